@@ -1,0 +1,1 @@
+"""The offline evaluator (`python -m robotool.eval`)."""

@@ -1,0 +1,412 @@
+"""The task file format (version 1): pydantic models, loading and validation.
+
+A task file describes a scene (objects with sizes in metres and masses in kilograms), a robot
+and one goal. :func:`load_task` reads YAML or JSON and reports *every* problem with its field
+path in a :class:`TaskFileError`, never a raw traceback.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+import yaml
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    FiniteFloat,
+    StringConstraints,
+    ValidationError,
+    model_validator,
+)
+
+from robotool import geometry
+from robotool.embodiments import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
+
+DEFAULT_DENSITY = 300.0  # kg/m^3, for movable objects without a mass
+RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
+OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate
+
+Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
+PositiveLength = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+Vec3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+Size3 = tuple[PositiveLength, PositiveLength, PositiveLength]
+Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
+Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
+GoalKind = Literal["robot_on", "grasped", "pressed", "lifted", "lowered"]
+
+GOALS_BY_EMBODIMENT: dict[str, frozenset[str]] = {
+    "quadruped": frozenset({"robot_on", "lifted", "lowered"}),
+    "arm": frozenset({"grasped", "pressed", "lifted", "lowered"}),
+}
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Fragile(_Strict):
+    """A fragile object breaks if it falls more than ``max_drop`` metres onto a hard surface."""
+
+    max_drop: PositiveLength
+
+
+class SceneObject(_Strict):
+    """One object of the scene. Sizes are the bounding box before rotation, in metres."""
+
+    name: Name
+    shape: Shape
+    center: Vec3
+    size: Size3
+    rpy: Vec3 = (0.0, 0.0, 0.0)
+    axis: Literal["x", "y", "z"] = "z"
+    thickness: PositiveLength = 0.02
+    movable: bool = True
+    mass: PositiveLength | None = None
+    friction: PositiveLength | None = None
+    magnetic: bool = False
+    soft: bool = False
+    fragile: Fragile | None = None
+    graspable_point: Vec3 | None = None
+    notes: str | None = None
+
+    @model_validator(mode="after")
+    def _shape_options(self) -> SceneObject:
+        fields = self.model_fields_set
+        if "axis" in fields and self.shape != "cylinder":
+            raise ValueError(f"'axis' applies to cylinders only, not to a {self.shape}")
+        if "thickness" in fields and self.shape != "hook":
+            raise ValueError(f"'thickness' applies to hooks only, not to a {self.shape}")
+        if self.shape == "hook" and self.thickness >= min(self.size[0], self.size[1]):
+            raise ValueError(
+                f"hook thickness {self.thickness} m must be smaller than its length and head "
+                f"({self.size[0]} m x {self.size[1]} m)"
+            )
+        return self
+
+    @property
+    def volume(self) -> float:
+        """Volume in m^3 of the solid the simulator builds."""
+        sx, sy, sz = self.size
+        if self.shape == "cylinder":
+            parts = geometry.object_parts(self)
+            r, half_len = parts[0].half[0], parts[0].half[2]
+            return math.pi * r * r * 2 * half_len
+        if self.shape == "hook":
+            t = self.thickness
+            return (sx * t + (sy - t) * t) * sz
+        return sx * sy * sz
+
+    @property
+    def effective_mass(self) -> float:
+        """The mass in kg: as given, or from the default density."""
+        return self.mass if self.mass is not None else DEFAULT_DENSITY * self.volume
+
+    @property
+    def grasp_point(self) -> tuple[float, float, float]:
+        """Where the gripper holds it: as given, or the top centre of its bounding box."""
+        if self.graspable_point is not None:
+            return self.graspable_point
+        x, y, z = self.center
+        return (x, y, z + self.size[2] / 2)
+
+    @property
+    def top(self) -> float:
+        """Height of the highest point of the object, m."""
+        return float(max(p.aabb()[1][2] for p in geometry.object_parts(self)))
+
+    @property
+    def bottom(self) -> float:
+        """Height of the lowest point of the object, m."""
+        return float(min(p.aabb()[0][2] for p in geometry.object_parts(self)))
+
+
+class Robot(_Strict):
+    """The robot: its embodiment, start position (quadruped) and limit overrides."""
+
+    type: EmbodimentName
+    position: tuple[FiniteFloat, FiniteFloat] | None = None
+    limits: dict[str, Any] = Field(default_factory=dict)
+
+
+class LiftGoal(_Strict):
+    object: Name
+    height: PositiveLength
+
+
+class LowerGoal(_Strict):
+    object: Name
+    height: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+
+
+class Goal(_Strict):
+    """Exactly one goal condition."""
+
+    robot_on: Name | None = None
+    grasped: Name | None = None
+    pressed: Name | None = None
+    lifted: LiftGoal | None = None
+    lowered: LowerGoal | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> Goal:
+        given = [k for k in GOALS_BY_EMBODIMENT["quadruped"] | GOALS_BY_EMBODIMENT["arm"]
+                 if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "give exactly one of robot_on, grasped, pressed, lifted, lowered "
+                f"(got {', '.join(sorted(given)) or 'none'})"
+            )
+        return self
+
+    @property
+    def kind(self) -> GoalKind:
+        """Which goal this is."""
+        for k in ("robot_on", "grasped", "pressed", "lifted", "lowered"):
+            if getattr(self, k) is not None:
+                return k  # type: ignore[return-value]
+        raise AssertionError("validated goal has no kind")
+
+    @property
+    def object(self) -> str:
+        """The object the goal is about."""
+        value = getattr(self, self.kind)
+        return value if isinstance(value, str) else value.object
+
+
+class Task(_Strict):
+    """A whole task file (format 1)."""
+
+    format: Literal[1]
+    name: Name
+    category: Category
+    instruction: Annotated[str, StringConstraints(min_length=1, strip_whitespace=True)]
+    robot: Robot
+    objects: list[SceneObject]
+    goal: Goal
+
+    @property
+    def embodiment(self) -> EmbodimentName:
+        return self.robot.type
+
+    @property
+    def limits(self) -> QuadrupedLimits | ArmLimits:
+        """The embodiment's limits with this task's overrides applied."""
+        return LIMITS_MODELS[self.robot.type](**self.robot.limits)
+
+    def object(self, name: str) -> SceneObject:
+        """The object with this name (KeyError naming the known objects otherwise)."""
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(f"no object named {name!r}; objects: {', '.join(self.object_names)}")
+
+    @property
+    def object_names(self) -> list[str]:
+        return [o.name for o in self.objects]
+
+    def to_yaml(self) -> str:
+        """The task as a YAML task file."""
+        data = self.model_dump(mode="json", exclude_defaults=True)
+        data["format"] = 1
+        return yaml.safe_dump(data, sort_keys=False)
+
+
+class Problem(BaseModel):
+    """One thing wrong with a task file, at a field path such as ``objects[2].size[0]``."""
+
+    path: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.message}" if self.path else self.message
+
+
+class TaskFileError(ValueError):
+    """A task file that cannot be used; ``problems`` lists every problem found."""
+
+    def __init__(self, source: str, problems: list[Problem]):
+        self.source = source
+        self.problems = problems
+        count = f"{len(problems)} problem" + ("s" if len(problems) != 1 else "")
+        lines = "\n".join(f"  - {p}" for p in problems)
+        super().__init__(f"{source}: {count}\n{lines}")
+
+
+def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
+    """Turn a pydantic error location into ``objects[2](hammer).size[0]``."""
+    out = ""
+    node = raw
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+            node = node[part] if isinstance(node, list) and part < len(node) else None
+            if isinstance(node, Mapping) and isinstance(node.get("name"), str):
+                out += f"({node['name']})"
+        else:
+            out += f".{part}" if out else str(part)
+            node = node.get(part) if isinstance(node, Mapping) else None
+    return out
+
+
+def _friendly(error: Mapping[str, Any]) -> str:
+    kind, msg = error["type"], error["msg"]
+    value = error.get("input")
+    if kind == "extra_forbidden":
+        return "unknown key"
+    if kind == "literal_error":
+        return f"{msg} (got {value!r})"
+    if kind == "string_pattern_mismatch":
+        return f"names use only lowercase letters, digits and '_' (got {value!r})"
+    if kind == "missing":
+        return "required field is missing"
+    if msg.startswith("Value error, "):
+        return msg.removeprefix("Value error, ")
+    if value is not None and not isinstance(value, Mapping | list):
+        return f"{msg} (got {value!r})"
+    return msg
+
+
+def _model_problems(error: ValidationError, raw: Any) -> list[Problem]:
+    problems = []
+    for e in error.errors():
+        loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        # Tagged tuples report a position per element; literal unions add the type name.
+        loc = tuple(p for p in loc if p not in ("tuple[float, float]",))
+        problems.append(Problem(path=_format_loc(loc, raw), message=_friendly(e)))
+    return problems
+
+
+def _object_path(task: Task, index: int) -> str:
+    return f"objects[{index}]({task.objects[index].name})"
+
+
+def _check_semantics(task: Task) -> list[Problem]:
+    """Checks that need the whole scene: names, goal, limits, geometry."""
+    problems: list[Problem] = []
+    seen: dict[str, int] = {}
+    for i, obj in enumerate(task.objects):
+        if obj.name in seen:
+            problems.append(Problem(path=f"objects[{i}].name",
+                                    message=f"duplicate name {obj.name!r} (also objects[{seen[obj.name]}])"))
+        seen.setdefault(obj.name, i)
+        if obj.name == "robot":
+            problems.append(Problem(path=f"objects[{i}].name",
+                                    message="'robot' is reserved for the robot itself"))
+
+    robot = task.robot
+    try:
+        task.limits  # noqa: B018 - validates the overrides
+    except ValidationError as e:
+        for err in e.errors():
+            path = "robot.limits" + "".join(f".{p}" if isinstance(p, str) else f"[{p}]" for p in err["loc"])
+            problems.append(Problem(path=path, message=_friendly(err)))
+    if robot.type == "quadruped" and robot.position is None:
+        problems.append(Problem(path="robot.position", message="a quadruped needs a start [x, y]"))
+    if robot.type == "arm" and robot.position is not None:
+        problems.append(Problem(path="robot.position",
+                                message="the arm's base is fixed at [0, 0, 0]; remove 'position'"))
+
+    kind = task.goal.kind
+    target = task.goal.object
+    if kind not in GOALS_BY_EMBODIMENT[robot.type]:
+        allowed = ", ".join(sorted(GOALS_BY_EMBODIMENT[robot.type]))
+        problems.append(Problem(path=f"goal.{kind}",
+                                message=f"a {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"))
+    elif target not in seen:
+        problems.append(Problem(path=f"goal.{kind}",
+                                message=f"no object named {target!r} (objects: {', '.join(seen)})"))
+    else:
+        obj = task.objects[seen[target]]
+        if kind == "pressed" and obj.shape != "button":
+            problems.append(Problem(path="goal.pressed", message=f"{target!r} is a {obj.shape}, not a button"))
+        if kind in ("grasped", "lifted", "lowered") and not obj.movable:
+            problems.append(Problem(path=f"goal.{kind}", message=f"{target!r} is fixed and cannot be moved"))
+        if kind == "robot_on" and obj.shape == "cloth":
+            problems.append(Problem(path="goal.robot_on", message=f"{target!r} is a cloth and cannot carry the robot"))
+
+    if len(seen) == len(task.objects):  # geometry needs unique names
+        problems += _check_geometry(task)
+    return problems
+
+
+def _check_geometry(task: Task) -> list[Problem]:
+    parts = {o.name: geometry.object_parts(o) for o in task.objects}
+    problems: list[Problem] = []
+    fixed = [i for i, o in enumerate(task.objects) if not o.movable]
+    for a_pos, i in enumerate(fixed):
+        for j in fixed[a_pos + 1:]:
+            a, b = task.objects[i], task.objects[j]
+            depth = geometry.solids_overlap(parts[a.name], parts[b.name])
+            if depth > OVERLAP_TOLERANCE:
+                problems.append(Problem(path=_object_path(task, j),
+                                        message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m"))
+    for i, obj in enumerate(task.objects):
+        others = {n: p for n, p in parts.items() if n != obj.name}
+        contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
+        if contact.penetration > RESTING_TOLERANCE:
+            problems.append(Problem(path=f"{_object_path(task, i)}.center",
+                                    message=f"sunk {contact.penetration:.3f} m into {contact.into}"))
+        elif contact.gap > RESTING_TOLERANCE:
+            problems.append(Problem(path=f"{_object_path(task, i)}.center",
+                                    message=f"floats {contact.gap:.3f} m above the surface below it"))
+    if task.robot.type == "quadruped" and task.robot.position is not None:
+        problem = _check_start(task, parts)
+        if problem:
+            problems.append(problem)
+    return problems
+
+
+def _check_start(task: Task, parts: dict[str, list[geometry.Part]]) -> Problem | None:
+    """The quadruped must start with its body centre over the surface it stands on."""
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    x, y = task.robot.position  # type: ignore[misc]
+    sx, sy, _ = limits.body_size
+    gx, gy = np.meshgrid(np.linspace(x - sx / 2, x + sx / 2, 9), np.linspace(y - sy / 2, y + sy / 2, 5))
+    footprint = np.column_stack([gx.ravel(), gy.ravel()])
+    solids = [p for n, p in parts.items() if task.object(n).shape != "cloth"]
+    stand = float(geometry.surface_height(footprint, solids).max())
+    under_centre = float(geometry.surface_height(np.array([[x, y]]), solids)[0])
+    if stand - under_centre > limits.max_step_up:
+        return Problem(path="robot.position",
+                       message=f"the robot at [{x}, {y}] is not over a surface: its centre hangs over "
+                               f"a {stand - under_centre:.2f} m drop at the edge of what it would stand on")
+    return None
+
+
+def parse_task(data: Any, source: str = "<task>") -> Task:
+    """Validate already-loaded task data (a mapping), raising :class:`TaskFileError`."""
+    if not isinstance(data, Mapping):
+        raise TaskFileError(source, [Problem(path="", message="a task file must be a mapping of keys")])
+    try:
+        task = Task.model_validate(data)
+    except ValidationError as e:
+        raise TaskFileError(source, _model_problems(e, data)) from None
+    problems = _check_semantics(task)
+    if problems:
+        raise TaskFileError(source, problems)
+    return task
+
+
+def load_task(path: str | Path) -> Task:
+    """Load and validate a YAML or JSON task file."""
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TaskFileError(source, [Problem(path="", message="file not found")]) from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise TaskFileError(source, [Problem(path="", message=f"cannot read the file: {e}")]) from None
+    try:
+        data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
+    except (yaml.YAMLError, json.JSONDecodeError) as e:
+        message = " ".join(str(e).split())
+        raise TaskFileError(source, [Problem(path="", message=f"not valid YAML/JSON: {message}")]) from None
+    return parse_task(data, source)
