@@ -6,6 +6,7 @@ the sandbox allowlist and the simulator read one source of truth.
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -189,3 +190,48 @@ def skills(embodiment: EmbodimentName) -> tuple[SkillSpec, ...]:
 def skill_names(embodiment: EmbodimentName) -> frozenset[str]:
     """Names of an embodiment's skills (the sandbox allowlist)."""
     return frozenset(s.name for s in SKILLS[embodiment])
+
+
+class SkillArgumentError(ValueError):
+    """A skill was called with arguments it cannot take; the message says which and why."""
+
+
+def check_call(embodiment: EmbodimentName, name: str, args: tuple[object, ...]) -> tuple[object, ...]:
+    """Check a skill call's arguments and return them normalized (positions as 3 floats).
+
+    Raises :class:`SkillArgumentError` for an unknown skill, a wrong argument count, a name that
+    is not a string, or a position that is not three finite numbers. A 2-number position gets z = 0.
+    """
+    spec = next((s for s in SKILLS[embodiment] if s.name == name), None)
+    if spec is None:
+        known = ", ".join(s.name for s in SKILLS[embodiment])
+        raise SkillArgumentError(f"unknown skill {name!r} for the {embodiment} (skills: {known})")
+    if len(args) != len(spec.params):
+        raise SkillArgumentError(
+            f"{spec.signature} takes {len(spec.params)} argument(s), got {len(args)}"
+        )
+    out: list[object] = []
+    for (param, kind), value in zip(spec.params, args, strict=True):
+        if kind == "name":
+            if not isinstance(value, str):
+                raise SkillArgumentError(f"{name}: {param} must be an object name, got {value!r}")
+            out.append(value)
+            continue
+        out.append(_position(name, param, value))
+    return tuple(out)
+
+
+def _position(skill: str, param: str, value: object) -> tuple[float, float, float]:
+    try:
+        items = [float(v) for v in value]  # type: ignore[attr-defined]
+    except (TypeError, ValueError):
+        raise SkillArgumentError(
+            f"{skill}: {param} must be [x, y, z] in metres, got {value!r}"
+        ) from None
+    if isinstance(value, str | bytes) or len(items) not in (2, 3):
+        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {value!r}")
+    if not all(math.isfinite(v) for v in items):
+        raise SkillArgumentError(f"{skill}: {param} must be finite, got {items}")
+    if len(items) == 2:
+        items.append(0.0)
+    return (items[0], items[1], items[2])

@@ -40,6 +40,7 @@ Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
 Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
 GoalKind = Literal["robot_on", "grasped", "pressed", "lifted", "lowered"]
 
+_ARTICLE = {"arm": "an", "quadruped": "a"}
 GOALS_BY_EMBODIMENT: dict[str, frozenset[str]] = {
     "quadruped": frozenset({"robot_on", "lifted", "lowered"}),
     "arm": frozenset({"grasped", "pressed", "lifted", "lowered"}),
@@ -77,10 +78,9 @@ class SceneObject(_Strict):
 
     @model_validator(mode="after")
     def _shape_options(self) -> SceneObject:
-        fields = self.model_fields_set
-        if "axis" in fields and self.shape != "cylinder":
+        if self.axis != "z" and self.shape != "cylinder":
             raise ValueError(f"'axis' applies to cylinders only, not to a {self.shape}")
-        if "thickness" in fields and self.shape != "hook":
+        if self.thickness != 0.02 and self.shape != "hook":
             raise ValueError(f"'thickness' applies to hooks only, not to a {self.shape}")
         if self.shape == "hook" and self.thickness >= min(self.size[0], self.size[1]):
             raise ValueError(
@@ -300,9 +300,11 @@ def _check_semantics(task: Task) -> list[Problem]:
                                     message="'robot' is reserved for the robot itself"))
 
     robot = task.robot
+    limits_ok = True
     try:
         task.limits  # noqa: B018 - validates the overrides
     except ValidationError as e:
+        limits_ok = False
         for err in e.errors():
             path = "robot.limits" + "".join(f".{p}" if isinstance(p, str) else f"[{p}]" for p in err["loc"])
             problems.append(Problem(path=path, message=_friendly(err)))
@@ -317,7 +319,7 @@ def _check_semantics(task: Task) -> list[Problem]:
     if kind not in GOALS_BY_EMBODIMENT[robot.type]:
         allowed = ", ".join(sorted(GOALS_BY_EMBODIMENT[robot.type]))
         problems.append(Problem(path=f"goal.{kind}",
-                                message=f"a {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"))
+                                message=f"{_ARTICLE[robot.type]} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"))
     elif target not in seen:
         problems.append(Problem(path=f"goal.{kind}",
                                 message=f"no object named {target!r} (objects: {', '.join(seen)})"))
@@ -330,7 +332,7 @@ def _check_semantics(task: Task) -> list[Problem]:
         if kind == "robot_on" and obj.shape == "cloth":
             problems.append(Problem(path="goal.robot_on", message=f"{target!r} is a cloth and cannot carry the robot"))
 
-    if len(seen) == len(task.objects):  # geometry needs unique names
+    if limits_ok and len(seen) == len(task.objects):  # geometry needs unique names and limits
         problems += _check_geometry(task)
     return problems
 

@@ -1,0 +1,39 @@
+"""The command line: listing, describing, and bad input ending with status 2 and no traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from robotool import tasks
+from robotool.cli import main
+
+
+def test_tasks_lists_all_ten(capsys) -> None:
+    assert main(["tasks"]) == 0
+    out = capsys.readouterr().out
+    for name in tasks.names():
+        assert name in out
+    assert len(tasks.names()) == 10
+
+
+def test_describe_prints_numbers(capsys) -> None:
+    assert main(["describe", "sofa_traversing"]) == 0
+    out = capsys.readouterr().out
+    assert "sofa_2" in out and "0.34" in out and "climbs up a step of at most 0.12 m" in out
+
+
+def test_broken_file_exits_2_without_traceback(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("format: 1\nname: x\nobjects:\n  - {name: a, shape: sphere}\n")
+    result = subprocess.run([sys.executable, "-m", "robotool", "describe", str(broken)],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert "objects[0](a).shape" in result.stderr
+
+
+def test_unknown_task_exits_2(capsys) -> None:
+    assert main(["describe", "no_such_task"]) == 2
+    assert "built-in tasks" in capsys.readouterr().err
