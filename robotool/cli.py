@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
@@ -16,6 +17,9 @@ from rich.table import Table
 from robotool import tasks
 from robotool.concepts import needs_tool
 from robotool.describe import describe
+from robotool.lm import LMConfigError
+from robotool.methods import METHODS
+from robotool.sandbox.validate import ProgramRejected
 from robotool.scene import Task, TaskFileError
 
 EXIT_USAGE = 2
@@ -52,6 +56,65 @@ def cmd_describe(args: argparse.Namespace, console: Console) -> int:
     return 0
 
 
+def cmd_solve(args: argparse.Namespace, console: Console) -> int:
+    """Solve a task with the RoboTool program and print the summary."""
+    import dspy
+
+    from robotool.lm import HOW_TO_CONFIGURE, make_lm
+    from robotool.program import RoboTool
+    from robotool.report import print_solution
+
+    task = tasks.load(args.task)
+    lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env,
+                 temperature=args.temperature, max_tokens=args.max_tokens, cache=not args.no_cache)
+    if lm is None:
+        console.print(HOW_TO_CONFIGURE)
+        return EXIT_USAGE
+    program = RoboTool.method(args.method, candidates=args.candidates, worlds_per_candidate=args.worlds,
+                              backend=args.backend, seed=args.seed)
+    with console.status(f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
+                        f"{args.worlds} world(s) on {lm.model}"), dspy.context(lm=lm):
+        solution = program(task=task).solution
+    print_solution(solution, console)
+    if args.out and solution.code:
+        args.out.write_text(solution.code)
+        console.print(f"wrote the best program to {args.out}")
+    if args.json:
+        args.json.write_text(solution.model_dump_json(indent=2))
+        console.print(f"wrote the report to {args.json}")
+    return 0 if solution.success else 1
+
+
+def cmd_run(args: argparse.Namespace, console: Console) -> int:
+    """Run a skill program against a task in perturbed worlds and report what happened."""
+    from robotool.execute import run
+    from robotool.report import print_run
+
+    task = tasks.load(args.task)
+    try:
+        code = args.program.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise UsageError(f"cannot read the program {args.program}: {e}") from None
+    with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
+        report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend)
+    print_run(report, console)
+    if args.json:
+        args.json.write_text(report.model_dump_json(indent=2))
+        console.print(f"wrote the report to {args.json}")
+    return 0 if report.success else 1
+
+
+class UsageError(ValueError):
+    """A mistake in how a command was called; reported in one line with exit status 2."""
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
@@ -63,6 +126,32 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("describe", help="print the scene description the language model reads")
     p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
     p.set_defaults(func=cmd_describe)
+
+    p = sub.add_parser("solve", help="write a skill program for a task with a language model")
+    p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
+    p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
+    p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
+    p.add_argument("--api-key-env", help="environment variable holding the API key")
+    p.add_argument("--temperature", type=float, help="sampling temperature of the first candidate")
+    p.add_argument("--max-tokens", type=_positive_int, help="token limit of each LM reply")
+    p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
+    p.add_argument("--method", choices=list(METHODS), default="robotool", help="the program or an ablation")
+    p.add_argument("--candidates", type=_positive_int, default=1, help="candidate programs to sample (K)")
+    p.add_argument("--worlds", type=_positive_int, default=3, help="perturbed worlds per candidate (R)")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the world perturbations")
+    p.add_argument("--out", type=Path, help="write the best program here")
+    p.add_argument("--json", type=Path, help="write the full report here as JSON")
+    p.set_defaults(func=cmd_solve)
+
+    p = sub.add_parser("run", help="run a skill program against a task and report what happened")
+    p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
+    p.add_argument("program", metavar="PROGRAM.py", type=Path, help="the skill program")
+    p.add_argument("--worlds", type=_positive_int, default=1, help="perturbed worlds to run it in")
+    p.add_argument("--seed", type=int, default=0, help="seed of the world perturbations")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
+    p.add_argument("--json", type=Path, help="write the full report here as JSON")
+    p.set_defaults(func=cmd_run)
     return parser
 
 
@@ -74,7 +163,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     func: Command = args.func
     try:
         return func(args, console)
-    except TaskFileError as e:
+    except (TaskFileError, LMConfigError, UsageError, ProgramRejected) as e:
         errors.print(f"[bold red]error:[/] {e}", markup=True, highlight=False, soft_wrap=True)
         return EXIT_USAGE
 

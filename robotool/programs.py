@@ -116,7 +116,7 @@ class TrustedSession:
             self.program(_SkillProxy(self, self.skill_names))
         except _Stop:
             return
-        except Exception as e:  # noqa: BLE001 - a program's error ends only its own world
+        except Exception as e:
             self._requests.put(ProgramEnded(error=f"{type(e).__name__}: {e}"))
             return
         self._requests.put(ProgramEnded())

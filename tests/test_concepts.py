@@ -62,7 +62,7 @@ def test_concepts_follow_geometry_not_names() -> None:
     for obj in data["objects"]:
         obj["center"][0] = -obj["center"][0]
     mirrored = parse_task(data)
-    gap = [c for c in key_concepts(mirrored) if c.kind == "gap_width"][0]
+    gap = next(c for c in key_concepts(mirrored) if c.kind == "gap_width")
     assert gap.value == pytest.approx(0.40, abs=1e-3)
 
 

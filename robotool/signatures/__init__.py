@@ -1,1 +1,19 @@
-"""Typed DSPy signatures, one per stage of the RoboTool program (Analyzer, Planner, Calculator, Coder)."""
+"""Typed DSPy signatures, one per stage of the RoboTool program, and their output models."""
+
+from robotool.signatures.analyzer import Analyze
+from robotool.signatures.calculator import Calculate
+from robotool.signatures.coder import Code
+from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters, scene_context
+from robotool.signatures.planner import Plan
+
+__all__ = [
+    "Analyze",
+    "Calculate",
+    "Code",
+    "KeyConcept",
+    "ObjectRole",
+    "Plan",
+    "PlanStep",
+    "StepParameters",
+    "scene_context",
+]

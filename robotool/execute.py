@@ -1,0 +1,54 @@
+"""Run one skill program against a task in perturbed worlds: ``robotool.run`` and ``robotool run``.
+
+The program goes through the same sandbox as generated code, so a hand-edited program is checked
+and confined exactly like a model's.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import BaseModel, Field
+
+from robotool import tasks
+from robotool.rollout import Rollout
+from robotool.sandbox import ProgramRejected, extract_program, validate
+from robotool.scene import Task
+from robotool.sim.backend import default_backend
+from robotool.verify import run_codes
+
+
+class RunReport(BaseModel):
+    """Everything ``robotool run`` reports; ``--json`` writes this model."""
+
+    task: str
+    worlds: int
+    seed: int
+    backend: str
+    success: bool = Field(description="true when the goal was reached in every world")
+    success_rate: float = Field(description="share of worlds in which the goal was reached")
+    code: str
+    rollouts: list[Rollout]
+
+
+def run(
+    task: Task | str | Path, code: str, *, worlds: int = 1, seed: int = 0, backend: str | None = None
+) -> RunReport:
+    """Validate ``code`` in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.
+
+    Raises :class:`~robotool.sandbox.ProgramRejected` for a program the sandbox refuses and
+    :class:`~robotool.scene.TaskFileError` for a bad task.
+    """
+    if worlds < 1:
+        raise ValueError(f"worlds must be at least 1, got {worlds}")
+    task = task if isinstance(task, Task) else tasks.load(task)
+    program = extract_program(code)
+    validate(program, task.embodiment)
+    rollouts = run_codes(task, [program], worlds=worlds, seed=seed, backend=backend)[0]
+    successes = sum(r.success for r in rollouts)
+    return RunReport(task=task.name, worlds=worlds, seed=seed, backend=backend or default_backend(),
+                     success=successes == worlds, success_rate=successes / worlds, code=program,
+                     rollouts=rollouts)
+
+
+__all__ = ["ProgramRejected", "RunReport", "run"]

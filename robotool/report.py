@@ -1,0 +1,99 @@
+"""Readable console summaries of a :class:`~robotool.solution.Solution`."""
+
+from __future__ import annotations
+
+from rich.console import Console
+from rich.syntax import Syntax
+from rich.table import Table
+
+from robotool.execute import RunReport
+from robotool.rollout import Rollout
+from robotool.solution import Solution
+from robotool.verify import world_failure
+
+
+def print_solution(solution: Solution, console: Console) -> None:
+    """Key concepts, the chosen plan, every candidate's outcome, and the best code."""
+    for note in solution.notes:
+        console.print(f"[yellow]note:[/] {note}")
+    stages = solution.stages
+    if stages.key_concepts:
+        table = Table(title="Key concepts")
+        for column in ("concept", "value", "limit", "met"):
+            table.add_column(column)
+        for c in stages.key_concepts:
+            table.add_row(c.name, f"{c.value:g} {c.unit}", f"{c.limit:g} ({c.limit_name})",
+                          "yes" if c.satisfied else "[red]no[/]")
+        console.print(table)
+    if stages.abstract_plan:
+        console.print(f"[bold]Plan:[/] {stages.abstract_plan}")
+    for i, step in enumerate(stages.steps or [], start=1):
+        objects = f" [{', '.join(step.objects)}]" if step.objects else ""
+        console.print(f"  {i}. {step.skill}{objects}: {step.intent}")
+    table = Table(title=f"Candidates ({solution.method})")
+    for column in ("#", "success", "objects", "calls", "outcome"):
+        table.add_column(column, overflow="fold")
+    for c in solution.candidates:
+        ran = bool(c.rollouts)
+        table.add_row(
+            str(c.index) + (" *" if c.index == solution.best else ""),
+            f"{c.success_rate:.0%}" if ran else "-",
+            f"{c.objects_touched:.1f}" if ran else "-",
+            f"{c.skill_calls:.1f}" if ran else "-",
+            c.failure or "solved in every world",
+        )
+    console.print(table)
+    if solution.code:
+        console.print(Syntax(solution.code, "python", line_numbers=False))
+    verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
+    tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
+    console.print(f"{verdict}: best success rate {solution.success_rate:.0%}; "
+                  f"{tokens} LM tokens; {solution.timings.get('total', 0.0):.1f} s")
+
+
+def _format_args(args: list[object]) -> str:
+    parts = []
+    for a in args:
+        if isinstance(a, list | tuple):
+            parts.append("[" + ", ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in a) + "]")
+        else:
+            parts.append(repr(a))
+    return ", ".join(parts)
+
+
+def print_trace(rollout: Rollout, console: Console) -> None:
+    """One world's skill calls: arguments, outcome, duration, reasons and measured values."""
+    status = "[green]success[/]" if rollout.success else "[red]failed[/]"
+    table = Table(title=f"World {rollout.world} ({status}, {rollout.sim_time:.2f} s simulated)")
+    for column in ("#", "call", "outcome", "time (s)", "reason / measured"):
+        table.add_column(column, overflow="fold")
+    for i, call in enumerate(rollout.calls, start=1):
+        outcome = call.outcome if call.outcome == "done" else f"[red]{call.outcome}[/]"
+        details = "; ".join(
+            [call.reason] if call.reason else []
+        ) + ("" if not call.measured else " (" + ", ".join(f"{k} {v:.3g}" for k, v in call.measured.items()) + ")")
+        table.add_row(str(i), f"{call.skill}({_format_args(call.args)})", outcome,
+                      f"{call.ended - call.started:.2f}", details.strip())
+    console.print(table)
+    conditions = ", ".join(f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items())
+    console.print(f"  goal: {conditions or 'no conditions'}; touched: {', '.join(rollout.touched) or 'nothing'}")
+    if rollout.error:
+        console.print(f"  [red]error:[/] {rollout.error}")
+    if rollout.output:
+        console.print(f"  printed: {rollout.output.strip()[:500]}", markup=False)
+
+
+def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
+    """A run's summary over worlds, then the traces of the first world and of failed worlds."""
+    table = Table(title=f"{report.task}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend")
+    for column in ("world", "success", "sim time (s)", "calls", "touched", "why it failed"):
+        table.add_column(column, overflow="fold")
+    for r in report.rollouts:
+        table.add_row(str(r.world), "yes" if r.success else "[red]no[/]", f"{r.sim_time:.2f}", str(len(r.calls)),
+                      str(len(r.touched)), world_failure(r) or "")
+    console.print(table)
+    shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
+    for rollout in shown:
+        print_trace(rollout, console)
+    verdict = "[green]every world succeeded[/]" if report.success else "[red]some worlds failed[/]"
+    console.print(f"{verdict}: success rate {report.success_rate:.0%}")

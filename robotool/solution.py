@@ -1,0 +1,85 @@
+"""What solving a task returns: the best program, every candidate with its rollouts, and the stages."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, Field
+
+from robotool.rollout import Rollout
+from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
+
+
+class StageOutputs(BaseModel):
+    """The typed outputs of the stages that ran (None for a stage that did not)."""
+
+    analysis: str | None = None
+    key_concepts: list[KeyConcept] | None = None
+    object_roles: list[ObjectRole] | None = None
+    abstract_plan: str | None = None
+    steps: list[PlanStep] | None = None
+    calculation: str | None = None
+    parameters: list[StepParameters] | None = None
+
+
+class TokenUsage(BaseModel):
+    """Tokens a stage used, summed over its LM calls."""
+
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+
+    def __add__(self, other: TokenUsage) -> TokenUsage:
+        return TokenUsage(prompt_tokens=self.prompt_tokens + other.prompt_tokens,
+                          completion_tokens=self.completion_tokens + other.completion_tokens)
+
+
+class Candidate(BaseModel):
+    """One candidate program: how it was made, and how it did in its perturbed worlds."""
+
+    index: int
+    code: str | None = None
+    stages: StageOutputs = Field(default_factory=StageOutputs)
+    failure: str | None = Field(None, description="why it failed: unparsable reply, rejected code, or rollouts")
+    rollouts: list[Rollout] = Field(default_factory=list)
+    usage: dict[str, TokenUsage] = Field(default_factory=dict, description="tokens by stage")
+
+    @property
+    def success_rate(self) -> float:
+        """Share of its worlds in which the goal was reached."""
+        return sum(r.success for r in self.rollouts) / len(self.rollouts) if self.rollouts else 0.0
+
+    @property
+    def objects_touched(self) -> float:
+        """Mean number of objects it touched per world."""
+        return sum(len(r.touched) for r in self.rollouts) / len(self.rollouts) if self.rollouts else 0.0
+
+    @property
+    def skill_calls(self) -> float:
+        """Mean number of skill calls per world."""
+        return sum(len(r.calls) for r in self.rollouts) / len(self.rollouts) if self.rollouts else 0.0
+
+    def rank_key(self) -> tuple[float, float, float, int]:
+        """Sort key, best first: success rate, then fewer objects touched, then fewer skill calls."""
+        return (-self.success_rate, self.objects_touched, self.skill_calls, self.index)
+
+
+class Solution(BaseModel):
+    """The result of solving a task: the best code and everything behind the choice."""
+
+    task: str
+    method: str
+    code: str | None = Field(None, description="the best candidate's program (None if none ran)")
+    best: int | None = Field(None, description="index of the best candidate")
+    success_rate: float = 0.0
+    candidates: list[Candidate] = Field(default_factory=list)
+    stages: StageOutputs = Field(default_factory=StageOutputs, description="the best candidate's stages")
+    usage: dict[str, TokenUsage] = Field(default_factory=dict, description="tokens by stage, all candidates")
+    timings: dict[str, float] = Field(default_factory=dict, description="seconds by phase")
+    notes: list[str] = Field(default_factory=list, description="what the user should know (e.g. which planner)")
+
+    @property
+    def success(self) -> bool:
+        return self.best is not None and self.success_rate > 0
+
+
+def rank(candidates: list[Candidate]) -> list[Candidate]:
+    """Candidates best first; ones that never ran come last."""
+    return sorted(candidates, key=lambda c: (c.code is None or not c.rollouts, *c.rank_key()))

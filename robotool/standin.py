@@ -1,0 +1,157 @@
+"""A local OpenAI-compatible chat-completions server that answers from a script.
+
+It speaks the real protocol (``POST /v1/chat/completions``) on 127.0.0.1, so the whole LM path
+(DSPy, the HTTP client, retries, parsing) runs without a provider. Replies come from a *script*:
+an ordered list of rules, each matching a substring of the last user message and giving the reply
+text, or an HTTP status to fail with, or a delay. It is a development and test tool; the replies it
+serves are whatever script it is given.
+
+Run it: ``python -m robotool.standin SCRIPT.json --port 8000``, then point robotool at
+``--lm openai/standin --api-base http://127.0.0.1:8000/v1``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import threading
+import time
+from collections.abc import Sequence
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, Field
+
+
+class Rule(BaseModel):
+    """One scripted answer: used for requests whose last user message contains ``match``."""
+
+    match: str = ""
+    reply: str = ""
+    status: int = Field(200, description="HTTP status; not 200 sends an error body instead of a reply")
+    delay: float = Field(0.0, ge=0, description="seconds to wait before answering")
+    times: int | None = Field(None, description="use this rule at most this many times, then skip it")
+
+
+class Script(BaseModel):
+    """The stand-in's whole behaviour: rules tried in order, plus a default delay."""
+
+    rules: list[Rule]
+    delay: float = Field(0.0, ge=0, description="seconds added before every answer")
+
+
+class StandinServer:
+    """The server, run in a background thread; ``base_url`` ends in ``/v1``."""
+
+    def __init__(self, script: Script, port: int = 0):
+        self.script = script
+        self.requests: list[dict[str, Any]] = []
+        self._uses = [0] * len(script.rules)
+        self._lock = threading.Lock()
+        handler = _handler_for(self)
+        self._server = ThreadingHTTPServer(("127.0.0.1", port), handler)
+        self._server.daemon_threads = True
+        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+
+    @property
+    def base_url(self) -> str:
+        host, port = self._server.server_address[:2]
+        return f"http://{host}:{port}/v1"
+
+    def __enter__(self) -> StandinServer:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._server.shutdown()
+        self._server.server_close()
+
+    def pick(self, body: dict[str, Any]) -> Rule | None:
+        """The first rule that matches the request's last user message and has uses left."""
+        messages = body.get("messages") or []
+        last_user = next((m for m in reversed(messages) if m.get("role") == "user"), {})
+        text = _text(last_user.get("content", ""))
+        with self._lock:
+            self.requests.append(body)
+            for i, rule in enumerate(self.script.rules):
+                if rule.match in text and (rule.times is None or self._uses[i] < rule.times):
+                    self._uses[i] += 1
+                    return rule
+        return None
+
+
+def _text(content: Any) -> str:
+    if isinstance(content, list):
+        return "".join(part.get("text", "") for part in content if isinstance(part, dict))
+    return str(content)
+
+
+def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
+    class Handler(BaseHTTPRequestHandler):
+        def log_message(self, format: str, *args: Any) -> None:
+            return
+
+        def _send(self, status: int, payload: dict[str, Any]) -> None:
+            data = json.dumps(payload).encode()
+            self.send_response(status)
+            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Length", str(len(data)))
+            if status == 429:
+                self.send_header("Retry-After", "0")
+            self.end_headers()
+            try:
+                self.wfile.write(data)
+            except (BrokenPipeError, ConnectionResetError):
+                pass  # the client gave up (its timeout): nothing to answer
+
+        def do_POST(self) -> None:
+            if not self.path.rstrip("/").endswith("/chat/completions"):
+                self._send(404, {"error": {"message": f"no route {self.path}", "type": "not_found"}})
+                return
+            length = int(self.headers.get("Content-Length", 0))
+            try:
+                body = json.loads(self.rfile.read(length) or b"{}")
+            except json.JSONDecodeError:
+                self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
+                return
+            rule = server.pick(body)
+            time.sleep(server.script.delay + (rule.delay if rule else 0.0))
+            if rule is None:
+                self._send(500, {"error": {"message": "no scripted reply matches", "type": "server_error"}})
+                return
+            if rule.status != 200:
+                self._send(rule.status, {"error": {"message": f"scripted status {rule.status}",
+                                                   "type": "server_error"}})
+                return
+            words = len(rule.reply.split())
+            prompt = sum(len(_text(m.get("content", "")).split()) for m in body.get("messages", []))
+            self._send(200, {
+                "id": "chatcmpl-standin",
+                "object": "chat.completion",
+                "created": int(time.time()),
+                "model": body.get("model", "standin"),
+                "choices": [{"index": 0, "finish_reason": "stop",
+                             "message": {"role": "assistant", "content": rule.reply}}],
+                "usage": {"prompt_tokens": prompt, "completion_tokens": words, "total_tokens": prompt + words},
+            })
+
+    return Handler
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Serve a script until interrupted."""
+    parser = argparse.ArgumentParser(prog="python -m robotool.standin", description=__doc__.split("\n")[0])
+    parser.add_argument("script", type=Path, help="JSON file with {'rules': [...], 'delay': seconds}")
+    parser.add_argument("--port", type=int, default=8000)
+    args = parser.parse_args(argv)
+    script = Script.model_validate_json(args.script.read_text())
+    with StandinServer(script, args.port) as server:
+        print(f"serving {len(script.rules)} scripted rules at {server.base_url} (Ctrl-C stops)", flush=True)
+        with contextlib.suppress(KeyboardInterrupt):
+            threading.Event().wait()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+"""Candidates -> sandboxed programs -> one batch of perturbed rollouts -> outcomes.
+
+Every candidate runs in the same ``worlds`` perturbed copies of the scene (world ``r`` of each
+candidate is perturbed with the same seed), all candidates in one batch of the simulator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from robotool.rollout import Rollout
+from robotool.sandbox import ProgramRejected, extract_program, start_sessions, validate
+from robotool.scene import Task
+from robotool.sim import run_sessions
+from robotool.solution import Candidate
+
+
+def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
+    """Extract the program from an LM reply and validate it: (code, None) or (code or None, reason)."""
+    try:
+        code = extract_program(text)
+    except ProgramRejected as e:
+        return None, str(e)
+    try:
+        validate(code, task.embodiment)
+    except ProgramRejected as e:
+        return code, str(e)
+    return code, None
+
+
+def run_codes(
+    task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+) -> list[list[Rollout]]:
+    """Run each (validated) program in ``worlds`` perturbed worlds, all in one batch."""
+    if not codes:
+        return []
+    sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
+    world_seeds = [seed + r for _ in codes for r in range(worlds)]
+    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend)
+    return [rollouts[i * worlds:(i + 1) * worlds] for i in range(len(codes))]
+
+
+def verify(
+    task: Task, candidates: Sequence[Candidate], *, worlds: int, seed: int = 0, backend: str | None = None
+) -> None:
+    """Simulate every candidate that has valid code; record rollouts and a failure reason in place."""
+    runnable = [c for c in candidates if c.code is not None and c.failure is None]
+    results = run_codes(task, [c.code for c in runnable], worlds=worlds, seed=seed, backend=backend)
+    for candidate, rollouts in zip(runnable, results, strict=True):
+        candidate.rollouts = rollouts
+        if candidate.success_rate < 1.0:
+            candidate.failure = failure_reason(rollouts)
+
+
+def failure_reason(rollouts: Sequence[Rollout]) -> str | None:
+    """One line on why the first failed world failed, with how many worlds failed."""
+    failed = [r for r in rollouts if not r.success]
+    if not failed:
+        return None
+    return f"{len(failed)}/{len(rollouts)} worlds failed; world {failed[0].world}: {world_failure(failed[0])}"
+
+
+def world_failure(rollout: Rollout) -> str | None:
+    """Why one world failed: its error, its first refused/stalled/timed-out call, or unmet conditions."""
+    if rollout.success:
+        return None
+    if rollout.error:
+        return rollout.error
+    for call in rollout.calls:
+        if call.outcome != "done":
+            return f"{call.skill} {call.outcome}" + (f": {call.reason}" if call.reason else "")
+    unmet = [name for name, ok in rollout.conditions.items() if not ok]
+    return "goal not reached: " + ", ".join(unmet) if unmet else "goal not reached"
