@@ -1,21 +1,49 @@
 """robotool: creative robot tool use with language models.
 
-Public API, re-exported by name; everything else may move.
+Public API, re-exported by name; everything else may move. The simulator- and DSPy-backed names
+(``RoboTool``, ``run``, ``Solution``, ``RunReport``) load on first use, so ``import robotool`` stays quick.
 """
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
 
 from robotool import tasks
 from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.describe import describe
 from robotool.scene import Problem, Task, TaskFileError, load_task
 
+if TYPE_CHECKING:
+    from robotool.execute import RunReport, run
+    from robotool.program import RoboTool
+    from robotool.solution import Solution
+
+_LAZY = {
+    "RoboTool": "robotool.program",
+    "RunReport": "robotool.execute",
+    "Solution": "robotool.solution",
+    "run": "robotool.execute",
+}
+
 __all__ = [
     "KeyConcept",
     "Problem",
+    "RoboTool",
+    "RunReport",
+    "Solution",
     "Task",
     "TaskFileError",
     "describe",
     "key_concepts",
     "load_task",
     "needs_tool",
+    "run",
     "tasks",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'robotool' has no attribute {name!r}")

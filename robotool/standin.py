@@ -38,6 +38,7 @@ class Rule(BaseModel):
 class Script(BaseModel):
     """The stand-in's whole behaviour: rules tried in order, plus a default delay."""
 
+    note: str = Field("", description="what this script is, for people reading it")
     rules: list[Rule]
     delay: float = Field(0.0, ge=0, description="seconds added before every answer")
 

@@ -12,6 +12,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox import ProgramRejected, extract_program, start_sessions, validate
 from robotool.scene import Task
 from robotool.sim import run_sessions
+from robotool.sim.backend import default_backend
 from robotool.solution import Candidate
 
 
@@ -35,8 +36,7 @@ def run_codes(
     if not codes:
         return []
     sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
-    world_seeds = [seed + r for _ in codes for r in range(worlds)]
-    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend)
+    rollouts = run_sessions(task, sessions, seed=seed, backend=backend or default_backend())
     return [rollouts[i * worlds:(i + 1) * worlds] for i in range(len(codes))]
 
 

@@ -102,3 +102,14 @@ def test_bad_lm_settings_are_config_errors(monkeypatch) -> None:
         make_lm("openai/gpt-4o", api_key_env="NO_SUCH_KEY_VAR")
     monkeypatch.setenv("ROBOTOOL_LM", "openai/from-env")
     assert make_lm().model == "openai/from-env"
+
+
+def test_readme_standin_example_solves_milk_reaching(capsys) -> None:
+    """The README's offline walk-through: the example script served over HTTP solves milk_reaching."""
+    example = Path(__file__).parents[1] / "examples" / "standin" / "milk_reaching.json"
+    with StandinServer(Script.model_validate_json(example.read_text())) as server:
+        status = main(["solve", "milk_reaching", "--lm", "openai/standin", "--api-base", server.base_url,
+                       "--no-cache", "--worlds", "2"])
+    out = capsys.readouterr().out
+    assert status == 0, out
+    assert "hammer" in out and "100%" in out
