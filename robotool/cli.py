@@ -37,7 +37,11 @@ def _goal_text(task: Task) -> str:
 
 
 def cmd_tasks(args: argparse.Namespace, console: Console) -> int:
-    """List the built-in tasks."""
+    """List the built-in tasks, or write one generated instance of a procedural family."""
+    if args.family is not None:
+        return _write_generated(args, console)
+    if args.seed is not None or args.out is not None:
+        raise UsageError("--seed and --out go with --family")
     table = Table(title="Built-in tasks")
     for column in ("name", "embodiment", "category", "goal", "needs a tool"):
         table.add_column(column, no_wrap=column in ("name", "category"))
@@ -46,6 +50,21 @@ def cmd_tasks(args: argparse.Namespace, console: Console) -> int:
         table.add_row(name, task.embodiment, task.category, _goal_text(task),
                       "yes" if needs_tool(task) else "no")
     console.print(table)
+    return 0
+
+
+def _write_generated(args: argparse.Namespace, console: Console) -> int:
+    if args.family not in tasks.families():
+        raise UsageError(f"unknown family {args.family!r}; families: {', '.join(tasks.families())}")
+    instance = tasks.generate(args.family, args.seed if args.seed is not None else 0)
+    if args.out is None:
+        console.print(instance.task.to_yaml(), markup=False, highlight=False, end="")
+    else:
+        tasks.write_instance(instance, args.out)
+        console.print(f"wrote {instance.task.name} to {args.out}: {instance.description}", markup=False)
+    verdict = "needs a tool" if instance.needs_tool else "needs no tool"
+    console.print(f"# {verdict}; {'solvable' if instance.solvable else 'not solvable'}", markup=False,
+                  style="dim")
     return 0
 
 
@@ -121,7 +140,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="robotool", description="Creative robot tool use with language models."
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    p = sub.add_parser("tasks", help="list the built-in tasks")
+    p = sub.add_parser("tasks", help="list the built-in tasks, or write a generated one")
+    p.add_argument("--family", help="write an instance of this procedural family instead of listing")
+    p.add_argument("--seed", type=int, help="the instance's seed (with --family; default 0)")
+    p.add_argument("--out", type=Path, help="the YAML file to write (with --family; default: print it)")
     p.set_defaults(func=cmd_tasks)
     p = sub.add_parser("describe", help="print the scene description the language model reads")
     p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")

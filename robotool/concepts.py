@@ -18,7 +18,7 @@ from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject, Task
 
 ConceptKind = Literal[
-    "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "other"
+    "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
 ]
 
 
@@ -28,7 +28,9 @@ class KeyConcept(BaseModel):
     name: str = Field(description="what is measured, naming the objects, e.g. 'gap between sofa_1 and sofa_2'")
     kind: ConceptKind = Field(
         "other",
-        description="workspace_excess | climb_height | drop_height | gap_width | mass | fall_height | other",
+        description=(
+            "workspace_excess | climb_height | drop_height | gap_width | mass | fall_height | lift_height | other"
+        ),
     )
     value: float = Field(description="the measured value")
     unit: str = Field("m", description="SI unit of value and limit: m or kg")
@@ -118,6 +120,10 @@ def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]
                 name=f"gap between {start_name} and {obj.name}", kind="gap_width", value=round(gap, 4),
                 limit=limits.max_gap, limit_name="max_gap", satisfied=gap <= limits.max_gap))
     elif kind == "lifted":
+        lift = task.goal.lifted.height  # type: ignore[union-attr]
+        concepts.append(KeyConcept(
+            name=f"height {obj.name} must rise, against what the robot can lift by itself", kind="lift_height",
+            value=lift, limit=0.0, limit_name="robot_lift", satisfied=False))
         concepts.append(_mass_concept(obj, limits))
     elif kind == "lowered":
         support_name, support_h = surface_under(task, np.asarray(obj.center[:2]), exclude=obj.name)

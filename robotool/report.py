@@ -69,13 +69,14 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         table.add_column(column, overflow="fold")
     for i, call in enumerate(rollout.calls, start=1):
         outcome = call.outcome if call.outcome == "done" else f"[red]{call.outcome}[/]"
-        details = "; ".join(
-            [call.reason] if call.reason else []
-        ) + ("" if not call.measured else " (" + ", ".join(f"{k} {v:.3g}" for k, v in call.measured.items()) + ")")
+        measured = "" if call.outcome == "done" else ", ".join(f"{k} {v:.3g}" for k, v in call.measured.items())
+        details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
         table.add_row(str(i), f"{call.skill}({_format_args(call.args)})", outcome,
-                      f"{call.ended - call.started:.2f}", details.strip())
+                      f"{call.ended - call.started:.2f}", details)
     console.print(table)
-    conditions = ", ".join(f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items())
+    conditions = ", ".join(
+        f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
+    )
     console.print(f"  goal: {conditions or 'no conditions'}; touched: {', '.join(rollout.touched) or 'nothing'}")
     if rollout.error:
         console.print(f"  [red]error:[/] {rollout.error}")

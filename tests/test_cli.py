@@ -37,3 +37,11 @@ def test_broken_file_exits_2_without_traceback(tmp_path: Path) -> None:
 def test_unknown_task_exits_2(capsys) -> None:
     assert main(["describe", "no_such_task"]) == 2
     assert "built-in tasks" in capsys.readouterr().err
+
+
+def test_tasks_writes_a_generated_instance(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "t.yaml"
+    assert main(["tasks", "--family", "sofa_traversing", "--seed", "3", "--out", str(out)]) == 0
+    assert tasks.load(out).name == "sofa_traversing_3"
+    assert main(["tasks", "--family", "no_such_family"]) == 2
+    assert "families:" in capsys.readouterr().err

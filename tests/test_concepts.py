@@ -70,3 +70,14 @@ def test_limit_override_changes_verdict() -> None:
     data = tasks.load("sofa_traversing").model_dump(mode="json")
     data["robot"]["limits"] = {"max_gap": 0.5}
     assert not needs_tool(parse_task(data))
+
+
+def test_lifted_goal_needs_a_tool_whatever_the_mass() -> None:
+    """A quadruped cannot raise anything by itself: a light cube still needs the lever."""
+    data = tasks.load("cube_lifting").model_dump(mode="json")
+    next(o for o in data["objects"] if o["name"] == "cube")["mass"] = 2.0
+    task = parse_task(data)
+    lift = next(c for c in key_concepts(task) if c.kind == "lift_height")
+    assert lift.value == pytest.approx(0.10) and not lift.satisfied
+    assert next(c for c in key_concepts(task) if c.kind == "mass").satisfied
+    assert needs_tool(task)

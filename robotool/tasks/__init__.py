@@ -1,7 +1,8 @@
-"""Built-in task files and the task registry.
+"""Built-in task files, the task registry and the procedural task families.
 
 ``names()`` lists the built-in tasks; ``load(name_or_path)`` returns a validated :class:`Task`
-for a built-in name or for a path to a YAML/JSON task file.
+for a built-in name or for a path to a YAML/JSON task file. ``families()`` and
+``generate(family, seed)`` give seeded variations (see :mod:`robotool.tasks.families`).
 """
 
 from __future__ import annotations
@@ -31,3 +32,8 @@ def load(name_or_path: str | Path) -> Task:
     raise TaskFileError(
         text, [Problem(path="", message=f"no built-in task or file by that name; built-in tasks: {', '.join(names())}")]
     )
+
+
+from robotool.tasks.families import Instance, families, generate, write_instance  # noqa: E402 - uses load()
+
+__all__ = ["Instance", "families", "generate", "load", "names", "write_instance"]
