@@ -36,7 +36,8 @@ def run_codes(
     if not codes:
         return []
     sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
-    rollouts = run_sessions(task, sessions, seed=seed, backend=backend or default_backend())
+    world_seeds = [seed + r for _ in codes for r in range(worlds)]
+    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend or default_backend())
     return [rollouts[i * worlds:(i + 1) * worlds] for i in range(len(codes))]
 
 

@@ -21,7 +21,7 @@ def test_description_lists_every_object_and_skill(name: str) -> None:
 
 def test_quadruped_numbers_and_limits() -> None:
     text = describe(tasks.load("sofa_traversing"))
-    assert "centre [1.45, 0, 0.17], size [0.6, 0.9, 0.34]" in text
+    assert "centre [1.65, 0, 0.17], size [1, 0.9, 0.34]" in text
     assert "at most 0.12 m" in text and "at most 0.1 m" in text and "at most 5 kg" in text
     assert "standing on sofa_1" in text
 

@@ -1,0 +1,42 @@
+"""Physics: task -> MuJoCo model, batched backends, skill controllers and the lockstep runner.
+
+Modules, one job each:
+
+- :mod:`robotool.sim.embodiment` — **the embodiment-controller interface** that the arm and the
+  quadruped implement (model building, skill start/tick/query over batched state, dispatch on
+  ``task.robot.type``).
+- :mod:`robotool.sim.build` — ``build(task) -> Scene`` (the ``MjModel`` made through ``MjSpec``).
+- :mod:`robotool.sim.backend` — the ``BatchedSim`` protocol, ``BatchState``, perturbations, ``make_sim``;
+  backends in :mod:`~robotool.sim.backend_mujoco` (C, threads) and :mod:`~robotool.sim.backend_warp`.
+- :mod:`robotool.sim.arm` — the arm embodiment; :mod:`robotool.sim.quadruped` — the quadruped.
+- :mod:`robotool.sim.magnets` — magnetic objects weld on contact.
+- :mod:`robotool.sim.goals` — goal sub-conditions.
+- :mod:`robotool.sim.runner` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
+"""
+
+from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, default_backend, make_sim
+from robotool.sim.build import Scene, build
+from robotool.sim.embodiment import Embodiment, QueryError, SkillController, SkillEnd, embodiment_for
+from robotool.sim.goals import GoalTracker, goal_tracker
+from robotool.sim.runner import run_programs, run_sessions, trusted_sessions
+
+__all__ = [
+    "BackendName",
+    "BatchState",
+    "BatchedSim",
+    "Embodiment",
+    "GoalTracker",
+    "Perturbation",
+    "QueryError",
+    "Scene",
+    "SkillController",
+    "SkillEnd",
+    "build",
+    "default_backend",
+    "embodiment_for",
+    "goal_tracker",
+    "make_sim",
+    "run_programs",
+    "run_sessions",
+    "trusted_sessions",
+]

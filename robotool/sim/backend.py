@@ -1,0 +1,203 @@
+"""The batched-simulator protocol, its state view, per-world perturbations, and backend selection.
+
+Two backends implement :class:`BatchedSim` over the same :class:`~robotool.sim.build.Scene`:
+``mujoco`` (C MuJoCo, one ``MjData`` and one ``MjModel`` copy per world, stepped on a thread pool;
+:mod:`robotool.sim.backend_mujoco`) and ``warp`` (mujoco_warp, one ``Data`` with ``nworld`` worlds and a
+captured graph for the substeps; :mod:`robotool.sim.backend_warp`). Controllers only use what is here.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal, Protocol
+
+import mujoco
+import numpy as np
+
+if TYPE_CHECKING:
+    from robotool.sim.build import Scene
+
+BackendName = Literal["mujoco", "warp"]
+TOUCH_DISTANCE = 0.002  # m: bodies whose geoms are at most this far apart are touching
+
+_BACKENDS: dict[str, str] = {
+    "mujoco": "robotool.sim.backend_mujoco:MujocoSim",
+    "warp": "robotool.sim.backend_warp:WarpSim",
+}
+
+
+@dataclass(frozen=True)
+class BatchState:
+    """All worlds after the last step; numpy arrays with the world index first.
+
+    ``touching[w, a, b]`` is True when bodies ``a`` and ``b`` have geoms within
+    :data:`TOUCH_DISTANCE` (symmetric). ``failed[w]`` holds a reason for worlds whose physics
+    cannot be trusted (buffer overflow, divergence), else None.
+    """
+
+    time: np.ndarray  # (nworld,)
+    qpos: np.ndarray  # (nworld, nq)
+    qvel: np.ndarray  # (nworld, nv)
+    xpos: np.ndarray  # (nworld, nbody, 3)
+    xquat: np.ndarray  # (nworld, nbody, 4)
+    sensordata: np.ndarray  # (nworld, nsensordata)
+    eq_active: np.ndarray  # (nworld, neq) bool
+    touching: np.ndarray  # (nworld, nbody, nbody) bool
+    failed: list[str | None]
+
+    def xmat(self, body: int) -> np.ndarray:
+        """Rotation matrices of one body in every world, (nworld, 3, 3)."""
+        q = self.xquat[:, body]
+        w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+        return np.stack([
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ], axis=1)
+
+
+class BatchedSim(Protocol):
+    """``nworld`` copies of one scene stepped together.
+
+    ``ctrl`` (nworld, nu) and ``mocap_pos`` (nworld, nmocap, 3) are buffers the controllers write;
+    the backend applies them before each step.
+    """
+
+    scene: Scene
+    nworld: int
+    ctrl: np.ndarray
+    mocap_pos: np.ndarray
+
+    def state(self) -> BatchState:
+        """The state after the last :meth:`step`."""
+
+    def step(self, nstep: int, active: np.ndarray) -> None:
+        """Advance by ``nstep`` physics steps; worlds where ``active`` is False may be left as they are."""
+
+    def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
+        """Activate weld ``eq`` at the current relative pose of its two bodies, or deactivate it."""
+
+    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """Cast rays (nworld, nray, 3) from ``pnt`` along ``vec`` against the current geoms.
+
+        Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
+        (-1 where none), both (nworld, nray). Geoms of ``exclude_body`` are ignored.
+        """
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """Per-world changes to the scene: friction and mass scales, and start-pose offsets.
+
+    ``offset[w, i]`` is (dx, dy, dyaw in radians) for movable object ``i`` (zeros for fixed ones).
+    """
+
+    friction_scale: np.ndarray  # (nworld,)
+    mass_scale: np.ndarray  # (nworld, nobject)
+    offset: np.ndarray  # (nworld, nobject, 3)
+
+    @classmethod
+    def none(cls, scene: Scene, nworld: int) -> Perturbation:
+        """No change in any world."""
+        nobj = len(scene.object_names)
+        return cls(np.ones(nworld), np.ones((nworld, nobj)), np.zeros((nworld, nobj, 3)))
+
+    @classmethod
+    def sample(cls, scene: Scene, nworld: int, seed: int, *, friction: float = 0.2, mass: float = 0.15,
+               shift: float = 0.005, yaw_deg: float = 2.0) -> Perturbation:
+        """Uniform relative friction and mass noise and small pose noise of movable objects, seeded."""
+        rng = np.random.default_rng(seed)
+        nobj = len(scene.object_names)
+        movable = np.array([o.movable for o in scene.task.objects], dtype=float)
+        offset = np.concatenate([rng.uniform(-shift, shift, (nworld, nobj, 2)),
+                                 rng.uniform(-1, 1, (nworld, nobj, 1)) * np.radians(yaw_deg)], axis=2)
+        return cls(friction_scale=rng.uniform(1 - friction, 1 + friction, nworld),
+                   mass_scale=1 + movable * rng.uniform(-mass, mass, (nworld, nobj)),
+                   offset=offset * movable[None, :, None])
+
+    @classmethod
+    def for_seeds(cls, scene: Scene, seeds: Sequence[int]) -> Perturbation:
+        """World ``w`` perturbed from ``seeds[w]`` alone, so equal seeds give equal worlds in any batch."""
+        worlds = [cls.sample(scene, 1, seed) for seed in seeds]
+        return cls(friction_scale=np.concatenate([w.friction_scale for w in worlds]),
+                   mass_scale=np.concatenate([w.mass_scale for w in worlds]),
+                   offset=np.concatenate([w.offset for w in worlds]))
+
+    def apply_to_model(self, scene: Scene, model: mujoco.MjModel, world: int, *, friction: np.ndarray,
+                       mass: np.ndarray, inertia: np.ndarray) -> None:
+        """Write world ``world``'s friction, mass and inertia into per-world model arrays."""
+        friction[:, 0] = scene.model.geom_friction[:, 0] * self.friction_scale[world]
+        mass[:] = scene.model.body_mass
+        inertia[:] = scene.model.body_inertia
+        for i, body in enumerate(scene.object_body):
+            mass[body] *= self.mass_scale[world, i]
+            inertia[body] *= self.mass_scale[world, i]
+
+    def initial_qpos(self, scene: Scene) -> np.ndarray:
+        """Start configurations (nworld, nq): ``qpos0`` with the movable objects' pose offsets."""
+        model = scene.model
+        qpos = np.tile(model.qpos0, (len(self.friction_scale), 1))
+        for i, name in enumerate(scene.object_names):
+            if not scene.task.objects[i].movable:
+                continue
+            adr = model.jnt_qposadr[model.joint(f"{name}__free").id]
+            qpos[:, adr:adr + 2] += self.offset[:, i, :2]
+            half = self.offset[:, i, 2] / 2
+            dq = np.stack([np.cos(half), 0 * half, 0 * half, np.sin(half)], axis=1)
+            for w in range(qpos.shape[0]):
+                out = np.zeros(4)
+                mujoco.mju_mulQuat(out, dq[w], qpos[w, adr + 3:adr + 7])
+                qpos[w, adr + 3:adr + 7] = out
+        return qpos
+
+
+def weld_relpose(xpos: np.ndarray, xquat: np.ndarray, body1: int, body2: int) -> np.ndarray:
+    """Weld ``eq_data`` (12 values) that holds body2 at its current pose relative to body1."""
+    data = np.zeros(12)
+    rot1 = np.zeros(9)
+    mujoco.mju_quat2Mat(rot1, xquat[body1])
+    data[3:6] = rot1.reshape(3, 3).T @ (xpos[body2] - xpos[body1])
+    inv = np.zeros(4)
+    mujoco.mju_negQuat(inv, xquat[body1])
+    mujoco.mju_mulQuat(data[6:10], inv, xquat[body2])
+    data[10] = 1.0  # torquescale
+    return data
+
+
+def touching_from_contacts(nbody: int, geom_body: np.ndarray, world: np.ndarray, geom: np.ndarray,
+                           dist: np.ndarray, nworld: int) -> np.ndarray:
+    """(nworld, nbody, nbody) touching matrix from a flat contact list."""
+    out = np.zeros((nworld, nbody, nbody), dtype=bool)
+    near = dist <= TOUCH_DISTANCE
+    w, b1, b2 = world[near], geom_body[geom[near, 0]], geom_body[geom[near, 1]]
+    out[w, b1, b2] = True
+    out[w, b2, b1] = True
+    return out
+
+
+def make_sim(scene: Scene, nworld: int, *, backend: BackendName = "mujoco", perturbation: Perturbation | None = None,
+             njmax: int | None = None, nconmax: int | None = None) -> BatchedSim:
+    """A batched simulator of ``nworld`` worlds on ``backend`` (``mujoco`` or ``warp``).
+
+    ``njmax``/``nconmax`` (constraint rows and contacts per world) default to the scene's sizes;
+    a world that needs more is marked failed.
+    """
+    if backend not in _BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(_BACKENDS)}")
+    module_name, cls_name = _BACKENDS[backend].split(":")
+    cls = getattr(importlib.import_module(module_name), cls_name)
+    return cls(scene, nworld, perturbation or Perturbation.none(scene, nworld),
+               njmax=njmax or scene.njmax, nconmax=nconmax or scene.nconmax)
+
+
+def default_backend() -> BackendName:
+    """``warp`` when Warp sees a CUDA device, else ``mujoco``."""
+    try:
+        import warp as wp
+    except ImportError:
+        return "mujoco"
+    wp.config.quiet = True
+    wp.init()
+    return "warp" if wp.get_cuda_device_count() > 0 else "mujoco"

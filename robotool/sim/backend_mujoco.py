@@ -1,0 +1,141 @@
+"""The C MuJoCo backend: one ``MjModel`` copy and one ``MjData`` per world, stepped on a thread pool.
+
+Each world owns a model copy because welds attach at a per-world relative pose (``eq_data``) and
+perturbations change friction and mass per world. ``mj_step(m, d, nstep)`` releases the GIL, so
+worker threads step disjoint chunks of worlds in parallel and gather their state into shared arrays.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import mujoco
+import numpy as np
+
+from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, weld_relpose
+from robotool.sim.build import Scene
+
+_WARNINGS = {
+    mujoco.mjtWarning.mjWARN_BADQACC: "physics diverged (bad acceleration)",
+    mujoco.mjtWarning.mjWARN_CNSTRFULL: "constraint buffer full",
+    mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
+}
+
+
+class MujocoSim:
+    """:class:`~robotool.sim.backend.BatchedSim` on C MuJoCo (deterministic for a given seed)."""
+
+    def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
+                 nthread: int | None = None):
+        self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax
+        self.models = [copy.copy(scene.model) for _ in range(nworld)]
+        self.datas = [mujoco.MjData(m) for m in self.models]
+        qpos0 = perturbation.initial_qpos(scene)
+        for w, (m, d) in enumerate(zip(self.models, self.datas, strict=True)):
+            perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass,
+                                        inertia=m.body_inertia)
+            d.qpos[:] = qpos0[w]
+            mujoco.mj_forward(m, d)
+        model = scene.model
+        self.ctrl = np.zeros((nworld, model.nu))
+        self.mocap_pos = np.array([d.mocap_pos for d in self.datas]).reshape(nworld, model.nmocap, 3)
+        self._time = np.zeros(nworld)
+        self._qpos = np.zeros((nworld, model.nq))
+        self._qvel = np.zeros((nworld, model.nv))
+        self._xpos = np.zeros((nworld, model.nbody, 3))
+        self._xquat = np.zeros((nworld, model.nbody, 4))
+        self._sensordata = np.zeros((nworld, model.nsensordata))
+        self._eq_active = np.zeros((nworld, model.neq), dtype=bool)
+        self._touching = np.zeros((nworld, model.nbody, model.nbody), dtype=bool)
+        self._failed: list[str | None] = [None] * nworld
+        self._nthread = nthread or min(os.cpu_count() or 1, nworld)
+        self._pool = ThreadPoolExecutor(self._nthread) if self._nthread > 1 else None
+        for w in range(nworld):
+            self._gather(w)
+
+    def _gather(self, w: int) -> None:
+        d = self.datas[w]
+        self._time[w] = d.time
+        self._qpos[w] = d.qpos
+        self._qvel[w] = d.qvel
+        self._xpos[w] = d.xpos
+        self._xquat[w] = d.xquat
+        self._sensordata[w] = d.sensordata
+        self._eq_active[w] = d.eq_active
+        touching = self._touching[w]
+        touching[:] = False
+        if d.ncon:
+            con = d.contact
+            near = con.dist <= TOUCH_DISTANCE
+            bodies = self.scene.model.geom_bodyid[con.geom[near]]
+            touching[bodies[:, 0], bodies[:, 1]] = True
+            touching[bodies[:, 1], bodies[:, 0]] = True
+        if self._failed[w] is None:
+            self._failed[w] = self._failure(d)
+
+    def _failure(self, d: mujoco.MjData) -> str | None:
+        for kind, text in _WARNINGS.items():
+            if d.warning[kind].number:
+                return text
+        if d.nefc > self.njmax:
+            return f"constraint rows {d.nefc} over njmax {self.njmax}"
+        if d.ncon > self.nconmax:
+            return f"contacts {d.ncon} over nconmax {self.nconmax}"
+        return None
+
+    def _run(self, worlds: np.ndarray, nstep: int) -> None:
+        for w in worlds:
+            m, d = self.models[w], self.datas[w]
+            d.ctrl[:] = self.ctrl[w]
+            d.mocap_pos[:] = self.mocap_pos[w]
+            mujoco.mj_step(m, d, nstep)
+            self._gather(w)
+
+    def step(self, nstep: int, active: np.ndarray) -> None:
+        """Step the active, non-failed worlds ``nstep`` times, in parallel chunks."""
+        worlds = np.flatnonzero(np.asarray(active) & np.array([f is None for f in self._failed]))
+        if self._pool is None or worlds.size < 2:
+            self._run(worlds, nstep)
+            return
+        chunks = np.array_split(worlds, self._nthread)
+        for future in [self._pool.submit(self._run, c, nstep) for c in chunks if c.size]:
+            future.result()
+
+    def state(self) -> BatchState:
+        """Copies of the gathered state (safe to keep across steps)."""
+        return BatchState(time=self._time.copy(), qpos=self._qpos.copy(), qvel=self._qvel.copy(),
+                          xpos=self._xpos.copy(), xquat=self._xquat.copy(), sensordata=self._sensordata.copy(),
+                          eq_active=self._eq_active.copy(), touching=self._touching.copy(),
+                          failed=list(self._failed))
+
+    def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
+        """Attach (at the current relative pose) or detach weld ``eq`` in ``worlds``."""
+        model = self.scene.model
+        b1, b2 = model.eq_obj1id[eq], model.eq_obj2id[eq]
+        for w in np.asarray(worlds, dtype=int).reshape(-1):
+            d = self.datas[w]
+            if active:
+                self.models[w].eq_data[eq] = weld_relpose(d.xpos, d.xquat, b1, b2)
+            d.eq_active[eq] = active
+            self._eq_active[w, eq] = active
+
+    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
+        nworld, nray = pnt.shape[:2]
+        dist = np.full((nworld, nray), np.inf)
+        geom = np.full((nworld, nray), -1, dtype=int)
+        hit = np.zeros(1, dtype=np.int32)
+        for w in range(nworld):
+            m, d = self.models[w], self.datas[w]
+            for r in range(nray):
+                x = mujoco.mj_ray(m, d, pnt[w, r], vec[w, r], None, 1, exclude_body, hit)
+                if x >= 0:
+                    dist[w, r], geom[w, r] = x, hit[0]
+        return dist, geom
+
+    def close(self) -> None:
+        """Stop the worker threads."""
+        if self._pool is not None:
+            self._pool.shutdown()

@@ -1,0 +1,124 @@
+"""The mujoco_warp backend: one ``Data`` with ``nworld`` worlds, substeps replayed from a captured graph.
+
+Runs on Warp's ``cuda`` device when there is one, else on ``cpu`` (one thread; for development and
+tests). Per-world friction, mass, inertia and weld ``eq_data`` are batched model fields. Controls are
+written in place (``assign``) so captured graphs see them. A world whose sticky overflow flag is set
+(contacts or constraint rows over ``nconmax``/``njmax``) is marked failed.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import mujoco_warp as mjw
+import numpy as np
+import warp as wp
+
+from robotool.sim.backend import BatchState, Perturbation, touching_from_contacts, weld_relpose
+from robotool.sim.build import Scene
+
+_BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data")
+_OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}
+
+
+class WarpSim:
+    """:class:`~robotool.sim.backend.BatchedSim` on mujoco_warp."""
+
+    def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
+                 device: str | None = None):
+        wp.config.quiet = True
+        wp.config.log_level = wp.LOG_WARNING  # no per-module load messages
+        wp.init()
+        self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax
+        self.device = device or ("cuda" if wp.get_cuda_device_count() else "cpu")
+        model = scene.model
+        mjd = mujoco.MjData(model)
+        mujoco.mj_forward(model, mjd)
+        with wp.ScopedDevice(self.device):
+            self.m = mjw.put_model(model, batch_sizes=dict.fromkeys(_BATCHED, nworld))
+            self.m.opt.warn_overflow = 0  # overflowing worlds are reported as failed instead
+            self.d = mjw.put_data(model, mjd, nworld=nworld, nconmax=nconmax, njmax=njmax)
+            friction, mass, inertia = (self.m.geom_friction.numpy(), self.m.body_mass.numpy(),
+                                       self.m.body_inertia.numpy())
+            for w in range(nworld):
+                perturbation.apply_to_model(scene, model, w, friction=friction[w], mass=mass[w], inertia=inertia[w])
+            self.m.geom_friction.assign(friction)
+            self.m.body_mass.assign(mass)
+            self.m.body_inertia.assign(inertia)
+            self.d.qpos.assign(perturbation.initial_qpos(scene).astype(np.float32))
+            mjw.forward(self.m, self.d)
+        self._eq_data = self.m.eq_data.numpy().copy()
+        self._eq_active = self.d.eq_active.numpy().copy()
+        self.ctrl = np.zeros((nworld, model.nu))
+        self.mocap_pos = np.tile(mjd.mocap_pos, (nworld, 1, 1))
+        self._graphs: dict[int, object] = {}
+        self._state = self._read()
+
+    def _substeps(self, nstep: int) -> None:
+        for _ in range(nstep):
+            mjw.step(self.m, self.d)
+
+    def step(self, nstep: int, active: np.ndarray) -> None:
+        """Step every world ``nstep`` times (``active`` is ignored: the batch moves together)."""
+        with wp.ScopedDevice(self.device):
+            self.d.ctrl.assign(self.ctrl.astype(np.float32))
+            if self.scene.model.nmocap:
+                self.d.mocap_pos.assign(self.mocap_pos.astype(np.float32))
+            graph = self._graphs.get(nstep)
+            if graph is None:
+                self._substeps(nstep)  # loads the kernels; capture needs them loaded
+                saved = {k: getattr(self.d, k).numpy().copy() for k in ("qpos", "qvel", "act", "time",
+                                                                        "qacc_warmstart")}
+                with wp.ScopedCapture() as capture:
+                    self._substeps(nstep)
+                for key, value in saved.items():
+                    getattr(self.d, key).assign(value)
+                self._graphs[nstep] = graph = capture.graph
+            else:
+                wp.capture_launch(graph)
+        self._state = self._read()
+
+    def _read(self) -> BatchState:
+        d, model = self.d, self.scene.model
+        nacon = int(d.nacon.numpy()[0])
+        touching = touching_from_contacts(model.nbody, model.geom_bodyid, d.contact.worldid.numpy()[:nacon],
+                                          d.contact.geom.numpy()[:nacon], d.contact.dist.numpy()[:nacon],
+                                          self.nworld)
+        overflow = d.overflow.numpy()
+        failed = [None if not flags else "overflow: " + ", ".join(
+            name for bit, name in _OVERFLOWS.items() if flags & bit) for flags in overflow]
+        return BatchState(time=d.time.numpy().astype(float), qpos=d.qpos.numpy().astype(float),
+                          qvel=d.qvel.numpy().astype(float), xpos=d.xpos.numpy().astype(float),
+                          xquat=d.xquat.numpy().astype(float), sensordata=d.sensordata.numpy().astype(float),
+                          eq_active=d.eq_active.numpy().astype(bool), touching=touching, failed=failed)
+
+    def state(self) -> BatchState:
+        """The state read back after the last step."""
+        return self._state
+
+    def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
+        """Attach (at the current relative pose) or detach weld ``eq`` in ``worlds``."""
+        model = self.scene.model
+        b1, b2 = model.eq_obj1id[eq], model.eq_obj2id[eq]
+        state = self._state
+        for w in np.asarray(worlds, dtype=int).reshape(-1):
+            if active:
+                self._eq_data[w, eq] = weld_relpose(state.xpos[w], state.xquat[w], b1, b2)
+            self._eq_active[w, eq] = active
+            state.eq_active[w, eq] = active
+        with wp.ScopedDevice(self.device):
+            self.m.eq_data.assign(self._eq_data)
+            self.d.eq_active.assign(self._eq_active)
+
+    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit."""
+        nworld, nray = pnt.shape[:2]
+        with wp.ScopedDevice(self.device):
+            dist = wp.zeros((nworld, nray), dtype=float)
+            geom = wp.zeros((nworld, nray), dtype=int)
+            normal = wp.zeros((nworld, nray), dtype=wp.vec3)
+            all_groups = wp.types.vector(6, wp.float32)(-1, -1, -1, -1, -1, -1)
+            mjw.rays(self.m, self.d, wp.array(pnt.astype(np.float32), dtype=wp.vec3),
+                     wp.array(vec.astype(np.float32), dtype=wp.vec3), all_groups, True,
+                     wp.full(nray, exclude_body, dtype=int), dist, geom, normal)
+        d, g = dist.numpy().astype(float), geom.numpy().astype(int)
+        return np.where(d < 0, np.inf, d), np.where(d < 0, -1, g)

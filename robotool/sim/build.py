@@ -1,0 +1,184 @@
+"""Task -> ``mujoco.MjModel`` through ``mujoco.MjSpec``, and the id tables the simulator needs.
+
+Every task object becomes a body named after it whose frame is the object's centre and rotation;
+its geoms are :func:`robotool.geometry.object_parts`. Fixed objects are static bodies (welded to the
+world); movable ones have a free joint, their mass and friction. A button is a fixed housing with a
+face on its -x side, on a spring-loaded slide joint whose travel is the sensor ``<name>__travel``.
+Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
+Cloth is built by the quadruped module (``robotool.sim.quadruped_cloth.add_cloth(spec, obj)``).
+The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from itertools import combinations
+
+import mujoco
+import numpy as np
+
+from robotool import geometry
+from robotool.scene import SceneObject, Task
+from robotool.sim.embodiment import Embodiment, embodiment_for
+
+TIMESTEP = 0.002  # s, physics step
+CONTROL_SUBSTEPS = 25  # physics steps per control tick
+GROUND_FRICTION = 0.5
+DEFAULT_FRICTION = 0.5
+WELD_SOLREF = (0.01, 1.0)  # stiff enough to carry and push without visible lag
+PRESS_TRAVEL = 0.01  # m: a button counts as pressed after this much travel
+BUTTON_STIFFNESS = 40.0  # N/m
+BUTTON_FACE_DEPTH = 0.015  # m
+BUTTON_MAX_TRAVEL = 0.025  # m
+
+_CLOTH_BUILDER = "robotool.sim.quadruped_cloth:add_cloth"
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A compiled task: the model, its embodiment and the ids that map objects to bodies.
+
+    ``object_body[i]`` is the body of ``object_names[i]``; ``body_object[b]`` the object index of
+    body ``b`` (-1 for the world and the robot; a button's face maps to the button). ``grasp_local``
+    holds each object's graspable point in its body frame.
+    """
+
+    task: Task
+    model: mujoco.MjModel
+    embodiment: Embodiment
+    object_names: tuple[str, ...]
+    object_body: np.ndarray
+    body_object: np.ndarray
+    robot_body: np.ndarray
+    grasp_local: np.ndarray
+    control_substeps: int
+    nconmax: int
+    njmax: int
+
+    @property
+    def control_dt(self) -> float:
+        """Seconds between control ticks."""
+        return self.control_substeps * self.model.opt.timestep
+
+    def object_index(self, name: str) -> int:
+        """Index of a task object by name (KeyError listing the objects otherwise)."""
+        try:
+            return self.object_names.index(name)
+        except ValueError:
+            raise KeyError(f"no object named {name!r}; objects: {', '.join(self.object_names)}") from None
+
+
+def _quat(rot: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rot).reshape(-1))
+    return q
+
+
+def _add_part(body: mujoco.MjsBody, part: geometry.Part, frame_pos: np.ndarray, frame_rot: np.ndarray,
+              **attrs: object) -> mujoco.MjsGeom:
+    """Add one convex part, given in the world, to a body whose frame is (frame_pos, frame_rot)."""
+    pos = frame_rot.T @ (part.center - frame_pos)
+    quat = _quat(frame_rot.T @ part.rot)
+    if part.kind == "box":
+        geom = body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=part.half, pos=pos, quat=quat)
+    else:
+        geom = body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[part.half[0], part.half[2], 0],
+                             pos=pos, quat=quat)
+    for key, value in attrs.items():
+        setattr(geom, key, value)
+    return geom
+
+
+def _part_volume(part: geometry.Part) -> float:
+    if part.kind == "box":
+        return float(8 * np.prod(part.half))
+    return float(np.pi * part.half[0] ** 2 * 2 * part.half[2])
+
+
+def _add_object(spec: mujoco.MjSpec, obj: SceneObject) -> None:
+    center = np.asarray(obj.center, dtype=float)
+    rot = geometry.rotation_matrix(obj.rpy)
+    body = spec.worldbody.add_body(name=obj.name, pos=center, quat=_quat(rot))
+    friction = [obj.friction or DEFAULT_FRICTION, 0.005, 0.0001]
+    parts = geometry.object_parts(obj)
+    if obj.shape == "button":
+        _add_button(body, obj, friction)
+        return
+    attrs: dict[str, object] = {"friction": friction}
+    if obj.movable:
+        body.add_freejoint(name=f"{obj.name}__free")
+        attrs["density"] = obj.effective_mass / sum(_part_volume(p) for p in parts)
+    for part in parts:
+        _add_part(body, part, center, rot, **attrs)
+
+
+def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -> None:
+    """A fixed housing with a spring-loaded face on its -x side (in the button's own frame)."""
+    sx, sy, sz = obj.size
+    depth = min(BUTTON_FACE_DEPTH, 0.2 * sx)
+    travel = min(BUTTON_MAX_TRAVEL, 0.4 * sx)
+    housing_x0 = -sx / 2 + depth + travel
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[(sx / 2 - housing_x0) / 2, sy / 2, sz / 2],
+                  pos=[(housing_x0 + sx / 2) / 2, 0, 0], friction=friction)
+    face = body.add_body(name=f"{obj.name}__face", pos=[-sx / 2 + depth / 2, 0, 0])
+    face.add_joint(name=f"{obj.name}__travel", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
+                   stiffness=BUTTON_STIFFNESS, damping=2.0, range=[0, travel], limited=mujoco.mjtLimited.mjLIMITED_TRUE)
+    face.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[depth / 2, 0.4 * sy, 0.4 * sz], mass=0.02,
+                  friction=friction, rgba=[0.8, 0.1, 0.1, 1])
+
+
+def _add_cloth(spec: mujoco.MjSpec, obj: SceneObject) -> None:
+    module_name, func_name = _CLOTH_BUILDER.split(":")
+    getattr(importlib.import_module(module_name), func_name)(spec, obj)
+
+
+def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
+    """The task's ``MjSpec``: ground, objects, magnet welds, button sensors and the robot."""
+    spec = mujoco.MjSpec()
+    spec.option.timestep = TIMESTEP
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[5, 5, 0.1],
+                            friction=[GROUND_FRICTION, 0.005, 0.0001])
+    for obj in task.objects:
+        if obj.shape == "cloth":
+            _add_cloth(spec, obj)
+        else:
+            _add_object(spec, obj)
+        if obj.shape == "button":
+            spec.add_sensor(name=f"{obj.name}__travel", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
+                            objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"{obj.name}__travel")
+    magnets = [o.name for o in task.objects if o.magnetic]
+    for a, b in combinations(magnets, 2):
+        spec.add_equality(name=f"magnet__{a}__{b}", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
+                          name1=a, name2=b, active=False, solref=WELD_SOLREF)
+    embodiment.add_to_spec(spec, task)
+    return spec
+
+
+def build(task: Task) -> Scene:
+    """Compile a task into a :class:`Scene` (model, embodiment, object/body tables, buffer sizes)."""
+    embodiment = embodiment_for(task)
+    model = make_spec(task, embodiment).compile()
+    names = tuple(o.name for o in task.objects)
+    object_body = np.array([model.body(n).id for n in names], dtype=int)
+    body_object = np.full(model.nbody, -1, dtype=int)
+    robot_body = np.zeros(model.nbody, dtype=bool)
+    for b in range(model.nbody):
+        root = b
+        while model.body_parentid[root] != 0:
+            root = model.body_parentid[root]
+        hits = np.flatnonzero(object_body == root)
+        if hits.size:
+            body_object[b] = hits[0]
+        elif b != 0:
+            robot_body[b] = model.body(root).name.startswith("robot")
+    grasp_local = np.zeros((len(names), 3))
+    for i, obj in enumerate(task.objects):
+        rot = geometry.rotation_matrix(obj.rpy)
+        grasp_local[i] = rot.T @ (np.asarray(obj.grasp_point) - np.asarray(obj.center))
+    nconmax = max(32, 8 * model.ngeom)
+    njmax = 4 * nconmax + 6 * model.neq + 2 * model.njnt
+    return Scene(task=task, model=model, embodiment=embodiment, object_names=names,
+                 object_body=object_body, body_object=body_object, robot_body=robot_body,
+                 grasp_local=grasp_local, control_substeps=CONTROL_SUBSTEPS, nconmax=nconmax, njmax=njmax)

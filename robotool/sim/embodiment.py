@@ -1,0 +1,96 @@
+"""The embodiment-controller interface that the arm and the quadruped both implement.
+
+An embodiment takes part in three phases, and only talks to the simulator through the
+backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend internals):
+
+1. **Model building.** :meth:`Embodiment.add_to_spec` adds the robot's bodies, joints, actuators,
+   sensors and equalities to the ``mujoco.MjSpec`` that :func:`robotool.sim.build` made from the task.
+   Robot element names start with ``robot`` so they never clash with task objects (which may not be
+   named ``robot``). Objects are already in the spec as bodies named after the task objects.
+2. **Running skills.** :meth:`Embodiment.controller` returns a :class:`SkillController` bound to one
+   batched simulator. The runner calls :meth:`SkillController.start` when programs in some worlds call a
+   motion skill, then, at every control tick (every ``Scene.control_substeps`` physics steps), calls
+   :meth:`SkillController.tick` with a fresh :class:`~robotool.sim.backend.BatchState`. ``tick`` reports
+   the skills that finished since the last tick (:class:`SkillEnd`, with outcome ``done``, ``stalled``,
+   ``timeout`` or ``refused``, a reason and measured values) and writes the controls for the next
+   interval through the simulator: ``sim.ctrl`` / ``sim.mocap_pos`` (numpy buffers, world first,
+   pushed to the backend before each step), ``sim.set_weld(worlds, eq, active)`` (attach at the current
+   relative pose, or detach) and ``sim.rays(...)`` for support heights.
+   Query skills are answered at once by :meth:`SkillController.query` from the current state.
+3. **Goals.** Goal sub-conditions are evaluated by :mod:`robotool.sim.goals` from the batched state;
+   embodiment-specific goal kinds live in the embodiment's module and are named there.
+
+All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, times seconds.
+:func:`embodiment_for` dispatches on ``task.robot.type`` and imports the quadruped lazily.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from robotool.scene import Task
+    from robotool.sim.backend import BatchedSim, BatchState
+
+EndOutcome = Literal["done", "stalled", "timeout", "refused"]
+
+_EMBODIMENTS: dict[str, str] = {
+    "arm": "robotool.sim.arm:ArmEmbodiment",
+    "quadruped": "robotool.sim.quadruped:QuadrupedEmbodiment",
+}
+
+
+@dataclass(frozen=True)
+class SkillEnd:
+    """A motion skill that finished in one world: how, why, and the values behind it."""
+
+    world: int
+    outcome: EndOutcome
+    reason: str | None = None
+    measured: dict[str, float] = field(default_factory=dict)
+    result: Any = None
+
+
+class QueryError(ValueError):
+    """A query skill cannot be answered (e.g. an unknown object); the program sees the message."""
+
+
+class SkillController(Protocol):
+    """Runs one embodiment's skills in every world of one batched simulator."""
+
+    def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:
+        """Begin motion skill ``skill`` (arguments already checked by ``check_call``) in ``worlds``.
+
+        Returns the worlds where the skill ends at once (e.g. refused before moving); the others
+        are reported later by :meth:`tick`.
+        """
+
+    def tick(self, state: BatchState) -> list[SkillEnd]:
+        """One control tick: report finished skills, then write controls for the next interval."""
+
+    def query(self, state: BatchState, world: int, skill: str, args: tuple[Any, ...]) -> Any:
+        """Answer a query skill in one world from the current state (raise :class:`QueryError`)."""
+
+
+class Embodiment(Protocol):
+    """One robot type: how it enters the model and how its skills run."""
+
+    def add_to_spec(self, spec: mujoco.MjSpec, task: Task) -> None:
+        """Add the robot's bodies, actuators, sensors and equalities to the task's spec."""
+
+    def controller(self, sim: BatchedSim) -> SkillController:
+        """A controller for every world of ``sim`` (built from the scene this embodiment made)."""
+
+
+def embodiment_for(task: Task) -> Embodiment:
+    """The embodiment for ``task.robot.type``, with the task's limits."""
+    module_name, cls_name = _EMBODIMENTS[task.robot.type].split(":")
+    cls = getattr(importlib.import_module(module_name), cls_name)
+    return cls(task.limits)
+

@@ -1,0 +1,149 @@
+"""The quadruped's goal kinds as named sub-conditions: ``robot_on``, ``lifted`` and ``lowered``.
+
+Object extents come from the state: every object carries the corners of its parts in its body
+frame, placed each tick by its body pose. A fragile object's falls are followed every control tick:
+a fall starts when it was last resting (touching something other than the robot, nearly still) and
+ends when it touches something again; it breaks when its centre dropped more than ``max_drop`` and
+what it landed on is not soft.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool import geometry
+from robotool.sim.backend import BatchState
+from robotool.sim.build import Scene
+from robotool.sim.quadruped_body import BODY
+
+ON_TOLERANCE = 0.03  # m: feet this close to an object's top stand on it
+RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
+
+
+def local_corners(scene: Scene) -> list[np.ndarray]:
+    """Per object, the corners (k, 3) of its parts in its body frame."""
+    out = []
+    for obj in scene.task.objects:
+        rot = geometry.rotation_matrix(obj.rpy)
+        corners = np.vstack([p.corners() for p in geometry.object_parts(obj)])
+        out.append((corners - np.asarray(obj.center)) @ rot)
+    return out
+
+
+def world_corners(state: BatchState, body: int, local: np.ndarray) -> np.ndarray:
+    """Corners (nworld, k, 3) of one object in the world."""
+    return state.xpos[:, body, None, :] + np.einsum("wij,kj->wki", state.xmat(body), local)
+
+
+class RobotOnGoal:
+    """``robot_on: obj``: the robot touches ``obj`` and its feet stand at its top, centre over it."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.name = scene.task.goal.object
+        self.index = scene.object_index(self.name)
+        self.local = local_corners(scene)[self.index]
+        self.robot = scene.model.body(BODY).id
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        """Nothing to remember: the goal holds at the end."""
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        bodies = np.flatnonzero(self.scene.body_object == self.index)
+        touching = state.touching[:, self.robot][:, bodies].any(axis=1)
+        corners = world_corners(state, self.scene.object_body[self.index], self.local)
+        lo, hi = corners.min(axis=1), corners.max(axis=1)
+        feet = state.xpos[:, self.robot]
+        over = np.all((feet[:, :2] >= lo[:, :2]) & (feet[:, :2] <= hi[:, :2]), axis=1)
+        at_top = np.abs(feet[:, 2] - hi[:, 2]) <= ON_TOLERANCE
+        return {f"robot_touches_{self.name}": touching, f"robot_over_{self.name}_top": over & at_top}
+
+
+class LiftedGoal:
+    """``lifted: {object, height}``: the object's bottom is at least ``height`` above its start."""
+
+    def __init__(self, scene: Scene):
+        goal = scene.task.goal.lifted
+        assert goal is not None
+        self.name, self.height = goal.object, goal.height
+        index = scene.object_index(self.name)
+        self.body, self.local = scene.object_body[index], local_corners(scene)[index]
+        self.start: np.ndarray | None = None
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        if self.start is None:
+            self.start = self._bottom(state)
+
+    def _bottom(self, state: BatchState) -> np.ndarray:
+        return world_corners(state, self.body, self.local)[:, :, 2].min(axis=1)
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        start = self.start if self.start is not None else self._bottom(state)
+        return {f"{self.name}_lifted": self._bottom(state) - start >= self.height}
+
+
+class FallTracker:
+    """Follows the falls of one fragile object in every world and remembers whether it broke."""
+
+    def __init__(self, scene: Scene, index: int, max_drop: float):
+        self.scene, self.max_drop = scene, max_drop
+        self.body = scene.object_body[index]
+        self.bodies = np.flatnonzero(scene.body_object == index)
+        self.others = ~np.isin(np.arange(scene.model.nbody), self.bodies) & ~scene.robot_body
+        self.soft = np.array([o.soft for o in scene.task.objects])
+        self.rest_height: np.ndarray | None = None
+        self.airborne: np.ndarray | None = None
+        self.broken: np.ndarray | None = None
+        self.worst = np.zeros(0)
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        touch = state.touching[:, self.bodies][:, :, self.others].any(axis=1)  # (nworld, nbody)
+        supported = touch.any(axis=1)
+        height = state.xpos[:, self.body, 2]
+        if self.rest_height is None:
+            self.rest_height, self.airborne = height.copy(), ~supported
+            self.broken, self.worst = np.zeros_like(supported), np.zeros_like(height)
+        assert self.airborne is not None and self.broken is not None
+        speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
+        resting = active & supported & (speed < RESTING_SPEED)
+        self.rest_height = np.where(resting, height, self.rest_height)
+        landed = active & self.airborne & supported
+        for w in np.flatnonzero(landed):
+            fall = float(self.rest_height[w] - height[w])
+            on = self.scene.body_object[np.flatnonzero(touch[w])]
+            soft = on.size > 0 and bool(np.all((on >= 0) & self.soft[np.maximum(on, 0)]))
+            self.worst[w] = max(self.worst[w], fall)
+            self.broken[w] |= fall > self.max_drop and not soft
+        self.airborne = np.where(active, ~supported, self.airborne)
+
+    def _dof(self) -> np.ndarray:
+        model = self.scene.model
+        adr = model.body_dofadr[self.body]
+        return np.arange(adr, adr + 3)
+
+
+class LoweredGoal:
+    """``lowered: {object, height}``: bottom at most ``height`` above the ground; unbroken if fragile."""
+
+    def __init__(self, scene: Scene):
+        goal = scene.task.goal.lowered
+        assert goal is not None
+        self.name, self.height = goal.object, goal.height
+        index = scene.object_index(self.name)
+        self.body, self.local = scene.object_body[index], local_corners(scene)[index]
+        fragile = scene.task.objects[index].fragile
+        self.falls = FallTracker(scene, index, fragile.max_drop) if fragile else None
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        if self.falls is not None:
+            self.falls.update(state, active)
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        bottom = world_corners(state, self.body, self.local)[:, :, 2].min(axis=1)
+        out = {f"{self.name}_lowered": bottom <= self.height}
+        if self.falls is not None:
+            broken = (
+                self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)
+            )
+            out[f"{self.name}_unbroken"] = ~broken
+        return out

@@ -1,0 +1,141 @@
+"""Pushing for the quadruped: the rules a push must satisfy, and where to stand to push.
+
+A push moves the object along x and y in turn (the shorter leg first), each leg a straight push with
+the robot's face flat against the object's face, so an axis-aligned body never pushes on a corner.
+For each leg the robot stands on the object's far side; if the straight-on pose or its sweep would run
+into something higher than the floor it stands on (another object, a board overhead), the pose slides
+along the object's face to the nearest clear one that still overlaps the face.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+
+from robotool.embodiments import QuadrupedLimits
+
+GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
+MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover
+OFFSET_STEP = 0.05  # m between candidate lateral offsets
+SAME_SURFACE = 0.04  # m: supports closer in height than this are the same surface
+MIN_LEG = 0.02  # m: shorter pushes along an axis are skipped
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One straight push along ``axis`` (0: x, 1: y) that brings the object's centre to ``target``."""
+
+    axis: int
+    target: float
+
+
+def legs(center: np.ndarray, target: np.ndarray) -> list[Leg]:
+    """The axis-aligned pushes from ``center`` to ``target`` (x-y), shorter first."""
+    delta = np.asarray(target[:2]) - np.asarray(center[:2])
+    order = np.argsort(np.abs(delta), kind="stable")
+    return [Leg(int(a), float(target[a])) for a in order if abs(delta[a]) >= MIN_LEG]
+
+
+def rule_violation(
+    *,
+    movable: bool,
+    mass: float,
+    under_robot: bool,
+    robot_support_movable: str | None,
+    object_support: float,
+    robot_support: float,
+    limits: QuadrupedLimits,
+) -> tuple[str, dict[str, float]] | None:
+    """The first push rule broken (reason, measured values), or None when the push is allowed."""
+    if not movable:
+        return "it is fixed in place", {}
+    if under_robot:
+        return "the robot is standing on it", {}
+    if mass > limits.max_push_mass:
+        return (
+            f"its mass {mass:.1f} kg exceeds the push limit of {limits.max_push_mass:.1f} kg",
+            {"mass": mass, "limit": limits.max_push_mass},
+        )
+    if robot_support_movable is not None:
+        return f"the robot stands on {robot_support_movable}, which is movable", {}
+    if abs(object_support - robot_support) > SAME_SURFACE:
+        return (
+            f"it rests at height {object_support:.2f} m, not on the robot's surface at {robot_support:.2f} m",
+            {"object_support": object_support, "robot_support": robot_support},
+        )
+    return None
+
+
+def lateral_offsets(object_width: float, robot_width: float) -> np.ndarray:
+    """Candidate offsets of the robot along the object's face, nearest to straight-on first."""
+    reach = max(0.0, (object_width + robot_width) / 2 - MIN_OVERLAP)
+    steps = np.arange(0.0, reach + 1e-9, OFFSET_STEP)
+    both = np.stack([steps, -steps], axis=1).ravel()
+    return both[1:] if both.size > 1 else both
+
+
+def push_pose(
+    lo: np.ndarray, hi: np.ndarray, leg: Leg, half: np.ndarray, offset: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Robot centres (x-y) at the start and end of ``leg`` for an object with x-y bounds ``lo``-``hi``.
+
+    ``half`` is the robot's x-y half size; ``offset`` shifts the robot along the object's face.
+    """
+    a, b = leg.axis, 1 - leg.axis
+    center = (lo + hi) / 2
+    sign = np.sign(leg.target - center[a])
+    start = np.zeros(2)
+    start[a] = (lo[a] - half[a] - GAP) if sign > 0 else (hi[a] + half[a] + GAP)
+    start[b] = center[b] + offset
+    end = start.copy()
+    end[a] += leg.target - center[a] + sign * GAP
+    return start, end
+
+
+def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: float = 0.05) -> np.ndarray:
+    """x-y sample points (n, 2) covering the robot's footprint swept from ``start`` to ``end``."""
+    lo = np.minimum(start, end) - half + 0.01
+    hi = np.maximum(start, end) + half - 0.01
+    axes = [np.linspace(lo[k], hi[k], max(2, int(np.ceil((hi[k] - lo[k]) / spacing)) + 1)) for k in range(2)]
+    gx, gy = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([gx.ravel(), gy.ravel()])
+
+
+def route(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:
+    """Waypoints (x-y) from ``start`` to ``goal`` around the box ``lo``-``hi`` (robot centre space).
+
+    The straight line is kept when it misses the box; otherwise the path goes by the box's corners,
+    the shorter way round.
+    """
+    if not _crosses(start, goal, lo, hi):
+        return [goal]
+    corners = [np.array([x, y]) for x, y in ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1]))]
+    best: list[np.ndarray] | None = None
+    best_len = np.inf
+    for i in range(4):
+        for direction in (1, -1):
+            for count in (1, 2, 3):
+                path = [corners[(i + direction * k) % 4] for k in range(count)]
+                points = [start, *path, goal]
+                if any(_crosses(p, q, lo, hi) for p, q in pairwise(points)):
+                    continue
+                length = sum(float(np.linalg.norm(q - p)) for p, q in pairwise(points))
+                if length < best_len:
+                    best, best_len = [*path, goal], length
+    return best if best is not None else [goal]
+
+
+def _crosses(p: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether segment p-q passes through the open box (lo, hi) (slab test)."""
+    t0, t1 = 0.0, 1.0
+    d = q - p
+    for k in range(2):
+        if abs(d[k]) < 1e-12:
+            if not lo[k] < p[k] < hi[k]:
+                return False
+            continue
+        a, b = (lo[k] - p[k]) / d[k], (hi[k] - p[k]) / d[k]
+        t0, t1 = max(t0, min(a, b)), min(t1, max(a, b))
+    return t1 - t0 > 1e-6

@@ -1,0 +1,243 @@
+"""The lockstep runner: N programs in N perturbed worlds of one task, stepped together.
+
+Each program runs until it calls a motion skill or ends; query skills are answered at once from the
+current state; the batch then steps, one control tick at a time, until the pending motion skills
+finish (done, stalled, timeout, refused), and the programs whose skill finished are resumed. The
+runner resumes every such world first and only then waits on each (so sandboxed programs run in
+parallel). A program that errors or ends is finished for its world only. Each world yields a
+:class:`~robotool.rollout.Rollout`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from robotool.embodiments import SkillArgumentError, check_call, skill_names, skills
+from robotool.programs import ProgramEnded, ProgramSession, SkillReply, SkillRequest, TrustedProgram, TrustedSession
+from robotool.rollout import Rollout, SkillCall
+from robotool.scene import Task
+from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
+from robotool.sim.build import Scene, build
+from robotool.sim.embodiment import QueryError, SkillController, SkillEnd
+from robotool.sim.goals import GoalTracker, goal_tracker
+from robotool.sim.magnets import Magnets
+
+SETTLE_TIME = 0.3  # s of physics before the programs start
+MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
+MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
+MOVED = 0.01  # m: an object displaced this much counts as touched
+
+
+@dataclass
+class _World:
+    """The runner's bookkeeping for one world."""
+
+    session: ProgramSession
+    calls: list[SkillCall] = field(default_factory=list)
+    pending: SkillCall | None = None
+    pending_args: tuple[Any, ...] = ()
+    ended: bool = False
+    error: str | None = None
+    output: str = ""
+    conditions: dict[str, bool] = field(default_factory=dict)
+    sim_time: float = 0.0
+
+
+def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[TrustedSession]:
+    """One :class:`~robotool.programs.TrustedSession` per trusted callable ``program(robot)``."""
+    names = skill_names(task.robot.type)
+    return [TrustedSession(p, names) for p in programs]
+
+
+def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed: int = 0,
+                 world_seeds: Sequence[int] | None = None,
+                 backend: BackendName = "mujoco", perturb: bool = True, njmax: int | None = None,
+                 nconmax: int | None = None, max_sim_time: float = MAX_SIM_TIME,
+                 max_skill_calls: int = MAX_SKILL_CALLS) -> list[Rollout]:
+    """Run one program session per world and return one :class:`~robotool.rollout.Rollout` each.
+
+    ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
+    the model). World ``w`` is perturbed from ``seed`` (friction, mass, small pose noise) unless
+    ``perturb`` is False; with ``world_seeds``, world ``w`` is perturbed from ``world_seeds[w]`` alone,
+    so candidates compared in one batch meet the same worlds. ``njmax``/``nconmax`` override the per-world constraint and contact
+    capacity; a world that overflows them, diverges, runs over ``max_sim_time`` simulated seconds
+    or makes more than ``max_skill_calls`` calls fails with that reason. A world succeeds when every
+    goal sub-condition holds at its end and it has no error. The same inputs and seed give
+    identical rollouts on the ``mujoco`` backend. Sessions are closed on return.
+    """
+    scene = task if isinstance(task, Scene) else build(task)
+    nworld = len(sessions)
+    if not perturb:
+        perturbation = Perturbation.none(scene, nworld)
+    elif world_seeds is not None:
+        if len(world_seeds) != nworld:
+            raise ValueError(f"{len(world_seeds)} world seeds for {nworld} sessions")
+        perturbation = Perturbation.for_seeds(scene, world_seeds)
+    else:
+        perturbation = Perturbation.sample(scene, nworld, seed)
+    sim = make_sim(scene, nworld, backend=backend, perturbation=perturbation, njmax=njmax, nconmax=nconmax)
+    try:
+        seeds = list(world_seeds) if world_seeds is not None else [seed] * nworld
+        return _Run(scene, sim, sessions, max_sim_time, max_skill_calls).run(seeds)
+    finally:
+        for s in sessions:
+            s.close()
+        close = getattr(sim, "close", None)
+        if close is not None:
+            close()
+
+
+def run_programs(task: Task | Scene, programs: Sequence[TrustedProgram], **kwargs: Any) -> list[Rollout]:
+    """:func:`run_sessions` for trusted callables (tests, hand-written programs)."""
+    scene_task = task.task if isinstance(task, Scene) else task
+    return run_sessions(task, trusted_sessions(scene_task, programs), **kwargs)
+
+
+class _Run:
+    """One lockstep run; see :func:`run_sessions`."""
+
+    def __init__(self, scene: Scene, sim: BatchedSim, sessions: Sequence[ProgramSession],
+                 max_sim_time: float, max_skill_calls: int):
+        self.scene, self.sim = scene, sim
+        self.max_sim_time, self.max_skill_calls = max_sim_time, max_skill_calls
+        self.worlds = [_World(s) for s in sessions]
+        self.embodiment_name = scene.task.robot.type
+        self.kinds = {s.name: s.kind for s in skills(self.embodiment_name)}
+        self.controller: SkillController = scene.embodiment.controller(sim)
+        self.magnets = Magnets(scene)
+        self.goal: GoalTracker = goal_tracker(scene)
+        nworld, nobj = sim.nworld, len(scene.object_names)
+        self.touched = np.zeros((nworld, nobj), dtype=bool)
+        self.start_xpos = np.zeros(0)
+        self.t0 = np.zeros(nworld)
+
+    def alive(self) -> np.ndarray:
+        return np.array([not w.ended for w in self.worlds])
+
+    def run(self, seeds: Sequence[int]) -> list[Rollout]:
+        nworld = self.sim.nworld
+        self.sim.step(max(1, round(SETTLE_TIME / self.scene.model.opt.timestep)), np.ones(nworld, dtype=bool))
+        state = self.sim.state()
+        self.t0 = state.time.copy()
+        self.start_xpos = state.xpos.copy()
+        for w in self.worlds:
+            w.session.resume(None)
+        self._collect(state, list(range(nworld)))
+        while self.alive().any():
+            self.sim.step(self.scene.control_substeps, self.alive())
+            state = self.sim.state()
+            self._observe(state)
+            resumed = self._finish_skills(state, self.controller.tick(state))
+            self._collect(state, resumed)
+        return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
+
+    # -- programs ------------------------------------------------------------------------------
+
+    def _collect(self, state: BatchState, to_wait: list[int]) -> None:
+        """Wait on each resumed world; answer queries (resuming all first), start motion skills."""
+        while to_wait:
+            again = []
+            starts: dict[int, SkillRequest] = {}
+            for i in to_wait:
+                message = self.worlds[i].session.wait()
+                if isinstance(message, ProgramEnded):
+                    self._end(i, state, message.error, message.output)
+                elif self._request(i, state, message):
+                    again.append(i)
+                elif not self.worlds[i].ended:
+                    starts[i] = message
+            for i, request in starts.items():
+                ends = self.controller.start(state, np.array([i]), request.name, self.worlds[i].pending_args)
+                again += self._finish_skills(state, ends)
+            to_wait = again
+
+    def _request(self, i: int, state: BatchState, request: SkillRequest) -> bool:
+        """Handle a skill call; True when the program was resumed at once (query or error)."""
+        world = self.worlds[i]
+        t = float(state.time[i] - self.t0[i])
+        if len(world.calls) >= self.max_skill_calls:
+            self._end(i, state, f"more than {self.max_skill_calls} skill calls")
+            return False
+        try:
+            args = check_call(self.embodiment_name, request.name, request.args)
+        except SkillArgumentError as e:
+            world.calls.append(SkillCall(skill=request.name, args=_jsonable(request.args), outcome="error",
+                                         reason=str(e), started=t, ended=t))
+            world.session.resume(SkillReply(error=str(e)))
+            return True
+        call = SkillCall(skill=request.name, args=_jsonable(args), outcome="done", started=t, ended=t)
+        world.calls.append(call)
+        if self.kinds[request.name] == "motion":
+            world.pending, world.pending_args = call, args
+            return False
+        try:
+            call.result = self.controller.query(state, i, request.name, args)
+        except QueryError as e:
+            call.outcome, call.reason = "error", str(e)
+            world.session.resume(SkillReply(error=str(e)))
+            return True
+        world.session.resume(SkillReply(value=call.result))
+        return True
+
+    def _finish_skills(self, state: BatchState, ends: list[SkillEnd]) -> list[int]:
+        """Record finished motion skills and resume their programs; returns the resumed worlds."""
+        resumed = []
+        for end in ends:
+            world = self.worlds[end.world]
+            if world.ended or world.pending is None:
+                continue
+            call, world.pending = world.pending, None
+            call.outcome, call.reason, call.measured, call.result = end.outcome, end.reason, end.measured, end.result
+            call.ended = float(state.time[end.world] - self.t0[end.world])
+            world.session.resume(SkillReply(value=end.result))
+            resumed.append(end.world)
+        return resumed
+
+    def _end(self, i: int, state: BatchState, error: str | None, output: str = "") -> None:
+        world = self.worlds[i]
+        if world.ended:
+            return
+        world.ended, world.error, world.output = True, error, output
+        world.sim_time = float(state.time[i] - self.t0[i])
+        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
+        if world.pending is not None:
+            world.pending.outcome, world.pending.reason = "error", error
+            world.pending.ended = world.sim_time
+            world.pending = None
+        world.session.close()
+
+    # -- physics bookkeeping -------------------------------------------------------------------
+
+    def _observe(self, state: BatchState) -> None:
+        """After a control tick: magnets, goal memory, touched objects, failures and caps."""
+        alive = self.alive()
+        self.magnets.update(self.sim, state, alive)
+        self.goal.update(state, alive)
+        scene = self.scene
+        owner = scene.body_object
+        robot_contact = state.touching[:, scene.robot_body, :].any(axis=1)  # (nworld, nbody)
+        moved = np.linalg.norm(state.xpos - self.start_xpos, axis=2) > MOVED
+        hit = (robot_contact | moved)[:, owner >= 0]
+        touched = np.zeros_like(self.touched)
+        np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
+        self.touched |= touched & alive[:, None]
+        for i in np.flatnonzero(alive):
+            if state.failed[i] is not None:
+                self._end(i, state, f"simulation failed: {state.failed[i]}")
+            elif state.time[i] - self.t0[i] > self.max_sim_time:
+                self._end(i, state, f"simulated time over the {self.max_sim_time} s cap")
+
+    def _rollout(self, i: int, world: _World, seed: int) -> Rollout:
+        names = self.scene.object_names
+        success = bool(world.conditions) and all(world.conditions.values()) and world.error is None
+        return Rollout(world=i, seed=seed, success=success, conditions=world.conditions, calls=world.calls,
+                       touched=[names[k] for k in np.flatnonzero(self.touched[i])], sim_time=world.sim_time,
+                       error=world.error, output=world.output)
+
+
+def _jsonable(args: tuple[Any, ...]) -> list[Any]:
+    return [list(a) if isinstance(a, tuple) else a for a in args]

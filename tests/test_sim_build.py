@@ -1,0 +1,83 @@
+"""Task -> MuJoCo model: every arm shape, fixed vs movable, buttons, magnets, the gripper."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from robotool import sim
+from robotool.scene import parse_task
+
+
+def _task(objects: list[dict], goal: dict | None = None):
+    return parse_task({"format": 1, "name": "t", "category": "no_tool", "instruction": "x",
+                       "robot": {"type": "arm"}, "objects": objects,
+                       "goal": goal or {"grasped": objects[0]["name"]}})
+
+
+SHAPES = [
+    {"name": "block", "shape": "box", "center": [0.3, 0.0, 0.02], "size": [0.04, 0.06, 0.04], "mass": 0.3},
+    {"name": "roller", "shape": "cylinder", "axis": "x", "center": [0.2, 0.2, 0.02], "size": [0.2, 0.04, 0.04]},
+    {"name": "hook", "shape": "hook", "center": [0.0, -0.3, 0.015], "size": [0.3, 0.15, 0.03], "mass": 0.4},
+    {"name": "button", "shape": "button", "center": [0.6, 0.3, 0.04], "size": [0.2, 0.1, 0.08], "movable": False},
+    {"name": "wall", "shape": "box", "center": [-0.2, 0.3, 0.05], "size": [0.02, 0.2, 0.1], "movable": False,
+     "friction": 0.9},
+]
+
+
+@pytest.fixture(scope="module")
+def scene() -> sim.Scene:
+    return sim.build(_task(SHAPES))
+
+
+def test_movable_objects_are_free_bodies_with_their_mass(scene: sim.Scene) -> None:
+    m = scene.model
+    for obj in scene.task.objects:
+        body = m.body(obj.name)
+        if obj.movable:
+            assert m.jnt_type[body.jntadr[0]] == mujoco.mjtJoint.mjJNT_FREE
+            assert body.mass[0] == pytest.approx(obj.effective_mass, rel=1e-6)
+        else:
+            assert body.jntnum[0] == 0  # static: welded to the world
+
+
+def test_geoms_follow_the_object_parts(scene: sim.Scene) -> None:
+    m, d = scene.model, mujoco.MjData(scene.model)
+    mujoco.mj_forward(m, d)
+    hook = m.body("hook").id
+    assert np.count_nonzero(m.geom_bodyid == hook) == 2  # handle and head
+    roller = np.flatnonzero(m.geom_bodyid == m.body("roller").id)[0]
+    assert m.geom_type[roller] == mujoco.mjtGeom.mjGEOM_CYLINDER
+    np.testing.assert_allclose(d.geom_xmat[roller].reshape(3, 3)[:, 2], [1, 0, 0], atol=1e-9)  # axis along x
+    np.testing.assert_allclose(m.geom_size[roller][:2], [0.02, 0.1])
+    wall = np.flatnonzero(m.geom_bodyid == m.body("wall").id)[0]
+    assert m.geom_friction[wall][0] == pytest.approx(0.9)
+
+
+def test_button_face_is_spring_loaded_with_a_travel_sensor(scene: sim.Scene) -> None:
+    m, d = scene.model, mujoco.MjData(scene.model)
+    joint = m.joint("button__travel")
+    assert joint.stiffness[0] > 0 and m.sensor("button__travel").type[0] == mujoco.mjtSensor.mjSENS_JOINTPOS
+    d.qpos[joint.qposadr[0]] = 0.02
+    mujoco.mj_step(m, d, 500)
+    assert d.sensordata[m.sensor("button__travel").adr[0]] < 0.002  # the spring pushes the face back out
+
+
+def test_gripper_is_confined_to_the_workspace(scene: sim.Scene) -> None:
+    limits = scene.task.limits
+    for k, axis in enumerate("xyz"):
+        np.testing.assert_allclose(scene.model.joint(f"robot_{axis}").range,
+                                   [limits.workspace_min[k], limits.workspace_max[k]])
+    assert scene.robot_body[scene.model.body("robot_gripper").id]
+    assert scene.body_object[scene.model.body("button__face").id] == scene.object_index("button")
+
+
+def test_magnetic_pairs_get_inactive_welds() -> None:
+    cubes = [{"name": f"c{i}", "shape": "box", "center": [0.1 * i, 0, 0.015], "size": [0.03] * 3, "magnetic": True}
+             for i in range(3)]
+    m = sim.build(_task(cubes)).model
+    names = [m.equality(i).name for i in range(m.neq)]
+    assert sorted(n for n in names if n.startswith("magnet__")) == ["magnet__c0__c1", "magnet__c0__c2",
+                                                                    "magnet__c1__c2"]
+    assert not m.eq_active0.any()

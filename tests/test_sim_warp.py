@@ -1,0 +1,52 @@
+"""The mujoco_warp backend agrees with the C backend (Warp's CPU device; kernels compile once per run).
+
+Kept to one model (button_pressing) and a few worlds: the first Warp kernel compile is slow on CPU.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+from fixtures.arm_programs import REFERENCE, TOOL_FREE
+
+from robotool import sim
+
+pytest.importorskip("mujoco_warp")
+
+TASK = "button_pressing"
+
+
+@pytest.fixture(scope="session")
+def warp_rollouts(sim_scene: Any) -> list[Any]:
+    """Reference and tool-free programs side by side in one warp batch."""
+    programs = [REFERENCE[TASK], TOOL_FREE[TASK], REFERENCE[TASK]]
+    return sim.run_programs(sim_scene(TASK), programs, seed=1, backend="warp")
+
+
+def test_same_outcomes_as_the_c_backend(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    programs = [REFERENCE[TASK], TOOL_FREE[TASK], REFERENCE[TASK]]
+    c_rollouts = sim.run_programs(sim_scene(TASK), programs, seed=1, backend="mujoco")
+    assert [r.success for r in warp_rollouts] == [r.success for r in c_rollouts] == [True, False, True]
+    for w, c in zip(warp_rollouts, c_rollouts, strict=True):
+        assert [(k.skill, k.outcome) for k in w.calls] == [(k.skill, k.outcome) for k in c.calls]
+        assert w.sim_time == pytest.approx(c.sim_time, abs=0.1)
+
+
+def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    for backend in ("warp", "mujoco"):
+        (r,) = sim.run_programs(sim_scene(TASK), [REFERENCE[TASK]], backend=backend, njmax=8)
+        assert not r.success and r.error.startswith("simulation failed")
+        assert ("NEFC" in r.error) if backend == "warp" else ("over njmax 8" in r.error)
+
+
+def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    scene = sim_scene(TASK)
+    pnt = np.array([[[0.62, -0.1, 0.5], [0.4, 0.0, 0.5], [1.5, 1.5, 0.5]]] * 2)
+    vec = np.tile([0.0, 0.0, -1.0], (2, 3, 1))
+    results = [sim.make_sim(scene, 2, backend=b).rays(pnt, vec) for b in ("mujoco", "warp")]
+    (dist_c, geom_c), (dist_w, geom_w) = results
+    np.testing.assert_allclose(dist_w, dist_c, atol=1e-4)
+    np.testing.assert_array_equal(geom_w, geom_c)
+    assert dist_c[0, 0] == pytest.approx(0.5 - 0.08) and dist_c[0, 1] == pytest.approx(0.5 - 0.03, abs=1e-3)
