@@ -102,10 +102,8 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
             if status == 429:
                 self.send_header("Retry-After", "0")
             self.end_headers()
-            try:
+            with contextlib.suppress(BrokenPipeError, ConnectionResetError):  # the client gave up
                 self.wfile.write(data)
-            except (BrokenPipeError, ConnectionResetError):
-                pass  # the client gave up (its timeout): nothing to answer
 
         def do_POST(self) -> None:
             if not self.path.rstrip("/").endswith("/chat/completions"):

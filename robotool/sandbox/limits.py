@@ -1,0 +1,27 @@
+"""The budgets one sandboxed program runs under."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class SandboxLimits(BaseModel):
+    """Per-program limits. Time spent waiting for the simulator to answer a skill call counts
+    against none of them: ``cpu_s`` is the worker's own CPU time (it does not grow while 256 workers
+    share two cores, only their wall time does), and ``wall_s`` only runs while the worker owes the
+    runner an answer: from ``resume`` until ``wait`` reads its next skill call or its end. A message
+    that has already arrived is always accepted, so ``wall_s`` is a backstop for a worker that is
+    stuck without using CPU, set well above ``cpu_s``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    cpu_s: float = Field(2.0, gt=0, description="CPU seconds for the whole program (SIGPROF timer)")
+    wall_s: float = Field(
+        30.0, gt=0, description="wall seconds while the runner waits on the program, summed over its run"
+    )
+    memory_mb: int = Field(256, gt=0, description="address space the program may add to the worker, MiB")
+    max_output_chars: int = Field(20_000, gt=0, description="characters the program may print")
+    max_skill_calls: int = Field(500, gt=0, description="skill calls (queries and motions) per program")
+
+    def skill_calls_exceeded(self) -> str:
+        return f"skill call limit exceeded (more than {self.max_skill_calls} calls)"

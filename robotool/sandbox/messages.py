@@ -1,0 +1,53 @@
+"""Messages between the host and a worker: JSON, never pickle, since the worker is untrusted.
+
+Host to worker: ``{"code", "embodiment", "limits"}`` when the session is created, ``GO`` when the
+runner starts the program, then ``{"value", "error"}`` per reply.
+Worker to host: :class:`WorkerMessage`, validated by pydantic on arrival.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from robotool.embodiments import EmbodimentName
+from robotool.programs import SkillReply
+from robotool.sandbox.limits import SandboxLimits
+
+
+class WorkerMessage(BaseModel):
+    """A skill call (``call`` is the skill's name) or the program's end (``call`` is None), with
+    what the program printed since the previous message."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    call: str | None = Field(None, max_length=100)
+    args: list[Any] = Field([], max_length=10)
+    error: str | None = Field(None, max_length=1_000)
+    output: str = ""
+
+
+GO = b"{}"
+
+
+def max_message_bytes(limits: SandboxLimits) -> int:
+    """Largest worker message the host accepts: all allowed output, escaped, plus room for a call."""
+    return 6 * limits.max_output_chars + 65_536
+
+
+def encode_start(code: str, embodiment: EmbodimentName, limits: SandboxLimits) -> bytes:
+    return json.dumps({"code": code, "embodiment": embodiment, "limits": limits.model_dump()}).encode()
+
+
+def encode_reply(reply: SkillReply) -> bytes:
+    return json.dumps({"value": reply.value, "error": reply.error}, default=_plain).encode()
+
+
+def _plain(value: object) -> Any:
+    """numpy values in a reply become lists and Python numbers."""
+    if isinstance(value, np.ndarray | np.generic):
+        return value.tolist()
+    raise TypeError(f"a skill reply cannot contain {type(value).__name__}")

@@ -1,0 +1,153 @@
+"""Sandboxed programs behind the runner's :class:`~robotool.programs.ProgramSession` protocol."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import signal
+import time
+from collections.abc import Sequence
+
+from pydantic import ValidationError
+
+from robotool.embodiments import EmbodimentName, SkillArgumentError, check_call
+from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.sandbox.limits import SandboxLimits
+from robotool.sandbox.messages import GO, WorkerMessage, encode_reply, encode_start, max_message_bytes
+from robotool.sandbox.validate import ProgramRejected, validate
+from robotool.sandbox.zygote import Worker, zygote
+
+CLOSED = "closed before the program ended"
+
+
+class SandboxSession:
+    """One generated program, validated, then run in its own worker process.
+
+    A program the validator rejects gets no worker: :meth:`wait` returns ``ProgramEnded`` with the
+    rejection. A worker that crashes, overruns a limit or sends anything malformed ends only this
+    session, with the reason; the host and the other sessions carry on. ``worker`` is one from a
+    batch (:func:`start_sessions`); by default the session spawns its own.
+    """
+
+    def __init__(
+        self,
+        code: str,
+        embodiment: EmbodimentName,
+        limits: SandboxLimits | None = None,
+        *,
+        worker: Worker | None = None,
+    ):
+        self.code = code
+        self.embodiment: EmbodimentName = embodiment
+        self.limits = limits or SandboxLimits()
+        self._ended: ProgramEnded | None = None
+        self._output: list[str] = []
+        self._output_chars = 0
+        self._calls = 0
+        self._started = False
+        self._owed_since: float | None = None
+        self._wall_spent = 0.0
+        self._worker = worker
+        rejection = _rejection(code, embodiment)
+        if rejection is not None:
+            self._end(f"program rejected: {rejection}")
+            return
+        if self._worker is None:
+            (self._worker,) = zygote().spawn(1)
+        with contextlib.suppress(OSError):  # a dead worker: wait() reports how it ended
+            self._worker.conn.send_bytes(encode_start(code, embodiment, self.limits))
+
+    @property
+    def worker_pid(self) -> int | None:
+        """The worker's process id; None when the program was rejected."""
+        return None if self._worker is None else self._worker.pid
+
+    def resume(self, reply: SkillReply | None) -> None:
+        """Start the program (``None``) or answer its pending skill call."""
+        if self._ended is not None:
+            return
+        if self._started == (reply is None):
+            raise ValueError("resume(None) starts the program; after that, resume() takes a SkillReply")
+        self._started = True
+        assert self._worker is not None, "a session has its worker until it ends"
+        with contextlib.suppress(OSError):
+            self._worker.conn.send_bytes(GO if reply is None else encode_reply(reply))
+        self._owed_since = time.monotonic()
+
+    def wait(self) -> SkillRequest | ProgramEnded:
+        """Block until the program calls a skill or ends (or overruns its wall-clock budget)."""
+        if self._ended is not None:
+            return self._ended
+        worker = self._worker
+        assert worker is not None, "a session has its worker until it ends"
+        if self._owed_since is None:
+            raise RuntimeError("wait() without a pending resume()")
+        budget = self.limits.wall_s - self._wall_spent - (time.monotonic() - self._owed_since)
+        if not worker.conn.poll(max(budget, 0.0)):
+            return self._end(f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)")
+        self._wall_spent += time.monotonic() - self._owed_since
+        self._owed_since = None
+        try:
+            data = worker.conn.recv_bytes(max_message_bytes(self.limits))
+            message = WorkerMessage.model_validate_json(data)
+        except (EOFError, ConnectionError):  # reset when it died holding an unread reply
+            return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
+        except (OSError, ValidationError):
+            return self._end("the worker sent a malformed message")
+        self._add_output(message.output)
+        if message.call is None:
+            return self._end(message.error)
+        self._calls += 1
+        if self._calls > self.limits.max_skill_calls:
+            return self._end(self.limits.skill_calls_exceeded())
+        try:
+            args = check_call(self.embodiment, message.call, tuple(message.args))
+        except SkillArgumentError as e:
+            return self._end(str(e))
+        return SkillRequest(message.call, args)
+
+    def close(self) -> None:
+        """Stop the worker if it still runs; idempotent."""
+        if self._ended is None:
+            self._end(CLOSED)
+
+    def _add_output(self, text: str) -> None:
+        room = self.limits.max_output_chars - self._output_chars
+        if room > 0 and text:
+            self._output.append(text[:room])
+            self._output_chars += min(len(text), room)
+
+    def _death_reason(self, code: int) -> str:
+        if code in (-signal.SIGPROF, -signal.SIGXCPU):
+            return f"CPU time limit exceeded ({self.limits.cpu_s:g} s)"
+        if code == -signal.SIGKILL:
+            return "the worker was killed (out of memory?)"
+        if code < 0:
+            return f"the worker crashed ({signal.Signals(-code).name})"
+        return f"the worker exited without finishing the program (status {code})"
+
+    def _end(self, error: str | None) -> ProgramEnded:
+        self._ended = ProgramEnded(error=error, output="".join(self._output))
+        if self._worker is not None:
+            self._worker.zygote.release(self._worker.pid)
+            self._worker.conn.close()
+            self._worker = None
+        return self._ended
+
+
+@functools.lru_cache(maxsize=256)
+def _rejection(code: str, embodiment: EmbodimentName) -> str | None:
+    """Why the program is rejected, or None; cached, as a batch repeats each candidate in R worlds."""
+    try:
+        validate(code, embodiment)
+    except ProgramRejected as e:
+        return str(e)
+    return None
+
+
+def start_sessions(
+    codes: Sequence[str], embodiment: EmbodimentName, limits: SandboxLimits | None = None
+) -> list[SandboxSession]:
+    """One session per program, their workers spawned in one batch (a rejected program's is released)."""
+    workers = zygote().spawn(len(codes))
+    return [SandboxSession(c, embodiment, limits, worker=w) for c, w in zip(codes, workers, strict=True)]

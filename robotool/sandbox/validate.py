@@ -1,0 +1,299 @@
+"""Static check of a generated program's AST against the sandbox allowlist.
+
+Allowed: calls to the embodiment's skills, ``import numpy as np`` and ``import math`` with the
+functions listed in :mod:`robotool.sandbox.allowlist`, a small set of builtins and value methods,
+arithmetic, comparisons, assignments, literals, comprehensions, f-strings, ``for``/``while``/``if``,
+``assert``, ``print``, and helper functions (``def`` without decorators, ``lambda``).
+
+Helper functions are allowed on purpose: language models write them often, their bodies pass the
+same checks as the rest of the program, and what makes functions dangerous elsewhere (``__code__``,
+``__globals__``, ``__closure__``, ``gi_frame``) is reachable only through attributes the allowlist
+refuses. Runaway recursion is stopped by the worker's limits like any other runaway computation.
+
+Refused: other imports, classes, ``try``/``with``/``raise``/``global``/``yield``/``async``, any name
+or attribute starting with ``_``, attribute assignment, builtins outside the allowlist (``open``,
+``exec``, ``getattr``, ``type``...), rebinding a skill, module or builtin name, and skill calls whose
+literal arguments the embodiment cannot take.
+
+Why not RestrictedPython (9.0 was read for this): it compiles a much larger language (classes,
+imports through a guarded ``__import__``, any attribute not starting with ``_``) and its safety rests
+on runtime guards the host must write (``_getattr_``, ``_getitem_``, ``_getiter_``, ``_write_``,
+``_print_``). Its policy is a blocklist of private names; ours must be an allowlist of skills, numpy
+functions and value methods, with messages that name the skill and the embodiment. Taken from it:
+every node type not explicitly allowed is refused (new syntax stays out until reviewed), and its
+list of introspection attributes (``gi_frame``, ``f_globals``, ``tb_frame``...), all of which our
+attribute allowlist excludes.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+
+from robotool.embodiments import SKILLS, EmbodimentName, SkillArgumentError, check_call, skills
+from robotool.sandbox.allowlist import (
+    BUILTINS,
+    MATH_NAMES,
+    METHODS,
+    MODULES,
+    NOT_ALLOWED_BECAUSE,
+    NUMPY_CONSTANTS,
+    NUMPY_FUNCTIONS,
+    NUMPY_LINALG,
+)
+
+MAX_PROGRAM_CHARS = 100_000
+"""Longer text is refused before parsing."""
+
+IMPORT_HINT = "only `import numpy as np` and `import math`"
+
+_PLAIN_NODES: tuple[type[ast.AST], ...] = (
+    ast.Module, ast.Expr, ast.Assign, ast.AugAssign, ast.AnnAssign, ast.For, ast.While, ast.If,
+    ast.Break, ast.Continue, ast.Pass, ast.Return, ast.Assert, ast.BoolOp, ast.BinOp, ast.UnaryOp,
+    ast.IfExp, ast.Compare, ast.Constant, ast.JoinedStr, ast.FormattedValue, ast.List, ast.Tuple,
+    ast.Dict, ast.Set, ast.ListComp, ast.SetComp, ast.DictComp, ast.GeneratorExp, ast.comprehension,
+    ast.Subscript, ast.Slice, ast.Starred, ast.NamedExpr, ast.keyword, ast.arguments,
+    ast.operator, ast.boolop, ast.cmpop, ast.unaryop, ast.expr_context,
+)  # fmt: skip
+"""Nodes allowed as they are; their children are still checked."""
+
+_REFUSED_WORDS: dict[type[ast.AST], str] = {
+    ast.ClassDef: "class definitions are not allowed",
+    ast.AsyncFunctionDef: "async functions are not allowed",
+    ast.Try: "try/except is not allowed",
+    ast.With: "with statements are not allowed",
+    ast.Raise: "raise is not allowed",
+    ast.Global: "global is not allowed",
+    ast.Nonlocal: "nonlocal is not allowed",
+    ast.Delete: "del is not allowed",
+    ast.Yield: "yield (generators) is not allowed",
+    ast.YieldFrom: "yield (generators) is not allowed",
+    ast.Await: "async code is not allowed",
+    ast.Match: "match statements are not allowed",
+}
+
+
+class ProgramRejected(ValueError):
+    """A program (or LM output) that will not run: ``line`` (None if not tied to one),
+    ``construct`` (the offending code or thing, short) and a one-line message."""
+
+    def __init__(self, line: int | None, construct: str, reason: str):
+        self.line = line
+        self.construct = construct
+        self.reason = reason
+        super().__init__(f"line {line}: {reason}" if line else reason)
+
+
+def validate(code: str, embodiment: EmbodimentName) -> None:
+    """Check a program against the sandbox allowlist; raise :class:`ProgramRejected` if it fails.
+
+    The first problem in source order is reported.
+    """
+    if len(code) > MAX_PROGRAM_CHARS:
+        raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
+    try:
+        tree = ast.parse(code)
+    except SyntaxError as e:
+        raise ProgramRejected(e.lineno, "syntax", f"syntax error: {e.msg}") from None
+    except (ValueError, RecursionError, MemoryError) as e:
+        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+    checker = _Checker(code, embodiment, tree)
+    try:
+        checker.visit(tree)
+    except RecursionError:
+        raise ProgramRejected(None, "nesting", "program is nested too deeply") from None
+    checker.check_imports()
+    if checker.problems:
+        raise min(checker.problems, key=lambda p: p.line or 0)
+
+
+def _bound_names(tree: ast.Module) -> set[str]:
+    """Names the program itself binds: assignment and loop targets, functions, parameters."""
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.FunctionDef):
+            names.add(node.name)
+        elif isinstance(node, ast.arg):
+            names.add(node.arg)
+    return names
+
+
+class _Checker(ast.NodeVisitor):
+    """Visits every node, recording a :class:`ProgramRejected` for each problem."""
+
+    def __init__(self, code: str, embodiment: EmbodimentName, tree: ast.Module):
+        self.code = code
+        self.embodiment = embodiment
+        self.skills = {s.name: s for s in skills(embodiment)}
+        self.bound = _bound_names(tree)
+        self.imported: set[str] = set()
+        self.used_modules: dict[str, int] = {}
+        self.problems: list[ProgramRejected] = []
+
+    def reject(self, node: ast.AST, reason: str) -> None:
+        segment = ast.get_source_segment(self.code, node) or type(node).__name__
+        self.problems.append(ProgramRejected(getattr(node, "lineno", None), segment.split("\n")[0], reason))
+
+    def check_imports(self) -> None:
+        for alias, line in sorted(self.used_modules.items(), key=lambda item: item[1]):
+            if alias not in self.imported:
+                statement = "import numpy as np" if alias == "np" else "import math"
+                self.problems.append(
+                    ProgramRejected(line, alias, f"'{alias}' is used but never imported; add `{statement}`")
+                )
+
+    def generic_visit(self, node: ast.AST) -> None:
+        if isinstance(node, _PLAIN_NODES):
+            super().generic_visit(node)
+            return
+        words = _REFUSED_WORDS.get(type(node), f"{type(node).__name__} is not allowed")
+        self.reject(node, words)
+
+    # imports
+
+    def visit_Import(self, node: ast.Import) -> None:
+        for alias in node.names:
+            as_name = alias.asname or alias.name
+            if MODULES.get(as_name) == alias.name:
+                self.imported.add(as_name)
+            else:
+                shown = f"{alias.name} as {alias.asname}" if alias.asname else alias.name
+                self.reject(node, f"import of '{shown}' is not allowed; {IMPORT_HINT}")
+
+    def visit_ImportFrom(self, node: ast.ImportFrom) -> None:
+        names = ", ".join(a.name for a in node.names)
+        self.reject(node, f"'from {node.module} import {names}' is not allowed; {IMPORT_HINT}")
+
+    # names and attributes
+
+    def visit_Name(self, node: ast.Name) -> None:
+        name = node.id
+        if _private(name) or not isinstance(node.ctx, ast.Load):
+            self.check_binding(node, name)
+        elif name in MODULES:
+            self.reject(node, f"'{name}' can only be used as {name}.<function>, not as a value")
+        elif name in self.skills:
+            self.reject(node, f"skill '{name}' can only be called, not used as a value")
+        elif name not in BUILTINS and name not in self.bound:
+            self.reject(node, self.unknown_name(name, called=False))
+
+    def check_binding(self, node: ast.AST, name: str) -> None:
+        if _private(name):
+            self.reject(node, f"name '{name}' is not allowed: names starting with '_' are reserved")
+        elif name in self.skills or name in MODULES or name in BUILTINS:
+            self.reject(node, f"'{name}' cannot be assigned: it is a skill, module or builtin name")
+
+    def unknown_name(self, name: str, *, called: bool) -> str:
+        if hasattr(builtins, name):
+            return f"built-in '{name}' is not allowed in programs"
+        known = ", ".join(self.skills)
+        for other, specs in SKILLS.items():
+            if other != self.embodiment and any(s.name == name for s in specs):
+                return f"'{name}' is a {other} skill; the {self.embodiment}'s skills are: {known}"
+        if called:
+            return f"unknown function '{name}'; the {self.embodiment}'s skills are: {known}"
+        return f"name '{name}' is never assigned"
+
+    def visit_Attribute(self, node: ast.Attribute) -> None:
+        path = _module_path(node)
+        if path is None:
+            self.visit(node.value)
+        else:
+            self.used_modules.setdefault(path[0], node.lineno)
+        if node.attr.startswith("_"):
+            self.reject(node, f"attribute '{node.attr}' is not allowed: names starting with '_' are private")
+        elif not isinstance(node.ctx, ast.Load):
+            self.reject(node, "assigning to attributes is not allowed")
+        elif path is None and node.attr not in METHODS:
+            self.reject(node, _refusal(f"attribute '.{node.attr}'", node.attr))
+        elif path is not None and path not in _MODULE_ATTRIBUTES:
+            self.reject(node, _refusal(".".join(path), path[1]))
+        elif path == ("np", "linalg"):
+            self.reject(node, "'np.linalg' can only be used as np.linalg.<function>, not as a value")
+
+    # calls and definitions
+
+    def visit_Call(self, node: ast.Call) -> None:
+        func = node.func
+        if isinstance(func, ast.Name) and func.id in self.skills:
+            self.check_skill_call(node, func.id)
+        elif isinstance(func, ast.Attribute) and _module_path(func) == ("np", "linalg"):
+            self.reject(node, "'np.linalg' is a module, not a function")
+        elif isinstance(func, ast.Name) and func.id not in BUILTINS and func.id not in self.bound:
+            self.reject(node, self.unknown_name(func.id, called=True))
+        else:
+            self.visit(func)
+        for child in [*node.args, *node.keywords]:
+            self.visit(child)
+
+    def check_skill_call(self, node: ast.Call, name: str) -> None:
+        spec = self.skills[name]
+        if any(isinstance(a, ast.Starred) for a in node.args) or any(k.arg is None for k in node.keywords):
+            return
+        params = [p for p, _ in spec.params]
+        unknown = [k.arg for k in node.keywords if k.arg not in params]
+        if unknown:
+            self.reject(node, f"{spec.signature} has no parameter '{unknown[0]}'")
+            return
+        if len(node.args) + len(node.keywords) != len(params):
+            self.reject(node, f"{spec.signature} takes {len(params)} argument(s), got "
+                        f"{len(node.args) + len(node.keywords)}")
+            return
+        by_name = {k.arg: k.value for k in node.keywords}
+        values = [*node.args, *(by_name[p] for p in params[len(node.args):])]
+        try:
+            literal = tuple(ast.literal_eval(v) for v in values)
+        except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+            return  # not all literal: the worker checks the values when the call happens
+        try:
+            check_call(self.embodiment, name, literal)
+        except SkillArgumentError as e:
+            self.reject(node, str(e))
+
+    def visit_FunctionDef(self, node: ast.FunctionDef) -> None:
+        if node.decorator_list:
+            self.reject(node, "decorators are not allowed")
+        self.check_binding(node, node.name)
+        self.visit(node.args)
+        for child in [*node.body, *([node.returns] if node.returns else [])]:
+            self.visit(child)
+
+    def visit_Lambda(self, node: ast.Lambda) -> None:
+        self.visit(node.args)
+        self.visit(node.body)
+
+    def visit_arg(self, node: ast.arg) -> None:
+        self.check_binding(node, node.arg)
+        if node.annotation:
+            self.visit(node.annotation)
+
+
+_MODULE_ATTRIBUTES: frozenset[tuple[str, ...]] = frozenset(
+    {("np", n) for n in NUMPY_FUNCTIONS | NUMPY_CONSTANTS | {"linalg"}}
+    | {("np", "linalg", n) for n in NUMPY_LINALG}
+    | {("math", n) for n in MATH_NAMES}
+)
+
+
+def _module_path(node: ast.Attribute) -> tuple[str, ...] | None:
+    """``np.linalg.norm`` -> ("np", "linalg", "norm"); None when the chain does not start at np/math."""
+    parts = [node.attr]
+    value: ast.expr = node.value
+    while isinstance(value, ast.Attribute):
+        parts.append(value.attr)
+        value = value.value
+    if isinstance(value, ast.Name) and value.id in MODULES:
+        return (value.id, *reversed(parts))
+    return None
+
+
+def _private(name: str) -> bool:
+    """Names starting with '_' are reserved; '_' alone is the usual throwaway loop variable."""
+    return name.startswith("_") and name != "_"
+
+
+def _refusal(what: str, name: str) -> str:
+    reason = NOT_ALLOWED_BECAUSE.get(name)
+    return f"{what} is not allowed" + (f": {reason}" if reason else " (not in the sandbox allowlist)")

@@ -1,0 +1,75 @@
+"""Getting the program out of what a language model actually answers."""
+
+from __future__ import annotations
+
+import pytest
+
+from robotool.sandbox import ProgramRejected, extract_program, validate
+
+PROGRAM = 'import numpy as np\np = np.array(get_center("milk"))\nif p[2] > 0:\n    move_to_position(p)\n'
+
+
+def test_plain_program_is_kept() -> None:
+    assert extract_program(PROGRAM) == PROGRAM
+
+
+@pytest.mark.parametrize("tag", ["python", "py", "Python3", ""])
+def test_fenced_block_inside_prose(tag: str) -> None:
+    answer = f"Sure! Here is the program:\n\n```{tag}\n{PROGRAM}```\n\nIt grasps the milk. Let me know!"
+    assert extract_program(answer) == PROGRAM
+
+
+def test_several_python_blocks_are_joined_and_other_languages_skipped() -> None:
+    answer = (
+        "Step 1:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{\"milk\": 1}\n```\n"
+        "Step 2:\n~~~py\nclose_gripper()\n~~~\n"
+    )
+    assert extract_program(answer) == "open_gripper()\n\nclose_gripper()\n"
+
+
+def test_unclosed_fence_runs_to_the_end() -> None:
+    assert extract_program(f"Program:\n```python\n{PROGRAM}") == PROGRAM
+
+
+def test_prose_around_unfenced_code_is_dropped() -> None:
+    answer = f"Here is how the robot grasps the milk:\n{PROGRAM}\nThis works because the milk is in reach."
+    assert extract_program(answer) == PROGRAM
+
+
+def test_windows_line_endings_bom_tabs_and_nbsp() -> None:
+    answer = "\ufeff```python\r\nfor i in range(2):\r\n\tif i:\r\n\t\tmove_to_position([0.3, 0, 0.1])\r\n```"
+    program = extract_program(answer.replace("range(2)", "range(\u00a02)"))
+    assert program == "for i in range( 2):\n    if i:\n        move_to_position([0.3, 0, 0.1])\n"
+    validate(program, "arm")
+
+
+def test_missing_imports_are_added() -> None:
+    program = extract_program("d = np.linalg.norm(get_center('milk'))\nr = math.sqrt(d)\n")
+    assert program.startswith("import numpy as np\nimport math\nd = ")
+    validate(program, "arm")
+    assert extract_program("import math\nx = math.pi\n") == "import math\nx = math.pi\n"
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        "",
+        "I cannot help with that.",
+        "Done",
+        "```python\n\n```",
+        "The robot should first open the gripper, then move to the milk and close the gripper.",
+    ],
+)
+def test_no_program_is_rejected_clearly(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="no Python program found"):
+        extract_program(answer)
+
+
+def test_fenced_code_with_syntax_error_names_the_line() -> None:
+    with pytest.raises(ProgramRejected, match="line 2: syntax error"):
+        extract_program("```python\nopen_gripper()\nmove_to_position([0.3, 0.0\n```")
+
+
+def test_long_prose_is_searched_in_reasonable_time() -> None:
+    prose = "\n".join(f"Sentence number {i} explains the plan." for i in range(300))
+    assert extract_program(f"{prose}\n{PROGRAM}{prose}") == PROGRAM

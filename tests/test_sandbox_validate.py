@@ -1,0 +1,109 @@
+"""The sandbox's static allowlist: what typical generated programs need passes, the rest is named."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from robotool.sandbox import ProgramRejected, validate
+from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG
+
+ARM_PROGRAM = """\
+import numpy as np
+import math
+
+def above(point, height=0.1):
+    return [point[0], point[1], point[2] + height]
+
+low, high = get_workspace_range()[0]
+milk = np.array(get_graspable_point("milk"))
+size = get_size("milk")
+open_gripper()
+move_to_position(above(milk.tolist()))
+move_to_position(milk)
+close_gripper()
+for step in range(3):
+    target = milk + np.array([0.0, 0.0, 0.05 * (step + 1)])
+    move_to_position(target)
+distance = np.linalg.norm(milk[:2]) + math.hypot(size[0], size[1])
+names = sorted({"a": 1, "b": 2}.items(), key=lambda kv: -kv[1])
+print(f"milk at {milk.round(3)}, distance {distance:.2f}, {names}")
+"""
+
+QUADRUPED_PROGRAM = """\
+board = get_position("surfboard")
+gap = get_position("sofa_2")[0] - get_size("sofa_2")[0] / 2
+push_to_position("surfboard", [gap, board[1], board[2]])
+i = 0
+while i < 2 and abs(board[0]) >= 0:
+    i += 1
+walk_to_position(position=[gap + 0.3, 0.0, 0.0])
+climb_to_position([1.45, 0.0, 0.34])
+"""
+
+
+@pytest.mark.parametrize(("code", "embodiment"), [(ARM_PROGRAM, "arm"), (QUADRUPED_PROGRAM, "quadruped")])
+def test_typical_programs_pass(code: str, embodiment: str) -> None:
+    validate(code, embodiment)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("code", "line", "construct", "words"),
+    [
+        ("x = 1\nimport os\n", 2, "import os", "import of 'os' is not allowed; only `import numpy as np`"),
+        ("p = get_center('milk')\n\nq = p.__class__\n", 3, "p.__class__", "'__class__' is not allowed"),
+        ("def f():\n    return open('/etc/passwd')\n", 2, "open('/etc/passwd')", "built-in 'open'"),
+        ("x = np.zeros(3)\n", 1, "np", "'np' is used but never imported; add `import numpy as np`"),
+        ("import math\ny = math.tau\nz = cmath.pi\n", 3, "cmath", "name 'cmath' is never assigned"),
+        ("move_to_position([0.1, 0.2])\nget_center(3)\n", 2, "get_center(3)", "name must be an object name"),
+        ("move_to_position(pos=[0, 0, 0])\n", 1, "move_to_position(pos=[0, 0, 0])", "no parameter 'pos'"),
+        ("f = move_to_position\n", 1, "move_to_position", "can only be called"),
+        ("@staticmethod\ndef f():\n    pass\n", 2, "def f():", "decorators are not allowed"),
+        ("x = [1]\nx.append(2)\nx.pop().__class__\n", 3, "x.pop().__class__", "'__class__'"),
+    ],
+)
+def test_rejection_names_line_and_construct(code: str, line: int, construct: str, words: str) -> None:
+    with pytest.raises(ProgramRejected) as caught:
+        validate(code, "arm")
+    rejected = caught.value
+    assert isinstance(rejected, ValueError)
+    assert (rejected.line, rejected.construct) == (line, construct)
+    assert words in str(rejected) and str(rejected).startswith(f"line {line}: ")
+    assert "\n" not in str(rejected)
+
+
+def test_first_problem_in_source_order_is_reported() -> None:
+    with pytest.raises(ProgramRejected, match="line 2: import of 'sys'"):
+        validate("x = 1\nimport sys\nopen('f')\n", "arm")
+
+
+def test_skills_are_per_embodiment() -> None:
+    validate("walk_to_position([1.0, 0.0, 0.0])\n", "quadruped")
+    with pytest.raises(ProgramRejected, match="'walk_to_position' is a quadruped skill; the arm's skills"):
+        validate("walk_to_position([1.0, 0.0, 0.0])\n", "arm")
+
+
+def test_protected_names_cannot_be_rebound() -> None:
+    for code in ("np = 1\n", "def f(math):\n    return 0\n", "for print in range(3):\n    pass\n", "len = 3"):
+        with pytest.raises(ProgramRejected, match="cannot be assigned"):
+            validate(code, "arm")
+
+
+@pytest.mark.parametrize("code", ["(" * 300 + ")" * 300, "x = " + "-" * 100_000 + "1", "x = 1" * 50_000])
+def test_pathological_text_is_rejected_not_crashing(code: str) -> None:
+    with pytest.raises(ProgramRejected):
+        validate(code, "arm")
+
+
+def test_allowlisted_names_exist_where_the_worker_looks_them_up() -> None:
+    import builtins
+
+    assert all(hasattr(np, n) for n in NUMPY_FUNCTIONS | NUMPY_CONSTANTS)
+    assert all(hasattr(np.linalg, n) for n in NUMPY_LINALG)
+    assert all(hasattr(math, n) for n in MATH_NAMES)
+    assert all(hasattr(builtins, n) for n in BUILTINS)
+    dangerous = {"load", "save", "fromfile", "memmap", "ctypeslib", "lib", "testing", "loadtxt", "frompyfunc"}
+    assert not dangerous & NUMPY_FUNCTIONS
+    assert not {"open", "getattr", "type", "exec", "eval", "vars", "globals", "object"} & BUILTINS
