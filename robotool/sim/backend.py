@@ -8,7 +8,9 @@ captured graph for the substeps; :mod:`robotool.sim.backend_warp`). Controllers 
 
 from __future__ import annotations
 
+import ctypes.util
 import importlib
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, Protocol
@@ -193,11 +195,13 @@ def make_sim(scene: Scene, nworld: int, *, backend: BackendName = "mujoco", pert
 
 
 def default_backend() -> BackendName:
-    """``warp`` when Warp sees a CUDA device, else ``mujoco``."""
+    """``warp`` when Warp sees a CUDA device, else ``mujoco`` (Warp is not even loaded without a driver)."""
+    if ctypes.util.find_library("cuda") is None and not os.path.exists("/proc/driver/nvidia/version"):
+        return "mujoco"
     try:
         import warp as wp
     except ImportError:
         return "mujoco"
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_ERROR
     wp.init()
     return "warp" if wp.get_cuda_device_count() > 0 else "mujoco"

@@ -25,7 +25,7 @@ class WarpSim:
 
     def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
                  device: str | None = None):
-        wp.config.quiet = True
+        wp.config.log_level = wp.LOG_ERROR
         wp.config.log_level = wp.LOG_WARNING  # no per-module load messages
         wp.init()
         self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax

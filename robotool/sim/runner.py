@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import mujoco
 import numpy as np
 
 from robotool.embodiments import SkillArgumentError, check_call, skill_names, skills
@@ -112,6 +113,7 @@ class _Run:
         self.goal: GoalTracker = goal_tracker(scene)
         nworld, nobj = sim.nworld, len(scene.object_names)
         self.touched = np.zeros((nworld, nobj), dtype=bool)
+        self.robot_welds = _robot_welds(scene)
         self.start_xpos = np.zeros(0)
         self.t0 = np.zeros(nworld)
 
@@ -131,7 +133,10 @@ class _Run:
             self.sim.step(self.scene.control_substeps, self.alive())
             state = self.sim.state()
             self._observe(state)
-            resumed = self._finish_skills(state, self.controller.tick(state))
+            ends = self.controller.tick(state)
+            if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one
+                state = self.sim.state()
+            resumed = self._finish_skills(state, ends)
             self._collect(state, resumed)
         return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
 
@@ -204,6 +209,7 @@ class _Run:
         world.ended, world.error, world.output = True, error, output
         world.sim_time = float(state.time[i] - self.t0[i])
         world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
+        self._mark_held(state, np.arange(self.sim.nworld) == i)
         if world.pending is not None:
             world.pending.outcome, world.pending.reason = "error", error
             world.pending.ended = world.sim_time
@@ -225,11 +231,17 @@ class _Run:
         touched = np.zeros_like(self.touched)
         np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
         self.touched |= touched & alive[:, None]
+        self._mark_held(state, alive)
         for i in np.flatnonzero(alive):
             if state.failed[i] is not None:
                 self._end(i, state, f"simulation failed: {state.failed[i]}")
             elif state.time[i] - self.t0[i] > self.max_sim_time:
                 self._end(i, state, f"simulated time over the {self.max_sim_time} s cap")
+
+    def _mark_held(self, state: BatchState, worlds: np.ndarray) -> None:
+        """An object welded to the robot (held) counts as touched."""
+        for eq, obj in self.robot_welds:
+            self.touched[:, obj] |= state.eq_active[:, eq] & worlds
 
     def _rollout(self, i: int, world: _World, seed: int) -> Rollout:
         names = self.scene.object_names
@@ -237,6 +249,20 @@ class _Run:
         return Rollout(world=i, seed=seed, success=success, conditions=world.conditions, calls=world.calls,
                        touched=[names[k] for k in np.flatnonzero(self.touched[i])], sim_time=world.sim_time,
                        error=world.error, output=world.output)
+
+
+def _robot_welds(scene: Scene) -> list[tuple[int, int]]:
+    """(equality id, object index) of every weld between a robot body and an object."""
+    model = scene.model
+    welds = []
+    for eq in range(model.neq):
+        if model.eq_type[eq] != mujoco.mjtEq.mjEQ_WELD or model.eq_objtype[eq] != mujoco.mjtObj.mjOBJ_BODY:
+            continue
+        a, b = model.eq_obj1id[eq], model.eq_obj2id[eq]
+        for robot, other in ((a, b), (b, a)):
+            if scene.robot_body[robot] and scene.body_object[other] >= 0:
+                welds.append((eq, int(scene.body_object[other])))
+    return welds
 
 
 def _jsonable(args: tuple[Any, ...]) -> list[Any]:

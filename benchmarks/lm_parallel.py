@@ -1,0 +1,80 @@
+"""How well the RoboTool program overlaps its LM calls: wall time of K=8 candidates over K=1.
+
+A local OpenAI-compatible stand-in answers every request after a fixed delay (200 ms by default), so
+the measurement is the program's concurrency, not a provider's speed. The stand-in's replies are
+scripted for this benchmark (a direct grasp on milk_reaching_near); each solve runs the Analyzer once,
+then the Planner, Calculator and Coder per candidate, then verifies K x R worlds in one batch.
+
+    python benchmarks/lm_parallel.py [--delay 0.2] [--worlds 1] [--repeats 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+
+import dspy  # noqa: E402
+
+from robotool import tasks  # noqa: E402
+from robotool.lm import make_lm  # noqa: E402
+from robotool.program import RoboTool  # noqa: E402
+from robotool.standin import Rule, Script, StandinServer  # noqa: E402
+
+CODE = """\
+p = get_graspable_point("milk")
+open_gripper()
+move_to_position([p[0], p[1], p[2] + 0.02])
+"""
+
+
+def _reply(**fields: object) -> str:
+    parts = [f"[[ ## {k} ## ]]\n{v if isinstance(v, str) else json.dumps(v)}" for k, v in fields.items()]
+    return "\n\n".join([*parts, "[[ ## completed ## ]]"])
+
+
+SCRIPT = Script(
+    note="Benchmark replies (scripted, not a language model).",
+    rules=[
+        Rule(match="[[ ## analysis ## ]]", reply=_reply(analysis="The milk is in reach.", key_concepts=[])),
+        Rule(match="[[ ## abstract_plan ## ]]", reply=_reply(
+            object_roles=[], abstract_plan="Reach above the milk.",
+            steps=[{"skill": "move_to_position", "objects": ["milk"], "intent": "reach"}])),
+        Rule(match="[[ ## calculation ## ]]", reply=_reply(calculation="Above the grasp point.", parameters=[])),
+        Rule(match="[[ ## code ## ]]", reply=_reply(code=CODE)),
+    ],
+)
+
+
+def solve_seconds(server: StandinServer, candidates: int, worlds: int) -> float:
+    """Wall time of one solve with ``candidates`` candidates."""
+    lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=0)
+    program = RoboTool(candidates=candidates, worlds_per_candidate=worlds)
+    task = tasks.load("milk_reaching_near")
+    started = time.perf_counter()
+    with dspy.context(lm=lm):
+        solution = program(task=task).solution
+    elapsed = time.perf_counter() - started
+    assert len(solution.candidates) == candidates and all(c.rollouts for c in solution.candidates)
+    return elapsed
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--delay", type=float, default=0.2, help="seconds the stand-in waits before answering")
+    parser.add_argument("--worlds", type=int, default=1, help="perturbed worlds per candidate")
+    parser.add_argument("--repeats", type=int, default=3, help="runs of each K; the best is kept")
+    args = parser.parse_args()
+    script = SCRIPT.model_copy(update={"delay": args.delay})
+    with StandinServer(script) as server:
+        solve_seconds(server, 1, args.worlds)  # warm up the simulator and the sandbox
+        times = {k: min(solve_seconds(server, k, args.worlds) for _ in range(args.repeats)) for k in (1, 8)}
+    print(f"stand-in delay {args.delay * 1000:.0f} ms, {args.worlds} world(s) per candidate")
+    print(f"K=1: {times[1]:.2f} s   K=8: {times[8]:.2f} s   K=8/K=1: {times[8] / times[1]:.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""Candidate programs as they are built: skill calls as program text, plan steps and their parameters.
+
+A :class:`Program` collects the lines of a skill program (the form the sandbox accepts: skills called
+as plain functions, no imports beyond numpy/math, no definitions) together with one typed
+:class:`~robotool.signatures.models.PlanStep` and :class:`~robotool.signatures.models.StepParameters`
+per motion skill. Positions that depend on where objects are when the step runs are written as
+:class:`Point` values: per axis, a number or a queried position (:class:`Ref`) plus an offset.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robotool.signatures.models import PlanStep, StepParameters
+
+
+@dataclass(frozen=True)
+class Ref:
+    """A position the program queries when it runs: variable ``var`` holds ``skill(obj)``.
+
+    ``value`` is the plan-time estimate (from the task file), used for the step parameters.
+    """
+
+    var: str
+    obj: str
+    skill: str
+    value: tuple[float, float, float]
+
+
+Axis = tuple[Ref | None, float]
+
+
+@dataclass(frozen=True)
+class Point:
+    """A 3-D target: per axis, ``ref[axis] + offset`` (or the number alone when ``ref`` is None)."""
+
+    axes: tuple[Axis, Axis, Axis]
+
+    @classmethod
+    def at(cls, ref: Ref | None, offset: Sequence[float] = (0.0, 0.0, 0.0)) -> Point:
+        """``ref`` plus ``offset`` on every axis (absolute numbers when ``ref`` is None)."""
+        return cls(tuple((ref, float(o)) for o in offset))  # type: ignore[arg-type]
+
+    def with_axis(self, k: int, ref: Ref | None, offset: float) -> Point:
+        """This point with axis ``k`` replaced."""
+        axes = list(self.axes)
+        axes[k] = (ref, float(offset))
+        return Point(tuple(axes))  # type: ignore[arg-type]
+
+    def shifted(self, delta: Sequence[float]) -> Point:
+        """This point moved by ``delta``."""
+        return Point(tuple((r, o + float(d)) for (r, o), d in zip(self.axes, delta, strict=True)))  # type: ignore[arg-type]
+
+    def estimate(self) -> np.ndarray:
+        """Plan-time value of the point."""
+        return np.array([(r.value[k] if r else 0.0) + o for k, (r, o) in enumerate(self.axes)])
+
+    def code(self) -> str:
+        """The point as a Python list expression."""
+        return "[" + ", ".join(_axis_code(r, o, k) for k, (r, o) in enumerate(self.axes)) + "]"
+
+    def parameters(self, step: int, obj: str | None, explanation: str) -> StepParameters:
+        """Typed parameters: an offset from one object's centre when that is what it is, else a target."""
+        refs = {r for r, _ in self.axes}
+        offset = [round(o, 4) for _, o in self.axes]
+        if len(refs) == 1 and (ref := next(iter(refs))) is not None and ref.skill in ("get_center", "get_position"):
+            return StepParameters(step=step, object=obj, relative_to=ref.obj, offset=offset,
+                                  explanation=explanation)
+        return StepParameters(step=step, object=obj, target=[round(float(v), 4) for v in self.estimate()],
+                              explanation=f"{explanation}; computed when the step runs as {self.code()}")
+
+
+def _axis_code(ref: Ref | None, offset: float, k: int) -> str:
+    if ref is None:
+        return f"{offset:.4f}"
+    if abs(offset) < 5e-5:
+        return f"{ref.var}[{k}]"
+    sign = "+" if offset > 0 else "-"
+    return f"{ref.var}[{k}] {sign} {abs(offset):.4f}"
+
+
+@dataclass
+class Program:
+    """A candidate program under construction, with its plan steps, parameters and the objects it uses."""
+
+    lines: list[str] = field(default_factory=list)
+    steps: list[PlanStep] = field(default_factory=list)
+    parameters: list[StepParameters] = field(default_factory=list)
+    objects: list[str] = field(default_factory=list)
+    sentences: list[str] = field(default_factory=list)
+    roles: dict[str, str] = field(default_factory=dict)
+    doubt: str | None = None  # a limit the planner predicts the program breaks, if any
+    _count: int = 0
+
+    def use(self, name: str, role: str | None = None) -> None:
+        """Record that the program uses object ``name`` (with its role, if it has one)."""
+        if name not in self.objects:
+            self.objects.append(name)
+        if role and name not in self.roles:
+            self.roles[name] = role
+
+    def say(self, sentence: str) -> None:
+        """Add one sentence to the program's abstract plan."""
+        self.sentences.append(sentence)
+
+    def query(self, skill: str, obj: str, value: Sequence[float]) -> Ref:
+        """Query a position now (``var = skill('obj')``) and return it as a :class:`Ref`."""
+        self._count += 1
+        ref = Ref(f"p{self._count}", obj, skill, (float(value[0]), float(value[1]), float(value[2])))
+        self.lines.append(f"{ref.var} = {skill}({obj!r})")
+        return ref
+
+    def motion(self, skill: str, *, point: Point | None = None, obj: str | None = None,
+               objects: Sequence[str] = (), intent: str, explanation: str = "") -> None:
+        """Call a motion skill; record its plan step and, for a position, its parameters."""
+        args = ([repr(obj)] if obj is not None else []) + ([point.code()] if point is not None else [])
+        self.lines.append(f"{skill}({', '.join(args)})")
+        names = list(dict.fromkeys([*([obj] if obj else []), *objects]))
+        self.steps.append(PlanStep(skill=skill, objects=names, intent=intent))
+        if point is not None:
+            self.parameters.append(point.parameters(len(self.steps), obj, explanation or intent))
+
+    @property
+    def code(self) -> str:
+        """The program text."""
+        return "\n".join(self.lines) + "\n"
+
+    @property
+    def abstract_plan(self) -> str:
+        """The plan in words."""
+        return " ".join(self.sentences)
+
+    @property
+    def cost(self) -> tuple[int, int]:
+        """Search order: objects used, then motion steps."""
+        return len(self.objects), len(self.steps)

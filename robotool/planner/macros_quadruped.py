@@ -1,0 +1,394 @@
+"""Quadruped macros: walk or climb onto a surface (directly, over a pushed bridge, up pushed steps), push an
+object to a placement (against another object's side, across a gap, out of the way, beside an edge),
+stand on a lever's far end, push an object off an edge onto a soft landing.
+
+Each route is predicted with :func:`robotool.planner.layout.walk_violation` on the planned layout; a
+program whose walk is predicted to break a limit keeps that as its ``doubt`` and is tried late.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robotool.concepts import start_surface, surface_under
+from robotool.embodiments import QuadrupedLimits
+from robotool.planner.codegen import Point, Program, Ref
+from robotool.planner.layout import Box, Layout, detour, push_problem, walk_violation
+from robotool.scene import SceneObject, Task
+
+LEVEL = 0.04  # m: supports closer in height than this are the same surface
+APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
+INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
+OVERLAP = 0.15  # m a bridge rests on each side of a gap
+CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
+SIDE = 0.25  # m the robot keeps from a board it walks beside
+FALL_OFF = 0.08  # m an object pushed off an edge goes past it (beyond its own half size)
+MAX_STEPS = 2  # objects a staircase may use below the target
+
+
+@dataclass
+class Route:
+    """Pushes that rearrange the scene, then waypoints the robot walks through (each on a named surface)."""
+
+    pushes: list[tuple[str, np.ndarray, str]] = field(default_factory=list)  # object, x-y centre, why
+    waypoints: list[tuple[np.ndarray, str]] = field(default_factory=list)  # x-y, surface ("ground" or object)
+    uses: list[tuple[str, str]] = field(default_factory=list)  # object, role
+    words: str = ""
+
+    def layout(self, task: Task) -> Layout:
+        out = Layout(task)
+        for name, xy, _ in self.pushes:
+            out = out.with_moved(name, xy)
+        return out
+
+
+class Quadruped:
+    """The quadruped's view of one task: its limits, body, start and the objects' boxes."""
+
+    def __init__(self, task: Task):
+        self.task = task
+        limits = task.limits
+        assert isinstance(limits, QuadrupedLimits)
+        self.limits = limits
+        self.half = np.asarray(limits.body_size[:2]) / 2
+        self.start = np.asarray(task.robot.position, dtype=float)
+        self.floor_name, self.floor = start_surface(task)
+        self.layout = Layout(task)
+
+    def pushable(self, obj: SceneObject, level: float) -> bool:
+        """Whether the robot may push ``obj`` from a surface at height ``level``."""
+        return (obj.movable and obj.shape != "cloth" and obj.effective_mass <= self.limits.max_push_mass
+                and abs(obj.bottom - level) < LEVEL)
+
+    def extent(self, u: np.ndarray) -> float:
+        """Half length of the body along direction ``u``."""
+        return float(np.abs(u) @ self.half)
+
+    def top_point(self, box: Box, toward: np.ndarray, frm: np.ndarray) -> np.ndarray:
+        """A point well on ``box``'s top for a robot arriving from ``frm``: its centre, or, for a long box,
+        the point along the arrival direction that leaves room for the body."""
+        room = np.maximum(box.half - self.half - INSET, 0.0)
+        along = np.clip(frm - box.center, -room, room)
+        return np.where(np.abs(toward) > 0.5, box.center, box.center + along)
+
+
+# --- routes onto a surface ----------------------------------------------------------------------------
+
+
+def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
+    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps."""
+    box = quad.layout.box(name)
+    yield Route(waypoints=[(box.center, name)], words=f"Walk onto {name}.")
+    if not tools:
+        return
+    yield from _bridges(quad, name)
+    yield from _staircases(quad, name)
+
+
+def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Push a board that rests on the robot's surface across the gap on the straight way to ``name``."""
+    target = quad.layout.box(name)
+    gap = _gap(quad, target.center)
+    if gap is None:
+        return
+    near, far, u = gap
+    for obj in quad.task.objects:
+        if obj.name == name or not quad.pushable(obj, quad.floor) or obj.top - obj.bottom > quad.limits.max_step_up:
+            continue
+        board = quad.layout.box(obj.name)
+        length = 2 * float(np.abs(u) @ board.half)
+        if length < (far - near) + 2 * OVERLAP - 0.05:
+            continue
+        for shift in (far + OVERLAP - length / 2, (near + far) / 2):
+            xy = quad.start + u * shift
+            route = Route(pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
+                          waypoints=[(target.center, name)], uses=[(obj.name, "tool: a rigid board to bridge the gap")],
+                          words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.")
+            yield route
+
+
+def _gap(quad: Quadruped, goal: np.ndarray) -> tuple[float, float, np.ndarray] | None:
+    """The first stretch on the straight way from the start to ``goal`` too low to step in: (from, to, direction)."""
+    delta = goal - quad.start
+    length = float(np.linalg.norm(delta))
+    if length < 1e-6:
+        return None
+    u = delta / length
+    s = np.arange(0.0, length, 0.01)
+    fixed = [o.name for o in quad.task.objects if o.movable]
+    h = quad.layout.heights(quad.start + s[:, None] * u, exclude=fixed)
+    low = np.flatnonzero(h < quad.floor - quad.limits.max_step_up)
+    if not low.size:
+        return None
+    end = low[0]
+    while end + 1 < len(s) and h[end + 1] < quad.floor - quad.limits.max_step_up:
+        end += 1
+    return float(s[low[0]]), float(s[end]), u
+
+
+def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Climb objects of rising height onto ``name``, pushing those that do not already stand against the next."""
+    target = quad.task.object(name)
+    rise = quad.limits.max_step_up + 0.005
+    steps = [o for o in quad.task.objects
+             if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < o.top < target.top - 0.02]
+    for count in range(1, MAX_STEPS + 1):
+        for chain in itertools.permutations(steps, count):
+            tops = [quad.floor, *(o.top for o in chain), target.top]
+            if any(b - a > rise or b <= a for a, b in itertools.pairwise(tops)):
+                continue
+            yield from _place_chain(quad, [*chain, target])
+
+
+def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
+    """Every placement of the chain's movable links against the next one's sides (nearest the target first)."""
+    options: list[list[tuple[np.ndarray, np.ndarray | None]]] = []  # per link: (direction to next, new centre)
+    layout = quad.layout
+    for k in range(len(chain) - 2, -1, -1):
+        obj, nxt = chain[k], chain[k + 1]
+        box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
+        if box.touches(nxt_box):
+            direction = _axis_direction(nxt_box.center - box.center)
+            options.insert(0, [(direction, None)])
+            continue
+        if not quad.pushable(obj, quad.floor):
+            return
+        sides = []
+        for direction in (np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1))):
+            axis = int(np.argmax(np.abs(direction)))
+            xy = nxt_box.center.copy()
+            xy[axis] -= direction[axis] * (nxt_box.half[axis] + box.half[axis])
+            sides.append((direction, xy))
+        options.insert(0, sides)
+    for combo in itertools.product(*options):
+        route = _chain_route(quad, chain, list(combo))
+        if route is not None:
+            yield route
+
+
+def _chain_route(quad: Quadruped, chain: list[SceneObject],
+                 combo: list[tuple[np.ndarray, np.ndarray | None]]) -> Route | None:
+    route = Route()
+    layout = quad.layout
+    for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
+        _, xy = combo[k]
+        obj = chain[k]
+        if xy is not None:
+            moved = layout.box(obj.name).moved_to(xy)
+            if layout.collides(moved) is not None:
+                return None
+            layout = layout.with_moved(obj.name, xy)
+            route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))
+    boxes = [layout.box(o.name) for o in chain]
+    first_dir = combo[0][0]
+    back = float(np.abs(first_dir) @ boxes[0].half) + quad.extent(first_dir) + APPROACH
+    approach = boxes[0].center - first_dir * back
+    route.waypoints.append((approach, quad.floor_name))
+    for k, box in enumerate(boxes[:-1]):
+        route.waypoints.append((box.center, chain[k].name))
+        route.uses.append((chain[k].name, f"tool: a step up to {chain[k + 1].name}"))
+    last_dir = combo[-1][0]
+    route.waypoints.append((quad.top_point(boxes[-1], last_dir, boxes[-2].center), chain[-1].name))
+    names = ", ".join(o.name for o in chain[:-1])
+    route.words = (f"Make a staircase of {names} against {chain[-1].name}"
+                   + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
+                   + f", then climb it onto {chain[-1].name}.")
+    return route
+
+
+def _axis_direction(v: np.ndarray) -> np.ndarray:
+    axis = int(np.argmax(np.abs(v)))
+    out = np.zeros(2)
+    out[axis] = np.sign(v[axis]) or 1.0
+    return out
+
+
+# --- writing routes into programs ---------------------------------------------------------------------
+
+
+class Writer:
+    """Writes pushes and walks into a program, querying positions when they run."""
+
+    def __init__(self, quad: Quadruped, prog: Program):
+        self.quad, self.prog = quad, prog
+        self.layout = quad.layout
+        self.here = quad.start
+        self.level = quad.floor
+        self.refs: dict[str, Ref] = {}
+
+    def position(self, name: str) -> Ref:
+        """Query where ``name`` is now (once per placement)."""
+        if name not in self.refs:
+            box = self.layout.box(name)
+            self.refs[name] = self.prog.query("get_position", name, (*box.center, 0.0))
+        return self.refs[name]
+
+    def push(self, name: str, xy: np.ndarray, why: str) -> None:
+        problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level)
+        ref = self.position(name)
+        start = self.layout.box(name).center
+        self.prog.motion("push_to_position", obj=name, point=Point.at(ref, (*(xy - start), 0.0)),
+                         intent=f"push {name} {why}", explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]")
+        self.here = end
+        self.doubt(problem)
+        self.layout = self.layout.with_moved(name, xy)
+        self.refs.pop(name, None)
+        self.prog.use(name)
+
+    def doubt(self, problem: str | None) -> None:
+        """Keep the first predicted problem as the program's doubt."""
+        if problem and not self.prog.doubt:
+            self.prog.doubt = problem
+
+    def walk(self, xy: np.ndarray, surface: str, intent: str) -> None:
+        """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object."""
+        height = 0.0 if surface == "ground" else self.layout.box(surface).top
+        if surface == "ground" or not self.quad.task.object(surface).movable:
+            point = Point.at(None, (*xy, height))
+        else:  # a movable surface may not be quite where it was pushed to
+            point = Point.at(self.position(surface), (*(xy - self.layout.box(surface).center), 0.0))
+        skill = "climb_to_position" if height > self.level + 0.015 else "walk_to_position"
+        self.prog.motion(skill, point=point, objects=[] if surface == "ground" else [surface], intent=intent)
+        self.level = max(height, self.level) if skill == "climb_to_position" else height
+        self.here = np.asarray(xy, dtype=float)
+
+    def route(self, route: Route) -> None:
+        """Write a whole route; record a predicted violation of its walk as the program's doubt."""
+        for name, role in route.uses:
+            self.prog.use(name, role)
+        for name, xy, why in route.pushes:
+            self.push(name, xy, why)
+        first, surface = route.waypoints[0]
+        if surface == self.quad.floor_name:
+            for via in detour(self.layout, self.here, first, self.quad.limits)[:-1]:
+                self.walk(via, surface, "walk around what stands in the way")
+        self.doubt(walk_violation(self.layout, self.here, [xy for xy, _ in route.waypoints], self.quad.limits))
+        for xy, surface in route.waypoints:
+            self.walk(xy, surface, f"walk onto {surface}" if surface != "ground" else "walk into position")
+        self.prog.say(route.words)
+
+
+# --- goals ----------------------------------------------------------------------------------------------
+
+
+def candidates(task: Task, tools: bool) -> Iterator[Program]:
+    """Every program the macros make for the task (unordered; the search orders them)."""
+    quad = Quadruped(task)
+    goal = task.goal
+    target = task.object(goal.object)
+    if goal.kind == "robot_on":
+        for route in routes_onto(quad, target.name, tools):
+            prog = Program()
+            prog.use(target.name, "target")
+            Writer(quad, prog).route(route)
+            yield prog
+    elif goal.kind == "lifted":
+        if tools:
+            yield from _levers(quad, target)
+    else:
+        yield from _lowerings(quad, target, tools)
+
+
+def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
+    """Lift ``target`` by standing on the far end of the board it rests on, after pushing away what props it."""
+    task = quad.task
+    board_name, _ = surface_under(task, np.asarray(target.center[:2]), exclude=target.name)
+    if board_name == "ground":
+        return
+    board = task.object(board_name)
+    bbox = quad.layout.box(board_name)
+    under = [o for o in task.objects if o.name not in (board_name, target.name) and o.shape != "cloth"
+             and quad.layout.box(o.name).overlap(bbox) > 0.01 and o.top <= board.top]
+    fulcrums = [o for o in under if not o.movable]
+    props = [o for o in under if o.movable]
+    if not fulcrums:
+        return
+    axis = int(np.argmax(bbox.half))
+    a = np.zeros(2)
+    a[axis] = -np.sign(target.center[axis] - bbox.center[axis]) or 1.0  # toward the far end
+    lat = np.array([-a[1], a[0]])
+    fulcrum = quad.layout.box(fulcrums[0].name)
+    for side in (np.sign((quad.start - bbox.center) @ lat) or 1.0, -(np.sign((quad.start - bbox.center) @ lat) or 1.0)):
+        prog = Program()
+        prog.use(target.name, "target")
+        prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
+        prog.use(fulcrums[0].name, "tool: the fulcrum")
+        w = Writer(quad, prog)
+        beside = float(np.abs(lat) @ bbox.half) + quad.extent(lat) + SIDE
+        for prop in props:
+            p = quad.layout.box(prop.name)
+            out = p.center.copy()
+            away = float(np.abs(lat) @ (bbox.half + p.half)) + CLEARANCE + abs((p.center - bbox.center) @ lat)
+            out -= side * lat * away
+            prog.use(prop.name, f"obstacle: props up {board_name}'s far end; push it out of the way")
+            along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
+            w.walk(bbox.center + lat * side * beside + a * along, "ground", f"walk beside {prop.name}")
+            w.push(prop.name, out, "out from under the board")
+        step_on = fulcrum.center - a * (quad.extent(a) + 0.01)
+        step_on = step_on - lat * ((step_on - bbox.center) @ lat)
+        end = bbox.center + a * (float(np.abs(a) @ bbox.half) - quad.extent(a) - INSET)
+        path = [(w.here + lat * (side * beside - (w.here - bbox.center) @ lat), "ground"),
+                (step_on + lat * side * beside, "ground")]
+        for xy, surface in path:
+            w.walk(xy, surface, "walk beside the board")
+        w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
+        w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
+        prog.say((f"Push {', '.join(p.name for p in props)} out from under {board_name}. " if props else "")
+                 + f"Step onto {board_name} by {fulcrums[0].name} and walk to its far end: "
+                 + f"the lever lifts {target.name}.")
+        yield prog
+
+
+def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Program]:
+    """Get onto the surface ``target`` rests on and push it off an edge, onto a soft object when the fall is high."""
+    task = quad.task
+    goal = task.goal.lowered
+    assert goal is not None
+    support_name, _ = surface_under(task, np.asarray(target.center[:2]), exclude=target.name)
+    if support_name == "ground":
+        return
+    support = quad.layout.box(support_name)
+    tbox = quad.layout.box(target.name)
+    fall = target.bottom
+    cushions = [None]
+    if tools:
+        cushions += [o for o in task.objects if o.soft and quad.pushable(o, quad.floor) and o.top <= goal.height
+                     and (target.fragile is None or target.bottom - o.top <= target.fragile.max_drop)]
+    for direction in (np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1))):
+        axis = int(np.argmax(np.abs(direction)))
+        edge = support.center[axis] + direction[axis] * support.half[axis]
+        dest = tbox.center.copy()
+        dest[axis] = edge + direction[axis] * (tbox.half[axis] + FALL_OFF)
+        for cushion in cushions:
+            if cushion is None and target.fragile is not None and fall > target.fragile.max_drop:
+                continue
+            pushes = []
+            if cushion is not None:
+                cbox = quad.layout.box(cushion.name)
+                spot = dest.copy()
+                spot[axis] = edge + direction[axis] * (cbox.half[axis] + 0.005)
+                if quad.layout.collides(cbox.moved_to(spot), ignore=[target.name]) is not None:
+                    continue
+                pushes.append((cushion.name, spot))
+            for route in routes_onto(quad, support_name, tools):
+                prog = Program()
+                prog.use(target.name, "target")
+                w = Writer(quad, prog)
+                for name, spot in pushes:
+                    prog.use(name, f"tool: a soft landing for {target.name}")
+                    w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
+                w.route(route)
+                behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
+                w.walk(behind, support_name, f"walk behind {target.name}")
+                ref = w.position(target.name)
+                prog.motion("push_to_position", obj=target.name, point=Point.at(ref, (*(dest - tbox.center), 0.0)),
+                            intent=f"push {target.name} off {support_name}'s edge",
+                            explanation=f"its centre {tbox.half[axis] + FALL_OFF:.2f} m past the edge")
+                prog.say((f"Push {pushes[0][0]} beside {support_name}; " if pushes else "")
+                         + f"push {target.name} off {support_name}"
+                         + (f" onto {pushes[0][0]}." if pushes else "."))
+                yield prog

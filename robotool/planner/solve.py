@@ -1,0 +1,142 @@
+"""``solve``: the LM-free planner end to end, returning the same :class:`Solution` as the RoboTool program.
+
+Key concepts come from :func:`robotool.concepts.key_concepts`; candidate programs from the
+embodiment's macros; verification from :mod:`robotool.planner.search`. When a key concept is
+violated, programs that use no object besides the goal's own are skipped (the geometry already says
+they cannot work); with ``tools=False`` only those are tried (the evaluator's no-tool floor).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from robotool.concepts import KeyConcept, key_concepts, surface_under
+from robotool.planner import macros_arm, macros_quadruped
+from robotool.planner.codegen import Program
+from robotool.planner.search import Budget, Tried, order, search
+from robotool.scene import SceneObject, Task
+from robotool.signatures.models import ObjectRole, scene_context
+from robotool.solution import Solution, StageOutputs, rank
+
+MACROS: dict[str, Callable[[Task, bool], Iterator[Program]]] = {
+    "arm": macros_arm.candidates,
+    "quadruped": macros_quadruped.candidates,
+}
+BUDGETS: dict[str, Budget] = {
+    "arm": Budget(beam=8, rounds=4, seconds=60.0),
+    "quadruped": Budget(beam=3, rounds=3, seconds=90.0),
+}
+KEEP_CALLS = 4  # failed candidates (best first) that keep their rollouts' skill-call traces
+CALCULATION = ("Numbers come from the task file's geometry (object boxes, surfaces under vertical rays, graspable "
+               "points, button faces) and the robot's limits; positions of objects that may have moved are queried "
+               "when each step runs and the offsets are added to them.")
+
+
+def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True) -> Solution:
+    """Find the shortest program that the simulator shows reaching the goal, without a language model."""
+    started = time.perf_counter()
+    concepts = key_concepts(task)
+    allowed = goal_objects(task)
+    generated = list(MACROS[task.embodiment](task, tools))
+    tool_free = [p for p in generated if set(p.objects) <= allowed]
+    with_tool = [p for p in generated if not set(p.objects) <= allowed]
+    needs_tool = any(not c.satisfied for c in concepts)
+    if not tools:
+        tiers = [order(tool_free)]
+    elif needs_tool:
+        tiers = [order(with_tool or generated)]
+    else:  # the geometry says no tool is needed: try every tool-free program first
+        tiers = [order(tool_free), order(with_tool)]
+    programs = [p for tier in tiers for p in tier]
+    generated_at = time.perf_counter()
+    with scene_context(task):
+        tried, rounds = search(task, tiers, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
+                               backend=backend, budget=BUDGETS[task.embodiment])
+    verified_at = time.perf_counter()
+    solution = _solution(task, tried, concepts, tools)
+    solution.timings = {"generate": generated_at - started, "verify": verified_at - generated_at,
+                        "total": time.perf_counter() - started}
+    budget = BUDGETS[task.embodiment]
+    solution.notes = [
+        "Produced by the LM-free search planner (robotool.planner): generate-and-test over geometric skill "
+        "macros checked in the batched simulator; no language model was used.",
+        f"{len(generated)} programs generated, {len(programs)} considered, {len(tried)} verified in {rounds} "
+        f"round(s) of up to {budget.beam}, {worlds} perturbed world(s) each.",
+    ]
+    if not tools:
+        solution.notes.append("tools=False: only the goal object (and what it rests on) and the robot were used.")
+    if not solution.success:
+        solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
+    return solution
+
+
+def goal_objects(task: Task) -> set[str]:
+    """What a program may use without using a tool: the goal object and, when it is to be lowered, its support."""
+    target = task.object(task.goal.object)
+    names = {target.name}
+    if task.goal.kind == "lowered":
+        support, _ = surface_under(task, np.asarray(target.center[:2]), exclude=target.name)
+        names.add(support)
+    return names
+
+
+def stages_of(task: Task, prog: Program, concepts: list[KeyConcept]) -> StageOutputs:
+    """The typed stage outputs of one program."""
+    return StageOutputs(
+        analysis=analysis(concepts),
+        key_concepts=concepts,
+        object_roles=[ObjectRole(name=o.name, properties=properties(o), role=_role(task, prog, o))
+                      for o in task.objects],
+        abstract_plan=prog.abstract_plan,
+        steps=prog.steps,
+        calculation=CALCULATION,
+        parameters=prog.parameters,
+    )
+
+
+def analysis(concepts: list[KeyConcept]) -> str:
+    """The key concepts in words."""
+    if not concepts:
+        return "No limit is at stake: the goal is within the robot's reach."
+    lines = [f"{c.name}: {c.value:g} {c.unit} against {c.limit_name} {c.limit:g} {c.unit} "
+             f"({'within the limit' if c.satisfied else 'violated: a tool is needed'})" for c in concepts]
+    return "; ".join(lines) + "."
+
+
+def properties(obj: SceneObject) -> str:
+    """An object's relevant properties in words."""
+    size = " x ".join(f"{v:g}" for v in obj.size)
+    words = [f"{obj.shape}, {size} m, top at {obj.top:.3f} m"]
+    words.append(f"movable, {obj.effective_mass:.2f} kg" if obj.movable else "fixed")
+    words += [w for w, on in (("magnetic", obj.magnetic), ("soft", obj.soft)) if on]
+    if obj.fragile is not None:
+        words.append(f"fragile (max drop {obj.fragile.max_drop:g} m)")
+    return ", ".join(words)
+
+
+def _role(task: Task, prog: Program, obj: SceneObject) -> str:
+    if obj.name == task.goal.object:
+        return "target"
+    return prog.roles.get(obj.name, "none")
+
+
+def _solution(task: Task, tried: list[Tried], concepts: list[KeyConcept], tools: bool) -> Solution:
+    candidates = [t.candidate for t in tried]
+    ranked = rank(candidates)
+    best = ranked[0] if ranked and ranked[0].rollouts else None
+    for kept, candidate in enumerate(c for c in ranked if c is not best):
+        if kept >= KEEP_CALLS:
+            candidate.rollouts = [r.model_copy(update={"calls": []}) for r in candidate.rollouts]
+    empty = StageOutputs(analysis=analysis(concepts), key_concepts=concepts)
+    return Solution(
+        task=task.name,
+        method="search" if tools else "no_tool",
+        code=best.code if best else None,
+        best=best.index if best else None,
+        success_rate=best.success_rate if best else 0.0,
+        candidates=candidates,
+        stages=best.stages if best else empty,
+    )
