@@ -76,24 +76,32 @@ def cmd_describe(args: argparse.Namespace, console: Console) -> int:
 
 
 def cmd_solve(args: argparse.Namespace, console: Console) -> int:
-    """Solve a task with the RoboTool program and print the summary."""
-    import dspy
-
+    """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary."""
     from robotool.lm import HOW_TO_CONFIGURE, make_lm
-    from robotool.program import RoboTool
     from robotool.report import print_solution
 
     task = tasks.load(args.task)
-    lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env,
-                 temperature=args.temperature, max_tokens=args.max_tokens, cache=not args.no_cache)
+    lm = None
+    if args.planner == "lm":
+        lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env,
+                     temperature=args.temperature, max_tokens=args.max_tokens, cache=not args.no_cache)
+        if lm is None:
+            console.print(f"[yellow]{HOW_TO_CONFIGURE}[/]\nSolving with the LM-free search planner instead.")
     if lm is None:
-        console.print(HOW_TO_CONFIGURE)
-        return EXIT_USAGE
-    program = RoboTool.method(args.method, candidates=args.candidates, worlds_per_candidate=args.worlds,
-                              backend=args.backend, seed=args.seed)
-    with console.status(f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
-                        f"{args.worlds} world(s) on {lm.model}"), dspy.context(lm=lm):
-        solution = program(task=task).solution
+        from robotool.planner import solve
+
+        with console.status(f"searching for a program for {task.name} ({args.worlds} world(s) per candidate)"):
+            solution = solve(task, worlds=args.worlds, seed=args.seed, backend=args.backend)
+    else:
+        import dspy
+
+        from robotool.program import RoboTool
+
+        program = RoboTool.method(args.method, candidates=args.candidates, worlds_per_candidate=args.worlds,
+                                  backend=args.backend, seed=args.seed)
+        with console.status(f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
+                            f"{args.worlds} world(s) on {lm.model}"), dspy.context(lm=lm):
+            solution = program(task=task).solution
     print_solution(solution, console)
     if args.out and solution.code:
         args.out.write_text(solution.code)
@@ -149,8 +157,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
     p.set_defaults(func=cmd_describe)
 
-    p = sub.add_parser("solve", help="write a skill program for a task with a language model")
+    p = sub.add_parser("solve", help="write a skill program for a task (language model or search planner)")
     p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
+    p.add_argument("--planner", choices=["lm", "search"], default="lm",
+                   help="lm: the RoboTool program (falls back to search without a model); search: LM-free planner")
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
     p.add_argument("--api-key-env", help="environment variable holding the API key")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from rich.console import Console
+from rich.markup import escape
 from rich.syntax import Syntax
 from rich.table import Table
 
@@ -15,21 +16,21 @@ from robotool.verify import world_failure
 def print_solution(solution: Solution, console: Console) -> None:
     """Key concepts, the chosen plan, every candidate's outcome, and the best code."""
     for note in solution.notes:
-        console.print(f"[yellow]note:[/] {note}")
+        console.print(f"[yellow]note:[/] {escape(note)}")
     stages = solution.stages
     if stages.key_concepts:
         table = Table(title="Key concepts")
         for column in ("concept", "value", "limit", "met"):
             table.add_column(column)
         for c in stages.key_concepts:
-            table.add_row(c.name, f"{c.value:g} {c.unit}", f"{c.limit:g} ({c.limit_name})",
+            table.add_row(escape(c.name), f"{c.value:g} {c.unit}", f"{c.limit:g} ({c.limit_name})",
                           "yes" if c.satisfied else "[red]no[/]")
         console.print(table)
     if stages.abstract_plan:
-        console.print(f"[bold]Plan:[/] {stages.abstract_plan}")
+        console.print(f"[bold]Plan:[/] {escape(stages.abstract_plan)}")
     for i, step in enumerate(stages.steps or [], start=1):
         objects = f" [{', '.join(step.objects)}]" if step.objects else ""
-        console.print(f"  {i}. {step.skill}{objects}: {step.intent}")
+        console.print(escape(f"  {i}. {step.skill}{objects}: {step.intent}"))
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
@@ -40,7 +41,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            c.failure or "solved in every world",
+            escape(c.failure or "solved in every world"),
         )
     console.print(table)
     if solution.code:
@@ -71,15 +72,15 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         outcome = call.outcome if call.outcome == "done" else f"[red]{call.outcome}[/]"
         measured = "" if call.outcome == "done" else ", ".join(f"{k} {v:.3g}" for k, v in call.measured.items())
         details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
-        table.add_row(str(i), f"{call.skill}({_format_args(call.args)})", outcome,
-                      f"{call.ended - call.started:.2f}", details)
+        table.add_row(str(i), escape(f"{call.skill}({_format_args(call.args)})"), outcome,
+                      f"{call.ended - call.started:.2f}", escape(details))
     console.print(table)
     conditions = ", ".join(
         f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
     )
     console.print(f"  goal: {conditions or 'no conditions'}; touched: {', '.join(rollout.touched) or 'nothing'}")
     if rollout.error:
-        console.print(f"  [red]error:[/] {rollout.error}")
+        console.print(f"  [red]error:[/] {escape(rollout.error)}")
     if rollout.output:
         console.print(f"  printed: {rollout.output.strip()[:500]}", markup=False)
 
@@ -91,7 +92,7 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
         table.add_column(column, overflow="fold")
     for r in report.rollouts:
         table.add_row(str(r.world), "yes" if r.success else "[red]no[/]", f"{r.sim_time:.2f}", str(len(r.calls)),
-                      str(len(r.touched)), world_failure(r) or "")
+                      str(len(r.touched)), escape(world_failure(r) or ""))
     console.print(table)
     shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
     for rollout in shown:

@@ -55,10 +55,11 @@ def verify(
 
 def failure_reason(rollouts: Sequence[Rollout]) -> str | None:
     """One line on why the first failed world failed, with how many worlds failed."""
-    failed = [r for r in rollouts if not r.success]
+    failed = [(k, r) for k, r in enumerate(rollouts) if not r.success]
     if not failed:
         return None
-    return f"{len(failed)}/{len(rollouts)} worlds failed; world {failed[0].world}: {world_failure(failed[0])}"
+    k, first = failed[0]
+    return f"{len(failed)}/{len(rollouts)} worlds failed; world {k}: {world_failure(first)}"
 
 
 def world_failure(rollout: Rollout) -> str | None:

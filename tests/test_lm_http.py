@@ -88,10 +88,11 @@ def test_cli_solve_against_the_standin(tmp_path: Path, capsys) -> None:
     assert report["success_rate"] == 1.0 and report["method"] == "robotool"
 
 
-def test_cli_without_lm_says_how_to_configure(monkeypatch, capsys) -> None:
+def test_cli_without_lm_says_how_to_configure_and_uses_the_search_planner(monkeypatch, capsys) -> None:
     monkeypatch.delenv("ROBOTOOL_LM", raising=False)
-    assert main(["solve", TASK]) == 2
-    assert "--lm" in capsys.readouterr().out
+    assert main(["solve", TASK, "--worlds", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "--lm" in out and "search planner" in out
 
 
 def test_bad_lm_settings_are_config_errors(monkeypatch) -> None:
