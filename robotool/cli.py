@@ -184,11 +184,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
     p.add_argument("--json", type=Path, help="write the full report here as JSON")
     p.set_defaults(func=cmd_run)
+
+    # `robotool eval ...` is handed to the evaluator's own parser in main(); listed here for --help.
+    sub.add_parser("eval", help="the offline evaluator (same as python -m robotool.eval; see robotool eval -h)")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["eval"]:
+        from robotool.eval import main as eval_main
+
+        return eval_main(argv[1:], prog="robotool eval")
     args = build_parser().parse_args(argv)
     console = Console()
     errors = Console(stderr=True)

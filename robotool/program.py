@@ -4,7 +4,8 @@ The Analyzer runs once; the Planner, Calculator and Coder run once per candidate
 each candidate with its own ``rollout_id`` and temperature. Every candidate's code is validated by
 the sandbox and run in ``worlds_per_candidate`` perturbed worlds, all candidates in one batch, and
 the candidates are ranked (success rate, then fewer objects touched, then fewer skill calls).
-The paper's ablations are the same module with stages switched off: see :data:`METHODS`.
+The paper's ablations are the same module with stages switched off: see :data:`METHODS`. Repeated
+runs that should sample afresh set ``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ class RoboTool(dspy.Module):
         seed: int = 0,
         temperature: float = 0.7,
         max_temperature: float = 1.0,
+        rollout_base: int = 0,
     ):
         super().__init__()
         if calculator and not planner:
@@ -56,6 +58,7 @@ class RoboTool(dspy.Module):
         self.seed = seed
         self.temperature = temperature
         self.max_temperature = max_temperature
+        self.rollout_base = rollout_base
 
     @classmethod
     def method(cls, name: str, **options: Any) -> RoboTool:
@@ -124,7 +127,7 @@ class RoboTool(dspy.Module):
         if self.candidates == 1:
             return {}
         spread = (self.max_temperature - self.temperature) * k / (self.candidates - 1)
-        return {"rollout_id": k, "temperature": self.temperature + spread}
+        return {"rollout_id": self.rollout_base + k, "temperature": self.temperature + spread}
 
     def _candidate(self, task: Task, description: str, shared: StageOutputs, k: int) -> Candidate:
         candidate = Candidate(index=k, stages=shared.model_copy())

@@ -45,3 +45,8 @@ def test_tasks_writes_a_generated_instance(tmp_path: Path, capsys) -> None:
     assert tasks.load(out).name == "sofa_traversing_3"
     assert main(["tasks", "--family", "no_such_family"]) == 2
     assert "families:" in capsys.readouterr().err
+
+
+def test_eval_subcommand_hands_over_to_the_evaluator(capsys) -> None:
+    assert main(["eval", "--runs", "0"]) == 2
+    assert "--runs" in capsys.readouterr().err

@@ -1,1 +1,38 @@
-"""The offline evaluator (`python -m robotool.eval`)."""
+"""The offline evaluator (``python -m robotool.eval``): methods x tasks x runs -> tables, plots, report.
+
+Modules, one job each: :mod:`~robotool.eval.config` (what to run, defaults, output folder),
+:mod:`~robotool.eval.instances` (which tasks), :mod:`~robotool.eval.solvers` (the methods),
+:mod:`~robotool.eval.runner` (the resumable loop), :mod:`~robotool.eval.journal` (durable records),
+:mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.errors` (failure classes),
+:mod:`~robotool.eval.grading` (key-concept accuracy), :mod:`~robotool.eval.metrics`,
+:mod:`~robotool.eval.tables`, :mod:`~robotool.eval.report`, :mod:`~robotool.eval.plots`,
+:mod:`~robotool.eval.reference` (the paper's numbers), :mod:`~robotool.eval.cli`.
+"""
+
+from robotool.eval.cli import main
+from robotool.eval.config import TIME_BUDGET_S, EvalConfig, EvalError, Settings
+from robotool.eval.errors import FailureClass, TaskFacts, classify, tools_used
+from robotool.eval.grading import ConceptGrade, grade
+from robotool.eval.records import Results, RunKey, RunRecord
+from robotool.eval.runner import evaluate
+from robotool.eval.solvers import METHODS, Solver
+
+__all__ = [
+    "METHODS",
+    "TIME_BUDGET_S",
+    "ConceptGrade",
+    "EvalConfig",
+    "EvalError",
+    "FailureClass",
+    "Results",
+    "RunKey",
+    "RunRecord",
+    "Settings",
+    "Solver",
+    "TaskFacts",
+    "classify",
+    "evaluate",
+    "grade",
+    "main",
+    "tools_used",
+]

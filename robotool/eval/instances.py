@@ -1,0 +1,127 @@
+"""Which task instances an evaluation covers: built-in tasks, task files and generated instances.
+
+A built-in task or a task file is keyed by its name (seed None); a generated instance by its family
+and seed (``robotool.tasks.generate(family, seed)``). Unsolvable generated instances are left out:
+success on them measures nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from pydantic import BaseModel, ConfigDict
+
+from robotool import tasks
+from robotool.concepts import needs_tool
+from robotool.eval.config import EvalError
+from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
+from robotool.scene import Task
+
+DEFAULT_SEEDS: tuple[int, ...] = (0, 1, 2)
+"""Seeds per family in the default run, sized so that it fits :data:`~robotool.eval.config.TIME_BUDGET_S`."""
+
+
+class TaskInstance(BaseModel):
+    """One task to evaluate, with what grading needs to know about it."""
+
+    model_config = ConfigDict(frozen=True)
+
+    name: str
+    seed: int | None = None
+    family: str | None = None
+    task: Task
+    needs_tool: bool
+    tools: frozenset[str] | None = None
+
+    @property
+    def label(self) -> str:
+        """How tables and the progress bar name it: ``name`` or ``family#seed``."""
+        return self.name if self.seed is None else f"{self.name}#{self.seed}"
+
+
+def builtin(name_or_path: str) -> TaskInstance:
+    """A built-in task by name, or a task file by path (TaskFileError when neither)."""
+    task = tasks.load(name_or_path)
+    return TaskInstance(name=task.name, task=task, needs_tool=needs_tool(task),
+                        tools=BUILTIN_TOOLS.get(name_or_path))
+
+
+def builtin_names() -> list[str]:
+    """The built-in tasks, the paper's six first in its order."""
+    names = tasks.names()
+    return [n for n in PAPER_TASKS if n in names] + [n for n in names if n not in PAPER_TASKS]
+
+
+def families() -> list[str] | None:
+    """The procedural task families, or None when this install has none."""
+    listing = getattr(tasks, "families", None)
+    return list(listing()) if callable(listing) and callable(getattr(tasks, "generate", None)) else None
+
+
+def generated(family: str, seed: int) -> TaskInstance | None:
+    """A generated instance, or None when it is unsolvable."""
+    instance = tasks.generate(family, seed)  # type: ignore[attr-defined]
+    if not getattr(instance, "solvable", True):
+        return None
+    return TaskInstance(name=family, seed=seed, family=family, task=instance.task,
+                        needs_tool=bool(instance.needs_tool), tools=_tool_set(getattr(instance, "tool", None)))
+
+
+def _tool_set(tool: str | Iterable[str] | None) -> frozenset[str]:
+    """An instance's tools: None, "a", "a, b" or a collection of names."""
+    if tool is None:
+        return frozenset()
+    names = tool.split(",") if isinstance(tool, str) else tool
+    return frozenset(n.strip() for n in names if n.strip())
+
+
+def parse_seeds(text: str) -> tuple[int, ...]:
+    """``"A-B"`` (inclusive), ``"A"`` or ``"A,B,C"`` -> seeds; ValueError with a readable message."""
+    seeds: list[int] = []
+    for part in text.split(","):
+        low, dash, high = part.strip().partition("-")
+        try:
+            first, last = int(low), int(high) if dash else int(low)
+        except ValueError:
+            raise ValueError(f"seeds must look like 0-9 or 1,4,7, got {text!r}") from None
+        if first < 0 or last < first:
+            raise ValueError(f"seed range {part.strip()!r} must be A-B with 0 <= A <= B")
+        seeds.extend(range(first, last + 1))
+    return tuple(dict.fromkeys(seeds))
+
+
+def select(
+    task_names: Sequence[str] | None, family_names: Sequence[str] | None, seeds: Sequence[int] | None
+) -> tuple[list[TaskInstance], list[str]]:
+    """The instances to evaluate and notes for the user.
+
+    With nothing given: every built-in task plus every family at :data:`DEFAULT_SEEDS`. With only
+    tasks: those tasks. Families or seeds given: those families (default all) at those seeds
+    (default :data:`DEFAULT_SEEDS`), after the tasks given.
+    """
+    notes: list[str] = []
+    everything = task_names is None and family_names is None and seeds is None
+    chosen = [builtin(name) for name in (builtin_names() if everything else task_names or [])]
+    if everything or family_names is not None or seeds is not None:
+        available = families()
+        if available is None:
+            if not everything:
+                raise EvalError("procedural task families are not available in this install")
+            notes.append("no generated instances: procedural task families are not available in this install")
+            return chosen, notes
+        unknown = sorted(set(family_names or ()) - set(available))
+        if unknown:
+            raise EvalError(f"unknown task family {', '.join(unknown)}; families: {', '.join(available)}")
+        skipped = 0
+        for family in family_names or available:
+            for seed in seeds if seeds is not None else DEFAULT_SEEDS:
+                instance = generated(family, seed)
+                if instance is None:
+                    skipped += 1
+                else:
+                    chosen.append(instance)
+        if skipped:
+            notes.append(f"left out {skipped} unsolvable generated instance(s)")
+    if not chosen:
+        raise EvalError("no tasks to evaluate")
+    return chosen, notes

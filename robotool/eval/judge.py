@@ -1,0 +1,49 @@
+"""One run's :class:`~robotool.solution.Solution` -> its :class:`RunRecord`: classified and graded."""
+
+from __future__ import annotations
+
+from robotool.concepts import key_concepts
+from robotool.eval.errors import TaskFacts, classify, run_class, tools_used
+from robotool.eval.grading import grade
+from robotool.eval.instances import TaskInstance
+from robotool.eval.records import RunKey, RunRecord, WorldResult
+from robotool.solution import Solution
+from robotool.verify import world_failure
+
+
+def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) -> RunRecord:
+    """A run in which nothing ran: success 0, class ``invalid``."""
+    return RunRecord(key=key, family=instance.family, embodiment=instance.task.embodiment,
+                     needs_tool=instance.needs_tool, world_seed=world_seed, wall_s=wall_s, success_rate=0.0,
+                     failure_class="invalid")
+
+
+def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float) -> RunRecord:
+    """Classify the chosen candidate's worlds and grade the key concepts of a finished run."""
+    facts = TaskFacts.of(instance.task, needs_tool=instance.needs_tool, needed=instance.tools)
+    chosen = solution.candidates[solution.best] if solution.best is not None else None
+    rollouts = chosen.rollouts if chosen is not None else []
+    worlds = [WorldResult(world=r.world, seed=r.seed, success=r.success, failure_class=classify(r, facts),
+                          failure=world_failure(r), tools_used=sorted(tools_used(r, facts)), calls=len(r.calls),
+                          sim_time=r.sim_time) for r in rollouts]
+    update = {
+        "worlds": worlds,
+        "concepts": grade(key_concepts(instance.task), solution.stages.key_concepts),
+        "code": solution.code,
+        "stages": solution.stages,
+        "candidate_failures": [c.failure for c in solution.candidates],
+        "rollouts": rollouts,
+        "usage": solution.usage,
+        "timings": solution.timings,
+        "notes": solution.notes,
+    }
+    if worlds:
+        update |= {"success_rate": sum(w.success for w in worlds) / len(worlds),
+                   "failure_class": run_class([w.failure_class for w in worlds])}
+    return _empty(instance, key, world_seed, wall_s).model_copy(update=update)
+
+
+def crashed(instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float) -> RunRecord:
+    """The record of a run whose method raised: nothing ran, class ``invalid``."""
+    text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
+    return _empty(instance, key, world_seed, wall_s).model_copy(update={"error": text})

@@ -1,0 +1,72 @@
+"""PNG plots of a summary (matplotlib, Agg backend): success, error breakdown, discriminative tool use."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robotool.eval.metrics import OUTCOMES, Summary
+from robotool.eval.solvers import method_label
+
+COLORS = {"success": "#4c9a2a", "tool_use": "#d1495b", "logical": "#edae49", "numerical": "#00798c",
+          "invalid": "#9e9e9e"}
+
+
+def write_plots(summary: Summary, folder: Path) -> list[str]:
+    """Write the plots that have data into ``folder``; returns their file names."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written: list[str] = []
+
+    def save(fig: plt.Figure, name: str) -> None:
+        for ax in fig.axes:  # legend in a band above the bars
+            ax.set_ylim(0, 1.3)
+            ax.legend(fontsize=7, loc="upper center", ncol=5, frameon=False)
+        fig.tight_layout()
+        fig.savefig(folder / name, dpi=120)
+        plt.close(fig)
+        written.append(name)
+
+    if summary.success or summary.generated:
+        by_method: dict[str, dict[str, float]] = {}
+        for row in summary.success:
+            by_method.setdefault(row.method, {}).update({c: v.value or 0.0 for c, v in row.cells.items()})
+        for row in summary.generated:
+            by_method.setdefault(row.method, {}).update(
+                {f"{c} (gen.)": v.value or 0.0 for c, v in row.cells.items()})
+        columns = list(dict.fromkeys(c for values in by_method.values() for c in values))
+        fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(columns) + 2), 4))
+        width = 0.8 / len(by_method)
+        x = np.arange(len(columns))
+        for i, (method, values) in enumerate(by_method.items()):
+            ax.bar(x + i * width, [values.get(c, 0.0) for c in columns], width, label=method_label(method))
+        ax.set_xticks(x + 0.4 - width / 2, columns, rotation=35, ha="right", fontsize=8)
+        ax.set(ylabel="success rate", title="Success by method and task")
+        save(fig, "success.png")
+
+    if summary.errors:
+        fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(summary.errors) + 2), 4))
+        labels = [method_label(b.method) for b in summary.errors]
+        bottom = np.zeros(len(labels))
+        for outcome in OUTCOMES:
+            shares = np.array([b.shares[outcome] for b in summary.errors])
+            ax.bar(labels, shares, bottom=bottom, label=outcome, color=COLORS[outcome])
+            bottom += shares
+        ax.set(ylabel="share of runs", title="Outcomes and error breakdown")
+        ax.tick_params(axis="x", labelrotation=25, labelsize=8)
+        save(fig, "errors.png")
+
+    if summary.discrimination:
+        fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(summary.discrimination) + 2), 4))
+        x = np.arange(len(summary.discrimination))
+        for offset, (name, attr) in zip((-0.2, 0.2), (("tool needed", "needed"), ("no tool needed", "not_needed")),
+                                        strict=True):
+            ax.bar(x + offset, [getattr(d, attr).value or 0.0 for d in summary.discrimination], 0.4, label=name)
+        ax.set_xticks(x, [method_label(d.method) for d in summary.discrimination], rotation=25, fontsize=8)
+        ax.set(ylabel="tool-use rate", title="Discriminative tool use")
+        save(fig, "discrimination.png")
+    return written

@@ -1,0 +1,84 @@
+"""The evaluator's records: one :class:`RunRecord` per (task, seed, method, run), and the results file."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from robotool.eval.config import EvalConfig
+from robotool.eval.errors import FailureClass
+from robotool.eval.grading import ConceptGrade
+from robotool.rollout import Rollout
+from robotool.solution import StageOutputs, TokenUsage
+
+
+class RunKey(BaseModel):
+    """What identifies a run: the task (a family for generated instances), its seed, method, run index."""
+
+    model_config = ConfigDict(frozen=True)
+
+    task: str
+    seed: int | None = None
+    method: str
+    run: int
+
+    @property
+    def id(self) -> str:
+        """One string for the key, e.g. ``sofa_traversing#3/robotool/0``."""
+        task = self.task if self.seed is None else f"{self.task}#{self.seed}"
+        return f"{task}/{self.method}/{self.run}"
+
+
+class WorldResult(BaseModel):
+    """One perturbed world of the chosen candidate, summarized and classified."""
+
+    world: int
+    seed: int
+    success: bool
+    failure_class: FailureClass | None = None
+    failure: str | None = Field(None, description="why it failed, in one line")
+    tools_used: list[str] = Field(default_factory=list)
+    calls: int = 0
+    sim_time: float = 0.0
+
+
+class RunRecord(BaseModel):
+    """Everything about one run: the instance, the program, its worlds, its grades and its cost."""
+
+    key: RunKey
+    family: str | None = None
+    embodiment: str
+    needs_tool: bool
+    world_seed: int
+    success_rate: float = Field(description="share of the chosen candidate's worlds that reached the goal")
+    failure_class: FailureClass | None = Field(None, description="the run's most common failure; None: no failure")
+    worlds: list[WorldResult] = Field(default_factory=list)
+    concepts: ConceptGrade = Field(default_factory=ConceptGrade)
+    code: str | None = None
+    stages: StageOutputs = Field(default_factory=StageOutputs)
+    candidate_failures: list[str | None] = Field(default_factory=list)
+    rollouts: list[Rollout] = Field(default_factory=list, description="the chosen candidate's full traces")
+    usage: dict[str, TokenUsage] = Field(default_factory=dict, description="LM tokens by stage")
+    timings: dict[str, float] = Field(default_factory=dict, description="the method's own phases, seconds")
+    wall_s: float = Field(0.0, description="wall time of the whole run as the evaluator measured it")
+    notes: list[str] = Field(default_factory=list)
+    error: str | None = Field(None, description="the method raised instead of returning a solution")
+
+    @property
+    def tokens(self) -> int:
+        """LM tokens of the run, prompt and completion."""
+        return sum(u.prompt_tokens + u.completion_tokens for u in self.usage.values())
+
+    @property
+    def tool_use_rate(self) -> float | None:
+        """Share of its worlds in which the program used a tool (None when nothing ran)."""
+        return sum(bool(w.tools_used) for w in self.worlds) / len(self.worlds) if self.worlds else None
+
+
+class Results(BaseModel):
+    """``results.json``: the configuration, the methods left out and why, and every run's record."""
+
+    config: EvalConfig
+    skipped: dict[str, str] = Field(default_factory=dict, description="method -> why it did not run")
+    notes: list[str] = Field(default_factory=list)
+    records: list[RunRecord] = Field(default_factory=list)
+    wall_s: float = Field(0.0, description="wall time of the command that wrote this file")

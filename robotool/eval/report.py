@@ -1,0 +1,63 @@
+"""The tables as ``report.md`` and on the console."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from rich.console import Console
+from rich.table import Table
+
+from robotool.eval.records import Results
+from robotool.eval.tables import TextTable
+
+
+def _markdown_table(table: TextTable) -> str:
+    def line(cells: Sequence[str]) -> str:
+        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+    lines = [f"## {table.title}", "", line(table.columns), line(["---"] * len(table.columns))]
+    lines += [line(row) for row in table.rows]
+    if table.note:
+        lines += ["", table.note]
+    return "\n".join(lines)
+
+
+def _preamble(results: Results) -> list[str]:
+    """What ran, with which settings, and what did not run and why."""
+    s = results.config.settings
+    lines = [f"- LM: {s.lm or 'none'}; candidates per run: {s.candidates}; worlds per candidate: {s.worlds}; "
+             f"backend: {s.backend or 'default'}; base seed: {s.seed}",
+             f"- runs recorded: {len(results.records)}; wall time of the last command: {results.wall_s:.0f} s"]
+    lines += [f"- {line}" for line in skipped_lines(results.skipped)]
+    lines += [f"- note: {note}" for note in results.notes]
+    return lines
+
+
+def skipped_lines(skipped: Mapping[str, str]) -> list[str]:
+    """One line per reason: which methods did not run and why."""
+    methods: dict[str, list[str]] = {}
+    for method, why in skipped.items():
+        methods.setdefault(why, []).append(method)
+    return [f"skipped {', '.join(names)}: {why}" for why, names in methods.items()]
+
+
+def markdown(results: Results, tables: Sequence[TextTable], plots: Sequence[str]) -> str:
+    """The whole ``report.md``."""
+    parts = ["# robotool evaluation", "", *_preamble(results), ""]
+    parts += [_markdown_table(t) + "\n" for t in tables]
+    parts += [f"![{name}]({name})" for name in plots]
+    return "\n".join(parts).rstrip() + "\n"
+
+
+def print_tables(results: Results, tables: Sequence[TextTable], console: Console) -> None:
+    """The preamble and every table, reference rows dimmed."""
+    for line in _preamble(results):
+        console.print(line, markup=False, highlight=False)
+    for t in tables:
+        table = Table(title=t.title, caption=t.note or None)
+        for i, column in enumerate(t.columns):
+            header = column if i == 0 else column.replace("_", "\n")  # task names wrap at underscores
+            table.add_column(header, justify="left" if i == 0 else "right", no_wrap=i == 0)
+        for i, row in enumerate(t.rows):
+            table.add_row(*row, style="dim" if i >= len(t.rows) - t.reference else None)
+        console.print(table)

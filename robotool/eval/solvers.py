@@ -1,0 +1,134 @@
+"""The methods the evaluator compares, and how each one solves a task.
+
+LM methods are the RoboTool program and the paper's ablations (:data:`robotool.methods.METHODS`):
+each run gets its own ``rollout_id`` so that, at a temperature above 0, runs are fresh samples rather
+than cached replies. LM-free methods come from the search planner (``robotool.planner.solve``):
+``search`` with every object, ``no_tool`` restricted to the target object (the floor).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Protocol
+
+from pydantic import BaseModel
+
+from robotool.methods import METHODS as LM_STAGES
+from robotool.scene import Task
+from robotool.solution import Solution
+
+if TYPE_CHECKING:
+    import dspy
+
+
+class Solver(Protocol):
+    """Solves one task for one run; ``seed`` seeds the run's perturbed worlds."""
+
+    def __call__(self, task: Task, *, seed: int, run: int) -> Solution: ...
+
+
+class MethodInfo(BaseModel):
+    """A method's name as the CLI and records spell it, its label in tables, and what it needs."""
+
+    name: str
+    label: str
+    uses_lm: bool
+
+
+_LABELS = {
+    "robotool": "RoboTool",
+    "no_analyzer": "RoboTool w/o Analyzer",
+    "no_calculator": "RoboTool w/o Calculator",
+    "planner_coder": "Planner-Coder",
+    "coder": "Coder",
+    "search": "Search planner (no LM)",
+    "no_tool": "No tool (floor)",
+}
+
+METHODS: dict[str, MethodInfo] = {
+    name: MethodInfo(name=name, label=_LABELS[name], uses_lm=name in LM_STAGES)
+    for name in (*LM_STAGES, "search", "no_tool")
+}
+"""Every method, in table order: the LM program and its ablations, then the LM-free planner's two."""
+
+
+def method_label(method: str) -> str:
+    """How tables and plots name a method."""
+    info = METHODS.get(method)
+    return info.label if info else method
+
+
+class SolverSettings(BaseModel):
+    """What every solver shares: candidates per run (LM methods), worlds per candidate, backend."""
+
+    candidates: int = 1
+    worlds: int = 3
+    backend: str | None = None
+
+
+def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
+    """The RoboTool program or an ablation, sampling from ``lm``."""
+
+    def solve(task: Task, *, seed: int, run: int) -> Solution:
+        import dspy
+
+        from robotool.program import RoboTool
+
+        program = RoboTool.method(method, candidates=settings.candidates, worlds_per_candidate=settings.worlds,
+                                  backend=settings.backend, seed=seed, rollout_base=run * settings.candidates)
+        with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
+            return program(task=task).solution
+
+    return solve
+
+
+def planner_solver(tools: bool, settings: SolverSettings) -> Solver:
+    """The LM-free search planner, with every object (``tools``) or the target only."""
+
+    def solve(task: Task, *, seed: int, run: int) -> Solution:
+        planner = importlib.import_module("robotool.planner")
+        return planner.solve(task, worlds=settings.worlds, seed=seed, backend=settings.backend, tools=tools)
+
+    return solve
+
+
+def planner_missing() -> str | None:
+    """Why the search planner cannot be used here, or None when it can."""
+    try:
+        planner = importlib.import_module("robotool.planner")
+    except ImportError as e:
+        return f"the search planner is not available ({e})"
+    if not callable(getattr(planner, "solve", None)):
+        return "the search planner is not available (robotool.planner has no solve())"
+    return None
+
+
+def make_solvers(
+    methods: list[str],
+    settings: SolverSettings,
+    lm: dspy.LM | None,
+    overrides: Mapping[str, Solver] | None = None,
+) -> tuple[dict[str, Solver], dict[str, str]]:
+    """Solvers for the methods that can run, and the reason for each that cannot."""
+    overrides = overrides or {}
+    solvers: dict[str, Solver] = {}
+    skipped: dict[str, str] = {}
+    factories: dict[str, Callable[[], Solver]] = {
+        "search": lambda: planner_solver(True, settings),
+        "no_tool": lambda: planner_solver(False, settings),
+    }
+    missing = None if all(m in overrides for m in factories) else planner_missing()
+    for name in methods:
+        if name in overrides:
+            solvers[name] = overrides[name]
+        elif METHODS[name].uses_lm:
+            if lm is None:
+                skipped[name] = "no language model is configured (pass --lm MODEL or set ROBOTOOL_LM)"
+            else:
+                solvers[name] = lm_solver(name, lm, settings)
+        elif missing is not None:
+            skipped[name] = missing
+        else:
+            solvers[name] = factories[name]()
+    return solvers, skipped

@@ -1,0 +1,111 @@
+"""Metrics over hand-made records, task selection, seeds, and the journal's durability rules."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from robotool import tasks
+from robotool.eval.config import EvalError
+from robotool.eval.errors import FailureClass
+from robotool.eval.grading import ConceptGrade
+from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds, select
+from robotool.eval.journal import JOURNAL, Journal
+from robotool.eval.metrics import summarize
+from robotool.eval.records import RunKey, RunRecord, WorldResult
+from robotool.eval.tables import all_tables
+from robotool.solution import TokenUsage
+
+
+def record(task: str, method: str, run: int, worlds: list[tuple[FailureClass | None, bool]], *,
+           seed: int | None = None, needs_tool: bool = True, correct: bool | None = None) -> RunRecord:
+    """A hand-made record: one (failure class, used a tool) pair per world."""
+    results = [WorldResult(world=i, seed=i, success=c is None, failure_class=c, tools_used=["t"] if used else [])
+               for i, (c, used) in enumerate(worlds)]
+    return RunRecord(key=RunKey(task=task, seed=seed, method=method, run=run), embodiment="arm",
+                     needs_tool=needs_tool, world_seed=0,
+                     success_rate=sum(w.success for w in results) / len(results) if results else 0.0,
+                     worlds=results, concepts=ConceptGrade(correct=correct), wall_s=2.0,
+                     usage={"coder": TokenUsage(prompt_tokens=100, completion_tokens=10)})
+
+
+RECORDS = [
+    record("milk_reaching", "robotool", 0, [(None, True), ("numerical", True)], correct=True),
+    record("milk_reaching", "robotool", 1, [], correct=False),  # nothing ran
+    record("milk_reaching_near", "robotool", 0, [("tool_use", True), (None, False)], needs_tool=False),
+    record("sofa_traversing", "robotool", 0, [(None, True)], seed=3),
+    record("milk_reaching", "coder", 0, [("logical", False)]),
+]
+
+
+def test_summary_means_breakdown_and_discrimination() -> None:
+    summary = summarize(RECORDS, ["robotool", "no_analyzer", "coder"])
+    assert summary.methods == ["robotool", "coder"]
+    robotool = summary.success[0]
+    assert robotool.cells["milk_reaching"].value == pytest.approx(0.25) and robotool.cells["milk_reaching"].n == 2
+    assert summary.generated[0].cells["sofa_traversing"].value == 1.0
+    shares = summary.errors[0].shares
+    assert sum(shares.values()) == pytest.approx(1.0)
+    assert shares["invalid"] == pytest.approx(0.25) and shares["numerical"] == pytest.approx(0.125)
+    assert shares["success"] == pytest.approx((0.5 + 0 + 0.5 + 1) / 4)
+    d = summary.discrimination[0]
+    assert d.needed.value == pytest.approx(1.0) and d.needed.n == 2  # the run that ran nothing is left out
+    assert d.not_needed.value == pytest.approx(0.5)
+    assert summary.concepts[0].cells["milk_reaching"].value == pytest.approx(0.5)
+    assert summary.cost[0].prompt_tokens == 100 and summary.cost[0].total_wall_s == 8.0
+
+
+def test_tables_show_measured_rows_and_paper_references() -> None:
+    tables = {t.title: t for t in all_tables(summarize(RECORDS, ["robotool", "coder"]))}
+    table1 = tables["Success rate (paper Table 1)"]
+    assert table1.columns == ["method", "milk_reaching", "average"]
+    assert table1.rows[0] == ["RoboTool", "0.25", "0.25"]
+    assert table1.rows[-table1.reference] == ["paper: RoboTool", "0.90", "0.90"]
+    table2 = tables["Key-concept accuracy (paper Table 2)"]
+    assert table2.columns == ["task", "RoboTool", "paper: RoboTool"]  # tasks as rows, as in the paper
+    assert table2.rows == [["milk_reaching", "0.50", "1.00"]]
+
+
+@pytest.mark.parametrize(("text", "seeds"), [("0-3", (0, 1, 2, 3)), ("7", (7,)), ("1,4,2-3", (1, 4, 2, 3))])
+def test_parse_seeds(text: str, seeds: tuple[int, ...]) -> None:
+    assert parse_seeds(text) == seeds
+
+
+@pytest.mark.parametrize("text", ["a-b", "3-1", "-2", ""])
+def test_parse_seeds_rejects(text: str) -> None:
+    with pytest.raises(ValueError):
+        parse_seeds(text)
+
+
+def test_select_defaults_and_families() -> None:
+    chosen, _ = select(None, None, None)
+    builtins = [i for i in chosen if i.seed is None]
+    assert [i.name for i in builtins][:2] == ["milk_reaching", "can_grasping"]  # the paper's order first
+    assert len(builtins) == len(tasks.names())
+    generated = [i for i in chosen if i.seed is not None]
+    assert generated and {i.seed for i in generated} <= set(DEFAULT_SEEDS)
+    only, _ = select(["sofa_traversing"], None, None)
+    assert [i.label for i in only] == ["sofa_traversing"] and only[0].tools == frozenset({"surfboard"})
+    family, _ = select(None, ["sofa_traversing"], [0, 2])
+    assert [i.label for i in family] == ["sofa_traversing#0", "sofa_traversing#2"]
+    with pytest.raises(EvalError, match="unknown task family"):
+        select(None, ["juggling"], None)
+
+
+def test_journal_cuts_a_torn_line_and_never_duplicates(tmp_path: Path) -> None:
+    journal = Journal(tmp_path)
+    assert journal.append(RECORDS[0]) and not journal.append(RECORDS[0])
+    with (tmp_path / JOURNAL).open("a") as f:
+        f.write(RECORDS[1].model_dump_json()[:40])
+    reopened = Journal(tmp_path)
+    assert list(reopened.records) == [RECORDS[0].key.id]
+    assert reopened.append(RECORDS[1])
+    assert len((tmp_path / JOURNAL).read_text().splitlines()) == 2
+    assert list(Journal(tmp_path).records) == [RECORDS[0].key.id, RECORDS[1].key.id]
+
+
+def test_journal_refuses_a_corrupt_middle_line(tmp_path: Path) -> None:
+    (tmp_path / JOURNAL).write_text("not json\n" + RECORDS[0].model_dump_json() + "\n")
+    with pytest.raises(EvalError, match="line 1"):
+        Journal(tmp_path)

@@ -1,0 +1,206 @@
+"""The evaluator end to end: scripted-LM methods, stand-in planner methods, output folder, CLI, resuming."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import dspy
+import pytest
+from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, scripted_lm
+from rich.console import Console
+
+from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
+from robotool.eval.journal import JOURNAL
+from robotool.eval.solvers import METHODS, planner_missing
+from robotool.rollout import Rollout, SkillCall
+from robotool.scene import Task
+from robotool.solution import Candidate, Solution, StageOutputs
+
+TESTS = Path(__file__).parent
+
+
+def standin_solution(task: Task, *, seed: int, run: int) -> Solution:
+    """TEST FIXTURE standing in for ``robotool.planner.solve``: a hand-made solved run (no simulation)."""
+    world = Rollout(world=0, seed=seed, success=True, conditions={"goal": True},
+                    calls=[SkillCall(skill="get_position", args=[task.goal.object], outcome="done")])
+    candidate = Candidate(index=0, code="pass", rollouts=[world])
+    return Solution(task=task.name, method="standin", code="pass", best=0, success_rate=1.0,
+                    candidates=[candidate], stages=StageOutputs())
+
+
+STANDINS = {"search": standin_solution, "no_tool": standin_solution}
+
+
+def _config(tmp_path: Path, **fields: object) -> EvalConfig:
+    return EvalConfig(out=tmp_path / "out", settings=Settings(worlds=1), **fields)  # type: ignore[arg-type]
+
+
+def _quiet() -> Console:
+    return Console(file=io.StringIO(), width=200)
+
+
+def test_every_method_produces_rows_with_a_scripted_lm(tmp_path: Path) -> None:
+    lm, engine = scripted_lm(arm_script([GRASP_DIRECTLY]))
+    config = _config(tmp_path, tasks=["milk_reaching_near"], methods=list(METHODS))
+    console = _quiet()
+    with dspy.context(adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):
+        results = evaluate(config, lm=lm, solvers=STANDINS, console=console)
+    printed = console.file.getvalue()  # type: ignore[attr-defined]
+    assert "Success rate on other tasks" in printed and "Discriminative tool use" in printed
+    assert [r.key.method for r in results.records] == list(METHODS)
+    by_method = {r.key.method: r for r in results.records}
+    assert all(r.success_rate == 1.0 and r.failure_class is None for r in results.records), [
+        (r.key.method, r.candidate_failures, r.error) for r in results.records]
+    assert by_method["robotool"].concepts.correct is True  # scripted analyzer: milk inside the workspace
+    assert by_method["coder"].concepts.correct is None  # no Analyzer: not graded
+    assert by_method["robotool"].tokens > 0 and by_method["search"].tokens == 0
+    assert by_method["robotool"].worlds[0].tools_used == []
+    assert engine.calls["coder"] == 5
+
+    folder = tmp_path / "out"
+    assert {"results.json", "report.md", "journal.jsonl", "settings.json", "success.png", "errors.png",
+            "discrimination.png"} <= {p.name for p in folder.iterdir()}
+    report = (folder / "report.md").read_text()
+    for method in METHODS.values():
+        assert f"| {method.label} | 1.00 |" in report
+    assert "paper:" not in report  # the paper has no milk_reaching_near: no reference rows
+    saved = json.loads((folder / "results.json").read_text())
+    assert len(saved["records"]) == len(METHODS) and saved["config"]["settings"]["lm"] == "scripted/fixture"
+
+
+def test_default_run_without_lm_skips_lm_methods_and_says_why(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
+    results = evaluate(_config(tmp_path, tasks=["sofa_traversing", "milk_reaching"]), solvers=STANDINS,
+                       console=_quiet())
+    assert set(results.skipped) == {m for m, info in METHODS.items() if info.uses_lm}
+    assert all("no language model" in why for why in results.skipped.values())
+    assert {r.key.method for r in results.records} == {"search", "no_tool"}
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "skipped robotool, no_analyzer, no_calculator, planner_coder, coder: no language model" in report
+    assert "| milk_reaching | sofa_traversing | average |" in report  # the paper's column order
+    assert "| paper: RoboTool | 0.90 | 1.00 | 0.95 |" in report  # reference rows under the tasks run
+    assert "| paper: Coder | 0.00 | 0.00 | 0.00 |" in report
+
+
+def test_asking_for_an_lm_method_without_an_lm_is_an_error(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
+    with pytest.raises(EvalError, match="cannot run robotool: no language model"):
+        evaluate(_config(tmp_path, tasks=["sofa_traversing"], methods=["robotool"]), console=_quiet())
+
+
+def test_other_settings_do_not_mix_into_a_results_folder(tmp_path: Path) -> None:
+    evaluate(_config(tmp_path, tasks=["sofa_traversing"]), solvers=STANDINS, console=_quiet())
+    other = _config(tmp_path, tasks=["sofa_traversing"]).model_copy(update={"settings": Settings(worlds=2)})
+    with pytest.raises(EvalError, match="other settings"):
+        evaluate(other, solvers=STANDINS, console=_quiet())
+
+
+@pytest.mark.skipif(planner_missing() is not None, reason="the search planner is not in this checkout")
+def test_command_line_runs_the_real_planner(tmp_path: Path, capsys) -> None:
+    argv = ["--tasks", "milk_reaching_near", "--methods", "search", "no_tool", "--worlds", "1", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    assert "Success rate on other tasks" in capsys.readouterr().out
+    records = json.loads((tmp_path / "results.json").read_text())["records"]
+    assert [(r["key"]["method"], r["success_rate"]) for r in records] == [("search", 1.0), ("no_tool", 1.0)]
+
+
+@pytest.mark.parametrize("argv", [
+    ["--runs", "0"], ["--methods", "magic"], ["--seeds", "5-2"], ["--tasks", "no_such_task"],
+    ["--methods", "coder"], ["--seed", "-1"],
+])
+def test_bad_arguments_give_one_line_and_status_2(argv: list[str], tmp_path: Path, capsys, monkeypatch) -> None:
+    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
+    try:
+        status = main([*argv, "--out", str(tmp_path)])
+    except SystemExit as e:
+        status = e.code
+    err = capsys.readouterr().err.strip()
+    assert status == 2
+    assert err.startswith("error:") and "\n" not in err and "Traceback" not in err
+
+
+class Killed(BaseException):
+    """Stands in for the process being killed: not an Exception, so the evaluator does not catch it."""
+
+
+def test_killed_evaluation_resumes_with_every_run_exactly_once(tmp_path: Path) -> None:
+    calls: list[tuple[str, int]] = []
+
+    def dies_on_third(task: Task, *, seed: int, run: int) -> Solution:
+        if len(calls) == 2:
+            raise Killed
+        calls.append((task.name, run))
+        return standin_solution(task, seed=seed, run=run)
+
+    config = _config(tmp_path, tasks=["sofa_traversing", "milk_reaching"], methods=["search", "no_tool"], runs=2)
+    with pytest.raises(Killed):
+        evaluate(config, solvers={"search": dies_on_third, "no_tool": dies_on_third}, console=_quiet())
+    journal = tmp_path / "out" / JOURNAL
+    assert len(journal.read_text().splitlines()) == 2
+    with journal.open("a") as f:
+        f.write('{"key": {"task": "sofa_trav')  # a line torn by the kill
+
+    def counts(task: Task, *, seed: int, run: int) -> Solution:
+        calls.append((task.name, run))
+        return standin_solution(task, seed=seed, run=run)
+
+    results = evaluate(config, solvers={"search": counts, "no_tool": counts}, console=_quiet())
+    assert len(calls) == 8  # 2 before the kill + 6 after: nothing redone
+    ids = [r.key.id for r in results.records]
+    assert len(ids) == 8 and len(set(ids)) == 8
+    lines = journal.read_text().splitlines()
+    assert sorted(json.loads(line)["key"]["run"] for line in lines) == [0, 0, 0, 0, 1, 1, 1, 1]
+    assert len({tuple(json.loads(line)["key"].values()) for line in lines}) == 8
+
+
+def test_exception_in_a_method_fails_only_that_run(tmp_path: Path) -> None:
+    def broken(task: Task, *, seed: int, run: int) -> Solution:
+        raise RuntimeError("planner bug")
+
+    results = evaluate(_config(tmp_path, tasks=["sofa_traversing"]), solvers={"search": broken, "no_tool": broken},
+                       console=_quiet())
+    assert all(r.failure_class == "invalid" and "planner bug" in (r.error or "") for r in results.records)
+
+
+KILLABLE = """
+import sys, time
+sys.path.insert(0, {tests!r})
+from pathlib import Path
+from rich.console import Console
+from robotool.eval import EvalConfig, Settings, evaluate
+from test_eval_runner import standin_solution
+
+def slow(task, *, seed, run):
+    time.sleep(0.15)
+    return standin_solution(task, seed=seed, run=run)
+
+config = EvalConfig(out=Path({out!r}), tasks=["sofa_traversing", "milk_reaching"], methods=["search", "no_tool"],
+                    runs=2, settings=Settings(worlds=1))
+evaluate(config, solvers={{"search": slow, "no_tool": slow}}, console=Console(quiet=True))
+"""
+
+
+def test_sigkill_mid_run_then_rerun_records_every_run_once(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    script = KILLABLE.format(tests=str(TESTS), out=str(out))
+    journal = out / JOURNAL
+    process = subprocess.Popen([sys.executable, "-c", script])
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (journal.exists() and len(journal.read_text().splitlines()) >= 2):
+        time.sleep(0.05)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    done_before = len(journal.read_text().splitlines())
+    assert 2 <= done_before < 8
+    subprocess.run([sys.executable, "-c", script], check=True, timeout=120)
+    records = json.loads((out / "results.json").read_text())["records"]
+    ids = [(r["key"]["task"], r["key"]["method"], r["key"]["run"]) for r in records]
+    assert len(ids) == 8 and len(set(ids)) == 8
+    assert len(journal.read_text().splitlines()) == 8
