@@ -17,12 +17,12 @@ import time
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
-import dspy  # noqa: E402
+import dspy
 
-from robotool import tasks  # noqa: E402
-from robotool.lm import make_lm  # noqa: E402
-from robotool.program import RoboTool  # noqa: E402
-from robotool.standin import Rule, Script, StandinServer  # noqa: E402
+from robotool import tasks
+from robotool.lm import make_lm
+from robotool.program import RoboTool
+from robotool.standin import Rule, Script, StandinServer
 
 CODE = """\
 p = get_graspable_point("milk")

@@ -120,8 +120,10 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
     task = tasks.load(args.task)
     try:
         code = args.program.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeDecodeError) as e:
-        raise UsageError(f"cannot read the program {args.program}: {e}") from None
+        raise UsageError(f"cannot read the program {args.program}: {e.strerror or e}") from None
     with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
         report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend)
     print_run(report, console)

@@ -318,8 +318,8 @@ def _check_semantics(task: Task) -> list[Problem]:
     target = task.goal.object
     if kind not in GOALS_BY_EMBODIMENT[robot.type]:
         allowed = ", ".join(sorted(GOALS_BY_EMBODIMENT[robot.type]))
-        problems.append(Problem(path=f"goal.{kind}",
-                                message=f"{_ARTICLE[robot.type]} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"))
+        message = f"{_ARTICLE[robot.type]} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"
+        problems.append(Problem(path=f"goal.{kind}", message=message))
     elif target not in seen:
         problems.append(Problem(path=f"goal.{kind}",
                                 message=f"no object named {target!r} (objects: {', '.join(seen)})"))

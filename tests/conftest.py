@@ -1,17 +1,14 @@
 """Shared test setup: no network, no LM cache, shared models."""
 
+import functools
 import os
 
 os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 
-import dspy  # noqa: E402 - after the environment is set
+import dspy
+import pytest
 
 dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=False)
-
-
-import functools  # noqa: E402
-
-import pytest  # noqa: E402
 
 
 @functools.cache
@@ -25,3 +22,26 @@ def _scene(task_name: str):  # -> robotool.sim.Scene, imported lazily
 def sim_scene():
     """Build a built-in task's simulation scene once per test run: ``sim_scene("milk_reaching")``."""
     return _scene
+
+
+from collections.abc import Sequence  # noqa: E402
+from typing import TYPE_CHECKING, Any  # noqa: E402
+
+if TYPE_CHECKING:
+    from robotool.rollout import Rollout
+    from robotool.scene import Task
+    from robotool.sim import Scene
+
+
+def _run_texts(task: "Task | Scene", codes: Sequence[str], **kwargs: Any) -> "list[Rollout]":
+    from robotool import sandbox, sim
+
+    embodiment = (task.task if isinstance(task, sim.Scene) else task).embodiment
+    return sim.run_sessions(task, sandbox.start_sessions(codes, embodiment), **kwargs)
+
+
+@pytest.fixture(scope="session")
+def run_texts():
+    """Run program texts through the sandbox in the lockstep runner, one world each:
+    ``run_texts(scene_or_task, codes, seed=3, backend="warp")`` (keywords go to ``sim.run_sessions``)."""
+    return _run_texts

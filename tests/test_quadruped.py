@@ -2,20 +2,20 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import pytest
-from fixtures import quadruped_programs as qp
+from fixtures.reference import program
 
 from robotool import sim, tasks
 from robotool.rollout import Rollout
+from robotool.sandbox import start_sessions
 from robotool.scene import parse_task
 
 
-def run(task: Any, program: Callable[[Any], None], nworld: int, seed: int = 0) -> list[Rollout]:
-    """``nworld`` perturbed worlds of one program on the C backend."""
-    return sim.run_programs(task, [program] * nworld, seed=seed)
+def run(task: Any, name: str, nworld: int, seed: int = 0) -> list[Rollout]:
+    """``nworld`` perturbed worlds of reference program ``name``, sandboxed, on the C backend."""
+    return sim.run_sessions(task, start_sessions([program(name)] * nworld, "quadruped"), seed=seed)
 
 
 def motion_calls(rollout: Rollout) -> list[Any]:
@@ -23,32 +23,32 @@ def motion_calls(rollout: Rollout) -> list[Any]:
 
 
 @pytest.mark.parametrize(
-    ("task", "program"),
+    ("task", "name"),
     [
-        ("sofa_traversing", qp.sofa_traversing_bridge),
-        ("sofa_climbing", qp.sofa_climbing_steps),
-        ("cube_lifting", qp.cube_lifting_lever),
+        ("sofa_traversing", "sofa_traversing"),
+        ("sofa_climbing", "sofa_climbing"),
+        ("cube_lifting", "cube_lifting"),
     ],
 )
 def test_reference_program_solves_nine_of_ten_perturbed_worlds(
-    sim_scene: Any, task: str, program: Callable[[Any], None]
+    sim_scene: Any, task: str, name: str
 ) -> None:
-    rollouts = run(sim_scene(task), program, 10, seed=3)
+    rollouts = run(sim_scene(task), name, 10, seed=3)
     assert sum(r.success for r in rollouts) >= 9, [motion_calls(r) for r in rollouts if not r.success]
 
 
 @pytest.mark.parametrize(
-    ("task", "program", "skill", "key", "value"),
+    ("task", "name", "skill", "key", "value"),
     [
-        ("sofa_traversing", qp.sofa_traversing_direct, "walk_to_position", "gap", 0.40),
-        ("sofa_climbing", qp.sofa_climbing_direct, "climb_to_position", "step", 0.34),
-        ("cube_lifting", qp.cube_lifting_direct, "push_to_position", "mass", 10.0),
+        ("sofa_traversing", "sofa_traversing_direct", "walk_to_position", "gap", 0.40),
+        ("sofa_climbing", "sofa_climbing_direct", "climb_to_position", "step", 0.34),
+        ("cube_lifting", "cube_lifting_direct", "push_to_position", "mass", 10.0),
     ],
 )
 def test_tool_free_program_is_refused_with_the_measured_value(
-    sim_scene: Any, task: str, program: Any, skill: str, key: str, value: float
+    sim_scene: Any, task: str, name: str, skill: str, key: str, value: float
 ) -> None:
-    for rollout in run(sim_scene(task), program, 2):
+    for rollout in run(sim_scene(task), name, 2):
         assert not rollout.success
         refused = [c for c in rollout.calls if c.outcome == "refused"]
         assert [c.skill for c in refused] == [skill]
@@ -57,19 +57,19 @@ def test_tool_free_program_is_refused_with_the_measured_value(
 
 
 @pytest.mark.parametrize(
-    ("task", "program"),
+    ("task", "name"),
     [
-        ("sofa_traversing_small_gap", qp.sofa_traversing_direct),
-        ("sofa_climbing_low_sofa", qp.sofa_climbing_direct),
+        ("sofa_traversing_small_gap", "sofa_traversing_direct"),
+        ("sofa_climbing_low_sofa", "sofa_climbing_direct"),
     ],
 )
-def test_variants_are_solved_by_walking_directly(sim_scene: Any, task: str, program: Any) -> None:
-    rollouts = run(sim_scene(task), program, 2)
+def test_variants_are_solved_by_walking_directly(sim_scene: Any, task: str, name: str) -> None:
+    rollouts = run(sim_scene(task), name, 2)
     assert all(r.success for r in rollouts), [motion_calls(r) for r in rollouts]
 
 
 def test_the_cloth_is_no_bridge(sim_scene: Any) -> None:
-    for rollout in run(sim_scene("sofa_traversing"), qp.sofa_traversing_cloth, 2):
+    for rollout in run(sim_scene("sofa_traversing"), "sofa_traversing_cloth", 2):
         assert not rollout.success
         assert motion_calls(rollout)[-1].outcome == "refused"
 
@@ -79,7 +79,7 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
     data["objects"] = [o for o in data["objects"] if o["name"] != "surfboard"]
     cloth = next(o for o in data["objects"] if o["name"] == "strip_of_cloth")
     cloth["center"] = [0.95, 0.0, 0.342]  # spans the 0.40 m gap, 0.35 m on each sofa
-    for rollout in run(parse_task(data), qp.sofa_traversing_direct, 2):
+    for rollout in run(parse_task(data), "sofa_traversing_direct", 2):
         (walk,) = motion_calls(rollout)
         assert walk.outcome == "refused" and "gap" in walk.measured
         assert 0.1 < walk.measured["gap"] < 0.4  # the sagging middle, not the whole gap
@@ -87,16 +87,16 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
 
 
 @pytest.mark.parametrize(
-    ("program", "lifted"),
+    ("name", "lifted"),
     [
-        (qp.push_chair_away, False),  # (b) the chair alone does nothing
-        (qp.stand_on_lever_end, False),  # (c) the chair props the lever
+        ("cube_lifting_chair_only", False),  # (b) the chair alone does nothing
+        ("cube_lifting_lever_only", False),  # (c) the chair props the lever
     ],
 )
 def test_lever_needs_both_the_chair_away_and_the_robot_on_it(
-    sim_scene: Any, program: Any, lifted: bool
+    sim_scene: Any, name: str, lifted: bool
 ) -> None:
-    for rollout in run(sim_scene("cube_lifting"), program, 2):
+    for rollout in run(sim_scene("cube_lifting"), name, 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
         assert rollout.conditions == {"cube_lifted": lifted}
 
@@ -104,20 +104,20 @@ def test_lever_needs_both_the_chair_away_and_the_robot_on_it(
 def test_a_light_robot_does_not_tip_the_lever() -> None:
     data = tasks.load("cube_lifting").model_dump(mode="json", exclude_defaults=True)
     data["robot"]["limits"] = {"mass": 1.0}
-    for rollout in run(parse_task(data), qp.cube_lifting_lever, 2):
+    for rollout in run(parse_task(data), "cube_lifting", 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
         assert rollout.conditions == {"cube_lifted": False}
 
 
 @pytest.mark.parametrize(
-    ("program", "unbroken"),
+    ("name", "unbroken"),
     [
-        (qp.vase_lowering_cushion, True),
-        (qp.vase_lowering_no_cushion, False),
+        ("vase_lowering", True),
+        ("vase_lowering_no_cushion", False),
     ],
 )
-def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, program: Any, unbroken: bool) -> None:
-    for rollout in run(sim_scene("vase_lowering"), program, 2):
+def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: str, unbroken: bool) -> None:
+    for rollout in run(sim_scene("vase_lowering"), name, 2):
         assert rollout.conditions == {"glass_vase_lowered": True, "glass_vase_unbroken": unbroken}
         assert rollout.success is unbroken
 
@@ -125,13 +125,13 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, program:
 def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
     answers: list[Any] = []
 
-    def program(robot: Any) -> None:
+    def probe(robot: Any) -> None:
         answers.extend([robot.get_size("robot"), robot.get_position("robot"), robot.get_position("box_1")])
         robot.walk_to_position([0.3, 0.0, 0.0])
         answers.append(robot.get_position("robot"))
         robot.get_position("no_such_thing")
 
-    (rollout,) = sim.run_programs(sim_scene("sofa_climbing"), [program], perturb=False)
+    (rollout,) = sim.run_programs(sim_scene("sofa_climbing"), [probe], perturb=False)
     size, start, box, end = answers
     assert size == [0.65, 0.30, 0.30]
     assert start == pytest.approx([0.0, 0.0, 0.15], abs=0.01) and box == pytest.approx(

@@ -8,19 +8,18 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from fixtures import quadruped_programs as qp
+from fixtures.reference import program
 
-from robotool import sim
 from robotool.rollout import Rollout
 
 pytest.importorskip("mujoco_warp")
 
 
 @pytest.fixture(scope="session")
-def bridge_rollouts(sim_scene: Any) -> list[Rollout]:
+def bridge_rollouts(sim_scene: Any, run_texts: Any) -> list[Rollout]:
     """Ten perturbed worlds of the bridge program and one tool-free walk, stepped together on Warp."""
-    programs = [qp.sofa_traversing_bridge] * 10 + [qp.sofa_traversing_direct]
-    return sim.run_programs(sim_scene("sofa_traversing"), programs, seed=5, backend="warp")
+    programs = [program("sofa_traversing")] * 10 + [program("sofa_traversing_direct")]
+    return run_texts(sim_scene("sofa_traversing"), programs, seed=5, backend="warp")
 
 
 def test_bridge_solves_nine_of_ten_worlds_on_warp(bridge_rollouts: list[Rollout]) -> None:

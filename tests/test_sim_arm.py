@@ -5,26 +5,27 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from fixtures.arm_programs import REFERENCE, TOOL_FREE
+from fixtures.reference import REFERENCE, TOOL_FREE, program
 
-from robotool import sim
+from robotool import sandbox, sim
 from robotool.programs import ProgramEnded, SkillReply, SkillRequest
 
 WORLDS = 10
+ARM_TASKS = ["button_pressing", "can_grasping", "milk_reaching", "milk_reaching_near"]
 
 
-@pytest.mark.parametrize("task_name", sorted(REFERENCE))
-def test_reference_program_solves_perturbed_worlds(sim_scene: Any, task_name: str) -> None:
-    rollouts = sim.run_programs(sim_scene(task_name), [REFERENCE[task_name]] * WORLDS, seed=3)
+@pytest.mark.parametrize("task_name", ARM_TASKS)
+def test_reference_program_solves_perturbed_worlds(sim_scene: Any, run_texts: Any, task_name: str) -> None:
+    rollouts = run_texts(sim_scene(task_name), [program(REFERENCE[task_name])] * WORLDS, seed=3)
     assert sum(r.success for r in rollouts) >= 9, [(r.conditions, r.error) for r in rollouts]
     assert all(r.error is None for r in rollouts)
     goal = sim_scene(task_name).task.goal.object
     assert goal in rollouts[0].touched
 
 
-@pytest.mark.parametrize("task_name", sorted(TOOL_FREE))
-def test_tool_free_program_fails_at_the_workspace_clamp(sim_scene: Any, task_name: str) -> None:
-    rollouts = sim.run_programs(sim_scene(task_name), [TOOL_FREE[task_name]] * 3, seed=0)
+@pytest.mark.parametrize("task_name", [t for t in ARM_TASKS if t in TOOL_FREE])
+def test_tool_free_program_fails_at_the_workspace_clamp(sim_scene: Any, run_texts: Any, task_name: str) -> None:
+    rollouts = run_texts(sim_scene(task_name), [program(TOOL_FREE[task_name])] * 3, seed=0)
     assert not any(r.success for r in rollouts)
     for r in rollouts:
         clamped = [c for c in r.calls if "outside_workspace" in c.measured]
@@ -33,11 +34,12 @@ def test_tool_free_program_fails_at_the_workspace_clamp(sim_scene: Any, task_nam
         assert not all(r.conditions.values())
 
 
-def test_same_seed_gives_identical_rollouts(sim_scene: Any) -> None:
+def test_same_seed_gives_identical_rollouts(sim_scene: Any, run_texts: Any) -> None:
     scene = sim_scene("button_pressing")
-    runs = [sim.run_programs(scene, [REFERENCE["button_pressing"]] * 3, seed=5) for _ in range(2)]
+    code = program(REFERENCE["button_pressing"])
+    runs = [run_texts(scene, [code] * 3, seed=5) for _ in range(2)]
     assert [r.model_dump() for r in runs[0]] == [r.model_dump() for r in runs[1]]
-    other = sim.run_programs(scene, [REFERENCE["button_pressing"]] * 3, seed=6)
+    other = run_texts(scene, [code] * 3, seed=6)
     assert [r.calls[0].result for r in other] != [r.calls[0].result for r in runs[0]]
 
 
@@ -71,7 +73,9 @@ def test_errors_end_only_their_own_world(sim_scene: Any) -> None:
         raise RuntimeError("boom")
 
     scene = sim_scene("milk_reaching_near")
-    rollouts = sim.run_programs(scene, [bad_name, bad_args, crashes, REFERENCE["milk_reaching_near"]])
+    sessions = [*sim.trusted_sessions(scene.task, [bad_name, bad_args, crashes]),
+                *sandbox.start_sessions([program(REFERENCE["milk_reaching_near"])], "arm")]
+    rollouts = sim.run_sessions(scene, sessions)
     assert "unicorn" in rollouts[0].error and rollouts[0].calls[0].outcome == "error"
     assert "position" in rollouts[1].calls[0].reason and rollouts[1].error.startswith("SkillCallError")
     assert rollouts[2].error == "RuntimeError: boom" and not rollouts[2].calls
@@ -118,3 +122,18 @@ def test_runner_accepts_any_program_session(sim_scene: Any) -> None:
     (r,) = sim.run_sessions(sim_scene("milk_reaching"), [session], perturb=False)
     assert session.replies[0] is None and session.replies[1].value == pytest.approx([0.35, 0.05, 0.01], abs=2e-3)
     assert [c.outcome for c in r.calls] == ["done", "done"] and r.output == "bye"
+
+
+def test_grasp_as_the_last_call_counts(sim_scene) -> None:
+    """Regression: a program ending right after close_gripper is judged on the state after the grasp."""
+
+    def grasp_and_stop(robot: Any) -> None:
+        p = robot.get_graspable_point("milk")
+        robot.open_gripper()
+        robot.move_to_position([p[0], p[1], p[2] + 0.08])
+        robot.move_to_position(p)
+        robot.close_gripper()
+
+    (r,) = sim.run_programs(sim_scene("milk_reaching_near"), [grasp_and_stop], perturb=False)
+    assert r.success, r.conditions
+    assert "milk" in r.touched

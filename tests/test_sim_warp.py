@@ -9,34 +9,33 @@ from typing import Any
 
 import numpy as np
 import pytest
-from fixtures.arm_programs import REFERENCE, TOOL_FREE
+from fixtures.reference import REFERENCE, TOOL_FREE, program
 
 from robotool import sim
 
 pytest.importorskip("mujoco_warp")
 
 TASK = "button_pressing"
+PROGRAMS = [program(REFERENCE[TASK]), program(TOOL_FREE[TASK]), program(REFERENCE[TASK])]
 
 
 @pytest.fixture(scope="session")
-def warp_rollouts(sim_scene: Any) -> list[Any]:
+def warp_rollouts(sim_scene: Any, run_texts: Any) -> list[Any]:
     """Reference and tool-free programs side by side in one warp batch."""
-    programs = [REFERENCE[TASK], TOOL_FREE[TASK], REFERENCE[TASK]]
-    return sim.run_programs(sim_scene(TASK), programs, seed=1, backend="warp")
+    return run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="warp")
 
 
-def test_same_outcomes_as_the_c_backend(sim_scene: Any, warp_rollouts: list[Any]) -> None:
-    programs = [REFERENCE[TASK], TOOL_FREE[TASK], REFERENCE[TASK]]
-    c_rollouts = sim.run_programs(sim_scene(TASK), programs, seed=1, backend="mujoco")
+def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
+    c_rollouts = run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="mujoco")
     assert [r.success for r in warp_rollouts] == [r.success for r in c_rollouts] == [True, False, True]
     for w, c in zip(warp_rollouts, c_rollouts, strict=True):
         assert [(k.skill, k.outcome) for k in w.calls] == [(k.skill, k.outcome) for k in c.calls]
         assert w.sim_time == pytest.approx(c.sim_time, abs=0.1)
 
 
-def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
     for backend in ("warp", "mujoco"):
-        (r,) = sim.run_programs(sim_scene(TASK), [REFERENCE[TASK]], backend=backend, njmax=8)
+        (r,) = run_texts(sim_scene(TASK), PROGRAMS[:1], backend=backend, njmax=8)
         assert not r.success and r.error.startswith("simulation failed")
         assert ("NEFC" in r.error) if backend == "warp" else ("over njmax 8" in r.error)
 

@@ -64,8 +64,8 @@ def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed
     ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
     the model). World ``w`` is perturbed from ``seed`` (friction, mass, small pose noise) unless
     ``perturb`` is False; with ``world_seeds``, world ``w`` is perturbed from ``world_seeds[w]`` alone,
-    so candidates compared in one batch meet the same worlds. ``njmax``/``nconmax`` override the per-world constraint and contact
-    capacity; a world that overflows them, diverges, runs over ``max_sim_time`` simulated seconds
+    so candidates compared in one batch meet the same worlds. ``njmax``/``nconmax`` override the per-world
+    constraint and contact capacity; a world that overflows them, diverges, runs over ``max_sim_time`` simulated seconds
     or makes more than ``max_skill_calls`` calls fails with that reason. A world succeeds when every
     goal sub-condition holds at its end and it has no error. The same inputs and seed give
     identical rollouts on the ``mujoco`` backend. Sessions are closed on return.

@@ -1,0 +1,139 @@
+"""``robotool run TASK PROGRAM.py``: the reference program files, refusals, bad programs, the JSON report.
+
+Arm programs run in 3 worlds, quadruped programs (slower to simulate) in 2, all on the C backend so
+that the outcomes are deterministic.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fixtures.reference import REFERENCE, TOOL_FREE, program, program_path
+
+import robotool
+from robotool import tasks
+from robotool.cli import main
+
+REFUSALS = {  # quadruped task -> (skill refused, measured key, value) for its tool-free program
+    "sofa_traversing": ("walk_to_position", "gap", 0.40),
+    "sofa_climbing": ("climb_to_position", "step", 0.34),
+    "cube_lifting": ("push_to_position", "mass", 10.0),
+}
+
+
+@pytest.fixture(autouse=True)
+def wide_console(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A wide console, so that table cells (reasons, measured values) are not folded across lines."""
+    monkeypatch.setenv("COLUMNS", "250")
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    """``robotool run ARGS`` in-process: (exit status, stdout, stderr)."""
+    status = main(["run", *args])
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.out + captured.err
+    return status, captured.out, captured.err
+
+
+def worlds(task: str) -> str:
+    return "3" if tasks.load(task).embodiment == "arm" else "2"
+
+
+@pytest.mark.parametrize(("task", "name"), sorted(REFERENCE.items()))
+def test_reference_program_file_succeeds(capsys: pytest.CaptureFixture[str], task: str, name: str) -> None:
+    status, out, _ = run_cli(capsys, task, str(program_path(name)), "--worlds", worlds(task), "--backend", "mujoco")
+    assert status == 0, out
+    assert "every world succeeded: success rate 100%" in out
+
+
+@pytest.mark.parametrize(("task", "name"), sorted(TOOL_FREE.items()))
+def test_tool_free_program_fails_with_the_reason(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, task: str, name: str
+) -> None:
+    report = tmp_path / "report.json"
+    args = (task, str(program_path(name)), "--worlds", worlds(task), "--backend", "mujoco", "--json", str(report))
+    status, out, _ = run_cli(capsys, *args)
+    data = json.loads(report.read_text())
+    assert status == 1 and data["success"] is False and data["success_rate"] == 0.0
+    assert "some worlds failed: success rate 0%" in out
+    for rollout in data["rollouts"]:
+        assert not rollout["success"] and not all(rollout["conditions"].values())
+        if task in REFUSALS:
+            skill, key, value = REFUSALS[task]
+            (refused,) = [c for c in rollout["calls"] if c["outcome"] == "refused"]
+            assert refused["skill"] == skill and refused["measured"][key] == pytest.approx(value, abs=0.02)
+            assert "exceeds the" in refused["reason"]
+            assert f"{skill} refused: {refused['reason']}" in out  # the summary's "why it failed"
+            assert f"{key} {refused['measured'][key]:.3g}" in out  # the trace's measured value
+        else:
+            clamped = [c for c in rollout["calls"] if "outside_workspace" in c["measured"]]
+            assert clamped and clamped[0]["measured"]["clamped_x"] == pytest.approx(0.45)
+            assert clamped[0]["reason"] in out and "clamped to [0.450" in out
+
+
+@pytest.mark.parametrize(
+    ("code", "status", "reason"),
+    [
+        ("import os\n", 2, "error: line 1: import of 'os' is not allowed"),
+        ('grasp("milk")\n', 2, "error: line 1: unknown function 'grasp'; the arm's skills are: get_center"),
+        ("while True:\n    pass\n", 1, "CPU time limit exceeded (2 s)"),
+    ],
+)
+def test_bad_program_ends_with_one_line_reason(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, code: str, status: int, reason: str
+) -> None:
+    path = tmp_path / "prog.py"
+    path.write_text(code)
+    got, out, err = run_cli(capsys, "milk_reaching_near", str(path), "--backend", "mujoco")
+    assert got == status
+    if status == 2:
+        assert len(err.strip().splitlines()) == 1 and err.startswith(reason) and not out
+    else:
+        assert any(line.startswith(f"  error: {reason}") for line in out.splitlines())
+
+
+def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:
+    path = tmp_path / "loop.py"
+    path.write_text("open_gripper()\nwhile True:\n    pass\n")
+    result = subprocess.run([sys.executable, "-m", "robotool", "run", "milk_reaching_near", str(path)],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stdout + result.stderr
+    assert "CPU time limit exceeded (2 s)" in result.stdout and "success rate 0%" in result.stdout
+
+
+def test_json_report_matches_the_library(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    report = tmp_path / "report.json"
+    path = str(program_path("button_pressing"))
+    status, out, _ = run_cli(capsys, "button_pressing", path, "--worlds", "2", "--seed", "4", "--backend", "mujoco",
+                             "--json", str(report))
+    data: dict[str, Any] = json.loads(report.read_text())
+    assert status == 0 and f"wrote the report to {report}" in out
+    assert data["success"] is True and data["success_rate"] == 1.0
+    assert (data["task"], data["worlds"], data["seed"], data["backend"]) == ("button_pressing", 2, 4, "mujoco")
+    for rollout in data["rollouts"]:
+        assert rollout["conditions"] and all(rollout["conditions"].values())
+        assert {c["outcome"] for c in rollout["calls"]} == {"done"}
+        assert rollout["calls"][-1]["skill"] == "move_to_position"
+    library = robotool.run("button_pressing", program("button_pressing"), worlds=2, seed=4, backend="mujoco")
+    assert [r.model_dump(mode="json") for r in library.rollouts] == data["rollouts"]
+
+
+def test_bad_task_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("format: 1\nname: x\nobjects:\n  - {name: a, shape: sphere}\n")
+    status, out, err = run_cli(capsys, str(broken), str(program_path("milk_reaching_direct")))
+    assert status == 2 and not out
+    assert err.startswith(f"error: {broken}: 7 problems\n") and "objects[0](a).shape" in err
+
+
+def test_missing_program_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    missing = tmp_path / "nope.py"
+    status, out, err = run_cli(capsys, "milk_reaching_near", str(missing))
+    assert status == 2 and not out
+    assert err.strip() == f"error: cannot read the program {missing}: [Errno 2] No such file or directory: '{missing}'"
