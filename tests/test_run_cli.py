@@ -136,4 +136,4 @@ def test_missing_program_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_pa
     missing = tmp_path / "nope.py"
     status, out, err = run_cli(capsys, "milk_reaching_near", str(missing))
     assert status == 2 and not out
-    assert err.strip() == f"error: cannot read the program {missing}: [Errno 2] No such file or directory: '{missing}'"
+    assert err.strip() == f"error: program file not found: {missing}"
