@@ -5,7 +5,7 @@ from __future__ import annotations
 import ast
 import re
 
-from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected
+from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, parse_program
 
 _FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w+-]*)[^\n]*$", re.MULTILINE)
 _PYTHON_TAGS = frozenset({"python", "python3", "py", ""})
@@ -30,12 +30,7 @@ def extract_program(text: str) -> str:
     code = ("\n\n".join(blocks) if blocks else _longest_parsing_run(text)).strip("\n")
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
-    try:
-        tree = ast.parse(code)
-    except SyntaxError as e:
-        raise ProgramRejected(e.lineno, "syntax", f"syntax error: {e.msg}") from None
-    except (ValueError, RecursionError, MemoryError) as e:
-        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+    tree = parse_program(code)
     if not _has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose or names)")
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]

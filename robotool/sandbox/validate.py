@@ -84,6 +84,16 @@ class ProgramRejected(ValueError):
         super().__init__(f"line {line}: {reason}" if line else reason)
 
 
+def parse_program(code: str) -> ast.Module:
+    """Parse program text, turning every way it can fail into a :class:`ProgramRejected`."""
+    try:
+        return ast.parse(code)
+    except SyntaxError as e:
+        raise ProgramRejected(e.lineno, "syntax", f"syntax error: {e.msg}") from None
+    except (ValueError, RecursionError, MemoryError) as e:
+        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+
+
 def validate(code: str, embodiment: EmbodimentName) -> None:
     """Check a program against the sandbox allowlist; raise :class:`ProgramRejected` if it fails.
 
@@ -91,12 +101,7 @@ def validate(code: str, embodiment: EmbodimentName) -> None:
     """
     if len(code) > MAX_PROGRAM_CHARS:
         raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
-    try:
-        tree = ast.parse(code)
-    except SyntaxError as e:
-        raise ProgramRejected(e.lineno, "syntax", f"syntax error: {e.msg}") from None
-    except (ValueError, RecursionError, MemoryError) as e:
-        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+    tree = parse_program(code)
     checker = _Checker(code, embodiment, tree)
     try:
         checker.visit(tree)
