@@ -81,3 +81,19 @@ def test_magnetic_pairs_get_inactive_welds() -> None:
     assert sorted(n for n in names if n.startswith("magnet__")) == ["magnet__c0__c1", "magnet__c0__c2",
                                                                     "magnet__c1__c2"]
     assert not m.eq_active0.any()
+
+
+def test_mujoco_warnings_go_to_logging_not_a_file(tmp_path, monkeypatch) -> None:
+    """Regression: an unstable world used to leave MUJOCO_LOG.TXT in the working directory."""
+    import mujoco
+
+    import robotool.sim.backend_mujoco  # noqa: F401 - installs the warning handler
+
+    monkeypatch.chdir(tmp_path)
+    xml = "<mujoco><worldbody><body><freejoint/><geom size='.1'/></body></worldbody></mujoco>"
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    data.qvel[0] = float("nan")
+    mujoco.mj_step(model, data)
+    assert data.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number == 1
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

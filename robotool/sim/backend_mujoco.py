@@ -8,6 +8,7 @@ worker threads step disjoint chunks of worlds in parallel and gather their state
 from __future__ import annotations
 
 import copy
+import logging
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -16,6 +17,11 @@ import numpy as np
 
 from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, weld_relpose
 from robotool.sim.build import Scene
+
+_LOG = logging.getLogger("robotool.sim")
+# MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory by default; route them to
+# logging instead. Each world's warning counters still record them, and the runner fails the world.
+mujoco.set_mju_user_warning(lambda message: _LOG.debug("MuJoCo: %s", message))
 
 _WARNINGS = {
     mujoco.mjtWarning.mjWARN_BADQACC: "physics diverged (bad acceleration)",
