@@ -97,3 +97,15 @@ def test_mujoco_warnings_go_to_logging_not_a_file(tmp_path, monkeypatch) -> None
     mujoco.mj_step(model, data)
     assert data.warning[mujoco.mjtWarning.mjWARN_BADQVEL].number == 1
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_a_non_finite_control_fails_only_its_world(sim_scene) -> None:
+    """Regression: MuJoCo zeroes a NaN control and carries on; the world must be marked failed instead."""
+    from robotool import sim
+
+    simulator = sim.make_sim(sim_scene("milk_reaching_near"), 2, backend="mujoco")
+    simulator.ctrl[0, 0] = float("nan")
+    simulator.step(5, np.ones(2, dtype=bool))
+    failed = simulator.state().failed
+    assert failed[0] is not None and "non-finite control" in failed[0]
+    assert failed[1] is None

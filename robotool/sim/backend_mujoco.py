@@ -25,6 +25,9 @@ mujoco.set_mju_user_warning(lambda message: _LOG.debug("MuJoCo: %s", message))
 
 _WARNINGS = {
     mujoco.mjtWarning.mjWARN_BADQACC: "physics diverged (bad acceleration)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "physics diverged (bad velocity)",
+    mujoco.mjtWarning.mjWARN_BADQPOS: "physics diverged (bad position)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "a controller produced a non-finite control",
     mujoco.mjtWarning.mjWARN_CNSTRFULL: "constraint buffer full",
     mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
 }

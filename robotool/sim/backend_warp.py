@@ -84,10 +84,13 @@ class WarpSim:
                                           d.contact.geom.numpy()[:nacon], d.contact.dist.numpy()[:nacon],
                                           self.nworld)
         overflow = d.overflow.numpy()
-        failed = [None if not flags else "overflow: " + ", ".join(
-            name for bit, name in _OVERFLOWS.items() if flags & bit) for flags in overflow]
-        return BatchState(time=d.time.numpy().astype(float), qpos=d.qpos.numpy().astype(float),
-                          qvel=d.qvel.numpy().astype(float), xpos=d.xpos.numpy().astype(float),
+        qpos, qvel = d.qpos.numpy().astype(float), d.qvel.numpy().astype(float)
+        finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
+        failed = [("overflow: " + ", ".join(name for bit, name in _OVERFLOWS.items() if flags & bit)) if flags
+                  else None if ok else "physics diverged (non-finite state)"
+                  for flags, ok in zip(overflow, finite, strict=True)]
+        return BatchState(time=d.time.numpy().astype(float), qpos=qpos,
+                          qvel=qvel, xpos=d.xpos.numpy().astype(float),
                           xquat=d.xquat.numpy().astype(float), sensordata=d.sensordata.numpy().astype(float),
                           eq_active=d.eq_active.numpy().astype(bool), touching=touching, failed=failed)
 
