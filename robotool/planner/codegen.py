@@ -93,6 +93,7 @@ class Program:
     sentences: list[str] = field(default_factory=list)
     roles: dict[str, str] = field(default_factory=dict)
     doubt: str | None = None  # a limit the planner predicts the program breaks, if any
+    late: int = 0  # how many less likely choices it makes (tried after programs with fewer)
     _count: int = 0
 
     def use(self, name: str, role: str | None = None) -> None:

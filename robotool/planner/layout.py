@@ -21,6 +21,8 @@ SAMPLE = 0.02  # m between terrain samples along a walk
 FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
 PUSH_OVERLAP = 0.08  # m of an object's face the robot's face keeps covering when it slides along it
 SLACK = 0.01  # m a measured step, gap or drop may exceed its limit (the simulator's own measurement slack)
+SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
+BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks, is in the way
 
 
 @dataclass(frozen=True)
@@ -119,7 +121,9 @@ def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.nda
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
     The body (axis-aligned, ``limits.body_size``) reads the highest surface across its width along each
-    straight segment, from its rear edge at the start to its front edge at the end.
+    straight segment, from its rear edge at the start to its front edge at the end. Just outside its flanks
+    (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet are on: the
+    simulator lifts the body only for what lies under its central band, so the legs would run into it.
     """
     half = np.asarray(limits.body_size[:2]) / 2
     here = np.asarray(start, dtype=float)
@@ -136,9 +140,13 @@ def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.nda
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
         rear = here - u * extent
         points = rear + s[:, None] * u
-        across = np.stack([points + k * width * lateral for k in (-1.0, 0.0, 1.0)])
-        h = layout.heights(across.reshape(-1, 2), exclude).reshape(3, -1).max(axis=0)
+        flank = float(np.abs(lateral) @ half) + SIDE_MARGIN
+        across = np.stack([points + k * lateral for k in (-width, 0.0, width, -flank, flank)])
+        heights = layout.heights(across.reshape(-1, 2), exclude).reshape(5, -1)
+        h = heights[:3].max(axis=0)
         problem = _scan(h, limits)
+        if problem is None and (rub := heights[3:].max(axis=0) - h).max() > BRUSH:
+            problem = f"the body brushes against something {float(rub.max()):.2f} m higher at its side"
         if problem:
             return f"{problem} on the way to [{goal[0]:.2f}, {goal[1]:.2f}]"
         here = goal

@@ -38,6 +38,7 @@ class Route:
     waypoints: list[tuple[np.ndarray, str]] = field(default_factory=list)  # x-y, surface ("ground" or object)
     uses: list[tuple[str, str]] = field(default_factory=list)  # object, role
     words: str = ""
+    late: int = 0  # less likely choices it makes (a step down onto the target: the body rides on a higher step)
 
     def layout(self, task: Task) -> Layout:
         out = Layout(task)
@@ -78,74 +79,138 @@ class Quadruped:
 
 # --- routes onto a surface ----------------------------------------------------------------------------
 
+DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+FOOT = 0.03  # m the feet sit inside the body's outline: they must be over what the robot stands on
+ENTRIES = 2  # predicted-fine approaches kept for a direct climb
+
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
     """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps."""
-    box = quad.layout.box(name)
-    yield Route(waypoints=[(box.center, name)], words=f"Walk onto {name}.")
+    yield from _direct(quad, name)
     if not tools:
         return
     yield from _bridges(quad, name)
     yield from _staircases(quad, name)
 
 
-def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
-    """Push a board that rests on the robot's surface across the gap on the straight way to ``name``."""
-    target = quad.layout.box(name)
-    gap = _gap(quad, target.center)
-    if gap is None:
+def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Walk onto ``name``: straight when that is predicted fine, else lined up along an axis with one of its
+    sides (reached around what stands in the way), the shortest predicted-fine approaches first."""
+    box = quad.layout.box(name)
+    words = f"Walk onto {name}."
+    straight = Route(waypoints=[(box.center, name)], words=words)
+    if walk_violation(quad.layout, quad.start, [box.center], quad.limits) is None:
+        yield straight
         return
-    near, far, u = gap
+    found = []
+    for d in DIRECTIONS:
+        entry = _entry(quad, box, d, quad.start)
+        if entry is None:
+            continue
+        approach, inside = entry
+        path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, inside]
+        if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
+            found.append((_length(quad.start, path), approach, inside, d))
+    found.sort(key=lambda f: f[0])
+    for _, approach, inside, _ in found[:ENTRIES]:
+        yield Route(waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words)
+    if not found:
+        yield straight
+
+
+def _length(start: np.ndarray, path: list[np.ndarray]) -> float:
+    points = [start, *path]
+    return sum(float(np.linalg.norm(b - a)) for a, b in itertools.pairwise(points))
+
+
+def _entry(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where to line up (outside ``box``, facing ``d``) and where to stop on its top, or None when the box is too
+    narrow across ``d`` for the feet."""
+    axis = int(np.argmax(np.abs(d)))
+    lat = 1 - axis
+    if box.half[lat] < quad.half[lat] - FOOT:
+        return None
+    inside = quad.top_point(box, d, frm)
+    approach = inside.copy()
+    approach[axis] = box.center[axis] - d[axis] * (box.half[axis] + quad.half[axis] + APPROACH)
+    return approach, inside
+
+
+def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Push a board that rests on the robot's surface across the gap on the axis-aligned way to ``name``,
+    keeping the board's own line across the gap when it can (one push leg), else the start's or the target's."""
+    target = quad.layout.box(name)
+    d = _axis_direction(target.center - quad.start)
+    axis, lat = int(np.argmax(np.abs(d))), 1 - int(np.argmax(np.abs(d)))
     for obj in quad.task.objects:
         if obj.name == name or not quad.pushable(obj, quad.floor) or obj.top - obj.bottom > quad.limits.max_step_up:
             continue
         board = quad.layout.box(obj.name)
-        length = 2 * float(np.abs(u) @ board.half)
-        if length < (far - near) + 2 * OVERLAP - 0.05:
-            continue
-        for shift in (far + OVERLAP - length / 2, (near + far) / 2):
-            xy = quad.start + u * shift
-            route = Route(pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
-                          waypoints=[(target.center, name)], uses=[(obj.name, "tool: a rigid board to bridge the gap")],
-                          words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.")
-            yield route
+        length = 2 * float(board.half[axis])
+        lines = [board.center[lat], quad.start[lat], target.center[lat]]
+        for line in (v for k, v in enumerate(lines) if all(abs(v - w) > 0.02 for w in lines[:k])):
+            gap = _gap(quad, d, line, target)
+            if gap is None:
+                continue
+            near, far = gap
+            if length < (far - near) + 2 * OVERLAP - 0.05:
+                continue
+            for shift in (far + OVERLAP - length / 2, (near + far) / 2):
+                xy = np.zeros(2)
+                xy[axis] = quad.start[axis] + d[axis] * shift
+                xy[lat] = line
+                lined = quad.start.copy()
+                lined[lat] = line
+                inside = quad.top_point(target, d, lined)
+                inside[lat] = np.clip(line, target.lo[lat] + quad.half[lat], target.hi[lat] - quad.half[lat])
+                waypoints = ([(lined, quad.floor_name)] if abs(line - quad.start[lat]) > 0.01 else [])
+                yield Route(pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
+                            waypoints=[*waypoints, (inside, name)],
+                            uses=[(obj.name, "tool: a rigid board to bridge the gap")],
+                            words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.")
 
 
-def _gap(quad: Quadruped, goal: np.ndarray) -> tuple[float, float, np.ndarray] | None:
-    """The first stretch on the straight way from the start to ``goal`` too low to step in: (from, to, direction)."""
-    delta = goal - quad.start
-    length = float(np.linalg.norm(delta))
-    if length < 1e-6:
-        return None
-    u = delta / length
+def _gap(quad: Quadruped, d: np.ndarray, line: float, target: Box) -> tuple[float, float] | None:
+    """The first stretch too low to step in along ``d`` from the start to ``target`` on the line ``line`` across
+    (distances from the start along ``d``), ignoring movable objects."""
+    axis, lat = int(np.argmax(np.abs(d))), 1 - int(np.argmax(np.abs(d)))
+    length = float(abs(target.center[axis] - quad.start[axis]))
     s = np.arange(0.0, length, 0.01)
-    fixed = [o.name for o in quad.task.objects if o.movable]
-    h = quad.layout.heights(quad.start + s[:, None] * u, exclude=fixed)
+    points = np.zeros((len(s), 2))
+    points[:, axis] = quad.start[axis] + d[axis] * s
+    points[:, lat] = line
+    movable = [o.name for o in quad.task.objects if o.movable]
+    h = quad.layout.heights(points, exclude=movable)
     low = np.flatnonzero(h < quad.floor - quad.limits.max_step_up)
     if not low.size:
         return None
     end = low[0]
     while end + 1 < len(s) and h[end + 1] < quad.floor - quad.limits.max_step_up:
         end += 1
-    return float(s[low[0]]), float(s[end]), u
+    return float(s[low[0]]), float(s[end])
 
 
 def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
-    """Climb objects of rising height onto ``name``, pushing those that do not already stand against the next."""
+    """Climb objects onto ``name`` (each rise within the limit, a step down onto it allowed), pushing those that
+    do not already stand against the next."""
     target = quad.task.object(name)
     rise = quad.limits.max_step_up + 0.005
-    steps = [o for o in quad.task.objects
-             if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < o.top < target.top - 0.02]
+    steps = [o for o in quad.task.objects if o.name != name and o.shape != "cloth"
+             and quad.floor + 0.02 < o.top < target.top + quad.limits.max_step_up]
     for count in range(1, MAX_STEPS + 1):
         for chain in itertools.permutations(steps, count):
             tops = [quad.floor, *(o.top for o in chain), target.top]
-            if any(b - a > rise or b <= a for a, b in itertools.pairwise(tops)):
+            if any(b - a > rise or a - b > quad.limits.max_step_down or abs(b - a) < 0.02
+                   for a, b in itertools.pairwise(tops)):
                 continue
-            yield from _place_chain(quad, [*chain, target])
+            for route in _place_chain(quad, [*chain, target]):
+                route.late = int(tops[-1] < tops[-2])
+                yield route
 
 
 def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
-    """Every placement of the chain's movable links against the next one's sides (nearest the target first)."""
+    """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
+    nearest the target first; placements whose steps cannot carry the feet are left out."""
     options: list[list[tuple[np.ndarray, np.ndarray | None]]] = []  # per link: (direction to next, new centre)
     layout = quad.layout
     for k in range(len(chain) - 2, -1, -1):
@@ -158,11 +223,15 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
         if not quad.pushable(obj, quad.floor):
             return
         sides = []
-        for direction in (np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1))):
+        for direction in DIRECTIONS:
             axis = int(np.argmax(np.abs(direction)))
-            xy = nxt_box.center.copy()
-            xy[axis] -= direction[axis] * (nxt_box.half[axis] + box.half[axis])
-            sides.append((direction, xy))
+            lat = 1 - axis
+            slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
+            for offset in dict.fromkeys((0.0, slide, -slide)):
+                xy = nxt_box.center.copy()
+                xy[axis] -= direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+                xy[lat] += offset
+                sides.append((direction, xy))
         options.insert(0, sides)
     for combo in itertools.product(*options):
         route = _chain_route(quad, chain, list(combo))
@@ -184,15 +253,46 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject],
             layout = layout.with_moved(obj.name, xy)
             route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))
     boxes = [layout.box(o.name) for o in chain]
-    first_dir = combo[0][0]
-    back = float(np.abs(first_dir) @ boxes[0].half) + quad.extent(first_dir) + APPROACH
-    approach = boxes[0].center - first_dir * back
+    here = quad.start
+    lines = []
+    for k, (d, _) in enumerate(combo):  # the line across each climb on which every foot is over both steps
+        lat = 1 - int(np.argmax(np.abs(d)))
+        foot = quad.half[lat] - FOOT
+        lo = max(boxes[k].lo[lat], boxes[k + 1].lo[lat]) + foot
+        hi = min(boxes[k].hi[lat], boxes[k + 1].hi[lat]) - foot
+        if hi < lo - 0.004:
+            return None
+        lines.append(float(np.clip(here[lat], lo + 0.02, hi - 0.02)) if hi - lo > 0.04 else (lo + hi) / 2)
+    d0, lat0 = combo[0][0], 1 - int(np.argmax(np.abs(combo[0][0])))
+    axis0 = 1 - lat0
+    approach = np.zeros(2)
+    approach[axis0] = boxes[0].center[axis0] - d0[axis0] * (boxes[0].half[axis0] + quad.half[axis0] + APPROACH)
+    approach[lat0] = lines[0]
     route.waypoints.append((approach, quad.floor_name))
-    for k, box in enumerate(boxes[:-1]):
-        route.waypoints.append((box.center, chain[k].name))
+    previous = approach
+    for k in range(len(chain)):
+        d = combo[min(k, len(combo) - 1)][0]
+        axis = int(np.argmax(np.abs(d)))
+        stance = np.zeros(2)
+        stance[axis] = boxes[k].center[axis]
+        stance[1 - axis] = lines[min(k, len(lines) - 1)]
+        if k:  # straight onto this step along the last climb, then over to this climb's line
+            prev_d = combo[k - 1][0]
+            prev_axis = int(np.argmax(np.abs(prev_d)))
+            onto = previous.copy()
+            onto[prev_axis] = boxes[k].center[prev_axis] if k < len(chain) - 1 else stance[prev_axis]
+            if k == len(chain) - 1:
+                onto = quad.top_point(boxes[k], prev_d, previous)
+                onto[1 - prev_axis] = previous[1 - prev_axis]
+            route.waypoints.append((onto, chain[k].name))
+            if k == len(chain) - 1:
+                break
+            if float(np.linalg.norm(stance - onto)) > 0.01:
+                route.waypoints.append((stance, chain[k].name))
+        else:
+            route.waypoints.append((stance, chain[k].name))
+        previous = stance
         route.uses.append((chain[k].name, f"tool: a step up to {chain[k + 1].name}"))
-    last_dir = combo[-1][0]
-    route.waypoints.append((quad.top_point(boxes[-1], last_dir, boxes[-2].center), chain[-1].name))
     names = ", ".join(o.name for o in chain[:-1])
     route.words = (f"Make a staircase of {names} against {chain[-1].name}"
                    + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
@@ -258,6 +358,7 @@ class Writer:
 
     def route(self, route: Route) -> None:
         """Write a whole route; record a predicted violation of its walk as the program's doubt."""
+        self.prog.late += route.late
         for name, role in route.uses:
             self.prog.use(name, role)
         for name, xy, why in route.pushes:

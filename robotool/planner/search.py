@@ -37,14 +37,15 @@ class Tried:
 
 
 def order(programs: Iterable[Program]) -> list[Program]:
-    """Distinct programs, best guess first: predicted feasible, then fewer objects, then fewer steps."""
+    """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then fewer
+    objects, then fewer steps."""
     seen: set[str] = set()
     unique = []
     for prog in programs:
         if prog.code not in seen:
             seen.add(prog.code)
             unique.append(prog)
-    return sorted(unique, key=lambda p: (p.doubt is not None, *p.cost))
+    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, *p.cost))
 
 
 def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], StageOutputs], *, worlds: int, seed: int,
