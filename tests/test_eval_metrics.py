@@ -109,3 +109,19 @@ def test_journal_refuses_a_corrupt_middle_line(tmp_path: Path) -> None:
     (tmp_path / JOURNAL).write_text("not json\n" + RECORDS[0].model_dump_json() + "\n")
     with pytest.raises(EvalError, match="line 1"):
         Journal(tmp_path)
+
+
+def test_only_an_analyzer_is_graded_on_key_concepts() -> None:
+    """The search planner copies the ground-truth concepts; grading it would always give 1.0."""
+    from robotool.concepts import key_concepts
+    from robotool.eval.instances import builtin
+    from robotool.eval.judge import judge
+    from robotool.solution import Solution, StageOutputs
+
+    instance = builtin("sofa_traversing")
+    truth = key_concepts(instance.task)
+    solution = Solution(task="sofa_traversing", method="search", stages=StageOutputs(key_concepts=truth))
+    searched = judge(instance, RunKey(task="sofa_traversing", method="search", run=0), 0, solution, 0.1)
+    analyzed = judge(instance, RunKey(task="sofa_traversing", method="robotool", run=0), 0, solution, 0.1)
+    assert searched.concepts.correct is None
+    assert analyzed.concepts.correct is True

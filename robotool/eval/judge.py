@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from robotool.concepts import key_concepts
+from robotool.concepts import KeyConcept, key_concepts
 from robotool.eval.errors import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import RunKey, RunRecord, WorldResult
+from robotool.methods import METHODS
 from robotool.solution import Solution
 from robotool.verify import world_failure
 
@@ -16,6 +17,11 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
     return RunRecord(key=key, family=instance.family, embodiment=instance.task.embodiment,
                      needs_tool=instance.needs_tool, world_seed=world_seed, wall_s=wall_s, success_rate=0.0,
                      failure_class="invalid")
+
+
+def _predicted_concepts(key: RunKey, solution: Solution) -> list[KeyConcept] | None:
+    """The Analyzer's concepts; None for methods without one (the search planner copies the ground truth)."""
+    return solution.stages.key_concepts if METHODS.get(key.method, {}).get("analyzer") else None
 
 
 def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float) -> RunRecord:
@@ -28,7 +34,7 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
                           sim_time=r.sim_time) for r in rollouts]
     update = {
         "worlds": worlds,
-        "concepts": grade(key_concepts(instance.task), solution.stages.key_concepts),
+        "concepts": grade(key_concepts(instance.task), _predicted_concepts(key, solution)),
         "code": solution.code,
         "stages": solution.stages,
         "candidate_failures": [c.failure for c in solution.candidates],
