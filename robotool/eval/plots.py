@@ -24,8 +24,9 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
 
     def save(fig: plt.Figure, name: str) -> None:
         for ax in fig.axes:  # legend in a band above the bars
-            ax.set_ylim(0, 1.3)
-            ax.legend(fontsize=7, loc="upper center", ncol=5, frameon=False)
+            ax.set_ylim(0, 1.35)
+            ncol = min(3, len(ax.get_legend_handles_labels()[0]) or 1)
+            ax.legend(fontsize=7, loc="upper center", ncol=ncol, frameon=False)
         fig.tight_layout()
         fig.savefig(folder / name, dpi=120)
         plt.close(fig)
