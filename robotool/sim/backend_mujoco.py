@@ -31,6 +31,8 @@ _WARNINGS = {
     mujoco.mjtWarning.mjWARN_CNSTRFULL: "constraint buffer full",
     mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
 }
+_WARNING_KINDS = list(_WARNINGS)
+_WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 
 
 class MujocoSim:
@@ -58,6 +60,8 @@ class MujocoSim:
         self._sensordata = np.zeros((nworld, model.nsensordata))
         self._eq_active = np.zeros((nworld, model.neq), dtype=bool)
         self._touching = np.zeros((nworld, model.nbody, model.nbody), dtype=bool)
+        self._touch_pairs: list[np.ndarray | None] = [None] * nworld  # body pairs set in _touching
+        self._geom_body = model.geom_bodyid.copy()
         self._failed: list[str | None] = [None] * nworld
         self._nthread = nthread or min(os.cpu_count() or 1, nworld)
         self._pool = ThreadPoolExecutor(self._nthread) if self._nthread > 1 else None
@@ -74,20 +78,24 @@ class MujocoSim:
         self._sensordata[w] = d.sensordata
         self._eq_active[w] = d.eq_active
         touching = self._touching[w]
-        touching[:] = False
+        previous = self._touch_pairs[w]
+        if previous is not None:  # clear only what was set last time
+            touching[previous[:, 0], previous[:, 1]] = False
+            touching[previous[:, 1], previous[:, 0]] = False
+            self._touch_pairs[w] = None
         if d.ncon:
             con = d.contact
-            near = con.dist <= TOUCH_DISTANCE
-            bodies = self.scene.model.geom_bodyid[con.geom[near]]
+            bodies = self._geom_body[con.geom[con.dist <= TOUCH_DISTANCE]]
             touching[bodies[:, 0], bodies[:, 1]] = True
             touching[bodies[:, 1], bodies[:, 0]] = True
+            self._touch_pairs[w] = bodies
         if self._failed[w] is None:
             self._failed[w] = self._failure(d)
 
     def _failure(self, d: mujoco.MjData) -> str | None:
-        for kind, text in _WARNINGS.items():
-            if d.warning[kind].number:
-                return text
+        counts = d.warning.number
+        if counts[_WARNING_INDEX].any():
+            return _WARNINGS[_WARNING_KINDS[int(np.flatnonzero(counts[_WARNING_INDEX])[0])]]
         if d.nefc > self.njmax:
             return f"constraint rows {d.nefc} over njmax {self.njmax}"
         if d.ncon > self.nconmax:
