@@ -139,3 +139,16 @@ def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
     )
     assert end == pytest.approx([0.3, 0.0, 0.15], abs=0.02)
     assert rollout.calls[-1].outcome == "error" and "no object named" in rollout.calls[-1].reason
+
+
+def test_a_step_shorter_than_the_feet_span_is_crossed_without_catching_the_legs(run_texts: Any) -> None:
+    """box_2 (0.4 m long) is shorter than the feet's span (0.59 m): when the front feet step down past it onto
+    the sofa the rear feet are still over the lower box_1, so nothing but the lift motor carries the body over
+    box_2 (regression: it dropped onto box_2 with its torso and stalled with its rear legs against box_2's side)."""
+    data = tasks.load("sofa_climbing").model_dump(mode="json", exclude_defaults=True)
+    objects = {o["name"]: o for o in data["objects"]}
+    objects["box_2"]["center"] = [1.4, 0.0, 0.12]  # against box_1, in line
+    objects["sofa"].update(center=[2.05, 0.0, 0.042], size=[0.9, 1.5, 0.084])  # against box_2, lower than it
+    for rollout in run_texts(parse_task(data), ["climb_to_position([2.05, 0.0, 0.084])"] * 2):
+        assert [c.outcome for c in motion_calls(rollout)] == ["done"], motion_calls(rollout)
+        assert rollout.success

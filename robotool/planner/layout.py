@@ -15,14 +15,16 @@ import numpy as np
 from robotool import geometry
 from robotool.embodiments import QuadrupedLimits
 from robotool.scene import SceneObject, Task
+from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_points
 
 CONTACT = 0.02  # m: boxes closer than this touch
 SAMPLE = 0.02  # m between terrain samples along a walk
 FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
-PUSH_OVERLAP = 0.08  # m of an object's face the robot's face keeps covering when it slides along it
 SLACK = 0.01  # m a measured step, gap or drop may exceed its limit (the simulator's own measurement slack)
 SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks, is in the way
+PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
+PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep tolerates
 
 
 @dataclass(frozen=True)
@@ -179,7 +181,8 @@ def _scan(h: np.ndarray, limits: QuadrupedLimits) -> str | None:
 def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits,
            exclude: Iterable[str] = ()) -> list[np.ndarray]:
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else through the
-    shortest one of the L-corners and the corners of nearby objects (grown by the body) that makes it fine."""
+    shortest one (or, failing that, two) of the L-corners and the corners of nearby objects (grown by the body)
+    that makes it fine."""
     skip = list(exclude)
     if walk_violation(layout, start, [goal], limits, skip) is None:
         return [goal]
@@ -188,55 +191,80 @@ def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: Quadrupe
     for box in layout.boxes(skip):
         lo, hi = box.lo - half, box.hi + half
         vias += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
+        vias += [np.array([x, goal[1]]) for x in (lo[0], hi[0])] + [np.array([goal[0], y]) for y in (lo[1], hi[1])]
     vias.sort(key=lambda v: float(np.linalg.norm(v - start) + np.linalg.norm(goal - v)))
+    vias = vias[:24]
+
+    def fine(p: np.ndarray, q: np.ndarray) -> bool:
+        return walk_violation(layout, p, [q], limits, skip) is None
+
     for via in vias[:12]:
-        if walk_violation(layout, start, [via, goal], limits, skip) is None:
+        if fine(start, via) and fine(via, goal):
             return [via, goal]
+    out = [v for v in vias if fine(start, v)]
+    into = [v for v in vias if fine(v, goal)]
+    pairs = sorted(((a, b) for a in out for b in into if a is not b),
+                   key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0])
+                                       + np.linalg.norm(goal - p[1])))
+    for a, b in pairs[:40]:  # around two corners
+        if fine(a, b):
+            return [a, b, goal]
     return [goal]
 
 
-def push_problem(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndarray,
-                 floor: float) -> tuple[str | None, np.ndarray]:
-    """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it: one straight leg per axis, the
-    shorter first, the robot's face against the object's, slid along the face to the nearest offset whose
-    sweep is clear. Returns what blocks it (or None) and where the robot ends."""
+def push_problem(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndarray, floor: float,
+                 limits: QuadrupedLimits | None = None,
+                 here: np.ndarray | None = None) -> tuple[str | None, np.ndarray]:
+    """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.sim.quadruped_push`): one
+    straight leg per axis, the shorter first, the robot's face against the object's, slid along the face to the
+    nearest offset whose sweep (from where it lines up, else from the start pose, to the end of the push plus the
+    gap) meets nothing above its floor. With ``limits`` and the robot's position ``here``, the walk around the object
+    to where it lines up is predicted too. Returns what blocks it (or None) and where the robot ends."""
     box = layout.box(name)
-    pos = box.center.copy()
-    robot = pos.copy()
-    delta = np.asarray(dest, dtype=float) - pos
-    for axis in np.argsort(np.abs(delta), kind="stable"):
-        if abs(delta[axis]) < 0.02:
-            continue
-        end = pos.copy()
-        end[axis] = dest[axis]
-        hit = next((h for f in np.linspace(0.0, 1.0, max(2, int(abs(delta[axis]) / 0.05) + 1))
-                    if (h := layout.collides(box.moved_to(pos + f * (end - pos)), ignore=[name]))), None)
+    half = np.asarray(body_half, dtype=float)
+    robot = np.asarray(here, dtype=float) if here is not None else box.center.copy()
+    for leg in legs(box.center, np.asarray(dest, dtype=float)):
+        axis = leg.axis
+        end_center = box.center.copy()
+        end_center[axis] = leg.target
+        steps = max(2, int(abs(end_center[axis] - box.center[axis]) / 0.05) + 1)
+        hit = next((h for f in np.linspace(0.0, 1.0, steps)
+                    if (h := layout.collides(box.moved_to(box.center + f * (end_center - box.center)), ignore=[name]))),
+                   None)
         if hit:
             return f"{name} would run into {hit}", robot
-        across = 1 - axis
-        reach = max(0.0, box.half[across] + body_half[across] - PUSH_OVERLAP)
-        offsets = sorted(np.concatenate([np.arange(0.0, reach + 1e-9, 0.05), -np.arange(0.05, reach + 1e-9, 0.05)]),
-                         key=abs)
-        behind = next((b for o in offsets if not _robot_blocked(layout, b := _behind(pos, end, box, body_half, axis, o),
-                                                                  end - pos, body_half, floor, name)), None)
-        if behind is None:
+        pose = _push_pose(layout, name, box, leg, half, floor)
+        if pose is None:
             return f"no clear place to stand behind {name}", robot
-        robot = behind + (end - pos)
-        pos = end
+        start, end, staging = pose
+        if limits is not None and here is not None:
+            around = route(robot, staging, box.lo - half - GAP / 2, box.hi + half + GAP / 2)
+            problem = walk_violation(layout, robot, [*around, start], limits, exclude=[name])
+            if problem:
+                return f"the way to push {name}: {problem}", robot
+        robot = end - (end - start) / np.linalg.norm(end - start) * GAP
+        box = box.moved_to(end_center)
+        layout = layout.with_moved(name, end_center)
     return None, robot
 
 
-def _behind(pos: np.ndarray, end: np.ndarray, box: Box, body_half: np.ndarray, axis: int, offset: float) -> np.ndarray:
-    """The robot's centre lined up behind the object at ``pos`` to push it toward ``end`` along ``axis``."""
-    out = pos.copy()
-    out[axis] -= np.sign(end[axis] - pos[axis]) * (box.half[axis] + body_half[axis] + 0.03)
-    out[1 - axis] += offset
-    return out
+def push_staging(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndarray, floor: float) -> np.ndarray | None:
+    """Where the push skill lines the robot up for the first leg of a push of ``name`` to ``dest`` (None: no leg, or
+    nowhere clear to stand)."""
+    box = layout.box(name)
+    first = legs(box.center, np.asarray(dest, dtype=float))
+    pose = _push_pose(layout, name, box, first[0], np.asarray(body_half, dtype=float), floor) if first else None
+    return None if pose is None else pose[2]
 
 
-def _robot_blocked(layout: Layout, start: np.ndarray, travel: np.ndarray, body_half: np.ndarray, floor: float,
-                   name: str) -> bool:
-    """Whether the body, swept from ``start`` by ``travel``, meets anything above its floor but the pushed object."""
-    lo = np.minimum(start, start + travel) - body_half
-    hi = np.maximum(start, start + travel) + body_half
-    return layout.collides(Box("robot", lo, hi, floor, floor + 0.3), ignore=[name], margin=0.015) is not None
+def _push_pose(layout: Layout, name: str, box: Box, leg: Leg, half: np.ndarray,
+               floor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The skill's choice of start and end poses for one leg, and its staging point (None: nowhere clear)."""
+    offsets = lateral_offsets(float(box.hi[1 - leg.axis] - box.lo[1 - leg.axis]), 2 * float(half[1 - leg.axis]))
+    poses = [push_pose(box.lo, box.hi, leg, half, float(o)) for o in offsets]
+    for staging in (PUSH_STAGING, 0.0):
+        for start, end in poses:
+            behind = start - (end - start) / np.linalg.norm(end - start) * staging
+            if np.all(layout.heights(sweep_points(behind, end, half), exclude=[name]) <= floor + PUSH_RISE):
+                return start, end, start - (end - start) / np.linalg.norm(end - start) * PUSH_STAGING
+    return None

@@ -17,7 +17,7 @@ import numpy as np
 from robotool.concepts import start_surface, surface_under
 from robotool.embodiments import QuadrupedLimits
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.planner.layout import Box, Layout, detour, push_problem, walk_violation
+from robotool.planner.layout import Box, Layout, detour, push_problem, push_staging, walk_violation
 from robotool.scene import SceneObject, Task
 
 LEVEL = 0.04  # m: supports closer in height than this are the same surface
@@ -200,8 +200,8 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
     for count in range(1, MAX_STEPS + 1):
         for chain in itertools.permutations(steps, count):
             tops = [quad.floor, *(o.top for o in chain), target.top]
-            if any(b - a > rise or a - b > quad.limits.max_step_down or abs(b - a) < 0.02
-                   for a, b in itertools.pairwise(tops)):
+            if any(b - a > rise or a - b > quad.limits.max_step_down or (abs(b - a) < 0.02 and k < count)
+                   for k, (a, b) in enumerate(itertools.pairwise(tops))):  # the last link may be level with the target
                 continue
             for route in _place_chain(quad, [*chain, target]):
                 route.late = int(tops[-1] < tops[-2])
@@ -223,13 +223,22 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
         if not quad.pushable(obj, quad.floor):
             return
         sides = []
+        others = [b for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
+                  for b in [layout.box(o.name)]]
         for direction in DIRECTIONS:
             axis = int(np.argmax(np.abs(direction)))
             lat = 1 - axis
             slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
-            for offset in dict.fromkeys((0.0, slide, -slide)):
+            along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+            offsets = [0.0, slide, -slide]
+            for other in others:  # flush against something else that stands by the same face
+                if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
+                    offsets += [float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
+                                float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat])]
+            reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
+            for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
                 xy = nxt_box.center.copy()
-                xy[axis] -= direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+                xy[axis] = along
                 xy[lat] += offset
                 sides.append((direction, xy))
         options.insert(0, sides)
@@ -244,12 +253,15 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject],
     route = Route()
     layout = quad.layout
     for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
-        _, xy = combo[k]
+        d, xy = combo[k]
         obj = chain[k]
         if xy is not None:
             moved = layout.box(obj.name).moved_to(xy)
             if layout.collides(moved) is not None:
                 return None
+            lined = _lined_up(layout.box(obj.name).center, xy, d)
+            if lined is not None:
+                route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
             layout = layout.with_moved(obj.name, xy)
             route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))
     boxes = [layout.box(o.name) for o in chain]
@@ -262,6 +274,7 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject],
         hi = min(boxes[k].hi[lat], boxes[k + 1].hi[lat]) - foot
         if hi < lo - 0.004:
             return None
+        lo, hi = _clear_of_neighbours(quad, layout, chain, k, lat, lo, hi)
         lines.append(float(np.clip(here[lat], lo + 0.02, hi - 0.02)) if hi - lo > 0.04 else (lo + hi) / 2)
     d0, lat0 = combo[0][0], 1 - int(np.argmax(np.abs(combo[0][0])))
     axis0 = 1 - lat0
@@ -300,6 +313,43 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject],
     return route
 
 
+def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray | None:
+    """Where to push an object first so that its last push toward ``xy`` runs along ``d`` (into the face it is
+    to stand against) rather than sliding along that face: the push skill moves along the shorter axis first,
+    so when the move across ``d`` is the longer one the object is first lined up across ``d``; None when the
+    push already ends along ``d``."""
+    axis = int(np.argmax(np.abs(d)))
+    delta = np.asarray(xy) - center
+    if abs(delta[1 - axis]) < 0.02 or abs(delta[1 - axis]) <= abs(delta[axis]):
+        return None
+    out = np.array(center, dtype=float)
+    out[1 - axis] = xy[1 - axis]
+    return out
+
+
+def _clear_of_neighbours(quad: Quadruped, layout: Layout, chain: list[SceneObject], k: int, lat: int, lo: float,
+                         hi: float) -> tuple[float, float]:
+    """Narrow the climb line's range ``lo``-``hi`` (across the climb from link ``k`` onto link ``k + 1``) so that the
+    body's flanks keep clear of other objects standing beside the two steps; unchanged when no line is clear."""
+    axis = 1 - lat
+    a, b = layout.box(chain[k].name), layout.box(chain[k + 1].name)
+    span = (min(a.lo[axis], b.lo[axis]) - quad.half[axis], max(a.hi[axis], b.hi[axis]) + quad.half[axis])
+    names = {o.name for o in chain}
+    new_lo, new_hi = lo, hi
+    for obj in quad.task.objects:
+        if obj.name in names or obj.shape == "cloth" or obj.top < quad.floor + 0.03:
+            continue
+        other = layout.box(obj.name)
+        if other.hi[axis] <= span[0] or other.lo[axis] >= span[1]:
+            continue
+        middle = (lo + hi) / 2
+        if other.hi[lat] <= middle:
+            new_lo = max(new_lo, float(other.hi[lat]) + quad.half[lat] + 0.02)
+        elif other.lo[lat] >= middle:
+            new_hi = min(new_hi, float(other.lo[lat]) - quad.half[lat] - 0.02)
+    return (new_lo, new_hi) if new_hi >= new_lo else (lo, hi)
+
+
 def _axis_direction(v: np.ndarray) -> np.ndarray:
     axis = int(np.argmax(np.abs(v)))
     out = np.zeros(2)
@@ -318,6 +368,7 @@ class Writer:
         self.layout = quad.layout
         self.here = quad.start
         self.level = quad.floor
+        self.surface = quad.floor_name
         self.refs: dict[str, Ref] = {}
 
     def position(self, name: str) -> Ref:
@@ -328,7 +379,17 @@ class Writer:
         return self.refs[name]
 
     def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level)
+        """Push ``name`` to ``xy``; when the push skill's own way to where it lines up is predicted blocked, walk
+        there first around what stands in the way."""
+        limits = self.quad.limits
+        problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
+        staging = push_staging(self.layout, name, xy, self.quad.half, self.level) if problem else None
+        if problem and problem.startswith("the way to push") and staging is not None:
+            path = detour(self.layout, self.here, staging, limits)
+            if walk_violation(self.layout, self.here, path, limits) is None:
+                for via in path:
+                    self.walk(via, self.surface, f"walk to where the push of {name} lines up")
+                problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
         ref = self.position(name)
         start = self.layout.box(name).center
         self.prog.motion("push_to_position", obj=name, point=Point.at(ref, (*(xy - start), 0.0)),
@@ -355,6 +416,7 @@ class Writer:
         self.prog.motion(skill, point=point, objects=[] if surface == "ground" else [surface], intent=intent)
         self.level = max(height, self.level) if skill == "climb_to_position" else height
         self.here = np.asarray(xy, dtype=float)
+        self.surface = surface
 
     def route(self, route: Route) -> None:
         """Write a whole route; record a predicted violation of its walk as the program's doubt."""

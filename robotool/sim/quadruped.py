@@ -43,7 +43,7 @@ from robotool.sim.quadruped_push import (
     rule_violation,
     sweep_points,
 )
-from robotool.sim.quadruped_terrain import RISE, scan
+from robotool.sim.quadruped_terrain import RISE, TOLERANCE, scan
 from robotool.sim.quadruped_terrain import describe as describe_violation
 
 WALK_SPEED = 0.4  # m/s
@@ -234,15 +234,22 @@ class QuadrupedController:
     def _clear_pose(
         self, w: int, index: int, leg: Leg, lo: np.ndarray, hi: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The push start and end poses nearest straight-on whose sweep meets nothing above the floor."""
+        """The push start and end poses nearest straight-on whose sweep meets nothing above the floor.
+
+        Poses whose sweep is clear from the staging point (``STAGING`` behind the start, where the robot lines up)
+        come first, so that the robot can line up there; failing those, a clear sweep from the start will do.
+        """
         feet_z = self.state.qpos[w, self.ids.qpos[2]]
         floor = float(self._heights(w, self.state.qpos[w, self.ids.qpos[:2]][None], feet_z + 0.05)[0][0])
         width = hi[1 - leg.axis] - lo[1 - leg.axis]
-        for offset in lateral_offsets(width, 2 * self.half[1 - leg.axis]):
-            start, end = push_pose(lo, hi, leg, self.half, float(offset))
-            z, objects = self._heights(w, sweep_points(start, end, self.half), floor + RAY_HEIGHT)
-            if np.all((z <= floor + RISE) | (objects == index)):
-                return start, end
+        offsets = lateral_offsets(width, 2 * self.half[1 - leg.axis])
+        poses = [push_pose(lo, hi, leg, self.half, float(o)) for o in offsets]
+        for staging in (STAGING, 0.0):
+            for start, end in poses:
+                behind = start - (end - start) / np.linalg.norm(end - start) * staging
+                z, objects = self._heights(w, sweep_points(behind, end, self.half), floor + RAY_HEIGHT)
+                if np.all((z <= floor + RISE) | (objects == index)):
+                    return start, end
         return None
 
     # -- running moves -----------------------------------------------------------------------------
@@ -325,9 +332,30 @@ class QuadrupedController:
             lift = float(np.nanmax(result.level[: min(front, n)]))
             rest = float(result.level[0])
             lifting = lift > rest + RISE
+            belly = self._belly(h, under, pos[w, 2])
+            if belly is not None and (not lifting or belly > lift):
+                lift, lifting = belly, True
             self.sim.ctrl[w, self.ids.actuator[2]] = lift + CLEARANCE if lifting else OFF
             waiting = lifting and pos[w, 2] < lift + CLEARANCE / 2
             self._step_setpoint(w, stop, moving=not waiting)
+
+    def _belly(self, h: np.ndarray, under: int, feet: float) -> float | None:
+        """The height of a surface under the middle of the body that stands higher than both foot rows.
+
+        A step shorter than the feet's span (the body straddles it, front feet past its near edge and rear
+        feet not yet on it, or the other way round) carries no foot: the body is held above it by the lift
+        motor until a foot row is over it again, instead of dropping onto it with its torso and catching
+        its legs on its sides. Only a surface the feet could have stepped onto (within the step limit of
+        the feet) counts. None when there is no such surface.
+        """
+        reach = int(np.ceil(2 * FOOT_RADIUS / SPACING))
+        if under - EDGE_SAMPLES <= 2 * reach:
+            return None
+        rows = max(float(h[EDGE_SAMPLES : reach + 1].max()), float(h[under - reach : under - EDGE_SAMPLES + 1].max()))
+        middle = float(h[reach + 1 : under - reach].max())
+        if middle > rows + RISE and middle - feet <= self.limits.max_step_up + TOLERANCE:
+            return middle
+        return None
 
     def _check_arrival(self, w: int, active: _Active, reach: float, dist: float) -> SkillEnd | None:
         """End the move when the body reached its stopping point, stalled or ran out of time."""
