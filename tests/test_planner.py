@@ -107,3 +107,11 @@ def test_planner_source_names_no_task_or_family() -> None:
         words |= {o.name for o in tasks.load(task_name).objects if "_" in o.name}
     found = sorted(w for w in words if re.search(rf"\b{re.escape(w)}\b", source))
     assert not found, f"the planner names {found}"
+
+
+@pytest.mark.parametrize(("family", "seed"), [("sofa_climbing", 1021), ("sofa_climbing", 1028)])
+def test_solves_generated_staircases_that_once_failed(family: str, seed: int) -> None:
+    """Regression: a last step level with the target (1021) and a box that drifted along another's face (1028)."""
+    instance = tasks.generate(family, seed)
+    solution = solve(instance.task, worlds=2)
+    assert solution.success, solution.candidates[0].failure if solution.candidates else solution.notes
