@@ -46,6 +46,8 @@ def grasp_eq_name(obj: str) -> str:
 class ArmEmbodiment:
     """:class:`~robotool.sim.embodiment.Embodiment` for the arm."""
 
+    control_substeps = 50  # 10 Hz: the servos track interpolated targets, so a slower tick loses nothing
+
     def __init__(self, limits: ArmLimits):
         self.limits = limits
 

@@ -23,7 +23,6 @@ from robotool.scene import SceneObject, Task
 from robotool.sim.embodiment import Embodiment, embodiment_for
 
 TIMESTEP = 0.002  # s, physics step
-CONTROL_SUBSTEPS = 25  # physics steps per control tick
 GROUND_FRICTION = 0.5
 DEFAULT_FRICTION = 0.5
 WELD_SOLREF = (0.01, 1.0)  # stiff enough to carry and push without visible lag
@@ -181,4 +180,4 @@ def build(task: Task) -> Scene:
     njmax = 4 * nconmax + 6 * model.neq + 2 * model.njnt
     return Scene(task=task, model=model, embodiment=embodiment, object_names=names,
                  object_body=object_body, body_object=body_object, robot_body=robot_body,
-                 grasp_local=grasp_local, control_substeps=CONTROL_SUBSTEPS, nconmax=nconmax, njmax=njmax)
+                 grasp_local=grasp_local, control_substeps=embodiment.control_substeps, nconmax=nconmax, njmax=njmax)

@@ -81,6 +81,9 @@ class SkillController(Protocol):
 class Embodiment(Protocol):
     """One robot type: how it enters the model and how its skills run."""
 
+    control_substeps: int
+    """Physics steps per control tick (the controller's rate)."""
+
     def add_to_spec(self, spec: mujoco.MjSpec, task: Task) -> None:
         """Add the robot's bodies, actuators, sensors and equalities to the task's spec."""
 

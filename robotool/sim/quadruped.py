@@ -90,6 +90,8 @@ class _Active:
 class QuadrupedEmbodiment:
     """The quadruped (Go1-sized) with the limits of one task."""
 
+    control_substeps = 25  # 20 Hz: the lift motor must react within a step's approach
+
     def __init__(self, limits: QuadrupedLimits):
         self.limits = limits
 
