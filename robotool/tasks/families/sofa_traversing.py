@@ -11,8 +11,7 @@ Randomizations:
     - the board's length (the template's, or up to 0.1 m shorter; always at least the gap plus the
       template's overlap on the sofas) and mass (the template's +-15%);
     - decoys: the cloth always; in some solvable scenes a plank on the floor (the robot could step down
-      to it but never climb back up); in unsolvable scenes the board on sofa_1 is too short to bridge
-      the gap (no longer than the gap) or too heavy (6-10 kg) to push;
+      to it but never climb back up); unsolvable scenes have no rigid board, only the cloth;
     - 0-3 fixed pieces of furniture on the floor away from the sofas; the whole scene mirrored, turned
       by quarter turns and shifted on the floor.
 Success conditions:
@@ -82,13 +81,8 @@ def build(rng: np.random.Generator) -> Draft:
             scene.append(on_top("plank", "box", (sofa_1.center[0], y), (1.1, 0.4, 0.05), mass=2.0,
                                 notes="a wooden plank lying on the floor"))
             decoys.append("plank")
-    elif rng.random() < 0.5:
-        short = uniform(rng, 0.25, gap)  # no longer than the gap: it cannot bridge it
-        scene.append(board(short, r4(mass * short / length), surfboard.notes))
-        decoys.append("surfboard")
-    else:
-        scene.append(board(length, uniform(rng, 6.0, 10.0, 1), "a solid hardwood board, partly lying on the cloth"))
-        decoys.append("surfboard")
+    # Unsolvable scenes have no rigid board at all, only the cloth: a heavy board can be shoved by the walking
+    # robot until it wedges across the gap, and a short one can lodge in the gap as a filler.
     x0, y0 = base.robot.position  # type: ignore[misc]
     start = (uniform(rng, x0 - 0.05, x0), uniform(rng, y0 - 0.1, y0 + 0.1))
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
