@@ -9,6 +9,7 @@ from rich.table import Table
 
 from robotool.eval.records import Results
 from robotool.eval.tables import TextTable
+from robotool.methods import METHODS
 
 
 def _markdown_table(table: TextTable) -> str:
@@ -30,6 +31,9 @@ def _preamble(results: Results) -> list[str]:
              f"- runs recorded: {len(results.records)}; wall time of the last command: {results.wall_s:.0f} s"]
     lines += [f"- {line}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {note}" for note in results.notes]
+    if not any(METHODS.get(r.key.method, {}).get("analyzer") for r in results.records):
+        lines.append("- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an "
+                     "LM; none ran")
     return lines
 
 
