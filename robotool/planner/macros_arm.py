@@ -61,6 +61,21 @@ class Arm:
 # --- macros ------------------------------------------------------------------------------------------
 
 
+def pick_and_lift(
+    prog: Program, arm: Arm, tool: SceneObject, target: SceneObject, role: str
+) -> tuple[Ref, float, float]:
+    """Grasp ``tool``, query ``target``'s centre and lift the tool above everything.
+
+    Returns the target's centre, the carrying height and the height to slide the tool at.
+    """
+    g = pick(prog, tool, role)
+    t = prog.query("get_center", target.name, target.center)
+    carry = arm.carry_height([tool], tool)
+    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[tool.name],
+                intent=f"lift {tool.name} above everything")
+    return t, carry, tool.grasp_point[2] + SLIDE
+
+
 def pick(prog: Program, obj: SceneObject, role: str) -> Ref:
     """Open, approach the graspable point from above, close on it. Returns the queried point."""
     prog.use(obj.name, role)
@@ -152,12 +167,8 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
     g_pre = box.center + pre
     if not (arm.inside(g_pre) and arm.inside(g_pre + pull * pull_by)):
         return False
-    g = pick(prog, hook, f"tool: a hook whose head reaches behind {target.name} to pull it in")
-    t = prog.query("get_center", target.name, target.center)
-    carry = arm.carry_height([hook], hook)
-    low = hook.grasp_point[2] + SLIDE
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[hook.name],
-                intent=f"lift {hook.name} above everything")
+    t, carry, low = pick_and_lift(prog, arm, hook, target,
+                                  f"tool: a hook whose head reaches behind {target.name} to pull it in")
     above = Point.at(t, (*pre, 0)).with_axis(2, None, carry)
     prog.motion("move_to_position", point=above, objects=[hook.name, target.name],
                 intent=f"carry {hook.name}'s head over the far side of {target.name}",
@@ -196,12 +207,7 @@ def tool_push(prog: Program, arm: Arm, tool: SceneObject, target: SceneObject, d
               and arm.inside(box.center + back - side * q + d * (dist + GAP))), None)
     if q is None:
         return False
-    g = pick(prog, tool, f"tool: a rigid object to push {target.name} with")
-    t = prog.query("get_center", target.name, target.center)
-    carry = arm.carry_height([tool], tool)
-    low = tool.grasp_point[2] + SLIDE
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[tool.name],
-                intent=f"lift {tool.name} above everything")
+    t, carry, low = pick_and_lift(prog, arm, tool, target, f"tool: a rigid object to push {target.name} with")
     above = Point.at(t, (*(back - side * q), 0)).with_axis(2, None, carry)
     prog.motion("move_to_position", point=above, objects=[tool.name],
                 intent=f"carry {tool.name} behind {target.name}", explanation=f"its face {GAP} m behind {target.name}")
