@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import logging
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import mujoco
@@ -31,6 +32,7 @@ _WARNINGS = {
     mujoco.mjtWarning.mjWARN_CNSTRFULL: "constraint buffer full",
     mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
 }
+CHUNKS_PER_THREAD = 4  # worlds are handed out in this many chunks per thread, taken as threads free up
 _WARNING_KINDS = list(_WARNINGS)
 _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 
@@ -64,7 +66,7 @@ class MujocoSim:
         self._geom_body = model.geom_bodyid.copy()
         self._failed: list[str | None] = [None] * nworld
         self._nthread = nthread or min(os.cpu_count() or 1, nworld)
-        self._pool = ThreadPoolExecutor(self._nthread) if self._nthread > 1 else None
+        self._pool = ThreadPoolExecutor(self._nthread - 1) if self._nthread > 1 else None
         for w in range(nworld):
             self._gather(w)
 
@@ -116,8 +118,20 @@ class MujocoSim:
         if self._pool is None or worlds.size < 2:
             self._run(worlds, nstep)
             return
-        chunks = np.array_split(worlds, self._nthread)
-        for future in [self._pool.submit(self._run, c, nstep) for c in chunks if c.size]:
+        chunks = iter(np.array_split(worlds, min(worlds.size, CHUNKS_PER_THREAD * self._nthread)))
+        lock = threading.Lock()
+
+        def drain() -> None:  # threads take chunks until none is left, so uneven worlds balance out
+            while True:
+                with lock:
+                    chunk = next(chunks, None)
+                if chunk is None:
+                    return
+                self._run(chunk, nstep)
+
+        helpers = [self._pool.submit(drain) for _ in range(self._nthread - 1)]
+        drain()  # the calling thread steps worlds too
+        for future in helpers:
             future.result()
 
     def state(self) -> BatchState:
