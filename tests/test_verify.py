@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
+from fixtures.reference import program
+
 from robotool import tasks
 from robotool.verify import failure_reason, run_codes
 
-GRASP = """\
-p = get_graspable_point("milk")
-open_gripper()
-move_to_position([p[0], p[1], p[2] + 0.08])
-move_to_position(p)
-close_gripper()
-"""
+GRASP = program("milk_reaching_direct")
 
 
 def test_every_candidate_meets_the_same_worlds() -> None:
