@@ -27,6 +27,10 @@ EXIT_USAGE = 2
 Command = Callable[[argparse.Namespace, Console], int]
 
 
+class UsageError(ValueError):
+    """A mistake in how a command was called; reported in one line with exit status 2."""
+
+
 def _goal_text(task: Task) -> str:
     goal = task.goal
     if goal.lifted is not None:
@@ -131,10 +135,6 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         args.json.write_text(report.model_dump_json(indent=2))
         console.print(f"wrote the report to {args.json}")
     return 0 if report.success else 1
-
-
-class UsageError(ValueError):
-    """A mistake in how a command was called; reported in one line with exit status 2."""
 
 
 def _positive_int(text: str) -> int:

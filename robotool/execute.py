@@ -12,7 +12,7 @@ from pydantic import BaseModel, Field
 
 from robotool import tasks
 from robotool.rollout import Rollout
-from robotool.sandbox import ProgramRejected, extract_program, validate
+from robotool.sandbox import extract_program, validate
 from robotool.scene import Task
 from robotool.sim.backend import default_backend
 from robotool.verify import run_codes
@@ -50,5 +50,3 @@ def run(
                      success=successes == worlds, success_rate=successes / worlds, code=program,
                      rollouts=rollouts)
 
-
-__all__ = ["ProgramRejected", "RunReport", "run"]
