@@ -9,6 +9,7 @@ captured graph for the substeps; :mod:`robotool.sim.backend_warp`). Controllers 
 from __future__ import annotations
 
 import ctypes.util
+import functools
 import importlib
 import os
 from collections.abc import Sequence
@@ -194,6 +195,7 @@ def make_sim(scene: Scene, nworld: int, *, backend: BackendName = "mujoco", pert
                njmax=njmax or scene.njmax, nconmax=nconmax or scene.nconmax)
 
 
+@functools.cache
 def default_backend() -> BackendName:
     """``warp`` when Warp sees a CUDA device, else ``mujoco`` (Warp is not even loaded without a driver)."""
     if ctypes.util.find_library("cuda") is None and not os.path.exists("/proc/driver/nvidia/version"):
