@@ -1,0 +1,23 @@
+"""Typed errors that robotool raises for conditions a user can fix (the message says how)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+
+class RobotoolError(Exception):
+    """Base class of robotool's user-facing errors; the message is one line that names the fix."""
+
+
+LMFailureKind = Literal["no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted"]
+
+
+class LMUnavailableError(RobotoolError):
+    """A language-model call could not be attempted or never got an answer (not a result of the method).
+
+    ``kind`` says why; the evaluator does not journal runs that end with this error, so they are retried later.
+    """
+
+    def __init__(self, kind: LMFailureKind, message: str) -> None:
+        super().__init__(message)
+        self.kind: LMFailureKind = kind
