@@ -1,7 +1,8 @@
-"""The ``robotool`` command line: ``robotool tasks``, ``robotool describe TASK``.
+"""The ``robotool`` command line: ``robotool tasks|describe|solve|run|eval``.
 
-User mistakes (a bad task file, an unknown task) end with a readable message and exit status 2,
-never a traceback.
+User mistakes (a bad task file, an unknown task, a bad number, an output path that cannot be written)
+end with one readable line and exit status 2, never a traceback; output paths are checked before any
+work starts.
 """
 
 from __future__ import annotations
@@ -15,6 +16,19 @@ from rich.console import Console
 from rich.table import Table
 
 from robotool import tasks
+from robotool.cliargs import (
+    DEFAULT_WORLDS,
+    EXIT_USAGE,
+    Parser,
+    make_console,
+    output_file,
+    positive_int,
+    print_error,
+    seed,
+    temperature,
+    version,
+    warn_if_warp_on_cpu,
+)
 from robotool.concepts import needs_tool
 from robotool.describe import describe
 from robotool.lm import LMConfigError
@@ -22,7 +36,8 @@ from robotool.methods import METHODS
 from robotool.sandbox.validate import ProgramRejected
 from robotool.scene import Task, TaskFileError
 
-EXIT_USAGE = 2
+RUN_WORLDS = 1
+"""``run`` checks one program once by default; ask for more with ``--worlds``."""
 
 Command = Callable[[argparse.Namespace, Console], int]
 
@@ -41,7 +56,12 @@ def _goal_text(task: Task) -> str:
 
 
 def cmd_tasks(args: argparse.Namespace, console: Console) -> int:
-    """List the built-in tasks, or write one generated instance of a procedural family."""
+    """List the built-in tasks, print one's YAML (``--show``), or write one generated instance of a family."""
+    if args.show is not None:
+        if args.family is not None or args.seed is not None or args.out is not None:
+            raise UsageError("--show prints a built-in task; it does not go with --family, --seed or --out")
+        console.print(tasks.source(args.show), markup=False, highlight=False, end="", soft_wrap=True)
+        return 0
     if args.family is not None:
         return _write_generated(args, console)
     if args.seed is not None or args.out is not None:
@@ -51,9 +71,14 @@ def cmd_tasks(args: argparse.Namespace, console: Console) -> int:
         table.add_column(column, no_wrap=column in ("name", "category"))
     for name in tasks.names():
         task = tasks.load(name)
-        table.add_row(name, task.embodiment, task.category, _goal_text(task),
-                      "yes" if needs_tool(task) else "no")
+        table.add_row(name, task.embodiment, task.category, _goal_text(task), "yes" if needs_tool(task) else "no")
     console.print(table)
+    console.print(
+        "robotool tasks --show NAME prints a task's YAML to start a new one from",
+        style="dim",
+        markup=False,
+        highlight=False,
+    )
     return 0
 
 
@@ -62,14 +87,23 @@ def _write_generated(args: argparse.Namespace, console: Console) -> int:
         raise UsageError(f"unknown family {args.family!r}; families: {', '.join(tasks.families())}")
     instance = tasks.generate(args.family, args.seed if args.seed is not None else 0)
     if args.out is None:
-        console.print(instance.task.to_yaml(), markup=False, highlight=False, end="")
+        console.print(instance.task.to_yaml(), markup=False, highlight=False, end="", soft_wrap=True)
     else:
-        tasks.write_instance(instance, args.out)
-        console.print(f"wrote {instance.task.name} to {args.out}: {instance.description}", markup=False)
+        _write(args.out, lambda: tasks.write_instance(instance, args.out))
+        console.print(
+            f"wrote {instance.task.name} to {args.out}: {instance.description}", markup=False, highlight=False
+        )
     verdict = "needs a tool" if instance.needs_tool else "needs no tool"
-    console.print(f"# {verdict}; {'solvable' if instance.solvable else 'not solvable'}", markup=False,
-                  style="dim")
+    console.print(f"# {verdict}; {'solvable' if instance.solvable else 'not solvable'}", markup=False, style="dim")
     return 0
+
+
+def _write(path: Path, write: Callable[[], object]) -> None:
+    """Run ``write``; a file system error becomes a one-line :class:`UsageError` naming ``path``."""
+    try:
+        write()
+    except OSError as e:
+        raise UsageError(f"cannot write {path}: {e.strerror or e}") from None
 
 
 def cmd_describe(args: argparse.Namespace, console: Console) -> int:
@@ -87,10 +121,21 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     task = tasks.load(args.task)
     lm = None
     if args.planner == "lm":
-        lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env,
-                     temperature=args.temperature, max_tokens=args.max_tokens, cache=not args.no_cache)
+        lm = make_lm(
+            args.lm,
+            api_base=args.api_base,
+            api_key_env=args.api_key_env,
+            temperature=args.temperature,
+            max_tokens=args.max_tokens,
+            cache=not args.no_cache,
+        )
         if lm is None:
-            console.print(f"[yellow]{HOW_TO_CONFIGURE}[/]\nSolving with the LM-free search planner instead.")
+            console.print(
+                f"{HOW_TO_CONFIGURE}\nSolving with the LM-free search planner instead.",
+                style="yellow",
+                markup=False,
+                highlight=False,
+            )
     if lm is None:
         from robotool.planner import solve
 
@@ -101,23 +146,33 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
 
         from robotool.program import RoboTool
 
-        program = RoboTool.method(args.method, candidates=args.candidates, worlds_per_candidate=args.worlds,
-                                  backend=args.backend, seed=args.seed)
-        with console.status(f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
-                            f"{args.worlds} world(s) on {lm.model}"), dspy.context(lm=lm):
+        program = RoboTool.method(
+            args.method,
+            candidates=args.candidates,
+            worlds_per_candidate=args.worlds,
+            backend=args.backend,
+            seed=args.seed,
+        )
+        with (
+            console.status(
+                f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
+                f"{args.worlds} world(s) on {lm.model}"
+            ),
+            dspy.context(lm=lm),
+        ):
             solution = program(task=task).solution
     print_solution(solution, console)
     if args.out and solution.code:
-        args.out.write_text(solution.code)
-        console.print(f"wrote the best program to {args.out}")
+        _write(args.out, lambda: args.out.write_text(solution.code, encoding="utf-8"))
+        console.print(f"wrote the best program to {args.out}", markup=False, highlight=False)
     if args.json:
-        args.json.write_text(solution.model_dump_json(indent=2))
-        console.print(f"wrote the report to {args.json}")
+        _write(args.json, lambda: args.json.write_text(solution.model_dump_json(indent=2), encoding="utf-8"))
+        console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     return 0 if solution.success else 1
 
 
 def cmd_run(args: argparse.Namespace, console: Console) -> int:
-    """Run a skill program against a task in perturbed worlds and report what happened."""
+    """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
     from robotool.execute import run
     from robotool.report import print_run
 
@@ -127,64 +182,79 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeDecodeError) as e:
-        raise UsageError(f"cannot read the program {args.program}: {e.strerror or e}") from None
-    with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
-        report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend)
+        raise UsageError(f"cannot read the program {args.program}: {getattr(e, 'strerror', None) or e}") from None
+    try:
+        with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
+            report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend)
+    except ProgramRejected as e:
+        raise UsageError(f"{args.program}: {e}") from None
     print_run(report, console)
     if args.json:
-        args.json.write_text(report.model_dump_json(indent=2))
-        console.print(f"wrote the report to {args.json}")
+        _write(args.json, lambda: args.json.write_text(report.model_dump_json(indent=2), encoding="utf-8"))
+        console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     return 0 if report.success else 1
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+_TASK_HELP = "a built-in task name (see robotool tasks) or a YAML/JSON task file"
+_BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
-    parser = argparse.ArgumentParser(
-        prog="robotool", description="Creative robot tool use with language models."
-    )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    p = sub.add_parser("tasks", help="list the built-in tasks, or write a generated one")
+    parser = Parser(prog="robotool", description="Creative robot tool use with language models.")
+    parser.add_argument("--version", action="version", version=f"robotool {version()}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    p = sub.add_parser("tasks", help="list the built-in tasks, print one, or write a generated one")
+    p.add_argument("--show", metavar="NAME", help="print this built-in task's YAML (a start for a new task file)")
     p.add_argument("--family", help="write an instance of this procedural family instead of listing")
-    p.add_argument("--seed", type=int, help="the instance's seed (with --family; default 0)")
-    p.add_argument("--out", type=Path, help="the YAML file to write (with --family; default: print it)")
+    p.add_argument("--seed", type=seed, help="the instance's seed (with --family; default: 0)")
+    p.add_argument("--out", type=output_file, help="the YAML file to write (with --family; default: print it)")
     p.set_defaults(func=cmd_tasks)
     p = sub.add_parser("describe", help="print the scene description the language model reads")
-    p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
+    p.add_argument("task", metavar="TASK_OR_FILE", help=_TASK_HELP)
     p.set_defaults(func=cmd_describe)
 
     p = sub.add_parser("solve", help="write a skill program for a task (language model or search planner)")
-    p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
-    p.add_argument("--planner", choices=["lm", "search"], default="lm",
-                   help="lm: the RoboTool program (falls back to search without a model); search: LM-free planner")
+    p.add_argument("task", metavar="TASK_OR_FILE", help=_TASK_HELP)
+    p.add_argument(
+        "--planner",
+        choices=["lm", "search"],
+        default="lm",
+        help="lm: the RoboTool program (falls back to search without a model); search: LM-free planner",
+    )
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
     p.add_argument("--api-key-env", help="environment variable holding the API key")
-    p.add_argument("--temperature", type=float, help="sampling temperature of the first candidate")
-    p.add_argument("--max-tokens", type=_positive_int, help="token limit of each LM reply")
+    p.add_argument("--temperature", type=temperature, help="sampling temperature of the first candidate")
+    p.add_argument("--max-tokens", type=positive_int, help="token limit of each LM reply")
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--method", choices=list(METHODS), default="robotool", help="the program or an ablation")
-    p.add_argument("--candidates", type=_positive_int, default=1, help="candidate programs to sample (K)")
-    p.add_argument("--worlds", type=_positive_int, default=3, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the world perturbations")
-    p.add_argument("--out", type=Path, help="write the best program here")
-    p.add_argument("--json", type=Path, help="write the full report here as JSON")
+    p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
+    p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=_BACKEND_HELP)
+    p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
+    p.add_argument("--out", type=output_file, help="write the best program here")
+    p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     p.set_defaults(func=cmd_solve)
 
-    p = sub.add_parser("run", help="run a skill program against a task and report what happened")
-    p.add_argument("task", metavar="TASK_OR_FILE", help="a built-in task name or a YAML/JSON task file")
-    p.add_argument("program", metavar="PROGRAM.py", type=Path, help="the skill program")
-    p.add_argument("--worlds", type=_positive_int, default=1, help="perturbed worlds to run it in")
-    p.add_argument("--seed", type=int, default=0, help="seed of the world perturbations")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
-    p.add_argument("--json", type=Path, help="write the full report here as JSON")
+    p = sub.add_parser("run", help="run a skill program file against a task and report what happened")
+    p.add_argument("task", metavar="TASK_OR_FILE", help=_TASK_HELP)
+    p.add_argument(
+        "program",
+        metavar="PROGRAM.py",
+        type=Path,
+        help="the skill program, parsed strictly as Python (a syntax error stops it before it runs)",
+    )
+    p.add_argument(
+        "--worlds",
+        type=positive_int,
+        default=RUN_WORLDS,
+        help=f"perturbed worlds to run it in (default: {RUN_WORLDS}, one quick check; solve and eval "
+        f"use {DEFAULT_WORLDS} to rank candidates)",
+    )
+    p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=_BACKEND_HELP)
+    p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     p.set_defaults(func=cmd_run)
 
     # `robotool eval ...` is handed to the evaluator's own parser in main(); listed here for --help.
@@ -199,14 +269,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         from robotool.eval import main as eval_main
 
         return eval_main(argv[1:], prog="robotool eval")
-    args = build_parser().parse_args(argv)
-    console = Console()
-    errors = Console(stderr=True)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    console = make_console()
+    errors = make_console(stderr=True)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    warn_if_warp_on_cpu(getattr(args, "backend", None), errors)
     func: Command = args.func
     try:
         return func(args, console)
     except (TaskFileError, LMConfigError, UsageError, ProgramRejected) as e:
-        errors.print(f"[bold red]error:[/] {e}", markup=True, highlight=False, soft_wrap=True)
+        print_error(errors, str(e))
         return EXIT_USAGE
 
 

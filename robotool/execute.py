@@ -1,7 +1,8 @@
 """Run one skill program against a task in perturbed worlds: ``robotool.run`` and ``robotool run``.
 
-The program goes through the same sandbox as generated code, so a hand-edited program is checked
-and confined exactly like a model's.
+The program is parsed strictly (Python as written: a syntax error anywhere stops it before it runs)
+and then goes through the same sandbox as generated code, so it is checked and confined exactly like a
+model's.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pydantic import BaseModel, Field
 
 from robotool import tasks
 from robotool.rollout import Rollout
-from robotool.sandbox import extract_program, validate
+from robotool.sandbox.strict import check_user_program
 from robotool.scene import Task
 from robotool.sim.backend import default_backend
 from robotool.verify import run_codes
@@ -34,7 +35,7 @@ class RunReport(BaseModel):
 def run(
     task: Task | str | Path, code: str, *, worlds: int = 1, seed: int = 0, backend: str | None = None
 ) -> RunReport:
-    """Validate ``code`` in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.
+    """Check ``code`` strictly in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.
 
     Raises :class:`~robotool.sandbox.ProgramRejected` for a program the sandbox refuses and
     :class:`~robotool.scene.TaskFileError` for a bad task.
@@ -42,8 +43,7 @@ def run(
     if worlds < 1:
         raise ValueError(f"worlds must be at least 1, got {worlds}")
     task = task if isinstance(task, Task) else tasks.load(task)
-    program = extract_program(code)
-    validate(program, task.embodiment)
+    program = check_user_program(code, task.embodiment)
     rollouts = run_codes(task, [program], worlds=worlds, seed=seed, backend=backend)[0]
     successes = sum(r.success for r in rollouts)
     return RunReport(task=task.name, worlds=worlds, seed=seed, backend=backend or default_backend(),

@@ -79,8 +79,10 @@ def test_tool_free_program_fails_with_the_reason(
 @pytest.mark.parametrize(
     ("code", "status", "reason"),
     [
-        ("import os\n", 2, "error: line 1: import of 'os' is not allowed"),
-        ('grasp("milk")\n', 2, "error: line 1: unknown function 'grasp'; the arm's skills are: get_center"),
+        ("import os\n", 2, "error: {path}: line 1: import of 'os' is not allowed"),
+        ('grasp("milk")\n', 2, "error: {path}: line 1: unknown function 'grasp'; the arm's skills are: get_center"),
+        ("open_gripper()\nmove_to_position([0.5, 0, 0.1]\n", 2, "error: {path}: line 2: syntax error at column 17: "
+         "'(' was never closed"),
         ("while True:\n    pass\n", 1, "CPU time limit exceeded (2 s)"),
     ],
 )
@@ -92,7 +94,7 @@ def test_bad_program_ends_with_one_line_reason(
     got, out, err = run_cli(capsys, "milk_reaching_near", str(path), "--backend", "mujoco")
     assert got == status
     if status == 2:
-        assert len(err.strip().splitlines()) == 1 and err.startswith(reason) and not out
+        assert len(err.strip().splitlines()) == 1 and err.startswith(reason.format(path=path)) and not out
     else:
         assert any(line.startswith(f"  error: {reason}") for line in out.splitlines())
 

@@ -10,7 +10,7 @@ Modules, one job each: :mod:`~robotool.eval.config` (what to run, defaults, outp
 """
 
 from robotool.eval.cli import main
-from robotool.eval.config import TIME_BUDGET_S, EvalConfig, EvalError, Settings
+from robotool.eval.config import TIME_BUDGET_S, EvalConfig, EvalError, RunsNotAttempted, Settings
 from robotool.eval.errors import FailureClass, TaskFacts, classify, tools_used
 from robotool.eval.grading import ConceptGrade, grade
 from robotool.eval.records import Results, RunKey, RunRecord
@@ -27,6 +27,7 @@ __all__ = [
     "Results",
     "RunKey",
     "RunRecord",
+    "RunsNotAttempted",
     "Settings",
     "Solver",
     "TaskFacts",

@@ -2,9 +2,10 @@
 
 Output folder: ``--out DIR``, or by default ``results/<model>-k<K>-w<R>-s<seed>`` (``<model>`` is the
 LM's model string made path-safe, ``no-lm`` without one), so the same command always writes to, and
-resumes in, the same folder while different settings never mix. The folder holds ``settings.json``
-(the settings that decide results, checked when resuming), ``journal.jsonl`` (one line per finished
-run), and at the end ``results.json``, ``report.md`` and the plots.
+resumes in, the same folder. The folder holds ``settings.json`` (the :class:`Request` that last wrote
+it: a different request is refused unless ``--resume`` is given), ``journal.jsonl`` (one line per
+finished run, keyed by the content of its inputs) and at the end ``results.json``, ``report.md`` and the
+plots, which cover exactly the runs the last command asked for.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import re
 from pathlib import Path
 
 from pydantic import BaseModel, Field
+
+from robotool.errors import LMUnavailableError, RobotoolError
 
 TIME_BUDGET_S = 300.0
 """The default run (no LM: the LM-free methods on every built-in task and the default generated
@@ -28,6 +31,21 @@ class EvalError(ValueError):
     """The evaluation cannot be set up as asked; the message says why (exit status 2)."""
 
 
+class RunsNotAttempted(RobotoolError):
+    """Some runs could not be attempted (the language model was unavailable); nothing was recorded for them.
+
+    ``attempted`` runs finished and are in the journal; the same command retries the others.
+    """
+
+    def __init__(self, missing: int, total: int, cause: LMUnavailableError) -> None:
+        super().__init__(
+            f"{missing} of {total} run(s) could not be attempted: {cause} ({cause.kind}); "
+            "nothing was recorded for them: fix this and rerun the same command "
+            "(finished runs are kept)"
+        )
+        self.missing, self.total, self.cause = missing, total, cause
+
+
 class Settings(BaseModel):
     """The settings that decide a run's result: resuming with other settings is refused."""
 
@@ -37,6 +55,35 @@ class Settings(BaseModel):
     worlds: int = Field(3, ge=1, description="perturbed worlds per candidate")
     backend: str | None = None
     seed: int = Field(0, ge=0, description="base seed of the perturbed worlds")
+
+
+class Request(BaseModel):
+    """What an evaluation asked for: which runs, with which settings (``settings.json`` of a results folder)."""
+
+    tasks: list[str] | None = None
+    families: list[str] | None = None
+    seeds: list[int] | None = None
+    methods: list[str] | None = None
+    runs: int = 1
+    settings: Settings = Field(default_factory=Settings)
+    api_base: str | None = None
+
+    def differences(self, other: Request) -> list[str]:
+        """``field: other -> self`` for each field that differs (settings field by field)."""
+        mine, theirs = self.model_dump(), other.model_dump()
+        mine |= {f"settings.{k}": v for k, v in mine.pop("settings").items()}
+        theirs |= {f"settings.{k}": v for k, v in theirs.pop("settings").items()}
+        return [
+            f"{k.removeprefix('settings.')}: {_shown(theirs.get(k))} -> {_shown(v)}"
+            for k, v in mine.items()
+            if theirs.get(k) != v
+        ]
+
+
+def _shown(value: object) -> str:
+    if value is None:
+        return "default"
+    return ",".join(map(str, value)) if isinstance(value, list) else str(value)
 
 
 class EvalConfig(BaseModel):
@@ -52,6 +99,20 @@ class EvalConfig(BaseModel):
     api_key_env: str | None = None
     workers: int = Field(DEFAULT_WORKERS, ge=1)
     out: Path | None = None
+    resume: bool = Field(False, description="reuse a folder whose settings.json holds a different request")
+
+    @property
+    def request(self) -> Request:
+        """What this evaluation asks for, as ``settings.json`` records it."""
+        return Request(
+            tasks=self.tasks,
+            families=self.families,
+            seeds=self.seeds,
+            methods=self.methods,
+            runs=self.runs,
+            settings=self.settings,
+            api_base=self.api_base,
+        )
 
     @property
     def out_dir(self) -> Path:

@@ -1,18 +1,24 @@
-"""The evaluator's records: one :class:`RunRecord` per (task, seed, method, run), and the results file."""
+"""The evaluator's records: one :class:`RunRecord` per run (keyed by its inputs' content), and the results file."""
 
 from __future__ import annotations
 
+import hashlib
+import json
+from collections.abc import Mapping
+
 from pydantic import BaseModel, ConfigDict, Field
 
-from robotool.eval.config import EvalConfig
+from robotool.eval.config import EvalConfig, Settings
 from robotool.eval.errors import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.rollout import Rollout
+from robotool.scene import Task
 from robotool.solution import StageOutputs, TokenUsage
 
 
 class RunKey(BaseModel):
-    """What identifies a run: the task (a family for generated instances), its seed, method, run index."""
+    """What identifies a run: the task (a family for generated instances), its seed, method, run index,
+    and ``inputs``, a digest of the content of everything its result depends on (see :func:`inputs_digest`)."""
 
     model_config = ConfigDict(frozen=True)
 
@@ -20,12 +26,28 @@ class RunKey(BaseModel):
     seed: int | None = None
     method: str
     run: int
+    inputs: str = Field("", description="digest of the run's inputs; '' in journals written before it existed")
 
     @property
     def id(self) -> str:
-        """One string for the key, e.g. ``sofa_traversing#3/robotool/0``."""
+        """One string for the key, e.g. ``sofa_traversing#3/robotool/0@1f0c...``."""
         task = self.task if self.seed is None else f"{self.task}#{self.seed}"
-        return f"{task}/{self.method}/{self.run}"
+        return f"{task}/{self.method}/{self.run}@{self.inputs}"
+
+
+def inputs_digest(task: Task, method: str, run: int, settings: Settings, context: Mapping[str, object]) -> str:
+    """A digest of what decides a run's result: the task's content (every field of the validated task, so an
+    edited task file is a new run), the method, the run index, the settings (LM model, temperature,
+    candidates, worlds, backend, seed) and ``context`` (e.g. the API base URL, the resolved backend and the
+    robotool version)."""
+    payload = {
+        "task": task.model_dump(mode="json"),
+        "method": method,
+        "run": run,
+        "settings": settings.model_dump(mode="json"),
+        "context": dict(context),
+    }
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
 
 class WorldResult(BaseModel):

@@ -1,9 +1,12 @@
 """``evaluate``: methods x task instances x runs -> journal -> results folder.
 
-Runs are keyed by (task, seed, method, run). Each finished run is appended to the folder's journal
-by the thread that ran it, so an interrupted evaluation resumes where it stopped: rerunning the
-same command skips every run already in the journal. Runs go through a thread pool; LM-free runs
-(pure simulation on the CPU) take turns on a lock, while LM runs overlap their LM calls.
+A run is keyed by (task, seed, method, run) and a digest of the content of its inputs (the task itself,
+the method, the LM and its settings, the seeds, the robotool version), so a changed input is a new run.
+Each finished run is appended to the folder's journal by the thread that ran it, so an interrupted
+evaluation resumes where it stopped: rerunning the same command reuses every run already in the journal
+and says how many. A run that could not be attempted because the language model was unavailable is not
+a result and is never journalled. Runs go through a thread pool; LM-free runs (pure simulation on the
+CPU) take turns on a lock, while LM runs overlap their LM calls.
 """
 
 from __future__ import annotations
@@ -19,13 +22,14 @@ from typing import TYPE_CHECKING
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from robotool.eval.config import EvalConfig, EvalError, Settings
+from robotool.errors import LMUnavailableError
+from robotool.eval.config import EvalConfig, EvalError, Request, RunsNotAttempted
 from robotool.eval.instances import TaskInstance, select
 from robotool.eval.journal import Journal, write_atomic
 from robotool.eval.judge import crashed, judge
 from robotool.eval.metrics import summarize
 from robotool.eval.plots import write_plots
-from robotool.eval.records import Results, RunKey, RunRecord
+from robotool.eval.records import Results, RunKey, RunRecord, inputs_digest
 from robotool.eval.report import markdown, print_tables, skipped_lines
 from robotool.eval.solvers import METHODS, Solver, SolverSettings, make_solvers
 from robotool.eval.tables import all_tables
@@ -42,8 +46,12 @@ def _lm(config: EvalConfig, lm: dspy.LM | None) -> dspy.LM | None:
         return lm
     from robotool.lm import make_lm
 
-    return make_lm(config.settings.lm, api_base=config.api_base, api_key_env=config.api_key_env,
-                   temperature=config.settings.temperature)
+    return make_lm(
+        config.settings.lm,
+        api_base=config.api_base,
+        api_key_env=config.api_key_env,
+        temperature=config.settings.temperature,
+    )
 
 
 def _methods(
@@ -54,8 +62,9 @@ def _methods(
     unknown = [m for m in names if m not in METHODS]
     if unknown:
         raise EvalError(f"unknown method {', '.join(unknown)}; methods: {', '.join(METHODS)}")
-    settings = SolverSettings(candidates=config.settings.candidates, worlds=config.settings.worlds,
-                              backend=config.settings.backend)
+    settings = SolverSettings(
+        candidates=config.settings.candidates, worlds=config.settings.worlds, backend=config.settings.backend
+    )
     solvers, skipped = make_solvers(names, settings, lm, overrides)
     if config.methods is not None and skipped:
         method, why = next(iter(skipped.items()))
@@ -65,19 +74,73 @@ def _methods(
     return solvers, skipped
 
 
-def _check_settings(config: EvalConfig) -> None:
-    """Refuse to mix results made with other settings into the output folder."""
+def _check_folder(config: EvalConfig) -> None:
+    """Create the output folder; refuse one that holds a different request unless ``--resume``."""
     folder = config.out_dir
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise EvalError(f"cannot create the output folder {folder}: {e.strerror or e}") from None
     path = folder / SETTINGS
-    current = config.settings.model_dump_json(indent=2)
-    if path.exists():
-        before = Settings.model_validate_json(path.read_text())
-        if before != config.settings:
-            raise EvalError(f"{folder} holds results made with other settings ({before.model_dump()}); "
-                            "choose another --out")
-    else:
-        write_atomic(path, current)
+    request = config.request
+    if path.exists() and not config.resume:
+        try:
+            before = Request.model_validate_json(path.read_text(encoding="utf-8"))
+        except ValueError:  # pydantic.ValidationError included: an older or foreign settings.json
+            raise EvalError(
+                f"{folder} holds results of an unknown request; pass --resume to reuse its "
+                "matching runs, or choose another --out"
+            ) from None
+        if before != request:
+            changes = "; ".join(request.differences(before))
+            raise EvalError(
+                f"{folder} holds an evaluation with other settings ({changes}); pass --resume to "
+                "reuse its matching runs and add these, or choose another --out"
+            )
+    try:
+        write_atomic(path, request.model_dump_json(indent=2))
+    except OSError as e:
+        raise EvalError(f"cannot write into the output folder {folder}: {e.strerror or e}") from None
+
+
+def _plan(config: EvalConfig, instances: list[TaskInstance], methods: list[str]) -> list[tuple[TaskInstance, RunKey]]:
+    """Every run asked for, keyed by the content of its inputs."""
+    from robotool.cliargs import version
+    from robotool.sim.backend import default_backend
+
+    context = {
+        "api_base": config.api_base,
+        "backend": config.settings.backend or default_backend(),
+        "robotool": version(),
+    }
+    return [
+        (
+            instance,
+            RunKey(
+                task=instance.name,
+                seed=instance.seed,
+                method=method,
+                run=run,
+                inputs=inputs_digest(instance.task, method, run, config.settings, context),
+            ),
+        )
+        for instance in instances
+        for method in methods
+        for run in range(config.runs)
+    ]
+
+
+def _say_reuse(config: EvalConfig, plan: list[tuple[TaskInstance, RunKey]], journal: Journal, console: Console) -> None:
+    """Say out loud how many runs come from the folder's journal, and how many of its runs are left out."""
+    reused = sum(key.id in journal for _, key in plan)
+    if not journal.records:
+        return
+    wanted = {key.id for _, key in plan}
+    other = sum(key_id not in wanted for key_id in journal.records)
+    line = f"reusing {reused} of {len(plan)} runs from {config.out_dir}"
+    if other:
+        line += f"; {other} other run(s) in its journal (other inputs or settings) are not in this report"
+    console.print(line, highlight=False, markup=False)
 
 
 def evaluate(
@@ -87,9 +150,11 @@ def evaluate(
     solvers: Mapping[str, Solver] | None = None,
     console: Console | None = None,
 ) -> Results:
-    """Run every (instance, method, run) not yet in the journal, then write the results folder.
+    """Run every run asked for that is not yet in the journal, then write the results folder.
 
     ``lm`` replaces the LM the configuration names; ``solvers`` replaces methods' solvers (tests).
+    Raises :class:`RunsNotAttempted` (after the other runs finished) when the language model was
+    unavailable for some runs: they are not journalled, and no report is written.
     """
     started = time.perf_counter()
     console = console or Console()
@@ -98,32 +163,52 @@ def evaluate(
         config = config.model_copy(update={"settings": config.settings.model_copy(update={"lm": lm.model})})
     instances, notes = select(config.tasks, config.families, config.seeds)
     chosen, skipped = _methods(config, lm, solvers)
-    _check_settings(config)
+    _check_folder(config)
     journal = Journal(config.out_dir)
-    plan = [(instance, RunKey(task=instance.name, seed=instance.seed, method=method, run=run))
-            for instance in instances for method in chosen for run in range(config.runs)]
+    plan = _plan(config, instances, list(chosen))
     for line in skipped_lines(skipped):
-        console.print(line, style="yellow", highlight=False)
+        console.print(line, style="yellow", highlight=False, markup=False)
+    _say_reuse(config, plan, journal, console)
     _run(config, chosen, [(i, k) for i, k in plan if k.id not in journal], journal, len(plan), console)
-    results = Results(config=config, skipped=skipped, notes=notes,
-                      records=[journal.records[k.id] for _, k in plan], wall_s=time.perf_counter() - started)
+    results = Results(
+        config=config,
+        skipped=skipped,
+        notes=notes,
+        records=[journal.records[k.id] for _, k in plan],
+        wall_s=time.perf_counter() - started,
+    )
     _write(results, console)
     return results
 
 
 def _run(
-    config: EvalConfig, solvers: Mapping[str, Solver], pending: list[tuple[TaskInstance, RunKey]],
-    journal: Journal, total: int, console: Console,
+    config: EvalConfig,
+    solvers: Mapping[str, Solver],
+    pending: list[tuple[TaskInstance, RunKey]],
+    journal: Journal,
+    total: int,
+    console: Console,
 ) -> None:
-    """Run the pending runs in a thread pool, journaling each as it finishes."""
-    sim_turn = threading.Lock()
+    """Run the pending runs in a thread pool, journaling each as it finishes.
 
-    def one(instance: TaskInstance, key: RunKey) -> RunRecord:
+    A run whose method raises :class:`LMUnavailableError` is not a result: it is not journalled, the LM
+    runs not yet started are not attempted, and :class:`RunsNotAttempted` is raised once the others end.
+    """
+    sim_turn = threading.Lock()
+    unavailable: list[LMUnavailableError] = []
+
+    def one(instance: TaskInstance, key: RunKey) -> RunRecord | None:
+        uses_lm = METHODS[key.method].uses_lm
+        if uses_lm and unavailable:
+            return None
         seed = config.world_seed(key.run)
-        with contextlib.nullcontext() if METHODS[key.method].uses_lm else sim_turn:
+        with contextlib.nullcontext() if uses_lm else sim_turn:
             begun = time.perf_counter()
             try:
                 solution = solvers[key.method](instance.task, seed=seed, run=key.run)
+            except LMUnavailableError as e:  # nothing was attempted: not a result
+                unavailable.append(e)
+                return None
             except Exception as e:  # a method that raises fails its run, not the evaluation
                 record = crashed(instance, key, seed, e, time.perf_counter() - begun)
             else:
@@ -133,19 +218,25 @@ def _run(
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
     any_lm = any(METHODS[m].uses_lm for m in solvers)
-    with Progress(*columns, console=console) as progress, ThreadPoolExecutor(
-            max_workers=config.workers if any_lm else 1) as pool:
+    missing = 0
+    with (
+        Progress(*columns, console=console) as progress,
+        ThreadPoolExecutor(max_workers=config.workers if any_lm else 1) as pool,
+    ):
         bar = progress.add_task("evaluating", total=total, completed=total - len(pending))
-        futures: list[Future[RunRecord]] = [
-            pool.submit(contextvars.copy_context().run, one, instance, key) for instance, key in pending]
+        futures: list[Future[RunRecord | None]] = [
+            pool.submit(contextvars.copy_context().run, one, instance, key) for instance, key in pending
+        ]
         try:
             for future in as_completed(futures):
-                record = future.result()
-                outcome = f"{record.success_rate:.0%}" if record.failure_class is None else record.failure_class
-                progress.update(bar, advance=1, description=f"{record.key.id}: {outcome}")
+                if future.result() is None:
+                    missing += 1
+                progress.update(bar, advance=1)
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)
             raise
+    if unavailable:
+        raise RunsNotAttempted(missing, total, unavailable[0])
 
 
 def _write(results: Results, console: Console) -> None:

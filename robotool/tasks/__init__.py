@@ -34,6 +34,14 @@ def load(name_or_path: str | Path) -> Task:
     )
 
 
+def source(name: str) -> str:
+    """The YAML text of a built-in task, as shipped (TaskFileError naming the built-in tasks otherwise)."""
+    if name not in names():
+        raise TaskFileError(name, [Problem(path="", message=f"no built-in task by that name; built-in tasks: "
+                                                            f"{', '.join(names())}")])
+    return _DATA.joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+
+
 from robotool.tasks.families import Instance, families, generate, write_instance  # noqa: E402 - uses load()
 
-__all__ = ["Instance", "families", "generate", "load", "names", "write_instance"]
+__all__ = ["Instance", "families", "generate", "load", "names", "source", "write_instance"]

@@ -1,0 +1,152 @@
+"""What every robotool command line shares: one-line argument errors, checked numbers and output paths,
+consoles that keep their width when piped, and error lines that print text exactly as it is.
+
+A user mistake ends as one line on stderr and exit status :data:`EXIT_USAGE`, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from importlib import metadata
+from pathlib import Path
+from typing import NoReturn
+
+from rich.console import Console
+from rich.text import Text
+
+EXIT_USAGE = 2
+DEFAULT_WORLDS = 3
+"""Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
+CAPTURED_WIDTH = 120
+"""Console width when the output goes to a file or a pipe (rich would squeeze tables to 80 columns)."""
+
+
+def version() -> str:
+    """The installed robotool version (``unknown`` when it runs from a bare source tree)."""
+    try:
+        return metadata.version("robotool")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Appends ``(default: X)`` to an option's help when it has a default and the help does not say it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            default is None
+            or default is False
+            or default is argparse.SUPPRESS
+            or "default" in text
+            or action.option_strings == []
+            or not text
+        ):
+            return text
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
+        return f"{text} (default: {shown})"
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr with exit status 2."""
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"error: {message} (see {self.prog} --help)\n")
+
+
+def positive_int(text: str) -> int:
+    """An argument that must be a whole number of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def seed(text: str) -> int:
+    """A seed: a whole number of at least 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {value}")
+    return value
+
+
+def temperature(text: str) -> float:
+    """A sampling temperature: a finite number of at least 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def output_file(text: str) -> Path:
+    """A file the command will write: its folder must exist and be writable, and it must not be a folder."""
+    path = Path(text)
+    folder = path.parent
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{path} is a folder; give a file name")
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"cannot write {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise argparse.ArgumentTypeError(f"cannot write {path}: permission denied")
+    return path
+
+
+def output_folder(text: str) -> Path:
+    """A folder the command will create or write into: it must not be a file, and it must be creatable."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{path} is a file, not a folder")
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir():
+        raise argparse.ArgumentTypeError(f"cannot create {path}: {existing} is a file")
+    if not os.access(existing, os.W_OK):
+        raise argparse.ArgumentTypeError(f"cannot write into {path}: permission denied on {existing}")
+    return path
+
+
+def make_console(*, stderr: bool = False) -> Console:
+    """A console for output; when it is not a terminal (and ``COLUMNS`` is not set), tables keep
+    :data:`CAPTURED_WIDTH` columns instead of rich's 80."""
+    stream = sys.stderr if stderr else sys.stdout
+    if stream.isatty() or os.environ.get("COLUMNS"):
+        return Console(stderr=stderr)
+    return Console(stderr=stderr, width=CAPTURED_WIDTH)
+
+
+def print_error(errors: Console, message: str) -> None:
+    """``error: message``, the message printed exactly (square brackets and all, never read as markup)."""
+    errors.print(Text.assemble(("error:", "bold red"), " ", message), highlight=False, soft_wrap=True)
+
+
+def warn_if_warp_on_cpu(backend: str | None, errors: Console) -> None:
+    """Say once that ``--backend warp`` without a CUDA GPU runs on the CPU, much slower than mujoco."""
+    if backend != "warp":
+        return
+    from robotool.sim.backend import default_backend
+
+    if default_backend() != "warp":
+        errors.print(
+            Text.assemble(
+                ("warning:", "yellow"),
+                " no CUDA GPU found: --backend warp runs on the CPU, much slower than --backend mujoco",
+            ),
+            highlight=False,
+            soft_wrap=True,
+        )
