@@ -7,6 +7,8 @@ the sandbox allowlist and the simulator read one source of truth.
 from __future__ import annotations
 
 import math
+import reprlib
+from dataclasses import dataclass
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -196,11 +198,32 @@ class SkillArgumentError(ValueError):
     """A skill was called with arguments it cannot take; the message says which and why."""
 
 
-def check_call(embodiment: EmbodimentName, name: str, args: tuple[object, ...]) -> tuple[object, ...]:
+MAX_DISTANCE_FROM_SCENE = 5.0
+"""How far (m) a position argument may lie outside the box around the scene's objects, the robot and
+its workspace: farther is refused as a mistake (a wrong unit, a runaway computation), never simulated."""
+
+
+@dataclass(frozen=True)
+class SceneBox:
+    """The axis-aligned box (m) around a scene: its objects, the robot's start and the arm's workspace."""
+
+    lo: tuple[float, float, float]
+    hi: tuple[float, float, float]
+
+    def distance(self, point: tuple[float, float, float]) -> float:
+        """How far ``point`` lies outside the box (0 inside)."""
+        gaps = (max(lo - p, 0.0, p - hi) for p, lo, hi in zip(point, self.lo, self.hi, strict=True))
+        return math.sqrt(sum(g * g for g in gaps))
+
+
+def check_call(
+    embodiment: EmbodimentName, name: str, args: tuple[object, ...], scene: SceneBox | None = None
+) -> tuple[object, ...]:
     """Check a skill call's arguments and return them normalized (positions as 3 floats).
 
     Raises :class:`SkillArgumentError` for an unknown skill, a wrong argument count, a name that
-    is not a string, or a position that is not three finite numbers. A 2-number position gets z = 0.
+    is not a string, a position that is not three finite numbers, or (given the ``scene``'s box) a
+    position more than :data:`MAX_DISTANCE_FROM_SCENE` outside it. A 2-number position gets z = 0.
     """
     spec = next((s for s in SKILLS[embodiment] if s.name == name), None)
     if spec is None:
@@ -214,22 +237,29 @@ def check_call(embodiment: EmbodimentName, name: str, args: tuple[object, ...]) 
     for (param, kind), value in zip(spec.params, args, strict=True):
         if kind == "name":
             if not isinstance(value, str):
-                raise SkillArgumentError(f"{name}: {param} must be an object name, got {value!r}")
+                raise SkillArgumentError(f"{name}: {param} must be an object name, got {reprlib.repr(value)}")
             out.append(value)
             continue
-        out.append(_position(name, param, value))
+        position = _position(name, param, value)
+        if scene is not None and scene.distance(position) > MAX_DISTANCE_FROM_SCENE:
+            shown = ", ".join(f"{v:.4g}" for v in position)
+            raise SkillArgumentError(
+                f"{name}: {param} [{shown}] is {scene.distance(position):.3g} m outside the scene (more than "
+                f"{MAX_DISTANCE_FROM_SCENE:g} m); positions are in metres"
+            )
+        out.append(position)
     return tuple(out)
 
 
 def _position(skill: str, param: str, value: object) -> tuple[float, float, float]:
     try:
         items = [float(v) for v in value]  # type: ignore[attr-defined]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise SkillArgumentError(
-            f"{skill}: {param} must be [x, y, z] in metres, got {value!r}"
+            f"{skill}: {param} must be [x, y, z] in metres, got {reprlib.repr(value)}"
         ) from None
     if isinstance(value, str | bytes) or len(items) not in (2, 3):
-        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {value!r}")
+        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {reprlib.repr(value)}")
     if not all(math.isfinite(v) for v in items):
         raise SkillArgumentError(f"{skill}: {param} must be finite, got {items}")
     if len(items) == 2:

@@ -4,7 +4,9 @@ Each program runs until it calls a motion skill or ends; query skills are answer
 current state; the batch then steps, one control tick at a time, until the pending motion skills
 finish (done, stalled, timeout, refused), and the programs whose skill finished are resumed. The
 runner resumes every such world first and only then waits on each (so sandboxed programs run in
-parallel). A program that errors or ends is finished for its world only. Each world yields a
+parallel). A program that errors or ends is finished for its world only. Skill arguments are checked on
+this side of the sandbox, positions against the scene's box (:func:`scene_box`); an exception inside
+the skill controller fails the world it happened in with the reason, never the batch. Each world yields a
 :class:`~robotool.rollout.Rollout`.
 """
 
@@ -17,7 +19,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool.embodiments import SkillArgumentError, check_call, skill_names, skills
+from robotool import geometry
+from robotool.embodiments import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
 from robotool.programs import ProgramEnded, ProgramSession, SkillReply, SkillRequest, TrustedProgram, TrustedSession
 from robotool.rollout import Rollout, SkillCall
 from robotool.scene import Task
@@ -108,6 +111,7 @@ class _Run:
         self.worlds = [_World(s) for s in sessions]
         self.embodiment_name = scene.task.robot.type
         self.kinds = {s.name: s.kind for s in skills(self.embodiment_name)}
+        self.box = scene_box(scene.task)
         self.controller: SkillController = scene.embodiment.controller(sim)
         self.magnets = Magnets(scene)
         self.goal: GoalTracker = goal_tracker(scene)
@@ -133,12 +137,23 @@ class _Run:
             self.sim.step(self.scene.control_substeps, self.alive())
             state = self.sim.state()
             self._observe(state)
-            ends = self.controller.tick(state)
+            ends = self._tick(state)
             if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one
                 state = self.sim.state()
             resumed = self._finish_skills(state, ends)
             self._collect(state, resumed)
         return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
+
+    def _tick(self, state: BatchState) -> list[SkillEnd]:
+        """The controller's tick; if it raises, the worlds with a motion skill in progress fail with the
+        reason (the batched tick cannot say which world caused it) and the other worlds go on."""
+        try:
+            return self.controller.tick(state)
+        except Exception as e:
+            for i, world in enumerate(self.worlds):
+                if not world.ended and world.pending is not None:
+                    self._end(i, state, _controller_error(world.pending.skill, e))
+            return []
 
     # -- programs ------------------------------------------------------------------------------
 
@@ -156,7 +171,11 @@ class _Run:
                 elif not self.worlds[i].ended:
                     starts[i] = message
             for i, request in starts.items():
-                ends = self.controller.start(state, np.array([i]), request.name, self.worlds[i].pending_args)
+                try:
+                    ends = self.controller.start(state, np.array([i]), request.name, self.worlds[i].pending_args)
+                except Exception as e:  # a controller bug fails this world only
+                    self._end(i, state, _controller_error(request.name, e))
+                    continue
                 again += self._finish_skills(state, ends)
             to_wait = again
 
@@ -168,7 +187,7 @@ class _Run:
             self._end(i, state, f"more than {self.max_skill_calls} skill calls")
             return False
         try:
-            args = check_call(self.embodiment_name, request.name, request.args)
+            args = check_call(self.embodiment_name, request.name, request.args, self.box)
         except SkillArgumentError as e:
             world.calls.append(SkillCall(skill=request.name, args=_jsonable(request.args), outcome="error",
                                          reason=str(e), started=t, ended=t))
@@ -185,6 +204,10 @@ class _Run:
             call.outcome, call.reason = "error", str(e)
             world.session.resume(SkillReply(error=str(e)))
             return True
+        except Exception as e:  # a controller bug fails this world only
+            call.outcome, call.reason = "error", _controller_error(request.name, e)
+            self._end(i, state, call.reason)
+            return False
         world.session.resume(SkillReply(value=call.result))
         return True
 
@@ -263,6 +286,24 @@ def _robot_welds(scene: Scene) -> list[tuple[int, int]]:
             if scene.robot_body[robot] and scene.body_object[other] >= 0:
                 welds.append((eq, int(scene.body_object[other])))
     return welds
+
+
+def scene_box(task: Task) -> SceneBox:
+    """The box around the task's objects, the robot's start and (arm) its workspace, for argument checks."""
+    corners = [corner for obj in task.objects for part in geometry.object_parts(obj) for corner in part.aabb()]
+    limits = task.limits
+    if isinstance(limits, ArmLimits):
+        corners += [np.array(limits.workspace_min), np.array(limits.workspace_max)]
+    if task.robot.position is not None:
+        corners.append(np.array([*task.robot.position, 0.0]))
+    points = np.array(corners, dtype=float).reshape(-1, 3)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return SceneBox(lo=(float(lo[0]), float(lo[1]), float(lo[2])), hi=(float(hi[0]), float(hi[1]), float(hi[2])))
+
+
+def _controller_error(skill: str, error: Exception) -> str:
+    """The one-line reason of a world failed by an exception inside the skill controller."""
+    return " ".join(f"controller error in {skill}: {type(error).__name__}: {error}".split())[:500]
 
 
 def _jsonable(args: tuple[Any, ...]) -> list[Any]:

@@ -1,0 +1,80 @@
+"""Bad skill arguments fail one call and a controller exception fails one world, never the batch."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from fixtures.reference import REFERENCE, program
+
+from robotool import sandbox, sim, tasks
+from robotool.cli import main
+from robotool.embodiments import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
+from robotool.sim.arm import ArmController
+from robotool.sim.runner import scene_box
+
+
+@pytest.mark.parametrize(
+    ("position", "reason"),
+    [
+        ([1e155, 0.0, 0.0], "outside the scene"),
+        ([0.2, 40.0, 0.0], "outside the scene"),
+        ([10**400, 0, 0], "must be [x, y, z] in metres"),
+        ([[0.1], [0.2], [0.3]], "must be [x, y, z] in metres"),
+        ([0.1, 0.2, 0.3, 0.4], "must be [x, y, z] in metres"),
+        ([float("nan"), 0, 0], "must be finite"),
+    ],
+)
+def test_positions_are_checked_against_the_scene(position: list[Any], reason: str) -> None:
+    box = scene_box(tasks.load("sofa_traversing"))
+    with pytest.raises(SkillArgumentError, match=reason.replace("[", r"\[").replace("]", r"\]")):
+        check_call("quadruped", "walk_to_position", (position,), box)
+
+
+def test_the_scene_box_covers_objects_robot_and_workspace() -> None:
+    box = scene_box(tasks.load("milk_reaching"))
+    assert box.lo[0] <= -0.30 and box.hi[0] >= 0.59 and box.hi[2] >= 0.50  # workspace and the milk carton
+    assert SceneBox(lo=(0, 0, 0), hi=(1, 1, 1)).distance((1 + MAX_DISTANCE_FROM_SCENE, 0.5, 0.5)) == pytest.approx(
+        MAX_DISTANCE_FROM_SCENE
+    )
+    near = (box.hi[0] + MAX_DISTANCE_FROM_SCENE - 0.1, 0.0, 0.1)
+    assert check_call("arm", "move_to_position", (near,), box) == (near,)  # far but sane: clamped by physics
+
+
+def test_huge_target_is_refused_in_its_world_only(sim_scene: Any) -> None:
+    scene = sim_scene("sofa_traversing")
+    codes = ["walk_to_position([1e155, 0, 0])\n", "p = get_position('robot')\nwalk_to_position([p[0] + 0.1, p[1]])\n"]
+    huge, fine = sim.run_sessions(scene, sandbox.start_sessions(codes, "quadruped"), perturb=False)
+    assert huge.calls[0].outcome == "error" and "outside the scene" in (huge.calls[0].reason or "")
+    assert huge.error is not None and "outside the scene" in huge.error
+    assert fine.error is None and [c.outcome for c in fine.calls] == ["done", "done"]
+
+
+def test_huge_target_through_robotool_run_is_a_report_not_a_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "huge.py"
+    path.write_text("walk_to_position([1e155, 0, 0])\n")
+    assert main(["run", "sofa_traversing", str(path), "--backend", "mujoco"]) == 1
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.out + captured.err and "outside the scene" in captured.out
+
+
+def test_a_controller_exception_fails_only_its_world(sim_scene: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    original = ArmController.start
+
+    def breaks_in_world_1(self: ArmController, state: Any, worlds: np.ndarray, skill: str, args: Any) -> Any:
+        if 1 in np.asarray(worlds):
+            raise FloatingPointError("overflow encountered in the servo reference")
+        return original(self, state, worlds, skill, args)
+
+    monkeypatch.setattr(ArmController, "start", breaks_in_world_1)
+    code = program(REFERENCE["milk_reaching_near"])
+    rollouts = sim.run_sessions(sim_scene("milk_reaching_near"), sandbox.start_sessions([code] * 3, "arm"))
+    assert rollouts[0].success and rollouts[2].success
+    broken = rollouts[1]
+    assert not broken.success and broken.error is not None
+    assert broken.error.startswith("controller error in ") and "FloatingPointError: overflow" in broken.error
+    assert broken.calls[-1].outcome == "error"
