@@ -226,3 +226,18 @@ def height_profile(
     direction = (end_xy - start_xy) / length if length > 0 else np.zeros(2)
     xy = start_xy + s[:, None] * direction
     return s, surface_height(xy, solids)
+
+
+def distance_to_parts(parts: list[Part], point: np.ndarray | tuple[float, float, float]) -> float:
+    """How far ``point`` lies outside the union of ``parts`` (0 inside or on the surface), metres."""
+    p = np.asarray(point, dtype=float)
+    best = np.inf
+    for part in parts:
+        local = (p - part.center) @ part.rot
+        if part.kind == "box":
+            excess = np.maximum(np.abs(local) - part.half, 0.0)
+        else:
+            radial = max(float(np.hypot(local[0], local[1])) - part.half[0], 0.0)
+            excess = np.array([radial, max(abs(float(local[2])) - part.half[2], 0.0)])
+        best = min(best, float(np.linalg.norm(excess)))
+    return best

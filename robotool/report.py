@@ -45,7 +45,9 @@ def print_solution(solution: Solution, console: Console) -> None:
         )
     console.print(table)
     if solution.code:
-        console.print(Syntax(solution.code, "python", line_numbers=False))
+        code = Syntax(solution.code, "python").highlight(solution.code)  # Text: no padding on copied lines
+        code.rstrip()
+        console.print(code, soft_wrap=True)
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
     console.print(f"{verdict}: best success rate {solution.success_rate:.0%}; "

@@ -7,8 +7,11 @@ path in a :class:`TaskFileError`, never a raw traceback.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
+import types
+import typing
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -31,6 +34,13 @@ from robotool.embodiments import LIMITS_MODELS, ArmLimits, EmbodimentName, Quadr
 DEFAULT_DENSITY = 300.0  # kg/m^3, for movable objects without a mass
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
 OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate
+GRASP_POINT_TOLERANCE = 0.005  # m: how far outside its object a graspable point may lie
+KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
+    "rotation": "rpy", "orientation": "rpy", "euler": "rpy", "position": "center", "pos": "center",
+    "centre": "center", "dimensions": "size", "extent": "size", "weight": "mass", "type": "shape",
+    "grasp_point": "graspable_point", "grasp": "graspable_point", "handle": "graspable_point", "fixed": "movable",
+    "description": "notes", "note": "notes", "objects_list": "objects", "task": "name", "version": "format",
+}  # fmt: skip
 
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
 PositiveLength = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -228,14 +238,16 @@ class Problem(BaseModel):
 
 
 class TaskFileError(ValueError):
-    """A task file that cannot be used; ``problems`` lists every problem found."""
+    """A task file that cannot be used; ``problems`` lists every problem found (one line when there is one)."""
 
     def __init__(self, source: str, problems: list[Problem]):
         self.source = source
         self.problems = problems
-        count = f"{len(problems)} problem" + ("s" if len(problems) != 1 else "")
+        if len(problems) == 1:  # one mistake, one line
+            super().__init__(f"{source}: {problems[0]}")
+            return
         lines = "\n".join(f"  - {p}" for p in problems)
-        super().__init__(f"{source}: {count}\n{lines}")
+        super().__init__(f"{source}: {len(problems)} problems\n{lines}")
 
 
 def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
@@ -272,14 +284,50 @@ def _friendly(error: Mapping[str, Any]) -> str:
     return msg
 
 
-def _model_problems(error: ValidationError, raw: Any) -> list[Problem]:
+def _model_problems(error: ValidationError, raw: Any, model: type[BaseModel] | None = None) -> list[Problem]:
     problems = []
     for e in error.errors():
         loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         # Tagged tuples report a position per element; literal unions add the type name.
         loc = tuple(p for p in loc if p not in ("tuple[float, float]",))
-        problems.append(Problem(path=_format_loc(loc, raw), message=_friendly(e)))
+        message = _friendly(e)
+        if e["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
+            message = _unknown_key(loc[-1], _keys_at(model or Task, loc[:-1]))
+        problems.append(Problem(path=_format_loc(loc, raw), message=message))
     return problems
+
+
+def _keys_at(model: type[BaseModel], loc: tuple[int | str, ...]) -> list[str]:
+    """The keys the model nested at ``loc`` accepts (``objects[0].fragile`` -> Fragile's keys)."""
+    current: type[BaseModel] | None = model
+    for part in loc:
+        if current is None:
+            return []
+        if isinstance(part, int):
+            continue
+        field = current.model_fields.get(part)
+        current = _nested_model(field.annotation) if field is not None else None
+    return list(current.model_fields) if current is not None else []
+
+
+def _nested_model(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside an annotation such as ``list[SceneObject]`` or ``Fragile | None``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if typing.get_origin(annotation) in (list, typing.Union, types.UnionType):
+        return next((m for a in typing.get_args(annotation) if (m := _nested_model(a)) is not None), None)
+    return None
+
+
+def _unknown_key(key: str, keys: list[str]) -> str:
+    """``unknown key 'rotation' (did you mean 'rpy'?); keys here: ...``."""
+    guess = KEY_SYNONYMS.get(key.lower())
+    if guess not in keys:
+        close = difflib.get_close_matches(key.lower(), keys, n=1, cutoff=0.6)
+        guess = close[0] if close else None
+    hint = f" (did you mean {guess!r}?)" if guess else ""
+    listing = f"; keys here: {', '.join(keys)}" if keys else ""
+    return f"unknown key {key!r}{hint}{listing}"
 
 
 def _object_path(task: Task, index: int) -> str:
@@ -305,9 +353,9 @@ def _check_semantics(task: Task) -> list[Problem]:
         task.limits  # noqa: B018 - validates the overrides
     except ValidationError as e:
         limits_ok = False
-        for err in e.errors():
-            path = "robot.limits" + "".join(f".{p}" if isinstance(p, str) else f"[{p}]" for p in err["loc"])
-            problems.append(Problem(path=path, message=_friendly(err)))
+        model = LIMITS_MODELS[robot.type]
+        for problem in _model_problems(e, robot.limits, model):
+            problems.append(Problem(path=f"robot.limits.{problem.path}", message=problem.message))
     if robot.type == "quadruped" and robot.position is None:
         problems.append(Problem(path="robot.position", message="a quadruped needs a start [x, y]"))
     if robot.type == "arm" and robot.position is not None:
@@ -349,6 +397,13 @@ def _check_geometry(task: Task) -> list[Problem]:
                 problems.append(Problem(path=_object_path(task, j),
                                         message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m"))
     for i, obj in enumerate(task.objects):
+        if obj.graspable_point is not None:
+            off = geometry.distance_to_parts(parts[obj.name], obj.graspable_point)
+            if off > GRASP_POINT_TOLERANCE:
+                problems.append(Problem(
+                    path=f"{_object_path(task, i)}.graspable_point",
+                    message=f"{list(obj.graspable_point)} lies {off:.3f} m outside {obj.name!r}; a graspable point "
+                            "is in world coordinates (metres) and must lie within or on its object"))
         others = {n: p for n, p in parts.items() if n != obj.name}
         contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
         if contact.penetration > RESTING_TOLERANCE:
@@ -408,7 +463,32 @@ def load_task(path: str | Path) -> Task:
         raise TaskFileError(source, [Problem(path="", message=f"cannot read the file: {e}")]) from None
     try:
         data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
-    except (yaml.YAMLError, json.JSONDecodeError) as e:
-        message = " ".join(str(e).split())
-        raise TaskFileError(source, [Problem(path="", message=f"not valid YAML/JSON: {message}")]) from None
+    except json.JSONDecodeError as e:
+        raise TaskFileError(source, [_syntax_problem("JSON", text, e.lineno, e.colno, e.msg)]) from None
+    except yaml.MarkedYAMLError as e:
+        raise TaskFileError(source, [_yaml_problem(text, e)]) from None
+    except yaml.YAMLError as e:
+        raise TaskFileError(source, [_syntax_problem("YAML", text, None, None, " ".join(str(e).split()))]) from None
     return parse_task(data, source)
+
+
+def _yaml_problem(text: str, error: yaml.MarkedYAMLError) -> Problem:
+    """Where YAML broke (line, column, the line's text) and, when it says so, where the broken part began."""
+    mark = error.problem_mark or error.context_mark
+    line, column = (mark.line + 1, mark.column + 1) if mark is not None else (None, None)
+    problem = _syntax_problem("YAML", text, line, column, error.problem or error.context or "cannot be read")
+    start = error.context_mark
+    if error.problem_mark is not None and error.context and start is not None and start.line != mark.line:
+        began = text.splitlines()[start.line].strip() if start.line < len(text.splitlines()) else ""
+        problem.message += f" ({error.context} that began at line {start.line + 1}: `{began}`)"
+    return problem
+
+
+def _syntax_problem(kind: str, text: str, line: int | None, column: int | None, what: str) -> Problem:
+    """``not valid YAML at line 3, column 12: <what>: `the offending line```."""
+    if line is None:
+        return Problem(path="", message=f"not valid {kind}: {what}")
+    lines = text.splitlines()
+    shown = lines[line - 1].strip() if 0 < line <= len(lines) else ""
+    where = f"line {line}" + (f", column {column}" if column else "")
+    return Problem(path="", message=f"not valid {kind} at {where}: {what}" + (f": `{shown}`" if shown else ""))

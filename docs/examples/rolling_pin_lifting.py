@@ -1,0 +1,6 @@
+p = get_graspable_point("rolling_pin")
+open_gripper()
+move_to_position([p[0], p[1], p[2] + 0.08])
+move_to_position(p)
+close_gripper()
+move_to_position([p[0], p[1], p[2] + 0.15])

@@ -1,0 +1,114 @@
+"""The task format is a documented contract: every key on the format page, helpful errors, the page's
+examples load, and a task written from the page alone loads, is described and runs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+import yaml
+from pydantic import BaseModel
+
+from robotool import tasks
+from robotool.cli import main
+from robotool.describe import describe
+from robotool.embodiments import ArmLimits, QuadrupedLimits
+from robotool.execute import run
+from robotool.scene import Fragile, Goal, LiftGoal, Robot, SceneObject, Task, TaskFileError, load_task, parse_task
+
+DOCS = Path(__file__).parent.parent / "docs"
+FORMAT_PAGE = DOCS / "task-format.md"
+EXAMPLE_TASK = DOCS / "examples" / "rolling_pin_lifting.yaml"
+EXAMPLE_PROGRAM = DOCS / "examples" / "rolling_pin_lifting.py"
+
+
+def _task_data(**changes: object) -> dict[str, object]:
+    data = yaml.safe_load(tasks.source("milk_reaching_near"))
+    data.update(changes)
+    return data
+
+
+def _problems(data: object) -> list[str]:
+    with pytest.raises(TaskFileError) as info:
+        parse_task(data, "t.yaml")
+    return [str(p) for p in info.value.problems]
+
+
+@pytest.mark.parametrize("model", [Task, Robot, SceneObject, Goal, LiftGoal, Fragile, QuadrupedLimits, ArmLimits])
+def test_every_key_is_on_the_format_page(model: type[BaseModel]) -> None:
+    page = FORMAT_PAGE.read_text()
+    missing = [key for key in model.model_fields if f"`{key}`" not in page]
+    assert not missing, f"{model.__name__} keys missing from {FORMAT_PAGE.name}: {missing}"
+
+
+def test_the_format_page_examples_load() -> None:
+    examples = FORMAT_PAGE.read_text().split("## Examples", 1)[1]
+    blocks = re.findall(r"```yaml\n(.*?)```", examples, flags=re.DOTALL)
+    assert len(blocks) == 2
+    for block in blocks:
+        parse_task(yaml.safe_load(block), "example")
+
+
+def test_a_task_written_from_the_format_page_loads_describes_and_runs() -> None:
+    task = load_task(EXAMPLE_TASK)
+    assert task.name not in tasks.names()
+    assert "rolling_pin: cylinder with its axis along x" in describe(task)
+    report = run(task, EXAMPLE_PROGRAM.read_text(), worlds=2, backend="mujoco")
+    assert report.success, [r.error or r.conditions for r in report.rollouts]
+
+
+def test_an_unknown_key_suggests_the_right_one() -> None:
+    data = _task_data()
+    data["objects"][0]["rotation"] = 30  # type: ignore[index]
+    (problem,) = _problems(data)
+    assert problem.startswith("objects[0](milk).rotation: unknown key 'rotation' (did you mean 'rpy'?); keys here: ")
+    data = _task_data(goal={"lifted": {"object": "milk", "hieght": 0.1}})
+    assert any("unknown key 'hieght' (did you mean 'height'?)" in p for p in _problems(data))
+    data = _task_data(robot={"type": "arm", "limits": {"grasp_radios": 0.05}})
+    assert _problems(data) == [
+        "robot.limits.grasp_radios: unknown key 'grasp_radios' (did you mean 'grasp_radius'?); "
+        "keys here: workspace_min, workspace_max, grasp_radius"
+    ]
+
+
+def test_a_graspable_point_must_lie_on_its_object() -> None:
+    data = _task_data()
+    milk = data["objects"][0]  # type: ignore[index]
+    x, y, z = milk["graspable_point"]
+    milk["graspable_point"] = [x, y + 0.2, z]
+    (problem,) = _problems(data)
+    assert problem.startswith("objects[0](milk).graspable_point: ") and "lies 0.178 m outside 'milk'" in problem
+    assert "world coordinates" in problem
+    milk["graspable_point"] = [x, y + 0.022, z]  # on its side face
+    parse_task(data, "t.yaml")
+
+
+def test_yaml_errors_name_the_file_line_column_and_text(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "broken.yaml"
+    path.write_text(tasks.source("milk_reaching_near").replace("size: [0.044, 0.044, 0.16]", "size: [0.044, 0.044"))
+    assert main(["describe", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith(f"error: {path}: not valid YAML at line ")
+    assert ", column " in err and "`size: [0.044, 0.044`" in err  # the brackets survive the console
+    assert "<unicode string>" not in err
+
+
+def test_json_errors_name_the_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "t.json"
+    path.write_text('{"format": 1,\n "name": }\n')
+    with pytest.raises(
+        TaskFileError, match=r"t.json: not valid JSON at line 2, column 10: Expecting value: `\"name\": }`"
+    ):
+        load_task(path)
+
+
+def test_tasks_show_prints_a_builtin_task_to_start_from(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["tasks", "--show", "sofa_climbing"]) == 0
+    printed = capsys.readouterr().out
+    copy = tmp_path / "copy.yaml"
+    copy.write_text(printed)
+    assert load_task(copy) == tasks.load("sofa_climbing")
+    assert main(["tasks", "--show", "sofa"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith("error: sofa: no built-in task by that name; built-in tasks: ")
