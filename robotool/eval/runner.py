@@ -248,4 +248,4 @@ def _write(results: Results, console: Console) -> None:
     plots = write_plots(summary, folder)
     write_atomic(folder / "report.md", markdown(results, tables, plots))
     print_tables(results, tables, console)
-    console.print(f"wrote {folder}/results.json, report.md and {len(plots)} plot(s)", highlight=False)
+    console.print(f"wrote {folder}/results.json, report.md and {len(plots)} plot(s)", highlight=False, markup=False)
