@@ -31,6 +31,7 @@ from robotool.cliargs import (
 )
 from robotool.concepts import needs_tool
 from robotool.describe import describe
+from robotool.errors import RobotoolError
 from robotool.lm import LMConfigError
 from robotool.methods import METHODS
 from robotool.sandbox.validate import ProgramRejected
@@ -280,7 +281,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     func: Command = args.func
     try:
         return func(args, console)
-    except (TaskFileError, LMConfigError, UsageError, ProgramRejected) as e:
+    except (TaskFileError, LMConfigError, RobotoolError, UsageError, ProgramRejected) as e:
         print_error(errors, str(e))
         return EXIT_USAGE
 

@@ -175,3 +175,20 @@ def test_cli_refuses_a_folder_with_other_settings_in_one_line(
     )
     assert main(["--tasks", "sofa_traversing", "--methods", "search", "--worlds", "2", "--out", out, "--resume"]) == 0
     assert f"reusing 0 of 1 runs from {out}" in capsys.readouterr().out
+
+
+def test_a_folder_written_before_run_identity_is_refused_unless_resumed(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "settings.json").write_text(Settings(worlds=1).model_dump_json())  # the older settings-only file
+    old = {"key": {"task": "sofa_traversing", "method": "search", "run": 0}, "embodiment": "quadruped",
+           "needs_tool": True, "world_seed": 0, "success_rate": 0.0, "failure_class": "invalid"}  # fmt: skip
+    (out / JOURNAL).write_text(json.dumps(old) + "\n")
+    config = _config(out, tasks=["sofa_traversing"], methods=["search"])
+    with pytest.raises(EvalError, match="holds results of an unknown request; pass --resume"):
+        evaluate(config, solvers={"search": Counting()}, console=_console())
+    solver = Counting()
+    results = evaluate(config.model_copy(update={"resume": True}), solvers={"search": solver}, console=_console())
+    assert (
+        solver.calls == ["sofa_traversing"] and results.records[0].success_rate == 1.0
+    )  # the old record is not reused

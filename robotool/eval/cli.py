@@ -25,6 +25,7 @@ from robotool.cliargs import (
     version,
     warn_if_warp_on_cpu,
 )
+from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
@@ -128,12 +129,12 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
     warn_if_warp_on_cpu(args.backend, errors)
     try:
         evaluate(config_from(args), console=console)
-    except (EvalError, TaskFileError, LMConfigError) as e:
-        print_error(errors, " ".join(str(e).split()))
-        return EXIT_USAGE
-    except RunsNotAttempted as e:
+    except RunsNotAttempted as e:  # before RobotoolError, which it is
         print_error(errors, str(e))
         return EXIT_NOT_ATTEMPTED
+    except (EvalError, TaskFileError, LMConfigError, RobotoolError) as e:
+        print_error(errors, " ".join(str(e).split()))
+        return EXIT_USAGE
     except KeyboardInterrupt:
         errors.print(
             "interrupted: finished runs are kept in the journal; run the same command to resume",

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from robotool.errors import LMUnavailableError, RobotoolError
 
@@ -59,6 +59,8 @@ class Settings(BaseModel):
 
 class Request(BaseModel):
     """What an evaluation asked for: which runs, with which settings (``settings.json`` of a results folder)."""
+
+    model_config = ConfigDict(extra="forbid")
 
     tasks: list[str] | None = None
     families: list[str] | None = None
