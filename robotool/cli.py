@@ -17,6 +17,7 @@ from rich.table import Table
 
 from robotool import tasks
 from robotool.cliargs import (
+    BACKEND_HELP,
     DEFAULT_WORLDS,
     EXIT_USAGE,
     Parser,
@@ -197,7 +198,6 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
 
 
 _TASK_HELP = "a built-in task name (see robotool tasks) or a YAML/JSON task file"
-_BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=list(METHODS), default="robotool", help="the program or an ablation")
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=_BACKEND_HELP)
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
     p.add_argument("--out", type=output_file, help="write the best program here")
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
@@ -254,7 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"use {DEFAULT_WORLDS} to rank candidates)",
     )
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=_BACKEND_HELP)
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     p.set_defaults(func=cmd_run)
 

@@ -20,6 +20,7 @@ from rich.text import Text
 EXIT_USAGE = 2
 DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
+BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 CAPTURED_WIDTH = 120
 """Console width when the output goes to a file or a pipe (rich would squeeze tables to 80 columns)."""
 

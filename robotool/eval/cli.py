@@ -13,6 +13,7 @@ import sys
 from collections.abc import Sequence
 
 from robotool.cliargs import (
+    BACKEND_HELP,
     DEFAULT_WORLDS,
     EXIT_USAGE,
     Parser,
@@ -81,7 +82,7 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--temperature", type=temperature, help="LM sampling temperature (above 0 for runs that differ)")
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help="simulator (default: warp with a GPU, else mujoco)")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
     p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
     p.add_argument("--out", type=output_folder, help="output folder (default: results/<model>-k<K>-w<R>-s<seed>)")
