@@ -78,3 +78,17 @@ def test_a_controller_exception_fails_only_its_world(sim_scene: Any, monkeypatch
     assert not broken.success and broken.error is not None
     assert broken.error.startswith("controller error in ") and "FloatingPointError: overflow" in broken.error
     assert broken.calls[-1].outcome == "error"
+
+
+def test_an_exception_in_the_batched_tick_ends_the_moving_worlds_with_the_reason(
+    sim_scene: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken_tick(self: ArmController, state: Any) -> Any:
+        raise FloatingPointError("overflow in the servo reference")
+
+    monkeypatch.setattr(ArmController, "tick", broken_tick)
+    codes = [program(REFERENCE["milk_reaching_near"]), "p = get_center('milk')\n"]
+    moving, querying = sim.run_sessions(sim_scene("milk_reaching_near"), sandbox.start_sessions(codes, "arm"))
+    assert moving.error == "controller error in open_gripper: FloatingPointError: overflow in the servo reference"
+    assert moving.calls[-1].outcome == "error"
+    assert querying.error is None and [c.outcome for c in querying.calls] == ["done"]  # no motion: unaffected

@@ -37,8 +37,9 @@ def load(name_or_path: str | Path) -> Task:
 def source(name: str) -> str:
     """The YAML text of a built-in task, as shipped (TaskFileError naming the built-in tasks otherwise)."""
     if name not in names():
-        raise TaskFileError(name, [Problem(path="", message=f"no built-in task by that name; built-in tasks: "
-                                                            f"{', '.join(names())}")])
+        raise TaskFileError(
+            name, [Problem(path="", message=f"no built-in task by that name; built-in tasks: {', '.join(names())}")]
+        )
     return _DATA.joinpath(f"{name}.yaml").read_text(encoding="utf-8")
 
 
