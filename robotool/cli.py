@@ -27,7 +27,6 @@ from robotool.cliargs import (
     print_error,
     seed,
     temperature,
-    version,
     warn_if_warp_on_cpu,
 )
 from robotool.concepts import needs_tool
@@ -37,6 +36,7 @@ from robotool.lm import LMConfigError
 from robotool.methods import METHODS
 from robotool.sandbox.validate import ProgramRejected
 from robotool.scene import Task, TaskFileError
+from robotool.version import version
 
 RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
@@ -180,7 +180,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
 
     task = tasks.load(args.task)
     try:
-        code = args.program.read_text(encoding="utf-8")
+        code = args.program.read_text(encoding="utf-8-sig")  # as Python reads source: a BOM is allowed
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeDecodeError) as e:

@@ -10,7 +10,6 @@ import argparse
 import math
 import os
 import sys
-from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
@@ -23,14 +22,6 @@ DEFAULT_WORLDS = 3
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 CAPTURED_WIDTH = 120
 """Console width when the output goes to a file or a pipe (rich would squeeze tables to 80 columns)."""
-
-
-def version() -> str:
-    """The installed robotool version (``unknown`` when it runs from a bare source tree)."""
-    try:
-        return metadata.version("robotool")
-    except metadata.PackageNotFoundError:
-        return "unknown"
 
 
 class HelpFormatter(argparse.HelpFormatter):

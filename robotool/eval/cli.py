@@ -23,7 +23,6 @@ from robotool.cliargs import (
     print_error,
     seed,
     temperature,
-    version,
     warn_if_warp_on_cpu,
 )
 from robotool.errors import RobotoolError
@@ -32,6 +31,7 @@ from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
 from robotool.lm import LMConfigError
 from robotool.scene import TaskFileError
+from robotool.version import version
 
 EXIT_NOT_ATTEMPTED = 3
 """Some runs could not be attempted (the language model was unavailable); they were not recorded."""

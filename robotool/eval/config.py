@@ -34,7 +34,8 @@ class EvalError(ValueError):
 class RunsNotAttempted(RobotoolError):
     """Some runs could not be attempted (the language model was unavailable); nothing was recorded for them.
 
-    ``attempted`` runs finished and are in the journal; the same command retries the others.
+    ``missing`` of ``total`` runs were not attempted because of ``cause``; the runs that finished are in the
+    journal, and the same command retries the others.
     """
 
     def __init__(self, missing: int, total: int, cause: LMUnavailableError) -> None:

@@ -33,6 +33,7 @@ from robotool.eval.records import Results, RunKey, RunRecord, inputs_digest
 from robotool.eval.report import markdown, print_tables, skipped_lines
 from robotool.eval.solvers import METHODS, Solver, SolverSettings, make_solvers
 from robotool.eval.tables import all_tables
+from robotool.version import version
 
 if TYPE_CHECKING:
     import dspy
@@ -105,7 +106,6 @@ def _check_folder(config: EvalConfig) -> None:
 
 def _plan(config: EvalConfig, instances: list[TaskInstance], methods: list[str]) -> list[tuple[TaskInstance, RunKey]]:
     """Every run asked for, keyed by the content of its inputs."""
-    from robotool.cliargs import version
     from robotool.sim.backend import default_backend
 
     context = {
