@@ -11,6 +11,7 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.table import Table
@@ -23,6 +24,7 @@ from robotool.cliargs import (
     Parser,
     make_console,
     output_file,
+    output_folder,
     positive_int,
     print_error,
     seed,
@@ -37,6 +39,10 @@ from robotool.methods import METHODS
 from robotool.sandbox.validate import ProgramRejected
 from robotool.scene import Task, TaskFileError
 from robotool.version import version
+
+if TYPE_CHECKING:
+    from robotool.rollout import Rollout
+    from robotool.sim.recorder import StateRecorder
 
 RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
@@ -121,6 +127,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     from robotool.report import print_solution
 
     task = tasks.load(args.task)
+    _check_video_args(args, folder=True)
     lm = None
     if args.planner == "lm":
         lm = make_lm(
@@ -170,6 +177,8 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     if args.json:
         _write(args.json, lambda: args.json.write_text(solution.model_dump_json(indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
+    if args.video:
+        _solve_videos(args, task, solution.code, console)
     return 0 if solution.success else 1
 
 
@@ -185,16 +194,120 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeDecodeError) as e:
         raise UsageError(f"cannot read the program {args.program}: {getattr(e, 'strerror', None) or e}") from None
+    recorder = _run_recorder(args)
     try:
         with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
-            report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend)
+            report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend, recorder=recorder)
     except ProgramRejected as e:
         raise UsageError(f"{args.program}: {e}") from None
     print_run(report, console)
     if args.json:
         _write(args.json, lambda: args.json.write_text(report.model_dump_json(indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
+    if args.plan:
+        from robotool.render.plan import write_plan
+        from robotool.sim import build
+
+        assert recorder is not None
+        write_plan(args.plan, task, report.rollouts[0], scene=build(task), track=recorder.tracks[0])
+        console.print(f"wrote the plan of world 0 to {args.plan}", markup=False, highlight=False)
+    if args.video:
+        from robotool.render.rollouts import video_paths
+
+        assert recorder is not None
+        _write_videos(task, report.rollouts, recorder, video_paths(args.video, args.video_worlds), console)
     return 0 if report.success else 1
+
+
+# -- pictures and videos -------------------------------------------------------------------------
+
+
+def cmd_render(args: argparse.Namespace, console: Console) -> int:
+    """Draw a task's scene, labelled, to a PNG."""
+    from robotool.render.still import render_scene
+
+    task = tasks.load(args.task)
+    if args.out.suffix.lower() != ".png":
+        raise UsageError(f"--out must name a .png file, got {args.out}")
+    with console.status(f"drawing {task.name}"):
+        render_scene(task, args.out, width=args.width, height=args.height)
+    console.print(f"wrote {args.out}", markup=False, highlight=False)
+    return 0
+
+
+def _video_worlds(text: str) -> list[int]:
+    try:
+        worlds = sorted({int(w) for w in text.split(",")})
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected world numbers joined by commas, e.g. 0,2; got {text!r}") from None
+    if worlds[0] < 0:
+        raise argparse.ArgumentTypeError(f"world numbers start at 0, got {worlds[0]}")
+    return worlds
+
+
+def _check_video_args(args: argparse.Namespace, *, folder: bool) -> None:
+    """Refuse bad --video / --video-worlds before anything runs; --video-worlds defaults to world 0."""
+    if args.video is None:
+        if args.video_worlds is not None:
+            raise UsageError("--video-worlds goes with --video")
+        return
+    args.video_worlds = args.video_worlds or [0]
+    if not folder and args.video.suffix.lower() != ".mp4":
+        raise UsageError(f"--video must name an .mp4 file, got {args.video}")
+    outside = [w for w in args.video_worlds if w >= args.worlds]
+    if outside:
+        raise UsageError(
+            f"--video-worlds {','.join(map(str, outside))}: only worlds 0..{args.worlds - 1} run "
+            f"(--worlds {args.worlds})"
+        )
+
+
+def _run_recorder(args: argparse.Namespace) -> StateRecorder | None:
+    """A recorder of the worlds to film (and of world 0 for --plan), only when a video or a plan was asked for."""
+    _check_video_args(args, folder=False)
+    if args.plan is not None and args.plan.suffix.lower() != ".png":
+        raise UsageError(f"--plan must name a .png file, got {args.plan}")
+    worlds = set(args.video_worlds or []) | ({0} if args.plan is not None else set())
+    if not worlds:
+        return None
+    from robotool.sim.recorder import StateRecorder
+
+    return StateRecorder(sorted(worlds))
+
+
+def _write_videos(
+    task: Task, rollouts: Sequence[Rollout], recorder: StateRecorder, paths: dict[int, Path], console: Console
+) -> None:
+    from robotool.render.rollouts import write_videos
+
+    with console.status(f"drawing {len(paths)} video(s)"):
+        videos = write_videos(task, rollouts, recorder, paths)
+    for v in videos:
+        line = f"wrote {v.path} ({v.frames} frames at {v.fps} fps, {v.duration:.1f} s simulated)"
+        console.print(line, markup=False, highlight=False, soft_wrap=True)
+
+
+def _solve_videos(args: argparse.Namespace, task: Task, code: str | None, console: Console) -> None:
+    """Run the best program again in the chosen worlds, recorded, and write their videos to the folder."""
+    from robotool.render.rollouts import rerun_recorded
+
+    if code is None:
+        console.print("no program was found, so there is no video", style="yellow", markup=False, highlight=False)
+        return
+    with console.status(f"recording the best program in world(s) {args.video_worlds}"):
+        rollouts, recorder = rerun_recorded(task, code, args.video_worlds, seed=args.seed, backend=args.backend)
+    paths = {w: args.video / f"{task.name}-world{w}.mp4" for w in args.video_worlds}
+    _write_videos(task, rollouts, recorder, paths, console)
+
+
+def _add_video_options(p: argparse.ArgumentParser, *, folder: bool, help_text: str) -> None:
+    p.add_argument(
+        "--video",
+        type=output_folder if folder else output_file,
+        metavar="DIR" if folder else "OUT.mp4",
+        help=help_text,
+    )
+    p.add_argument("--video-worlds", type=_video_worlds, metavar="K[,K...]", help="the worlds to film (default: 0)")
 
 
 _TASK_HELP = "a built-in task name (see robotool tasks) or a YAML/JSON task file"
@@ -236,6 +349,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
     p.add_argument("--out", type=output_file, help="write the best program here")
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
+    _add_video_options(p, folder=True, help_text="write an MP4 of the best program in each chosen world to this folder")
     p.set_defaults(func=cmd_solve)
 
     p = sub.add_parser("run", help="run a skill program file against a task and report what happened")
@@ -256,7 +370,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
+    _add_video_options(p, folder=False, help_text="write the rollout as MP4 (several worlds: OUT-world<k>.mp4)")
+    p.add_argument(
+        "--plan",
+        type=output_file,
+        metavar="PLAN.png",
+        help="draw world 0 from above: path, pushes, refusals (matplotlib, no OpenGL)",
+    )
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("render", help="draw a task's scene, labelled, to a PNG (headless)")
+    p.add_argument("task", metavar="TASK_OR_FILE", help=_TASK_HELP)
+    p.add_argument("--out", type=output_file, required=True, help="the PNG file to write")
+    p.add_argument("--width", type=positive_int, default=960, help="picture width in pixels")
+    p.add_argument("--height", type=positive_int, default=540, help="picture height in pixels")
+    p.set_defaults(func=cmd_render)
 
     # `robotool eval ...` is handed to the evaluator's own parser in main(); listed here for --help.
     sub.add_parser("eval", help="the offline evaluator (same as python -m robotool.eval; see robotool eval -h)")

@@ -16,6 +16,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox.strict import check_user_program
 from robotool.scene import Task
 from robotool.sim.backend import default_backend
+from robotool.sim.recorder import StateRecorder
 from robotool.verify import run_codes
 
 
@@ -33,9 +34,12 @@ class RunReport(BaseModel):
 
 
 def run(
-    task: Task | str | Path, code: str, *, worlds: int = 1, seed: int = 0, backend: str | None = None
+    task: Task | str | Path, code: str, *, worlds: int = 1, seed: int = 0, backend: str | None = None,
+    recorder: StateRecorder | None = None,
 ) -> RunReport:
     """Check ``code`` strictly in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.
+
+    A ``recorder`` keeps the states of the worlds it names (for videos).
 
     Raises :class:`~robotool.sandbox.ProgramRejected` for a program the sandbox refuses and
     :class:`~robotool.scene.TaskFileError` for a bad task.
@@ -44,7 +48,7 @@ def run(
         raise ValueError(f"worlds must be at least 1, got {worlds}")
     task = task if isinstance(task, Task) else tasks.load(task)
     program = check_user_program(code, task.embodiment)
-    rollouts = run_codes(task, [program], worlds=worlds, seed=seed, backend=backend)[0]
+    rollouts = run_codes(task, [program], worlds=worlds, seed=seed, backend=backend, recorder=recorder)[0]
     successes = sum(r.success for r in rollouts)
     return RunReport(task=task.name, worlds=worlds, seed=seed, backend=backend or default_backend(),
                      success=successes == worlds, success_rate=successes / worlds, code=program,

@@ -13,6 +13,7 @@ from robotool.sandbox import ProgramRejected, extract_program, start_sessions, v
 from robotool.scene import Task
 from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
+from robotool.sim.recorder import StateRecorder
 from robotool.solution import Candidate
 
 
@@ -30,14 +31,19 @@ def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
 
 
 def run_codes(
-    task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+    task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None,
+    recorder: StateRecorder | None = None,
 ) -> list[list[Rollout]]:
-    """Run each (validated) program in ``worlds`` perturbed worlds, all in one batch."""
+    """Run each (validated) program in ``worlds`` perturbed worlds, all in one batch.
+
+    World ``r`` of program ``i`` is world ``i * worlds + r`` of the batch (the index a ``recorder`` names).
+    """
     if not codes:
         return []
     sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
     world_seeds = [seed + r for _ in codes for r in range(worlds)]
-    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend or default_backend())
+    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend or default_backend(),
+                            recorder=recorder)
     return [rollouts[i * worlds:(i + 1) * worlds] for i in range(len(codes))]
 
 

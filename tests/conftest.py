@@ -8,6 +8,8 @@ os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 import dspy
 import pytest
 
+import robotool  # noqa: F401 - before any test imports mujoco: picks EGL for rendering when there is no display
+
 dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=False)
 
 

@@ -92,6 +92,11 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         help="reuse an output folder that holds an evaluation with other settings: its runs with the "
         "same inputs are reused, the rest are run, and the report covers exactly this command's runs",
     )
+    p.add_argument(
+        "--no-pictures",
+        action="store_true",
+        help="leave out the report's pictures (each task's scene and one failed world per failure class)",
+    )
     return p
 
 
@@ -117,6 +122,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         workers=args.workers,
         out=args.out,
         resume=args.resume,
+        pictures=not args.no_pictures,
     )
 
 

@@ -103,6 +103,7 @@ class EvalConfig(BaseModel):
     workers: int = Field(DEFAULT_WORKERS, ge=1)
     out: Path | None = None
     resume: bool = Field(False, description="reuse a folder whose settings.json holds a different request")
+    pictures: bool = Field(True, description="draw each task's scene and representative failures for the report")
 
     @property
     def request(self) -> Request:

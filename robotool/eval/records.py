@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Mapping
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -96,6 +97,18 @@ class RunRecord(BaseModel):
         return sum(bool(w.tools_used) for w in self.worlds) / len(self.worlds) if self.worlds else None
 
 
+class Picture(BaseModel):
+    """One picture in the results folder: a task's scene, or the end of a failed world."""
+
+    kind: Literal["scene", "failure"]
+    task: str = Field(description="the instance: task name, or family#seed")
+    file: str = Field(description="path relative to the results folder")
+    failure_class: FailureClass | None = None
+    run: str | None = Field(None, description="the run the world belongs to (task/method/run)")
+    world: int | None = None
+    caption: str = ""
+
+
 class Results(BaseModel):
     """``results.json``: the configuration, the methods left out and why, and every run's record."""
 
@@ -104,3 +117,4 @@ class Results(BaseModel):
     notes: list[str] = Field(default_factory=list)
     records: list[RunRecord] = Field(default_factory=list)
     wall_s: float = Field(0.0, description="wall time of the command that wrote this file")
+    pictures: list[Picture] = Field(default_factory=list, description="the report's pictures (files in the folder)")

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from rich.console import Console
 from rich.table import Table
 
-from robotool.eval.records import Results
+from robotool.eval.records import Picture, Results
 from robotool.eval.tables import TextTable
 from robotool.methods import METHODS
 
@@ -50,7 +50,25 @@ def markdown(results: Results, tables: Sequence[TextTable], plots: Sequence[str]
     parts = ["# robotool evaluation", "", *_preamble(results), ""]
     parts += [_markdown_table(t) + "\n" for t in tables]
     parts += [f"![{name}]({name})" for name in plots]
+    parts += _pictures_section(results.pictures)
     return "\n".join(parts).rstrip() + "\n"
+
+
+def _pictures_section(pictures: Sequence[Picture]) -> list[str]:
+    """Per task: its scene, then the end state of one failed world per failure class."""
+    if not pictures:
+        return []
+    lines = ["", "## Pictures", "", "Each task's scene, then the end of one failed world per failure class "
+             "(simulated again from its program and seed)."]
+    by_task: dict[str, list[Picture]] = {}
+    for picture in pictures:
+        by_task.setdefault(picture.task, []).append(picture)
+    for task, shown in by_task.items():
+        lines += ["", f"### {task}", ""]
+        for picture in shown:
+            alt = " ".join(picture.caption.split()).replace("[", "(").replace("]", ")")
+            lines += [f"![{alt}]({picture.file})", ""]
+    return lines
 
 
 def print_tables(results: Results, tables: Sequence[TextTable], console: Console) -> None:

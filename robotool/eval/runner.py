@@ -175,8 +175,9 @@ def evaluate(
         skipped=skipped,
         notes=notes,
         records=[journal.records[k.id] for _, k in plan],
-        wall_s=time.perf_counter() - started,
     )
+    results = _with_pictures(results, instances)
+    results.wall_s = time.perf_counter() - started
     _write(results, console)
     return results
 
@@ -237,6 +238,20 @@ def _run(
             raise
     if unavailable:
         raise RunsNotAttempted(missing, total, unavailable[0])
+
+
+def _with_pictures(results: Results, instances: list[TaskInstance]) -> Results:
+    """The results with the report's pictures drawn (or a note saying why there are none)."""
+    if not results.config.pictures:
+        return results
+    from robotool.errors import RobotoolError
+    from robotool.eval.pictures import write_pictures
+
+    try:
+        pictures = write_pictures(instances, results.records, results.config.out_dir, results.config.settings.backend)
+    except RobotoolError as e:
+        return results.model_copy(update={"notes": [*results.notes, f"no pictures: {e}"]})
+    return results.model_copy(update={"pictures": pictures})
 
 
 def _write(results: Results, console: Console) -> None:

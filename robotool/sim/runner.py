@@ -29,6 +29,7 @@ from robotool.sim.build import Scene, build
 from robotool.sim.embodiment import QueryError, SkillController, SkillEnd
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
+from robotool.sim.recorder import StateRecorder
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
@@ -61,7 +62,7 @@ def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed
                  world_seeds: Sequence[int] | None = None,
                  backend: BackendName = "mujoco", perturb: bool = True, njmax: int | None = None,
                  nconmax: int | None = None, max_sim_time: float = MAX_SIM_TIME,
-                 max_skill_calls: int = MAX_SKILL_CALLS) -> list[Rollout]:
+                 max_skill_calls: int = MAX_SKILL_CALLS, recorder: StateRecorder | None = None) -> list[Rollout]:
     """Run one program session per world and return one :class:`~robotool.rollout.Rollout` each.
 
     ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
@@ -71,7 +72,8 @@ def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed
     constraint and contact capacity; a world that overflows them, diverges, runs over ``max_sim_time`` simulated seconds
     or makes more than ``max_skill_calls`` calls fails with that reason. A world succeeds when every
     goal sub-condition holds at its end and it has no error. The same inputs and seed give
-    identical rollouts on the ``mujoco`` backend. Sessions are closed on return.
+    identical rollouts on the ``mujoco`` backend. Sessions are closed on return. A ``recorder`` keeps the
+    states of the worlds it names at every control tick (for videos); without one nothing is kept.
     """
     scene = task if isinstance(task, Scene) else build(task)
     nworld = len(sessions)
@@ -86,7 +88,7 @@ def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed
     sim = make_sim(scene, nworld, backend=backend, perturbation=perturbation, njmax=njmax, nconmax=nconmax)
     try:
         seeds = list(world_seeds) if world_seeds is not None else [seed] * nworld
-        return _Run(scene, sim, sessions, max_sim_time, max_skill_calls).run(seeds)
+        return _Run(scene, sim, sessions, max_sim_time, max_skill_calls, recorder).run(seeds)
     finally:
         for s in sessions:
             s.close()
@@ -105,8 +107,8 @@ class _Run:
     """One lockstep run; see :func:`run_sessions`."""
 
     def __init__(self, scene: Scene, sim: BatchedSim, sessions: Sequence[ProgramSession],
-                 max_sim_time: float, max_skill_calls: int):
-        self.scene, self.sim = scene, sim
+                 max_sim_time: float, max_skill_calls: int, recorder: StateRecorder | None = None):
+        self.scene, self.sim, self.recorder = scene, sim, recorder
         self.max_sim_time, self.max_skill_calls = max_sim_time, max_skill_calls
         self.worlds = [_World(s) for s in sessions]
         self.embodiment_name = scene.task.robot.type
@@ -130,12 +132,16 @@ class _Run:
         state = self.sim.state()
         self.t0 = state.time.copy()
         self.start_xpos = state.xpos.copy()
+        if self.recorder is not None:
+            self.recorder.start(state, self.sim.mocap_pos)
         for w in self.worlds:
             w.session.resume(None)
         self._collect(state, list(range(nworld)))
         while self.alive().any():
             self.sim.step(self.scene.control_substeps, self.alive())
             state = self.sim.state()
+            if self.recorder is not None:
+                self.recorder.capture(state, self.sim.mocap_pos)
             self._observe(state)
             ends = self._tick(state)
             if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one

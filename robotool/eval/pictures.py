@@ -1,0 +1,119 @@
+"""Pictures for the evaluation report: each task's scene, and the end state of a representative failed world.
+
+For every task instance and every failure class seen on it, the first failed world (in run order) is
+simulated again from its program and its world's seed, recorded, and drawn at its end; the caption
+gives the method, run, world, class and the recorded reason. On the ``mujoco`` backend the new rollout
+repeats the evaluated one exactly; where it does not (another backend), the caption says so. A run
+whose program never ran is drawn at its start. Files go to ``pictures/`` in the results folder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from robotool.eval.errors import FailureClass
+from robotool.eval.instances import TaskInstance
+from robotool.eval.records import Picture, RunRecord, WorldResult
+from robotool.render.overlay import CaptionLine
+from robotool.render.video import RED, end_lines
+
+if TYPE_CHECKING:
+    from robotool.sim.build import Scene
+
+FOLDER = "pictures"
+SIZE = (640, 360)  # px
+
+
+def _slug(text: str) -> str:
+    return "".join(c if c.isalnum() or c == "_" else "-" for c in text)  # family#3 -> family-3
+
+
+def representatives(records: Sequence[RunRecord]) -> dict[FailureClass, tuple[RunRecord, WorldResult | None]]:
+    """The first failed world of each failure class among one instance's records (None: nothing ran)."""
+    found: dict[FailureClass, tuple[RunRecord, WorldResult | None]] = {}
+    for record in records:
+        if not record.worlds and record.failure_class is not None and record.failure_class not in found:
+            found[record.failure_class] = (record, None)
+        for world in record.worlds:
+            if world.failure_class is not None and world.failure_class not in found:
+                found[world.failure_class] = (record, world)
+    return found
+
+
+def write_pictures(
+    instances: Sequence[TaskInstance], records: Sequence[RunRecord], folder: Path, backend: str | None
+) -> list[Picture]:
+    """Draw every instance's scene and its representative failures into ``folder/pictures``."""
+    from robotool.render.still import render_scene, render_state
+    from robotool.sim import build
+
+    pictures: list[Picture] = []
+    for instance in instances:
+        label = instance.label
+        scene = build(instance.task)
+        file = f"{FOLDER}/{_slug(label)}.png"
+        render_scene(scene, folder / file, width=SIZE[0], height=SIZE[1])
+        pictures.append(Picture(kind="scene", task=label, file=file, caption=f"{label}: the scene at the start"))
+        mine = [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed]
+        for cls, (record, world) in representatives(mine).items():
+            file = f"{FOLDER}/{_slug(label)}-{cls}.png"
+            heading = f"{record.key.method} run {record.key.run}" + (f", world {world.world}" if world else "")
+            why = (
+                (world.failure if world else None)
+                or record.error
+                or "; ".join(f for f in record.candidate_failures if f)
+                or "no program ran"
+            )
+            text = f"{heading}: {cls} - {why}"
+            lines = [CaptionLine(text, RED)]
+            if world is None or record.code is None:
+                render_state(scene, scene.model.qpos0, folder / file, caption=lines, width=SIZE[0], height=SIZE[1])
+            else:
+                _replay(instance, record, world, scene, folder / file, lines, backend)
+            pictures.append(
+                Picture(
+                    kind="failure",
+                    task=label,
+                    file=file,
+                    failure_class=cls,
+                    run=record.key.id,
+                    world=world.world if world else None,
+                    caption=text,
+                )
+            )
+    return pictures
+
+
+def _replay(
+    instance: TaskInstance,
+    record: RunRecord,
+    world: WorldResult,
+    scene: Scene,
+    path: Path,
+    lines: list[CaptionLine],
+    backend: str | None,
+) -> None:
+    """Simulate the world again and draw its end state, captioned with ``lines`` and how it ended."""
+    from robotool.render.rollouts import rerun_recorded
+    from robotool.render.still import render_state
+
+    assert record.code is not None
+    rollouts, recorder = rerun_recorded(
+        instance.task, record.code, [world.world], seed=world.seed - world.world, backend=backend
+    )
+    again = rollouts[world.world]
+    extra = end_lines(again)
+    if again.success:
+        extra.insert(0, CaptionLine("simulated again, this world reached the goal (the evaluated run did not)", RED))
+    track = recorder.tracks[world.world]
+    render_state(
+        scene,
+        track.qpos[-1],
+        path,
+        caption=[*lines, *extra],
+        mocap_pos=track.mocap_pos[-1],
+        width=SIZE[0],
+        height=SIZE[1],
+    )

@@ -1,0 +1,240 @@
+"""A top-down plan of one world's rollout (matplotlib, no OpenGL): footprints, the robot's path, pushes, refusals.
+
+Objects are drawn as their footprints with their names and top heights, the goal's object in green. Each
+motion skill becomes an arrow: skills that move the robot (one position argument) from where the robot was
+to the target, skills that move an object (an object name and a position) from the object to the target.
+Arrows of skills that ended ``done`` are solid; refused, stalled or timed-out ones are red and dashed, with
+the reason written at their target. With a recorded track the robot's actual path is drawn too, and failed
+moves start where the robot really was.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon, Rectangle
+
+from robotool import geometry
+from robotool.embodiments import skills
+from robotool.render.model import GOAL_RGBA, ROBOT_RGBA, object_colours
+from robotool.render.still import goal_text
+from robotool.rollout import Rollout, SkillCall
+from robotool.scene import Task
+from robotool.sim.arm import HOME as ARM_HOME
+from robotool.sim.build import Scene
+from robotool.sim.recorder import Track
+
+Colour = str | tuple[float, ...]
+REFUSED = "#d62728"
+PUSH = "#1f77b4"
+ROBOT = ROBOT_RGBA[:3]
+MIN_ARROW = 0.01  # m: shorter moves in the plane are not drawn
+REASON_CHARS = 60  # a refusal reason is cut to this many characters on the plan
+
+
+def _footprint(task: Task, index: int) -> list[np.ndarray]:
+    """The xy outline (n, 2) of each of an object's parts (a hook is two)."""
+    return [_convex_hull(p.corners()[:, :2]) for p in geometry.object_parts(task.objects[index])]
+
+
+def _convex_hull(points: np.ndarray) -> np.ndarray:
+    """Andrew's monotone chain: the hull of 2-D points, counter-clockwise."""
+    pts = sorted({(round(float(x), 6), round(float(y), 6)) for x, y in points})
+    if len(pts) < 3:
+        return np.array(pts)
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        out: list[tuple[float, float]] = []
+        for p in seq:
+            while (
+                len(out) >= 2
+                and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]))
+                <= 0
+            ):
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def robot_path(scene: Scene, track: Track) -> tuple[np.ndarray, np.ndarray]:
+    """(times (T,), xy (T, 2)) of the robot's root body over a recorded track."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    root = int(np.flatnonzero(scene.robot_body)[0])
+    times, qpos, _ = track.arrays()
+    xy = np.zeros((len(times), 2))
+    for k, q in enumerate(qpos):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        xy[k] = data.xpos[root, :2]
+    return times, xy
+
+
+def _position_at(times: np.ndarray, xy: np.ndarray, t: float) -> np.ndarray:
+    return np.array([np.interp(t, times, xy[:, 0]), np.interp(t, times, xy[:, 1])])
+
+
+def _short(text: str) -> str:
+    return text if len(text) <= REASON_CHARS else text[: REASON_CHARS - 1] + "…"
+
+
+def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, track: Track | None = None) -> Figure:
+    """The plan of ``rollout`` in ``task`` as a matplotlib figure (``scene`` and ``track`` add the real path)."""
+    fig = Figure(figsize=(8, 5.5), dpi=110)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    colours = object_colours(task)
+    centres: dict[str, np.ndarray] = {}
+    outlines = [_footprint(task, i) for i in range(len(task.objects))]
+    every = np.concatenate([o for parts in outlines for o in parts])
+    gap = (every.max(axis=0) - every.min(axis=0)) * (0.14, 0.07)  # how far apart two labels must be
+    placed: list[np.ndarray] = []
+    for i, obj in enumerate(task.objects):
+        goal = obj.name == task.goal.object
+        for outline in outlines[i]:
+            ax.add_patch(
+                Polygon(
+                    outline,
+                    closed=True,
+                    facecolor=colours[i][:3],
+                    alpha=0.35 if obj.movable else 0.5,
+                    edgecolor="black",
+                    linewidth=1.6 if goal else 0.8,
+                )
+            )
+        centres[obj.name] = np.asarray(obj.center[:2], dtype=float)
+        at = centres[obj.name].copy()
+        while any((np.abs(at - p) < gap).all() for p in placed):
+            at[1] -= gap[1]
+        placed.append(at)
+        ax.annotate(
+            f"{obj.name}{' (goal)' if goal else ''}\ntop {obj.top:.2f} m",
+            at,
+            fontsize=7,
+            ha="center",
+            va="center",
+            color="darkgreen" if goal else "black",
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.6, "linewidth": 0},
+        )
+    path_times, path_xy = robot_path(scene, track) if scene is not None and track is not None else (None, None)
+    start = _start(task, path_xy)
+    _draw_robot_box(ax, task, start)
+    if path_xy is not None:
+        ax.plot(path_xy[:, 0], path_xy[:, 1], color=ROBOT, linewidth=1.2, alpha=0.8, label="robot path (simulated)")
+    _draw_calls(ax, task, rollout, start, centres, path_times, path_xy)
+    verdict = "goal reached" if rollout.success else "goal not reached"
+    ax.set_title(
+        f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}",
+        fontsize=9,
+        color=tuple(GOAL_RGBA[:3]) if rollout.success else REFUSED,
+    )
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.08)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
+    if path_xy is not None:
+        return path_xy[0]
+    position = task.robot.position  # the quadruped's start; the arm's gripper starts at its home
+    return np.asarray(position if position is not None else ARM_HOME[:2], dtype=float)
+
+
+def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray) -> None:
+    size = getattr(task.limits, "body_size", None)
+    if size is None:  # an arm's gripper: a marker
+        ax.plot(*at, marker="s", color=ROBOT, markersize=8, label="robot start")
+        return
+    ax.add_patch(
+        Rectangle(
+            (at[0] - size[0] / 2, at[1] - size[1] / 2),
+            size[0],
+            size[1],
+            facecolor=ROBOT,
+            alpha=0.5,
+            edgecolor="black",
+            linewidth=0.8,
+            label="robot start",
+        )
+    )
+
+
+def _draw_calls(
+    ax: Axes,
+    task: Task,
+    rollout: Rollout,
+    start: np.ndarray,
+    centres: dict[str, np.ndarray],
+    path_times: np.ndarray | None,
+    path_xy: np.ndarray | None,
+) -> None:
+    """An arrow per motion skill call, from the robot (or the pushed object) to the call's target."""
+    params = {s.name: [kind for _, kind in s.params] for s in skills(task.embodiment) if s.kind == "motion"}
+    robot_at = start.copy()
+    step = 0
+    for call in rollout.calls:
+        kinds = params.get(call.skill)
+        if not kinds or "position" not in kinds:
+            continue
+        step += 1
+        target = np.asarray(call.args[kinds.index("position")][:2], dtype=float)
+        moves_object = "name" in kinds
+        if moves_object:
+            name = call.args[kinds.index("name")]
+            origin = centres.get(name, robot_at)
+        elif path_xy is not None:  # a failed move is drawn from where the robot stopped: the part it could not do
+            origin = _position_at(path_times, path_xy, call.ended if call.outcome != "done" else call.started)
+        else:
+            origin = robot_at
+        if call.outcome != "done" or np.linalg.norm(target - origin) >= MIN_ARROW:  # up-and-down moves: no arrow
+            _arrow(ax, origin, target, call, PUSH if moves_object else ROBOT, step)
+        if moves_object and call.outcome == "done":
+            centres[name] = target
+        if not moves_object:
+            robot_at = target if call.outcome == "done" else robot_at
+            if path_xy is not None:
+                robot_at = _position_at(path_times, path_xy, call.ended)
+
+
+def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, colour: Colour, step: int) -> None:
+    failed = call.outcome != "done"
+    style = {"color": REFUSED if failed else colour, "linestyle": "--" if failed else "-", "linewidth": 1.6}
+    ax.annotate("", xy=target, xytext=origin, arrowprops={"arrowstyle": "->", **style})
+    ax.update_datalim([origin, target])  # arrows are annotations: make room for them
+    mid = (origin + target) / 2
+    ax.annotate(f"{step}. {call.skill}", mid, fontsize=6.5, color=style["color"], ha="center", va="bottom")
+    if failed:  # the cross marks where it ended
+        ax.plot(*origin, marker="x", color=REFUSED, markersize=9, mew=2)
+        ax.annotate(
+            _short(f"{call.outcome}: {call.reason or ''}"),
+            origin,
+            xytext=(4, -10),
+            textcoords="offset points",
+            fontsize=6.5,
+            color=REFUSED,
+        )
+
+
+def write_plan(
+    path: Path, task: Task, rollout: Rollout, *, scene: Scene | None = None, track: Track | None = None
+) -> Path:
+    """Write the plan of ``rollout`` as a PNG at ``path``."""
+    fig = plan_figure(task, rollout, scene=scene, track=track)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    return path

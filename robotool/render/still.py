@@ -1,0 +1,73 @@
+"""Still pictures: a task's scene at its start, or a recorded world at its end."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from robotool.render.overlay import CaptionLine
+from robotool.render.painter import Painter, RenderError
+from robotool.scene import Task
+from robotool.sim.build import Scene, build
+
+STILL_SIZE = (960, 540)  # px, width x height
+
+
+def goal_text(task: Task) -> str:
+    """The goal in a few words, e.g. ``robot on sofa_2`` or ``vase lowered to <= 0.05 m``."""
+    goal = task.goal
+    if goal.lifted is not None:
+        return f"{goal.lifted.object} lifted to >= {goal.lifted.height:g} m"
+    if goal.lowered is not None:
+        return f"{goal.lowered.object} lowered to <= {goal.lowered.height:g} m"
+    words = {"robot_on": "robot on", "grasped": "grasp", "pressed": "press"}
+    return f"{words[goal.kind]} {goal.object}"
+
+
+def scene_title(task: Task) -> CaptionLine:
+    """The title band of a task's pictures: its name, embodiment and goal."""
+    return CaptionLine(f"{task.name} ({task.embodiment}) - goal: {goal_text(task)}")
+
+
+def save_png(image_path: Path, painter: Painter, caption: list[CaptionLine] | None = None) -> Path:
+    """Write the painter's current state as a labelled PNG."""
+    image = painter.picture(title=[scene_title(painter.scene.task)], caption=caption or [])
+    try:
+        image_path.parent.mkdir(parents=True, exist_ok=True)
+        image.save(image_path, format="PNG", optimize=True)
+    except OSError as e:
+        raise RenderError(f"cannot write {image_path}: {e.strerror or e}") from None
+    return image_path
+
+
+def render_scene(task: Task | Scene, out: Path, *, width: int = STILL_SIZE[0], height: int = STILL_SIZE[1]) -> Path:
+    """Draw the task's scene at its start state, labelled, to the PNG ``out``."""
+    scene = task if isinstance(task, Scene) else build(task)
+    painter = Painter(scene, width, height)
+    try:
+        return save_png(out, painter)
+    finally:
+        painter.close()
+
+
+def render_state(
+    scene: Scene,
+    qpos: np.ndarray,
+    out: Path,
+    *,
+    caption: list[CaptionLine],
+    mocap_pos: np.ndarray | None = None,
+    width: int = STILL_SIZE[0],
+    height: int = STILL_SIZE[1],
+) -> Path:
+    """Draw one state of a world (e.g. the end of a failed rollout) with a caption, to the PNG ``out``.
+
+    The camera keeps both the start state and this one in view.
+    """
+    painter = Painter(scene, width, height, frame_qpos=np.stack([scene.model.qpos0, qpos]))
+    try:
+        painter.set_state(qpos, mocap_pos)
+        return save_png(out, painter, caption)
+    finally:
+        painter.close()
