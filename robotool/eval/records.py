@@ -104,7 +104,7 @@ class Picture(BaseModel):
     task: str = Field(description="the instance: task name, or family#seed")
     file: str = Field(description="path relative to the results folder")
     failure_class: FailureClass | None = None
-    run: str | None = Field(None, description="the run the world belongs to (task/method/run)")
+    run: str | None = Field(None, description="the key of the run the world belongs to (task/method/run@inputs)")
     world: int | None = None
     caption: str = ""
 
