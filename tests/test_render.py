@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import av
@@ -18,6 +19,7 @@ from PIL import Image
 
 from robotool import tasks
 from robotool.cli import main
+from robotool.eval.records import Results
 from robotool.render.model import GOAL_RGBA, ROBOT_RGBA
 from robotool.render.painter import Painter
 from robotool.render.plan import plan_figure, write_plan
@@ -25,6 +27,7 @@ from robotool.render.rollouts import video_paths
 from robotool.render.still import render_scene
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, frame_times, render_video
 from robotool.rollout import Rollout, SkillCall
+from robotool.scene import Task
 from robotool.sim.recorder import StateRecorder
 
 SMALL = (240, 136)  # px
@@ -238,33 +241,37 @@ def test_plan_draws_a_push_from_the_object_and_works_without_a_recording(tmp_pat
     assert Image.open(out).size[0] > 400
 
 
-def test_evaluation_report_embeds_scenes_and_a_failed_world(tmp_path: Path, monkeypatch) -> None:
+def _evaluate_sofa_traversing(folder: Path, rollouts_of: Callable[[Task, str, int], list[Rollout]]) -> Results:
+    """The evaluator on sofa_traversing with one method whose solver (a TEST FIXTURE) returns the tool-free
+    program with the rollouts ``rollouts_of(task, code, seed)``."""
     from rich.console import Console
 
     from robotool.eval import EvalConfig, Settings, evaluate
-    from robotool.execute import run as run_program
-    from robotool.scene import Task
     from robotool.solution import Candidate, Solution
 
-    def walks_into_the_gap(task: Task, *, seed: int, run: int) -> Solution:  # TEST FIXTURE: a failing solver
+    def walks_into_the_gap(task: Task, *, seed: int, run: int) -> Solution:
         code = program("sofa_traversing_direct")
-        rollouts = run_program(task, code, worlds=1, seed=seed, backend="mujoco").rollouts
-        candidate = Candidate(index=0, code=code, rollouts=rollouts)
+        candidate = Candidate(index=0, code=code, rollouts=rollouts_of(task, code, seed))
         return Solution(task=task.name, method="fixture", code=code, best=0, success_rate=0.0, candidates=[candidate])
 
-    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
     config = EvalConfig(
-        out=tmp_path / "out",
-        settings=Settings(worlds=1, backend="mujoco"),
-        tasks=["sofa_traversing"],
-        methods=["search"],
+        out=folder, settings=Settings(worlds=1, backend="mujoco"), tasks=["sofa_traversing"], methods=["search"]
     )
-    results = evaluate(config, solvers={"search": walks_into_the_gap}, console=Console(quiet=True))
+    return evaluate(config, solvers={"search": walks_into_the_gap}, console=Console(quiet=True))
+
+
+def test_evaluation_report_embeds_scenes_and_a_failed_world(tmp_path: Path) -> None:
+    from robotool.execute import run as run_program
+
+    folder = tmp_path / "out"
+    results = _evaluate_sofa_traversing(
+        folder, lambda task, code, seed: run_program(task, code, worlds=1, seed=seed, backend="mujoco").rollouts
+    )
     kinds = [(p.kind, p.failure_class) for p in results.pictures]
     assert kinds[0] == ("scene", None) and kinds[1][0] == "failure" and len(kinds) == 2
     failure = results.pictures[1]
     assert failure.run.startswith("sofa_traversing/search/0@") and failure.world == 0 and "gap" in failure.caption
-    folder = tmp_path / "out"
+    assert failure.reproduced is True
     report = (folder / "report.md").read_text()
     saved = json.loads((folder / "results.json").read_text())
     for picture in results.pictures:
@@ -273,6 +280,16 @@ def test_evaluation_report_embeds_scenes_and_a_failed_world(tmp_path: Path, monk
     assert [p["file"] for p in saved["pictures"]] == [p.file for p in results.pictures]
     still = np.asarray(Image.open(folder / failure.file).convert("RGB"))
     assert _hue_pixels(still, ROBOT_RGBA).sum() > 20
+
+
+def test_evaluation_picture_says_when_the_world_did_not_fail_the_same_way_again(tmp_path: Path) -> None:
+    def claimed(task: Task, code: str, seed: int) -> list[Rollout]:  # TEST FIXTURE: not what this program does
+        stall = SkillCall(skill="walk_to_position", args=[[2.0, 0.0, 0.0]], outcome="stalled", reason="blocked")
+        return [Rollout(world=0, seed=seed, success=False, conditions={"robot_on_sofa_2": False}, calls=[stall])]
+
+    results = _evaluate_sofa_traversing(tmp_path / "out", claimed)
+    failure = results.pictures[1]
+    assert "stalled: blocked" in failure.caption and failure.reproduced is False
 
 
 def test_solve_command_films_the_best_program(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

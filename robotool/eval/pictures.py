@@ -18,6 +18,7 @@ from robotool.eval.instances import TaskInstance
 from robotool.eval.records import Picture, RunRecord, WorldResult
 from robotool.render.overlay import CaptionLine
 from robotool.render.video import RED, end_lines
+from robotool.verify import world_failure
 
 if TYPE_CHECKING:
     from robotool.sim.build import Scene
@@ -68,10 +69,11 @@ def write_pictures(
             )
             text = f"{heading}: {cls} - {why}"
             lines = [CaptionLine(text, RED)]
+            reproduced = None
             if world is None or record.code is None:
                 render_state(scene, scene.model.qpos0, folder / file, caption=lines, width=SIZE[0], height=SIZE[1])
             else:
-                _replay(instance, record, world, scene, folder / file, lines, backend)
+                reproduced = _replay(instance, record, world, scene, folder / file, lines, backend)
             pictures.append(
                 Picture(
                     kind="failure",
@@ -81,6 +83,7 @@ def write_pictures(
                     run=record.key.id,
                     world=world.world if world else None,
                     caption=text,
+                    reproduced=reproduced,
                 )
             )
     return pictures
@@ -94,8 +97,11 @@ def _replay(
     path: Path,
     lines: list[CaptionLine],
     backend: str | None,
-) -> None:
-    """Simulate the world again and draw its end state, captioned with ``lines`` and how it ended."""
+) -> bool:
+    """Simulate the world again and draw its end state, captioned with ``lines`` and how it ended.
+
+    Returns whether it ended as recorded (same failure); the caption says so when it did not.
+    """
     from robotool.render.rollouts import rerun_recorded
     from robotool.render.still import render_state
 
@@ -104,9 +110,12 @@ def _replay(
         instance.task, record.code, [world.world], seed=world.seed - world.world, backend=backend
     )
     again = rollouts[world.world]
-    extra = end_lines(again)
-    if again.success:
-        extra.insert(0, CaptionLine("simulated again, this world reached the goal (the evaluated run did not)", RED))
+    recorded = (world.failure or "").startswith("goal not reached")  # then the first line says it already
+    extra = [line for line in end_lines(again) if not (recorded and line.text.startswith("goal not reached"))]
+    now = world_failure(again)
+    reproduced = now == world.failure
+    if not reproduced:
+        extra.insert(0, CaptionLine(f"simulated again, it ended otherwise: {now or 'goal reached'}", RED))
     track = recorder.tracks[world.world]
     render_state(
         scene,
@@ -117,3 +126,4 @@ def _replay(
         width=SIZE[0],
         height=SIZE[1],
     )
+    return reproduced

@@ -107,6 +107,9 @@ class Picture(BaseModel):
     run: str | None = Field(None, description="the key of the run the world belongs to (task/method/run@inputs)")
     world: int | None = None
     caption: str = ""
+    reproduced: bool | None = Field(
+        None, description="the failed world simulated again failed the same way (None: nothing to simulate)"
+    )
 
 
 class Results(BaseModel):
