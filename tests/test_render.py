@@ -148,7 +148,7 @@ def test_rollout_video_opens_with_the_expected_frames(tmp_path: Path, sim_scene,
     assert info.frames == expected
     with av.open(str(info.path)) as container:
         stream = container.streams.video[0]
-        assert (stream.codec_context.name, stream.width, stream.height) == ("h264", *VIDEO)
+        assert stream.codec_context.name in ("h264", "mpeg4") and (stream.width, stream.height) == VIDEO
         decoded = [frame.to_ndarray(format="rgb24") for frame in container.decode(stream)]
     assert len(decoded) == expected
     assert np.abs(decoded[0].astype(int) - decoded[-1].astype(int)).mean() > 1, "the robot did not move"
@@ -331,3 +331,18 @@ def test_frames_between_ticks_interpolate_the_recorded_positions(sim_scene) -> N
     assert np.isclose(np.linalg.norm(quats[1]), 1.0)
     assert np.isclose(angle(quats[0], quats[1]), angle(quats[0], quats[2]) / 2)
     assert np.isclose(angle(quats[1], quats[2]), angle(quats[0], quats[2]) / 2)
+
+
+def test_videos_fall_back_to_mpeg4_without_an_h264_encoder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import robotool.render.video as video
+    from robotool.render.painter import RenderError
+
+    assert video._encoder({"mpeg4", "libx264"}) == "libx264" and video._encoder({"mpeg4"}) == "mpeg4"
+    with pytest.raises(RenderError, match="none of the video encoders"):
+        video._encoder({"gif"})
+    monkeypatch.setattr(video, "ENCODERS", ("mpeg4",))
+    frames = (np.full((VIDEO[1], VIDEO[0], 3), 40 * k, dtype=np.uint8) for k in range(5))
+    assert video.write_mp4(tmp_path / "m.mp4", frames, fps=FPS, width=VIDEO[0], height=VIDEO[1]) == 5
+    with av.open(str(tmp_path / "m.mp4")) as container:
+        stream = container.streams.video[0]
+        assert stream.codec_context.name == "mpeg4" and sum(1 for _ in container.decode(stream)) == 5

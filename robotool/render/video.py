@@ -5,7 +5,8 @@ two ticks shows the positions interpolated between them (``mj_differentiatePos``
 rotations stay rotations). The caption names the skill running at that time; a skill that did not end
 ``done`` (refused, stalled, timed out, failed) is shown in red for a while from when it ended; the last
 frame is held with the goal's end state (reached, or which conditions failed and why the world failed).
-Encoding uses PyAV (FFmpeg's libraries, shipped in its wheel) with H.264 in ``yuv420p`` for players.
+Encoding uses PyAV (FFmpeg's libraries, shipped in its wheel) with H.264 in ``yuv420p`` for players (MPEG-4
+Part 2 where the FFmpeg build has no H.264 encoder).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ HOLD_S = 2.0  # s the end state stays on screen
 MARK_S = 2.0  # s a refusal or failure stays in the caption after it happened
 BOUNDS_SAMPLES = 40  # recorded states the camera keeps in view (spread over the rollout)
 RED, GREEN = (255, 110, 100), (120, 230, 130)
+ENCODERS = ("libx264", "libopenh264", "mpeg4")  # in order of preference
 
 
 @dataclass(frozen=True)
@@ -142,6 +144,14 @@ def frames(
         painter.close()
 
 
+def _encoder(available: set[str]) -> str:
+    """H.264 (x264, else OpenH264) where this FFmpeg build has it, else MPEG-4 Part 2 (both play in MP4)."""
+    for name in ENCODERS:
+        if name in available:
+            return name
+    raise RenderError(f"this FFmpeg build has none of the video encoders {', '.join(ENCODERS)}")
+
+
 def write_mp4(path: Path, images: Iterator[np.ndarray], *, fps: int, width: int, height: int) -> int:
     """Encode RGB frames as H.264 MP4 at ``path``; returns the number of frames written."""
     try:
@@ -155,9 +165,11 @@ def write_mp4(path: Path, images: Iterator[np.ndarray], *, fps: int, width: int,
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with av.open(str(path), mode="w", format="mp4") as container:
-            stream = container.add_stream("libx264", rate=fps)
+            encoder = _encoder(av.codecs_available)
+            stream = container.add_stream(encoder, rate=fps)
             stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-            stream.options = {"crf": "23", "preset": "veryfast"}
+            if encoder == "libx264":
+                stream.options = {"crf": "23", "preset": "veryfast"}
             for pixels in images:
                 container.mux(stream.encode(av.VideoFrame.from_ndarray(pixels, format="rgb24")))
                 count += 1
