@@ -2,10 +2,14 @@
 
 A local OpenAI-compatible stand-in answers every request after a fixed delay (200 ms by default), so
 the measurement is the program's concurrency, not a provider's speed. The stand-in's replies are
-scripted for this benchmark (a direct grasp on milk_reaching_near); each solve runs the Analyzer once,
+scripted for this benchmark (a direct grasp on milk_reaching_near, each candidate's program a little
+different, so that none is simulated once for several candidates); each solve runs the Analyzer once,
 then the Planner, Calculator and Coder per candidate, then verifies K x R worlds in one batch.
 
     python benchmarks/lm_parallel.py [--delay 0.2] [--worlds 1] [--repeats 3]
+
+It prints the ratio for the whole solve and for its LM phases alone (Analyzer, then the candidates'
+stages), since the rest is simulating K programs instead of one.
 """
 
 from __future__ import annotations
@@ -24,11 +28,14 @@ from robotool.lm import make_lm
 from robotool.program import RoboTool
 from robotool.standin import Rule, Script, StandinServer
 
-CODE = """\
-p = get_graspable_point("milk")
-open_gripper()
-move_to_position([p[0], p[1], p[2] + 0.02])
-"""
+MAX_CANDIDATES = 8
+
+
+def _code(k: int) -> str:
+    """Candidate ``k``'s program: the same reach, ``k`` mm higher."""
+    return (
+        f'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0], p[1], p[2] + {0.02 + k / 1000:g}])\n'
+    )
 
 
 def _reply(**fields: object) -> str:
@@ -40,26 +47,33 @@ SCRIPT = Script(
     note="Benchmark replies (scripted, not a language model).",
     rules=[
         Rule(match="[[ ## analysis ## ]]", reply=_reply(analysis="The milk is in reach.", key_concepts=[])),
-        Rule(match="[[ ## abstract_plan ## ]]", reply=_reply(
-            object_roles=[], abstract_plan="Reach above the milk.",
-            steps=[{"skill": "move_to_position", "objects": ["milk"], "intent": "reach"}])),
+        Rule(
+            match="[[ ## abstract_plan ## ]]",
+            reply=_reply(
+                object_roles=[],
+                abstract_plan="Reach above the milk.",
+                steps=[{"skill": "move_to_position", "objects": ["milk"], "intent": "reach"}],
+            ),
+        ),
         Rule(match="[[ ## calculation ## ]]", reply=_reply(calculation="Above the grasp point.", parameters=[])),
-        Rule(match="[[ ## code ## ]]", reply=_reply(code=CODE)),
+        *(Rule(match="[[ ## code ## ]]", reply=_reply(code=_code(k)), times=1) for k in range(MAX_CANDIDATES)),
     ],
 )
 
 
-def solve_seconds(server: StandinServer, candidates: int, worlds: int) -> float:
-    """Wall time of one solve with ``candidates`` candidates."""
-    lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=0)
+def solve_seconds(script: Script, candidates: int, worlds: int) -> tuple[float, float]:
+    """Wall time of one solve with ``candidates`` candidates, against a fresh stand-in, and of its LM calls."""
     program = RoboTool(candidates=candidates, worlds_per_candidate=worlds)
     task = tasks.load("milk_reaching_near")
-    started = time.perf_counter()
-    with dspy.context(lm=lm):
-        solution = program(task=task).solution
-    elapsed = time.perf_counter() - started
+    with StandinServer(script) as server:
+        lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=0)
+        started = time.perf_counter()
+        with dspy.context(lm=lm):
+            solution = program(task=task).solution
+        elapsed = time.perf_counter() - started
     assert len(solution.candidates) == candidates and all(c.rollouts for c in solution.candidates)
-    return elapsed
+    assert len({c.code for c in solution.candidates}) == candidates  # every candidate simulated
+    return elapsed, solution.timings["analyzer"] + solution.timings["candidates"]
 
 
 def main() -> None:
@@ -69,11 +83,14 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs of each K; the best is kept")
     args = parser.parse_args()
     script = SCRIPT.model_copy(update={"delay": args.delay})
-    with StandinServer(script) as server:
-        solve_seconds(server, 1, args.worlds)  # warm up the simulator and the sandbox
-        times = {k: min(solve_seconds(server, k, args.worlds) for _ in range(args.repeats)) for k in (1, 8)}
+    solve_seconds(script, 1, args.worlds)  # warm up the simulator and the sandbox
+    k = MAX_CANDIDATES
+    runs = {n: [solve_seconds(script, n, args.worlds) for _ in range(args.repeats)] for n in (1, k)}
+    total = {n: min(t for t, _ in runs[n]) for n in runs}
+    lm = {n: min(t for _, t in runs[n]) for n in runs}
     print(f"stand-in delay {args.delay * 1000:.0f} ms, {args.worlds} world(s) per candidate")
-    print(f"K=1: {times[1]:.2f} s   K=8: {times[8]:.2f} s   K=8/K=1: {times[8] / times[1]:.2f}")
+    print(f"solve:     K=1: {total[1]:.2f} s   K={k}: {total[k]:.2f} s   K={k}/K=1: {total[k] / total[1]:.2f}")
+    print(f"LM phases: K=1: {lm[1]:.2f} s   K={k}: {lm[k]:.2f} s   K={k}/K=1: {lm[k] / lm[1]:.2f}")
 
 
 if __name__ == "__main__":

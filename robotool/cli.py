@@ -18,15 +18,20 @@ from rich.table import Table
 
 from robotool import tasks
 from robotool.cliargs import (
+    ADAPTER_HELP,
+    ADAPTERS,
     BACKEND_HELP,
     DEFAULT_WORLDS,
     EXIT_USAGE,
+    LOG_PROMPTS_HELP,
     Parser,
+    count,
     make_console,
     output_file,
     output_folder,
     positive_int,
     print_error,
+    seconds,
     seed,
     temperature,
     warn_if_warp_on_cpu,
@@ -34,7 +39,7 @@ from robotool.cliargs import (
 from robotool.concepts import needs_tool
 from robotool.describe import describe
 from robotool.errors import RobotoolError
-from robotool.lm import LMConfigError
+from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
 from robotool.methods import METHODS
 from robotool.sandbox.validate import ProgramRejected
 from robotool.scene import Task, TaskFileError
@@ -137,6 +142,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
             temperature=args.temperature,
             max_tokens=args.max_tokens,
             cache=not args.no_cache,
+            timeout=args.timeout,
         )
         if lm is None:
             console.print(
@@ -161,6 +167,10 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
             worlds_per_candidate=args.worlds,
             backend=args.backend,
             seed=args.seed,
+            temperature=args.temperature,
+            adapter=args.adapter,
+            format_retries=args.format_retries,
+            log_prompts=args.log_prompts,
         )
         with (
             console.status(
@@ -339,8 +349,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
     p.add_argument("--api-key-env", help="environment variable holding the API key")
-    p.add_argument("--temperature", type=temperature, help="sampling temperature of the first candidate")
+    p.add_argument(
+        "--temperature",
+        type=temperature,
+        help="sampling temperature of every LM call (default: the model's for one candidate, 0.7 to 1.0 spread "
+        "over several)",
+    )
     p.add_argument("--max-tokens", type=positive_int, help="token limit of each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
+    p.add_argument(
+        "--format-retries",
+        type=count,
+        default=DEFAULT_FORMAT_RETRIES,
+        metavar="N",
+        help="times a stage is asked again, shown what was wrong, after a reply that does not parse",
+    )
+    p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--method", choices=list(METHODS), default="robotool", help="the program or an ablation")
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")

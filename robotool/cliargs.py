@@ -20,6 +20,9 @@ EXIT_USAGE = 2
 DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
+ADAPTERS = ["chat", "json"]
+ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
+LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
 CAPTURED_WIDTH = 120
 """Console width when the output goes to a file or a pipe (rich would squeeze tables to 80 columns)."""
 
@@ -73,6 +76,28 @@ def seed(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {text!r}") from None
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {value}")
+    return value
+
+
+def count(text: str) -> int:
+    """A count that may be zero: a whole number of at least 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {value}")
+    return value
+
+
+def seconds(text: str) -> float:
+    """A duration: a finite number of seconds above 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds > 0, got {text!r}")
     return value
 
 

@@ -1,19 +1,28 @@
-"""Language-model configuration: any model string DSPy accepts, from flags or the environment.
+"""Language-model configuration, and what its failures mean to a user.
 
 ``ROBOTOOL_LM`` names the model when ``--lm`` is not given (``ROBOTOOL_API_BASE`` likewise the
 server). DSPy's response cache is on by default, so repeated runs cost nothing; tests turn it off.
+:func:`unavailable` turns an LM call's error that no reply can cure (no key, a rejected key, an
+unknown model, an unreachable server, no quota, retries used up) into a one-line
+:class:`~robotool.errors.LMUnavailableError` that names the flag or variable to fix.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from typing import TYPE_CHECKING
+
+from robotool.errors import LMUnavailableError, RobotoolError
 
 if TYPE_CHECKING:
     import dspy
 
 MODEL_ENV = "ROBOTOOL_LM"
 API_BASE_ENV = "ROBOTOOL_API_BASE"
+PLACEHOLDER_KEY = "unused"  # local OpenAI-compatible servers accept any key
+DEFAULT_FORMAT_RETRIES = 2
+"""Repairs after a reply that does not parse: each shows the model its reply and what was wrong."""
 
 HOW_TO_CONFIGURE = (
     "No language model is configured. Pass --lm MODEL (any model string DSPy accepts, e.g. "
@@ -23,7 +32,7 @@ HOW_TO_CONFIGURE = (
 )
 
 
-class LMConfigError(ValueError):
+class LMConfigError(RobotoolError, ValueError):
     """The language-model settings cannot be used; the message says how to fix them."""
 
 
@@ -56,11 +65,15 @@ def make_lm(
     if api_key_env:
         key = os.environ.get(api_key_env)
         if not key:
-            raise LMConfigError(f"--api-key-env names {api_key_env}, but that variable is not set")
+            raise LMUnavailableError(
+                "no_key", f"--api-key-env names {api_key_env}, but that variable is not set; set it to the API key"
+            )
         kwargs["api_key"] = key
     elif api_base:
-        kwargs["api_key"] = "unused"  # local OpenAI-compatible servers accept any key
+        kwargs["api_key"] = PLACEHOLDER_KEY
     if timeout is not None:
+        if timeout <= 0:
+            raise LMConfigError(f"the timeout must be positive, got {timeout} s")
         kwargs["timeout"] = timeout
     if temperature is not None and temperature < 0:
         raise LMConfigError(f"temperature must be at least 0, got {temperature}")
@@ -69,7 +82,85 @@ def make_lm(
     import dspy
 
     try:
-        return dspy.LM(model, temperature=temperature, max_tokens=max_tokens, cache=cache,
-                       num_retries=num_retries, **kwargs)
+        return dspy.LM(
+            model, temperature=temperature, max_tokens=max_tokens, cache=cache, num_retries=num_retries, **kwargs
+        )
     except (ValueError, TypeError) as e:
         raise LMConfigError(f"cannot use model {model!r}: {e}") from None
+
+
+_KEY_VARIABLE = re.compile(r"\b([A-Z][A-Z0-9_]*_API_KEY)\b")
+
+
+def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
+    """The user-facing error for an LM call's ``error`` that no other reply can cure, else None.
+
+    None means the failure belongs to this one request (a malformed request, a context window
+    exceeded) and the caller reports it as that stage's failure.
+    """
+    from dspy.utils import exceptions as dx
+
+    model = lm.model
+    api_base = lm.kwargs.get("api_base")
+    where = f"the server at {api_base}" if api_base else f"the provider of {model}"
+    tries = f"all {lm.num_retries + 1} tries" if lm.num_retries else "the only try"
+    if isinstance(error, dx.LMNotConfiguredError):
+        variable = _KEY_VARIABLE.search(str(error))
+        fix = f"set {variable.group(1)}" if variable else "set the provider's API key variable"
+        return LMUnavailableError(
+            "no_key", f"no API key for {model}: {fix}, or name the variable that holds the key with --api-key-env"
+        )
+    if isinstance(error, dx.LMAuthError):
+        if lm.kwargs.get("api_key") == PLACEHOLDER_KEY:
+            fix = "it needs an API key: name the variable that holds it with --api-key-env"
+        else:
+            fix = "check the API key (in the variable --api-key-env names, or the provider's usual one)"
+        return LMUnavailableError("authentication", f"{where} rejected the credentials for {model}: {fix}")
+    if isinstance(error, dx.LMBillingError) or getattr(error, "provider_code", None) == "insufficient_quota":
+        return LMUnavailableError(
+            "quota", f"{where} refused {model} for billing or quota reasons: check the account's plan and credit"
+        )
+    if isinstance(error, dx.LMUnsupportedModelError) or (
+        isinstance(error, dx.LMInvalidRequestError) and getattr(error, "status", None) == 404
+    ):
+        fix = "check --lm (or ROBOTOOL_LM)" + (" and that --api-base ends in /v1" if api_base else "")
+        return LMUnavailableError("unknown_model", f"{where} does not know the model {model!r}: {fix}")
+    if isinstance(error, dx.LMTransportError) and _connection_failed(error):
+        target = f"the language-model server at {api_base}" if api_base else f"the provider of {model}"
+        fix = (
+            "check --api-base (or ROBOTOOL_API_BASE) and that the server is running"
+            if api_base
+            else "check the network connection"
+        )
+        return LMUnavailableError("unreachable", f"cannot reach {target}: {fix}")
+    if isinstance(error, dx.LMTransportError):
+        timeout = lm.kwargs.get("timeout")
+        limit = f"within {timeout:g} s " if timeout else ""
+        return LMUnavailableError(
+            "retries_exhausted", f"{where} did not answer {limit}on {tries}: raise --timeout or check the server"
+        )
+    if isinstance(error, dx.LMRateLimitError):
+        return LMUnavailableError(
+            "retries_exhausted",
+            f"{where} turned requests away as too many (rate limit) on {tries}: wait and rerun, or lower --candidates",
+        )
+    if isinstance(error, dx.LMServerError | dx.LMUnexpectedError):
+        return LMUnavailableError(
+            "retries_exhausted", f"{where} failed to answer on {tries} (server error): try again later"
+        )
+    return None
+
+
+def _connection_failed(error: BaseException) -> bool:
+    """Whether a transport error, or one it was raised from, is a failure to connect (not a slow answer)."""
+    seen: set[int] = set()
+    current: BaseException | None = error
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        names = {klass.__name__ for klass in type(current).__mro__}
+        if "ConnectError" in names or (
+            isinstance(current, ConnectionError | OSError) and not isinstance(current, TimeoutError)
+        ):
+            return True
+        current = current.__cause__ or current.__context__
+    return False

@@ -1,29 +1,45 @@
 """``RoboTool``: the four-stage DSPy program, its ablations, and candidates checked in simulation.
 
 The Analyzer runs once; the Planner, Calculator and Coder run once per candidate, concurrently,
-each candidate with its own ``rollout_id`` and temperature. Every candidate's code is validated by
-the sandbox and run in ``worlds_per_candidate`` perturbed worlds, all candidates in one batch, and
-the candidates are ranked (success rate, then fewer objects touched, then fewer skill calls).
-The paper's ablations are the same module with stages switched off: see :data:`METHODS`. Repeated
-runs that should sample afresh set ``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``).
+each candidate with its own ``rollout_id``. Every stage call goes through
+:func:`robotool.lm_calls.call_stage`: replies are parsed leniently and, when they still do not
+parse, asked for again with the problem shown to the model. If the Analyzer gives no usable reply,
+the candidates run without key concepts and the solution says so. Every candidate's code is
+validated by the sandbox and run in ``worlds_per_candidate`` perturbed worlds, all candidates in
+one batch (identical programs once; a program the sandbox rejects is asked for again like a reply
+that does not parse), and the candidates are ranked (see
+:meth:`~robotool.solution.Candidate.rank_key`). The paper's ablations are the same module with
+stages switched off: see :data:`METHODS`. Repeated runs that should sample afresh set
+``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``).
+
+Temperature: with ``temperature`` set, every LM call uses it; without, a single candidate uses the
+model's default and several candidates spread from 0.7 to 1.0 so that they differ.
 """
 
 from __future__ import annotations
 
 import contextvars
 import time
-from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from pathlib import Path
+from typing import Any, Literal
 
 import dspy
 
 from robotool.describe import describe
+from robotool.errors import RobotoolError
+from robotool.lm import DEFAULT_FORMAT_RETRIES
+from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage
 from robotool.methods import METHODS
+from robotool.sandbox import extract_program
 from robotool.scene import Task
 from robotool.signatures import Analyze, Calculate, Code, Plan, scene_context
-from robotool.solution import Candidate, Solution, StageOutputs, TokenUsage, rank
+from robotool.solution import Candidate, LMCall, Solution, StageOutputs, rank, usage_by_stage
 from robotool.verify import prepare_code, verify
+
+AdapterName = Literal["chat", "json"]
+SPREAD = (0.7, 1.0)
+"""Temperatures of the first and last of several candidates when no temperature is set."""
 
 
 class RoboTool(dspy.Module):
@@ -39,15 +55,24 @@ class RoboTool(dspy.Module):
         worlds_per_candidate: int = 3,
         backend: str | None = None,
         seed: int = 0,
-        temperature: float = 0.7,
-        max_temperature: float = 1.0,
+        temperature: float | None = None,
         rollout_base: int = 0,
+        adapter: AdapterName | None = None,
+        format_retries: int = DEFAULT_FORMAT_RETRIES,
+        log_prompts: Path | None = None,
     ):
+        """``adapter``: the answer format asked of the model (default: the one configured in DSPy, else
+        field markers); ``format_retries``: repairs per stage call after an unusable reply;
+        ``log_prompts``: a JSONL file that receives every request and reply."""
         super().__init__()
         if calculator and not planner:
             raise ValueError("the Calculator needs the Planner's steps")
         if candidates < 1 or worlds_per_candidate < 1:
             raise ValueError("candidates and worlds_per_candidate must be at least 1")
+        if temperature is not None and temperature < 0:
+            raise ValueError(f"temperature must be at least 0, got {temperature}")
+        if format_retries < 0:
+            raise ValueError(f"format_retries must be at least 0, got {format_retries}")
         self.analyze = dspy.Predict(Analyze) if analyzer else None
         self.plan = dspy.Predict(Plan) if planner else None
         self.calculate = dspy.Predict(Calculate) if calculator else None
@@ -57,8 +82,10 @@ class RoboTool(dspy.Module):
         self.backend = backend
         self.seed = seed
         self.temperature = temperature
-        self.max_temperature = max_temperature
         self.rollout_base = rollout_base
+        self.adapter = adapter
+        self.format_retries = format_retries
+        self.log_prompts = log_prompts
 
     @classmethod
     def method(cls, name: str, **options: Any) -> RoboTool:
@@ -69,37 +96,58 @@ class RoboTool(dspy.Module):
 
     @property
     def method_name(self) -> str:
-        stages = {"analyzer": self.analyze is not None, "planner": self.plan is not None,
-                  "calculator": self.calculate is not None}
+        stages = {
+            "analyzer": self.analyze is not None,
+            "planner": self.plan is not None,
+            "calculator": self.calculate is not None,
+        }
         return next(name for name, switches in METHODS.items() if switches == stages)
 
     def forward(self, task: Task) -> dspy.Prediction:
-        """Solve ``task``; the prediction carries the :class:`Solution` and the best code."""
+        """Solve ``task``; the prediction carries the :class:`Solution` and the best code.
+
+        Raises :class:`~robotool.errors.LMUnavailableError` when the model cannot be used at all.
+        """
         started = time.perf_counter()
         description = describe(task)
+        settings = CallSettings(
+            adapter=self._adapter(),
+            format_retries=self.format_retries,
+            log=PromptLog(self.log_prompts) if self.log_prompts else None,
+        )
         shared = StageOutputs()
-        usage: dict[str, TokenUsage] = {}
-        analysis_failure = None
-        with scene_context(task):
-            if self.analyze is not None:
-                try:
-                    out, usage["analyzer"] = _tracked(lambda: self.analyze(description=description))
-                    shared = StageOutputs(analysis=out.analysis, key_concepts=out.key_concepts)
-                except Exception as e:
-                    analysis_failure = f"analyzer: {_reason(e)}"
+        notes: list[str] = []
+        analyzer_calls: list[LMCall] = []
+        if self.analyze is not None:
+            try:
+                with scene_context(task):
+                    result = call_stage(
+                        self.analyze,
+                        "analyzer",
+                        {"description": description},
+                        settings=settings,
+                        config=self._config(None),
+                    )
+                shared = StageOutputs(analysis=result.outputs.analysis, key_concepts=result.outputs.key_concepts)
+                analyzer_calls = result.calls
+                notes += [f"analyzer: {note}" for note in result.notes]
+            except StageFailed as e:
+                analyzer_calls = e.calls
+                notes.append(f"the Analyzer gave no usable reply ({e.reason}); the candidates ran without key concepts")
+            except RobotoolError:
+                raise
+            except Exception as e:  # a fault in the Analyzer leaves the candidates to run without it
+                notes.append(
+                    f"the Analyzer failed ({type(e).__name__}: {' '.join(str(e).split())[:300]}); the "
+                    "candidates ran without key concepts"
+                )
         lm_started = time.perf_counter()
-        if analysis_failure is not None:
-            candidates = [Candidate(index=k, stages=shared, failure=analysis_failure)
-                          for k in range(self.candidates)]
-        else:
-            candidates = self._sample(task, description, shared)
+        candidates = self._sample(task, description, shared, settings)
         lm_done = time.perf_counter()
         verify(task, candidates, worlds=self.worlds_per_candidate, seed=self.seed, backend=self.backend)
         ranked = rank(candidates)
         best = ranked[0] if ranked[0].rollouts else None
-        for candidate in candidates:
-            for stage, tokens in candidate.usage.items():
-                usage[stage] = usage.get(stage, TokenUsage()) + tokens
+        calls = analyzer_calls + [call for c in candidates for call in c.lm_calls]
         solution = Solution(
             task=task.name,
             method=self.method_name,
@@ -108,73 +156,112 @@ class RoboTool(dspy.Module):
             success_rate=best.success_rate if best else 0.0,
             candidates=candidates,
             stages=best.stages if best else shared,
-            usage=usage,
-            timings={"analyzer": lm_started - started, "candidates": lm_done - lm_started,
-                     "verify": time.perf_counter() - lm_done, "total": time.perf_counter() - started},
+            usage=usage_by_stage(calls),
+            lm_calls=calls,
+            timings={
+                "analyzer": lm_started - started,
+                "candidates": lm_done - lm_started,
+                "verify": time.perf_counter() - lm_done,
+                "total": time.perf_counter() - started,
+            },
+            notes=notes,
         )
         return dspy.Prediction(solution=solution, code=solution.code)
 
-    def _sample(self, task: Task, description: str, shared: StageOutputs) -> list[Candidate]:
+    def _adapter(self) -> dspy.Adapter:
+        """The adapter of every stage call; DSPy's one-shot JSON fallback is off (repairs replace it)."""
+        if self.adapter == "json":
+            return dspy.JSONAdapter()
+        if self.adapter is None and dspy.settings.adapter is not None:
+            return dspy.settings.adapter
+        return dspy.ChatAdapter(use_json_adapter_fallback=False)
+
+    def _sample(self, task: Task, description: str, shared: StageOutputs, settings: CallSettings) -> list[Candidate]:
         """Run the per-candidate stages for every candidate concurrently."""
         with ThreadPoolExecutor(max_workers=self.candidates) as pool:
             futures = []
             for k in range(self.candidates):
                 context = contextvars.copy_context()  # carries dspy.context overrides into the thread
-                futures.append(pool.submit(context.run, self._candidate, task, description, shared, k))
-            return [f.result() for f in futures]
+                futures.append(pool.submit(context.run, self._candidate, task, description, shared, k, settings))
+            outcomes = []
+            for future in futures:
+                try:
+                    outcomes.append(future.result())
+                except Exception as e:
+                    outcomes.append(e)
+        errors = [o for o in outcomes if isinstance(o, Exception) and not isinstance(o, Cancelled)]
+        if errors:
+            raise errors[0]
+        return [o for o in outcomes if isinstance(o, Candidate)]
 
-    def _config(self, k: int) -> dict[str, Any]:
-        if self.candidates == 1:
-            return {}
-        spread = (self.max_temperature - self.temperature) * k / (self.candidates - 1)
-        return {"rollout_id": self.rollout_base + k, "temperature": self.temperature + spread}
+    def _config(self, k: int | None) -> dict[str, Any]:
+        """Sampling settings of candidate ``k`` (None: the Analyzer)."""
+        config: dict[str, Any] = {}
+        if self.temperature is not None:
+            config["temperature"] = self.temperature
+        elif k is not None and self.candidates > 1:
+            low, high = SPREAD
+            config["temperature"] = low + (high - low) * k / (self.candidates - 1)
+        if k is not None and self.candidates > 1 and config.get("temperature", 0) > 0:
+            config["rollout_id"] = self.rollout_base + k
+        return config
 
-    def _candidate(self, task: Task, description: str, shared: StageOutputs, k: int) -> Candidate:
+    def _candidate(
+        self, task: Task, description: str, shared: StageOutputs, k: int, settings: CallSettings
+    ) -> Candidate:
         candidate = Candidate(index=k, stages=shared.model_copy())
         stages, config = candidate.stages, self._config(k)
         concepts = shared.key_concepts or []
+
+        def run(predictor: dspy.Predict, stage: str, inputs: dict[str, Any], **reading: Any) -> dspy.Prediction:
+            result = call_stage(predictor, stage, inputs, settings=settings, candidate=k, config=config, **reading)
+            candidate.lm_calls += result.calls
+            candidate.notes += [f"{stage}: {note}" for note in result.notes]
+            return result.outputs
+
+        def program_problem(out: dspy.Prediction) -> str | None:
+            """Why the Coder's program cannot run (shown to the model), keeping the last program seen."""
+            candidate.code, rejection = prepare_code(out.code, task)
+            return rejection
+
         stage = "planner"
         try:
             with scene_context(task):
                 if self.plan is not None:
-                    out, candidate.usage["planner"] = _tracked(
-                        lambda: self.plan(description=description, key_concepts=concepts, config=config))
+                    out = run(self.plan, stage, {"description": description, "key_concepts": concepts})
                     stages.object_roles, stages.abstract_plan, stages.steps = (
-                        out.object_roles, out.abstract_plan, out.steps)
+                        out.object_roles or [],
+                        out.abstract_plan or "",
+                        out.steps,
+                    )
                 stage = "calculator"
                 if self.calculate is not None:
-                    out, candidate.usage["calculator"] = _tracked(lambda: self.calculate(
-                        description=description, key_concepts=concepts, steps=stages.steps, config=config))
-                    stages.calculation, stages.parameters = out.calculation, out.parameters
+                    out = run(
+                        self.calculate,
+                        stage,
+                        {"description": description, "key_concepts": concepts, "steps": stages.steps},
+                    )
+                    stages.calculation, stages.parameters = out.calculation or "", out.parameters
                 stage = "coder"
-                out, candidate.usage["coder"] = _tracked(lambda: self.code(
-                    description=description, steps=stages.steps or [], parameters=stages.parameters or [],
-                    config=config))
-        except Exception as e:
-            candidate.failure = f"{stage}: {_reason(e)}"
+                out = run(
+                    self.code,
+                    stage,
+                    {"description": description, "steps": stages.steps or [], "parameters": stages.parameters or []},
+                    salvage=_program_reply,
+                    check=program_problem,
+                )
+        except StageFailed as e:
+            candidate.lm_calls += e.calls
+            candidate.failure = f"{stage}: {e.reason}"
             return candidate
-        candidate.code, rejection = prepare_code(out.code, task)
-        if rejection is not None:
-            candidate.failure = f"coder: {rejection}"
+        except (RobotoolError, Cancelled):
+            raise
+        except Exception as e:  # a fault in this candidate's stage must not end the others
+            candidate.failure = f"{stage}: {type(e).__name__}: {' '.join(str(e).split())[:300]}"
         return candidate
 
 
-def _tracked(call: Callable[[], dspy.Prediction]) -> tuple[dspy.Prediction, TokenUsage]:
-    """Run one stage call and count its tokens."""
-    with dspy.track_usage() as tracker:
-        out = call()
-    usage = TokenUsage()
-    for entry in tracker.get_total_tokens().values():
-        usage = usage + TokenUsage(prompt_tokens=int(entry.get("prompt_tokens") or 0),
-                                   completion_tokens=int(entry.get("completion_tokens") or 0))
-    return out, usage
-
-
-def _reason(error: Exception) -> str:
-    """One readable line for a failed LM stage."""
-    if isinstance(error, dspy.utils.exceptions.AdapterParseError):
-        text = " ".join(str(error).split())
-        return f"the reply could not be parsed ({text[:300]})"
-    first = " ".join(str(error).split())
-    return f"{type(error).__name__}: {first[:300]}"
-
+def _program_reply(text: str) -> dspy.Prediction:
+    """The Coder's output from a plain chat answer (prose and a code block); raises
+    :class:`~robotool.sandbox.ProgramRejected` (a ValueError) when it holds no program."""
+    return dspy.Prediction(code=extract_program(text))

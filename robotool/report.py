@@ -41,7 +41,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            escape(c.failure or "solved in every world"),
+            escape("; ".join([c.failure or "solved in every world", *c.notes])),
         )
     console.print(table)
     if solution.code:
@@ -50,8 +50,12 @@ def print_solution(solution: Solution, console: Console) -> None:
         console.print(code, soft_wrap=True)
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
+    calls = f" in {len(solution.lm_calls)} LM call(s)" if solution.lm_calls else ""
     console.print(f"{verdict}: best success rate {solution.success_rate:.0%}; "
-                  f"{tokens} LM tokens; {solution.timings.get('total', 0.0):.1f} s")
+                  f"{tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s")
+    if solution.cached_replies:
+        console.print(f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
+                      "DSPy's cache, not the model (--no-cache asks the model again)")
 
 
 def _format_args(args: list[object]) -> str:

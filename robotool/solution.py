@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, computed_field
 
 from robotool.rollout import Rollout
 from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
@@ -27,8 +27,35 @@ class TokenUsage(BaseModel):
     completion_tokens: int = 0
 
     def __add__(self, other: TokenUsage) -> TokenUsage:
-        return TokenUsage(prompt_tokens=self.prompt_tokens + other.prompt_tokens,
-                          completion_tokens=self.completion_tokens + other.completion_tokens)
+        return TokenUsage(
+            prompt_tokens=self.prompt_tokens + other.prompt_tokens,
+            completion_tokens=self.completion_tokens + other.completion_tokens,
+        )
+
+
+class LMCall(BaseModel):
+    """One request to the language model: which stage and attempt made it, what it cost, how it ended."""
+
+    stage: str
+    candidate: int | None = Field(None, description="the candidate it belongs to; None for the shared Analyzer")
+    attempt: int = Field(1, ge=1, description="1 for the first try, 2+ for format repairs")
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    seconds: float = 0.0
+    cached: bool = Field(False, description="answered from DSPy's cache (costs no tokens)")
+    error: str | None = Field(None, description="why this reply was not used, if it was not")
+
+    @property
+    def usage(self) -> TokenUsage:
+        return TokenUsage(prompt_tokens=self.prompt_tokens, completion_tokens=self.completion_tokens)
+
+
+def usage_by_stage(calls: list[LMCall]) -> dict[str, TokenUsage]:
+    """Tokens summed per stage over ``calls``, failed ones included."""
+    usage: dict[str, TokenUsage] = {}
+    for call in calls:
+        usage[call.stage] = usage.get(call.stage, TokenUsage()) + call.usage
+    return usage
 
 
 class Candidate(BaseModel):
@@ -39,7 +66,14 @@ class Candidate(BaseModel):
     stages: StageOutputs = Field(default_factory=StageOutputs)
     failure: str | None = Field(None, description="why it failed: unparsable reply, rejected code, or rollouts")
     rollouts: list[Rollout] = Field(default_factory=list)
-    usage: dict[str, TokenUsage] = Field(default_factory=dict, description="tokens by stage")
+    lm_calls: list[LMCall] = Field(default_factory=list, description="its LM requests, failed ones included")
+    notes: list[str] = Field(default_factory=list, description="what was repaired or ignored in its replies")
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def usage(self) -> dict[str, TokenUsage]:
+        """Tokens by stage over every LM call it made, failed attempts included."""
+        return usage_by_stage(self.lm_calls)
 
     @property
     def success_rate(self) -> float:
@@ -56,9 +90,32 @@ class Candidate(BaseModel):
         """Mean number of skill calls per world."""
         return sum(len(r.calls) for r in self.rollouts) / len(self.rollouts) if self.rollouts else 0.0
 
-    def rank_key(self) -> tuple[float, float, float, int]:
-        """Sort key, best first: success rate, then fewer objects touched, then fewer skill calls."""
-        return (-self.success_rate, self.objects_touched, self.skill_calls, self.index)
+    @property
+    def conditions_met(self) -> float:
+        """Mean share of the goal's sub-conditions met at the end of a world."""
+        shares = [
+            sum(r.conditions.values()) / len(r.conditions) if r.conditions else float(r.success) for r in self.rollouts
+        ]
+        return sum(shares) / len(shares) if shares else 0.0
+
+    @property
+    def calls_completed_in_failures(self) -> float:
+        """Mean number of skill calls that completed in its failed worlds (how far it got; 0 if none failed)."""
+        failed = [r for r in self.rollouts if not r.success]
+        done = sum(sum(call.outcome == "done" for call in r.calls) for r in failed)
+        return done / len(self.rollouts) if self.rollouts else 0.0
+
+    def rank_key(self) -> tuple[float, ...]:
+        """Sort key, best first: success rate, then how far failed worlds got (goal sub-conditions met,
+        skill calls completed), then fewer objects touched, then fewer skill calls."""
+        return (
+            -self.success_rate,
+            -self.conditions_met,
+            -self.calls_completed_in_failures,
+            self.objects_touched,
+            self.skill_calls,
+            self.index,
+        )
 
 
 class Solution(BaseModel):
@@ -72,12 +129,18 @@ class Solution(BaseModel):
     candidates: list[Candidate] = Field(default_factory=list)
     stages: StageOutputs = Field(default_factory=StageOutputs, description="the best candidate's stages")
     usage: dict[str, TokenUsage] = Field(default_factory=dict, description="tokens by stage, all candidates")
+    lm_calls: list[LMCall] = Field(default_factory=list, description="every LM request, failed ones included")
     timings: dict[str, float] = Field(default_factory=dict, description="seconds by phase")
     notes: list[str] = Field(default_factory=list, description="what the user should know (e.g. which planner)")
 
     @property
     def success(self) -> bool:
         return self.best is not None and self.success_rate > 0
+
+    @property
+    def cached_replies(self) -> int:
+        """How many LM replies came from DSPy's cache rather than the model."""
+        return sum(call.cached for call in self.lm_calls)
 
 
 def rank(candidates: list[Candidate]) -> list[Candidate]:

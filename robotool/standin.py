@@ -6,8 +6,9 @@ an ordered list of rules, each matching a substring of the last user message and
 text, or an HTTP status to fail with, or a delay. It is a development and test tool; the replies it
 serves are whatever script it is given.
 
-Run it: ``python -m robotool.standin SCRIPT.json --port 8000``, then point robotool at
-``--lm openai/standin --api-base http://127.0.0.1:8000/v1``.
+Run it: ``python -m robotool.standin SCRIPT.json --port 8000 [--log requests.jsonl]``, then point
+robotool at ``--lm openai/standin --api-base http://127.0.0.1:8000/v1``. With a log file, each
+request is appended to it as one JSON line with the status and reply it got.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ class Rule(BaseModel):
     status: int = Field(200, description="HTTP status; not 200 sends an error body instead of a reply")
     delay: float = Field(0.0, ge=0, description="seconds to wait before answering")
     times: int | None = Field(None, description="use this rule at most this many times, then skip it")
+    error_code: str | None = Field(None, description="the error body's code, e.g. 'insufficient_quota'")
 
 
 class Script(BaseModel):
@@ -46,8 +48,9 @@ class Script(BaseModel):
 class StandinServer:
     """The server, run in a background thread; ``base_url`` ends in ``/v1``."""
 
-    def __init__(self, script: Script, port: int = 0):
+    def __init__(self, script: Script, port: int = 0, log: Path | None = None):
         self.script = script
+        self.log = log
         self.requests: list[dict[str, Any]] = []
         self._uses = [0] * len(script.rules)
         self._lock = threading.Lock()
@@ -81,6 +84,14 @@ class StandinServer:
                     self._uses[i] += 1
                     return rule
         return None
+
+    def record(self, body: dict[str, Any], status: int, reply: str | None) -> None:
+        """Append one request and what it got to the log file, if there is one."""
+        if self.log is None:
+            return
+        line = json.dumps({"time": time.time(), "request": body, "status": status, "reply": reply})
+        with self._lock, self.log.open("a", encoding="utf-8") as f:
+            f.write(line + "\n")
 
 
 def _text(content: Any) -> str:
@@ -118,23 +129,29 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
             rule = server.pick(body)
             time.sleep(server.script.delay + (rule.delay if rule else 0.0))
             if rule is None:
+                server.record(body, 500, None)
                 self._send(500, {"error": {"message": "no scripted reply matches", "type": "server_error"}})
                 return
+            server.record(body, rule.status, rule.reply if rule.status == 200 else None)
             if rule.status != 200:
-                self._send(rule.status, {"error": {"message": f"scripted status {rule.status}",
-                                                   "type": "server_error"}})
+                error = {"message": f"scripted status {rule.status}", "type": "server_error", "code": rule.error_code}
+                self._send(rule.status, {"error": error})
                 return
             words = len(rule.reply.split())
             prompt = sum(len(_text(m.get("content", "")).split()) for m in body.get("messages", []))
-            self._send(200, {
-                "id": "chatcmpl-standin",
-                "object": "chat.completion",
-                "created": int(time.time()),
-                "model": body.get("model", "standin"),
-                "choices": [{"index": 0, "finish_reason": "stop",
-                             "message": {"role": "assistant", "content": rule.reply}}],
-                "usage": {"prompt_tokens": prompt, "completion_tokens": words, "total_tokens": prompt + words},
-            })
+            self._send(
+                200,
+                {
+                    "id": "chatcmpl-standin",
+                    "object": "chat.completion",
+                    "created": int(time.time()),
+                    "model": body.get("model", "standin"),
+                    "choices": [
+                        {"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": rule.reply}}
+                    ],
+                    "usage": {"prompt_tokens": prompt, "completion_tokens": words, "total_tokens": prompt + words},
+                },
+            )
 
     return Handler
 
@@ -144,9 +161,10 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m robotool.standin", description=__doc__.split("\n")[0])
     parser.add_argument("script", type=Path, help="JSON file with {'rules': [...], 'delay': seconds}")
     parser.add_argument("--port", type=int, default=8000)
+    parser.add_argument("--log", type=Path, metavar="FILE", help="append each request and its reply to this JSONL file")
     args = parser.parse_args(argv)
     script = Script.model_validate_json(args.script.read_text())
-    with StandinServer(script, args.port) as server:
+    with StandinServer(script, args.port, log=args.log) as server:
         print(f"serving {len(script.rules)} scripted rules at {server.base_url} (Ctrl-C stops)", flush=True)
         with contextlib.suppress(KeyboardInterrupt):
             threading.Event().wait()

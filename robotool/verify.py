@@ -50,13 +50,23 @@ def run_codes(
 def verify(
     task: Task, candidates: Sequence[Candidate], *, worlds: int, seed: int = 0, backend: str | None = None
 ) -> None:
-    """Simulate every candidate that has valid code; record rollouts and a failure reason in place."""
+    """Simulate every candidate that has valid code; record rollouts and a failure reason in place.
+
+    Candidates with the same program are simulated once and share its rollouts (a note says so).
+    """
     runnable = [c for c in candidates if c.code is not None and c.failure is None]
-    results = run_codes(task, [c.code for c in runnable], worlds=worlds, seed=seed, backend=backend)
-    for candidate, rollouts in zip(runnable, results, strict=True):
-        candidate.rollouts = rollouts
+    first: dict[str, Candidate] = {}
+    for candidate in runnable:
+        first.setdefault(candidate.code or "", candidate)
+    codes = list(first)
+    results = dict(zip(codes, run_codes(task, codes, worlds=worlds, seed=seed, backend=backend), strict=True))
+    for candidate in runnable:
+        code = candidate.code or ""
+        candidate.rollouts = [r.model_copy(deep=True) for r in results[code]]
+        if first[code] is not candidate:
+            candidate.notes.append(f"same program as candidate {first[code].index}; simulated once")
         if candidate.success_rate < 1.0:
-            candidate.failure = failure_reason(rollouts)
+            candidate.failure = failure_reason(candidate.rollouts)
 
 
 def failure_reason(rollouts: Sequence[Rollout]) -> str | None:

@@ -125,3 +125,20 @@ def test_only_an_analyzer_is_graded_on_key_concepts() -> None:
     analyzed = judge(instance, RunKey(task="sofa_traversing", method="robotool", run=0), 0, solution, 0.1)
     assert searched.concepts.correct is None
     assert analyzed.concepts.correct is True
+
+
+def test_every_run_of_a_method_with_an_analyzer_is_graded() -> None:
+    """A run whose Analyzer gave no usable reply, or whose method raised, predicted nothing: it counts as wrong."""
+    from robotool.eval.instances import builtin
+    from robotool.eval.judge import crashed, judge
+    from robotool.solution import Solution, StageOutputs
+
+    instance = builtin("sofa_traversing")
+    no_concepts = Solution(task="sofa_traversing", method="robotool", stages=StageOutputs(key_concepts=None))
+    key = RunKey(task="sofa_traversing", method="robotool", run=0)
+    assert judge(instance, key, 0, no_concepts, 0.1).concepts.correct is False
+    assert crashed(instance, key, 0, RuntimeError("boom"), 0.1).concepts.correct is False
+    coder = RunKey(task="sofa_traversing", method="coder", run=0)
+    assert crashed(instance, coder, 0, RuntimeError("boom"), 0.1).concepts.correct is None
+    records = [judge(instance, key, 0, no_concepts, 0.1)]
+    assert summarize(records, ["robotool"]).concepts[0].cells["sofa_traversing"].value == 0.0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
 import dspy
@@ -11,6 +12,7 @@ from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script
 
 from robotool import tasks
 from robotool.cli import main
+from robotool.errors import LMUnavailableError
 from robotool.lm import LMConfigError, make_lm
 from robotool.program import RoboTool
 from robotool.standin import Rule, Script, StandinServer
@@ -51,37 +53,51 @@ def test_rate_limit_is_retried() -> None:
         assert len(server.requests) == 5
 
 
-def test_server_error_fails_the_candidate_readably() -> None:
+def test_server_errors_on_every_retry_end_the_solve_with_a_typed_error() -> None:
     rules = _rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(status=500)])
-    with StandinServer(Script(rules=rules)) as server:
-        solution = _solve(server)
-    assert not solution.success
-    assert solution.candidates[0].failure.startswith("coder:")
-    assert "500" in solution.candidates[0].failure
+    with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
+        _solve(server)
+    assert raised.value.kind == "retries_exhausted"
+    assert f"the server at {server.base_url} failed to answer on all 2 tries" in str(raised.value)
 
 
-def test_timeout_fails_the_candidate_readably() -> None:
+def test_no_answer_within_the_timeout_ends_the_solve_with_a_typed_error() -> None:
     rules = _rules(arm_script([GRASP_DIRECTLY]), calculator=[Rule(delay=2.0, reply="late")])
-    with StandinServer(Script(rules=rules)) as server:
-        solution = _solve(server, timeout=0.5)
-    assert not solution.success
-    assert solution.candidates[0].failure.startswith("calculator:")
-    assert "timed out" in solution.candidates[0].failure
+    with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
+        _solve(server, timeout=0.5)
+    assert raised.value.kind == "retries_exhausted"
+    assert "did not answer within 0.5 s" in str(raised.value) and "--timeout" in str(raised.value)
 
 
-def test_malformed_reply_fails_the_candidate_readably() -> None:
+def test_malformed_analyzer_reply_leaves_candidates_to_run_without_key_concepts() -> None:
     rules = _rules(arm_script([GRASP_DIRECTLY]), analyzer=[Rule(reply="{ this is not the format")])
     with StandinServer(Script(rules=rules)) as server:
         solution = _solve(server, candidates=2)
-    assert not solution.success
-    assert all(c.failure.startswith("analyzer:") and "could not be parsed" in c.failure
-               for c in solution.candidates)
+    assert solution.success and solution.stages.key_concepts is None
+    assert any("Analyzer gave no usable reply" in note for note in solution.notes)
+    analyzer_calls = [c for c in solution.lm_calls if c.stage == "analyzer"]
+    assert len(analyzer_calls) == 3 and all(c.error and c.prompt_tokens > 0 for c in analyzer_calls)
 
 
 def test_cli_solve_against_the_standin(tmp_path: Path, capsys) -> None:
     with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
-        status = main(["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache",
-                       "--worlds", "1", "--out", str(tmp_path / "p.py"), "--json", str(tmp_path / "r.json")])
+        status = main(
+            [
+                "solve",
+                TASK,
+                "--lm",
+                "openai/standin",
+                "--api-base",
+                server.base_url,
+                "--no-cache",
+                "--worlds",
+                "1",
+                "--out",
+                str(tmp_path / "p.py"),
+                "--json",
+                str(tmp_path / "r.json"),
+            ]
+        )
     assert status == 0, capsys.readouterr().out
     assert (tmp_path / "p.py").read_text() == GRASP_DIRECTLY
     report = json.loads((tmp_path / "r.json").read_text())
@@ -98,9 +114,12 @@ def test_cli_without_lm_says_how_to_configure_and_uses_the_search_planner(monkey
 def test_bad_lm_settings_are_config_errors(monkeypatch) -> None:
     with pytest.raises(LMConfigError, match="provider prefix"):
         make_lm("gpt-4o")
+    with pytest.raises(LMConfigError, match="timeout must be positive"):
+        make_lm("openai/gpt-4o", timeout=0)
     monkeypatch.delenv("NO_SUCH_KEY_VAR", raising=False)
-    with pytest.raises(LMConfigError, match="NO_SUCH_KEY_VAR"):
+    with pytest.raises(LMUnavailableError, match="NO_SUCH_KEY_VAR") as raised:
         make_lm("openai/gpt-4o", api_key_env="NO_SUCH_KEY_VAR")
+    assert raised.value.kind == "no_key"
     monkeypatch.setenv("ROBOTOOL_LM", "openai/from-env")
     assert make_lm().model == "openai/from-env"
 
@@ -109,8 +128,256 @@ def test_readme_standin_example_solves_milk_reaching(capsys) -> None:
     """The README's offline walk-through: the example script served over HTTP solves milk_reaching."""
     example = Path(__file__).parents[1] / "examples" / "standin" / "milk_reaching.json"
     with StandinServer(Script.model_validate_json(example.read_text())) as server:
-        status = main(["solve", "milk_reaching", "--lm", "openai/standin", "--api-base", server.base_url,
-                       "--no-cache", "--worlds", "2"])
+        status = main(
+            [
+                "solve",
+                "milk_reaching",
+                "--lm",
+                "openai/standin",
+                "--api-base",
+                server.base_url,
+                "--no-cache",
+                "--worlds",
+                "2",
+            ]
+        )
     out = capsys.readouterr().out
     assert status == 0, out
     assert "hammer" in out and "100%" in out
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _solve_cli(capsys, *extra: str) -> tuple[int, str, str]:
+    status = main(["solve", TASK, "--no-cache", "--worlds", "1", *extra])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def _assert_one_line(err: str, *expected: str) -> None:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err and "lm15" not in err and "[openai/" not in err
+    for text in expected:
+        assert text in lines[0], lines[0]
+
+
+@pytest.mark.parametrize(
+    ("status", "expected"),
+    [
+        (401, ("rejected the credentials", "--api-key-env")),
+        (403, ("rejected the credentials", "--api-key-env")),
+        (404, ("does not know the model 'openai/standin'", "--lm", "/v1")),
+    ],
+)
+def test_cli_misconfiguration_is_one_line_and_exit_2(status: int, expected: tuple[str, ...], capsys) -> None:
+    with StandinServer(Script(rules=[Rule(status=status)])) as server:
+        code, _, err = _solve_cli(capsys, "--lm", "openai/standin", "--api-base", server.base_url)
+        assert len(server.requests) == 1  # not retried, and nothing else asked
+    assert code == 2
+    _assert_one_line(err, *expected)
+
+
+def test_cli_exhausted_quota_is_one_line_and_exit_2(capsys) -> None:
+    with StandinServer(Script(rules=[Rule(status=429, error_code="insufficient_quota")])) as server:
+        code, _, err = _solve_cli(capsys, "--lm", "openai/standin", "--api-base", server.base_url)
+    assert code == 2
+    _assert_one_line(err, "refused openai/standin for billing or quota reasons")
+
+
+def test_cli_refused_connection_is_one_line_and_exit_2(capsys) -> None:
+    url = f"http://127.0.0.1:{_free_port()}/v1"
+    code, _, err = _solve_cli(capsys, "--lm", "openai/standin", "--api-base", url)
+    assert code == 2
+    _assert_one_line(err, f"cannot reach the language-model server at {url}", "--api-base")
+
+
+def test_cli_missing_key_is_one_line_and_exit_2(monkeypatch, capsys) -> None:
+    for variable in ("OPENAI_API_KEY", "OPENAI_API_BASE", "OPENAI_BASE_URL", "ROBOTOOL_API_BASE"):
+        monkeypatch.delenv(variable, raising=False)
+    code, _, err = _solve_cli(capsys, "--lm", "openai/gpt-4o-mini")
+    assert code == 2
+    _assert_one_line(err, "no API key for openai/gpt-4o-mini", "OPENAI_API_KEY", "--api-key-env")
+    monkeypatch.delenv("NO_SUCH_KEY_VAR", raising=False)
+    code, _, err = _solve_cli(capsys, "--lm", "openai/gpt-4o-mini", "--api-key-env", "NO_SUCH_KEY_VAR")
+    assert code == 2
+    _assert_one_line(err, "--api-key-env names NO_SUCH_KEY_VAR")
+
+
+def test_library_raises_a_typed_error_without_a_key(monkeypatch) -> None:
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+    lm = make_lm("openai/gpt-4o-mini", cache=False, num_retries=0)
+    with dspy.context(lm=lm), pytest.raises(LMUnavailableError) as raised:
+        RoboTool(candidates=2, worlds_per_candidate=1)(task=tasks.load(TASK))
+    assert raised.value.kind == "no_key"
+
+
+def test_cli_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) -> None:
+    dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=True)
+    try:
+        with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+            args = ["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--worlds", "1"]
+            assert main(args) == 0
+            assert "from DSPy's cache" not in capsys.readouterr().out
+            assert main(args) == 0
+            assert len(server.requests) == 4  # the second solve asked nothing
+    finally:
+        dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=False)
+    out = capsys.readouterr().out
+    assert "4 of 4 LM replies came from DSPy's cache" in " ".join(out.split())
+
+
+def test_cli_logs_prompts_and_the_standin_logs_requests(tmp_path: Path, capsys) -> None:
+    script = Script(rules=_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(reply="Sorry, no.", times=1)]))
+    with StandinServer(script, log=tmp_path / "standin.jsonl") as server:
+        status = main(
+            [
+                "solve",
+                TASK,
+                "--lm",
+                "openai/standin",
+                "--api-base",
+                server.base_url,
+                "--no-cache",
+                "--worlds",
+                "1",
+                "--temperature",
+                "0.2",
+                "--log-prompts",
+                str(tmp_path / "prompts.jsonl"),
+            ]
+        )
+    assert status == 0, capsys.readouterr()
+    prompts = [json.loads(line) for line in (tmp_path / "prompts.jsonl").read_text().splitlines()]
+    assert [(p["stage"], p["attempt"]) for p in prompts] == [
+        ("analyzer", 1),
+        ("planner", 1),
+        ("calculator", 1),
+        ("coder", 1),
+        ("coder", 2),
+    ]
+    assert prompts[3]["reply"] == "Sorry, no." and "lacks the field(s) code" in prompts[3]["error"]
+    assert "reply_problem" in prompts[4]["messages"][-1]["content"]
+    assert all(p["options"].get("temperature") == 0.2 and p["prompt_tokens"] > 0 for p in prompts)
+    served = [json.loads(line) for line in (tmp_path / "standin.jsonl").read_text().splitlines()]
+    assert len(served) == 5 and served[3]["reply"] == "Sorry, no." and served[3]["status"] == 200
+    assert all(r["request"]["temperature"] == 0.2 for r in served)
+
+
+def test_eval_flags_reach_every_lm_call(tmp_path: Path, capsys) -> None:
+    from robotool.eval import main as eval_main
+
+    script = arm_script([GRASP_DIRECTLY])  # replies with field markers although JSON is asked for
+    json_prompts = {
+        "analyzer": "`analysis`",
+        "planner": "`abstract_plan`",
+        "calculator": "`calculation`",
+        "coder": "`code`",
+    }
+    rules = [Rule(match=json_prompts[stage], reply=script[stage][0]) for stage in STAGE_MARKERS]
+    with StandinServer(Script(rules=rules)) as server:
+        status = eval_main(
+            [
+                "--tasks",
+                TASK,
+                "--methods",
+                "robotool",
+                "--candidates",
+                "2",
+                "--worlds",
+                "1",
+                "--lm",
+                "openai/standin",
+                "--api-base",
+                server.base_url,
+                "--no-cache",
+                "--temperature",
+                "0.4",
+                "--adapter",
+                "json",
+                "--timeout",
+                "30",
+                "--log-prompts",
+                str(tmp_path / "prompts.jsonl"),
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+    assert status == 0, capsys.readouterr()
+    prompts = [json.loads(line) for line in (tmp_path / "prompts.jsonl").read_text().splitlines()]
+    assert len(prompts) == 7 and {p["options"]["temperature"] for p in prompts} == {0.4}
+    assert all("JSON" in p["messages"][0]["content"] for p in prompts)  # the JSON adapter's instructions
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert results["config"]["settings"]["adapter"] == "json" and results["config"]["cache"] is False
+    assert results["records"][0]["success_rate"] == 1.0
+
+
+def test_eval_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) -> None:
+    from robotool.eval import main as eval_main
+
+    dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=True)
+    try:
+        with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+            for out in ("first", "second"):  # the second folder runs everything again, from the cache
+                assert (
+                    eval_main(
+                        [
+                            "--tasks",
+                            TASK,
+                            "--methods",
+                            "robotool",
+                            "--worlds",
+                            "1",
+                            "--lm",
+                            "openai/standin",
+                            "--api-base",
+                            server.base_url,
+                            "--out",
+                            str(tmp_path / out),
+                        ]
+                    )
+                    == 0
+                )
+            assert len(server.requests) == 4
+    finally:
+        dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=False)
+    report = (tmp_path / "second" / "report.md").read_text()
+    assert "4 of 4 LM replies came from DSPy's cache" in report
+    assert "from DSPy's cache" not in (tmp_path / "first" / "report.md").read_text()
+
+
+def test_cli_unwritable_prompt_log_is_one_line_and_exit_2(tmp_path: Path, capsys) -> None:
+    (tmp_path / "file").write_text("")
+    code, _, err = _solve_cli(
+        capsys,
+        "--lm",
+        "openai/standin",
+        "--api-base",
+        "http://127.0.0.1:9/v1",
+        "--log-prompts",
+        str(tmp_path / "file" / "prompts.jsonl"),
+    )
+    assert code == 2
+    _assert_one_line(err, "cannot write the prompt log")
+    from robotool.eval import main as eval_main
+
+    code = eval_main(
+        [
+            "--methods",
+            "robotool",
+            "--lm",
+            "openai/standin",
+            "--api-base",
+            "http://127.0.0.1:9/v1",
+            "--log-prompts",
+            str(tmp_path / "file" / "prompts.jsonl"),
+            "--out",
+            str(tmp_path / "out"),
+        ]
+    )
+    assert code == 2
+    _assert_one_line(capsys.readouterr().err, "cannot write the prompt log")

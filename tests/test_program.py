@@ -66,19 +66,114 @@ def test_wrong_candidate_loses_to_right_one() -> None:
     assert loser.success_rate == 0.0 and "goal not reached" in loser.failure
 
 
-def test_unparsable_reply_fails_only_that_candidate() -> None:
+def test_unparsable_reply_without_repairs_fails_only_that_candidate() -> None:
     script = arm_script([GRASP_DIRECTLY])
     script["planner"] = ["I would rather not answer in fields.", script["planner"][0]]
-    solution, _ = _solve("milk_reaching_near", script, candidates=2)
+    solution, _ = _solve("milk_reaching_near", script, candidates=2, format_retries=0)
     failed = [c for c in solution.candidates if c.failure and c.failure.startswith("planner:")]
-    assert len(failed) == 1 and "could not be parsed" in failed[0].failure
+    assert len(failed) == 1 and "lacks the field(s) steps" in failed[0].failure
+    assert [call.error is not None for call in failed[0].lm_calls] == [True]
     assert solution.success
+
+
+MALFORMED_CONCEPT = chat_reply(
+    analysis="The milk is within reach.",
+    key_concepts=[
+        {
+            "name": "distance of milk's graspable point outside the workspace",
+            "kind": "workspace_excess",
+            "value": "roughly nothing",
+            "unit": "m",
+            "limit": 0.0,
+            "satisfied": True,
+        }
+    ],
+)
+
+
+def test_k3_repair_after_the_validation_error_is_shown_counts_both_attempts() -> None:
+    """The Analyzer (shared by the candidates) first gives a malformed key concept and candidate 2's Planner
+    an unknown skill; each is asked again with the exact validation error, answers validly, and pays for both."""
+    script = arm_script([GRASP_DIRECTLY])
+    valid_plan = script["planner"][0]
+    script["analyzer"] = [MALFORMED_CONCEPT, script["analyzer"][0]]
+    script["planner@1"] = [
+        chat_reply(
+            object_roles=[],
+            abstract_plan="grab it",
+            steps=[{"skill": "grab", "objects": ["milk"], "intent": "hold it"}],
+        ),
+        valid_plan,
+    ]
+    solution, engine = _solve("milk_reaching_near", script, candidates=3)
+    assert solution.success
+    assert all(c.success_rate == 1.0 for c in solution.candidates)
+    assert solution.stages.key_concepts[0].value == 0.0
+    repairs = [text for stage, _, text in engine.prompts if "reply_problem" in text]
+    assert len(repairs) == 2
+    assert any("[0].value: expected a number" in text and "roughly nothing" in text for text in repairs)
+    assert any("unknown skill 'grab'" in text for text in repairs)
+    third = solution.candidates[2]
+    planner_calls = [c for c in third.lm_calls if c.stage == "planner"]
+    assert [(c.attempt, c.error is None) for c in planner_calls] == [(1, False), (2, True)]
+    assert "unknown skill 'grab'" in planner_calls[0].error
+    assert third.usage["planner"].prompt_tokens == 200  # the fixture charges 100 prompt tokens a request
+    assert solution.candidates[0].usage["planner"].prompt_tokens == 100
+    analyzer_calls = [c for c in solution.lm_calls if c.stage == "analyzer"]
+    assert [c.attempt for c in analyzer_calls] == [1, 2] and analyzer_calls[0].error
+    assert solution.usage["analyzer"].prompt_tokens == 200
+    assert solution.usage["planner"].prompt_tokens == 400
+
+
+def test_failed_analyzer_lets_candidates_run_without_key_concepts() -> None:
+    script = arm_script([GRASP_DIRECTLY])
+    script["analyzer"] = [MALFORMED_CONCEPT]
+    solution, engine = _solve("milk_reaching_near", script, candidates=2, format_retries=1)
+    assert engine.calls["analyzer"] == 2
+    assert solution.success and solution.stages.key_concepts is None
+    assert any(
+        "Analyzer gave no usable reply" in note and "ran without key concepts" in note for note in solution.notes
+    )
+    assert solution.usage["analyzer"].prompt_tokens == 200  # failed calls are counted
+
+
+def test_every_candidate_uses_the_temperature_given() -> None:
+    solution, engine = _solve("milk_reaching_near", arm_script([GRASP_DIRECTLY]), candidates=3, temperature=0.3)
+    assert solution.success
+    assert {t for _, t, _ in engine.prompts} == {0.3}
+
+
+def test_without_a_temperature_candidates_spread_over_the_default_range() -> None:
+    _, engine = _solve("milk_reaching_near", arm_script([GRASP_DIRECTLY]), candidates=3)
+    assert {t for stage, t, _ in engine.prompts if stage == "coder"} == {0.7, 0.85, 1.0}
+
+
+def test_identical_programs_are_simulated_once(monkeypatch) -> None:
+    from robotool import verify
+
+    simulated: list[int] = []
+    real_run_codes = verify.run_codes
+
+    def counting(task, codes, **kwargs):
+        simulated.append(len(codes))
+        return real_run_codes(task, codes, **kwargs)
+
+    monkeypatch.setattr(verify, "run_codes", counting)
+    solution, _ = _solve("milk_reaching_near", arm_script([GRASP_DIRECTLY]), candidates=3)
+    assert simulated == [1]
+    assert all(c.success_rate == 1.0 for c in solution.candidates)
+    assert "same program as candidate 0" in solution.candidates[2].notes[-1]
 
 
 def test_plan_naming_an_unknown_skill_is_rejected_by_the_model() -> None:
     script = arm_script([GRASP_DIRECTLY])
-    script["planner"] = [chat_reply(object_roles=[], abstract_plan="teleport",
-                                    steps=[{"skill": "teleport", "objects": ["milk"], "intent": "cheat"}])]
+    script["planner"] = [
+        chat_reply(
+            object_roles=[],
+            abstract_plan="teleport",
+            steps=[{"skill": "teleport", "objects": ["milk"], "intent": "cheat"}],
+        )
+    ]
     solution, _ = _solve("milk_reaching_near", script)
     assert not solution.success
     assert "unknown skill 'teleport'" in solution.candidates[0].failure
@@ -106,3 +201,12 @@ def test_save_and_load_round_trip(tmp_path: Path) -> None:
 def test_calculator_without_planner_is_refused() -> None:
     with pytest.raises(ValueError, match="Planner"):
         RoboTool(planner=False, calculator=True)
+
+
+def test_code_the_sandbox_rejects_is_asked_for_again_with_the_reason() -> None:
+    solution, engine = _solve("milk_reaching_near", arm_script(["import os\nos.system('true')\n", GRASP_DIRECTLY]))
+    assert solution.success and solution.code == GRASP_DIRECTLY
+    coder_calls = [c for c in solution.lm_calls if c.stage == "coder"]
+    assert [c.attempt for c in coder_calls] == [1, 2] and "os" in coder_calls[0].error
+    repair = next(text for stage, _, text in engine.prompts if stage == "coder" and "reply_problem" in text)
+    assert coder_calls[0].error in " ".join(repair.split())

@@ -5,6 +5,8 @@ from __future__ import annotations
 from fixtures.reference import program
 
 from robotool import tasks
+from robotool.rollout import Rollout, SkillCall
+from robotool.solution import Candidate, rank
 from robotool.verify import failure_reason, run_codes
 
 GRASP = program("milk_reaching_direct")
@@ -24,3 +26,28 @@ def test_failure_reason_names_the_first_failed_world() -> None:
     (rollouts,) = run_codes(task, [GRASP], worlds=2)
     reason = failure_reason(rollouts)
     assert reason is not None and reason.startswith("2/2 worlds failed; world 0: goal not reached")
+
+
+def _candidate(index: int, rollouts: list[Rollout]) -> Candidate:
+    return Candidate(index=index, code="pass", rollouts=rollouts)
+
+
+def _world(success: bool, conditions: dict[str, bool], done: int, touched: int) -> Rollout:
+    calls = [SkillCall(skill="move_to_position", args=[], outcome="done") for _ in range(done)]
+    return Rollout(
+        world=0, seed=0, success=success, conditions=conditions, calls=calls, touched=[f"o{i}" for i in range(touched)]
+    )
+
+
+def test_failed_candidates_rank_by_how_far_they_got_before_objects_touched() -> None:
+    crashed_early = _candidate(0, [_world(False, {"held": False, "lifted": False}, done=0, touched=0)])
+    held_it = _candidate(1, [_world(False, {"held": True, "lifted": False}, done=4, touched=2)])
+    moved_more = _candidate(2, [_world(False, {"held": False, "lifted": False}, done=3, touched=1)])
+    assert [c.index for c in rank([crashed_early, moved_more, held_it])] == [1, 2, 0]
+
+
+def test_successful_candidates_still_prefer_fewer_objects_and_calls() -> None:
+    tool_use = _candidate(0, [_world(True, {"held": True}, done=6, touched=2)])
+    direct = _candidate(1, [_world(True, {"held": True}, done=3, touched=1)])
+    failed = _candidate(2, [_world(False, {"held": True, "lifted": False}, done=9, touched=0)])
+    assert [c.index for c in rank([tool_use, failed, direct])] == [1, 0, 2]

@@ -13,14 +13,19 @@ import sys
 from collections.abc import Sequence
 
 from robotool.cliargs import (
+    ADAPTER_HELP,
+    ADAPTERS,
     BACKEND_HELP,
     DEFAULT_WORLDS,
     EXIT_USAGE,
+    LOG_PROMPTS_HELP,
     Parser,
     make_console,
+    output_file,
     output_folder,
     positive_int,
     print_error,
+    seconds,
     seed,
     temperature,
     warn_if_warp_on_cpu,
@@ -79,7 +84,16 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
     p.add_argument("--api-key-env", help="environment variable holding the API key")
-    p.add_argument("--temperature", type=temperature, help="LM sampling temperature (above 0 for runs that differ)")
+    p.add_argument(
+        "--temperature",
+        type=temperature,
+        help="sampling temperature of every LM call (above 0 for runs that differ; default: the model's for one "
+        "candidate, 0.7 to 1.0 spread over several)",
+    )
+    p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
+    p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
@@ -109,7 +123,12 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         worlds=args.worlds,
         backend=args.backend,
         seed=args.seed,
+        adapter=args.adapter,
     )
+    if args.log_prompts is not None:
+        from robotool.lm_calls import PromptLog
+
+        PromptLog(args.log_prompts)  # an unwritable file is refused here, not in every run
     return EvalConfig(
         tasks=args.tasks,
         families=args.families,
@@ -123,6 +142,9 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         out=args.out,
         resume=args.resume,
         pictures=not args.no_pictures,
+        cache=not args.no_cache,
+        timeout=args.timeout,
+        log_prompts=args.log_prompts,
     )
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -56,6 +57,7 @@ class Settings(BaseModel):
     worlds: int = Field(3, ge=1, description="perturbed worlds per candidate")
     backend: str | None = None
     seed: int = Field(0, ge=0, description="base seed of the perturbed worlds")
+    adapter: Literal["chat", "json"] | None = Field(None, description="answer format asked of the LM (None: chat)")
 
 
 class Request(BaseModel):
@@ -104,6 +106,9 @@ class EvalConfig(BaseModel):
     out: Path | None = None
     resume: bool = Field(False, description="reuse a folder whose settings.json holds a different request")
     pictures: bool = Field(True, description="draw each task's scene and representative failures for the report")
+    cache: bool = Field(True, description="reuse DSPy's cached LM replies")
+    timeout: float | None = Field(None, gt=0, description="seconds to wait for each LM reply")
+    log_prompts: Path | None = Field(None, description="JSONL file that receives every LM request and reply")
 
     @property
     def request(self) -> Request:

@@ -9,9 +9,10 @@ some predicted concept has
 - the same ``satisfied`` verdict (the value respects the robot's limit, or not).
 
 A run is *correct* when every ground-truth concept of its task is recovered; extra predicted
-concepts are not penalized. A task's accuracy is the share of its runs that are correct. Runs of
-methods without an Analyzer (no predicted concepts at all) and tasks without ground-truth concepts
-are not graded (``correct`` is None).
+concepts are not penalized. A task's accuracy is the share of its runs that are correct. Every run
+of a method with an Analyzer is graded: one whose Analyzer gave no usable reply, or that failed
+before it did, predicted nothing and counts as wrong. Runs of methods without an Analyzer and
+tasks without ground-truth concepts are not graded (``correct`` is None).
 """
 
 from __future__ import annotations

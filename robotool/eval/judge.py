@@ -19,9 +19,14 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
                      failure_class="invalid")
 
 
+def _has_analyzer(key: RunKey) -> bool:
+    return bool(METHODS.get(key.method, {}).get("analyzer"))
+
+
 def _predicted_concepts(key: RunKey, solution: Solution) -> list[KeyConcept] | None:
-    """The Analyzer's concepts; None for methods without one (the search planner copies the ground truth)."""
-    return solution.stages.key_concepts if METHODS.get(key.method, {}).get("analyzer") else None
+    """The Analyzer's concepts (none when it failed, which grades as wrong); None for methods without one
+    (the search planner copies the ground truth)."""
+    return (solution.stages.key_concepts or []) if _has_analyzer(key) else None
 
 
 def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float) -> RunRecord:
@@ -40,6 +45,8 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
         "candidate_failures": [c.failure for c in solution.candidates],
         "rollouts": rollouts,
         "usage": solution.usage,
+        "lm_calls": len(solution.lm_calls),
+        "cached_replies": solution.cached_replies,
         "timings": solution.timings,
         "notes": solution.notes,
     }
@@ -52,4 +59,7 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
 def crashed(instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float) -> RunRecord:
     """The record of a run whose method raised: nothing ran, class ``invalid``."""
     text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
-    return _empty(instance, key, world_seed, wall_s).model_copy(update={"error": text})
+    update: dict[str, object] = {"error": text}
+    if _has_analyzer(key):  # the run's Analyzer produced nothing: graded as wrong
+        update["concepts"] = grade(key_concepts(instance.task), [])
+    return _empty(instance, key, world_seed, wall_s).model_copy(update=update)

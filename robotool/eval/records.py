@@ -81,6 +81,8 @@ class RunRecord(BaseModel):
     candidate_failures: list[str | None] = Field(default_factory=list)
     rollouts: list[Rollout] = Field(default_factory=list, description="the chosen candidate's full traces")
     usage: dict[str, TokenUsage] = Field(default_factory=dict, description="LM tokens by stage")
+    lm_calls: int = Field(0, description="LM requests the run made, failed ones included")
+    cached_replies: int = Field(0, description="of those, replies that came from DSPy's cache")
     timings: dict[str, float] = Field(default_factory=dict, description="the method's own phases, seconds")
     wall_s: float = Field(0.0, description="wall time of the whole run as the evaluator measured it")
     notes: list[str] = Field(default_factory=list)

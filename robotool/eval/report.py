@@ -29,6 +29,11 @@ def _preamble(results: Results) -> list[str]:
     lines = [f"- LM: {s.lm or 'none'}; candidates per run: {s.candidates}; worlds per candidate: {s.worlds}; "
              f"backend: {s.backend or 'default'}; base seed: {s.seed}",
              f"- runs recorded: {len(results.records)}; wall time of the last command: {results.wall_s:.0f} s"]
+    calls = sum(r.lm_calls for r in results.records)
+    cached = sum(r.cached_replies for r in results.records)
+    if cached:
+        lines.append(f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks "
+                     "the model again)")
     lines += [f"- {line}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {note}" for note in results.notes]
     if not any(METHODS.get(r.key.method, {}).get("analyzer") for r in results.records):

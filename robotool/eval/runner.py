@@ -52,6 +52,8 @@ def _lm(config: EvalConfig, lm: dspy.LM | None) -> dspy.LM | None:
         api_base=config.api_base,
         api_key_env=config.api_key_env,
         temperature=config.settings.temperature,
+        cache=config.cache,
+        timeout=config.timeout,
     )
 
 
@@ -64,7 +66,12 @@ def _methods(
     if unknown:
         raise EvalError(f"unknown method {', '.join(unknown)}; methods: {', '.join(METHODS)}")
     settings = SolverSettings(
-        candidates=config.settings.candidates, worlds=config.settings.worlds, backend=config.settings.backend
+        candidates=config.settings.candidates,
+        worlds=config.settings.worlds,
+        backend=config.settings.backend,
+        temperature=config.settings.temperature,
+        adapter=config.settings.adapter,
+        log_prompts=config.log_prompts,
     )
     solvers, skipped = make_solvers(names, settings, lm, overrides)
     if config.methods is not None and skipped:

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Protocol
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal, Protocol
 
 from pydantic import BaseModel
 
@@ -60,11 +61,15 @@ def method_label(method: str) -> str:
 
 
 class SolverSettings(BaseModel):
-    """What every solver shares: candidates per run (LM methods), worlds per candidate, backend."""
+    """What every solver shares: worlds per candidate, backend; for LM methods candidates per run, the
+    temperature of every call, the answer format, and the file that logs requests and replies."""
 
     candidates: int = 1
     worlds: int = 3
     backend: str | None = None
+    temperature: float | None = None
+    adapter: Literal["chat", "json"] | None = None
+    log_prompts: Path | None = None
 
 
 def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
@@ -76,7 +81,9 @@ def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
         from robotool.program import RoboTool
 
         program = RoboTool.method(method, candidates=settings.candidates, worlds_per_candidate=settings.worlds,
-                                  backend=settings.backend, seed=seed, rollout_base=run * settings.candidates)
+                                  backend=settings.backend, seed=seed, rollout_base=run * settings.candidates,
+                                  temperature=settings.temperature, adapter=settings.adapter,
+                                  log_prompts=settings.log_prompts)
         with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
             return program(task=task).solution
 

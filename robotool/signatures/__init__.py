@@ -3,11 +3,20 @@
 from robotool.signatures.analyzer import Analyze
 from robotool.signatures.calculator import Calculate
 from robotool.signatures.coder import Code
-from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters, scene_context
+from robotool.signatures.models import (
+    AnalyzedConcept,
+    KeyConcept,
+    ObjectRole,
+    PlanStep,
+    StepParameters,
+    scene_context,
+    validation_notes,
+)
 from robotool.signatures.planner import Plan
 
 __all__ = [
     "Analyze",
+    "AnalyzedConcept",
     "Calculate",
     "Code",
     "KeyConcept",
@@ -16,4 +25,5 @@ __all__ = [
     "PlanStep",
     "StepParameters",
     "scene_context",
+    "validation_notes",
 ]

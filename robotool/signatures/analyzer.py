@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dspy
 
-from robotool.signatures.models import KeyConcept
+from robotool.signatures.models import AnalyzedConcept
 
 
 class Analyze(dspy.Signature):
@@ -18,5 +18,5 @@ class Analyze(dspy.Signature):
     """
 
     description: str = dspy.InputField(desc="the scene with its numbers, the robot's limits and skills, the task")
-    analysis: str = dspy.OutputField(desc="short reasoning that leads to the key concepts")
-    key_concepts: list[KeyConcept] = dspy.OutputField(desc="the quantities that decide feasibility")
+    analysis: str | None = dspy.OutputField(desc="short reasoning that leads to the key concepts")
+    key_concepts: list[AnalyzedConcept] = dspy.OutputField(desc="the quantities that decide feasibility")

@@ -19,5 +19,5 @@ class Calculate(dspy.Signature):
     description: str = dspy.InputField(desc="the scene with its numbers, the robot's limits and skills, the task")
     key_concepts: list[KeyConcept] = dspy.InputField(desc="the analysis of feasibility; may be empty")
     steps: list[PlanStep] = dspy.InputField(desc="the plan steps, numbered from 1 in order")
-    calculation: str = dspy.OutputField(desc="how the numbers were derived")
+    calculation: str | None = dspy.OutputField(desc="how the numbers were derived")
     parameters: list[StepParameters] = dspy.OutputField(desc="parameters of each step that needs numbers")

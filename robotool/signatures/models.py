@@ -1,44 +1,94 @@
 """Pydantic output models of the LM stages, validated against the task being solved.
 
-DSPy does not enforce constraints written on output fields, so validation lives here. A stage's
-reply must name real skills of the embodiment and real objects of the scene; the scene is made
-known to the validators with :func:`scene_context` around the stage calls.
+DSPy does not enforce constraints written on output fields, so validation lives here. It is lenient
+where a reply's meaning is clear and strict where it matters:
+
+- numbers may carry a unit (``"0.4 m"``, ``"40 cm"``, ``"2 kg"``); lengths become metres, masses kilograms;
+  numbers that are not finite are rejected;
+- a 2-D ``[x, y]`` target or offset for the quadruped (whose motions ignore z) gets z = 0; for the arm it is
+  rejected, since its height matters;
+- names that a plan step or an object role mentions only for information (``"gap"``, ``"floor"``) and that are
+  not objects of the scene are ignored with a note;
+- a key concept's missing ``limit_name`` is left empty and a missing ``satisfied`` is read from ``value <= limit``;
+- skills that do not exist, and unknown objects in the parameters a skill acts on, are rejected.
+
+The scene is made known to the validators with :func:`scene_context` around the stage calls; the notes
+about what was repaired or ignored are collected by :func:`validation_notes`.
 """
 
 from __future__ import annotations
 
 import contextvars
 import math
+import numbers
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Annotated, Any, get_args
 
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_validator
 
-from robotool.concepts import KeyConcept
-from robotool.embodiments import skill_names
+from robotool.concepts import ConceptKind, KeyConcept
+from robotool.embodiments import EmbodimentName, skill_names
 from robotool.scene import Task
 
-__all__ = ["KeyConcept", "ObjectRole", "PlanStep", "StepParameters", "scene_context"]
+__all__ = [
+    "AnalyzedConcept",
+    "KeyConcept",
+    "ObjectRole",
+    "PlanStep",
+    "StepParameters",
+    "parse_quantity",
+    "scene_context",
+    "validation_notes",
+]
 
 
 @dataclass(frozen=True)
 class _Scene:
+    embodiment: EmbodimentName
     skills: frozenset[str]
     objects: frozenset[str]
 
 
 _SCENE: contextvars.ContextVar[_Scene | None] = contextvars.ContextVar("robotool_scene", default=None)
+_NOTES: contextvars.ContextVar[list[str] | None] = contextvars.ContextVar("robotool_notes", default=None)
 
 
 @contextmanager
 def scene_context(task: Task) -> Iterator[None]:
-    """Validate stage outputs against ``task`` (its skills and object names) inside this block."""
-    token = _SCENE.set(_Scene(skill_names(task.embodiment), frozenset(task.object_names) | {"robot"}))
+    """Validate stage outputs against ``task`` (its embodiment, skills and object names) inside this block."""
+    scene = _Scene(task.embodiment, skill_names(task.embodiment), frozenset(task.object_names) | {"robot"})
+    token = _SCENE.set(scene)
     try:
         yield
     finally:
         _SCENE.reset(token)
+
+
+@dataclass
+class NoteSink:
+    """Notes on what validation repaired or ignored, in the order they arose."""
+
+    notes: list[str] = field(default_factory=list)
+
+
+@contextmanager
+def validation_notes() -> Iterator[NoteSink]:
+    """Collect the notes that validators write inside this block."""
+    sink = NoteSink()
+    token = _NOTES.set(sink.notes)
+    try:
+        yield sink
+    finally:
+        _NOTES.reset(token)
+
+
+def _note(text: str) -> None:
+    notes = _NOTES.get()
+    if notes is not None and text not in notes:
+        notes.append(text)
 
 
 def _check_objects(names: list[str]) -> list[str]:
@@ -50,17 +100,134 @@ def _check_objects(names: list[str]) -> list[str]:
     return names
 
 
+def _informational(names: list[str], where: str) -> list[str]:
+    """Names of scene objects among ``names``; the others are dropped with a note."""
+    scene = _SCENE.get()
+    if scene is None:
+        return names
+    unknown = [n for n in names if n not in scene.objects]
+    if unknown:
+        _note(f"{where} names {', '.join(map(repr, unknown))}, not object(s) of the scene; ignored")
+    return [n for n in names if n in scene.objects]
+
+
+_UNITS: dict[str, tuple[str, float]] = {
+    "m": ("m", 1.0),
+    "meter": ("m", 1.0),
+    "meters": ("m", 1.0),
+    "metre": ("m", 1.0),
+    "metres": ("m", 1.0),
+    "cm": ("m", 0.01),
+    "centimeter": ("m", 0.01),
+    "centimeters": ("m", 0.01),
+    "centimetre": ("m", 0.01),
+    "centimetres": ("m", 0.01),
+    "mm": ("m", 0.001),
+    "millimeter": ("m", 0.001),
+    "millimeters": ("m", 0.001),
+    "millimetre": ("m", 0.001),
+    "millimetres": ("m", 0.001),
+    "kg": ("kg", 1.0),
+    "kilogram": ("kg", 1.0),
+    "kilograms": ("kg", 1.0),
+    "g": ("kg", 0.001),
+    "gram": ("kg", 0.001),
+    "grams": ("kg", 0.001),
+}
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z]*)\s*$")
+
+
+def parse_quantity(value: Any) -> tuple[float, str | None]:
+    """A finite number and its SI unit (None when none was written) from a number or text like ``"40 cm"``."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got {value!r}")
+    if isinstance(value, numbers.Real):
+        number, unit = float(value), None
+    elif isinstance(value, str):
+        match = _QUANTITY.match(value.replace(",", ""))
+        if match is None and value.strip().lower().lstrip("+-") in ("inf", "infinity", "nan"):
+            raise ValueError(f"must be a finite number, got {value!r}")
+        if match is None:
+            raise ValueError(f"expected a number, optionally with a unit such as m, cm or kg; got {value!r}")
+        number, written = float(match.group(1)), match.group(2).lower()
+        if written and written not in _UNITS:
+            raise ValueError(f"unknown unit {match.group(2)!r} in {value!r}; use m, cm, mm, kg or g")
+        unit, scale = _UNITS[written] if written else (None, 1.0)
+        number *= scale
+    else:
+        raise ValueError(f"expected a number, got {value!r}")
+    if not math.isfinite(number):
+        raise ValueError(f"must be a finite number, got {value!r}")
+    return number, unit
+
+
+def _number(value: Any) -> float:
+    return parse_quantity(value)[0]
+
+
+Number = Annotated[float, BeforeValidator(_number)]
+"""A finite float that may be written with a unit; the unit is converted to SI."""
+
+
+class AnalyzedConcept(KeyConcept):
+    """A key concept as the Analyzer states it: numbers may carry units; ``limit_name`` and ``satisfied``
+    may be left out (``satisfied`` then means ``value <= limit``)."""
+
+    value: Number = Field(description="the measured value")
+    limit: Number = Field(description="the robot or object limit it is compared with")
+    limit_name: str = Field("", description="which limit, e.g. 'max_gap' or 'workspace'")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _lenient(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        if isinstance(data.get("kind"), str):
+            data["kind"] = _concept_kind(data["kind"])
+        try:
+            numbers = {key: parse_quantity(data[key]) for key in ("value", "limit") if data.get(key) is not None}
+        except ValueError:
+            return data  # the field validators say which number is wrong
+        written = {unit for _, unit in numbers.values() if unit is not None}
+        if len(written) > 1:
+            raise ValueError(f"value and limit are in different units ({', '.join(sorted(written))})")
+        data |= {key: number for key, (number, _) in numbers.items()}
+        if written:
+            data["unit"] = written.pop()
+        elif isinstance(data.get("unit"), str) and data["unit"].strip().lower() in _UNITS:
+            unit, scale = _UNITS[data["unit"].strip().lower()]  # plain numbers in the unit the field names
+            data |= {key: number * scale for key, (number, _) in numbers.items()} | {"unit": unit}
+        if data.get("satisfied") is None and len(numbers) == 2:
+            data["satisfied"] = data["value"] <= data["limit"]
+            _note(f"key concept {data.get('name', '?')!r} gave no verdict; read as value <= limit")
+        return data
+
+
+_KINDS: frozenset[str] = frozenset(get_args(ConceptKind))
+
+
+def _concept_kind(text: str) -> str:
+    """``"Gap width"`` -> ``gap_width``; a kind that is not known becomes ``other``."""
+    kind = re.sub(r"[\s\-]+", "_", text.strip().lower())
+    if kind not in _KINDS:
+        _note(f"key concept kind {text!r} is not a known kind; read as 'other'")
+        return "other"
+    return kind
+
+
 class ObjectRole(BaseModel):
     """What an object is like and what it could do for the task."""
 
     name: str = Field(description="an object of the scene")
-    properties: str = Field(description="its relevant physical and geometric properties")
-    role: str = Field(description="its possible role: target, tool (how), obstacle, or none")
+    properties: str = Field("", description="its relevant physical and geometric properties")
+    role: str = Field("", description="its possible role: target, tool (how), obstacle, or none")
 
     @field_validator("name")
     @classmethod
     def _known(cls, name: str) -> str:
-        return _check_objects([name])[0]
+        _informational([name], "an object role")
+        return name
 
 
 class PlanStep(BaseModel):
@@ -68,7 +235,14 @@ class PlanStep(BaseModel):
 
     skill: str = Field(description="the name of one of the robot's skills")
     objects: list[str] = Field(default_factory=list, description="objects this step involves")
-    intent: str = Field(description="what the step achieves")
+    intent: str = Field("", description="what the step achieves")
+
+    @field_validator("skill", mode="before")
+    @classmethod
+    def _call_to_name(cls, skill: Any) -> Any:
+        """``"move_to_position(p)"`` or ``" open_gripper() "`` names the skill."""
+        call = re.fullmatch(r"\s*([A-Za-z_]\w*)\s*(?:\(.*\))?\s*", skill, re.DOTALL) if isinstance(skill, str) else None
+        return call.group(1) if call else skill
 
     @field_validator("skill")
     @classmethod
@@ -78,10 +252,15 @@ class PlanStep(BaseModel):
             raise ValueError(f"unknown skill {skill!r}; the robot's skills are {sorted(scene.skills)}")
         return skill
 
+    @field_validator("objects", mode="before")
+    @classmethod
+    def _one_or_many(cls, objects: Any) -> Any:
+        return [objects] if isinstance(objects, str) else objects
+
     @field_validator("objects")
     @classmethod
-    def _real_objects(cls, objects: list[str]) -> list[str]:
-        return _check_objects(objects)
+    def _scene_objects(cls, objects: list[str]) -> list[str]:
+        return _informational(objects, "a plan step")
 
 
 class StepParameters(BaseModel):
@@ -89,18 +268,23 @@ class StepParameters(BaseModel):
 
     step: int = Field(ge=1, description="the plan step these parameters belong to, counting from 1")
     object: str | None = Field(None, description="the object the skill acts on, if any")
-    target: list[float] | None = Field(None, description="absolute target [x, y, z] in metres")
+    target: list[Number] | None = Field(None, description="absolute target [x, y, z] in metres")
     relative_to: str | None = Field(
         None, description="an object whose centre, queried when the step runs, the offset is added to"
     )
-    offset: list[float] | None = Field(None, description="[dx, dy, dz] in metres from relative_to's centre")
+    offset: list[Number] | None = Field(None, description="[dx, dy, dz] in metres from relative_to's centre")
     explanation: str = Field("", description="how the numbers were derived")
 
     @field_validator("target", "offset")
     @classmethod
     def _vector(cls, value: list[float] | None) -> list[float] | None:
-        if value is not None and (len(value) != 3 or not all(math.isfinite(v) for v in value)):
-            raise ValueError(f"must be three finite numbers [x, y, z], got {value}")
+        if value is None:
+            return None
+        scene = _SCENE.get()
+        if len(value) == 2 and scene is not None and scene.embodiment == "quadruped":
+            return [*value, 0.0]  # the quadruped's motions ignore z
+        if len(value) != 3:
+            raise ValueError(f"must be three numbers [x, y, z] in metres, got {value}")
         return value
 
     @model_validator(mode="after")

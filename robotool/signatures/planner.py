@@ -19,6 +19,6 @@ class Plan(dspy.Signature):
 
     description: str = dspy.InputField(desc="the scene with its numbers, the robot's limits and skills, the task")
     key_concepts: list[KeyConcept] = dspy.InputField(desc="the analysis of feasibility; may be empty")
-    object_roles: list[ObjectRole] = dspy.OutputField(desc="every relevant object's properties and role")
-    abstract_plan: str = dspy.OutputField(desc="the plan in a few sentences")
+    object_roles: list[ObjectRole] | None = dspy.OutputField(desc="every relevant object's properties and role")
+    abstract_plan: str | None = dspy.OutputField(desc="the plan in a few sentences")
     steps: list[PlanStep] = dspy.OutputField(desc="one skill call per step, in order")

@@ -1,0 +1,349 @@
+"""One stage's LM call, as real models answer: parsed leniently, repaired with feedback, and accounted for.
+
+:func:`call_stage` runs a ``dspy.Predict`` stage. When its reply does not parse or validate, it first
+reads the same reply in the other answer format (JSON where field markers were asked for, and the
+reverse) and then as plain text where the stage knows how (the Coder takes the program out of a chat
+answer). If that does not help, or the outputs fail the stage's own check (the Coder's program must
+pass the sandbox's validation), it asks again (at most ``format_retries`` times), showing the model
+its rejected reply and exactly what was wrong. Every request is recorded as an :class:`~robotool.solution.LMCall` with
+its tokens, wall time and whether DSPy's cache answered it, and optionally written to a JSONL log.
+Failures that no reply can cure (see :func:`robotool.lm.unavailable`) raise
+:class:`~robotool.errors.LMUnavailableError`.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import dspy
+from dspy.utils.callback import BaseCallback
+from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError
+from pydantic import ValidationError
+
+from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
+from robotool.signatures import validation_notes
+from robotool.solution import LMCall
+
+MAX_SHOWN_REPLY = 8000
+"""Characters of a rejected reply shown back to the model when asking again."""
+
+
+class StageFailed(Exception):
+    """A stage got no usable reply; ``reason`` is one line, ``calls`` are the requests it made."""
+
+    def __init__(self, reason: str, calls: list[LMCall]):
+        super().__init__(reason)
+        self.reason = reason
+        self.calls = calls
+
+
+class Cancelled(Exception):
+    """Another part of the same solve hit an error that ends it; this stage did not start."""
+
+
+_LOG_LOCKS: dict[Path, threading.Lock] = {}
+_LOG_LOCKS_GUARD = threading.Lock()
+
+
+class PromptLog:
+    """A JSONL file with one line per LM request: the messages sent, the reply, its cost and fate.
+
+    Lines are appended (several solves can share a file) and may come from several threads; logs of
+    the same file share one lock, so lines never interleave.
+    """
+
+    def __init__(self, path: Path):
+        """Raises :class:`~robotool.lm.LMConfigError` when the file cannot be written."""
+        self.path = path
+        with _LOG_LOCKS_GUARD:
+            self._lock = _LOG_LOCKS.setdefault(path.resolve(), threading.Lock())
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.open("a", encoding="utf-8").close()
+        except OSError as e:
+            raise LMConfigError(f"cannot write the prompt log {path}: {e.strerror or e}") from None
+
+    def write(self, record: dict[str, Any]) -> None:
+        line = json.dumps(record, default=str)
+        with self._lock, self.path.open("a", encoding="utf-8") as f:
+            f.write(line + "\n")
+
+
+@dataclass
+class CallSettings:
+    """How every stage call of one solve is made."""
+
+    adapter: dspy.Adapter
+    format_retries: int = DEFAULT_FORMAT_RETRIES
+    log: PromptLog | None = None
+    cancelled: threading.Event = field(default_factory=threading.Event)
+
+
+@dataclass
+class StageResult:
+    """A stage's parsed outputs, every request it took, and notes on what was repaired or ignored."""
+
+    outputs: dspy.Prediction
+    calls: list[LMCall]
+    notes: list[str]
+
+
+Salvage = Callable[[str], dspy.Prediction]
+"""Reads a stage's outputs from a reply that did not follow the answer format (raises ValueError when it cannot)."""
+
+Check = Callable[[dspy.Prediction], str | None]
+"""Checks parsed outputs beyond their types: None when they are usable, else what is wrong (shown to the model)."""
+
+
+@dataclass
+class _Request:
+    messages: Any
+    options: dict[str, Any]
+    started: float
+    tokens_before: tuple[int, int]
+    entries_before: int
+    reply: str | None = None
+    seconds: float = 0.0
+    tokens: tuple[int, int] = (0, 0)
+    cached: bool = False
+    error: str | None = None
+
+
+class _Recorder(BaseCallback):
+    """Records each LM request made inside one attempt (all on one thread), with the attempt's usage tracker."""
+
+    def __init__(self, tracker: Any):
+        self.tracker = tracker
+        self.requests: list[_Request] = []
+        self._open: dict[str, _Request] = {}
+
+    def _totals(self) -> tuple[int, int]:
+        entries = [e for per_model in self.tracker.usage_data.values() for e in per_model]
+        return (
+            sum(int(e.get("prompt_tokens") or 0) for e in entries),
+            sum(int(e.get("completion_tokens") or 0) for e in entries),
+        )
+
+    def _entries(self) -> int:
+        return sum(len(per_model) for per_model in self.tracker.usage_data.values())
+
+    def on_lm_start(self, call_id: str, instance: Any, inputs: dict[str, Any]) -> None:
+        options = {k: v for k, v in (inputs.get("kwargs") or {}).items() if not k.startswith("api_")}
+        messages = inputs.get("messages") or [{"role": "user", "content": inputs.get("prompt")}]
+        self._open[call_id] = _Request(messages, options, time.perf_counter(), self._totals(), self._entries())
+
+    def on_lm_end(self, call_id: str, outputs: Any | None, exception: Exception | None = None) -> None:
+        request = self._open.pop(call_id, None)
+        if request is None:
+            return
+        request.seconds = time.perf_counter() - request.started
+        after = self._totals()
+        request.tokens = (after[0] - request.tokens_before[0], after[1] - request.tokens_before[1])
+        request.cached = exception is None and self._entries() == request.entries_before  # DSPy adds no usage for hits
+        request.reply = _reply_text(outputs)
+        request.error = _one_line(exception) if exception is not None else None
+        self.requests.append(request)
+
+
+def _reply_text(outputs: Any) -> str | None:
+    if not outputs:
+        return None
+    first = outputs[0]
+    return first.get("text") if isinstance(first, dict) else str(first)
+
+
+def _one_line(what: object, limit: int = 300) -> str:
+    text = " ".join(str(what).split())
+    return text[:limit] + ("..." if len(text) > limit else "")
+
+
+@contextmanager
+def _attempt_context(settings: CallSettings) -> Iterator[_Recorder]:
+    with dspy.track_usage() as tracker:
+        recorder = _Recorder(tracker)
+        callbacks = [*dspy.settings.get("callbacks", []), recorder]
+        with dspy.context(callbacks=callbacks, adapter=settings.adapter):
+            yield recorder
+
+
+def call_stage(
+    predictor: dspy.Predict,
+    stage: str,
+    inputs: dict[str, Any],
+    *,
+    settings: CallSettings,
+    candidate: int | None = None,
+    config: dict[str, Any] | None = None,
+    salvage: Salvage | None = None,
+    check: Check | None = None,
+) -> StageResult:
+    """Call one stage until a reply parses and validates (see the module docstring).
+
+    Raises :class:`StageFailed` when no reply is usable, :class:`~robotool.errors.LMUnavailableError`
+    when the model cannot be reached or used at all, and :class:`Cancelled` when ``settings.cancelled``
+    is set before an attempt.
+    """
+    calls: list[LMCall] = []
+    rejected: tuple[str, str] | None = None
+    problem = ""
+    for attempt in range(1, settings.format_retries + 2):
+        if settings.cancelled.is_set():
+            raise Cancelled(stage)
+        signature, kwargs = predictor.signature, dict(inputs)
+        if rejected is not None:
+            signature = _with_feedback(signature)
+            kwargs |= {"rejected_reply": rejected[0], "reply_problem": rejected[1]}
+        outputs: dspy.Prediction | None = None
+        failure: str | None = None
+        with _attempt_context(settings) as recorder, validation_notes() as notes:
+            try:
+                outputs = predictor(signature=signature, config=config or {}, **kwargs)
+            except AdapterParseError as e:
+                reply = recorder.requests[-1].reply if recorder.requests else None
+                outputs, failure, salvage_note = _salvaged(e, reply, signature, settings.adapter, salvage)
+                if salvage_note is not None:
+                    notes.notes.append(salvage_note)
+            except LMError as e:
+                mapped = unavailable(e, predictor.lm or dspy.settings.lm)
+                if mapped is not None:
+                    settings.cancelled.set()
+                    raise mapped from None
+                failure = f"the LM request failed: {_one_line((e.message or str(e)).splitlines()[0])}"
+            if outputs is not None and check is not None and (failure := check(outputs)) is not None:
+                outputs = None
+        calls += _record(recorder.requests, stage, candidate, attempt, failure, settings.log)
+        if outputs is not None:
+            repaired = [f"attempt {attempt} used; the reply before was rejected: {problem}"] if rejected else []
+            return StageResult(outputs, calls, [*repaired, *notes.notes])
+        assert failure is not None
+        problem = failure
+        reply = recorder.requests[-1].reply if recorder.requests else None
+        if reply is None:  # the request itself failed: asking again would fail the same way
+            break
+        rejected = (reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]", problem)
+    tried = f"{len({c.attempt for c in calls})} attempt(s)"
+    raise StageFailed(f"{problem} ({tried})" if calls else problem, calls)
+
+
+def _with_feedback(signature: type[dspy.Signature]) -> type[dspy.Signature]:
+    """The stage's signature with the rejected reply and its problem as extra inputs."""
+    return signature.append(
+        "rejected_reply",
+        dspy.InputField(desc="your previous reply to this request, which could not be used"),
+        type_=str,
+    ).append(
+        "reply_problem",
+        dspy.InputField(
+            desc="exactly what was wrong with that reply; answer again in the required format, fixing this"
+        ),
+        type_=str,
+    )
+
+
+def _salvaged(
+    error: AdapterParseError,
+    reply: str | None,
+    signature: type[dspy.Signature],
+    adapter: dspy.Adapter,
+    salvage: Salvage | None,
+) -> tuple[dspy.Prediction | None, str | None, str | None]:
+    """From a ``reply`` the adapter rejected: (outputs, None, a note on how they were read), or
+    (None, what was wrong with it, None). The adapter's error may hold only part of the reply."""
+    text = reply if reply is not None else error.lm_response or ""
+    if not text.strip():
+        return None, "the reply was empty", None
+    problem = parse_problem(error, signature, adapter)
+    json_asked = isinstance(adapter, dspy.JSONAdapter)
+    other: dspy.Adapter = dspy.ChatAdapter() if json_asked else dspy.JSONAdapter()
+    try:
+        outputs = dspy.Prediction(**other.parse(signature, text))
+        return outputs, None, f"the reply used {'field markers' if json_asked else 'JSON'}; read it as such"
+    except AdapterParseError as e:
+        if _value_error(e) is not None:  # it was in that format, but a value was wrong
+            problem = parse_problem(e, signature, other)
+    except ValueError:
+        pass
+    if salvage is not None:
+        try:
+            return salvage(text), None, "the reply did not follow the answer format; it was read as plain text"
+        except ValueError:
+            pass
+    return None, problem, None
+
+
+def parse_problem(error: AdapterParseError, signature: type[dspy.Signature], adapter: dspy.Adapter) -> str:
+    """Exactly what was wrong with a reply, in one line a model can act on."""
+    cause = _value_error(error)
+    field_name = re.search(r"Failed to parse field (\w+)", str(error))
+    name = field_name.group(1) if field_name else None
+    if isinstance(cause, ValidationError):
+        details = "; ".join(_validation_detail(e) for e in cause.errors(include_url=False))
+        return f"field {name or '?'}: {details}"
+    if name is not None and cause is not None:
+        return f"field {name}: {_one_line(cause)}"
+    expected = list(signature.output_fields)
+    found = [k for k in (error.parsed_result or {}) if k in expected]
+    missing = [k for k in expected if k not in found]
+    layout = (
+        "as the keys of one JSON object"
+        if isinstance(adapter, dspy.JSONAdapter)
+        else "each under its own [[ ## field ## ]] header"
+    )
+    if missing:
+        return f"the reply lacks the field(s) {', '.join(missing)}; give {', '.join(expected)} {layout}"
+    return f"the reply does not follow the answer format; give {', '.join(expected)} {layout}"
+
+
+def _value_error(error: AdapterParseError) -> ValueError | None:
+    """The error of the field value that failed to parse, if that is why the adapter gave up."""
+    cause = error.__cause__ or error.__context__
+    return cause if isinstance(cause, ValueError) and not isinstance(cause, DSPyError) else None
+
+
+def _validation_detail(error: Any) -> str:
+    where = "".join(f"[{part}]" if isinstance(part, int) else f".{part}" for part in error.get("loc", ()))
+    message = str(error.get("msg", "")).removeprefix("Value error, ")
+    value = error.get("input")
+    if isinstance(value, dict | list) or str(value) in message:
+        return f"{where.lstrip('.') or 'value'}: {message}"
+    shown = repr(value)
+    shown = shown if len(shown) <= 80 else shown[:77] + "..."
+    return f"{where.lstrip('.') or 'value'}: {message} (got {shown})"
+
+
+def _record(
+    requests: list[_Request],
+    stage: str,
+    candidate: int | None,
+    attempt: int,
+    failure: str | None,
+    log: PromptLog | None,
+) -> list[LMCall]:
+    """One :class:`LMCall` per request; the attempt's failure is the last request's error."""
+    calls = []
+    for i, request in enumerate(requests):
+        error = request.error or (failure if i == len(requests) - 1 else None)
+        call = LMCall(
+            stage=stage,
+            candidate=candidate,
+            attempt=attempt,
+            prompt_tokens=request.tokens[0],
+            completion_tokens=request.tokens[1],
+            seconds=request.seconds,
+            cached=request.cached,
+            error=error,
+        )
+        calls.append(call)
+        if log is not None:
+            log.write(
+                {**call.model_dump(), "options": request.options, "messages": request.messages, "reply": request.reply}
+            )
+    return calls
