@@ -350,34 +350,17 @@ def test_eval_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) 
     assert "from DSPy's cache" not in (tmp_path / "first" / "report.md").read_text()
 
 
-def test_cli_unwritable_prompt_log_is_one_line_and_exit_2(tmp_path: Path, capsys) -> None:
+def test_unwritable_prompt_log_is_refused_before_any_request(tmp_path: Path, capsys) -> None:
     (tmp_path / "file").write_text("")
-    code, _, err = _solve_cli(
-        capsys,
-        "--lm",
-        "openai/standin",
-        "--api-base",
-        "http://127.0.0.1:9/v1",
-        "--log-prompts",
-        str(tmp_path / "file" / "prompts.jsonl"),
-    )
-    assert code == 2
-    _assert_one_line(err, "cannot write the prompt log")
+    log = str(tmp_path / "file" / "prompts.jsonl")
+    with pytest.raises(SystemExit) as solve_exit:
+        main(["solve", TASK, "--lm", "openai/standin", "--log-prompts", log])
     from robotool.eval import main as eval_main
 
-    code = eval_main(
-        [
-            "--methods",
-            "robotool",
-            "--lm",
-            "openai/standin",
-            "--api-base",
-            "http://127.0.0.1:9/v1",
-            "--log-prompts",
-            str(tmp_path / "file" / "prompts.jsonl"),
-            "--out",
-            str(tmp_path / "out"),
-        ]
-    )
-    assert code == 2
-    _assert_one_line(capsys.readouterr().err, "cannot write the prompt log")
+    with pytest.raises(SystemExit) as eval_exit:
+        eval_main(["--methods", "robotool", "--lm", "openai/standin", "--log-prompts", log])
+    assert solve_exit.value.code == eval_exit.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2 and all("--log-prompts" in line and "does not exist" in line for line in lines)
+    with pytest.raises(LMConfigError, match="cannot write the prompt log"):
+        RoboTool(log_prompts=Path(log))(task=tasks.load(TASK))  # the library refuses it too

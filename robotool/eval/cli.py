@@ -125,10 +125,6 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         seed=args.seed,
         adapter=args.adapter,
     )
-    if args.log_prompts is not None:
-        from robotool.lm_calls import PromptLog
-
-        PromptLog(args.log_prompts)  # an unwritable file is refused here, not in every run
     return EvalConfig(
         tasks=args.tasks,
         families=args.families,
