@@ -364,3 +364,29 @@ def test_unwritable_prompt_log_is_refused_before_any_request(tmp_path: Path, cap
     assert len(lines) == 2 and all("--log-prompts" in line and "does not exist" in line for line in lines)
     with pytest.raises(LMConfigError, match="cannot write the prompt log"):
         RoboTool(log_prompts=Path(log))(task=tasks.load(TASK))  # the library refuses it too
+
+
+def test_eval_with_a_rejected_key_records_nothing_and_says_why_in_one_line(tmp_path: Path, capsys) -> None:
+    from robotool.eval import main as eval_main
+
+    with StandinServer(Script(rules=[Rule(status=401)])) as server:
+        code = eval_main(
+            [
+                "--tasks",
+                TASK,
+                "--methods",
+                "robotool",
+                "--worlds",
+                "1",
+                "--lm",
+                "openai/standin",
+                "--api-base",
+                server.base_url,
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+    assert code == 3  # runs not attempted: the evaluator's status for an unusable model
+    _assert_one_line(capsys.readouterr().err, "rejected the credentials for openai/standin", "--api-key-env")
+    journal = tmp_path / "out" / "journal.jsonl"
+    assert not journal.exists() or journal.read_text().strip() == ""
