@@ -144,7 +144,7 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
             "retries_exhausted",
             f"{where} turned requests away as too many (rate limit) on {tries}: wait and rerun, or lower --candidates",
         )
-    if isinstance(error, dx.LMServerError | dx.LMUnexpectedError):
+    if isinstance(error, dx.LMServerError):
         return LMUnavailableError(
             "retries_exhausted", f"{where} failed to answer on {tries} (server error): try again later"
         )
@@ -158,9 +158,7 @@ def _connection_failed(error: BaseException) -> bool:
     while current is not None and id(current) not in seen:
         seen.add(id(current))
         names = {klass.__name__ for klass in type(current).__mro__}
-        if "ConnectError" in names or (
-            isinstance(current, ConnectionError | OSError) and not isinstance(current, TimeoutError)
-        ):
+        if "ConnectError" in names or (isinstance(current, OSError) and not isinstance(current, TimeoutError)):
             return True
         current = current.__cause__ or current.__context__
     return False
