@@ -23,8 +23,12 @@ def print_solution(solution: Solution, console: Console) -> None:
         for column in ("concept", "value", "limit", "met"):
             table.add_column(column)
         for c in stages.key_concepts:
-            table.add_row(escape(c.name), f"{c.value:g} {c.unit}", f"{c.limit:g} ({c.limit_name})",
-                          "yes" if c.satisfied else "[red]no[/]")
+            table.add_row(
+                escape(c.name),
+                f"{c.value:g} {c.unit}",
+                f"{c.limit:g} ({c.limit_name})",
+                "yes" if c.satisfied else "[red]no[/]",
+            )
         console.print(table)
     if stages.abstract_plan:
         console.print(f"[bold]Plan:[/] {escape(stages.abstract_plan)}")
@@ -51,11 +55,15 @@ def print_solution(solution: Solution, console: Console) -> None:
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
     calls = f" in {len(solution.lm_calls)} LM call(s)" if solution.lm_calls else ""
-    console.print(f"{verdict}: best success rate {solution.success_rate:.0%}; "
-                  f"{tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s")
+    console.print(
+        f"{verdict}: best success rate {solution.success_rate:.0%}; "
+        f"{tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s"
+    )
     if solution.cached_replies:
-        console.print(f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
-                      "DSPy's cache, not the model (--no-cache asks the model again)")
+        console.print(
+            f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
+            "DSPy's cache, not the model (--no-cache asks the model again)"
+        )
 
 
 def _format_args(args: list[object]) -> str:
@@ -78,8 +86,13 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         outcome = call.outcome if call.outcome == "done" else f"[red]{call.outcome}[/]"
         measured = "" if call.outcome == "done" else ", ".join(f"{k} {v:.3g}" for k, v in call.measured.items())
         details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
-        table.add_row(str(i), escape(f"{call.skill}({_format_args(call.args)})"), outcome,
-                      f"{call.ended - call.started:.2f}", escape(details))
+        table.add_row(
+            str(i),
+            escape(f"{call.skill}({_format_args(call.args)})"),
+            outcome,
+            f"{call.ended - call.started:.2f}",
+            escape(details),
+        )
     console.print(table)
     conditions = ", ".join(
         f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
@@ -97,8 +110,14 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
     for column in ("world", "success", "sim time (s)", "calls", "touched", "why it failed"):
         table.add_column(column, overflow="fold")
     for r in report.rollouts:
-        table.add_row(str(r.world), "yes" if r.success else "[red]no[/]", f"{r.sim_time:.2f}", str(len(r.calls)),
-                      str(len(r.touched)), escape(world_failure(r) or ""))
+        table.add_row(
+            str(r.world),
+            "yes" if r.success else "[red]no[/]",
+            f"{r.sim_time:.2f}",
+            str(len(r.calls)),
+            str(len(r.touched)),
+            escape(world_failure(r) or ""),
+        )
     console.print(table)
     shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
     for rollout in shown:

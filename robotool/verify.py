@@ -31,7 +31,12 @@ def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
 
 
 def run_codes(
-    task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None,
+    task: Task,
+    codes: Sequence[str],
+    *,
+    worlds: int,
+    seed: int = 0,
+    backend: str | None = None,
     recorder: StateRecorder | None = None,
 ) -> list[list[Rollout]]:
     """Run each (validated) program in ``worlds`` perturbed worlds, all in one batch.
@@ -42,9 +47,10 @@ def run_codes(
         return []
     sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
     world_seeds = [seed + r for _ in codes for r in range(worlds)]
-    rollouts = run_sessions(task, sessions, world_seeds=world_seeds, backend=backend or default_backend(),
-                            recorder=recorder)
-    return [rollouts[i * worlds:(i + 1) * worlds] for i in range(len(codes))]
+    rollouts = run_sessions(
+        task, sessions, world_seeds=world_seeds, backend=backend or default_backend(), recorder=recorder
+    )
+    return [rollouts[i * worlds : (i + 1) * worlds] for i in range(len(codes))]
 
 
 def verify(

@@ -18,16 +18,32 @@ from robotool.eval.tables import all_tables
 from robotool.solution import TokenUsage
 
 
-def record(task: str, method: str, run: int, worlds: list[tuple[FailureClass | None, bool]], *,
-           seed: int | None = None, needs_tool: bool = True, correct: bool | None = None) -> RunRecord:
+def record(
+    task: str,
+    method: str,
+    run: int,
+    worlds: list[tuple[FailureClass | None, bool]],
+    *,
+    seed: int | None = None,
+    needs_tool: bool = True,
+    correct: bool | None = None,
+) -> RunRecord:
     """A hand-made record: one (failure class, used a tool) pair per world."""
-    results = [WorldResult(world=i, seed=i, success=c is None, failure_class=c, tools_used=["t"] if used else [])
-               for i, (c, used) in enumerate(worlds)]
-    return RunRecord(key=RunKey(task=task, seed=seed, method=method, run=run), embodiment="arm",
-                     needs_tool=needs_tool, world_seed=0,
-                     success_rate=sum(w.success for w in results) / len(results) if results else 0.0,
-                     worlds=results, concepts=ConceptGrade(correct=correct), wall_s=2.0,
-                     usage={"coder": TokenUsage(prompt_tokens=100, completion_tokens=10)})
+    results = [
+        WorldResult(world=i, seed=i, success=c is None, failure_class=c, tools_used=["t"] if used else [])
+        for i, (c, used) in enumerate(worlds)
+    ]
+    return RunRecord(
+        key=RunKey(task=task, seed=seed, method=method, run=run),
+        embodiment="arm",
+        needs_tool=needs_tool,
+        world_seed=0,
+        success_rate=sum(w.success for w in results) / len(results) if results else 0.0,
+        worlds=results,
+        concepts=ConceptGrade(correct=correct),
+        wall_s=2.0,
+        usage={"coder": TokenUsage(prompt_tokens=100, completion_tokens=10)},
+    )
 
 
 RECORDS = [

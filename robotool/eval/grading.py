@@ -38,8 +38,11 @@ class ConceptGrade(BaseModel):
 def matches(truth: KeyConcept, predicted: KeyConcept) -> bool:
     """Whether ``predicted`` recovers ``truth`` (same kind, value within tolerance, same verdict)."""
     tolerance = max(RELATIVE_TOLERANCE * abs(truth.value), ABSOLUTE_TOLERANCE.get(truth.unit, 0.0))
-    return (predicted.kind == truth.kind and predicted.satisfied == truth.satisfied
-            and abs(predicted.value - truth.value) <= tolerance)
+    return (
+        predicted.kind == truth.kind
+        and predicted.satisfied == truth.satisfied
+        and abs(predicted.value - truth.value) <= tolerance
+    )
 
 
 def grade(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept] | None) -> ConceptGrade:

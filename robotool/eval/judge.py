@@ -14,9 +14,16 @@ from robotool.verify import world_failure
 
 def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) -> RunRecord:
     """A run in which nothing ran: success 0, class ``invalid``."""
-    return RunRecord(key=key, family=instance.family, embodiment=instance.task.embodiment,
-                     needs_tool=instance.needs_tool, world_seed=world_seed, wall_s=wall_s, success_rate=0.0,
-                     failure_class="invalid")
+    return RunRecord(
+        key=key,
+        family=instance.family,
+        embodiment=instance.task.embodiment,
+        needs_tool=instance.needs_tool,
+        world_seed=world_seed,
+        wall_s=wall_s,
+        success_rate=0.0,
+        failure_class="invalid",
+    )
 
 
 def _has_analyzer(key: RunKey) -> bool:
@@ -34,9 +41,19 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
     facts = TaskFacts.of(instance.task, needs_tool=instance.needs_tool, needed=instance.tools)
     chosen = solution.candidates[solution.best] if solution.best is not None else None
     rollouts = chosen.rollouts if chosen is not None else []
-    worlds = [WorldResult(world=r.world, seed=r.seed, success=r.success, failure_class=classify(r, facts),
-                          failure=world_failure(r), tools_used=sorted(tools_used(r, facts)), calls=len(r.calls),
-                          sim_time=r.sim_time) for r in rollouts]
+    worlds = [
+        WorldResult(
+            world=r.world,
+            seed=r.seed,
+            success=r.success,
+            failure_class=classify(r, facts),
+            failure=world_failure(r),
+            tools_used=sorted(tools_used(r, facts)),
+            calls=len(r.calls),
+            sim_time=r.sim_time,
+        )
+        for r in rollouts
+    ]
     update = {
         "worlds": worlds,
         "concepts": grade(key_concepts(instance.task), _predicted_concepts(key, solution)),
@@ -51,8 +68,10 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
         "notes": solution.notes,
     }
     if worlds:
-        update |= {"success_rate": sum(w.success for w in worlds) / len(worlds),
-                   "failure_class": run_class([w.failure_class for w in worlds])}
+        update |= {
+            "success_rate": sum(w.success for w in worlds) / len(worlds),
+            "failure_class": run_class([w.failure_class for w in worlds]),
+        }
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)
 
 

@@ -26,19 +26,23 @@ def _markdown_table(table: TextTable) -> str:
 def _preamble(results: Results) -> list[str]:
     """What ran, with which settings, and what did not run and why."""
     s = results.config.settings
-    lines = [f"- LM: {s.lm or 'none'}; candidates per run: {s.candidates}; worlds per candidate: {s.worlds}; "
-             f"backend: {s.backend or 'default'}; base seed: {s.seed}",
-             f"- runs recorded: {len(results.records)}; wall time of the last command: {results.wall_s:.0f} s"]
+    lines = [
+        f"- LM: {s.lm or 'none'}; candidates per run: {s.candidates}; worlds per candidate: {s.worlds}; "
+        f"backend: {s.backend or 'default'}; base seed: {s.seed}",
+        f"- runs recorded: {len(results.records)}; wall time of the last command: {results.wall_s:.0f} s",
+    ]
     calls = sum(r.lm_calls for r in results.records)
     cached = sum(r.cached_replies for r in results.records)
     if cached:
-        lines.append(f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks "
-                     "the model again)")
+        lines.append(
+            f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks the model again)"
+        )
     lines += [f"- {line}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {note}" for note in results.notes]
     if not any(METHODS.get(r.key.method, {}).get("analyzer") for r in results.records):
-        lines.append("- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an "
-                     "LM; none ran")
+        lines.append(
+            "- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an LM; none ran"
+        )
     return lines
 
 
@@ -63,8 +67,13 @@ def _pictures_section(pictures: Sequence[Picture]) -> list[str]:
     """Per task: its scene, then the end state of one failed world per failure class."""
     if not pictures:
         return []
-    lines = ["", "## Pictures", "", "Each task's scene, then the end of one failed world per failure class "
-             "(simulated again from its program and seed)."]
+    lines = [
+        "",
+        "## Pictures",
+        "",
+        "Each task's scene, then the end of one failed world per failure class "
+        "(simulated again from its program and seed).",
+    ]
     by_task: dict[str, list[Picture]] = {}
     for picture in pictures:
         by_task.setdefault(picture.task, []).append(picture)

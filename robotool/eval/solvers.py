@@ -80,10 +80,17 @@ def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
 
         from robotool.program import RoboTool
 
-        program = RoboTool.method(method, candidates=settings.candidates, worlds_per_candidate=settings.worlds,
-                                  backend=settings.backend, seed=seed, rollout_base=run * settings.candidates,
-                                  temperature=settings.temperature, adapter=settings.adapter,
-                                  log_prompts=settings.log_prompts)
+        program = RoboTool.method(
+            method,
+            candidates=settings.candidates,
+            worlds_per_candidate=settings.worlds,
+            backend=settings.backend,
+            seed=seed,
+            rollout_base=run * settings.candidates,
+            temperature=settings.temperature,
+            adapter=settings.adapter,
+            log_prompts=settings.log_prompts,
+        )
         with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
             return program(task=task).solution
 
