@@ -112,6 +112,14 @@ def temperature(text: str) -> float:
     return value
 
 
+def cluster_address(text: str) -> str:
+    """A cluster's address as its client takes it (``auto``, ``HOST:PORT``, ``ray://HOST:PORT``): one word."""
+    value = text.strip()
+    if not value or any(c.isspace() for c in value):
+        raise argparse.ArgumentTypeError(f"expected a cluster address such as auto or ray://HOST:10001, got {text!r}")
+    return value
+
+
 def output_file(text: str) -> Path:
     """A file the command will write: its folder must exist and be writable, and it must not be a folder."""
     path = Path(text)

@@ -4,6 +4,7 @@ Mistakes in the arguments end with a one-line message and exit status 2, never a
 Runs that could not be attempted because the language model was unavailable (no key, unreachable
 server, authentication, quota) are reported and not recorded: exit status 3, and the same command
 retries them. Interrupting (Ctrl-C) keeps every finished run; the same command resumes (130).
+``--executor ray [--address ADDR]`` runs the runs as Ray tasks (:mod:`robotool.eval.ray_executor`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from robotool.cliargs import (
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
     Parser,
+    cluster_address,
     make_console,
     output_file,
     output_folder,
@@ -32,6 +34,7 @@ from robotool.cliargs import (
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
+from robotool.eval.executor import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
 from robotool.lm import LMConfigError
@@ -99,6 +102,17 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
     p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
+    p.add_argument(
+        "--executor",
+        choices=EXECUTORS,
+        default="local",
+        help="where runs are carried out: threads here, or Ray tasks (pip install 'robotool[ray]')",
+    )
+    p.add_argument(
+        "--address",
+        type=cluster_address,
+        help="the Ray cluster to use with --executor ray, e.g. auto or ray://HOST:10001 (default: start Ray here)",
+    )
     p.add_argument("--out", type=output_folder, help="output folder (default: results/<model>-k<K>-w<R>-s<seed>)")
     p.add_argument(
         "--resume",
@@ -153,7 +167,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
     console = make_console()
     warn_if_warp_on_cpu(args.backend, errors)
     try:
-        evaluate(config_from(args), console=console)
+        with make_executor(args.executor, workers=args.workers, address=args.address) as executor:
+            evaluate(config_from(args), console=console, executor=executor)
     except RunsNotAttempted as e:  # before RobotoolError, which it is
         print_error(errors, str(e))
         return EXIT_NOT_ATTEMPTED

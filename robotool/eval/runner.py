@@ -5,18 +5,16 @@ the method, the LM and its settings, the seeds, the robotool version), so a chan
 Each finished run is appended to the folder's journal by the thread that ran it, so an interrupted
 evaluation resumes where it stopped: rerunning the same command reuses every run already in the journal
 and says how many. A run that could not be attempted because the language model was unavailable is not
-a result and is never journalled. Runs go through a thread pool; LM-free runs (pure simulation on the
-CPU) take turns on a lock, while LM runs overlap their LM calls.
+a result and is never journalled. Runs go through an executor (:mod:`robotool.eval.executor`): by default
+a thread pool here, where LM-free runs (pure simulation on the CPU) take turns on a lock while LM runs
+overlap their LM calls; or Ray tasks on a cluster (:mod:`robotool.eval.ray_executor`). Either way the
+journal is written here, as each run's record comes back, so the results folder is the same.
 """
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
-import threading
 import time
 from collections.abc import Mapping
-from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from typing import TYPE_CHECKING
 
 from rich.console import Console
@@ -24,15 +22,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from robotool.errors import LMUnavailableError
 from robotool.eval.config import EvalConfig, EvalError, Request, RunsNotAttempted
+from robotool.eval.executor import Executor, LocalExecutor, WorkerLost
 from robotool.eval.instances import TaskInstance, select
 from robotool.eval.journal import Journal, write_atomic
-from robotool.eval.judge import crashed, judge
+from robotool.eval.judge import crashed
 from robotool.eval.metrics import summarize
 from robotool.eval.plots import write_plots
 from robotool.eval.records import Results, RunKey, RunRecord, inputs_digest
 from robotool.eval.report import markdown, print_tables, skipped_lines
 from robotool.eval.solvers import METHODS, Solver, SolverSettings, make_solvers
 from robotool.eval.tables import all_tables
+from robotool.eval.work import NotAttempted, RunJob, RunWork
 from robotool.version import version
 
 if TYPE_CHECKING:
@@ -58,7 +58,7 @@ def _lm(config: EvalConfig, lm: dspy.LM | None) -> dspy.LM | None:
 
 
 def _methods(
-    config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None
+    config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str
 ) -> tuple[dict[str, Solver], dict[str, str]]:
     """Solvers to run and methods skipped; a method asked for by name that cannot run is an error."""
     names = config.methods or list(METHODS)
@@ -68,7 +68,7 @@ def _methods(
     settings = SolverSettings(
         candidates=config.settings.candidates,
         worlds=config.settings.worlds,
-        backend=config.settings.backend,
+        backend=backend,
         temperature=config.settings.temperature,
         adapter=config.settings.adapter,
         log_prompts=config.log_prompts,
@@ -111,15 +111,11 @@ def _check_folder(config: EvalConfig) -> None:
         raise EvalError(f"cannot write into the output folder {folder}: {e.strerror or e}") from None
 
 
-def _plan(config: EvalConfig, instances: list[TaskInstance], methods: list[str]) -> list[tuple[TaskInstance, RunKey]]:
-    """Every run asked for, keyed by the content of its inputs."""
-    from robotool.sim.backend import default_backend
-
-    context = {
-        "api_base": config.api_base,
-        "backend": config.settings.backend or default_backend(),
-        "robotool": version(),
-    }
+def _plan(
+    config: EvalConfig, instances: list[TaskInstance], methods: list[str], backend: str
+) -> list[tuple[TaskInstance, RunKey]]:
+    """Every run asked for, keyed by the content of its inputs (``backend``: the one the runs use)."""
+    context = {"api_base": config.api_base, "backend": backend, "robotool": version()}
     return [
         (
             instance,
@@ -156,10 +152,12 @@ def evaluate(
     lm: dspy.LM | None = None,
     solvers: Mapping[str, Solver] | None = None,
     console: Console | None = None,
+    executor: Executor | None = None,
 ) -> Results:
     """Run every run asked for that is not yet in the journal, then write the results folder.
 
-    ``lm`` replaces the LM the configuration names; ``solvers`` replaces methods' solvers (tests).
+    ``lm`` replaces the LM the configuration names; ``solvers`` replaces methods' solvers (tests);
+    ``executor`` carries out the runs (default: a :class:`LocalExecutor` with ``config.workers``).
     Raises :class:`RunsNotAttempted` (after the other runs finished) when the language model was
     unavailable for some runs: they are not journalled, and no report is written.
     """
@@ -169,14 +167,17 @@ def evaluate(
     if lm is not None and config.settings.lm is None:
         config = config.model_copy(update={"settings": config.settings.model_copy(update={"lm": lm.model})})
     instances, notes = select(config.tasks, config.families, config.seeds)
-    chosen, skipped = _methods(config, lm, solvers)
+    executor = executor or LocalExecutor(config.workers)
+    backend = executor.backend(config.settings.backend)
+    chosen, skipped = _methods(config, lm, solvers, backend)
     _check_folder(config)
     journal = Journal(config.out_dir)
-    plan = _plan(config, instances, list(chosen))
+    plan = _plan(config, instances, list(chosen), backend)
     for line in skipped_lines(skipped):
         console.print(line, style="yellow", highlight=False, markup=False)
     _say_reuse(config, plan, journal, console)
-    _run(config, chosen, [(i, k) for i, k in plan if k.id not in journal], journal, len(plan), console)
+    pending = [RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal]
+    _run(executor, RunWork(chosen), pending, journal, len(plan), backend, console)
     results = Results(
         config=config,
         skipped=skipped,
@@ -190,61 +191,49 @@ def evaluate(
 
 
 def _run(
-    config: EvalConfig,
-    solvers: Mapping[str, Solver],
-    pending: list[tuple[TaskInstance, RunKey]],
+    executor: Executor,
+    work: RunWork,
+    pending: list[RunJob],
     journal: Journal,
     total: int,
+    backend: str,
     console: Console,
 ) -> None:
-    """Run the pending runs in a thread pool, journaling each as it finishes.
+    """Carry out the pending runs with ``executor``, journaling each record as it comes back.
 
-    A run whose method raises :class:`LMUnavailableError` is not a result: it is not journalled, the LM
-    runs not yet started are not attempted, and :class:`RunsNotAttempted` is raised once the others end.
+    A run that could not be attempted because the language model was unavailable is not journalled, the
+    LM runs not yet started are not attempted, and :class:`RunsNotAttempted` is raised once the others
+    end. A run whose worker was lost on every attempt is journalled as failed, with the reason.
     """
-    sim_turn = threading.Lock()
     unavailable: list[LMUnavailableError] = []
+    recorded: list[str] = []
 
-    def one(instance: TaskInstance, key: RunKey) -> RunRecord | None:
-        uses_lm = METHODS[key.method].uses_lm
-        if uses_lm and unavailable:
-            return None
-        seed = config.world_seed(key.run)
-        with contextlib.nullcontext() if uses_lm else sim_turn:
-            begun = time.perf_counter()
-            try:
-                solution = solvers[key.method](instance.task, seed=seed, run=key.run)
-            except LMUnavailableError as e:  # nothing was attempted: not a result
-                unavailable.append(e)
-                return None
-            except Exception as e:  # a method that raises fails its run, not the evaluation
-                record = crashed(instance, key, seed, e, time.perf_counter() - begun)
-            else:
-                record = judge(instance, key, seed, solution, time.perf_counter() - begun)
-        journal.append(record)
-        return record
+    def uses_lm(job: RunJob) -> bool:
+        return METHODS[job.key.method].uses_lm
+
+    def done(job: RunJob, outcome: RunRecord | NotAttempted | WorkerLost) -> None:
+        if isinstance(outcome, NotAttempted):
+            unavailable.append(outcome.error())
+            return
+        if isinstance(outcome, WorkerLost):
+            outcome = crashed(job.instance, job.key, job.world_seed, outcome, 0.0)
+        journal.append(outcome)
+        recorded.append(job.key.id)
+        progress.update(bar, advance=1)
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-    any_lm = any(METHODS[m].uses_lm for m in solvers)
-    missing = 0
-    with (
-        Progress(*columns, console=console) as progress,
-        ThreadPoolExecutor(max_workers=config.workers if any_lm else 1) as pool,
-    ):
+    with Progress(*columns, console=console) as progress:
         bar = progress.add_task("evaluating", total=total, completed=total - len(pending))
-        futures: list[Future[RunRecord | None]] = [
-            pool.submit(contextvars.copy_context().run, one, instance, key) for instance, key in pending
-        ]
-        try:
-            for future in as_completed(futures):
-                if future.result() is None:
-                    missing += 1
-                progress.update(bar, advance=1)
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
+        executor.run(
+            pending,
+            work,
+            done,
+            skip=lambda job: uses_lm(job) and bool(unavailable),
+            exclusive=lambda job: not uses_lm(job),
+            backend=backend,
+        )
     if unavailable:
-        raise RunsNotAttempted(missing, total, unavailable[0])
+        raise RunsNotAttempted(len(pending) - len(recorded), total, unavailable[0])
 
 
 def _with_pictures(results: Results, instances: list[TaskInstance]) -> Results:

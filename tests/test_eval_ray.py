@@ -1,0 +1,169 @@
+"""The evaluator on the Ray executor: same results folder as the local executor, no run lost to a dead worker."""
+
+from __future__ import annotations
+
+import io
+import json
+import logging
+import os
+import signal
+import sys
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+from rich.console import Console
+from test_eval_runner import standin_solution
+
+from robotool.errors import LMUnavailableError
+from robotool.eval import EvalConfig, RunsNotAttempted, Settings, evaluate, main
+from robotool.eval.journal import JOURNAL
+from robotool.eval.solvers import planner_missing
+from robotool.scene import Task
+from robotool.solution import Solution
+
+TESTS = Path(__file__).parent
+
+
+@pytest.fixture(scope="module")
+def local_ray() -> Iterator[None]:
+    """A Ray on this machine with 2 CPUs; its workers import this folder's modules (the test solvers)."""
+    ray = pytest.importorskip("ray")
+    path = os.pathsep.join(p for p in (str(TESTS), os.environ.get("PYTHONPATH", "")) if p)
+    ray.init(num_cpus=2, include_dashboard=False, object_store_memory=80 * 2**20, logging_level=logging.ERROR,
+             log_to_driver=False, runtime_env={"env_vars": {"PYTHONPATH": path}})
+    try:
+        yield
+    finally:
+        ray.shutdown()
+
+
+def _quiet() -> Console:
+    return Console(file=io.StringIO(), width=200)
+
+
+VOLATILE = {"wall_s", "timings"}
+
+
+def _comparable(results_json: Path) -> dict[str, object]:
+    """results.json without what differs between two identical evaluations: wall times and the folder."""
+
+    def strip(value: object) -> object:
+        if isinstance(value, dict):
+            return {k: strip(v) for k, v in value.items() if k not in VOLATILE}
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+
+    data = json.loads(results_json.read_text())
+    data["config"].pop("out")
+    return strip(data)  # type: ignore[return-value]
+
+
+@pytest.mark.skipif(planner_missing() is not None, reason="the search planner is not in this checkout")
+def test_ray_sweep_writes_the_same_results_as_the_local_executor(tmp_path: Path, local_ray: None) -> None:
+    sweep = ["--tasks", "milk_reaching_near", "sofa_traversing", "--methods", "search", "no_tool", "--worlds", "1"]
+    assert main([*sweep, "--out", str(tmp_path / "local")]) == 0
+    assert main([*sweep, "--executor", "ray", "--out", str(tmp_path / "ray")]) == 0
+    local, on_ray = _comparable(tmp_path / "local" / "results.json"), _comparable(tmp_path / "ray" / "results.json")
+    assert len(on_ray["records"]) == 4  # type: ignore[arg-type]
+    assert on_ray == local
+    for name in ("journal.jsonl", "settings.json"):
+        assert (tmp_path / "local" / name).read_text().count("\n") == (tmp_path / "ray" / name).read_text().count("\n")
+    assert (tmp_path / "local" / "settings.json").read_text() == (tmp_path / "ray" / "settings.json").read_text()
+
+
+@dataclass(frozen=True)
+class DiesOnRay:
+    """TEST FIXTURE solver: logs every call to ``log``, kills its own (Ray worker) process the first
+    ``deaths[task]`` times it is called for a task, otherwise returns the stand-in solution after ``pause_s``."""
+
+    log: Path
+    deaths: Mapping[str, int] = field(default_factory=dict)
+    pause_s: float = 0.3
+
+    def __call__(self, task: Task, *, seed: int, run: int) -> Solution:
+        with self.log.open("a") as f:
+            f.write(f"{task.name}\n")
+        calls = self.log.read_text().splitlines().count(task.name)
+        if calls <= self.deaths.get(task.name, 0):
+            os.kill(os.getpid(), signal.SIGKILL)
+        time.sleep(self.pause_s)
+        return standin_solution(task, seed=seed, run=run)
+
+
+def test_killed_ray_workers_lose_no_run(tmp_path: Path, local_ray: None) -> None:
+    logs = {m: tmp_path / f"{m}.log" for m in ("search", "no_tool")}
+    solvers = {
+        "search": DiesOnRay(logs["search"], deaths={"milk_reaching": 1}),  # dies once: the retry finishes it
+        "no_tool": DiesOnRay(logs["no_tool"], deaths={"sofa_traversing": 9}),  # dies on every attempt
+    }
+    from robotool.eval.ray_executor import RayExecutor
+
+    config = EvalConfig(out=tmp_path / "out", tasks=["sofa_traversing", "milk_reaching", "milk_reaching_near"],
+                        methods=["search", "no_tool"], settings=Settings(worlds=1))
+    with RayExecutor() as executor:
+        results = evaluate(config, solvers=solvers, console=_quiet(), executor=executor)
+
+    by_run = {(r.key.task, r.key.method): r for r in results.records}
+    assert len(by_run) == 6 and len({r.key.id for r in results.records}) == 6
+    lost = by_run[("sofa_traversing", "no_tool")]
+    assert lost.failure_class == "invalid" and lost.success_rate == 0.0
+    assert "WorkerLost" in (lost.error or "") and "lost on all 2 attempts" in (lost.error or "")
+    assert all(r.success_rate == 1.0 and r.error is None for r in by_run.values() if r is not lost)
+    assert sorted(logs["search"].read_text().split()) == ["milk_reaching", "milk_reaching", "milk_reaching_near",
+                                                          "sofa_traversing"]  # only the killed run ran twice
+    assert sorted(logs["no_tool"].read_text().split()) == ["milk_reaching", "milk_reaching_near", "sofa_traversing",
+                                                           "sofa_traversing"]  # one retry, then recorded
+    journal = [json.loads(line)["key"] for line in (tmp_path / "out" / JOURNAL).read_text().splitlines()]
+    assert sorted((k["task"], k["method"]) for k in journal) == sorted(by_run)
+
+    with RayExecutor() as executor:  # resuming reuses every recorded run, the lost one included
+        again = evaluate(config, solvers=solvers, console=_quiet(), executor=executor)
+    assert [r.key.id for r in again.records] == [r.key.id for r in results.records]
+    assert len(logs["search"].read_text().split()) == 4 and len(logs["no_tool"].read_text().split()) == 4
+
+
+def unavailable(task: Task, *, seed: int, run: int) -> Solution:
+    """TEST FIXTURE solver: the language model cannot be reached."""
+    raise LMUnavailableError("unreachable", "the LM server at http://127.0.0.1:9 does not answer")
+
+
+def test_runs_without_an_lm_on_ray_are_not_recorded(tmp_path: Path, local_ray: None) -> None:
+    from robotool.eval.ray_executor import RayExecutor
+
+    config = EvalConfig(out=tmp_path / "out", tasks=["sofa_traversing"], methods=["search", "no_tool"],
+                        settings=Settings(worlds=1))
+    with RayExecutor() as executor, pytest.raises(RunsNotAttempted, match="1 of 2 run") as caught:
+        evaluate(config, solvers={"search": standin_solution, "no_tool": unavailable}, console=_quiet(),
+                 executor=executor)
+    assert caught.value.cause.kind == "unreachable"
+    lines = (tmp_path / "out" / JOURNAL).read_text().splitlines()
+    assert [json.loads(line)["key"]["method"] for line in lines] == ["search"]
+
+
+def test_ray_executor_without_ray_says_how_to_install(tmp_path: Path, capsys, monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
+    assert main(["--executor", "ray", "--tasks", "sofa_traversing", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: the Ray executor needs Ray, which is not installed: pip install 'robotool[ray]'"
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--address", "auto"], "--address needs --executor ray"),
+    (["--executor", "ray", "--address", "127.0.0.1:1"], "cannot reach the Ray cluster at 127.0.0.1:1"),
+    (["--executor", "ray", "--address", "head-node"], "a Ray cluster address is auto, HOST:PORT or ray://HOST:PORT"),
+    (["--executor", "dask"], "invalid choice: 'dask'"),
+])
+def test_bad_executor_arguments_give_one_line_and_status_2(argv: list[str], message: str, tmp_path: Path,
+                                                           capsys) -> None:
+    if "127.0.0.1:1" in argv or "head-node" in argv:
+        pytest.importorskip("ray")
+    try:
+        status = main([*argv, "--tasks", "sofa_traversing", "--out", str(tmp_path)])
+    except SystemExit as e:
+        status = e.code
+    err = capsys.readouterr().err.strip()
+    assert status == 2 and message in err and "\n" not in err
