@@ -7,6 +7,7 @@ import json
 import logging
 import os
 import signal
+import subprocess
 import sys
 import time
 from collections.abc import Iterator, Mapping
@@ -167,3 +168,55 @@ def test_bad_executor_arguments_give_one_line_and_status_2(argv: list[str], mess
         status = e.code
     err = capsys.readouterr().err.strip()
     assert status == 2 and message in err and "\n" not in err
+
+
+KILLABLE_ON_RAY = """
+import logging, sys, time
+sys.path.insert(0, {tests!r})
+from pathlib import Path
+import ray
+from rich.console import Console
+from robotool.eval import EvalConfig, Settings, evaluate
+from robotool.eval.ray_executor import RayExecutor
+from test_eval_runner import standin_solution
+
+def slow(task, *, seed, run):
+    time.sleep(0.5)
+    return standin_solution(task, seed=seed, run=run)
+
+ray.init(num_cpus=2, include_dashboard=False, object_store_memory=80 * 2**20, logging_level=logging.ERROR,
+         log_to_driver=False, runtime_env={{"env_vars": {{"PYTHONPATH": {path!r}}}}})
+config = EvalConfig(out=Path({out!r}), tasks=["sofa_traversing", "milk_reaching"], methods=["search", "no_tool"],
+                    runs=3, settings=Settings(worlds=1))
+evaluate(config, solvers={{"search": slow, "no_tool": slow}}, console=Console(quiet=True), executor=RayExecutor())
+"""
+
+
+def test_sigkill_of_a_ray_sweep_then_rerun_records_every_run_once(tmp_path: Path) -> None:
+    pytest.importorskip("ray")
+    out = tmp_path / "out"
+    path = os.pathsep.join(p for p in (str(TESTS), os.environ.get("PYTHONPATH", "")) if p)
+    script = KILLABLE_ON_RAY.format(tests=str(TESTS), out=str(out), path=path)
+    journal = out / JOURNAL
+    process = subprocess.Popen([sys.executable, "-c", script])
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (journal.exists() and len(journal.read_text().splitlines()) >= 3):
+        time.sleep(0.05)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    before = [json.loads(line)["key"] for line in journal.read_text().splitlines() if line.endswith("}")]
+    assert 3 <= len(before) < 12
+
+    calls: list[str] = []
+
+    def counts(task: Task, *, seed: int, run: int) -> Solution:
+        calls.append(task.name)
+        return standin_solution(task, seed=seed, run=run)
+
+    config = EvalConfig(out=out, tasks=["sofa_traversing", "milk_reaching"], methods=["search", "no_tool"], runs=3,
+                        settings=Settings(worlds=1))
+    results = evaluate(config, solvers={"search": counts, "no_tool": counts}, console=_quiet())  # local executor
+    assert len(calls) == 12 - len(before)  # what the Ray sweep finished is reused, not redone
+    ids = [r.key.id for r in results.records]
+    assert len(ids) == 12 and len(set(ids)) == 12
+    assert len(journal.read_text().splitlines()) == 12

@@ -2,7 +2,9 @@
 
 Modules, one job each: :mod:`~robotool.eval.config` (what to run, defaults, output folder),
 :mod:`~robotool.eval.instances` (which tasks), :mod:`~robotool.eval.solvers` (the methods),
-:mod:`~robotool.eval.runner` (the resumable loop), :mod:`~robotool.eval.journal` (durable records),
+:mod:`~robotool.eval.runner` (the resumable loop), :mod:`~robotool.eval.work` (one run as a job),
+:mod:`~robotool.eval.executor` (where runs are carried out: threads here) and
+:mod:`~robotool.eval.ray_executor` (Ray tasks on a cluster), :mod:`~robotool.eval.journal` (durable records),
 :mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.errors` (failure classes),
 :mod:`~robotool.eval.grading` (key-concept accuracy), :mod:`~robotool.eval.metrics`,
 :mod:`~robotool.eval.tables`, :mod:`~robotool.eval.report`, :mod:`~robotool.eval.plots`,
