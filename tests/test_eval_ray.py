@@ -22,8 +22,10 @@ from robotool.errors import LMUnavailableError
 from robotool.eval import EvalConfig, RunsNotAttempted, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import planner_missing
+from robotool.lm import make_lm
 from robotool.scene import Task
 from robotool.solution import Solution
+from robotool.standin import Script, StandinServer
 
 TESTS = Path(__file__).parent
 
@@ -125,6 +127,24 @@ def test_killed_ray_workers_lose_no_run(tmp_path: Path, local_ray: None) -> None
         again = evaluate(config, solvers=solvers, console=_quiet(), executor=executor)
     assert [r.key.id for r in again.records] == [r.key.id for r in results.records]
     assert len(logs["search"].read_text().split()) == 4 and len(logs["no_tool"].read_text().split()) == 4
+
+
+def test_lm_runs_on_ray_match_the_local_executor_over_http(tmp_path: Path, local_ray: None) -> None:
+    """The LM travels with the Ray task and its workers call the stand-in server over HTTP."""
+    from robotool.eval.ray_executor import RayExecutor
+
+    example = TESTS.parent / "examples" / "standin" / "milk_reaching.json"
+    with StandinServer(Script.model_validate_json(example.read_text())) as server:
+        lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=1)
+        config = EvalConfig(tasks=["milk_reaching"], methods=["robotool"], settings=Settings(worlds=1),
+                            api_base=server.base_url)
+        local = evaluate(config.model_copy(update={"out": tmp_path / "local"}), lm=lm, console=_quiet())
+        asked = len(server.requests)
+        with RayExecutor() as executor:
+            evaluate(config.model_copy(update={"out": tmp_path / "ray"}), lm=lm, console=_quiet(), executor=executor)
+        assert len(server.requests) == 2 * asked > 0  # the Ray worker asked the server as the local run did
+    assert local.records[0].success_rate == 1.0 and local.records[0].tokens > 0
+    assert _comparable(tmp_path / "ray" / "results.json") == _comparable(tmp_path / "local" / "results.json")
 
 
 def unavailable(task: Task, *, seed: int, run: int) -> Solution:
