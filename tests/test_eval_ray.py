@@ -19,7 +19,7 @@ from rich.console import Console
 from test_eval_runner import standin_solution
 
 from robotool.errors import LMUnavailableError
-from robotool.eval import EvalConfig, RunsNotAttempted, Settings, evaluate, main
+from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import planner_missing
 from robotool.lm import make_lm
@@ -145,6 +145,19 @@ def test_lm_runs_on_ray_match_the_local_executor_over_http(tmp_path: Path, local
         assert len(server.requests) == 2 * asked > 0  # the Ray worker asked the server as the local run did
     assert local.records[0].success_rate == 1.0 and local.records[0].tokens > 0
     assert _comparable(tmp_path / "ray" / "results.json") == _comparable(tmp_path / "local" / "results.json")
+
+
+def test_a_worker_with_another_robotool_version_stops_the_sweep(tmp_path: Path, local_ray: None,
+                                                               monkeypatch) -> None:
+    from robotool.eval import ray_executor
+
+    monkeypatch.setattr(ray_executor, "version", lambda: "0.0.0+driver")  # this machine, as seen by the executor
+    config = EvalConfig(out=tmp_path / "out", tasks=["sofa_traversing"], methods=["search"],
+                        settings=Settings(worlds=1))
+    mismatch = r"a Ray task failed: a Ray worker runs robotool .*, this machine 0\.0\.0\+driver"
+    with ray_executor.RayExecutor() as executor, pytest.raises(EvalError, match=mismatch):
+        evaluate(config, solvers={"search": standin_solution}, console=_quiet(), executor=executor)
+    assert not (tmp_path / "out" / JOURNAL).exists() or not (tmp_path / "out" / JOURNAL).read_text()
 
 
 def unavailable(task: Task, *, seed: int, run: int) -> Solution:
