@@ -111,7 +111,8 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument(
         "--address",
         type=cluster_address,
-        help="the Ray cluster to use with --executor ray, e.g. auto or ray://HOST:10001 (default: start Ray here)",
+        help="the Ray cluster to use with --executor ray, e.g. auto or ray://HOST:10001 "
+        "(default: $RAY_ADDRESS, else start Ray here)",
     )
     p.add_argument("--out", type=output_folder, help="output folder (default: results/<model>-k<K>-w<R>-s<seed>)")
     p.add_argument(

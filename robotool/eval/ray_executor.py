@@ -78,8 +78,8 @@ def _check_reachable(address: str) -> None:
 
 
 class RayExecutor:
-    """Jobs as Ray tasks: on the cluster at ``address``, or on a Ray started here (and shut down by
-    :meth:`close`) when none is given and this process is not connected to one yet."""
+    """Jobs as Ray tasks: on the cluster at ``address`` (None: ``$RAY_ADDRESS``, else a Ray started here and
+    shut down by :meth:`close`), or on the Ray this process is already connected to."""
 
     name: ExecutorName = "ray"
 
