@@ -2,7 +2,7 @@
 
 A run is keyed by (task, seed, method, run) and a digest of the content of its inputs (the task itself,
 the method, the LM and its settings, the seeds, the robotool version), so a changed input is a new run.
-Each finished run is appended to the folder's journal by the thread that ran it, so an interrupted
+Each finished run is appended to the folder's journal as soon as its record is back, so an interrupted
 evaluation resumes where it stopped: rerunning the same command reuses every run already in the journal
 and says how many. A run that could not be attempted because the language model was unavailable is not
 a result and is never journalled. Runs go through an executor (:mod:`robotool.eval.executor`): by default
