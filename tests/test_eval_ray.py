@@ -178,6 +178,18 @@ def test_runs_without_an_lm_on_ray_are_not_recorded(tmp_path: Path, local_ray: N
     assert [json.loads(line)["key"]["method"] for line in lines] == ["search"]
 
 
+def test_on_a_cluster_with_gpus_runs_use_warp_with_a_gpu_share(monkeypatch, local_ray: None) -> None:
+    from robotool.eval.ray_executor import JOBS_PER_GPU, RayExecutor, task_options
+
+    with RayExecutor() as executor:
+        assert executor.backend(None) == "mujoco"  # this machine's Ray has no GPU
+        monkeypatch.setattr(executor, "_resources", lambda: {"CPU": 64.0, "GPU": 8.0})
+        assert executor.backend(None) == "warp" and executor.backend("mujoco") == "mujoco"
+    gpus = {"CPU": 64.0, "GPU": 8.0}
+    assert task_options("warp", gpus) == {"num_cpus": 1, "num_gpus": 1 / JOBS_PER_GPU, "max_retries": 0}
+    assert task_options("mujoco", gpus)["num_gpus"] == 0 and task_options("warp", {"CPU": 2.0})["num_gpus"] == 0
+
+
 def test_ray_executor_without_ray_says_how_to_install(tmp_path: Path, capsys, monkeypatch) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # as if Ray were not installed
     assert main(["--executor", "ray", "--tasks", "sofa_traversing", "--out", str(tmp_path)]) == 2

@@ -77,6 +77,13 @@ def _check_reachable(address: str) -> None:
         raise EvalError(f"cannot reach the Ray cluster at {address}: {e.strerror or e}") from None
 
 
+def task_options(backend: str, resources: dict[str, float]) -> dict[str, float]:
+    """What one job's Ray task asks for on a cluster with ``resources``: a CPU, and a share of a GPU when
+    it simulates on warp and the cluster has GPUs; no automatic retry (a lost job is submitted again here)."""
+    gpu = 1 / JOBS_PER_GPU if backend == "warp" and resources.get("GPU", 0) > 0 else 0
+    return {"num_cpus": 1, "num_gpus": gpu, "max_retries": 0}
+
+
 class RayExecutor:
     """Jobs as Ray tasks: on the cluster at ``address`` (None: ``$RAY_ADDRESS``, else a Ray started here and
     shut down by :meth:`close`), or on the Ray this process is already connected to."""
@@ -118,8 +125,7 @@ class RayExecutor:
         job starts.
         """
         resources = self._resources()
-        gpu = 1 / JOBS_PER_GPU if backend == "warp" and resources.get("GPU", 0) > 0 else 0
-        task = ray.remote(_attempt).options(num_cpus=1, num_gpus=gpu, max_retries=0)
+        task = ray.remote(_attempt).options(**task_options(backend, resources))
         window = max(2, 2 * int(resources.get("CPU", 1)))
         work_ref = ray.put(work)
         driver_version = version()
