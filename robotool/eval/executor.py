@@ -36,8 +36,6 @@ class WorkerLost(RuntimeError):
 class Executor(Protocol):
     """Runs jobs somewhere and reports each outcome as it comes in."""
 
-    name: ExecutorName
-
     def backend(self, asked: str | None) -> str:
         """The simulator backend the jobs will use: ``asked``, or what the workers have (warp with a GPU)."""
         ...
@@ -75,8 +73,6 @@ class Executor(Protocol):
 
 class LocalExecutor:
     """Jobs on a thread pool in this process: exclusive jobs one at a time, the others ``workers`` at once."""
-
-    name: ExecutorName = "local"
 
     def __init__(self, workers: int) -> None:
         self.workers = workers

@@ -25,7 +25,7 @@ import ray
 from ray import exceptions as ray_errors
 
 from robotool.eval.config import EvalError
-from robotool.eval.executor import ExecutorName, WorkerLost
+from robotool.eval.executor import WorkerLost
 from robotool.version import version
 
 J = TypeVar("J")
@@ -87,8 +87,6 @@ def task_options(backend: str, resources: dict[str, float]) -> dict[str, float]:
 class RayExecutor:
     """Jobs as Ray tasks: on the cluster at ``address`` (None: ``$RAY_ADDRESS``, else a Ray started here and
     shut down by :meth:`close`), or on the Ray this process is already connected to."""
-
-    name: ExecutorName = "ray"
 
     def __init__(self, address: str | None = None) -> None:
         if address is not None:
