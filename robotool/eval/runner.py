@@ -184,7 +184,7 @@ def evaluate(
         notes=notes,
         records=[journal.records[k.id] for _, k in plan],
     )
-    results = _with_pictures(results, instances)
+    results = _with_pictures(results, instances, backend)
     results.wall_s = time.perf_counter() - started
     _write(results, console)
     return results
@@ -236,15 +236,16 @@ def _run(
         raise RunsNotAttempted(len(pending) - len(recorded), total, unavailable[0])
 
 
-def _with_pictures(results: Results, instances: list[TaskInstance]) -> Results:
-    """The results with the report's pictures drawn (or a note saying why there are none)."""
+def _with_pictures(results: Results, instances: list[TaskInstance], backend: str) -> Results:
+    """The results with the report's pictures drawn, failed worlds simulated again on ``backend`` (the one
+    the runs used), or a note saying why there are none."""
     if not results.config.pictures:
         return results
     from robotool.errors import RobotoolError
     from robotool.eval.pictures import write_pictures
 
     try:
-        pictures = write_pictures(instances, results.records, results.config.out_dir, results.config.settings.backend)
+        pictures = write_pictures(instances, results.records, results.config.out_dir, backend)
     except RobotoolError as e:
         return results.model_copy(update={"notes": [*results.notes, f"no pictures: {e}"]})
     return results.model_copy(update={"pictures": pictures})
