@@ -202,6 +202,7 @@ def test_ray_executor_without_ray_says_how_to_install(tmp_path: Path, capsys, mo
     (["--executor", "ray", "--address", "127.0.0.1:1"], "cannot reach the Ray cluster at 127.0.0.1:1"),
     (["--executor", "ray", "--address", "head-node"], "a Ray cluster address is auto, HOST:PORT or ray://HOST:PORT"),
     (["--executor", "dask"], "invalid choice: 'dask'"),
+    (["--executor", "ray", "--log-prompts", "prompts.jsonl"], "--log-prompts writes a file on this machine"),
 ])
 def test_bad_executor_arguments_give_one_line_and_status_2(argv: list[str], message: str, tmp_path: Path,
                                                            capsys) -> None:

@@ -163,7 +163,10 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
     """Run the evaluator; returns the exit status."""
     from robotool.eval.runner import evaluate
 
-    args = build_parser(prog).parse_args(argv)
+    parser = build_parser(prog)
+    args = parser.parse_args(argv)
+    if args.executor == "ray" and args.log_prompts is not None:  # the file would be written on the workers
+        parser.error("--log-prompts writes a file on this machine, so it needs --executor local")
     errors = make_console(stderr=True)
     console = make_console()
     warn_if_warp_on_cpu(args.backend, errors)
