@@ -21,7 +21,7 @@ def test_fenced_block_inside_prose(tag: str) -> None:
 
 def test_several_python_blocks_are_joined_and_other_languages_skipped() -> None:
     answer = (
-        "Step 1:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{\"milk\": 1}\n```\n"
+        'Step 1:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{"milk": 1}\n```\n'
         "Step 2:\n~~~py\nclose_gripper()\n~~~\n"
     )
     assert extract_program(answer) == "open_gripper()\n\nclose_gripper()\n"

@@ -7,11 +7,8 @@ sleeping) and answers every pending motion together.
 
 from __future__ import annotations
 
-import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -281,41 +278,14 @@ def test_worker_namespace_has_only_allowlisted_modules() -> None:
             _import(name, None, None, fromlist)
 
 
-def test_worker_process_cannot_open_files_or_sockets_or_grow() -> None:
-    """The OS limits alone, without the validator: run the worker's set-up in a fresh interpreter."""
-    script = """
-import json, socket, sys
-from robotool.sandbox.limits import SandboxLimits
-from robotool.sandbox.worker import _apply_limits, _isolate
-host, worker = socket.socketpair()
-conn = _isolate(worker.fileno())  # kept open: it holds descriptor 3
-_apply_limits(SandboxLimits(memory_mb=64))
-outcomes = {}
-for name, attempt in {
-    "open": lambda: open("/etc/hostname"),
-    "socket": lambda: socket.socket(),
-    "memory": lambda: bytearray(128 * 2**20),
-}.items():
-    try:
-        attempt()
-        outcomes[name] = "allowed"
-    except (OSError, MemoryError) as e:
-        outcomes[name] = type(e).__name__
-print(json.dumps(outcomes), file=sys.stderr)
-"""
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
-    outcomes = json.loads(result.stderr.splitlines()[0])
-    assert outcomes == {"open": "OSError", "socket": "OSError", "memory": "MemoryError"}
-
-
 def test_zygote_does_not_inherit_the_host_environment(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ROBOTOOL_TEST_API_KEY", "sk-secret")
     fresh = Zygote()
     try:
         (worker,) = fresh.spawn(1)
-        for pid in (fresh.process.pid, worker.pid):
+        for pid in (fresh.process.pid, worker.host_pid):
             environment = Path(f"/proc/{pid}/environ").read_bytes()
             assert b"sk-secret" not in environment and b"OPENBLAS_NUM_THREADS=1" in environment
     finally:
         fresh.close()
-    assert not Path(f"/proc/{worker.pid}").exists()
+    assert not Path(f"/proc/{worker.host_pid}").exists()

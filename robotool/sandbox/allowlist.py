@@ -22,10 +22,14 @@ NUMPY_FUNCTIONS: frozenset[str] = frozenset(
         "argmin", "argmax", "sum", "prod", "mean", "median", "std", "var", "cumsum", "diff", "dot", "cross",
         "inner", "outer", "matmul", "einsum", "allclose", "isclose", "isfinite", "isnan", "isinf", "all",
         "any", "where", "argsort", "sort", "unique", "interp", "mod", "fmod", "remainder", "floor_divide",
-        "float64", "int64", "ndarray"
     }
-)
-"""``np.<name>`` functions and types a program may use."""
+)  # fmt: skip
+"""``np.<name>`` functions a program may call. Missing on purpose: every constructor that takes a
+buffer, strides, an object dtype or gives uninitialised memory (``ndarray``, ``empty``,
+``frombuffer``, ``lib.stride_tricks``...); ``dtype=object`` is refused when the program runs."""
+
+NUMPY_TYPES: frozenset[str] = frozenset({"float64", "int64"})
+"""``np.<name>`` scalar types, for conversions and ``dtype=``."""
 
 NUMPY_CONSTANTS: frozenset[str] = frozenset({"pi", "e", "inf", "nan", "newaxis"})
 
@@ -46,7 +50,7 @@ BUILTINS: frozenset[str] = frozenset(
         "iter", "len", "list", "map", "max", "min", "next", "pow", "print", "range", "reversed", "round",
         "set", "sorted", "str", "sum", "tuple", "zip"
     }
-)
+)  # fmt: skip
 """Builtins a program may call. Missing on purpose: type, object, getattr, setattr, vars, dir,
 globals, locals, open, exec, eval, compile, __import__, input, breakpoint, help, memoryview."""
 
@@ -59,10 +63,14 @@ METHODS: frozenset[str] = frozenset(
         "min", "max", "argmin", "argmax", "prod", "std", "cumsum", "dot", "round", "clip", "all", "any",
         "T", "shape", "ndim", "size"
     }
-)
+)  # fmt: skip
 """Attributes a program may read on its own values (lists, dicts, strings, numpy arrays).
+``astype`` takes only a numeric type (checked by the validator).
 Missing on purpose: ``format``/``format_map`` (format fields reach attributes by name), ``tofile``,
-``dump``, ``ctypes``, ``base``, ``data``, ``view``, generator and frame attributes."""
+``dump``, ``ctypes``, ``base``, ``data``, ``view``, ``strides``, generator and frame attributes."""
+
+NUMERIC_TYPE_NAMES: frozenset[str] = frozenset({"float", "int", "bool", "float64", "int64", "float32", "int32"})
+"""What ``.astype(...)`` may convert to: these builtins, ``np.<these>`` or these names as strings."""
 
 NOT_ALLOWED_BECAUSE: dict[str, str] = {
     "format": "str.format can reach private attributes through its fields; use an f-string",

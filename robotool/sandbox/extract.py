@@ -44,9 +44,7 @@ def _fenced_blocks(text: str) -> list[str]:
     i = 0
     while i < len(fences):
         opening = fences[i]
-        closing = next(
-            (f for f in fences[i + 1 :] if f.group(1)[0] == opening.group(1)[0] and not f.group(2)), None
-        )
+        closing = next((f for f in fences[i + 1 :] if f.group(1)[0] == opening.group(1)[0] and not f.group(2)), None)
         end = closing.start() if closing else len(text)
         if opening.group(2).lower() in _PYTHON_TAGS:
             blocks.append(text[opening.end() + 1 : end].strip("\n"))

@@ -21,6 +21,9 @@ class SandboxLimits(BaseModel):
     )
     memory_mb: int = Field(256, gt=0, description="address space the program may add to the worker, MiB")
     max_output_chars: int = Field(20_000, gt=0, description="characters the program may print")
+    max_batch_output_chars: int = Field(
+        1_000_000, gt=0, description="characters kept from the output of all programs of one batch together"
+    )
     max_skill_calls: int = Field(500, gt=0, description="skill calls (queries and motions) per program")
 
     def skill_calls_exceeded(self) -> str:

@@ -1,7 +1,7 @@
 """Messages between the host and a worker: JSON, never pickle, since the worker is untrusted.
 
-Host to worker: ``{"code", "embodiment", "limits"}`` when the session is created, ``GO`` when the
-runner starts the program, then ``{"value", "error"}`` per reply.
+Host to worker: ``{"code", "embodiment", "limits", "python_checks"}`` when the session is created,
+``GO`` when the runner starts the program, then ``{"value", "error"}`` per reply.
 Worker to host: :class:`WorkerMessage`, validated by pydantic on arrival.
 """
 
@@ -38,8 +38,15 @@ def max_message_bytes(limits: SandboxLimits) -> int:
     return 6 * limits.max_output_chars + 65_536
 
 
-def encode_start(code: str, embodiment: EmbodimentName, limits: SandboxLimits) -> bytes:
-    return json.dumps({"code": code, "embodiment": embodiment, "limits": limits.model_dump()}).encode()
+def max_world_bytes(limits: SandboxLimits) -> int:
+    """Most bytes the host reads from one worker over its whole program: its output, escaped, and
+    room for every allowed skill call."""
+    return 6 * limits.max_output_chars + 65_536 + 4_096 * limits.max_skill_calls
+
+
+def encode_start(code: str, embodiment: EmbodimentName, limits: SandboxLimits, *, python_checks: bool) -> bytes:
+    start = {"code": code, "embodiment": embodiment, "limits": limits.model_dump(), "python_checks": python_checks}
+    return json.dumps(start).encode()
 
 
 def encode_reply(reply: SkillReply) -> bytes:

@@ -13,11 +13,26 @@ from pydantic import ValidationError
 from robotool.embodiments import EmbodimentName, SkillArgumentError, check_call
 from robotool.programs import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox.limits import SandboxLimits
-from robotool.sandbox.messages import GO, WorkerMessage, encode_reply, encode_start, max_message_bytes
+from robotool.sandbox.messages import (
+    GO,
+    WorkerMessage,
+    encode_reply,
+    encode_start,
+    max_message_bytes,
+    max_world_bytes,
+)
 from robotool.sandbox.validate import ProgramRejected, validate
 from robotool.sandbox.zygote import Worker, zygote
 
 CLOSED = "closed before the program ended"
+TOO_MUCH_DATA = "the worker sent more data than its limits allow"
+
+
+class OutputBudget:
+    """Characters of program output a batch may still keep (shared by its sessions)."""
+
+    def __init__(self, chars: int):
+        self.left = chars
 
 
 class SandboxSession:
@@ -27,6 +42,9 @@ class SandboxSession:
     rejection. A worker that crashes, overruns a limit or sends anything malformed ends only this
     session, with the reason; the host and the other sessions carry on. ``worker`` is one from a
     batch (:func:`start_sessions`); by default the session spawns its own.
+
+    ``test_only_skip_python_checks`` skips the validator and gives the program the real builtins,
+    so that tests can show what the OS layers alone stop. Nothing else may set it.
     """
 
     def __init__(
@@ -36,6 +54,8 @@ class SandboxSession:
         limits: SandboxLimits | None = None,
         *,
         worker: Worker | None = None,
+        batch_output: OutputBudget | None = None,
+        test_only_skip_python_checks: bool = False,
     ):
         self.code = code
         self.embodiment: EmbodimentName = embodiment
@@ -47,20 +67,23 @@ class SandboxSession:
         self._started = False
         self._owed_since: float | None = None
         self._wall_spent = 0.0
+        self._received = 0
+        self._batch_output = batch_output or OutputBudget(self.limits.max_batch_output_chars)
         self._worker = worker
-        rejection = _rejection(code, embodiment)
+        rejection = None if test_only_skip_python_checks else _rejection(code, embodiment)
         if rejection is not None:
             self._end(f"program rejected: {rejection}")
             return
         if self._worker is None:
             (self._worker,) = zygote().spawn(1)
         with contextlib.suppress(OSError):  # a dead worker: wait() reports how it ended
-            self._worker.conn.send_bytes(encode_start(code, embodiment, self.limits))
+            start = encode_start(code, embodiment, self.limits, python_checks=not test_only_skip_python_checks)
+            self._worker.conn.send_bytes(start)
 
     @property
     def worker_pid(self) -> int | None:
-        """The worker's process id; None when the program was rejected."""
-        return None if self._worker is None else self._worker.pid
+        """The worker's process id as this process sees it; None when the program was rejected."""
+        return None if self._worker is None else self._worker.host_pid
 
     def resume(self, reply: SkillReply | None) -> None:
         """Start the program (``None``) or answer its pending skill call."""
@@ -89,6 +112,9 @@ class SandboxSession:
         self._owed_since = None
         try:
             data = worker.conn.recv_bytes(max_message_bytes(self.limits))
+            self._received += len(data)
+            if self._received > max_world_bytes(self.limits):
+                return self._end(TOO_MUCH_DATA)
             message = WorkerMessage.model_validate_json(data)
         except (EOFError, ConnectionError):  # reset when it died holding an unread reply
             return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
@@ -112,10 +138,12 @@ class SandboxSession:
             self._end(CLOSED)
 
     def _add_output(self, text: str) -> None:
-        room = self.limits.max_output_chars - self._output_chars
+        room = min(self.limits.max_output_chars - self._output_chars, self._batch_output.left)
         if room > 0 and text:
-            self._output.append(text[:room])
-            self._output_chars += min(len(text), room)
+            kept = text[:room]
+            self._output.append(kept)
+            self._output_chars += len(kept)
+            self._batch_output.left -= len(kept)
 
     def _death_reason(self, code: int) -> str:
         if code in (-signal.SIGPROF, -signal.SIGXCPU):
@@ -148,6 +176,14 @@ def _rejection(code: str, embodiment: EmbodimentName) -> str | None:
 def start_sessions(
     codes: Sequence[str], embodiment: EmbodimentName, limits: SandboxLimits | None = None
 ) -> list[SandboxSession]:
-    """One session per program, their workers spawned in one batch (a rejected program's is released)."""
+    """One session per program, their workers spawned in one batch (a rejected program's is released).
+
+    The batch shares one output budget (``limits.max_batch_output_chars``).
+    """
+    limits = limits or SandboxLimits()
+    budget = OutputBudget(limits.max_batch_output_chars)
     workers = zygote().spawn(len(codes))
-    return [SandboxSession(c, embodiment, limits, worker=w) for c, w in zip(codes, workers, strict=True)]
+    return [
+        SandboxSession(c, embodiment, limits, worker=w, batch_output=budget)
+        for c, w in zip(codes, workers, strict=True)
+    ]

@@ -243,11 +243,12 @@ class _Checker(ast.NodeVisitor):
             self.reject(node, f"{spec.signature} has no parameter '{unknown[0]}'")
             return
         if len(node.args) + len(node.keywords) != len(params):
-            self.reject(node, f"{spec.signature} takes {len(params)} argument(s), got "
-                        f"{len(node.args) + len(node.keywords)}")
+            self.reject(
+                node, f"{spec.signature} takes {len(params)} argument(s), got {len(node.args) + len(node.keywords)}"
+            )
             return
         by_name = {k.arg: k.value for k in node.keywords}
-        values = [*node.args, *(by_name[p] for p in params[len(node.args):])]
+        values = [*node.args, *(by_name[p] for p in params[len(node.args) :])]
         try:
             literal = tuple(ast.literal_eval(v) for v in values)
         except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):

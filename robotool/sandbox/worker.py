@@ -1,9 +1,11 @@
-"""The worker process: applies the limits, then runs one validated program in a restricted namespace.
+"""The worker process: applies the limits and the OS layers, then runs one program in a restricted namespace.
 
 Runs in a child forked from the zygote (:mod:`robotool.sandbox.zygote`), never in the host. The
 program's globals hold only the allowlisted builtins, a restricted ``__import__`` that hands out
-namespaces of the allowlisted numpy/math functions, and one stub per skill that checks the
-arguments, sends the call to the host and blocks for the answer.
+namespaces of the allowlisted numpy/math functions (wrapped so that no object or structured array
+comes out of them), and one stub per skill that checks the arguments, sends the call to the host
+and blocks for the answer. Everything the worker says goes to the host through its socket as a
+:class:`WorkerMessage`; its stdin, stdout and stderr are ``/dev/null``.
 """
 
 from __future__ import annotations
@@ -12,8 +14,10 @@ import builtins
 import json
 import math
 import os
+import re
 import resource
 import signal
+import sys
 import warnings
 from collections.abc import Callable
 from multiprocessing.connection import Connection
@@ -21,21 +25,68 @@ from types import SimpleNamespace
 from typing import Any, NoReturn
 
 import numpy as np
+import numpy.ma
 
 from robotool.embodiments import EmbodimentName, SkillSpec, check_call, skills
 from robotool.programs import SkillCallError
-from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG
+from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
+from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import WorkerMessage
 
 PROGRAM_FILENAME = "<program>"
-_SOCKET_FD = 3
 MAX_ERROR_CHARS = 500
+UNDESCRIBABLE = "the error could not be described"
+"""What a program's error reads as when describing it fails too."""
+
+_ADDRESS = re.compile(r"0x[0-9a-fA-F]{4,}")
+_HOST_DIRECTORIES = sorted(
+    {
+        d
+        for d in (os.path.dirname(os.path.dirname(os.path.abspath(__file__))), sys.prefix, sys.base_prefix, *sys.path)
+        if len(d) > 1
+    },
+    key=len,
+    reverse=True,
+)
+
+
+class _NumpyFunction:
+    """An allowlisted numpy function whose arguments and results carry no object or structured dtype.
+
+    Object arrays and structured dtypes are how numpy lays references over raw memory; programs
+    only need numbers. The repr names the function, not where it lives in memory.
+    """
+
+    __slots__ = ("_function", "_name")
+
+    def __init__(self, name: str, function: Callable[..., Any]):
+        self._name = name
+        self._function = function
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        if "dtype" in kwargs:
+            _check_dtype(np.dtype(kwargs["dtype"]))
+        result = self._function(*args, **kwargs)
+        for value in result if isinstance(result, tuple) else (result,):
+            if isinstance(value, np.ndarray):
+                _check_dtype(value.dtype)
+        return result
+
+    def __repr__(self) -> str:
+        return f"<function {self._name}>"
+
+
+def _check_dtype(dtype: np.dtype[Any]) -> None:
+    if dtype.hasobject or dtype.kind == "V":
+        raise TypeError(f"arrays of dtype {dtype.str!r} are not allowed in programs; use numbers")
+
 
 _MODULES: dict[str, SimpleNamespace] = {
     "numpy": SimpleNamespace(
-        **{n: getattr(np, n) for n in NUMPY_FUNCTIONS | NUMPY_CONSTANTS},
-        linalg=SimpleNamespace(**{n: getattr(np.linalg, n) for n in NUMPY_LINALG}),
+        **{n: _NumpyFunction(f"np.{n}", getattr(np, n)) for n in NUMPY_FUNCTIONS},
+        **{n: getattr(np, n) for n in NUMPY_CONSTANTS | NUMPY_TYPES},
+        linalg=SimpleNamespace(**{n: _NumpyFunction(f"np.linalg.{n}", getattr(np.linalg, n)) for n in NUMPY_LINALG}),
     ),
     "math": SimpleNamespace(**{n: getattr(math, n) for n in MATH_NAMES}),
 }
@@ -45,50 +96,51 @@ class _LimitExceeded(BaseException):
     """Ends the program with the message of the limit it hit."""
 
 
-def serve(fd: int) -> NoReturn:
-    """Wait for the program and apply its limits, wait for the go, run it, report its end, exit.
+def serve(fd: int, jail: WorkerJail) -> NoReturn:
+    """Enter the jail, wait for the program and apply its limits, seal, wait for the go, run, report, exit.
 
     ``fd`` is this worker's socket to the host. The program arrives when its session is created and
     the go when the runner starts it, so the set-up overlaps with whatever the host does in between
-    (building and settling the simulation). Never returns.
+    (building and settling the simulation). The seccomp filter is loaded once the program is
+    compiled, before the go. Never returns.
     """
-    conn = _isolate(fd)
+    null = os.open(os.devnull, os.O_RDWR)
+    with open("/proc/self/statm") as f:
+        address_space = int(f.read().split()[0]) * resource.getpagesize()
+    jail.enter()
+    conn = _isolate(fd, null)
     try:
         start = json.loads(conn.recv_bytes())
         limits = SandboxLimits.model_validate(start["limits"])
-        _apply_limits(limits)
+        _apply_limits(limits, address_space)
         program = _Program(conn, start["embodiment"], limits)
+        code = program.prepare(start["code"], python_checks=start.get("python_checks", True))
+        jail.seal()
         conn.recv_bytes()
-        error = program.run(start["code"])
+        error = program.run(code)
         conn.send_bytes(WorkerMessage(error=error, output=program.take_output()).model_dump_json().encode())
     except (EOFError, OSError):
         os._exit(1)  # the host went away
     os._exit(0)
 
 
-def _isolate(fd: int) -> Connection:
-    """Keep only descriptors 0-3: stdin and stdout on /dev/null, stderr (for the worker's own
-    tracebacks; /dev/null if closed) and the host socket ``fd``, moved to 3. Close the rest."""
-    os.dup2(fd, _SOCKET_FD)
-    null = os.open(os.devnull, os.O_RDWR)
-    os.dup2(null, 0)
-    os.dup2(null, 1)
-    try:
-        os.fstat(2)
-    except OSError:
-        os.dup2(null, 2)
-    os.closerange(_SOCKET_FD + 1, resource.getrlimit(resource.RLIMIT_NOFILE)[0])
-    return Connection(_SOCKET_FD)
+def _isolate(fd: int, null: int) -> Connection:
+    """Keep only descriptors 0-3: stdin, stdout and stderr on /dev/null (``null``), and the host
+    socket ``fd``, moved to 3. Close the rest."""
+    os.dup2(fd, SOCKET_FD)
+    for std in (0, 1, 2):
+        os.dup2(null, std)
+    os.closerange(SOCKET_FD + 1, resource.getrlimit(resource.RLIMIT_NOFILE)[0])
+    return Connection(SOCKET_FD)
 
 
-def _apply_limits(limits: SandboxLimits) -> None:
+def _apply_limits(limits: SandboxLimits, address_space: int) -> None:
     """CPU and memory budgets, and no new files, processes or core dumps for this process.
 
-    After :func:`_isolate` descriptors 0-3 are all in use, so a descriptor limit of 4 leaves no room
-    to open a file or a socket. (The process limit binds only when the host does not run as root.)
+    ``address_space`` is the worker's size before the program, in bytes. After :func:`_isolate`
+    descriptors 0-3 are all in use, so a descriptor limit of 4 leaves no room to open a file or a
+    socket. (The process limit binds only for a worker that no longer runs as root.)
     """
-    with open("/proc/self/statm") as f:
-        address_space = int(f.read().split()[0]) * resource.getpagesize()
     memory = address_space + limits.memory_mb * 2**20
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     # SIGPROF's default action ends the process, even inside a long C call such as 10**10**9.
@@ -96,12 +148,28 @@ def _apply_limits(limits: SandboxLimits) -> None:
     backstop = math.ceil(limits.cpu_s) + 1
     resource.setrlimit(resource.RLIMIT_CPU, (backstop, backstop + 1))
     for limit, value in (
-        (resource.RLIMIT_NOFILE, _SOCKET_FD + 1),
+        (resource.RLIMIT_NOFILE, SOCKET_FD + 1),
         (resource.RLIMIT_FSIZE, 0),
         (resource.RLIMIT_CORE, 0),
         (resource.RLIMIT_NPROC, 0),
     ):
         resource.setrlimit(limit, (value, value))
+
+
+class _Skill:
+    """A skill as the program sees it: calling it sends the call to the host and returns the reply."""
+
+    __slots__ = ("_program", "_spec")
+
+    def __init__(self, program: _Program, spec: SkillSpec):
+        self._program = program
+        self._spec = spec
+
+    def __call__(self, *args: object, **kwargs: object) -> Any:
+        return self._program.call_skill(self._spec, args, kwargs)
+
+    def __repr__(self) -> str:
+        return f"<skill {self._spec.name}>"
 
 
 class _Program:
@@ -114,19 +182,34 @@ class _Program:
         self.output: list[str] = []
         self.printed = 0
         self.calls = 0
+        self.namespace: dict[str, Any] = {}
 
-    def run(self, code: str) -> str | None:
-        """Run the program to its end; the error that stopped it, or None."""
+    def prepare(self, code: str, *, python_checks: bool) -> Any:
+        """Compile the program and build its namespace; a program that does not compile ends at run.
+
+        ``python_checks=False`` gives the program every builtin (``print`` still goes to the host):
+        only tests of the OS layers ask for it (see ``SandboxSession``).
+        """
         warnings.showwarning = self.show_warning
-        namespace: dict[str, Any] = {"__builtins__": self.builtins()}
-        namespace.update({spec.name: self.skill(spec) for spec in skills(self.embodiment)})
+        every_builtin = {**vars(builtins), "print": self.print}
+        self.namespace = {"__builtins__": self.builtins() if python_checks else every_builtin}
+        self.namespace.update({spec.name: _Skill(self, spec) for spec in skills(self.embodiment)})
         try:
-            exec(compile(code, PROGRAM_FILENAME, "exec"), namespace)
+            return compile(code, PROGRAM_FILENAME, "exec")
+        except (SyntaxError, ValueError, RecursionError, MemoryError) as e:
+            return e
+
+    def run(self, code: Any) -> str | None:
+        """Run the compiled program to its end; the error that stopped it, or None."""
+        try:
+            if isinstance(code, BaseException):
+                raise code
+            exec(code, self.namespace)
         except _LimitExceeded as e:
             return str(e)
         except MemoryError:
             return f"memory limit exceeded ({self.limits.memory_mb} MiB)"
-        except Exception as e:  # the program's error is its world's result
+        except BaseException as e:  # the program's error is its world's result
             return _describe(e)
         return None
 
@@ -143,54 +226,73 @@ class _Program:
         if self.printed > self.limits.max_output_chars:
             limit = self.limits.max_output_chars
             raise _LimitExceeded(f"output limit exceeded (printed more than {limit} characters)")
-        self.output.append(text)
+        self.output.append(_encodable(text))
 
     def show_warning(self, message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
-        self.print(f"warning: {category.__name__}: {message}")
+        self.print(f"warning: {_public_name(category)}: {_safe_str(message)}")
 
     def take_output(self) -> str:
         text = "".join(self.output)
         self.output.clear()
         return text
 
-    def skill(self, spec: SkillSpec) -> Callable[..., Any]:
+    def call_skill(self, spec: SkillSpec, args: tuple[object, ...], kwargs: dict[str, object]) -> Any:
+        """Check the arguments (positions: finite numbers of the right shape), send the call, return the reply."""
         params = [p for p, _ in spec.params]
-
-        def call(*args: object, **kwargs: object) -> Any:
-            unknown = set(kwargs) - set(params[len(args) :])
-            if unknown:
-                raise TypeError(f"{spec.signature} got an unexpected argument '{sorted(unknown)[0]}'")
-            values = (*args, *(kwargs[p] for p in params[len(args) :] if p in kwargs))
-            checked = check_call(self.embodiment, spec.name, values)
-            self.calls += 1
-            if self.calls > self.limits.max_skill_calls:
-                raise _LimitExceeded(self.limits.skill_calls_exceeded())
-            message = WorkerMessage(call=spec.name, args=list(checked), output=self.take_output())
-            self.conn.send_bytes(message.model_dump_json().encode())
-            reply = json.loads(self.conn.recv_bytes())
-            if reply["error"] is not None:
-                raise SkillCallError(reply["error"])
-            return reply["value"]
-
-        call.__name__ = spec.name
-        return call
+        unknown = set(kwargs) - set(params[len(args) :])
+        if unknown:
+            raise TypeError(f"{spec.signature} got an unexpected argument {_safe_str(sorted(map(str, unknown))[0])!r}")
+        values = (*args, *(kwargs[p] for p in params[len(args) :] if p in kwargs))
+        checked = check_call(self.embodiment, spec.name, values)
+        self.calls += 1
+        if self.calls > self.limits.max_skill_calls:
+            raise _LimitExceeded(self.limits.skill_calls_exceeded())
+        message = WorkerMessage(call=spec.name, args=list(checked), output=self.take_output())
+        self.conn.send_bytes(message.model_dump_json().encode())
+        reply = json.loads(self.conn.recv_bytes())
+        if reply["error"] is not None:
+            raise SkillCallError(reply["error"])
+        return reply["value"]
 
 
-def _import(
-    name: str, _globals: object = None, _locals: object = None, fromlist: object = (), level: int = 0
-) -> Any:
+def _import(name: str, _globals: object = None, _locals: object = None, fromlist: object = (), level: int = 0) -> Any:
     """``import numpy`` and ``import math`` give the allowlisted namespaces; nothing else imports."""
     if name in _MODULES and not fromlist and level == 0:
         return _MODULES[name]
-    raise ImportError(f"import of {name!r} is not allowed")
+    raise ImportError(f"import of {_safe_str(name)!r} is not allowed")
 
 
-def _describe(error: Exception) -> str:
-    """``line N: Type: message`` with the program's line where the error happened."""
+def _describe(error: BaseException) -> str:
+    """``line N: Type: message`` with the program's line where the error happened.
+
+    The type is the nearest public class (numpy raises private subclasses), host paths and memory
+    addresses are masked, and a message that cannot itself be turned into text becomes
+    :data:`UNDESCRIBABLE`.
+    """
     line, tb = None, error.__traceback__
     while tb is not None:
         if tb.tb_frame.f_code.co_filename == PROGRAM_FILENAME:
             line = tb.tb_lineno
         tb = tb.tb_next
     where = f"line {line}: " if line else ""
-    return f"{where}{type(error).__name__}: {error}"[:MAX_ERROR_CHARS]
+    return f"{where}{_public_name(type(error))}: {_safe_str(error)}"[:MAX_ERROR_CHARS]
+
+
+def _public_name(kind: type) -> str:
+    return next((k.__name__ for k in kind.__mro__ if not k.__name__.startswith("_")), "Error")
+
+
+def _safe_str(value: object) -> str:
+    """``str(value)`` with host paths and addresses masked; :data:`UNDESCRIBABLE` if that fails."""
+    try:
+        text = str(value)[: MAX_ERROR_CHARS * 4]
+        for directory in _HOST_DIRECTORIES:
+            text = text.replace(directory, "...")
+        return _encodable(_ADDRESS.sub("0x...", text))
+    except BaseException:  # a hostile __str__, a huge integer, no memory left
+        return UNDESCRIBABLE
+
+
+def _encodable(text: str) -> str:
+    """The text with lone surrogates escaped, so that it always encodes as UTF-8 JSON."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")

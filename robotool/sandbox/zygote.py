@@ -8,14 +8,20 @@ or pytest) in every worker and exchanges pickles. So this module is the forkserv
 the host starts the zygote (:func:`main`) in a new interpreter once, and each worker is an
 ``os.fork`` of it (about a millisecond) with its own socket to the host.
 
+The zygote sets up the operating-system layers (:mod:`robotool.sandbox.jail`) when it starts: it
+enters new namespaces, and when one of them is a PID namespace it forks once more, so that the
+server is that namespace's init and the kernel kills every process left in it when the server ends.
+It probes which layers hold and reports them to the host on request (:meth:`Zygote.layers`).
+
 Start-up is kept off the host's critical path: the zygote forks a batch in one request, and while
 idle it pre-forks as many spare workers (blocked, waiting for a program) as the last batch asked
 for, so the next batch of that size is handed out without forking.
 
 The zygote is the workers' parent, so it alone kills and reaps them: no PID can be reused under a
-kill. Host and zygote talk over a ``SOCK_SEQPACKET`` socket in JSON requests; only ``spawn`` and
-``status`` are answered, and the host reads each answer right away, so neither side can block the
-other. When the host goes away the zygote kills its workers and exits.
+kill. Each worker leads its own process group, and a kill takes the whole group. Host and zygote
+talk over a ``SOCK_SEQPACKET`` socket in JSON requests; only ``spawn``, ``status`` and ``layers`` are
+answered, and the host reads each answer right away, so neither side can block the other. When the
+host goes away the zygote kills its workers and exits.
 """
 
 from __future__ import annotations
@@ -31,12 +37,11 @@ import subprocess
 import sys
 import threading
 import time
-import traceback
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import NamedTuple
 
-from robotool.sandbox import worker
+from robotool.sandbox import jail, worker
 
 MAX_SPARES = 256
 """Most idle workers the zygote keeps ready."""
@@ -51,11 +56,13 @@ class ZygoteError(RuntimeError):
 
 
 class Worker(NamedTuple):
-    """A forked worker: its PID, the host's end of its socket, and the zygote that owns it."""
+    """A forked worker: its PID in the zygote's namespace, the host's end of its socket, the zygote
+    that owns it, and its PID as the host sees it."""
 
     pid: int
     conn: Connection
     zygote: Zygote
+    host_pid: int
 
 
 class Zygote:
@@ -83,16 +90,29 @@ class Zygote:
         )
         theirs.close()
         self._lock = threading.Lock()
+        self._layers: jail.SandboxLayers | None = None
 
     def spawn(self, count: int) -> list[Worker]:
         """``count`` fresh workers, each waiting for its program."""
+        self.layers()  # learnt once, before the first worker: warns when seccomp is missing
         with self._lock:
             self._send({"op": "spawn", "count": count})
             workers = []
             for _ in range(count):
                 data, fds = self._receive(with_fd=True)
-                workers.append(Worker(json.loads(data)["pid"], Connection(fds[0]), self))
+                reply = json.loads(data)
+                workers.append(Worker(reply["pid"], Connection(fds[0]), self, reply["host_pid"]))
             return workers
+
+    def layers(self) -> jail.SandboxLayers:
+        """The OS layers the zygote's workers run under (asked once; warns when seccomp is missing)."""
+        with self._lock:
+            if self._layers is None:
+                self._send({"op": "layers"})
+                data, _ = self._receive(with_fd=False)
+                self._layers = jail.SandboxLayers.model_validate_json(data)
+                jail.warn_if_weak(self._layers)
+            return self._layers
 
     def exit_code(self, pid: int) -> int:
         """How a worker that closed its socket ended (negative: killed by that signal)."""
@@ -143,6 +163,13 @@ def zygote() -> Zygote:
         return _zygote
 
 
+def layers_in_use() -> jail.SandboxLayers | None:
+    """The OS layers of this process's zygote, or None when no zygote has been started."""
+    with _zygote_lock:
+        current = _zygote
+    return current.layers() if current is not None and current.alive() else None
+
+
 def _forget_zygote_in_child() -> None:
     """A forked host must start its own zygote rather than share its parent's socket."""
     global _zygote
@@ -155,8 +182,13 @@ os.register_at_fork(after_in_child=_forget_zygote_in_child)
 class _Server:
     """The zygote's side: forks workers, reports how they ended, kills them on request."""
 
-    def __init__(self, control: socket.socket):
+    def __init__(self, control: socket.socket, layers: jail.SandboxLayers, worker_jail: jail.WorkerJail):
         self.control = control
+        self.layers = layers
+        self.jail = worker_jail
+        # In a PID namespace the host knows workers by other PIDs: found through this process's children.
+        self.own_host_pid = int(os.readlink("/proc/self")) if "PID namespace" in layers.in_force else None
+        self.host_pids: dict[int, int] = {}
         # A child's exit wakes the loop (through this pipe) so that it is reaped at once.
         self.wake_r, self.wake_w = os.pipe()
         os.set_blocking(self.wake_r, False)
@@ -191,8 +223,10 @@ class _Server:
                 self.control.send(json.dumps({"code": self.wait(request["pid"])}).encode())
             elif request["op"] == "release":
                 self.release(request["pid"])
+            elif request["op"] == "layers":
+                self.control.send(self.layers.model_dump_json().encode())
         for pid in self.running:
-            os.kill(pid, signal.SIGKILL)
+            _kill_group(pid)
         for pid in self.running:
             os.waitpid(pid, 0)
 
@@ -201,34 +235,59 @@ class _Server:
         host_end, worker_end = socket.socketpair()
         pid = os.fork()
         if pid == 0:
-            try:
+            with contextlib.suppress(BaseException):  # the worker's stderr is /dev/null: nothing to print
+                os.setpgid(0, 0)
+                jail.die_with_parent()
                 signal.set_wakeup_fd(-1)
                 signal.signal(signal.SIGCHLD, signal.SIG_DFL)
-                worker.serve(worker_end.fileno())  # closes every other descriptor first
-            except BaseException:
-                traceback.print_exc()
-            finally:
-                os._exit(1)
+                worker.serve(worker_end.fileno(), self.jail)  # closes every other descriptor first
+            os._exit(1)
+        with contextlib.suppress(OSError):  # it may have done so itself already
+            os.setpgid(pid, pid)
         worker_end.close()
         self.running.add(pid)
+        self.host_pids[pid] = self.host_pid(pid)
         return pid, host_end
+
+    def host_pid(self, pid: int) -> int:
+        """The worker's PID as the host sees it: outside a PID namespace, the same."""
+        if self.own_host_pid is None:
+            return pid
+        me = self.own_host_pid
+        with open(f"/proc/{me}/task/{me}/children") as f:
+            children = set(map(int, f.read().split())) - set(self.host_pids.values())
+        for child in children:
+            with contextlib.suppress(OSError), open(f"/proc/{child}/status") as f:
+                ids = next(line for line in f if line.startswith("NSpid:")).split()
+                if int(ids[-1]) == pid:
+                    return child
+        return pid
 
     def spawn(self, count: int) -> None:
         for _ in range(count):
             pid, host_end = self.spares.pop() if self.spares else self.fork()
-            socket.send_fds(self.control, [json.dumps({"pid": pid}).encode()], [host_end.fileno()])
+            reply = {"pid": pid, "host_pid": self.host_pids[pid]}
+            socket.send_fds(self.control, [json.dumps(reply).encode()], [host_end.fileno()])
             host_end.close()
         self.spare_target = min(count, MAX_SPARES)
 
     def reap(self) -> None:
-        while self.running:
+        """Collect every ended child: workers, and in a PID namespace any orphan left to its init."""
+        while True:
             try:
-                pid, status = os.waitpid(-1, os.WNOHANG)
+                ended = os.waitid(os.P_ALL, 0, os.WEXITED | os.WNOHANG | os.WNOWAIT)
             except ChildProcessError:
                 return
-            if pid == 0:
+            if ended is None:
                 return
+            pid = ended.si_pid
+            if pid in self.running:
+                _kill_group(pid)  # anything the worker left in its group; its PID is not reusable until reaped
+            status = os.waitpid(pid, 0)[1]
+            if pid not in self.running:
+                continue  # an orphan this process inherited as the namespace's init
             self.running.discard(pid)
+            self.host_pids.pop(pid, None)
             if pid in self.released:
                 self.released.discard(pid)
             else:
@@ -241,22 +300,44 @@ class _Server:
             time.sleep(0.001)
             self.reap()
         if pid in self.running:
-            os.kill(pid, signal.SIGKILL)
+            _kill_group(pid)
             os.waitpid(pid, 0)
             self.running.discard(pid)
+            self.host_pids.pop(pid, None)
             return -signal.SIGKILL
         return self.exited.pop(pid, -signal.SIGKILL)
 
     def release(self, pid: int) -> None:
-        """Kill the worker if it runs (it is reaped later, so this never blocks) and forget it."""
+        """Kill the worker and its process group if it runs (reaped later: this never blocks); forget it."""
         if pid in self.running:
-            os.kill(pid, signal.SIGKILL)
+            _kill_group(pid)
             self.released.add(pid)
         self.exited.pop(pid, None)
 
 
+def _kill_group(pid: int) -> None:
+    """SIGKILL the process group a worker leads (it may be gone already)."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(pid, signal.SIGKILL)
+
+
 def main() -> None:
-    """Entry point of the zygote process; its one argument is the control socket's descriptor."""
+    """Entry point of the zygote process; its one argument is the control socket's descriptor.
+
+    Enters the namespaces, and in a new PID namespace forks the server as its init; this process
+    then only waits for the server and exits with its status.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the host's Ctrl-C is the host's to handle
+    jail.die_with_parent()
+    control = socket.socket(fileno=int(sys.argv[1]))
+    namespaces, missing = jail.enter_namespaces()
+    if "PID" in namespaces:
+        server = os.fork()
+        if server != 0:
+            control.close()
+            os._exit(os.waitstatus_to_exitcode(os.waitpid(server, 0)[1]) & 0xFF)
+        jail.die_with_parent()
+    worker_jail = jail.WorkerJail()
+    layers = worker_jail.probe(namespaces, missing)
     gc.freeze()  # keep the collector off the preloaded objects, so forked workers share their pages
-    _Server(socket.socket(fileno=int(sys.argv[1]))).serve()
+    _Server(control, layers, worker_jail).serve()

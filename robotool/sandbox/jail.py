@@ -1,0 +1,240 @@
+"""The operating-system layers around a worker, which hold even if a program defeats the Python-level checks.
+
+The Python-level layers (the validator and the worker's restricted namespace) assume that the
+allowlisted C code is memory-safe; it is not always (numpy has had buffer and dtype primitives that
+forge references). So every worker also runs behind these layers, each detected when the zygote
+starts and reported as :class:`SandboxLayers`:
+
+- **seccomp**: a seccomp-bpf filter (libseccomp, through ``pyseccomp``), loaded right before the
+  program starts, allows only what a running worker needs: reading and writing its socket to the
+  host, memory management, time, futexes, signal return and exit. Every other system call (open,
+  socket, exec, fork, kill, ptrace, ...) fails with ``EPERM``; a call from a foreign architecture
+  kills the worker.
+- **namespaces**: the zygote moves into new PID, network, IPC and mount namespaces (inside a user
+  namespace when not root). Workers see no host process, no network interface, and when the zygote
+  ends the kernel kills everything left in the PID namespace.
+- **empty root**: each worker ``chroot``s into a directory (mode 0700, owned by the host's user) that
+  was deleted right after it was made, so no file can be named, listed or created.
+- **unprivileged uid**: workers drop to ``nobody`` (when the host runs as root), set no-new-privileges
+  and are not dumpable, so their ``/proc`` entries and memory are closed to each other.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import errno
+import os
+import socket
+import tempfile
+import warnings
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict
+
+NOBODY = 65534
+"""The uid and gid workers run as when the host is root."""
+
+SOCKET_FD = 3
+"""The worker's socket to the host: the only descriptor it may read or write under seccomp."""
+
+ALLOWED_SYSCALLS: tuple[str, ...] = (
+    "mmap", "munmap", "mremap", "mprotect", "brk", "madvise",
+    "futex", "clock_gettime", "clock_getres", "gettimeofday", "clock_nanosleep", "nanosleep", "sched_yield",
+    "rt_sigreturn", "rt_sigprocmask", "getpid", "gettid", "exit", "exit_group",
+)  # fmt: skip
+"""System calls a running worker may make with any arguments (found by tracing workers running numpy)."""
+
+SOCKET_SYSCALLS: tuple[str, ...] = ("read", "write")
+"""System calls a running worker may make on :data:`SOCKET_FD` only."""
+
+_NAMESPACES: dict[str, int] = {"PID": 0x20000000, "network": 0x40000000, "IPC": 0x08000000, "mount": 0x00020000}
+_CLONE_NEWUSER = 0x10000000
+_PR_SET_PDEATHSIG = 1
+_PR_SET_DUMPABLE = 4
+_PR_SET_NO_NEW_PRIVS = 38
+
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+class SandboxLayers(BaseModel):
+    """The OS layers that confine workers (``in_force``) and those that could not be set up, with why."""
+
+    model_config = ConfigDict(frozen=True)
+
+    in_force: list[str]
+    missing: dict[str, str]
+
+    @property
+    def seccomp(self) -> bool:
+        return "seccomp filter" in self.in_force
+
+    def summary(self) -> str:
+        """One line: the layers in force, then the missing ones with their reasons."""
+        line = "sandbox: " + (", ".join(self.in_force) or "no OS layers")
+        if self.missing:
+            line += "; missing: " + "; ".join(f"{name} ({why})" for name, why in self.missing.items())
+        return line
+
+    def warning(self) -> str | None:
+        """A loud warning when the seccomp filter, the layer that must hold, is not in force."""
+        if self.seccomp:
+            return None
+        why = self.missing.get("seccomp filter", "unknown reason")
+        return (
+            f"generated programs run WITHOUT the seccomp filter ({why}): a program that defeats the "
+            "Python-level checks can make any system call its uid allows"
+        )
+
+
+class SandboxWarning(UserWarning):
+    """Issued once when workers run without their seccomp filter."""
+
+
+def _unshare(flags: int) -> None:
+    if _libc.unshare(flags) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code))
+
+
+def _prctl(option: int, value: int) -> None:
+    if _libc.prctl(option, value, 0, 0, 0) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code))
+
+
+def die_with_parent() -> None:
+    """SIGKILL this process when its parent ends (the host, or the zygote for a worker)."""
+    _prctl(_PR_SET_PDEATHSIG, 9)
+
+
+def enter_namespaces() -> tuple[list[str], dict[str, str]]:
+    """Move this (single-threaded) process into new namespaces; those entered, and why others failed.
+
+    After a new PID namespace the caller must fork: its first child is the namespace's init.
+    """
+    entered: list[str] = []
+    missing: dict[str, str] = {}
+    if os.geteuid() != 0:
+        uid, gid = os.getuid(), os.getgid()
+        try:
+            _unshare(_CLONE_NEWUSER)
+            for name, text in (("setgroups", "deny"), ("uid_map", f"{uid} {uid} 1"), ("gid_map", f"{gid} {gid} 1")):
+                with open(f"/proc/self/{name}", "w") as f:
+                    f.write(text)
+            entered.append("user namespace")
+        except OSError as e:
+            missing["user namespace"] = e.strerror or str(e)
+    for name, flag in _NAMESPACES.items():
+        try:
+            _unshare(flag)
+            entered.append(name)
+        except OSError as e:
+            missing[f"{name} namespace"] = e.strerror or str(e)
+    return entered, missing
+
+
+def _syscall_filter() -> tuple[Any, str | None]:
+    """The worker's seccomp filter, built once (loaded in each worker); or None and why not."""
+    try:
+        import pyseccomp as seccomp
+    except (ImportError, RuntimeError, OSError) as e:  # RuntimeError: libseccomp.so.2 is missing
+        return None, f"pyseccomp/libseccomp unavailable: {e}"
+    try:
+        syscall_filter = seccomp.SyscallFilter(seccomp.ERRNO(errno.EPERM))
+        for name in ALLOWED_SYSCALLS:
+            syscall_filter.add_rule(seccomp.ALLOW, name)
+        for name in SOCKET_SYSCALLS:
+            syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(0, seccomp.EQ, SOCKET_FD))
+    except (OSError, ValueError, RuntimeError) as e:
+        return None, f"libseccomp refused the filter: {e}"
+    return syscall_filter, None
+
+
+def _empty_root() -> int | None:
+    """A descriptor of a directory deleted right after it was made: nothing can be created in it."""
+    path = tempfile.mkdtemp(prefix="robotool-root-")
+    try:
+        return os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        return None
+    finally:
+        os.rmdir(path)
+
+
+class WorkerJail:
+    """The per-worker layers, prepared once in the zygote and applied in every forked worker."""
+
+    def __init__(self) -> None:
+        self._root_fd = _empty_root()
+        self._filter, self._filter_problem = _syscall_filter()
+        self._drop_uid = os.geteuid() == 0
+
+    def enter(self) -> None:
+        """Empty root, unprivileged uid, no new privileges, not dumpable; each where it works.
+
+        Called in the worker before it waits for its program; whatever fails is absent from the
+        layers the probe reported, and the rest still apply.
+        """
+        if self._root_fd is not None:
+            with contextlib.suppress(OSError):
+                os.fchdir(self._root_fd)
+                os.chroot(".")
+            os.close(self._root_fd)
+        if self._drop_uid:
+            with contextlib.suppress(OSError):
+                os.setgroups([])
+                os.setresgid(NOBODY, NOBODY, NOBODY)
+                os.setresuid(NOBODY, NOBODY, NOBODY)
+        with contextlib.suppress(OSError):
+            _prctl(_PR_SET_NO_NEW_PRIVS, 1)
+            _prctl(_PR_SET_DUMPABLE, 0)
+
+    def seal(self) -> None:
+        """Load the seccomp filter: from here on only :data:`ALLOWED_SYSCALLS` and the socket work."""
+        if self._filter is not None:
+            self._filter.load()
+
+    def probe(self, namespaces: list[str], missing: dict[str, str]) -> SandboxLayers:
+        """Apply every layer in a throw-away child and test each; the layers that held."""
+        read_end, write_end = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the probe child: report a bit per layer that held, then exit
+            held = 0
+            with contextlib.suppress(BaseException):
+                os.close(read_end)
+                self.enter()
+                os.dup2(write_end, SOCKET_FD)  # the one descriptor a sealed worker may write
+                held |= 0 if os.path.exists("/proc/self") else 1
+                held |= 2 if os.getuid() != 0 and os.geteuid() != 0 else 0
+                self.seal()
+                try:
+                    socket.socket(socket.AF_UNIX, socket.SOCK_STREAM).close()
+                except PermissionError:
+                    held |= 4
+                os.write(SOCKET_FD, bytes([held]))
+            os._exit(0)
+        os.close(write_end)
+        reply = os.read(read_end, 1)
+        os.close(read_end)
+        os.waitpid(pid, 0)
+        held = reply[0] if reply else 0
+        layers = [f"{name} namespace" if name != "user namespace" else name for name in namespaces]
+        missing = dict(missing)
+        for bit, layer, why in (
+            (1, "empty root", "chroot is not permitted"),
+            (2, "uid nobody", "the host does not run as root"),
+            (4, "seccomp filter", self._filter_problem or "the kernel refused the filter"),
+        ):
+            if held & bit:
+                layers.append(layer)
+            elif not (bit == 2 and not self._drop_uid and "user namespace" in namespaces):
+                missing[layer] = why
+        return SandboxLayers(in_force=layers, missing=missing)
+
+
+def warn_if_weak(layers: SandboxLayers) -> None:
+    """Issue a :class:`SandboxWarning` when the seccomp filter is not in force."""
+    message = layers.warning()
+    if message is not None:
+        warnings.warn(message, SandboxWarning, stacklevel=3)

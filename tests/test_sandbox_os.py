@@ -1,0 +1,214 @@
+"""The operating-system boundary: what a worker cannot do even with the Python-level checks switched off.
+
+These programs run through ``SandboxSession(..., test_only_skip_python_checks=True)``: no validator,
+every builtin, ``import os`` works. Only the OS layers (seccomp filter, namespaces, empty root,
+unprivileged uid, rlimits) stand between them and the host.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.sandbox import SandboxLimits, SandboxSession, layers_in_use, start_sessions
+from robotool.sandbox.allowlist import NUMPY_FUNCTIONS, NUMPY_LINALG
+from robotool.sandbox.zygote import Zygote, zygote
+
+ESCAPES = Path(__file__).parent / "fixtures" / "escapes"
+LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=20_000, max_skill_calls=50)
+
+
+def run_unchecked(code: str, limits: SandboxLimits = LIMITS) -> ProgramEnded:
+    """Run ``code`` without the Python-level checks; skill calls are answered with a fixed point."""
+    session = SandboxSession(code, "arm", limits, test_only_skip_python_checks=True)
+    try:
+        session.resume(None)
+        message = session.wait()
+        while isinstance(message, SkillRequest):
+            session.resume(SkillReply(value=[0.3, 0.0, 0.1]))
+            message = session.wait()
+        return message
+    finally:
+        session.close()
+
+
+def test_every_layer_is_in_force_on_this_machine() -> None:
+    zygote().spawn(1)[0].conn.close()
+    layers = layers_in_use()
+    assert layers is not None and layers.seccomp and layers.warning() is None
+    for layer in ("PID namespace", "network namespace", "IPC namespace", "mount namespace", "empty root"):
+        assert layer in layers.in_force, layers.summary()
+    if os.geteuid() == 0:
+        assert "uid nobody" in layers.in_force
+
+
+def test_os_calls_are_denied_without_the_python_checks() -> None:
+    """open, create, socket, /proc/<ppid>/environ, kill, fork, exec, setsid: each fails with EPERM."""
+    canary = Path("/tmp/robotool-escape-canary")
+    canary.unlink(missing_ok=True)
+    ended = run_unchecked((ESCAPES / "os_calls.py").read_text())
+    assert ended.error is None, ended.error
+    outcomes = dict(line.rsplit(" ", 2)[0:2][::-1][::-1] for line in ended.output.splitlines())
+    assert len(outcomes) == 14
+    assert all(outcome == "denied" for outcome in outcomes.values()), ended.output
+    assert all(line.endswith(" 1") for line in ended.output.splitlines())  # EPERM: the seccomp filter
+    assert not canary.exists()
+    assert zygote().alive()
+
+
+def test_a_program_cannot_signal_the_host_or_a_sibling() -> None:
+    """Two workers: one tries every PID it might guess for the host, the zygote and its sibling."""
+    victim = SandboxSession("move_to_position([0.3, 0.0, 0.2])\n", "arm", LIMITS)
+    victim.resume(None)
+    assert isinstance(victim.wait(), SkillRequest)
+    guesses = [os.getpid(), victim.worker_pid, 1, 2, 3, 4]
+    code = (
+        "import os\nhits = []\n"
+        f"for pid in {guesses}:\n"
+        "    try:\n        os.kill(pid, 9)\n        hits.append(pid)\n    except OSError:\n        pass\n"
+        "print(hits)\n"
+    )
+    try:
+        assert run_unchecked(code).output == "[]\n"
+        victim.resume(SkillReply(value=None))
+        assert victim.wait() == ProgramEnded(error=None)
+    finally:
+        victim.close()
+
+
+def test_no_process_outlives_its_zygote() -> None:
+    """A worker that tries to leave a process behind leaves none: fork is denied, and what is left in
+    the PID namespace when the zygote ends is killed by the kernel."""
+    fresh = Zygote()
+    try:
+        (worker,) = fresh.spawn(1)
+        code = "import os\ntry:\n    os.fork()\nexcept OSError as e:\n    print(e.errno)\nwhile True:\n    pass\n"
+        session = SandboxSession(code, "arm", LIMITS, worker=worker, test_only_skip_python_checks=True)
+        session.resume(None)
+        time.sleep(0.5)
+        zygote_pids = _descendants(fresh.process.pid)
+        assert worker.host_pid in zygote_pids
+        assert _descendants(worker.host_pid) == {worker.host_pid}  # its fork was denied
+    finally:
+        fresh.close()
+    deadline = time.monotonic() + 5
+    while any(Path(f"/proc/{pid}").exists() for pid in zygote_pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not [pid for pid in zygote_pids if Path(f"/proc/{pid}").exists()]
+
+
+def _descendants(pid: int) -> set[int]:
+    found, todo = set(), [pid]
+    while todo:
+        current = todo.pop()
+        found.add(current)
+        for task in Path(f"/proc/{current}/task").iterdir():
+            todo += [int(p) for p in (task / "children").read_text().split()]
+    return found
+
+
+def test_crash_inside_native_code_fails_only_its_world() -> None:
+    crash = "import ctypes\nctypes.string_at(0)\n"
+    ended = run_unchecked(crash)
+    assert ended.error == "the worker crashed (SIGSEGV)"
+
+
+def test_memory_and_cpu_limits_hold_without_the_python_checks() -> None:
+    assert run_unchecked("x = bytearray(512 * 2**20)\n").error == "memory limit exceeded (128 MiB)"
+    spin = run_unchecked("while True:\n    pass\n", LIMITS.model_copy(update={"cpu_s": 0.3}))
+    assert spin.error == "CPU time limit exceeded (0.3 s)"
+
+
+def test_worker_stderr_never_reaches_the_host(capfd: pytest.CaptureFixture[str]) -> None:
+    recursion = f"def {'f' * 5000}(n):\n    return {'f' * 5000}(n + 1)\n{'f' * 5000}(0)\n"
+    assert run_unchecked(recursion).error == "line 2: RecursionError: maximum recursion depth exceeded"
+    writes = run_unchecked("import os, sys\nsys.stderr.write('x' * 100000)\nsys.stderr.flush()\n")
+    assert writes.error == "line 2: PermissionError: [Errno 1] Operation not permitted"
+    assert capfd.readouterr().err == ""
+
+
+def test_every_allowlisted_numpy_function_works_inside_the_jail() -> None:
+    """The worker's root is empty: a numpy function that imports lazily would fail there."""
+    calls = {
+        "arange": "(3)",
+        "linspace": "(0, 1, 3)",
+        "eye": "(2)",
+        "identity": "(2)",
+        "zeros": "(2)",
+        "ones": "(2)",
+        "full": "(2, 1.5)",
+        "meshgrid": "(v, v)",
+        "interp": "(0.5, [0, 1], [0, 2])",
+        "einsum": "('ij,jk->ik', m, m)",
+        "arctan2": "(1.0, 2.0)",
+        "hypot": "(3.0, 4.0)",
+        "power": "(v, 2)",
+        "minimum": "(v, 1)",
+        "maximum": "(v, 1)",
+        "where": "(v > 1, v, 0)",
+        "clip": "(v, 0, 1)",
+        "cross": "(v, v)",
+        "dot": "(v, v)",
+        "inner": "(v, v)",
+        "full_like": "(v, 2.0)",
+        "outer": "(v, v)",
+        "matmul": "(m, m)",
+        "allclose": "(v, v)",
+        "isclose": "(v, v)",
+        "mod": "(v, 2)",
+        "fmod": "(v, 2)",
+        "remainder": "(v, 2)",
+        "floor_divide": "(v, 2)",
+        "append": "(v, 1)",
+        "repeat": "(v, 2)",
+        "tile": "(v, 2)",
+        "roll": "(v, 1)",
+        "reshape": "(v, (3, 1))",
+        "expand_dims": "(v, 0)",
+        "stack": "([v, v])",
+        "vstack": "([v, v])",
+        "hstack": "([v, v])",
+        "concatenate": "([v, v])",
+        "column_stack": "([v, v])",
+    }
+    linalg = {"solve": "(m, [1.0, 2.0])", "lstsq": "(m, [1.0, 2.0], rcond=None)"}
+    lines = ["import numpy as np", "v = np.array([1.0, 2.0, 3.0])", "m = np.array([[2.0, 1.0], [1.0, 3.0]])"]
+    lines += [f"print('{n}', np.{n}{calls.get(n, '(v)')} is not None)" for n in sorted(NUMPY_FUNCTIONS)]
+    lines += [f"print('linalg.{n}', np.linalg.{n}{linalg.get(n, '(m)')} is not None)" for n in sorted(NUMPY_LINALG)]
+    ended = run_unchecked("\n".join(lines) + "\n")
+    assert ended.error is None, ended.error
+    worked = {line.removesuffix(" True") for line in ended.output.splitlines() if line.endswith(" True")}
+    assert worked == NUMPY_FUNCTIONS | {f"linalg.{n}" for n in NUMPY_LINALG}
+
+
+def test_a_killed_worker_group_takes_what_it_left() -> None:
+    """Closing a session kills the worker's whole process group, not just the worker."""
+    session = SandboxSession("while True:\n    pass\n", "arm", LIMITS.model_copy(update={"cpu_s": 60.0}))
+    session.resume(None)
+    pid = session.worker_pid
+    assert pid is not None and os.getpgid(pid) == pid
+    session.close()
+    deadline = time.monotonic() + 2
+    while Path(f"/proc/{pid}").exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not Path(f"/proc/{pid}").exists()
+    with pytest.raises(ProcessLookupError):
+        os.killpg(pid, 0)
+
+
+def test_batch_of_unchecked_programs_leaves_good_worlds_alone() -> None:
+    hostile = (ESCAPES / "os_calls.py").read_text()
+    good = "move_to_position([0.3, 0.0, 0.2])\nprint('ok')\n"
+    sessions = start_sessions([good, good], "arm", LIMITS)
+    bad = run_unchecked(hostile)
+    assert "achieved" not in bad.output
+    for s in sessions:
+        s.resume(None)
+        assert isinstance(s.wait(), SkillRequest)
+        s.resume(SkillReply(value=None))
+        assert s.wait() == ProgramEnded(error=None, output="ok\n")
+        s.close()
