@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import pytest
 
 from robotool.sandbox import ProgramRejected, extract_program, validate
@@ -73,3 +75,31 @@ def test_fenced_code_with_syntax_error_names_the_line() -> None:
 def test_long_prose_is_searched_in_reasonable_time() -> None:
     prose = "\n".join(f"Sentence number {i} explains the plan." for i in range(300))
     assert extract_program(f"{prose}\n{PROGRAM}{prose}") == PROGRAM
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        "Done\n" * 20_000,  # names only: every suffix parses and none acts
+        "This is prose text here.\n" * 4_000,
+        '"""\n' + "word\n" * 19_000 + '"""\n',
+        "Let me think.\nx = 1\n" * 5_000,
+        "f(\n" * 33_000,
+        "x = 1\na b\n" * 9_000,
+        "Step: the gripper\n" * 5_500,
+    ],
+    ids=["names", "prose", "one-string", "alternating", "open-brackets", "code-then-junk", "annotations"],
+)
+def test_extraction_of_100_kb_finishes_in_a_second(answer: str) -> None:
+    import time
+
+    assert 90_000 <= len(answer) <= 100_000
+    started = time.process_time()
+    with contextlib.suppress(ProgramRejected):
+        extract_program(answer)
+    assert time.process_time() - started < 1.0
+
+
+def test_code_after_long_prose_is_still_found() -> None:
+    prose = "The plan has several careful steps, explained here.\n" * 1_500
+    assert extract_program(prose + PROGRAM) == PROGRAM

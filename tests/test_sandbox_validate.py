@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -107,3 +108,50 @@ def test_allowlisted_names_exist_where_the_worker_looks_them_up() -> None:
     dangerous = {"load", "save", "fromfile", "memmap", "ctypeslib", "lib", "testing", "loadtxt", "frompyfunc"}
     assert not dangerous & NUMPY_FUNCTIONS
     assert not {"open", "getattr", "type", "exec", "eval", "vars", "globals", "object"} & BUILTINS
+
+
+@pytest.mark.parametrize(
+    ("code", "words"),
+    [
+        ("def f(getattr):\n    return getattr\n", "'getattr' cannot be assigned: it is a Python built-in name"),
+        ("g = lambda open=1: open\n", "'open' cannot be assigned"),
+        ("def f(*vars, **globals):\n    return 0\n", "'vars' cannot be assigned"),
+        ("for type in [1]:\n    pass\n", "'type' cannot be assigned"),
+        ("x = [eval for eval in range(3)]\n", "'eval' cannot be assigned"),
+        ("if (exec := 1):\n    pass\n", "'exec' cannot be assigned"),
+        ("def f(x=getattr):\n    return x\n", "built-in 'getattr' is not allowed"),
+    ],
+)
+def test_forbidden_names_cannot_be_bound_anywhere(code: str, words: str) -> None:
+    with pytest.raises(ProgramRejected, match=words):
+        validate(code, "arm")
+
+
+def test_names_resolve_through_scopes() -> None:
+    validate("def f(a):\n    b = a + 1\n    g = lambda c: b + c\n    return g(2)\nx = f(1)\n", "arm")
+    validate("y = 2\ndef f():\n    return y\n", "arm")
+    with pytest.raises(ProgramRejected, match="line 3: name 'b' is not defined here"):
+        validate("def f(a):\n    b = a\nprint(b)\n", "arm")
+    with pytest.raises(ProgramRejected, match="line 3: name 'a' is not defined here"):
+        validate("g = lambda a: a\nh = g(1)\nprint(a)\n", "arm")
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        "x = getattr\n" * 8_000,  # a problem on every line
+        "open(1); " * 10_000,  # a problem every few characters of one line
+        "def f(a):\n" + "    a = a + 1\n" * 7_000,  # one deep scope
+        "x = [" + "1, " * 33_000 + "]\n",
+        "move_to_position([0.1, 0.2, 0.3])\n" * 2_900,
+    ],
+    ids=["bad-lines", "bad-one-line", "long-function", "long-literal", "many-calls"],
+)
+def test_validation_of_100_kb_finishes_in_a_second(code: str) -> None:
+    import time
+
+    assert 90_000 <= len(code) <= 100_000
+    started = time.process_time()
+    with contextlib.suppress(ProgramRejected):
+        validate(code, "arm")
+    assert time.process_time() - started < 1.0

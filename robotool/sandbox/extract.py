@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import ast
+import codeop
+import itertools
 import re
+import warnings
 
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, parse_program
 
@@ -55,27 +58,69 @@ def _fenced_blocks(text: str) -> list[str]:
 
 
 def _longest_parsing_run(text: str) -> str:
-    """The longest run of whole lines that parses, preferring the earliest; "" if none does.
+    """The longest run of whole lines that parses and acts, preferring the earliest; "" if none is found.
 
-    A syntax error at line k of a candidate means no run starting there can extend past line k-1,
-    so each start costs a few parses, not one per end line.
+    Each line may start a run; one that cannot start a program on its own (prose such as "Here is
+    the code:") is ruled out by compiling that line alone. From a start, a syntax error at line k
+    of a candidate means no run from there can extend past line k-1, so each start costs a few
+    parses. A parse that succeeds without any action, made of one-line statements only, rules out
+    every later start inside it. The whole search is bounded by :data:`SEARCH_EFFORT` parsed
+    characters per character of text; past that, the best run found so far is kept.
     """
     lines = text.split("\n")
+    offsets = list(itertools.accumulate((len(line) + 1 for line in lines), initial=0))
+    budget = SEARCH_EFFORT * len(text) + _PARSE_OVERHEAD_CHARS * 64
     best = (0, 0)
-    for start in range(len(lines)):
+    start = 0
+    while start < len(lines) and budget > 0:
+        next_start = start + 1
         end = len(lines)
-        while end - start > best[1] - best[0]:
+        if not lines[start].strip() or not _can_start_program(lines[start]):
+            start = next_start
+            continue
+        while end - start > best[1] - best[0] and budget > 0:
+            candidate = text[offsets[start] : offsets[end] - 1]
+            budget -= len(candidate) // 16 + _PARSE_OVERHEAD_CHARS  # slicing and encoding the candidate
             try:
-                tree = ast.parse("\n".join(lines[start:end]))
+                tree = _quiet_parse(candidate)
             except SyntaxError as e:
-                end = min(end - 1, start + (e.lineno or 1) - 1)
+                error_line = start + (e.lineno or 1)
+                budget -= offsets[min(error_line, end)] - offsets[start]
+                end = min(end - 1, error_line - 1)
                 continue
             except (ValueError, RecursionError, MemoryError):
                 break
+            budget -= len(candidate)
             if _has_action(tree):
                 best = (start, end)
+            elif all(statement.end_lineno == statement.lineno for statement in tree.body):
+                next_start = end
             break
-    return "\n".join(lines[best[0] : best[1]])
+        start = next_start
+    return text[offsets[best[0]] : offsets[best[1]] - 1] if best[1] > best[0] else ""
+
+
+SEARCH_EFFORT = 4
+"""Characters the unfenced-program search may parse per character of the answer."""
+
+_PARSE_OVERHEAD_CHARS = 256
+
+
+def _can_start_program(line: str) -> bool:
+    """False when the line alone is invalid Python however it continues (complete or incomplete is fine)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            codeop.compile_command(line, symbol="exec")
+    except (SyntaxError, ValueError, OverflowError, MemoryError, RecursionError):
+        return False
+    return True
+
+
+def _quiet_parse(code: str) -> ast.Module:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # SyntaxWarnings about text that is not the program
+        return ast.parse(code)
 
 
 def _has_action(tree: ast.Module) -> bool:

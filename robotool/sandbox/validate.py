@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import re
 
 from robotool.embodiments import SKILLS, EmbodimentName, SkillArgumentError, check_call, skills
 from robotool.sandbox.allowlist import (
@@ -37,9 +38,11 @@ from robotool.sandbox.allowlist import (
     METHODS,
     MODULES,
     NOT_ALLOWED_BECAUSE,
+    NUMERIC_TYPE_NAMES,
     NUMPY_CONSTANTS,
     NUMPY_FUNCTIONS,
     NUMPY_LINALG,
+    NUMPY_TYPES,
 )
 
 MAX_PROGRAM_CHARS = 100_000
@@ -97,57 +100,101 @@ def parse_program(code: str) -> ast.Module:
 def validate(code: str, embodiment: EmbodimentName) -> None:
     """Check a program against the sandbox allowlist; raise :class:`ProgramRejected` if it fails.
 
-    The first problem in source order is reported.
+    The first problem in source order is reported. The work is linear in the program's length:
+    one parse, one visit per node, and only the reported problem's source text is cut out.
     """
     if len(code) > MAX_PROGRAM_CHARS:
         raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
     tree = parse_program(code)
-    checker = _Checker(code, embodiment, tree)
+    checker = _Checker(embodiment)
     try:
-        checker.visit(tree)
+        checker.check_module(tree)
     except RecursionError:
         raise ProgramRejected(None, "nesting", "program is nested too deeply") from None
     checker.check_imports()
     if checker.problems:
-        raise min(checker.problems, key=lambda p: p.line or 0)
+        line, node, reason = min(checker.problems, key=lambda p: p[0] or 0)
+        raise ProgramRejected(line, _source_line_segment(code, node), reason)
 
 
-def _bound_names(tree: ast.Module) -> set[str]:
-    """Names the program itself binds: assignment and loop targets, functions, parameters."""
+def _source_line_segment(code: str, node: ast.AST | str) -> str:
+    """The first source line of ``node`` (or ``node`` itself when it is already text)."""
+    if isinstance(node, str):
+        return node
+    line, start = getattr(node, "lineno", None), getattr(node, "col_offset", None)
+    if line is None or start is None:
+        return type(node).__name__
+    text = _LINE_BREAK.split(code, maxsplit=line)[line - 1].encode()  # offsets count UTF-8 bytes
+    end = node.end_col_offset if getattr(node, "end_lineno", line) == line else None
+    return text[start:end].decode(errors="replace") or type(node).__name__
+
+
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
+def _scope_bindings(nodes: list[ast.AST]) -> set[str]:
+    """Names bound directly in one scope: targets, loop and comprehension variables, function names.
+
+    Nested function and lambda bodies and parameters are their own scopes and are not entered (their
+    defaults are evaluated in this one and are).
+    """
     names: set[str] = set()
-    for node in ast.walk(tree):
+    todo = list(nodes)
+    while todo:
+        node = todo.pop()
         if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
             names.add(node.id)
-        elif isinstance(node, ast.FunctionDef):
+        if isinstance(node, ast.FunctionDef):
             names.add(node.name)
-        elif isinstance(node, ast.arg):
-            names.add(node.arg)
+            todo += [*node.decorator_list, *node.args.defaults, *filter(None, node.args.kw_defaults)]
+        elif isinstance(node, ast.Lambda):
+            todo += [*node.args.defaults, *filter(None, node.args.kw_defaults)]
+        else:
+            todo += ast.iter_child_nodes(node)
     return names
 
 
-class _Checker(ast.NodeVisitor):
-    """Visits every node, recording a :class:`ProgramRejected` for each problem."""
+def _parameters(args: ast.arguments) -> list[ast.arg]:
+    return [*args.posonlyargs, *args.args, *filter(None, [args.vararg, args.kwarg]), *args.kwonlyargs]
 
-    def __init__(self, code: str, embodiment: EmbodimentName, tree: ast.Module):
-        self.code = code
+
+class _Checker(ast.NodeVisitor):
+    """Visits every node, recording ``(line, node, reason)`` for each problem.
+
+    Names resolve through a stack of scopes (the module, then each enclosing function or lambda),
+    so a name is usable only where the program binds it or where it is an allowed builtin.
+    """
+
+    def __init__(self, embodiment: EmbodimentName):
         self.embodiment = embodiment
         self.skills = {s.name: s for s in skills(embodiment)}
-        self.bound = _bound_names(tree)
+        self.scopes: list[set[str]] = []
+        self.bound_anywhere: set[str] = set()
         self.imported: set[str] = set()
         self.used_modules: dict[str, int] = {}
-        self.problems: list[ProgramRejected] = []
+        self.problems: list[tuple[int | None, ast.AST | str, str]] = []
 
     def reject(self, node: ast.AST, reason: str) -> None:
-        segment = ast.get_source_segment(self.code, node) or type(node).__name__
-        self.problems.append(ProgramRejected(getattr(node, "lineno", None), segment.split("\n")[0], reason))
+        self.problems.append((getattr(node, "lineno", None), node, reason))
+
+    def check_module(self, tree: ast.Module) -> None:
+        self.in_scope(_scope_bindings(tree.body), tree.body)
+
+    def in_scope(self, names: set[str], body: list[ast.AST]) -> None:
+        self.scopes.append(names)
+        self.bound_anywhere |= names
+        for node in body:
+            self.visit(node)
+        self.scopes.pop()
+
+    def is_bound(self, name: str) -> bool:
+        return any(name in scope for scope in self.scopes)
 
     def check_imports(self) -> None:
         for alias, line in sorted(self.used_modules.items(), key=lambda item: item[1]):
             if alias not in self.imported:
                 statement = "import numpy as np" if alias == "np" else "import math"
-                self.problems.append(
-                    ProgramRejected(line, alias, f"'{alias}' is used but never imported; add `{statement}`")
-                )
+                self.problems.append((line, alias, f"'{alias}' is used but never imported; add `{statement}`"))
 
     def generic_visit(self, node: ast.AST) -> None:
         if isinstance(node, _PLAIN_NODES):
@@ -181,14 +228,17 @@ class _Checker(ast.NodeVisitor):
             self.reject(node, f"'{name}' can only be used as {name}.<function>, not as a value")
         elif name in self.skills:
             self.reject(node, f"skill '{name}' can only be called, not used as a value")
-        elif name not in BUILTINS and name not in self.bound:
+        elif name not in BUILTINS and not self.is_bound(name):
             self.reject(node, self.unknown_name(name, called=False))
 
     def check_binding(self, node: ast.AST, name: str) -> None:
+        """A program may not bind a reserved, skill, module or builtin name, allowed or not, anywhere."""
         if _private(name):
             self.reject(node, f"name '{name}' is not allowed: names starting with '_' are reserved")
         elif name in self.skills or name in MODULES or name in BUILTINS:
             self.reject(node, f"'{name}' cannot be assigned: it is a skill, module or builtin name")
+        elif hasattr(builtins, name):
+            self.reject(node, f"'{name}' cannot be assigned: it is a Python built-in name; choose another name")
 
     def unknown_name(self, name: str, *, called: bool) -> str:
         if hasattr(builtins, name):
@@ -197,6 +247,8 @@ class _Checker(ast.NodeVisitor):
         for other, specs in SKILLS.items():
             if other != self.embodiment and any(s.name == name for s in specs):
                 return f"'{name}' is a {other} skill; the {self.embodiment}'s skills are: {known}"
+        if name in self.bound_anywhere:
+            return f"name '{name}' is not defined here: it is assigned only inside another function"
         if called:
             return f"unknown function '{name}'; the {self.embodiment}'s skills are: {known}"
         return f"name '{name}' is never assigned"
@@ -226,10 +278,12 @@ class _Checker(ast.NodeVisitor):
             self.check_skill_call(node, func.id)
         elif isinstance(func, ast.Attribute) and _module_path(func) == ("np", "linalg"):
             self.reject(node, "'np.linalg' is a module, not a function")
-        elif isinstance(func, ast.Name) and func.id not in BUILTINS and func.id not in self.bound:
+        elif isinstance(func, ast.Name) and func.id not in BUILTINS and not self.is_bound(func.id):
             self.reject(node, self.unknown_name(func.id, called=True))
         else:
             self.visit(func)
+        if isinstance(func, ast.Attribute) and func.attr == "astype" and not _numeric_type_only(node):
+            self.reject(node, "astype() takes one numeric type: float, int, bool, np.float64, np.int64 or 'float32'")
         for child in [*node.args, *node.keywords]:
             self.visit(child)
 
@@ -263,21 +317,27 @@ class _Checker(ast.NodeVisitor):
             self.reject(node, "decorators are not allowed")
         self.check_binding(node, node.name)
         self.visit(node.args)
-        for child in [*node.body, *([node.returns] if node.returns else [])]:
-            self.visit(child)
+        if node.returns:
+            self.visit(node.returns)
+        own = {a.arg for a in _parameters(node.args)} | _scope_bindings(node.body)
+        self.in_scope(own, node.body)
 
     def visit_Lambda(self, node: ast.Lambda) -> None:
         self.visit(node.args)
-        self.visit(node.body)
+        self.in_scope({a.arg for a in _parameters(node.args)}, [node.body])
 
-    def visit_arg(self, node: ast.arg) -> None:
-        self.check_binding(node, node.arg)
-        if node.annotation:
-            self.visit(node.annotation)
+    def visit_arguments(self, node: ast.arguments) -> None:
+        """Parameters are checked as bindings; defaults are evaluated in the enclosing scope."""
+        for parameter in _parameters(node):
+            self.check_binding(parameter, parameter.arg)
+            if parameter.annotation:
+                self.visit(parameter.annotation)
+        for default in [*node.defaults, *filter(None, node.kw_defaults)]:
+            self.visit(default)
 
 
 _MODULE_ATTRIBUTES: frozenset[tuple[str, ...]] = frozenset(
-    {("np", n) for n in NUMPY_FUNCTIONS | NUMPY_CONSTANTS | {"linalg"}}
+    {("np", n) for n in NUMPY_FUNCTIONS | NUMPY_CONSTANTS | NUMPY_TYPES | {"linalg"}}
     | {("np", "linalg", n) for n in NUMPY_LINALG}
     | {("math", n) for n in MATH_NAMES}
 )
@@ -293,6 +353,18 @@ def _module_path(node: ast.Attribute) -> tuple[str, ...] | None:
     if isinstance(value, ast.Name) and value.id in MODULES:
         return (value.id, *reversed(parts))
     return None
+
+
+def _numeric_type_only(call: ast.Call) -> bool:
+    """``x.astype(T)`` with ``T`` a numeric builtin, ``np.<numeric type>`` or its name as a string."""
+    if len(call.args) != 1 or call.keywords:
+        return False
+    (arg,) = call.args
+    if isinstance(arg, ast.Name):
+        return arg.id in ("float", "int", "bool")
+    if isinstance(arg, ast.Constant):
+        return isinstance(arg.value, str) and arg.value in NUMERIC_TYPE_NAMES
+    return isinstance(arg, ast.Attribute) and _module_path(arg) in {("np", n) for n in NUMPY_TYPES}
 
 
 def _private(name: str) -> bool:

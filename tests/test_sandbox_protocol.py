@@ -1,0 +1,129 @@
+"""Everything a worker says goes through the protocol: safe error descriptions, capped sizes, no leaks."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.sandbox import ProgramRejected, SandboxLimits, SandboxSession, start_sessions, validate
+from robotool.sandbox.messages import max_world_bytes
+from robotool.sandbox.worker import UNDESCRIBABLE
+
+LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=5_000, max_skill_calls=50)
+
+
+def run(code: str, limits: SandboxLimits = LIMITS, *, unchecked: bool = False) -> ProgramEnded:
+    session = SandboxSession(code, "arm", limits, test_only_skip_python_checks=unchecked)
+    try:
+        session.resume(None)
+        message = session.wait()
+        while isinstance(message, SkillRequest):
+            session.resume(SkillReply(value=[0.3, 0.0, 0.1]))
+            message = session.wait()
+        return message
+    finally:
+        session.close()
+
+
+def test_an_error_whose_description_fails_becomes_a_fixed_message() -> None:
+    ended = run("d = {}\nk = 10 ** 5000\nx = d[k]\n")
+    assert ended.error == f"line 3: KeyError: {UNDESCRIBABLE}"
+
+
+def test_lone_surrogates_in_output_and_errors_are_escaped() -> None:
+    ended = run("print('a\\ud800b')\nx = {}['\\udfff']\n")
+    assert ended.output == "a\\ud800b\n"
+    assert ended.error == "line 2: KeyError: '\\udfff'"
+
+
+def test_error_names_are_public_and_addresses_are_masked() -> None:
+    ended = run("import numpy as np\nx = np.array([1]) + 'a'\n")
+    assert ended.error is not None and ended.error.startswith("line 2: UFuncTypeError: ")
+    ended = run("f = lambda: 0\nx = {}[f]\n")
+    assert ended.error == "line 2: KeyError: <function <lambda> at 0x...>"
+
+
+def test_reprs_name_skills_and_numpy_functions_without_internals() -> None:
+    ended = run("import numpy as np\nprint(np.linalg.norm, np.clip)\n")
+    assert ended.output == "<function np.linalg.norm> <function np.clip>\n"
+    ended = run("print(repr(move_to_position))\n", unchecked=True)
+    assert ended.output == "<skill move_to_position>\n"
+
+
+def test_no_host_path_appears_in_an_error() -> None:
+    ended = run("import numpy as np\nnp.linalg.inv(np.zeros((2, 3)))\n")
+    assert ended.error is not None and "LinAlgError" in ended.error
+    ended = run("import json\njson.loads('{')\n", unchecked=True)
+    assert ended.error is not None and "/" not in ended.error
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import numpy as np\nx = np.array([None, 1])\n",
+        "import numpy as np\nx = np.array([1, 2], dtype='O')\n",
+        "import numpy as np\nx = np.zeros(2, dtype='V8')\n",
+        "import numpy as np\nx = np.full(2, 'a', 'O')\n",
+    ],
+)
+def test_numpy_functions_refuse_object_and_structured_arrays(code: str) -> None:
+    ended = run(code)
+    assert ended.error is not None and "not allowed in programs" in ended.error
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import numpy as np\nb = np.ndarray((4,), buffer=np.zeros(4), dtype=np.int64)\n",
+        "import numpy as np\nx = np.zeros(3).astype('O')\n",
+        "import numpy as np\nx = np.zeros(3).astype(object)\n",
+        "import numpy as np\nx = np.zeros(3).view(np.int64)\n",
+        "import numpy as np\nx = np.empty(3)\n",
+        "import numpy as np\nx = np.frombuffer(b'abcdefgh')\n",
+        "import numpy as np\nx = np.zeros(3).strides\n",
+    ],
+)
+def test_buffer_aliasing_primitives_are_refused(code: str) -> None:
+    with pytest.raises(ProgramRejected):
+        validate(code, "arm")
+
+
+def test_numeric_astype_still_works() -> None:
+    code = "import numpy as np\nx = np.array([1.7, 2.2])\nprint(x.astype(int).tolist(), x.astype('float32').tolist())\n"
+    assert run(code) == ProgramEnded(error=None, output="[1, 2] [1.7000000476837158, 2.200000047683716]\n")
+
+
+def test_a_worker_that_floods_the_host_is_cut_off() -> None:
+    """A worker speaking the protocol itself (Python checks off) with maximal messages."""
+    code = (
+        "import json\nfrom multiprocessing.connection import Connection\nhost = Connection(3)\n"
+        "while True:\n"
+        "    host.send_bytes(json.dumps({'call': 'get_center', 'args': ['milk'], 'output': 'x' * 30000}).encode())\n"
+        "    host.recv_bytes()\n"
+    )
+    ended = run(code, unchecked=True)
+    assert ended.error == "the worker sent more data than its limits allow"
+    assert len(ended.output) == LIMITS.max_output_chars
+    assert max_world_bytes(LIMITS) < 10 * 2**20
+
+
+def test_a_batch_keeps_at_most_its_output_budget() -> None:
+    limits = LIMITS.model_copy(update={"max_batch_output_chars": 100})
+    sessions = start_sessions(["print('y' * 80)\n"] * 3, "arm", limits)
+    outputs = []
+    for session in sessions:
+        session.resume(None)
+        ended = session.wait()
+        assert isinstance(ended, ProgramEnded) and ended.error is None
+        outputs.append(ended.output)
+        session.close()
+    assert [len(o) for o in outputs] == [81, 19, 0]
+
+
+def test_a_malformed_message_ends_only_that_world() -> None:
+    code = "from multiprocessing.connection import Connection\nConnection(3).send_bytes(b'{\"call\": 5}')\n"
+    ended = run(code, unchecked=True)
+    assert ended.error == "the worker sent a malformed message"
+    assert json.loads('{"ok": 1}')  # the host process carries on
