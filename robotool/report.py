@@ -9,14 +9,32 @@ from rich.table import Table
 
 from robotool.execute import RunReport
 from robotool.rollout import Rollout
+from robotool.safe_text import terminal_safe
+from robotool.sandbox import layers_in_use
 from robotool.solution import Solution
 from robotool.verify import world_failure
+
+
+def _shown(text: str) -> str:
+    """Text from a program, an LM or a task file: control characters escaped, then markup."""
+    return escape(terminal_safe(text))
+
+
+def print_sandbox_layers(console: Console) -> None:
+    """Which OS layers confined the generated programs of this run; a loud warning if seccomp was missing."""
+    layers = layers_in_use()
+    if layers is None:
+        return
+    console.print(layers.summary(), markup=False, highlight=False)
+    warning = layers.warning()
+    if warning:
+        console.print(f"[bold red]WARNING:[/] {escape(warning)}")
 
 
 def print_solution(solution: Solution, console: Console) -> None:
     """Key concepts, the chosen plan, every candidate's outcome, and the best code."""
     for note in solution.notes:
-        console.print(f"[yellow]note:[/] {escape(note)}")
+        console.print(f"[yellow]note:[/] {_shown(note)}")
     stages = solution.stages
     if stages.key_concepts:
         table = Table(title="Key concepts")
@@ -24,17 +42,17 @@ def print_solution(solution: Solution, console: Console) -> None:
             table.add_column(column)
         for c in stages.key_concepts:
             table.add_row(
-                escape(c.name),
-                f"{c.value:g} {c.unit}",
-                f"{c.limit:g} ({c.limit_name})",
+                _shown(c.name),
+                _shown(f"{c.value:g} {c.unit}"),
+                _shown(f"{c.limit:g} ({c.limit_name})"),
                 "yes" if c.satisfied else "[red]no[/]",
             )
         console.print(table)
     if stages.abstract_plan:
-        console.print(f"[bold]Plan:[/] {escape(stages.abstract_plan)}")
+        console.print(f"[bold]Plan:[/] {_shown(stages.abstract_plan)}")
     for i, step in enumerate(stages.steps or [], start=1):
         objects = f" [{', '.join(step.objects)}]" if step.objects else ""
-        console.print(escape(f"  {i}. {step.skill}{objects}: {step.intent}"))
+        console.print(_shown(f"  {i}. {step.skill}{objects}: {step.intent}"))
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
@@ -45,11 +63,12 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            escape("; ".join([c.failure or "solved in every world", *c.notes])),
+            _shown("; ".join([c.failure or "solved in every world", *c.notes])),
         )
     console.print(table)
     if solution.code:
-        code = Syntax(solution.code, "python").highlight(solution.code)  # Text: no padding on copied lines
+        safe_code = terminal_safe(solution.code)
+        code = Syntax(safe_code, "python").highlight(safe_code)  # Text: no padding on copied lines
         code.rstrip()
         console.print(code, soft_wrap=True)
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
@@ -64,6 +83,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
             "DSPy's cache, not the model (--no-cache asks the model again)"
         )
+    print_sandbox_layers(console)
 
 
 def _format_args(args: list[object]) -> str:
@@ -88,25 +108,27 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
         table.add_row(
             str(i),
-            escape(f"{call.skill}({_format_args(call.args)})"),
+            _shown(f"{call.skill}({_format_args(call.args)})"),
             outcome,
             f"{call.ended - call.started:.2f}",
-            escape(details),
+            _shown(details),
         )
     console.print(table)
     conditions = ", ".join(
-        f"{name} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
+        f"{_shown(name)} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
     )
-    console.print(f"  goal: {conditions or 'no conditions'}; touched: {', '.join(rollout.touched) or 'nothing'}")
+    touched = _shown(", ".join(rollout.touched)) or "nothing"
+    console.print(f"  goal: {conditions or 'no conditions'}; touched: {touched}")
     if rollout.error:
-        console.print(f"  [red]error:[/] {escape(rollout.error)}")
+        console.print(f"  [red]error:[/] {_shown(rollout.error)}")
     if rollout.output:
-        console.print(f"  printed: {rollout.output.strip()[:500]}", markup=False)
+        console.print(f"  printed: {terminal_safe(rollout.output.strip()[:500])}", markup=False, highlight=False)
 
 
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
     """A run's summary over worlds, then the traces of the first world and of failed worlds."""
-    table = Table(title=f"{report.task}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend")
+    title = f"{_shown(report.task)}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend"
+    table = Table(title=title)
     for column in ("world", "success", "sim time (s)", "calls", "touched", "why it failed"):
         table.add_column(column, overflow="fold")
     for r in report.rollouts:
@@ -116,7 +138,7 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
             f"{r.sim_time:.2f}",
             str(len(r.calls)),
             str(len(r.touched)),
-            escape(world_failure(r) or ""),
+            _shown(world_failure(r) or ""),
         )
     console.print(table)
     shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
@@ -124,3 +146,4 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
         print_trace(rollout, console)
     verdict = "[green]every world succeeded[/]" if report.success else "[red]some worlds failed[/]"
     console.print(f"{verdict}: success rate {report.success_rate:.0%}")
+    print_sandbox_layers(console)

@@ -5,21 +5,23 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from robotool.eval.records import Picture, Results
 from robotool.eval.tables import TextTable
 from robotool.methods import METHODS
+from robotool.safe_text import one_line
 
 
 def _markdown_table(table: TextTable) -> str:
     def line(cells: Sequence[str]) -> str:
-        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+        return "| " + " | ".join(one_line(c).replace("|", "\\|") for c in cells) + " |"
 
-    lines = [f"## {table.title}", "", line(table.columns), line(["---"] * len(table.columns))]
+    lines = [f"## {one_line(table.title)}", "", line(table.columns), line(["---"] * len(table.columns))]
     lines += [line(row) for row in table.rows]
     if table.note:
-        lines += ["", table.note]
+        lines += ["", one_line(table.note)]
     return "\n".join(lines)
 
 
@@ -37,8 +39,8 @@ def _preamble(results: Results) -> list[str]:
         lines.append(
             f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks the model again)"
         )
-    lines += [f"- {line}" for line in skipped_lines(results.skipped)]
-    lines += [f"- note: {note}" for note in results.notes]
+    lines += [f"- {one_line(line)}" for line in skipped_lines(results.skipped)]
+    lines += [f"- note: {one_line(note)}" for note in results.notes]
     if not any(METHODS.get(r.key.method, {}).get("analyzer") for r in results.records):
         lines.append(
             "- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an LM; none ran"
@@ -90,10 +92,11 @@ def print_tables(results: Results, tables: Sequence[TextTable], console: Console
     for line in _preamble(results):
         console.print(line, markup=False, highlight=False)
     for t in tables:
-        table = Table(title=t.title, caption=t.note or None)
+        table = Table(title=one_line(t.title), caption=one_line(t.note) or None)
         for i, column in enumerate(t.columns):
             header = column if i == 0 else column.replace("_", "\n")  # task names wrap at underscores
             table.add_column(header, justify="left" if i == 0 else "right", no_wrap=i == 0)
         for i, row in enumerate(t.rows):
-            table.add_row(*row, style="dim" if i >= len(t.rows) - t.reference else None)
+            cells = [escape(one_line(cell)) for cell in row]
+            table.add_row(*cells, style="dim" if i >= len(t.rows) - t.reference else None)
         console.print(table)

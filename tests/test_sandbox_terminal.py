@@ -1,0 +1,47 @@
+"""Terminal safety: what programs print and name reaches the console and the eval Markdown escaped."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from robotool.cli import main
+from robotool.eval.report import _markdown_table
+from robotool.eval.tables import TextTable
+from robotool.safe_text import one_line, terminal_safe
+
+HOSTILE_PRINTS = (
+    'print("\\x1b[2J\\x1b[H", end="")  # clear the screen\n'
+    'print("\\x1b]0;pwned\\x07", end="")  # window title\n'
+    'print("\\x1b]52;c;cm0gLXJmIH4=\\x07", end="")  # clipboard (OSC 52)\n'
+    'print("\\r\\x1b[32mevery world succeeded\\x1b[0m \\u202e")  # a fake green verdict\n'
+    'move_to_position(get_center("milk\\x1b[31m"))\n'
+)
+
+
+def test_escaping_keeps_text_readable() -> None:
+    assert terminal_safe("a\x1b[2Jb\tc\nd\x9b\u202e\r") == "a\\x1b[2Jb\tc\nd\\x9b\\u202e\\x0d"
+    assert one_line("a\nb\tc|") == "a\\x0ab\\x09c|"
+    assert terminal_safe("plain text, ünïcode ✓") == "plain text, ünïcode ✓"
+
+
+def test_run_report_shows_program_bytes_escaped(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "250")
+    program = tmp_path / "hostile_prints.py"
+    program.write_text(HOSTILE_PRINTS)
+    main(["run", "milk_reaching", str(program), "--worlds", "1", "--backend", "mujoco"])
+    out = capsys.readouterr().out
+    for raw in ("\x1b", "\x07", "\r", "\u202e"):  # captured output is not a terminal: rich adds none of these
+        assert raw not in out, repr(raw)
+    assert "\\x1b[2J" in out and "\\x1b]52;c;" in out
+    assert "sandbox: " in out and "seccomp filter" in out
+
+
+def test_eval_markdown_cells_are_escaped() -> None:
+    table = TextTable(title="T\x1b[2J", columns=["method", "note"], rows=[["a\x1b]52;c;x\x07", "line\nbreak|pipe"]])
+    text = _markdown_table(table)
+    assert "\x1b" not in text and "\x07" not in text
+    assert "| a\\x1b]52;c;x\\x07 | line\\x0abreak\\|pipe |" in text
