@@ -212,3 +212,17 @@ def test_batch_of_unchecked_programs_leaves_good_worlds_alone() -> None:
         s.resume(SkillReply(value=None))
         assert s.wait() == ProgramEnded(error=None, output="ok\n")
         s.close()
+
+
+def test_raw_system_calls_from_native_code_are_denied() -> None:
+    """ctypes reaches libc.syscall directly: fork, clone, kill, ptrace, switching off the CPU timer,
+    raising rlimits, adding filters and new namespaces all fail with EPERM."""
+    ended = run_unchecked((ESCAPES / "native_code.py").read_text())
+    assert ended.error is None, ended.error
+    lines = ended.output.splitlines()
+    assert len(lines) == 9 and all(line.endswith(" denied 1") for line in lines), ended.output
+
+
+@pytest.mark.parametrize("fixture", ["i386_abi.py", "x32_abi.py"])
+def test_system_calls_through_a_foreign_abi_kill_the_worker(fixture: str) -> None:
+    assert run_unchecked((ESCAPES / fixture).read_text()).error == "the worker crashed (SIGSYS)"

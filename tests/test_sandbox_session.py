@@ -283,9 +283,10 @@ def test_zygote_does_not_inherit_the_host_environment(monkeypatch: pytest.Monkey
     fresh = Zygote()
     try:
         (worker,) = fresh.spawn(1)
-        for pid in (fresh.process.pid, worker.host_pid):
+        worker_pid = worker.host_pid
+        for pid in (fresh.process.pid, worker_pid):
             environment = Path(f"/proc/{pid}/environ").read_bytes()
             assert b"sk-secret" not in environment and b"OPENBLAS_NUM_THREADS=1" in environment
     finally:
         fresh.close()
-    assert not Path(f"/proc/{worker.host_pid}").exists()
+    assert not Path(f"/proc/{worker_pid}").exists()

@@ -56,13 +56,17 @@ class ZygoteError(RuntimeError):
 
 
 class Worker(NamedTuple):
-    """A forked worker: its PID in the zygote's namespace, the host's end of its socket, the zygote
-    that owns it, and its PID as the host sees it."""
+    """A forked worker: its PID in the zygote's namespace, the host's end of its socket, and the
+    zygote that owns it."""
 
     pid: int
     conn: Connection
     zygote: Zygote
-    host_pid: int
+
+    @property
+    def host_pid(self) -> int:
+        """The worker's PID as this process sees it (asked of the zygote: it differs in a PID namespace)."""
+        return self.zygote.host_pid(self.pid)
 
 
 class Zygote:
@@ -100,9 +104,15 @@ class Zygote:
             workers = []
             for _ in range(count):
                 data, fds = self._receive(with_fd=True)
-                reply = json.loads(data)
-                workers.append(Worker(reply["pid"], Connection(fds[0]), self, reply["host_pid"]))
+                workers.append(Worker(json.loads(data)["pid"], Connection(fds[0]), self))
             return workers
+
+    def host_pid(self, pid: int) -> int:
+        """A running worker's PID as this process sees it."""
+        with self._lock:
+            self._send({"op": "host_pid", "pid": pid})
+            data, _ = self._receive(with_fd=False)
+            return int(json.loads(data)["host_pid"])
 
     def layers(self) -> jail.SandboxLayers:
         """The OS layers the zygote's workers run under (asked once; warns when seccomp is missing)."""
@@ -188,7 +198,6 @@ class _Server:
         self.jail = worker_jail
         # In a PID namespace the host knows workers by other PIDs: found through this process's children.
         self.own_host_pid = int(os.readlink("/proc/self")) if "PID namespace" in layers.in_force else None
-        self.host_pids: dict[int, int] = {}
         # A child's exit wakes the loop (through this pipe) so that it is reaped at once.
         self.wake_r, self.wake_w = os.pipe()
         os.set_blocking(self.wake_r, False)
@@ -225,6 +234,8 @@ class _Server:
                 self.release(request["pid"])
             elif request["op"] == "layers":
                 self.control.send(self.layers.model_dump_json().encode())
+            elif request["op"] == "host_pid":
+                self.control.send(json.dumps({"host_pid": self.host_pid(request["pid"])}).encode())
         for pid in self.running:
             _kill_group(pid)
         for pid in self.running:
@@ -246,28 +257,26 @@ class _Server:
             os.setpgid(pid, pid)
         worker_end.close()
         self.running.add(pid)
-        self.host_pids[pid] = self.host_pid(pid)
         return pid, host_end
 
     def host_pid(self, pid: int) -> int:
-        """The worker's PID as the host sees it: outside a PID namespace, the same."""
+        """The worker's PID as the host sees it: outside a PID namespace, the same; -1 if it is gone."""
         if self.own_host_pid is None:
             return pid
         me = self.own_host_pid
         with open(f"/proc/{me}/task/{me}/children") as f:
-            children = set(map(int, f.read().split())) - set(self.host_pids.values())
+            children = map(int, f.read().split())
         for child in children:
             with contextlib.suppress(OSError), open(f"/proc/{child}/status") as f:
                 ids = next(line for line in f if line.startswith("NSpid:")).split()
                 if int(ids[-1]) == pid:
                     return child
-        return pid
+        return -1
 
     def spawn(self, count: int) -> None:
         for _ in range(count):
             pid, host_end = self.spares.pop() if self.spares else self.fork()
-            reply = {"pid": pid, "host_pid": self.host_pids[pid]}
-            socket.send_fds(self.control, [json.dumps(reply).encode()], [host_end.fileno()])
+            socket.send_fds(self.control, [json.dumps({"pid": pid}).encode()], [host_end.fileno()])
             host_end.close()
         self.spare_target = min(count, MAX_SPARES)
 
@@ -287,7 +296,6 @@ class _Server:
             if pid not in self.running:
                 continue  # an orphan this process inherited as the namespace's init
             self.running.discard(pid)
-            self.host_pids.pop(pid, None)
             if pid in self.released:
                 self.released.discard(pid)
             else:
@@ -303,7 +311,6 @@ class _Server:
             _kill_group(pid)
             os.waitpid(pid, 0)
             self.running.discard(pid)
-            self.host_pids.pop(pid, None)
             return -signal.SIGKILL
         return self.exited.pop(pid, -signal.SIGKILL)
 
