@@ -127,3 +127,20 @@ def test_a_malformed_message_ends_only_that_world() -> None:
     ended = run(code, unchecked=True)
     assert ended.error == "the worker sent a malformed message"
     assert json.loads('{"ok": 1}')  # the host process carries on
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        "[" * 50_000 + "]" * 50_000,  # nesting that a recursive parser would choke on
+        '["' + "m" * 50_000 + '"]',  # a huge object name
+        "[" + ", ".join(["[1, 2, 3]"] * 10) + ", [[[1]]]]",
+    ],
+    ids=["deep", "long-name", "nested"],
+)
+def test_oversized_or_deep_skill_arguments_are_malformed(args: str) -> None:
+    code = (
+        "from multiprocessing.connection import Connection\n"
+        f'Connection(3).send_bytes(b\'{{"call": "get_center", "args": \' + {args!r}.encode() + b\'}}\')\n'
+    )
+    assert run(code, unchecked=True).error == "the worker sent a malformed message"

@@ -11,7 +11,7 @@ import json
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from robotool.embodiments import EmbodimentName
 from robotool.programs import SkillReply
@@ -28,6 +28,28 @@ class WorkerMessage(BaseModel):
     args: list[Any] = Field([], max_length=10)
     error: str | None = Field(None, max_length=1_000)
     output: str = ""
+
+    @field_validator("args")
+    @classmethod
+    def _small_arguments(cls, args: list[Any]) -> list[Any]:
+        if not all(_small(a, depth=0) for a in args):
+            raise ValueError(
+                f"skill arguments are numbers, short names and short lists of numbers ({MAX_ARGUMENT_CHARS})"
+            )
+        return args
+
+
+MAX_ARGUMENT_CHARS = 200
+"""Longest name a skill call may carry (object names are short)."""
+
+
+def _small(value: object, *, depth: int) -> bool:
+    """A number, a short string, or a list of at most 10 small values, at most two lists deep."""
+    if isinstance(value, str):
+        return len(value) <= MAX_ARGUMENT_CHARS
+    if isinstance(value, list | tuple):
+        return depth < 2 and len(value) <= 10 and all(_small(v, depth=depth + 1) for v in value)
+    return value is None or isinstance(value, bool | int | float)
 
 
 GO = b"{}"
