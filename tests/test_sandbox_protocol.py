@@ -144,3 +144,8 @@ def test_oversized_or_deep_skill_arguments_are_malformed(args: str) -> None:
         f'Connection(3).send_bytes(b\'{{"call": "get_center", "args": \' + {args!r}.encode() + b\'}}\')\n'
     )
     assert run(code, unchecked=True).error == "the worker sent a malformed message"
+
+
+def test_a_long_object_name_is_the_programs_error() -> None:
+    ended = run("c = get_center('m' * 300)\n")
+    assert ended.error == "line 1: ValueError: get_center: an object name has at most 200 characters"

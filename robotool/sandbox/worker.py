@@ -32,7 +32,7 @@ from robotool.programs import SkillCallError
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
-from robotool.sandbox.messages import WorkerMessage
+from robotool.sandbox.messages import MAX_ARGUMENT_CHARS, WorkerMessage
 
 PROGRAM_FILENAME = "<program>"
 MAX_ERROR_CHARS = 500
@@ -244,6 +244,8 @@ class _Program:
             raise TypeError(f"{spec.signature} got an unexpected argument {_safe_str(sorted(map(str, unknown))[0])!r}")
         values = (*args, *(kwargs[p] for p in params[len(args) :] if p in kwargs))
         checked = check_call(self.embodiment, spec.name, values)
+        if any(isinstance(v, str) and len(v) > MAX_ARGUMENT_CHARS for v in checked):
+            raise ValueError(f"{spec.name}: an object name has at most {MAX_ARGUMENT_CHARS} characters")
         self.calls += 1
         if self.calls > self.limits.max_skill_calls:
             raise _LimitExceeded(self.limits.skill_calls_exceeded())
