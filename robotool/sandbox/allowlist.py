@@ -76,5 +76,10 @@ NOT_ALLOWED_BECAUSE: dict[str, str] = {
     "format": "str.format can reach private attributes through its fields; use an f-string",
     "format_map": "str.format_map can reach private attributes through its fields; use an f-string",
     "random": "programs must be deterministic",
+    "ndarray": "it lays an array over a raw buffer; use np.array",
+    "empty": "it returns uninitialised memory; use np.zeros",
+    "frombuffer": "it lays an array over a raw buffer; use np.array",
+    "view": "it reinterprets an array's memory; use .astype(float)",
+    "strides": "programs do not handle memory layout",
 }
 """Why a commonly tried name is refused, for the rejection message."""
