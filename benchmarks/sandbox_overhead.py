@@ -109,10 +109,13 @@ def main() -> None:
 
     first, _ = timed(lambda: start_sessions([CODE], "arm")[0].close())
     print(f"zygote start and first worker: {first * 1e3:.0f} ms")
+    print(zygote().layers().summary())
     forking = startup(args.worlds)
     time.sleep(1.0)  # the zygote pre-forks spares for the next batch of this size while idle
-    print(f"worker start-up, {args.worlds} at once: {forking * 1e3:.2f} ms per session forking on demand, "
-          f"{startup(args.worlds) * 1e3:.2f} ms from pre-forked spares")
+    print(
+        f"worker start-up, {args.worlds} at once: {forking * 1e3:.2f} ms per session forking on demand, "
+        f"{startup(args.worlds) * 1e3:.2f} ms from pre-forked spares"
+    )
     trip = round_trip(args.worlds, 50)
     print(f"skill call round trip: {trip * 1e6:.0f} us per call ({args.worlds} workers)")
 
@@ -130,10 +133,14 @@ def main() -> None:
     print(f"{args.task}, {args.worlds} worlds, {successes} succeeded, {args.repeats} runs each")
     median = statistics.median
     for form in walls:
-        print(f"{form:9s}: wall best {min(walls[form]):.2f} s, median {median(walls[form]):.2f} s; "
-              f"CPU median {median(cpus[form]):.2f} s")
-    print(f"ratio, wall best/best: {min(walls['sandboxed']) / min(walls['trusted']):.3f}; "
-          f"CPU median/median: {median(cpus['sandboxed']) / median(cpus['trusted']):.3f}")
+        print(
+            f"{form:9s}: wall best {min(walls[form]):.2f} s, median {median(walls[form]):.2f} s; "
+            f"CPU median {median(cpus[form]):.2f} s"
+        )
+    print(
+        f"ratio, wall best/best: {min(walls['sandboxed']) / min(walls['trusted']):.3f}; "
+        f"CPU median/median: {median(cpus['sandboxed']) / median(cpus['trusted']):.3f}"
+    )
 
 
 if __name__ == "__main__":
