@@ -226,3 +226,27 @@ def test_raw_system_calls_from_native_code_are_denied() -> None:
 @pytest.mark.parametrize("fixture", ["i386_abi.py", "x32_abi.py"])
 def test_system_calls_through_a_foreign_abi_kill_the_worker(fixture: str) -> None:
     assert run_unchecked((ESCAPES / fixture).read_text()).error == "the worker crashed (SIGSYS)"
+
+
+def test_a_worker_still_dies_with_its_zygote_after_dropping_its_uid() -> None:
+    """Changing credentials clears the parent-death signal; the jail sets it again afterwards."""
+    import ctypes
+
+    from robotool.sandbox.jail import WorkerJail
+
+    worker_jail = WorkerJail()
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            worker_jail.enter()
+            signal_number = ctypes.c_int(0)
+            ctypes.CDLL(None).prctl(2, ctypes.byref(signal_number), 0, 0, 0)  # PR_GET_PDEATHSIG
+            os.write(write_end, bytes([signal_number.value, os.getuid() != 0]))
+        finally:
+            os._exit(0)
+    os.close(write_end)
+    reply = os.read(read_end, 2)
+    os.waitpid(pid, 0)
+    os.close(read_end)
+    assert reply == bytes([9, os.geteuid() == 0])

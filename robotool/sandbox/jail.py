@@ -171,7 +171,8 @@ class WorkerJail:
         self._drop_uid = os.geteuid() == 0
 
     def enter(self) -> None:
-        """Empty root, unprivileged uid, no new privileges, not dumpable; each where it works.
+        """Empty root, unprivileged uid, no new privileges, not dumpable, death with the zygote; each
+        where it works.
 
         Called in the worker before it waits for its program; whatever fails is absent from the
         layers the probe reported, and the rest still apply.
@@ -189,6 +190,7 @@ class WorkerJail:
         with contextlib.suppress(OSError):
             _prctl(_PR_SET_NO_NEW_PRIVS, 1)
             _prctl(_PR_SET_DUMPABLE, 0)
+        die_with_parent()  # after the uid change, which clears the parent-death signal
 
     def seal(self) -> None:
         """Load the seccomp filter: from here on only :data:`ALLOWED_SYSCALLS` and the socket work."""

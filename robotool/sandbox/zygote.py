@@ -248,7 +248,6 @@ class _Server:
         if pid == 0:
             with contextlib.suppress(BaseException):  # the worker's stderr is /dev/null: nothing to print
                 os.setpgid(0, 0)
-                jail.die_with_parent()
                 signal.set_wakeup_fd(-1)
                 signal.signal(signal.SIGCHLD, signal.SIG_DFL)
                 worker.serve(worker_end.fileno(), self.jail)  # closes every other descriptor first
