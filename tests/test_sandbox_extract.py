@@ -87,8 +87,20 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "f(\n" * 33_000,
         "x = 1\na b\n" * 9_000,
         "Step: the gripper\n" * 5_500,
+        "```\n~~~\n" * 12_000,  # fences that never close each other
+        "```json\n" * 12_000,
     ],
-    ids=["names", "prose", "one-string", "alternating", "open-brackets", "code-then-junk", "annotations"],
+    ids=[
+        "names",
+        "prose",
+        "one-string",
+        "alternating",
+        "open-brackets",
+        "code-then-junk",
+        "annotations",
+        "fences",
+        "tagged-fences",
+    ],
 )
 def test_extraction_of_100_kb_finishes_in_a_second(answer: str) -> None:
     import time

@@ -41,19 +41,19 @@ def extract_program(text: str) -> str:
 
 
 def _fenced_blocks(text: str) -> list[str]:
-    """Contents of the Python or untagged fenced blocks, in order."""
+    """Contents of the Python or untagged fenced blocks, in order (one pass over the fences)."""
     blocks: list[str] = []
     fences = list(_FENCE.finditer(text))
     i = 0
     while i < len(fences):
         opening = fences[i]
-        closing = next((f for f in fences[i + 1 :] if f.group(1)[0] == opening.group(1)[0] and not f.group(2)), None)
-        end = closing.start() if closing else len(text)
+        j = i + 1
+        while j < len(fences) and not (fences[j].group(1)[0] == opening.group(1)[0] and not fences[j].group(2)):
+            j += 1
+        end = fences[j].start() if j < len(fences) else len(text)
         if opening.group(2).lower() in _PYTHON_TAGS:
             blocks.append(text[opening.end() + 1 : end].strip("\n"))
-        if closing is None:
-            break
-        i = fences.index(closing) + 1
+        i = j + 1
     return blocks
 
 
