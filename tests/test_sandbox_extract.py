@@ -89,6 +89,7 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "Step: the gripper\n" * 5_500,
         "```\n~~~\n" * 12_000,  # fences that never close each other
         "```json\n" * 12_000,
+        'x = f"' + "{1}" * 30_000 + '"',  # Python 3.11 parses one f-string's fields in quadratic time
     ],
     ids=[
         "names",
@@ -100,6 +101,7 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "annotations",
         "fences",
         "tagged-fences",
+        "f-string-fields",
     ],
 )
 def test_extraction_of_100_kb_finishes_in_a_second(answer: str) -> None:

@@ -144,8 +144,9 @@ def test_names_resolve_through_scopes() -> None:
         "def f(a):\n" + "    a = a + 1\n" * 7_000,  # one deep scope
         "x = [" + "1, " * 33_000 + "]\n",
         "move_to_position([0.1, 0.2, 0.3])\n" * 2_900,
+        'x = f"' + "{1}" * 30_000 + '"',
     ],
-    ids=["bad-lines", "bad-one-line", "long-function", "long-literal", "many-calls"],
+    ids=["bad-lines", "bad-one-line", "long-function", "long-literal", "many-calls", "f-string-fields"],
 )
 def test_validation_of_100_kb_finishes_in_a_second(code: str) -> None:
     import time

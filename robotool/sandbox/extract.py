@@ -8,7 +8,7 @@ import itertools
 import re
 import warnings
 
-from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, parse_program
+from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
 
 _FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w+-]*)[^\n]*$", re.MULTILINE)
 _PYTHON_TAGS = frozenset({"python", "python3", "py", ""})
@@ -27,6 +27,7 @@ def extract_program(text: str) -> str:
     """
     if len(text) > MAX_PROGRAM_CHARS:
         raise ProgramRejected(None, "text", f"answer is longer than {MAX_PROGRAM_CHARS} characters")
+    check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
     text = "\n".join(_expand_indent_tabs(line) for line in text.split("\n"))
     blocks = _fenced_blocks(text)
