@@ -150,6 +150,8 @@ class SandboxSession:
             return f"CPU time limit exceeded ({self.limits.cpu_s:g} s)"
         if code == -signal.SIGKILL:
             return "the worker was killed (out of memory?)"
+        if code == -signal.SIGSYS:
+            return "the worker was stopped by the sandbox's system-call filter (SIGSYS)"
         if code < 0:
             return f"the worker crashed ({signal.Signals(-code).name})"
         return f"the worker exited without finishing the program (status {code})"
