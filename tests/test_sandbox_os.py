@@ -251,3 +251,24 @@ def test_a_worker_still_dies_with_its_zygote_after_dropping_its_uid() -> None:
     os.waitpid(pid, 0)
     os.close(read_end)
     assert reply == bytes([9, os.geteuid() == 0])
+
+
+def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without libseccomp the probe reports the filter missing, and the reports warn in red."""
+    from io import StringIO
+
+    from rich.console import Console
+
+    from robotool import report
+    from robotool.sandbox import SandboxWarning, jail
+
+    monkeypatch.setattr(jail, "_syscall_filter", lambda: (None, "pyseccomp/libseccomp unavailable: test"))
+    layers = jail.WorkerJail().probe(["PID"], {})
+    assert not layers.seccomp and layers.missing["seccomp filter"] == "pyseccomp/libseccomp unavailable: test"
+    with pytest.warns(SandboxWarning, match="WITHOUT the seccomp filter"):
+        jail.warn_if_weak(layers)
+    monkeypatch.setattr(report, "layers_in_use", lambda: layers)
+    console = Console(file=StringIO(), width=200)
+    report.print_sandbox_layers(console)
+    shown = console.file.getvalue()  # type: ignore[attr-defined]
+    assert "sandbox: PID namespace" in shown and "missing: " in shown and "WARNING: generated programs" in shown
