@@ -272,3 +272,32 @@ def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatc
     report.print_sandbox_layers(console)
     shown = console.file.getvalue()  # type: ignore[attr-defined]
     assert "sandbox: PID namespace" in shown and "missing: " in shown and "WARNING: generated programs" in shown
+
+
+def test_nothing_outlives_a_host_killed_mid_run() -> None:
+    """SIGKILL the host while its workers spin: the zygote and every worker die with it."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys, time\n"
+        "from robotool.sandbox import SandboxLimits, start_sessions\n"
+        "from robotool.sandbox.zygote import zygote\n"
+        "sessions = start_sessions(['while True:\\n    pass\\n'] * 2, 'arm', SandboxLimits(cpu_s=60.0, wall_s=60.0))\n"
+        "for s in sessions:\n    s.resume(None)\n"
+        "print(zygote().process.pid, *(s.worker_pid for s in sessions), flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    host = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert host.stdout is not None
+        pids = [int(p) for p in host.stdout.readline().split()]
+        tree = set().union(*(_descendants(pid) for pid in pids[:1]))
+        assert set(pids) <= tree
+    finally:
+        host.kill()
+        host.wait()
+    deadline = time.monotonic() + 5
+    while any(Path(f"/proc/{pid}").exists() for pid in tree) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not [pid for pid in tree if Path(f"/proc/{pid}").exists()]
