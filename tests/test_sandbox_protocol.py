@@ -149,3 +149,22 @@ def test_oversized_or_deep_skill_arguments_are_malformed(args: str) -> None:
 def test_a_long_object_name_is_the_programs_error() -> None:
     ended = run("c = get_center('m' * 300)\n")
     assert ended.error == "line 1: ValueError: get_center: an object name has at most 200 characters"
+
+
+@pytest.mark.parametrize(
+    ("code", "words"),
+    [
+        ("import numpy as np\nx = np.full(3, print)\n", "dtype '|O' are not allowed"),
+        ("import numpy as np\nx = np.where([True], [print], [len])\n", "dtype '|O' are not allowed"),
+        ("import numpy as np\nx = np.asarray({1: 2})\n", "dtype '|O' are not allowed"),
+        ("import numpy as np\nx = np.ones((2,) * 64)\n", "ValueError"),
+        ("import numpy as np\nx = np.tile([1.0], 10 ** 10)\n", "memory limit exceeded"),
+        ("import numpy as np\nx = np.array([1.0], ndmin=10 ** 9)\n", "ValueError"),
+        ("import numpy as np\nx = np.array(3.0).item(10 ** 20)\n", "OverflowError"),
+        ("import math\nx = math.factorial(10 ** 7)\n", "CPU time limit exceeded"),
+        ("x = f'{1:{10 ** 10}}'\n", "memory limit exceeded"),
+    ],
+)
+def test_c_functions_reachable_from_allowed_names_end_as_program_errors(code: str, words: str) -> None:
+    ended = run(code, LIMITS.model_copy(update={"cpu_s": 1.0}))
+    assert ended.error is not None and words in ended.error
