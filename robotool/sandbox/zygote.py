@@ -19,9 +19,9 @@ for, so the next batch of that size is handed out without forking.
 
 The zygote is the workers' parent, so it alone kills and reaps them: no PID can be reused under a
 kill. Each worker leads its own process group, and a kill takes the whole group. Host and zygote
-talk over a ``SOCK_SEQPACKET`` socket in JSON requests; only ``spawn``, ``status`` and ``layers`` are
-answered, and the host reads each answer right away, so neither side can block the other. When the
-host goes away the zygote kills its workers and exits.
+talk over a ``SOCK_SEQPACKET`` socket in JSON requests; ``spawn``, ``status``, ``layers`` and
+``host_pid`` are answered, and the host reads each answer right away, so neither side can block
+the other. When the host goes away the zygote kills its workers and exits.
 """
 
 from __future__ import annotations
@@ -152,7 +152,7 @@ class Zygote:
 
     def _receive(self, *, with_fd: bool) -> tuple[bytes, list[int]]:
         try:
-            data, fds, _, _ = socket.recv_fds(self._control, 1024, 1 if with_fd else 0)
+            data, fds, _, _ = socket.recv_fds(self._control, 65_536, 1 if with_fd else 0)
         except OSError as e:
             raise ZygoteError(f"sandbox zygote did not answer: {e}") from None
         if not data or len(fds) != int(with_fd):
