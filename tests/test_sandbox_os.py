@@ -230,7 +230,8 @@ def test_system_calls_through_a_foreign_abi_kill_the_worker(fixture: str) -> Non
 
 
 def test_a_worker_still_dies_with_its_zygote_after_dropping_its_uid() -> None:
-    """Changing credentials clears the parent-death signal; the jail sets it again afterwards."""
+    """Changing credentials clears the parent-death signal; the jail sets it again afterwards. It
+    also leaves the worker no capability."""
     import ctypes
 
     from robotool.sandbox.jail import WorkerJail
@@ -240,17 +241,19 @@ def test_a_worker_still_dies_with_its_zygote_after_dropping_its_uid() -> None:
     pid = os.fork()
     if pid == 0:
         try:
+            status = os.open("/proc/self/status", os.O_RDONLY)  # opened before the root is emptied
             worker_jail.enter()
+            effective = next(line for line in os.read(status, 4096).decode().splitlines() if line.startswith("CapEff"))
             signal_number = ctypes.c_int(0)
             ctypes.CDLL(None).prctl(2, ctypes.byref(signal_number), 0, 0, 0)  # PR_GET_PDEATHSIG
-            os.write(write_end, bytes([signal_number.value, os.getuid() != 0]))
+            os.write(write_end, bytes([signal_number.value, os.getuid() != 0, int(effective.split()[1], 16) == 0]))
         finally:
             os._exit(0)
     os.close(write_end)
-    reply = os.read(read_end, 2)
+    reply = os.read(read_end, 3)
     os.waitpid(pid, 0)
     os.close(read_end)
-    assert reply == bytes([9, os.geteuid() == 0])
+    assert reply == bytes([9, os.geteuid() == 0, 1])
 
 
 def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -15,8 +15,9 @@ starts and reported as :class:`SandboxLayers`:
   ends the kernel kills everything left in the PID namespace.
 - **empty root**: each worker ``chroot``s into a directory (mode 0700, owned by the host's user) that
   was deleted right after it was made, so no file can be named, listed or created.
-- **unprivileged uid**: workers drop to ``nobody`` (when the host runs as root), set no-new-privileges
-  and are not dumpable, so their ``/proc`` entries and memory are closed to each other.
+- **unprivileged uid**: workers drop to ``nobody`` (when the host runs as root) and every capability
+  (also those a user namespace grants), set no-new-privileges and are not dumpable, so their
+  ``/proc`` entries and memory are closed to each other.
 """
 
 from __future__ import annotations
@@ -103,6 +104,23 @@ def _prctl(option: int, value: int) -> None:
         raise OSError(code, os.strerror(code))
 
 
+class _CapabilityHeader(ctypes.Structure):
+    _fields_ = [("version", ctypes.c_uint32), ("pid", ctypes.c_int)]
+
+
+class _CapabilitySets(ctypes.Structure):
+    _fields_ = [("effective", ctypes.c_uint32), ("permitted", ctypes.c_uint32), ("inheritable", ctypes.c_uint32)]
+
+
+def _drop_capabilities() -> None:
+    """Clear every capability of this process (a worker in a user namespace starts with all of them there)."""
+    header = _CapabilityHeader(0x20080522, 0)  # _LINUX_CAPABILITY_VERSION_3: two 32-bit sets
+    sets = (_CapabilitySets * 2)()
+    if _libc.capset(ctypes.byref(header), sets) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code))
+
+
 def die_with_parent() -> None:
     """SIGKILL this process when its parent ends (the host, or the zygote for a worker)."""
     _prctl(_PR_SET_PDEATHSIG, 9)
@@ -171,8 +189,8 @@ class WorkerJail:
         self._drop_uid = os.geteuid() == 0
 
     def enter(self) -> None:
-        """Empty root, unprivileged uid, no new privileges, not dumpable, death with the zygote; each
-        where it works.
+        """Empty root, unprivileged uid, no capabilities, no new privileges, not dumpable, death with
+        the zygote; each where it works.
 
         Called in the worker before it waits for its program; whatever fails is absent from the
         layers the probe reported, and the rest still apply.
@@ -187,6 +205,8 @@ class WorkerJail:
                 os.setgroups([])
                 os.setresgid(NOBODY, NOBODY, NOBODY)
                 os.setresuid(NOBODY, NOBODY, NOBODY)
+        with contextlib.suppress(OSError):
+            _drop_capabilities()
         with contextlib.suppress(OSError):
             _prctl(_PR_SET_NO_NEW_PRIVS, 1)
             _prctl(_PR_SET_DUMPABLE, 0)
