@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import fcntl
 import os
 import socket
 import tempfile
@@ -173,11 +174,14 @@ def _empty_root() -> int | None:
     """A descriptor of a directory deleted right after it was made: nothing can be created in it."""
     path = tempfile.mkdtemp(prefix="robotool-root-")
     try:
-        return os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+        opened = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
     except OSError:
         return None
     finally:
         os.rmdir(path)
+    kept = fcntl.fcntl(opened, fcntl.F_DUPFD, 10)  # clear of descriptors 0-3, which a worker rearranges
+    os.close(opened)
+    return kept
 
 
 class WorkerJail:
