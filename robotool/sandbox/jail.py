@@ -5,8 +5,8 @@ allowlisted C code is memory-safe; it is not always (numpy has had buffer and dt
 forge references). So every worker also runs behind these layers, each detected when the zygote
 starts and reported as :class:`SandboxLayers`:
 
-- **seccomp**: a seccomp-bpf filter (libseccomp, through ``pyseccomp``), loaded right before the
-  program starts, allows only what a running worker needs: reading and writing its socket to the
+- **seccomp**: a seccomp-bpf filter (compiled once by libseccomp, through ``pyseccomp``), loaded in
+  each worker right before the program starts, allows only what a running worker needs: reading and writing its socket to the
   host, memory management, time, futexes, signal return and exit. Every other system call (open,
   socket, exec, fork, kill, ptrace, ...) fails with ``EPERM``; a call from a foreign architecture
   kills the worker.
@@ -55,6 +55,8 @@ _CLONE_NEWUSER = 0x10000000
 _PR_SET_PDEATHSIG = 1
 _PR_SET_DUMPABLE = 4
 _PR_SET_NO_NEW_PRIVS = 38
+_PR_SET_SECCOMP = 22
+_SECCOMP_MODE_FILTER = 2
 
 _libc = ctypes.CDLL(None, use_errno=True)
 
@@ -153,8 +155,15 @@ def enter_namespaces() -> tuple[list[str], dict[str, str]]:
     return entered, missing
 
 
+class _FilterProgram(ctypes.Structure):
+    """``struct sock_fprog``: a BPF program for ``prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ...)``."""
+
+    _fields_ = [("length", ctypes.c_ushort), ("instructions", ctypes.c_void_p)]
+
+
 def _syscall_filter() -> tuple[Any, str | None]:
-    """The worker's seccomp filter, built once (loaded in each worker); or None and why not."""
+    """The worker's seccomp filter as a BPF program, compiled once by libseccomp (each worker only
+    hands it to the kernel); or None and why not."""
     try:
         import pyseccomp as seccomp
     except (ImportError, RuntimeError, OSError) as e:  # RuntimeError: libseccomp.so.2 is missing
@@ -165,9 +174,14 @@ def _syscall_filter() -> tuple[Any, str | None]:
             syscall_filter.add_rule(seccomp.ALLOW, name)
         for name in SOCKET_SYSCALLS:
             syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(0, seccomp.EQ, SOCKET_FD))
+        with tempfile.TemporaryFile() as compiled:
+            syscall_filter.export_bpf(compiled)
+            compiled.seek(0)
+            instructions = ctypes.create_string_buffer(compiled.read())
     except (OSError, ValueError, RuntimeError) as e:
         return None, f"libseccomp refused the filter: {e}"
-    return syscall_filter, None
+    program = _FilterProgram(len(instructions.raw) // 8, ctypes.addressof(instructions))
+    return (program, instructions), None  # the buffer travels with the program that points into it
 
 
 def _empty_root() -> int | None:
@@ -217,9 +231,16 @@ class WorkerJail:
         die_with_parent()  # after the uid change, which clears the parent-death signal
 
     def seal(self) -> None:
-        """Load the seccomp filter: from here on only :data:`ALLOWED_SYSCALLS` and the socket work."""
+        """Load the seccomp filter: from here on only :data:`ALLOWED_SYSCALLS` and the socket work.
+
+        Needs no-new-privileges (set by :meth:`enter`) unless the process is privileged; raises
+        ``OSError`` when the kernel refuses, so that a worker never runs its program unfiltered.
+        """
         if self._filter is not None:
-            self._filter.load()
+            program, _ = self._filter
+            if _libc.prctl(_PR_SET_SECCOMP, _SECCOMP_MODE_FILTER, ctypes.byref(program), 0, 0) != 0:
+                code = ctypes.get_errno()
+                raise OSError(code, os.strerror(code))
 
     def probe(self, namespaces: list[str], missing: dict[str, str]) -> SandboxLayers:
         """Apply every layer in a throw-away child and test each; the layers that held."""
