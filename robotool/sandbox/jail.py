@@ -6,10 +6,10 @@ forge references). So every worker also runs behind these layers, each detected 
 starts and reported as :class:`SandboxLayers`:
 
 - **seccomp**: a seccomp-bpf filter (compiled once by libseccomp, through ``pyseccomp``), loaded in
-  each worker right before the program starts, allows only what a running worker needs: reading and writing its socket to the
-  host, memory management, time, futexes, signal return and exit. Every other system call (open,
-  socket, exec, fork, kill, ptrace, ...) fails with ``EPERM``; a call from a foreign architecture
-  kills the worker.
+  each worker right before the program starts, allows only what a running worker needs: reading
+  and writing its socket to the host, memory management, time, futexes, signal return and exit.
+  Every other system call (open, socket, exec, fork, kill, ptrace, sigaction, ...) fails with
+  ``EPERM``; a call through a foreign ABI (i386, x32) kills the worker.
 - **namespaces**: the zygote moves into new PID, network, IPC and mount namespaces (inside a user
   namespace when not root). Workers see no host process, no network interface, and when the zygote
   ends the kernel kills everything left in the PID namespace.
@@ -43,7 +43,7 @@ SOCKET_FD = 3
 ALLOWED_SYSCALLS: tuple[str, ...] = (
     "mmap", "munmap", "mremap", "mprotect", "brk", "madvise",
     "futex", "clock_gettime", "clock_getres", "gettimeofday", "clock_nanosleep", "nanosleep", "sched_yield",
-    "rt_sigreturn", "rt_sigprocmask", "getpid", "gettid", "exit", "exit_group",
+    "rt_sigreturn", "getpid", "gettid", "exit", "exit_group",
 )  # fmt: skip
 """System calls a running worker may make with any arguments (found by tracing workers running numpy)."""
 
