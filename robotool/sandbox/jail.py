@@ -7,7 +7,8 @@ starts and reported as :class:`SandboxLayers`:
 
 - **seccomp**: a seccomp-bpf filter (compiled once by libseccomp, through ``pyseccomp``), loaded in
   each worker right before the program starts, allows only what a running worker needs: reading
-  and writing its socket to the host, memory management, time, futexes, signal return and exit.
+  and writing its socket to the host, memory management (never executable), time, futexes, signal
+  return and exit.
   Every other system call (open, socket, exec, fork, kill, ptrace, sigaction, ...) fails with
   ``EPERM``; a call through a foreign ABI (i386, x32) kills the worker.
 - **namespaces**: the zygote moves into new PID, network, IPC and mount namespaces (inside a user
@@ -41,7 +42,7 @@ SOCKET_FD = 3
 """The worker's socket to the host: the only descriptor it may read or write under seccomp."""
 
 ALLOWED_SYSCALLS: tuple[str, ...] = (
-    "mmap", "munmap", "mremap", "mprotect", "brk", "madvise",
+    "munmap", "mremap", "brk", "madvise",
     "futex", "clock_gettime", "clock_getres", "gettimeofday", "clock_nanosleep", "nanosleep", "sched_yield",
     "rt_sigreturn", "getpid", "gettid", "exit", "exit_group",
 )  # fmt: skip
@@ -49,6 +50,11 @@ ALLOWED_SYSCALLS: tuple[str, ...] = (
 
 SOCKET_SYSCALLS: tuple[str, ...] = ("read", "write")
 """System calls a running worker may make on :data:`SOCKET_FD` only."""
+
+NO_EXEC_SYSCALLS: tuple[str, ...] = ("mmap", "mprotect")
+"""System calls a running worker may make only without ``PROT_EXEC``: it never needs new machine code."""
+
+_PROT_EXEC = 4
 
 _NAMESPACES: dict[str, int] = {"PID": 0x20000000, "network": 0x40000000, "IPC": 0x08000000, "mount": 0x00020000}
 _CLONE_NEWUSER = 0x10000000
@@ -174,6 +180,8 @@ def _syscall_filter() -> tuple[Any, str | None]:
             syscall_filter.add_rule(seccomp.ALLOW, name)
         for name in SOCKET_SYSCALLS:
             syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(0, seccomp.EQ, SOCKET_FD))
+        for name in NO_EXEC_SYSCALLS:
+            syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(2, seccomp.MASKED_EQ, _PROT_EXEC, 0))
         with tempfile.TemporaryFile() as compiled:
             syscall_filter.export_bpf(compiled)
             compiled.seek(0)
