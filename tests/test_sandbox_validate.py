@@ -98,6 +98,11 @@ def test_pathological_text_is_rejected_not_crashing(code: str) -> None:
         validate(code, "arm")
 
 
+def test_deep_nesting_is_named_in_the_rejection() -> None:
+    with pytest.raises(ProgramRejected, match=r"^program is nested too deeply$"):
+        validate("f = " + "lambda: " * 11_000 + "1", "arm")
+
+
 def test_allowlisted_names_exist_where_the_worker_looks_them_up() -> None:
     import builtins
 

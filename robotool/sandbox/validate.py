@@ -105,8 +105,10 @@ def parse_program(code: str) -> ast.Module:
         return ast.parse(code)
     except SyntaxError as e:
         raise ProgramRejected(e.lineno, "syntax", f"syntax error: {e.msg}") from None
-    except (ValueError, RecursionError, MemoryError) as e:
-        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+    except (RecursionError, MemoryError):  # the parser's stack overflows (text is at most 100 KB)
+        raise ProgramRejected(None, "nesting", "program is nested too deeply") from None
+    except ValueError as e:
+        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e}") from None
 
 
 def validate(code: str, embodiment: EmbodimentName) -> None:
