@@ -34,7 +34,7 @@ class WorkerMessage(BaseModel):
     def _small_arguments(cls, args: list[Any]) -> list[Any]:
         if not all(_small(a, depth=0) for a in args):
             raise ValueError(
-                f"skill arguments are numbers, short names and short lists of numbers ({MAX_ARGUMENT_CHARS})"
+                f"skill arguments are numbers, names of at most {MAX_ARGUMENT_CHARS} characters and short lists"
             )
         return args
 

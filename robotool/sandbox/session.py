@@ -43,8 +43,8 @@ class SandboxSession:
     session, with the reason; the host and the other sessions carry on. ``worker`` is one from a
     batch (:func:`start_sessions`); by default the session spawns its own.
 
-    ``test_only_skip_python_checks`` skips the validator and gives the program the real builtins,
-    so that tests can show what the OS layers alone stop. Nothing else may set it.
+    ``test_only_skip_python_checks`` skips the validator and gives the program every builtin (so
+    ``import os`` works), so that tests can show what the OS layers alone stop. Nothing else may set it.
     """
 
     def __init__(
