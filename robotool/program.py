@@ -1,4 +1,10 @@
-"""``RoboTool``: the four-stage DSPy program, its ablations, and candidates checked in simulation.
+"""The four-stage DSPy program: :class:`Proposer` writes candidate programs, :class:`RoboTool` also verifies them.
+
+:class:`Proposer` is the proposing program: the four LM stages, producing code and nothing else that is
+expensive, so prompt optimisers (which see exactly its predictors) and their metric can verify a
+proposal themselves (:func:`robotool.verify.select`) without running the program inside itself.
+:class:`RoboTool` is the same stages followed by verified best-of-K selection; both have the same
+predictors, so a state file compiled for one loads into the other.
 
 The Analyzer runs once; the Planner, Calculator and Coder run once per candidate, concurrently,
 each candidate with its own ``rollout_id``. Every stage call goes through
@@ -6,8 +12,8 @@ each candidate with its own ``rollout_id``. Every stage call goes through
 parse, asked for again with the problem shown to the model. If the Analyzer gives no usable reply,
 the candidates run without key concepts and the solution says so. Every candidate's code is
 validated by the sandbox and run in ``worlds_per_candidate`` perturbed worlds, all candidates in
-one batch (identical programs once; a program the sandbox rejects is asked for again like a reply
-that does not parse), and the candidates are ranked (see
+one batch (identical programs once); a program the sandbox rejects is asked for again like a reply
+that does not parse. The candidates are ranked (see
 :meth:`~robotool.solution.Candidate.rank_key`). The paper's ablations are the same module with
 stages switched off: see :data:`METHODS`. Repeated runs that should sample afresh set
 ``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``).
@@ -22,7 +28,7 @@ import contextvars
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, Self
 
 import dspy
 
@@ -34,16 +40,16 @@ from robotool.methods import METHODS
 from robotool.sandbox import extract_program
 from robotool.scene import Task
 from robotool.signatures import Analyze, Calculate, Code, Plan, scene_context
-from robotool.solution import Candidate, LMCall, Solution, StageOutputs, rank, usage_by_stage
-from robotool.verify import prepare_code, verify
+from robotool.solution import Candidate, LMCall, Proposal, StageOutputs
+from robotool.verify import prepare_code, select
 
 AdapterName = Literal["chat", "json"]
 SPREAD = (0.7, 1.0)
 """Temperatures of the first and last of several candidates when no temperature is set."""
 
 
-class RoboTool(dspy.Module):
-    """Description -> Analyzer -> Planner -> Calculator -> Coder -> K candidates verified in simulation."""
+class Proposer(dspy.Module):
+    """Description -> Analyzer -> Planner -> Calculator -> Coder -> K candidate programs (not simulated)."""
 
     def __init__(
         self,
@@ -52,9 +58,6 @@ class RoboTool(dspy.Module):
         planner: bool = True,
         calculator: bool = True,
         candidates: int = 1,
-        worlds_per_candidate: int = 3,
-        backend: str | None = None,
-        seed: int = 0,
         temperature: float | None = None,
         rollout_base: int = 0,
         adapter: AdapterName | None = None,
@@ -67,8 +70,8 @@ class RoboTool(dspy.Module):
         super().__init__()
         if calculator and not planner:
             raise ValueError("the Calculator needs the Planner's steps")
-        if candidates < 1 or worlds_per_candidate < 1:
-            raise ValueError("candidates and worlds_per_candidate must be at least 1")
+        if candidates < 1:
+            raise ValueError("candidates must be at least 1")
         if temperature is not None and temperature < 0:
             raise ValueError(f"temperature must be at least 0, got {temperature}")
         if format_retries < 0:
@@ -78,9 +81,6 @@ class RoboTool(dspy.Module):
         self.calculate = dspy.Predict(Calculate) if calculator else None
         self.code = dspy.Predict(Code)
         self.candidates = candidates
-        self.worlds_per_candidate = worlds_per_candidate
-        self.backend = backend
-        self.seed = seed
         self.temperature = temperature
         self.rollout_base = rollout_base
         self.adapter = adapter
@@ -88,7 +88,7 @@ class RoboTool(dspy.Module):
         self.log_prompts = log_prompts
 
     @classmethod
-    def method(cls, name: str, **options: Any) -> RoboTool:
+    def method(cls, name: str, **options: Any) -> Self:
         """The full program or an ablation by name (see :data:`METHODS`)."""
         if name not in METHODS:
             raise ValueError(f"unknown method {name!r}; methods: {', '.join(METHODS)}")
@@ -104,7 +104,7 @@ class RoboTool(dspy.Module):
         return next(name for name, switches in METHODS.items() if switches == stages)
 
     def forward(self, task: Task) -> dspy.Prediction:
-        """Solve ``task``; the prediction carries the :class:`Solution` and the best code.
+        """Propose candidate programs for ``task``; the prediction carries the :class:`Proposal`.
 
         Raises :class:`~robotool.errors.LMUnavailableError` when the model cannot be used at all.
         """
@@ -143,30 +143,16 @@ class RoboTool(dspy.Module):
                 )
         lm_started = time.perf_counter()
         candidates = self._sample(task, description, shared, settings)
-        lm_done = time.perf_counter()
-        verify(task, candidates, worlds=self.worlds_per_candidate, seed=self.seed, backend=self.backend)
-        ranked = rank(candidates)
-        best = ranked[0] if ranked[0].rollouts else None
-        calls = analyzer_calls + [call for c in candidates for call in c.lm_calls]
-        solution = Solution(
+        proposal = Proposal(
             task=task.name,
             method=self.method_name,
-            code=best.code if best else None,
-            best=best.index if best else None,
-            success_rate=best.success_rate if best else 0.0,
+            shared=shared,
             candidates=candidates,
-            stages=best.stages if best else shared,
-            usage=usage_by_stage(calls),
-            lm_calls=calls,
-            timings={
-                "analyzer": lm_started - started,
-                "candidates": lm_done - lm_started,
-                "verify": time.perf_counter() - lm_done,
-                "total": time.perf_counter() - started,
-            },
+            lm_calls=analyzer_calls,
             notes=notes,
+            timings={"analyzer": lm_started - started, "candidates": time.perf_counter() - lm_started},
         )
-        return dspy.Prediction(solution=solution, code=solution.code)
+        return dspy.Prediction(proposal=proposal)
 
     def _adapter(self) -> dspy.Adapter:
         """The adapter of every stage call; DSPy's one-shot JSON fallback is off (repairs replace it)."""
@@ -259,6 +245,30 @@ class RoboTool(dspy.Module):
         except Exception as e:  # a fault in this candidate's stage must not end the others
             candidate.failure = f"{stage}: {type(e).__name__}: {' '.join(str(e).split())[:300]}"
         return candidate
+
+
+class RoboTool(Proposer):
+    """The :class:`Proposer`'s candidates, verified in ``worlds_per_candidate`` perturbed worlds each; the best wins."""
+
+    def __init__(
+        self, *, worlds_per_candidate: int = 3, backend: str | None = None, seed: int = 0, **proposer: Any
+    ):
+        """``proposer``: the :class:`Proposer`'s options (stages, candidates, sampling, answer format)."""
+        super().__init__(**proposer)
+        if worlds_per_candidate < 1:
+            raise ValueError("worlds_per_candidate must be at least 1")
+        self.worlds_per_candidate = worlds_per_candidate
+        self.backend = backend
+        self.seed = seed
+
+    def forward(self, task: Task) -> dspy.Prediction:
+        """Solve ``task``; the prediction carries the :class:`Solution` and the best code.
+
+        Raises :class:`~robotool.errors.LMUnavailableError` when the model cannot be used at all.
+        """
+        proposal = super().forward(task).proposal
+        solution = select(task, proposal, worlds=self.worlds_per_candidate, seed=self.seed, backend=self.backend)
+        return dspy.Prediction(solution=solution, code=solution.code)
 
 
 def _program_reply(text: str) -> dspy.Prediction:

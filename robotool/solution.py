@@ -118,6 +118,18 @@ class Candidate(BaseModel):
         )
 
 
+class Proposal(BaseModel):
+    """What the LM stages proposed for one task, before anything was simulated."""
+
+    task: str
+    method: str
+    shared: StageOutputs = Field(default_factory=StageOutputs, description="the Analyzer's outputs")
+    candidates: list[Candidate] = Field(default_factory=list)
+    lm_calls: list[LMCall] = Field(default_factory=list, description="the Analyzer's LM requests")
+    notes: list[str] = Field(default_factory=list)
+    timings: dict[str, float] = Field(default_factory=dict, description="seconds by phase")
+
+
 class Solution(BaseModel):
     """The result of solving a task: the best code and everything behind the choice."""
 

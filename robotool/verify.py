@@ -1,11 +1,14 @@
-"""Candidates -> sandboxed programs -> one batch of perturbed rollouts -> outcomes.
+"""Candidates -> sandboxed programs -> one batch of perturbed rollouts -> outcomes -> the best.
 
 Every candidate runs in the same ``worlds`` perturbed copies of the scene (world ``r`` of each
 candidate is perturbed with the same seed), all candidates in one batch of the simulator.
+:func:`select` is verified best-of-K: a :class:`~robotool.solution.Proposal` in, a
+:class:`~robotool.solution.Solution` out.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 
 from robotool.rollout import Rollout
@@ -14,7 +17,7 @@ from robotool.scene import Task
 from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
-from robotool.solution import Candidate
+from robotool.solution import Candidate, Proposal, Solution, rank, usage_by_stage
 
 
 def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
@@ -73,6 +76,34 @@ def verify(
             candidate.notes.append(f"same program as candidate {first[code].index}; simulated once")
         if candidate.success_rate < 1.0:
             candidate.failure = failure_reason(candidate.rollouts)
+
+
+def select(task: Task, proposal: Proposal, *, worlds: int, seed: int = 0, backend: str | None = None) -> Solution:
+    """Verify a proposal's candidates (see :func:`verify`) and return the best as a :class:`Solution`.
+
+    The proposal is not changed: the solution holds verified copies of its candidates.
+    """
+    started = time.perf_counter()
+    candidates = [c.model_copy(deep=True) for c in proposal.candidates]
+    verify(task, candidates, worlds=worlds, seed=seed, backend=backend)
+    ranked = rank(candidates)
+    best = ranked[0] if ranked and ranked[0].rollouts else None
+    calls = proposal.lm_calls + [call for c in candidates for call in c.lm_calls]
+    timings = proposal.timings | {"verify": time.perf_counter() - started}
+    timings["total"] = sum(timings.values())
+    return Solution(
+        task=proposal.task,
+        method=proposal.method,
+        code=best.code if best else None,
+        best=best.index if best else None,
+        success_rate=best.success_rate if best else 0.0,
+        candidates=candidates,
+        stages=best.stages if best else proposal.shared,
+        usage=usage_by_stage(calls),
+        lm_calls=calls,
+        timings=timings,
+        notes=list(proposal.notes),
+    )
 
 
 def failure_reason(rollouts: Sequence[Rollout]) -> str | None:

@@ -210,3 +210,17 @@ def test_code_the_sandbox_rejects_is_asked_for_again_with_the_reason() -> None:
     assert [c.attempt for c in coder_calls] == [1, 2] and "os" in coder_calls[0].error
     repair = next(text for stage, _, text in engine.prompts if stage == "coder" and "reply_problem" in text)
     assert coder_calls[0].error in " ".join(repair.split())
+
+
+def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robotool import verify
+    from robotool.program import Proposer
+
+    assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code"]
+    assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code"]
+    monkeypatch.setattr(verify, "run_codes", lambda *a, **k: pytest.fail("the proposer simulated"))
+    lm, _ = scripted_lm(arm_script([GRASP_DIRECTLY]))
+    with dspy.context(lm=lm, adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):
+        proposal = Proposer(candidates=2, temperature=0.5)(task=tasks.load("milk_reaching_near")).proposal
+    assert [c.code for c in proposal.candidates] == [GRASP_DIRECTLY, GRASP_DIRECTLY]
+    assert all(not c.rollouts for c in proposal.candidates) and proposal.shared.key_concepts
