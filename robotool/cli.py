@@ -1,4 +1,4 @@
-"""The ``robotool`` command line: ``robotool tasks|describe|solve|run|eval``.
+"""The ``robotool`` command line: ``robotool tasks|describe|solve|run|render|eval|optimize``.
 
 User mistakes (a bad task file, an unknown task, a bad number, an output path that cannot be written)
 end with one readable line and exit status 2, never a traceback; output paths are checked before any
@@ -46,6 +46,7 @@ from robotool.scene import Task, TaskFileError
 from robotool.version import version
 
 if TYPE_CHECKING:
+    from robotool.program import RoboTool
     from robotool.rollout import Rollout
     from robotool.sim.recorder import StateRecorder
 
@@ -133,6 +134,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
 
     task = tasks.load(args.task)
     _check_video_args(args, folder=True)
+    program = _lm_program(args)
     lm = None
     if args.planner == "lm":
         lm = make_lm(
@@ -144,6 +146,8 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
             cache=not args.no_cache,
             timeout=args.timeout,
         )
+        if lm is None and program is not None:
+            raise UsageError(f"--program runs its stages on a language model. {HOW_TO_CONFIGURE}")
         if lm is None:
             console.print(
                 f"{HOW_TO_CONFIGURE}\nSolving with the LM-free search planner instead.",
@@ -159,22 +163,10 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     else:
         import dspy
 
-        from robotool.program import RoboTool
-
-        program = RoboTool.method(
-            args.method,
-            candidates=args.candidates,
-            worlds_per_candidate=args.worlds,
-            backend=args.backend,
-            seed=args.seed,
-            temperature=args.temperature,
-            adapter=args.adapter,
-            format_retries=args.format_retries,
-            log_prompts=args.log_prompts,
-        )
+        assert program is not None
         with (
             console.status(
-                f"solving {task.name} with {args.method}: {args.candidates} candidate(s) x "
+                f"solving {task.name} with {program.method_name}: {args.candidates} candidate(s) x "
                 f"{args.worlds} world(s) on {lm.model}"
             ),
             dspy.context(lm=lm),
@@ -190,6 +182,32 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     if args.video:
         _solve_videos(args, task, solution.code, console)
     return 0 if solution.success else 1
+
+
+def _lm_program(args: argparse.Namespace) -> RoboTool | None:
+    """The RoboTool program ``solve`` asked for (None for the search planner); a ``--program`` file is loaded
+    (and checked) here, before anything runs."""
+    if args.planner == "search":
+        if args.program is not None:
+            raise UsageError("--program is a compiled LM program; it does not go with --planner search")
+        return None
+    from robotool.program import RoboTool
+
+    options = {
+        "candidates": args.candidates,
+        "worlds_per_candidate": args.worlds,
+        "backend": args.backend,
+        "seed": args.seed,
+        "temperature": args.temperature,
+        "adapter": args.adapter,
+        "format_retries": args.format_retries,
+        "log_prompts": args.log_prompts,
+    }
+    if args.program is None:
+        return RoboTool.method(args.method or "robotool", **options)
+    if args.method is None:
+        return RoboTool.from_compiled(args.program, **options)
+    return RoboTool.method(args.method, **options).load(args.program)
 
 
 def cmd_run(args: argparse.Namespace, console: Console) -> int:
@@ -367,7 +385,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
-    p.add_argument("--method", choices=list(METHODS), default="robotool", help="the program or an ablation")
+    p.add_argument(
+        "--method",
+        choices=list(METHODS),
+        help="the program or an ablation (default: robotool, or the method --program was compiled for)",
+    )
+    p.add_argument(
+        "--program",
+        type=Path,
+        metavar="PROGRAM.json",
+        help="a compiled program (robotool optimize): its optimised prompts and demonstrations",
+    )
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
@@ -413,6 +441,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     # `robotool eval ...` is handed to the evaluator's own parser in main(); listed here for --help.
     sub.add_parser("eval", help="the offline evaluator (same as python -m robotool.eval; see robotool eval -h)")
+    sub.add_parser(
+        "optimize", help="compile the program's prompts (same as python -m robotool.optimize; see robotool optimize -h)"
+    )
     return parser
 
 
@@ -423,6 +454,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from robotool.eval import main as eval_main
 
         return eval_main(argv[1:], prog="robotool eval")
+    if argv[:1] == ["optimize"]:
+        from robotool.optimize.cli import main as optimize_main
+
+        return optimize_main(argv[1:], prog="robotool optimize")
     parser = build_parser()
     args = parser.parse_args(argv)
     console = make_console()

@@ -32,6 +32,7 @@ from typing import Any, Literal, Self
 
 import dspy
 
+from robotool.compiled import CompiledInfo, check_fits, read_compiled, version_note
 from robotool.describe import describe
 from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES
@@ -86,6 +87,8 @@ class Proposer(dspy.Module):
         self.adapter = adapter
         self.format_retries = format_retries
         self.log_prompts = log_prompts
+        self.compiled: CompiledInfo | None = None
+        self.compiled_notes: list[str] = []
 
     @classmethod
     def method(cls, name: str, **options: Any) -> Self:
@@ -93,6 +96,30 @@ class Proposer(dspy.Module):
         if name not in METHODS:
             raise ValueError(f"unknown method {name!r}; methods: {', '.join(METHODS)}")
         return cls(**METHODS[name], **options)
+
+    @classmethod
+    def from_compiled(cls, path: Path, **options: Any) -> Self:
+        """The program a compiled file was made for (its method's stages), with the file's prompts loaded.
+
+        Raises :class:`~robotool.compiled.CompiledProgramError` for a file that cannot be used.
+        """
+        _, info = read_compiled(Path(path))
+        return cls.method(info.method if info else "robotool", **options).load(path)
+
+    def load(self, path: str | Path, allow_pickle: bool = False, allow_unsafe_lm_state: bool = False) -> Self:
+        """Load a compiled program (or a DSPy state file) whose stages are this program's.
+
+        Raises :class:`~robotool.compiled.CompiledProgramError` when the file cannot be read or lacks one of
+        this program's stages; a file from another robotool version, or with stages this program does not
+        have, loads with a note in every solution.
+        """
+        path = Path(path)
+        state, info = read_compiled(path)
+        unused = check_fits(path, state, info, [name for name, _ in self.named_predictors()])
+        self.load_state(state, allow_unsafe_lm_state=allow_unsafe_lm_state)
+        self.compiled = info
+        self.compiled_notes = unused + ([note] if (note := version_note(path, info)) else [])
+        return self
 
     @property
     def method_name(self) -> str:
@@ -116,7 +143,7 @@ class Proposer(dspy.Module):
             log=PromptLog(self.log_prompts) if self.log_prompts else None,
         )
         shared = StageOutputs()
-        notes: list[str] = []
+        notes: list[str] = list(self.compiled_notes)
         analyzer_calls: list[LMCall] = []
         if self.analyze is not None:
             try:
@@ -238,12 +265,13 @@ class Proposer(dspy.Module):
                 )
         except StageFailed as e:
             candidate.lm_calls += e.calls
-            candidate.failure = f"{stage}: {e.reason}"
+            candidate.failure, candidate.failed_stage = f"{stage}: {e.reason}", stage
             return candidate
         except (RobotoolError, Cancelled):
             raise
         except Exception as e:  # a fault in this candidate's stage must not end the others
             candidate.failure = f"{stage}: {type(e).__name__}: {' '.join(str(e).split())[:300]}"
+            candidate.failed_stage = stage
         return candidate
 
 

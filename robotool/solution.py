@@ -65,6 +65,7 @@ class Candidate(BaseModel):
     code: str | None = None
     stages: StageOutputs = Field(default_factory=StageOutputs)
     failure: str | None = Field(None, description="why it failed: unparsable reply, rejected code, or rollouts")
+    failed_stage: str | None = Field(None, description="the stage that gave no usable reply, if one did not")
     rollouts: list[Rollout] = Field(default_factory=list)
     lm_calls: list[LMCall] = Field(default_factory=list, description="its LM requests, failed ones included")
     notes: list[str] = Field(default_factory=list, description="what was repaired or ignored in its replies")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from typing import Protocol
 
 from robotool.rollout import Rollout
 from robotool.sandbox import ProgramRejected, extract_program, start_sessions, validate
@@ -33,6 +34,21 @@ def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
     return code, None
 
 
+def run_worlds(
+    task: Task,
+    programs: Sequence[str],
+    world_seeds: Sequence[int],
+    *,
+    backend: str | None = None,
+    recorder: StateRecorder | None = None,
+) -> list[Rollout]:
+    """Run ``programs[w]`` in world ``w`` perturbed from ``world_seeds[w]``, all worlds in one batch."""
+    sessions = start_sessions(list(programs), task.embodiment)
+    return run_sessions(
+        task, sessions, world_seeds=list(world_seeds), backend=backend or default_backend(), recorder=recorder
+    )
+
+
 def run_codes(
     task: Task,
     codes: Sequence[str],
@@ -48,27 +64,41 @@ def run_codes(
     """
     if not codes:
         return []
-    sessions = start_sessions([code for code in codes for _ in range(worlds)], task.embodiment)
+    programs = [code for code in codes for _ in range(worlds)]
     world_seeds = [seed + r for _ in codes for r in range(worlds)]
-    rollouts = run_sessions(
-        task, sessions, world_seeds=world_seeds, backend=backend or default_backend(), recorder=recorder
-    )
+    rollouts = run_worlds(task, programs, world_seeds, backend=backend, recorder=recorder)
     return [rollouts[i * worlds : (i + 1) * worlds] for i in range(len(codes))]
 
 
+class CodeRunner(Protocol):
+    """Runs programs in perturbed worlds like :func:`run_codes` (which is one; a batching service is another)."""
+
+    def __call__(
+        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+    ) -> list[list[Rollout]]: ...
+
+
 def verify(
-    task: Task, candidates: Sequence[Candidate], *, worlds: int, seed: int = 0, backend: str | None = None
+    task: Task,
+    candidates: Sequence[Candidate],
+    *,
+    worlds: int,
+    seed: int = 0,
+    backend: str | None = None,
+    runner: CodeRunner | None = None,
 ) -> None:
     """Simulate every candidate that has valid code; record rollouts and a failure reason in place.
 
     Candidates with the same program are simulated once and share its rollouts (a note says so).
+    ``runner`` runs the programs (default: :func:`run_codes`, one batch per call).
     """
     runnable = [c for c in candidates if c.code is not None and c.failure is None]
     first: dict[str, Candidate] = {}
     for candidate in runnable:
         first.setdefault(candidate.code or "", candidate)
     codes = list(first)
-    results = dict(zip(codes, run_codes(task, codes, worlds=worlds, seed=seed, backend=backend), strict=True))
+    run = runner or run_codes
+    results = dict(zip(codes, run(task, codes, worlds=worlds, seed=seed, backend=backend), strict=True))
     for candidate in runnable:
         code = candidate.code or ""
         candidate.rollouts = [r.model_copy(deep=True) for r in results[code]]
@@ -78,14 +108,23 @@ def verify(
             candidate.failure = failure_reason(candidate.rollouts)
 
 
-def select(task: Task, proposal: Proposal, *, worlds: int, seed: int = 0, backend: str | None = None) -> Solution:
+def select(
+    task: Task,
+    proposal: Proposal,
+    *,
+    worlds: int,
+    seed: int = 0,
+    backend: str | None = None,
+    runner: CodeRunner | None = None,
+) -> Solution:
     """Verify a proposal's candidates (see :func:`verify`) and return the best as a :class:`Solution`.
 
-    The proposal is not changed: the solution holds verified copies of its candidates.
+    The proposal is not changed: the solution holds verified copies of its candidates; ``runner`` as for
+    :func:`verify`.
     """
     started = time.perf_counter()
     candidates = [c.model_copy(deep=True) for c in proposal.candidates]
-    verify(task, candidates, worlds=worlds, seed=seed, backend=backend)
+    verify(task, candidates, worlds=worlds, seed=seed, backend=backend, runner=runner)
     ranked = rank(candidates)
     best = ranked[0] if ranked and ranked[0].rollouts else None
     calls = proposal.lm_calls + [call for c in candidates for call in c.lm_calls]

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from robotool.cliargs import (
     ADAPTER_HELP,
@@ -83,6 +84,15 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         metavar="METHOD",
         help=f"methods to compare: {', '.join(METHODS)} (default: every method that can run here)",
     )
+    p.add_argument(
+        "--program",
+        dest="programs",
+        nargs="+",
+        type=Path,
+        metavar="PROGRAM.json",
+        help="compiled programs (robotool optimize), each evaluated as a method named after its file; "
+        "with --program and no --methods only the programs run",
+    )
     p.add_argument("--runs", type=positive_int, default=1, help="runs per task and method (the paper: 10)")
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
@@ -145,6 +155,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         families=args.families,
         seeds=args.seeds,
         methods=args.methods,
+        programs=args.programs,
         runs=args.runs,
         settings=settings,
         api_base=args.api_base,

@@ -69,6 +69,7 @@ class Request(BaseModel):
     families: list[str] | None = None
     seeds: list[int] | None = None
     methods: list[str] | None = None
+    programs: list[str] | None = None
     runs: int = 1
     settings: Settings = Field(default_factory=Settings)
     api_base: str | None = None
@@ -98,6 +99,9 @@ class EvalConfig(BaseModel):
     families: list[str] | None = None
     seeds: list[int] | None = None
     methods: list[str] | None = Field(None, description="None: every method that can run here")
+    programs: list[Path] | None = Field(
+        None, description="compiled programs (robotool optimize), each a method named after its file"
+    )
     runs: int = Field(1, ge=1, description="runs per task instance and method")
     settings: Settings = Field(default_factory=Settings)
     api_base: str | None = None
@@ -118,6 +122,7 @@ class EvalConfig(BaseModel):
             families=self.families,
             seeds=self.seeds,
             methods=self.methods,
+            programs=[str(p) for p in self.programs] if self.programs else None,
             runs=self.runs,
             settings=self.settings,
             api_base=self.api_base,

@@ -26,18 +26,21 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
     )
 
 
-def _has_analyzer(key: RunKey) -> bool:
-    return bool(METHODS.get(key.method, {}).get("analyzer"))
+def _has_analyzer(stages: str) -> bool:
+    return bool(METHODS.get(stages, {}).get("analyzer"))
 
 
-def _predicted_concepts(key: RunKey, solution: Solution) -> list[KeyConcept] | None:
+def _predicted_concepts(stages: str, solution: Solution) -> list[KeyConcept] | None:
     """The Analyzer's concepts (none when it failed, which grades as wrong); None for methods without one
     (the search planner copies the ground truth)."""
-    return (solution.stages.key_concepts or []) if _has_analyzer(key) else None
+    return (solution.stages.key_concepts or []) if _has_analyzer(stages) else None
 
 
-def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float) -> RunRecord:
-    """Classify the chosen candidate's worlds and grade the key concepts of a finished run."""
+def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float,
+          stages: str | None = None) -> RunRecord:
+    """Classify the chosen candidate's worlds and grade the key concepts of a finished run.
+
+    ``stages``: the method whose stages ran (default: the run's method; a compiled program's differs)."""
     facts = TaskFacts.of(instance.task, needs_tool=instance.needs_tool, needed=instance.tools)
     chosen = solution.candidates[solution.best] if solution.best is not None else None
     rollouts = chosen.rollouts if chosen is not None else []
@@ -56,7 +59,7 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
     ]
     update = {
         "worlds": worlds,
-        "concepts": grade(key_concepts(instance.task), _predicted_concepts(key, solution)),
+        "concepts": grade(key_concepts(instance.task), _predicted_concepts(stages or key.method, solution)),
         "code": solution.code,
         "stages": solution.stages,
         "candidate_failures": [c.failure for c in solution.candidates],
@@ -75,10 +78,11 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)
 
 
-def crashed(instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float) -> RunRecord:
-    """The record of a run whose method raised: nothing ran, class ``invalid``."""
+def crashed(instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float,
+            stages: str | None = None) -> RunRecord:
+    """The record of a run whose method raised: nothing ran, class ``invalid`` (``stages`` as for :func:`judge`)."""
     text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
     update: dict[str, object] = {"error": text}
-    if _has_analyzer(key):  # the run's Analyzer produced nothing: graded as wrong
+    if _has_analyzer(stages or key.method):  # the run's Analyzer produced nothing: graded as wrong
         update["concepts"] = grade(key_concepts(instance.task), [])
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)

@@ -13,9 +13,10 @@ journal is written here, as each run's record comes back, so the results folder 
 
 from __future__ import annotations
 
+import hashlib
 import time
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -30,7 +31,14 @@ from robotool.eval.metrics import summarize
 from robotool.eval.plots import write_plots
 from robotool.eval.records import Results, RunKey, RunRecord, inputs_digest
 from robotool.eval.report import markdown, print_tables, skipped_lines
-from robotool.eval.solvers import METHODS, Solver, SolverSettings, make_solvers
+from robotool.eval.solvers import (
+    METHODS,
+    Solver,
+    SolverSettings,
+    compiled_solver,
+    make_solvers,
+    program_stages,
+)
 from robotool.eval.tables import all_tables
 from robotool.eval.work import NotAttempted, RunJob, RunWork
 from robotool.version import version
@@ -57,11 +65,19 @@ def _lm(config: EvalConfig, lm: dspy.LM | None) -> dspy.LM | None:
     )
 
 
+class Methods(NamedTuple):
+    """The solvers to run, the methods skipped and why, and for each compiled program the method of its stages."""
+
+    solvers: dict[str, Solver]
+    skipped: dict[str, str]
+    stages: dict[str, str]
+
+
 def _methods(
     config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str
-) -> tuple[dict[str, Solver], dict[str, str]]:
+) -> Methods:
     """Solvers to run and methods skipped; a method asked for by name that cannot run is an error."""
-    names = config.methods or list(METHODS)
+    names = config.methods or ([] if config.programs else list(METHODS))
     unknown = [m for m in names if m not in METHODS]
     if unknown:
         raise EvalError(f"unknown method {', '.join(unknown)}; methods: {', '.join(METHODS)}")
@@ -77,9 +93,38 @@ def _methods(
     if config.methods is not None and skipped:
         method, why = next(iter(skipped.items()))
         raise EvalError(f"cannot run {method}: {why}")
+    stages = _programs(config, lm, settings, solvers)
     if not solvers:
         raise EvalError("no method can run here: " + "; ".join(skipped_lines(skipped)))
-    return solvers, skipped
+    return Methods(solvers, skipped, stages)
+
+
+def _programs(
+    config: EvalConfig, lm: dspy.LM | None, settings: SolverSettings, solvers: dict[str, Solver]
+) -> dict[str, str]:
+    """Add a solver per compiled program (a method named after its file); returns each one's stages."""
+    from robotool.compiled import CompiledProgramError
+
+    stages: dict[str, str] = {}
+    for path in config.programs or []:
+        name = path.stem
+        if name in METHODS or name in stages:
+            raise EvalError(f"--program {path}: its name {name!r} is already a method's; rename the file")
+        if lm is None:
+            raise EvalError(
+                f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM"
+            )
+        try:
+            solvers[name] = compiled_solver(path, lm, settings)
+            stages[name] = program_stages(path)
+        except CompiledProgramError as e:
+            raise EvalError(str(e)) from None
+    return stages
+
+
+def uses_lm(method: str) -> bool:
+    """Whether a method's runs call a language model (compiled programs always do)."""
+    return METHODS[method].uses_lm if method in METHODS else True
 
 
 def _check_folder(config: EvalConfig) -> None:
@@ -114,8 +159,11 @@ def _check_folder(config: EvalConfig) -> None:
 def _plan(
     config: EvalConfig, instances: list[TaskInstance], methods: list[str], backend: str
 ) -> list[tuple[TaskInstance, RunKey]]:
-    """Every run asked for, keyed by the content of its inputs (``backend``: the one the runs use)."""
-    context = {"api_base": config.api_base, "backend": backend, "robotool": version()}
+    """Every run asked for, keyed by the content of its inputs (``backend``: the one the runs use; a compiled
+    program's runs also by its file's content)."""
+    shared = {"api_base": config.api_base, "backend": backend, "robotool": version()}
+    programs = {p.stem: hashlib.sha256(p.read_bytes()).hexdigest()[:16] for p in config.programs or []}
+    contexts = {m: shared | ({"program": programs[m]} if m in programs else {}) for m in methods}
     return [
         (
             instance,
@@ -124,7 +172,7 @@ def _plan(
                 seed=instance.seed,
                 method=method,
                 run=run,
-                inputs=inputs_digest(instance.task, method, run, config.settings, context),
+                inputs=inputs_digest(instance.task, method, run, config.settings, contexts[method]),
             ),
         )
         for instance in instances
@@ -169,7 +217,7 @@ def evaluate(
     instances, notes = select(config.tasks, config.families, config.seeds)
     executor = executor or LocalExecutor(config.workers)
     backend = executor.backend(config.settings.backend)
-    chosen, skipped = _methods(config, lm, solvers, backend)
+    chosen, skipped, stages = _methods(config, lm, solvers, backend)
     _check_folder(config)
     journal = Journal(config.out_dir)
     plan = _plan(config, instances, list(chosen), backend)
@@ -177,7 +225,7 @@ def evaluate(
         console.print(line, style="yellow", highlight=False, markup=False)
     _say_reuse(config, plan, journal, console)
     pending = [RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal]
-    _run(executor, RunWork(chosen), pending, journal, len(plan), backend, console)
+    _run(executor, RunWork(chosen, stages), pending, journal, len(plan), backend, console)
     results = Results(
         config=config,
         skipped=skipped,
@@ -208,15 +256,13 @@ def _run(
     unavailable: list[LMUnavailableError] = []
     recorded: list[str] = []
 
-    def uses_lm(job: RunJob) -> bool:
-        return METHODS[job.key.method].uses_lm
-
     def done(job: RunJob, outcome: RunRecord | NotAttempted | WorkerLost) -> None:
         if isinstance(outcome, NotAttempted):
             unavailable.append(outcome.error())
             return
         if isinstance(outcome, WorkerLost):
-            outcome = crashed(job.instance, job.key, job.world_seed, outcome, 0.0)
+            ran = work.stages.get(job.key.method)
+            outcome = crashed(job.instance, job.key, job.world_seed, outcome, 0.0, stages=ran)
         journal.append(outcome)
         recorded.append(job.key.id)
         progress.update(bar, advance=1)
@@ -228,8 +274,8 @@ def _run(
             pending,
             work,
             done,
-            skip=lambda job: uses_lm(job) and bool(unavailable),
-            exclusive=lambda job: not uses_lm(job),
+            skip=lambda job: uses_lm(job.key.method) and bool(unavailable),
+            exclusive=lambda job: not uses_lm(job.key.method),
             backend=backend,
         )
     if unavailable:
@@ -255,7 +301,7 @@ def _write(results: Results, console: Console) -> None:
     """results.json, the plots, report.md; then the tables on the console."""
     folder = results.config.out_dir
     write_atomic(folder / "results.json", results.model_dump_json(indent=1))
-    summary = summarize(results.records, list(METHODS))
+    summary = summarize(results.records, [*METHODS, *(p.stem for p in results.config.programs or [])])
     tables = all_tables(summary)
     plots = write_plots(summary, folder)
     write_atomic(folder / "report.md", markdown(results, tables, plots))

@@ -97,6 +97,44 @@ def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
     return solve
 
 
+def compiled_solver(path: Path, lm: dspy.LM, settings: SolverSettings) -> Solver:
+    """A compiled program file (``robotool optimize``) as a method, sampling from ``lm``.
+
+    The file is read and checked now (:class:`~robotool.compiled.CompiledProgramError` when it cannot be
+    used) and loaded afresh for each run.
+    """
+    from robotool.program import RoboTool
+
+    RoboTool.from_compiled(path)
+
+    def solve(task: Task, *, seed: int, run: int) -> Solution:
+        import dspy
+
+        program = RoboTool.from_compiled(
+            path,
+            candidates=settings.candidates,
+            worlds_per_candidate=settings.worlds,
+            backend=settings.backend,
+            seed=seed,
+            rollout_base=run * settings.candidates,
+            temperature=settings.temperature,
+            adapter=settings.adapter,
+            log_prompts=settings.log_prompts,
+        )
+        with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
+            return program(task=task).solution
+
+    return solve
+
+
+def program_stages(path: Path) -> str:
+    """The method (stages) a compiled program file was made for."""
+    from robotool.compiled import read_compiled
+
+    _, info = read_compiled(path)
+    return info.method if info else "robotool"
+
+
 def planner_solver(tools: bool, settings: SolverSettings) -> Solver:
     """The LM-free search planner, with every object (``tools``) or the target only."""
 

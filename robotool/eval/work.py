@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from robotool.errors import LMFailureKind, LMUnavailableError
 from robotool.eval.instances import TaskInstance
@@ -43,17 +43,20 @@ class NotAttempted:
 
 @dataclass(frozen=True)
 class RunWork:
-    """Solve and judge one run with the solver of its method."""
+    """Solve and judge one run with the solver of its method; ``stages`` names, for each compiled program,
+    the method whose stages it has (its Analyzer's key concepts are graded)."""
 
     solvers: Mapping[str, Solver]
+    stages: Mapping[str, str] = field(default_factory=dict)
 
     def __call__(self, job: RunJob) -> RunRecord | NotAttempted:
         begun = time.perf_counter()
         key = job.key
+        ran = self.stages.get(key.method)
         try:
             solution = self.solvers[key.method](job.instance.task, seed=job.world_seed, run=key.run)
         except LMUnavailableError as e:  # nothing was attempted: not a result
             return NotAttempted(e.kind, str(e))
         except Exception as e:  # a method that raises fails its run, not the evaluation
-            return crashed(job.instance, key, job.world_seed, e, time.perf_counter() - begun)
-        return judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun)
+            return crashed(job.instance, key, job.world_seed, e, time.perf_counter() - begun, stages=ran)
+        return judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun, stages=ran)

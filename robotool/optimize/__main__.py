@@ -1,0 +1,7 @@
+"""``python -m robotool.optimize``."""
+
+import sys
+
+from robotool.optimize.cli import main
+
+sys.exit(main())

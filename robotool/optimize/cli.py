@@ -1,0 +1,159 @@
+"""``python -m robotool.optimize`` (also ``robotool optimize``): compile the proposing program.
+
+Mistakes in the arguments end with one line and exit status 2; a language model that cannot be used
+(no key, unreachable server) with one line and exit status 3; Ctrl-C with 130 (the log folder keeps what
+was done: run the same command to resume).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from robotool import tasks
+from robotool.cliargs import (
+    ADAPTER_HELP,
+    ADAPTERS,
+    BACKEND_HELP,
+    DEFAULT_WORLDS,
+    EXIT_USAGE,
+    Parser,
+    count,
+    make_console,
+    output_file,
+    output_folder,
+    positive_int,
+    print_error,
+    seconds,
+    seed,
+    temperature,
+    warn_if_warp_on_cpu,
+)
+from robotool.errors import LMUnavailableError, RobotoolError
+from robotool.methods import METHODS
+from robotool.optimize.data import DatasetError
+from robotool.optimize.run import OPTIMIZERS, Budget, OptimizeError, Outcome, Settings, optimize
+from robotool.version import version
+
+EXIT_LM_UNAVAILABLE = 3
+EXIT_INTERRUPTED = 130
+
+
+def build_parser(prog: str = "python -m robotool.optimize") -> argparse.ArgumentParser:
+    """The optimiser's arguments (``prog`` names the command in messages)."""
+    p = Parser(
+        prog=prog,
+        description="Compile the RoboTool program: optimise its stages' prompts and demonstrations against "
+        "simulator-verified success on generated task instances, and write a program file that solve, eval "
+        "and RoboTool.load() use.",
+    )
+    p.add_argument("--version", action="version", version=f"robotool {version()}")
+    p.add_argument("--optimizer", required=True, choices=OPTIMIZERS,
+                   help="gepa (reflective prompt evolution), mipro (MIPROv2), bootstrap (BootstrapFewShot), simba, "
+                   "or planner-demos (no LM: verified search-planner solutions as demonstrations)")
+    p.add_argument("--out", type=output_file, required=True, metavar="PROGRAM.json", help="the compiled program")
+    p.add_argument("--log", type=output_folder, metavar="DIR",
+                   help="resumable log folder (default: the --out file's name with -log)")
+    p.add_argument("--families", nargs="+", metavar="FAMILY", help="task families to draw examples from "
+                   "(default: all); the paper's six built-in tasks are never training examples")
+    p.add_argument("--train", type=positive_int, default=6, help="training examples")
+    p.add_argument("--val", type=count, default=4, help="validation examples (scored before and after)")
+    p.add_argument("--method", choices=list(METHODS), default="robotool", help="which stages the program has")
+    p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
+    p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
+    p.add_argument("--api-key-env", help="environment variable holding the API key")
+    p.add_argument("--reflection-lm", help="model that proposes instructions (gepa, mipro, simba; default: --lm)")
+    p.add_argument("--reflection-api-base", help="base URL for the reflection model (default: --api-base)")
+    p.add_argument("--temperature", type=temperature, help="sampling temperature of the stages' calls")
+    p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
+    p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per verification")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the perturbed worlds and the optimiser")
+    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
+    p.add_argument("--threads", type=positive_int, default=4, help="metric calls in flight at once")
+    budget = p.add_argument_group("budget")
+    budget.add_argument("--auto", choices=["light", "medium", "heavy"], help="gepa, mipro: DSPy's budget preset")
+    budget.add_argument("--max-metric-calls", type=positive_int, help="gepa: metric calls (default: 60)")
+    budget.add_argument("--trials", type=positive_int, default=6, help="mipro: trials")
+    budget.add_argument("--candidates", type=positive_int, default=3,
+                        help="mipro, simba: instruction candidates")
+    budget.add_argument("--steps", type=positive_int, default=4, help="simba: steps")
+    budget.add_argument("--demos", type=count, default=2, help="demonstrations per stage")
+    return p
+
+
+def settings_from(args: argparse.Namespace) -> Settings:
+    """The run the parsed arguments ask for."""
+    families = args.families or tasks.families()
+    unknown = sorted(set(families) - set(tasks.families()))
+    if unknown:
+        raise DatasetError(f"unknown task family {', '.join(unknown)}; families: {', '.join(tasks.families())}")
+    if args.auto and args.max_metric_calls:
+        raise OptimizeError("--auto and --max-metric-calls are two budgets; give one")
+    return Settings(
+        optimizer=args.optimizer, families=families, train=args.train, val=args.val, method=args.method,
+        worlds=args.worlds, seed=args.seed, backend=args.backend, threads=args.threads, lm=args.lm,
+        reflection_lm=args.reflection_lm, temperature=args.temperature, adapter=args.adapter,
+        budget=Budget(auto=args.auto, max_metric_calls=args.max_metric_calls, trials=args.trials,
+                      candidates=args.candidates, steps=args.steps, demos=args.demos),
+    )
+
+
+def print_outcome(outcome: Outcome, console: Console) -> None:
+    """The before/after validation table and where the program went."""
+    v = outcome.info.validation
+    table = Table(title=f"Validation success ({outcome.info.optimizer}, method {outcome.info.method})")
+    for column in ("examples", "before", "after"):
+        table.add_column(column, justify="right")
+    shown = [f"{s:.2f}" if s is not None else "-" for s in (v.before, v.after)] if v else ["-", "-"]
+    table.add_row(str(v.examples if v else 0), *shown)
+    console.print(table)
+    if v is not None and v.note:
+        console.print(f"validation {v.note}", style="yellow", markup=False, highlight=False)
+    if outcome.info.demonstrations:
+        console.print(f"{len(outcome.info.demonstrations)} verified demonstration(s) per stage from: "
+                      + ", ".join(d.task for d in outcome.info.demonstrations), markup=False, highlight=False)
+    console.print(f"wrote {outcome.out}", markup=False, highlight=False)
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.optimize") -> int:
+    """Run the optimiser; returns the exit status."""
+    from robotool.compiled import CompiledProgramError
+    from robotool.lm import LMConfigError, make_lm
+
+    args = build_parser(prog).parse_args(argv)
+    console, errors = make_console(), make_console(stderr=True)
+    warn_if_warp_on_cpu(args.backend, errors)
+    try:
+        settings = settings_from(args)
+        lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env, temperature=args.temperature,
+                     cache=not args.no_cache, timeout=args.timeout)
+        reflection = make_lm(args.reflection_lm, api_base=args.reflection_api_base or args.api_base,
+                             api_key_env=args.api_key_env, cache=not args.no_cache,
+                             timeout=args.timeout) if args.reflection_lm else None
+        if lm is not None:
+            settings = settings.model_copy(update={"lm": lm.model})
+        log = args.log or args.out.with_name(f"{args.out.stem}-log")
+        outcome = optimize(settings, out=args.out, log=Path(log), lm=lm, reflection_lm=reflection,
+                           say=lambda line: console.print(line, markup=False, highlight=False))
+    except LMUnavailableError as e:
+        print_error(errors, str(e))
+        return EXIT_LM_UNAVAILABLE
+    except (OptimizeError, DatasetError, CompiledProgramError, LMConfigError, RobotoolError) as e:
+        print_error(errors, " ".join(str(e).split()))
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        errors.print("interrupted: run the same command to resume from the log folder", markup=False)
+        return EXIT_INTERRUPTED
+    print_outcome(outcome, console)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

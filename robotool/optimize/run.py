@@ -1,0 +1,181 @@
+"""One optimisation run: examples -> validation before -> an optimiser compiles the proposing program ->
+validation after -> a compiled program file.
+
+The student is a :class:`~robotool.program.Proposer` (the four stages, one candidate per task): optimisers
+see exactly its predictors, and the :class:`~robotool.optimize.metric.Metric` verifies what it proposes in
+simulation. The log folder holds ``settings.json`` (what the run was asked to do), the optimiser's own
+checkpoints (GEPA resumes from them; MIPROv2 writes its trials there), the planner's solved instances
+(``planner-demos`` reuses them) and the validation scores; DSPy's LM cache makes a rerun of the LM calls
+already made cost nothing.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any, Literal
+
+import dspy
+from pydantic import BaseModel, Field
+
+from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compiled
+from robotool.optimize.data import Splits, splits
+from robotool.optimize.demos import planner_demonstrations
+from robotool.optimize.metric import Metric
+from robotool.program import Proposer
+
+Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
+OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")
+Say = Callable[[str], None]
+
+
+class OptimizeError(ValueError):
+    """The run cannot be set up as asked; the message says why."""
+
+
+class Budget(BaseModel):
+    """How much an optimiser may spend (each applies to the optimisers named)."""
+
+    auto: Literal["light", "medium", "heavy"] | None = Field(None, description="gepa, mipro: DSPy's preset")
+    max_metric_calls: int | None = Field(None, ge=1, description="gepa: metric calls (default 60 without auto)")
+    trials: int = Field(6, ge=1, description="mipro: trials without auto")
+    candidates: int = Field(3, ge=1, description="mipro, simba: instruction candidates per round")
+    steps: int = Field(4, ge=1, description="simba: steps")
+    demos: int = Field(2, ge=0, description="bootstrap, mipro, simba, planner-demos: demonstrations per stage")
+
+
+class Settings(BaseModel):
+    """Everything that decides a run's result (``settings.json``; recorded in the compiled program)."""
+
+    optimizer: Optimizer
+    families: list[str]
+    train: int = Field(ge=1)
+    val: int = Field(ge=0)
+    method: str = "robotool"
+    worlds: int = Field(3, ge=1)
+    seed: int = Field(0, ge=0)
+    backend: str | None = None
+    threads: int = Field(4, ge=1)
+    lm: str | None = None
+    reflection_lm: str | None = None
+    temperature: float | None = None
+    adapter: Literal["chat", "json"] | None = None
+    budget: Budget = Field(default_factory=Budget)
+
+
+class Outcome(BaseModel):
+    """What a run produced."""
+
+    info: CompiledInfo
+    out: Path
+    train: list[str]
+    val: list[str]
+
+
+def student(settings: Settings) -> Proposer:
+    """The program an optimiser compiles: the method's stages, one candidate per task."""
+    return Proposer.method(settings.method, temperature=settings.temperature, adapter=settings.adapter)
+
+
+def validate(program: Proposer, examples: Sequence[dspy.Example], metric: Metric, threads: int) -> float:
+    """Mean verified success of ``program`` on ``examples``; an unavailable LM stops it (the error propagates)."""
+
+    def one(example: dspy.Example) -> float:
+        return float(metric(example, program(**example.inputs())))
+
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        futures = [pool.submit(contextvars.copy_context().run, one, e) for e in examples]
+        scores = [f.result() for f in futures]
+    return sum(scores) / len(scores)
+
+
+def _compile(settings: Settings, program: Proposer, data: Splits, metric: Metric, log: Path,
+             reflection_lm: dspy.LM | None, say: Say) -> tuple[Proposer, list[DemoSource]]:
+    b = settings.budget
+    name = settings.optimizer
+    if name == "planner-demos":
+        say(f"solving {len(data.train)} training instance(s) with the search planner")
+        sources = planner_demonstrations(program, data.train, per_stage=b.demos, worlds=settings.worlds,
+                                         seed=settings.seed, backend=settings.backend, log=log, say=say)
+        if not sources:
+            raise OptimizeError("the search planner verified no training instance: no demonstration to keep; "
+                                "try more --train examples or other --families")
+        return program, sources
+    valset = data.val or None
+    if name == "gepa":
+        if reflection_lm is None:
+            raise OptimizeError("gepa needs a reflection model: pass --reflection-lm (or --lm)")
+        budget: dict[str, Any] = {"auto": b.auto} if b.auto else {"max_metric_calls": b.max_metric_calls or 60}
+        optimizer = dspy.GEPA(metric=metric, reflection_lm=reflection_lm, num_threads=settings.threads,
+                              log_dir=str(log / "gepa"), seed=settings.seed, **budget)
+        return optimizer.compile(program, trainset=data.train, valset=valset), []
+    if name == "bootstrap":
+        optimizer = dspy.BootstrapFewShot(metric=metric, metric_threshold=1.0, max_bootstrapped_demos=b.demos,
+                                          max_labeled_demos=0, max_rounds=1)
+        return optimizer.compile(program, trainset=data.train), []
+    if name == "mipro":
+        mipro = dspy.MIPROv2(metric=metric, prompt_model=reflection_lm, auto=b.auto,
+                             num_candidates=None if b.auto else b.candidates, num_threads=settings.threads,
+                             max_bootstrapped_demos=b.demos, max_labeled_demos=0, seed=settings.seed,
+                             log_dir=str(log / "mipro"), metric_threshold=1.0)
+        trials = {} if b.auto else {"num_trials": b.trials}
+        return mipro.compile(program, trainset=data.train, valset=valset, minibatch=False,
+                             data_aware_proposer=False, **trials), []
+    simba = dspy.SIMBA(metric=metric, bsize=min(len(data.train), 8), num_candidates=b.candidates,
+                       max_steps=b.steps, max_demos=b.demos, prompt_model=reflection_lm, num_threads=settings.threads)
+    return simba.compile(program, trainset=data.train, seed=settings.seed), []
+
+
+def optimize(settings: Settings, *, out: Path, log: Path, lm: dspy.LM | None = None,
+             reflection_lm: dspy.LM | None = None, say: Say = print) -> Outcome:
+    """Run one optimisation (see the module docstring) and write the compiled program to ``out``."""
+    if settings.optimizer != "planner-demos" and lm is None:
+        raise OptimizeError(f"{settings.optimizer} runs the stages on a language model: pass --lm MODEL")
+    _claim(log, settings)
+    data = splits(settings.families, train=settings.train, val=settings.val, paper_tasks=False)
+    say(f"{len(data.train)} training and {len(data.val)} validation example(s) from {', '.join(settings.families)}")
+    metric = Metric(worlds=settings.worlds, seed=settings.seed, backend=settings.backend)
+    program = student(settings)
+    with dspy.context(lm=lm) if lm is not None else contextlib.nullcontext():
+        before = _measure(program, data, metric, settings, lm, "before", say)
+        compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
+        after = _measure(compiled, data, metric, settings, lm, "after", say)
+    validation = Validation(examples=len(data.val), before=before, after=after,
+                            note=None if lm is not None and data.val else
+                            "not measured: " + ("no validation examples" if not data.val else
+                                                "no language model (pass --lm to measure the stages on one)"))
+    info = CompiledInfo(optimizer=settings.optimizer, method=settings.method,
+                        settings=settings.model_dump(mode="json"), validation=validation, demonstrations=sources)
+    save_compiled(compiled, out, info)
+    (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
+    return Outcome(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
+
+
+def _claim(log: Path, settings: Settings) -> None:
+    """Create the log folder, or resume in it when it holds a run with the same settings (else refuse)."""
+    path = log / "settings.json"
+    if path.exists():
+        try:
+            before = Settings.model_validate_json(path.read_text(encoding="utf-8"))
+        except ValueError:
+            raise OptimizeError(f"{log} holds a run this version cannot read; choose another --log") from None
+        if before != settings:
+            mine, theirs = settings.model_dump(), before.model_dump()
+            changed = ", ".join(k for k in mine if mine[k] != theirs[k])
+            raise OptimizeError(f"{log} holds a run with other settings ({changed}); choose another --log")
+    try:
+        log.mkdir(parents=True, exist_ok=True)
+        path.write_text(settings.model_dump_json(indent=1), encoding="utf-8")
+    except OSError as e:
+        raise OptimizeError(f"cannot write the log folder {log}: {e.strerror or e}") from None
+
+
+def _measure(program: Proposer, data: Splits, metric: Metric, settings: Settings, lm: dspy.LM | None, when: str,
+             say: Say) -> float | None:
+    if lm is None or not data.val:
+        return None
+    say(f"validating {when}: {len(data.val)} example(s) x {settings.worlds} world(s)")
+    return validate(program, data.val, metric, settings.threads)
