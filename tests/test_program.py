@@ -218,7 +218,7 @@ def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pyte
 
     assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code"]
     assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code"]
-    monkeypatch.setattr(verify, "run_codes", lambda *a, **k: pytest.fail("the proposer simulated"))
+    monkeypatch.setattr(verify, "run_worlds", lambda *a, **k: pytest.fail("the proposer simulated"))
     lm, _ = scripted_lm(arm_script([GRASP_DIRECTLY]))
     with dspy.context(lm=lm, adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):
         proposal = Proposer(candidates=2, temperature=0.5)(task=tasks.load("milk_reaching_near")).proposal

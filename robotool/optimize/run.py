@@ -22,7 +22,7 @@ import dspy
 from pydantic import BaseModel, Field
 
 from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compiled
-from robotool.optimize.data import Splits, splits
+from robotool.optimize.data import Splits, check_training, splits
 from robotool.optimize.demos import planner_demonstrations
 from robotool.optimize.metric import Metric
 from robotool.program import Proposer
@@ -130,12 +130,17 @@ def _compile(settings: Settings, program: Proposer, data: Splits, metric: Metric
 
 
 def optimize(settings: Settings, *, out: Path, log: Path, lm: dspy.LM | None = None,
-             reflection_lm: dspy.LM | None = None, say: Say = print) -> Outcome:
-    """Run one optimisation (see the module docstring) and write the compiled program to ``out``."""
+             reflection_lm: dspy.LM | None = None, say: Say = print, data: Splits | None = None) -> Outcome:
+    """Run one optimisation (see the module docstring) and write the compiled program to ``out``.
+
+    ``data`` replaces the examples drawn from ``settings.families`` (its training set is checked the same way).
+    """
     if settings.optimizer != "planner-demos" and lm is None:
         raise OptimizeError(f"{settings.optimizer} runs the stages on a language model: pass --lm MODEL")
     _claim(log, settings)
-    data = splits(settings.families, train=settings.train, val=settings.val, paper_tasks=False)
+    if data is None:
+        data = splits(settings.families, train=settings.train, val=settings.val, paper_tasks=False)
+    check_training(data.train)
     say(f"{len(data.train)} training and {len(data.val)} validation example(s) from {', '.join(settings.families)}")
     metric = Metric(worlds=settings.worlds, seed=settings.seed, backend=settings.backend)
     program = student(settings)
