@@ -254,3 +254,34 @@ def test_solve_with_a_compiled_program_over_http(tmp_path: Path, capsys: pytest.
     assert status == 0 and any("COMPILED-CODER-INSTRUCTION" in s for s in systems)
     assert robotool_main(["solve", ARM, "--program", str(tmp_path / "missing.json"), "--lm", "openai/x"]) == 2
     assert "compiled program not found" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--optimizer", "gepa"], "gepa runs the stages on a language model: pass --lm MODEL"),
+        (["--optimizer", "planner-demos", "--families", "nonsense"], "unknown task family nonsense"),
+        (["--optimizer", "gepa", "--lm", "openai/x", "--auto", "light", "--max-metric-calls", "5"],
+         "--auto and --max-metric-calls are two budgets"),
+    ],
+)
+def test_optimize_command_mistakes_end_in_one_line(argv: list[str], message: str, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    from robotool.cli import main as robotool_main
+
+    assert robotool_main(["optimize", *argv, "--out", str(tmp_path / "p.json"), "--val", "0"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_log_folder_with_other_settings_is_refused(tmp_path: Path) -> None:
+    from robotool.optimize import OptimizeError
+
+    data = Splits(train=[builtin(ARM)], val=[], test=[])
+    lm, _ = _task_lm()
+    with dspy.context(adapter=CHAT):
+        optimize(_settings("bootstrap"), out=tmp_path / "p.json", log=tmp_path / "log", lm=lm, data=data,
+                 say=lambda _: None)
+        with pytest.raises(OptimizeError, match="other settings \\(worlds\\)"):
+            optimize(_settings("bootstrap").model_copy(update={"worlds": 2}), out=tmp_path / "p.json",
+                     log=tmp_path / "log", lm=lm, data=data, say=lambda _: None)
