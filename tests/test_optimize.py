@@ -84,6 +84,8 @@ def test_metric_verifies_once_and_gives_plain_optimisers_the_score() -> None:
     scored = metric(gold, pred, None, "plan", None)
     assert scored.score == 1.0 and "2 of 2" in scored.feedback
     assert metric.batcher.batches == [1]  # GEPA's per-predictor call reused the verdict
+    with pytest.raises(TypeError, match="compile a Proposer"):
+        metric(gold, dspy.Prediction(solution=None))
 
 
 def test_feedback_to_the_analyzer_names_the_missed_and_misjudged_quantities() -> None:
@@ -168,6 +170,15 @@ def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: 
     assert any("MIPRO-PROPOSED" in s for s in engine.systems)
     stored = json.loads((tmp_path / "p.json").read_text())
     assert stored["robotool"]["optimizer"] == "mipro" and set(stored) >= {"analyze", "plan", "calculate", "code"}
+
+
+def test_simba_on_two_training_examples(tmp_path: Path) -> None:
+    lm, _ = _task_lm(arm_code=STAND_STILL)
+    data = Splits(train=[builtin(ARM), builtin(QUADRUPED)], val=[], test=[])
+    with dspy.context(adapter=CHAT):
+        optimize(_settings("simba", steps=1, candidates=2, demos=1), out=tmp_path / "p.json", log=tmp_path / "log",
+                 lm=lm, reflection_lm=engine_lm(ReflectionEngine("unused")), data=data, say=lambda _: None)
+    assert RoboTool.from_compiled(tmp_path / "p.json").compiled.optimizer == "simba"
 
 
 def _standin_rules(coder_code: str) -> list[Rule]:

@@ -51,7 +51,10 @@ class Metric:
 
     def verdict(self, gold: dspy.Example, pred: dspy.Prediction) -> Solution:
         """The proposal in ``pred`` verified in simulation (once per proposal)."""
-        proposal: Proposal = pred.proposal
+        proposal = pred.get("proposal")
+        if not isinstance(proposal, Proposal):
+            raise TypeError("the metric verifies what a robotool.program.Proposer proposed; compile a Proposer "
+                            "(RoboTool verifies its own candidates)")
         with self._lock:
             kept = self._verdicts.get(id(proposal))
             if kept is not None and kept[0] is proposal:
