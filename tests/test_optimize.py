@@ -202,6 +202,19 @@ def test_gepa_over_http_puts_the_reflected_instruction_into_the_prompts(tmp_path
     assert (tmp_path / "log" / "gepa").is_dir()
 
 
+def test_gepa_with_a_scripted_lm_reflects_on_each_stage_s_feedback(tmp_path: Path) -> None:
+    marker = "GEPA-PROPOSED: move the gripper to the milk before closing it."
+    lm, engine = _task_lm(arm_code=STAND_STILL)
+    reflection = ReflectionEngine(marker)
+    data = Splits(train=[builtin(ARM)], val=[builtin(ARM)], test=[])
+    with dspy.context(adapter=CHAT):
+        optimize(_settings("gepa", max_metric_calls=6), out=tmp_path / "p.json", log=tmp_path / "log", lm=lm,
+                 reflection_lm=engine_lm(reflection), data=data, say=lambda _: None)
+    assert any(marker in s for s in engine.systems)
+    shown = "\n".join(reflection.shown)  # GEPA improves the Analyzer first: its feedback says the fault is elsewhere
+    assert "Nothing points at the Analyzer's output" in shown and "point at the Planner" in shown
+
+
 # -- offline compilation and compiled programs everywhere -------------------------------------------
 
 
