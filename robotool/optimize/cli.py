@@ -36,7 +36,7 @@ from robotool.cliargs import (
 )
 from robotool.errors import LMUnavailableError, RobotoolError
 from robotool.methods import METHODS
-from robotool.optimize.data import DatasetError
+from robotool.optimize.data import DatasetError, check_families
 from robotool.optimize.run import OPTIMIZERS, Budget, OptimizeError, Outcome, Settings, optimize
 from robotool.version import version
 
@@ -91,9 +91,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
 def settings_from(args: argparse.Namespace) -> Settings:
     """The run the parsed arguments ask for."""
     families = args.families or tasks.families()
-    unknown = sorted(set(families) - set(tasks.families()))
-    if unknown:
-        raise DatasetError(f"unknown task family {', '.join(unknown)}; families: {', '.join(tasks.families())}")
+    check_families(families)
     if args.auto and args.max_metric_calls:
         raise OptimizeError("--auto and --max-metric-calls are two budgets; give one")
     return Settings(

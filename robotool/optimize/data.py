@@ -69,19 +69,24 @@ def split_of(seed: int) -> Split:
     return next(name for name, seeds in SEED_RANGES.items() if seed in seeds)
 
 
-def dataset(families: Sequence[str], seeds: Sequence[int]) -> list[dspy.Example]:
-    """Examples of ``families`` at ``seeds`` (unsolvable instances left out), family by family."""
+def check_families(families: Sequence[str]) -> None:
+    """Refuse an empty or unknown family name, naming the families there are."""
+    if not families:
+        raise DatasetError("no task families given")
     unknown = sorted(set(families) - set(tasks.families()))
     if unknown:
         raise DatasetError(f"unknown task family {', '.join(unknown)}; families: {', '.join(tasks.families())}")
+
+
+def dataset(families: Sequence[str], seeds: Sequence[int]) -> list[dspy.Example]:
+    """Examples of ``families`` at ``seeds`` (unsolvable instances left out), family by family."""
+    check_families(families)
     return [e for family in families for seed in seeds if (e := generated(family, seed)) is not None]
 
 
 def draw(families: Sequence[str], count: int, split: Split) -> list[dspy.Example]:
     """``count`` solvable examples from ``split``'s seed range, taking the families in turn."""
-    if not families:
-        raise DatasetError("no task families given")
-    dataset(families, [])  # checks the names
+    check_families(families)
     chosen: list[dspy.Example] = []
     next_seed = {family: SEED_RANGES[split].start for family in families}
     for attempt in range(MAX_DRAWS * count):
