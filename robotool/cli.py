@@ -146,7 +146,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
             cache=not args.no_cache,
             timeout=args.timeout,
         )
-        if lm is None and program is not None:
+        if lm is None and args.program is not None:
             raise UsageError(f"--program runs its stages on a language model. {HOW_TO_CONFIGURE}")
         if lm is None:
             console.print(

@@ -264,7 +264,8 @@ def test_a_compiled_program_that_lacks_a_stage_is_refused_clearly(tmp_path: Path
     assert loaded.method_name == "coder" and "compiled with robotool 0.0.1" in loaded.compiled_notes[0]
 
 
-def test_solve_with_a_compiled_program_over_http(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_solve_with_a_compiled_program_over_http(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     from robotool.cli import main as robotool_main
     from robotool.compiled import CompiledInfo, save_compiled
 
@@ -276,8 +277,12 @@ def test_solve_with_a_compiled_program_over_http(tmp_path: Path, capsys: pytest.
                                 "--api-base", server.base_url, "--no-cache", "--worlds", "1"])
         systems = [m["content"] for r in server.requests for m in r["messages"] if m["role"] == "system"]
     assert status == 0 and any("COMPILED-CODER-INSTRUCTION" in s for s in systems)
+    capsys.readouterr()
     assert robotool_main(["solve", ARM, "--program", str(tmp_path / "missing.json"), "--lm", "openai/x"]) == 2
     assert "compiled program not found" in capsys.readouterr().err
+    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
+    assert robotool_main(["solve", ARM, "--program", str(tmp_path / "p.json")]) == 2
+    assert "--program runs its stages on a language model" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(
