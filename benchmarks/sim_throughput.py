@@ -58,15 +58,15 @@ CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE 
 def button_pressing(robot: Any) -> None:
     """PROGRAM_FILE as a trusted callable: chain the magnetic cubes into a stick, press the button."""
     clear, lift = 0.08, 0.004
-    g = robot.get_graspable_point("magnetic_cube_1")
+    g = robot.get_graspable_point("magnetic_cube1")
     robot.open_gripper()
     robot.move_to_position([g[0], g[1], g[2] + clear])
     robot.move_to_position(g)
     robot.close_gripper()
-    edge = robot.get_size("magnetic_cube_1")[0]
+    edge = robot.get_size("magnetic_cube1")[0]
     z = g[2] + lift
     robot.move_to_position([g[0], g[1], z])
-    for k, name in enumerate(("magnetic_cube_2", "magnetic_cube_3"), start=1):
+    for k, name in enumerate(("magnetic_cube2", "magnetic_cube3"), start=1):
         c = robot.get_center(name)
         robot.move_to_position([c[0] - k * edge - 0.05, c[1], z])
         robot.move_to_position([c[0] - k * edge + 0.004, c[1], z])

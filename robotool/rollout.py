@@ -1,4 +1,4 @@
-"""What one world's run of a program produced: the skill-call trace and the goal's conditions."""
+"""What one world's run of a program produced: the skill-call trace, typed events and the goal's conditions."""
 
 from __future__ import annotations
 
@@ -7,6 +7,16 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field
 
 Outcome = Literal["done", "stalled", "timeout", "refused", "error"]
+EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
+GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
+
+_GRASP_FAILURE_TEXT: dict[str, str] = {
+    "nothing_between": "the fingers closed on nothing",
+    "one_finger": "only one finger touched {object}",
+    "too_wide": "{object} is wider across the fingers than the opening",
+    "on_top": "the fingers rested on top of {object} instead of on its sides",
+    "not_between": "{object} was not between the fingers",
+}
 
 
 class SkillCall(BaseModel):
@@ -24,6 +34,59 @@ class SkillCall(BaseModel):
     ended: float = 0.0
 
 
+class Event(BaseModel):
+    """Something that happened in a world, with typed fields; failure reasons are rendered from these.
+
+    ``kind`` says what happened: a motion target ``clamped`` to a limit, a grasp that held ``object``
+    (``grasped``) or held nothing (``grasp_failed``, with its ``cause``), an object ``pushed_out`` of
+    the robot's reach, a skill that ``stalled``, ran out of time (``timeout``) or was ``refused``, or the
+    robot ``fell``. ``call`` is the index of the skill call it happened in (None outside calls), ``limit``
+    the robot limit involved (e.g. ``workspace``), ``measured`` the numbers in SI units and ``detail`` the
+    controller's own words, if any.
+    """
+
+    kind: EventKind
+    time: float = 0.0
+    call: int | None = None
+    object: str | None = None
+    limit: str | None = None
+    cause: GraspFailure | None = None
+    measured: dict[str, float] = Field(default_factory=dict)
+    detail: str | None = None
+
+    def describe(self, calls: list[SkillCall]) -> str:
+        """One clause for a failure reason, e.g. ``call 4 move_to_position: clamped 0.119 m at the workspace edge``."""
+        where = f"call {self.call + 1} {calls[self.call].skill}: " if self.call is not None else ""
+        m = self.measured
+        if self.kind == "clamped":
+            target = _point(m, "target_")
+            clamped = _point(m, "clamped_")
+            text = f"clamped {m.get('outside_workspace', 0.0):.3f} m at the {self.limit or 'limit'} edge"
+            if target and clamped:
+                text += f" (target {target} -> {clamped})"
+        elif self.kind == "grasped":
+            text = f"holds {self.object}"
+        elif self.kind == "grasp_failed":
+            cause = _GRASP_FAILURE_TEXT[self.cause or "nothing_between"].format(object=self.object)
+            values = ", ".join(f"{k} {v:.3f} m" for k, v in m.items())
+            text = f"held nothing: {cause}" + (f" ({values})" if values else "")
+        elif self.kind == "pushed_out":
+            text = (f"{self.object} was pushed {m.get('pushed', 0.0):.3f} m, to {m.get('outside', 0.0):.3f} m "
+                    f"outside the {self.limit or 'workspace'}" + (f" at {_point(m, '')}" if _point(m, "") else ""))
+        elif self.kind == "fell":
+            text = "the robot fell" + (f": {self.detail}" if self.detail else "")
+        else:
+            text = self.kind + (f": {self.detail}" if self.detail else "")
+        return where + text
+
+
+def _point(measured: dict[str, float], prefix: str) -> str:
+    keys = [f"{prefix}{a}" for a in "xyz"]
+    if not all(k in measured for k in keys):
+        return ""
+    return "[" + ", ".join(f"{measured[k]:.3f}" for k in keys) + "]"
+
+
 class Rollout(BaseModel):
     """One program in one perturbed world, from start to end."""
 
@@ -34,6 +97,7 @@ class Rollout(BaseModel):
         default_factory=dict, description="the goal's named sub-conditions at the end"
     )
     calls: list[SkillCall] = Field(default_factory=list)
+    events: list[Event] = Field(default_factory=list, description="what happened, in time order")
     touched: list[str] = Field(default_factory=list, description="objects the robot moved or met")
     sim_time: float = 0.0
     error: str | None = Field(None, description="why the world failed outside the goal, if it did")

@@ -41,6 +41,9 @@ KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
     "grasp_point": "graspable_point", "grasp": "graspable_point", "handle": "graspable_point", "fixed": "movable",
     "description": "notes", "note": "notes", "objects_list": "objects", "task": "name", "version": "format",
 }  # fmt: skip
+PRESS_TRAVEL = 0.01  # m: a button counts as pressed after its face travelled this far
+DEFAULT_BUTTON_STIFFNESS = 300.0  # N/m: 3 N at the press travel, like a real push button
+DEFAULT_BUTTON_TRAVEL = 0.02  # m the face can be pushed in
 
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
 PositiveLength = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -84,6 +87,8 @@ class SceneObject(_Strict):
     soft: bool = False
     fragile: Fragile | None = None
     graspable_point: Vec3 | None = None
+    stiffness: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None  # buttons: spring, N/m
+    travel: PositiveLength | None = None  # buttons: how far the face can be pushed in, m
     notes: str | None = None
 
     @model_validator(mode="after")
@@ -92,12 +97,28 @@ class SceneObject(_Strict):
             raise ValueError(f"'axis' applies to cylinders only, not to a {self.shape}")
         if self.thickness != 0.02 and self.shape != "hook":
             raise ValueError(f"'thickness' applies to hooks only, not to a {self.shape}")
+        for key in ("stiffness", "travel"):
+            if getattr(self, key) is not None and self.shape != "button":
+                raise ValueError(f"'{key}' applies to buttons only, not to a {self.shape}")
+        if self.shape == "button" and not PRESS_TRAVEL < self.button_travel <= self.size[0] / 2:
+            raise ValueError(f"button travel {self.button_travel} m must exceed the {PRESS_TRAVEL} m that counts "
+                             f"as pressed and be at most half the button's length ({self.size[0] / 2} m)")
         if self.shape == "hook" and self.thickness >= min(self.size[0], self.size[1]):
             raise ValueError(
                 f"hook thickness {self.thickness} m must be smaller than its length and head "
                 f"({self.size[0]} m x {self.size[1]} m)"
             )
         return self
+
+    @property
+    def button_stiffness(self) -> float:
+        """A button's spring stiffness in N/m: as given, or :data:`DEFAULT_BUTTON_STIFFNESS`."""
+        return self.stiffness if self.stiffness is not None else DEFAULT_BUTTON_STIFFNESS
+
+    @property
+    def button_travel(self) -> float:
+        """How far a button's face can be pushed in, m: as given, or :data:`DEFAULT_BUTTON_TRAVEL`."""
+        return self.travel if self.travel is not None else DEFAULT_BUTTON_TRAVEL
 
     @property
     def volume(self) -> float:

@@ -40,7 +40,7 @@ BUILTIN_TOOLS: dict[str, frozenset[str]] = {
     "milk_reaching": frozenset({"hammer"}),
     "milk_reaching_near": frozenset(),
     "can_grasping": frozenset({"stick", "strip_of_paper"}),
-    "button_pressing": frozenset({"magnetic_cube_1", "magnetic_cube_2", "magnetic_cube_3"}),
+    "button_pressing": frozenset({"magnetic_cube1", "magnetic_cube2", "magnetic_cube3"}),
     "sofa_traversing": frozenset({"surfboard"}),
     "sofa_traversing_small_gap": frozenset(),
     "sofa_climbing": frozenset({"box_1", "box_2"}),

@@ -3,22 +3,30 @@
 The gripper body ``robot_gripper`` rides on three slide joints whose coordinates are the gripper
 centre in the world (``ref`` = home, so ``qpos`` is absolute); position servos with force limits
 drive them, so a blocked motion really stalls. The joint ranges are the workspace; targets outside
-it are clamped and the clamp is recorded. Fingers are visual; the palm above the centre collides.
-A grasp is the weld ``robot_grasp__<object>`` (one per movable object) attached at the current pose
-when ``close_gripper`` finds a graspable point within the grasp radius, and released by ``open_gripper``.
+it are clamped and the clamp is recorded. The palm above the centre and the two fingers collide; the
+fingers close along the world y axis on position servos until they meet something or close fully.
+
+``close_gripper`` holds an object only when both fingers touch it from its sides (not resting on top
+of it), it lies between them, and it is no wider across them than the opening; it is then attached
+rigidly by the weld ``robot_grasp__<object>`` (one per movable object) at the current pose, as
+grasp-assisted simulators do, and released by ``open_gripper``. Otherwise the call reports what the
+fingers met and why nothing is held, as a typed ``grasp_failed`` event with the measured values.
+Each motion skill also reports objects it pushed further out of the workspace (``pushed_out``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from robotool.embodiments import ArmLimits
+from robotool.rollout import Event, GraspFailure
 from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import WELD_SOLREF, Scene
+from robotool.sim.build import WELD_SOLIMP, WELD_SOLREF, Scene
 from robotool.sim.embodiment import QueryError, SkillEnd
 
 GRIPPER_BODY = "robot_gripper"
@@ -30,12 +38,20 @@ REACHED = 0.005  # m: a move is done when the centre is this close to the target
 STALL_ERROR, STALL_SPEED, STALL_TIME = 0.02, 0.02, 0.3  # m, m/s, s
 TIME_MARGIN = 2.0  # s a move may take beyond distance / speed
 GRIPPER_TIME = 0.3  # s to open or close the fingers
-FINGER_OPEN = 0.04  # m, each finger's offset from the centre when open
+FINGER_OPEN = 0.038  # m, each finger's centre from the gripper centre when open (0 when fully closed)
+FINGER_HALF = (0.008, 0.004, 0.023)  # m, half sizes of a finger (x, y across the closing axis, z)
+FINGER_Z = 0.007  # m, a finger's centre above the gripper centre: the tips reach 0.016 m below it
+FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
+OPENING = 2 * (FINGER_OPEN - FINGER_HALF[1])  # m between the open fingers' inner faces
+GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
+ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
+PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
 PALM_HALF = (0.02, 0.05, 0.01)  # m
 PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 
 _IDLE, _MOVE, _FINGERS = 0, 1, 2
 _AXES = "xyz"
+_SIDES = ("left", "right")
 
 
 def grasp_eq_name(obj: str) -> str:
@@ -52,7 +68,7 @@ class ArmEmbodiment:
         self.limits = limits
 
     def add_to_spec(self, spec: mujoco.MjSpec, task: Task) -> None:
-        """Gripper on x/y/z slides with position servos, two visual fingers, one grasp weld per movable object."""
+        """Gripper on x/y/z slides with position servos, two colliding fingers, one grasp weld per movable object."""
         lo, hi = self.limits.workspace_min, self.limits.workspace_max
         gripper = spec.worldbody.add_body(name=GRIPPER_BODY, pos=HOME, gravcomp=1.0)
         for k, axis in enumerate(_AXES):
@@ -67,25 +83,40 @@ class ArmEmbodiment:
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         gripper.add_geom(name="robot_palm", type=mujoco.mjtGeom.mjGEOM_BOX, size=PALM_HALF,
                          pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]], mass=0.5)
-        for side, sign in (("left", 1.0), ("right", -1.0)):
+        for side, sign in zip(_SIDES, (1.0, -1.0), strict=True):
             finger = gripper.add_body(name=f"robot_finger_{side}", pos=[0, 0, 0], gravcomp=1.0)
             finger.add_joint(name=f"robot_finger_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, sign, 0],
                              range=[0, FINGER_OPEN])
-            finger.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.008, 0.004, PALM_CLEARANCE / 2 + 0.008],
-                            pos=[0, 0, PALM_CLEARANCE / 2 - 0.008], mass=0.02, contype=0, conaffinity=0)
+            finger.add_geom(name=f"robot_finger_{side}", type=mujoco.mjtGeom.mjGEOM_BOX, size=FINGER_HALF,
+                            pos=[0, 0, FINGER_Z], mass=0.02, friction=[1.0, 0.005, 0.0001])
             act = spec.add_actuator(name=f"robot_finger_{side}", target=f"robot_finger_{side}",
                                     trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            act.set_to_position(kp=50.0, kv=2.0)
+            act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
             act.ctrlrange = [0, FINGER_OPEN]
+        spec.add_exclude(bodyname1="robot_finger_left", bodyname2="robot_finger_right")
         for obj in task.objects:
             if obj.movable and obj.shape != "cloth":
                 spec.add_equality(name=grasp_eq_name(obj.name), type=mujoco.mjtEq.mjEQ_WELD,
                                   objtype=mujoco.mjtObj.mjOBJ_BODY, name1=GRIPPER_BODY, name2=obj.name,
-                                  active=False, solref=WELD_SOLREF)
+                                  active=False, solref=WELD_SOLREF, solimp=WELD_SOLIMP)
 
     def controller(self, sim: BatchedSim) -> ArmController:
         """Skill controller for every world of ``sim``."""
         return ArmController(sim, self.limits)
+
+
+@dataclass(frozen=True)
+class _Grip:
+    """Where the fingers are in one world: the inner faces across the closing axis (world y), their x and z spans."""
+
+    left: float
+    right: float
+    x: tuple[float, float]
+    z: tuple[float, float]
+
+    @property
+    def gap(self) -> float:
+        return self.left - self.right
 
 
 class ArmController:
@@ -96,11 +127,15 @@ class ArmController:
         model = self.scene.model
         self.gripper = model.body(GRIPPER_BODY).id
         self.xyz_act = np.array([model.actuator(f"robot_{a}").id for a in _AXES])
-        self.finger_act = np.array([model.actuator(f"robot_finger_{s}").id for s in ("left", "right")])
+        self.finger_act = np.array([model.actuator(f"robot_finger_{s}").id for s in _SIDES])
+        self.finger_body = np.array([model.body(f"robot_finger_{s}").id for s in _SIDES])
+        self.finger_qpos = np.array([model.jnt_qposadr[model.joint(f"robot_finger_{s}").id] for s in _SIDES])
         self.xyz_dof = np.array([model.jnt_dofadr[model.joint(f"robot_{a}").id] for a in _AXES])
         names = self.scene.object_names
         self.grasp_eq = np.array([model.equality(grasp_eq_name(n)).id if self._graspable(i) else -1
                                   for i, n in enumerate(names)])
+        self.object_geoms = [np.flatnonzero(self.scene.body_object[model.geom_bodyid] == i) for i in range(len(names))]
+        self.movable = np.array([o.movable for o in self.scene.task.objects])
         n = sim.nworld
         self.mode = np.full(n, _IDLE)
         self.started = np.zeros(n)
@@ -110,6 +145,7 @@ class ArmController:
         self.stall_since = np.full(n, np.nan)
         self.closing = np.zeros(n, dtype=bool)
         self.clamp: list[dict[str, float]] = [{} for _ in range(n)]
+        self.start_points = np.zeros((n, len(names), 3))
         sim.ctrl[:, self.xyz_act] = HOME
         sim.ctrl[:, self.finger_act] = FINGER_OPEN
 
@@ -123,6 +159,7 @@ class ArmController:
         """Begin ``move_to_position``, ``open_gripper`` or ``close_gripper`` in ``worlds``."""
         worlds = np.asarray(worlds, dtype=int)
         self.started[worlds] = state.time[worlds]
+        self.start_points[worlds] = graspable_points(self.scene, state)[worlds]
         if skill == "move_to_position":
             self._start_move(state, worlds, np.asarray(args[0], dtype=float))
         else:
@@ -154,6 +191,8 @@ class ArmController:
     def tick(self, state: BatchState) -> list[SkillEnd]:
         """Finish skills that reached their end, then write the servo references for the next interval."""
         ends = self._tick_moves(state) + self._tick_fingers(state)
+        if ends:
+            ends = self._with_pushed_out(state, ends)
         moving = np.flatnonzero(self.mode == _MOVE)
         if moving.size:
             elapsed = state.time[moving] - self.started[moving]
@@ -186,14 +225,15 @@ class ArmController:
                 continue
             measured = dict(self.clamp[w]) | {"remaining": float(remaining[k])}
             reason = self._clamp_reason(w)
+            events = (Event(kind="clamped", limit="workspace", measured=dict(self.clamp[w])),) if self.clamp[w] else ()
             if done[k]:
-                ends.append(SkillEnd(int(w), "done", reason, measured))
+                ends.append(SkillEnd(int(w), "done", reason, measured, events=events))
                 continue
             here = ", ".join(f"{v:.3f}" for v in pos[k])
             why = "blocked" if stalled[k] else "out of time"
             text = f"{why} at [{here}], {remaining[k]:.3f} m short of the target"
             ends.append(SkillEnd(int(w), "stalled" if stalled[k] else "timeout",
-                                 "; ".join(t for t in (text, reason) if t), measured))
+                                 "; ".join(t for t in (text, reason) if t), measured, events=events))
             self.sim.ctrl[w, self.xyz_act] = pos[k]
         for end in ends:
             self.mode[end.world] = _IDLE
@@ -208,6 +248,26 @@ class ArmController:
         return (f"target [{target}] is {clamp['outside_workspace']:.3f} m outside the workspace; "
                 f"clamped to [{clamped}]")
 
+    def _with_pushed_out(self, state: BatchState, ends: list[SkillEnd]) -> list[SkillEnd]:
+        """Add a ``pushed_out`` event for each loose object pushed further out of the workspace during the skill."""
+        lo, hi = np.asarray(self.limits.workspace_min), np.asarray(self.limits.workspace_max)
+        points = graspable_points(self.scene, state)
+        held = held_objects(self.scene, state)
+        out = []
+        for end in ends:
+            w = end.world
+            before = np.linalg.norm(self.start_points[w] - np.clip(self.start_points[w], lo, hi), axis=1)
+            after = np.linalg.norm(points[w] - np.clip(points[w], lo, hi), axis=1)
+            pushed = np.linalg.norm(points[w] - self.start_points[w], axis=1)
+            events = list(end.events)
+            for i in np.flatnonzero(self.movable & (after - before > PUSHED_OUT) & (np.arange(len(after)) != held[w])):
+                centre = state.xpos[w, self.scene.object_body[i]]
+                events.append(Event(kind="pushed_out", object=self.scene.object_names[i], limit="workspace",
+                                    measured={"pushed": float(pushed[i]), "outside": float(after[i]),
+                                              **{a: float(v) for a, v in zip(_AXES, centre, strict=True)}}))
+            out.append(replace(end, events=tuple(events)))
+        return out
+
     def _tick_fingers(self, state: BatchState) -> list[SkillEnd]:
         worlds = np.flatnonzero((self.mode == _FINGERS) & (state.time - self.started >= GRIPPER_TIME - 1e-9))
         ends = []
@@ -219,22 +279,69 @@ class ArmController:
             ends.append(self._grasp(state, int(w)))
         return ends
 
+    def _grip(self, state: BatchState, w: int) -> _Grip:
+        c = state.xpos[w, self.gripper]
+        q_left, q_right = state.qpos[w, self.finger_qpos]
+        return _Grip(left=float(c[1] + q_left - FINGER_HALF[1]), right=float(c[1] - q_right + FINGER_HALF[1]),
+                     x=(float(c[0] - FINGER_HALF[0]), float(c[0] + FINGER_HALF[0])),
+                     z=(float(c[2] + FINGER_Z - FINGER_HALF[2]), float(c[2] + FINGER_Z + FINGER_HALF[2])))
+
     def _grasp(self, state: BatchState, w: int) -> SkillEnd:
+        """Hold the object both fingers grip from its sides, if it fits the opening; else say why nothing is held."""
+        names = self.scene.object_names
         held = held_objects(self.scene, state)[w]
         if held >= 0:
-            return SkillEnd(w, "done", f"holding {self.scene.object_names[held]}")
-        points = graspable_points(self.scene, state)[w]
+            return SkillEnd(w, "done", f"holding {names[held]}", events=(Event(kind="grasped", object=names[held]),))
+        grip = self._grip(state, w)
+        owner = self.scene.body_object
+        touch = state.touching[w][self.finger_body]  # (2, nbody)
+        by_finger = [set(owner[np.flatnonzero(t)]) - {-1} for t in touch]
+        both = sorted(i for i in by_finger[0] & by_finger[1] if self.grasp_eq[i] >= 0)
+        failures: list[tuple[GraspFailure, int, dict[str, float]]] = []
+        for i in both:
+            cause, measured = self._fit(state, w, i, grip)
+            if cause is None:
+                self.sim.set_weld(np.array([w]), int(self.grasp_eq[i]), True)
+                return SkillEnd(w, "done", f"holding {names[i]}", measured,
+                                events=(Event(kind="grasped", object=names[i], measured=measured),))
+            failures.append((cause, i, measured))
+        if not failures:
+            one = sorted(i for i in by_finger[0] ^ by_finger[1] if self.grasp_eq[i] >= 0)
+            if one:
+                failures.append(("one_finger", one[0], {"opening": grip.gap}))
+            else:
+                failures.append(("nothing_between", -1, {"opening": grip.gap} | self._nearest(state, w)))
+        cause, i, measured = failures[0]
+        event = Event(kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause,
+                      measured=measured)
+        return SkillEnd(w, "done", event.describe([]), measured, events=(event,))
+
+    def _fit(self, state: BatchState, w: int, i: int, grip: _Grip) -> tuple[GraspFailure | None, dict[str, float]]:
+        """Whether both fingers, touching object ``i``, grip it from its sides (else why not).
+
+        Fingers that touch an object below its top and stopped apart grip it between them; the gap is its
+        width there. Fingertips at or above its top rest on it: it is too wide to get between the fingers,
+        or the gripper is off to one side.
+        """
+        lo, hi = _geom_extents(self.scene, state, w, self.object_geoms[i])
+        near = (lo[:, 0] < grip.x[1] + GRIP_TOLERANCE) & (hi[:, 0] > grip.x[0] - GRIP_TOLERANCE)
+        if not near.any():
+            return "not_between", {"opening": grip.gap}
+        lo, hi = lo[near], hi[near]
+        if grip.z[0] > hi[:, 2].max() - ON_TOP:
+            width = float((hi[:, 1] - lo[:, 1]).min())
+            return ("too_wide" if width > OPENING else "on_top"), {"width": width, "opening": OPENING}
+        if grip.gap <= 0.0:
+            return "not_between", {"opening": grip.gap}
+        return None, {"width": grip.gap, "opening": OPENING}
+
+    def _nearest(self, state: BatchState, w: int) -> dict[str, float]:
         candidates = np.flatnonzero(self.grasp_eq >= 0)
         if not candidates.size:
-            return SkillEnd(w, "done", "nothing graspable in the scene")
-        dist = np.linalg.norm(points[candidates] - state.xpos[w, self.gripper], axis=1)
-        best = int(np.argmin(dist))
-        name, d = self.scene.object_names[candidates[best]], float(dist[best])
-        if d > self.limits.grasp_radius:
-            return SkillEnd(w, "done", f"nothing within {self.limits.grasp_radius} m of the gripper centre "
-                                       f"(nearest graspable point: {name}, {d:.3f} m)", {"distance": d})
-        self.sim.set_weld(np.array([w]), int(self.grasp_eq[candidates[best]]), True)
-        return SkillEnd(w, "done", f"holding {name}", {"distance": d})
+            return {}
+        points = graspable_points(self.scene, state)[w, candidates]
+        dist = np.linalg.norm(points - state.xpos[w, self.gripper], axis=1)
+        return {"nearest_graspable_point": float(dist.min())}
 
     # -- state and queries ---------------------------------------------------------------------
 
@@ -254,6 +361,28 @@ class ArmController:
         if skill == "get_size":
             return [float(v) for v in self.scene.task.objects[i].size]
         raise QueryError(f"{skill} is not a query skill of the arm")
+
+
+def _geom_extents(scene: Scene, state: BatchState, w: int, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World axis-aligned bounds (low, high), (ngeom, 3) each, of box and cylinder geoms in world ``w``."""
+    model = scene.model
+    lo, hi = np.zeros((len(geoms), 3)), np.zeros((len(geoms), 3))
+    for k, g in enumerate(geoms):
+        body = model.geom_bodyid[g]
+        body_rot = np.zeros(9)
+        mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
+        geom_rot = np.zeros(9)
+        mujoco.mju_quat2Mat(geom_rot, model.geom_quat[g])
+        rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
+        centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[g]
+        size = model.geom_size[g]
+        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+            axis = np.abs(rot[:, 2])
+            half = axis * size[1] + size[0] * np.sqrt(np.clip(1 - axis**2, 0, 1))
+        else:
+            half = np.abs(rot) @ size
+        lo[k], hi[k] = centre - half, centre + half
+    return lo, hi
 
 
 def held_objects(scene: Scene, state: BatchState) -> np.ndarray:

@@ -3,7 +3,9 @@
 Every task object becomes a body named after it whose frame is the object's centre and rotation;
 its geoms are :func:`robotool.geometry.object_parts`. Fixed objects are static bodies (welded to the
 world); movable ones have a free joint, their mass and friction. A button is a fixed housing with a
-face on its -x side, on a spring-loaded slide joint whose travel is the sensor ``<name>__travel``.
+face on its -x side, on a slide joint with the button's spring (``stiffness``, N/m, over ``travel``, m;
+defaults in :mod:`robotool.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
+after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
 Cloth is built by the quadruped module (``robotool.sim.quadruped_cloth.add_cloth(spec, obj)``).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
@@ -19,17 +21,20 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.scene import SceneObject, Task
+from robotool.scene import PRESS_TRAVEL, SceneObject, Task
 from robotool.sim.embodiment import Embodiment, embodiment_for
 
 TIMESTEP = 0.002  # s, physics step
 GROUND_FRICTION = 0.5
 DEFAULT_FRICTION = 0.5
-WELD_SOLREF = (0.01, 1.0)  # stiff enough to carry and push without visible lag
-PRESS_TRAVEL = 0.01  # m: a button counts as pressed after this much travel
-BUTTON_STIFFNESS = 40.0  # N/m
+# Welds (grasps, magnetic joins) are nearly hard: MuJoCo's soft constraints are mass-normalised, so a
+# light object's weld gives way in proportion to 1 / mass under a given force. The shortest stable time
+# constant (2 steps) and an impedance near 1 keep a 50 g cube within a fraction of a degree under the
+# servo's full force.
+WELD_SOLREF = (2 * TIMESTEP, 1.0)
+WELD_SOLIMP = (0.999, 0.9999, 0.001, 0.5, 2.0)
 BUTTON_FACE_DEPTH = 0.015  # m
-BUTTON_MAX_TRAVEL = 0.025  # m
+BUTTON_DAMPING = 2.0  # N s/m
 
 _CLOTH_BUILDER = "robotool.sim.quadruped_cloth:add_cloth"
 
@@ -116,13 +121,14 @@ def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -
     """A fixed housing with a spring-loaded face on its -x side (in the button's own frame)."""
     sx, sy, sz = obj.size
     depth = min(BUTTON_FACE_DEPTH, 0.2 * sx)
-    travel = min(BUTTON_MAX_TRAVEL, 0.4 * sx)
+    travel = obj.button_travel
     housing_x0 = -sx / 2 + depth + travel
     body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[(sx / 2 - housing_x0) / 2, sy / 2, sz / 2],
                   pos=[(housing_x0 + sx / 2) / 2, 0, 0], friction=friction)
     face = body.add_body(name=f"{obj.name}__face", pos=[-sx / 2 + depth / 2, 0, 0])
     face.add_joint(name=f"{obj.name}__travel", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                   stiffness=BUTTON_STIFFNESS, damping=2.0, range=[0, travel], limited=mujoco.mjtLimited.mjLIMITED_TRUE)
+                   stiffness=obj.button_stiffness, damping=BUTTON_DAMPING, range=[0, travel],
+                   limited=mujoco.mjtLimited.mjLIMITED_TRUE)
     face.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[depth / 2, 0.4 * sy, 0.4 * sz], mass=0.02,
                   friction=friction, rgba=[0.8, 0.1, 0.1, 1])
 
@@ -150,7 +156,8 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
     magnets = [o.name for o in task.objects if o.magnetic]
     for a, b in combinations(magnets, 2):
         spec.add_equality(name=f"magnet__{a}__{b}", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1=a, name2=b, active=False, solref=WELD_SOLREF)
+                          name1=a, name2=b, active=False, solref=WELD_SOLREF,
+                          solimp=WELD_SOLIMP)
     embodiment.add_to_spec(spec, task)
     return spec
 

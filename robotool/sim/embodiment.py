@@ -35,6 +35,7 @@ import numpy as np
 if TYPE_CHECKING:
     import mujoco
 
+    from robotool.rollout import Event
     from robotool.scene import Task
     from robotool.sim.backend import BatchedSim, BatchState
 
@@ -48,13 +49,18 @@ _EMBODIMENTS: dict[str, str] = {
 
 @dataclass(frozen=True)
 class SkillEnd:
-    """A motion skill that finished in one world: how, why, and the values behind it."""
+    """A motion skill that finished in one world: how, why, the values behind it and what happened.
+
+    ``events`` are typed records of what happened during the skill (a clamp, a grasp that held nothing,
+    an object pushed away); the runner stamps them with the call and the time.
+    """
 
     world: int
     outcome: EndOutcome
     reason: str | None = None
     measured: dict[str, float] = field(default_factory=dict)
     result: Any = None
+    events: tuple[Event, ...] = ()
 
 
 class QueryError(ValueError):

@@ -22,7 +22,7 @@ import numpy as np
 from robotool import geometry
 from robotool.embodiments import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
 from robotool.programs import ProgramEnded, ProgramSession, SkillReply, SkillRequest, TrustedProgram, TrustedSession
-from robotool.rollout import Rollout, SkillCall
+from robotool.rollout import Event, Rollout, SkillCall
 from robotool.scene import Task
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
@@ -43,6 +43,7 @@ class _World:
 
     session: ProgramSession
     calls: list[SkillCall] = field(default_factory=list)
+    events: list[Event] = field(default_factory=list)
     pending: SkillCall | None = None
     pending_args: tuple[Any, ...] = ()
     ended: bool = False
@@ -227,6 +228,7 @@ class _Run:
             call, world.pending = world.pending, None
             call.outcome, call.reason, call.measured, call.result = end.outcome, end.reason, end.measured, end.result
             call.ended = float(state.time[end.world] - self.t0[end.world])
+            world.events += _events_of(end, len(world.calls) - 1, call.ended)
             world.session.resume(SkillReply(value=end.result))
             resumed.append(end.world)
         return resumed
@@ -276,6 +278,7 @@ class _Run:
         names = self.scene.object_names
         success = bool(world.conditions) and all(world.conditions.values()) and world.error is None
         return Rollout(world=i, seed=seed, success=success, conditions=world.conditions, calls=world.calls,
+                       events=world.events,
                        touched=[names[k] for k in np.flatnonzero(self.touched[i])], sim_time=world.sim_time,
                        error=world.error, output=world.output)
 
@@ -310,6 +313,14 @@ def scene_box(task: Task) -> SceneBox:
 def _controller_error(skill: str, error: Exception) -> str:
     """The one-line reason of a world failed by an exception inside the skill controller."""
     return " ".join(f"controller error in {skill}: {type(error).__name__}: {error}".split())[:500]
+
+
+def _events_of(end: SkillEnd, call: int, time: float) -> list[Event]:
+    """A finished skill's events stamped with its call and time; a stall, timeout or refusal is one too."""
+    events = [e.model_copy(update={"call": call, "time": time}) for e in end.events]
+    if end.outcome != "done" and not any(e.kind == end.outcome for e in events):
+        events.append(Event(kind=end.outcome, call=call, time=time, measured=end.measured, detail=end.reason))
+    return events
 
 
 def _jsonable(args: tuple[Any, ...]) -> list[Any]:

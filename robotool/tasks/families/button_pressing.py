@@ -48,7 +48,7 @@ def cubes(rng: np.random.Generator, prefix: str, count: int, avoid: list[tuple[f
     placed = []
     for i in range(count):
         spot = spot_for(rng, (CUBE, CUBE), (0.15, -0.35, 0.43, 0.35), avoid, 0.03)
-        placed.append(on_top(f"{prefix}_{i + 1}", "box", spot, (CUBE, CUBE, CUBE), mass=0.05, magnetic=magnetic,
+        placed.append(on_top(f"{prefix}{i + 1}", "box", spot, (CUBE, CUBE, CUBE), mass=0.05, magnetic=magnetic,
                              notes=notes))
         avoid.append((spot[0] - CUBE / 2, spot[1] - CUBE / 2, spot[0] + CUBE / 2, spot[1] + CUBE / 2))
     return placed
