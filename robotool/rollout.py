@@ -10,15 +10,6 @@ Outcome = Literal["done", "stalled", "timeout", "refused", "error"]
 EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
 
-_GRASP_FAILURE_TEXT: dict[str, str] = {
-    "nothing_between": "the fingers closed on nothing",
-    "one_finger": "only one finger touched {object}",
-    "too_wide": "{object} is wider across the fingers than the opening",
-    "on_top": "the fingers rested on top of {object} instead of on its sides",
-    "not_between": "{object} was not between the fingers",
-}
-
-
 class SkillCall(BaseModel):
     """One skill call in a world: arguments, how it ended and why, in simulated seconds."""
 
@@ -67,9 +58,7 @@ class Event(BaseModel):
         elif self.kind == "grasped":
             text = f"holds {self.object}"
         elif self.kind == "grasp_failed":
-            cause = _GRASP_FAILURE_TEXT[self.cause or "nothing_between"].format(object=self.object)
-            values = ", ".join(f"{k} {v:.3f} m" for k, v in m.items())
-            text = f"held nothing: {cause}" + (f" ({values})" if values else "")
+            text = f"held nothing: {self._grasp_failure()}"
         elif self.kind == "pushed_out":
             text = (f"{self.object} was pushed {m.get('pushed', 0.0):.3f} m, to {m.get('outside', 0.0):.3f} m "
                     f"outside the {self.limit or 'workspace'}" + (f" at {_point(m, '')}" if _point(m, "") else ""))
@@ -78,6 +67,22 @@ class Event(BaseModel):
         else:
             text = self.kind + (f": {self.detail}" if self.detail else "")
         return where + text
+
+    def _grasp_failure(self) -> str:
+        m, obj = self.measured, self.object
+        if self.cause == "too_wide":
+            return (f"{obj} is {m.get('width', 0.0):.3f} m across the fingers, wider than their "
+                    f"{m.get('opening', 0.0):.3f} m opening")
+        if self.cause == "on_top":
+            return f"the fingers rested on top of {obj} instead of closing on its sides"
+        if self.cause == "one_finger":
+            return f"only one finger touched {obj}"
+        if self.cause == "not_between":
+            return f"{obj} was not between the fingers"
+        if obj is None:
+            return "the fingers closed on nothing"
+        return (f"the fingers closed on nothing; the nearest graspable point ({obj}'s) is "
+                f"{m.get('nearest', 0.0):.3f} m from the gripper centre")
 
 
 def _point(measured: dict[str, float], prefix: str) -> str:

@@ -12,7 +12,7 @@ import time
 from collections.abc import Sequence
 from typing import Protocol
 
-from robotool.rollout import Rollout
+from robotool.rollout import Event, Rollout
 from robotool.sandbox import ProgramRejected, extract_program, start_sessions, validate
 from robotool.scene import Task
 from robotool.sim import run_sessions
@@ -154,14 +154,39 @@ def failure_reason(rollouts: Sequence[Rollout]) -> str | None:
     return f"{len(failed)}/{len(rollouts)} worlds failed; world {k}: {world_failure(first)}"
 
 
+MAX_TOLD_EVENTS = 4  # events a one-line failure reason tells, besides what failed
+
+
 def world_failure(rollout: Rollout) -> str | None:
-    """Why one world failed: its error, its first refused/stalled/timed-out call, or unmet conditions."""
+    """Why one world failed: its error or the goal conditions not met, then the most telling events before it.
+
+    The events (clamps, grasps that held nothing, objects pushed away, stalls, refusals, falls) are
+    rendered from the rollout's typed records, in time order; repeats of an event on the same object
+    and limit are told once (the last grasp failure, the first of the others).
+    """
     if rollout.success:
         return None
     if rollout.error:
-        return rollout.error
-    for call in rollout.calls:
-        if call.outcome != "done":
-            return f"{call.skill} {call.outcome}" + (f": {call.reason}" if call.reason else "")
-    unmet = [name for name, ok in rollout.conditions.items() if not ok]
-    return "goal not reached: " + ", ".join(unmet) if unmet else "goal not reached"
+        head = rollout.error
+    else:
+        unmet = [name for name, ok in rollout.conditions.items() if not ok]
+        head = "goal not reached: " + ", ".join(unmet) if unmet else "goal not reached"
+    told = telling_events(rollout.events)
+    if not told:
+        return head
+    return head + "; before that: " + "; ".join(e.describe(rollout.calls) for e in told)
+
+
+def telling_events(events: Sequence[Event]) -> list[Event]:
+    """The events worth telling in a failure reason (see :func:`world_failure`), at most :data:`MAX_TOLD_EVENTS`."""
+    chosen: dict[tuple[str, str | None, str | None], int] = {}
+    for k, event in enumerate(events):
+        if event.kind == "grasped":
+            continue
+        key = (event.kind, event.object, event.limit)
+        if key not in chosen or event.kind == "grasp_failed":
+            chosen[key] = k
+    picked = sorted(chosen.values())
+    if len(picked) > MAX_TOLD_EVENTS:  # keep the last one (closest to the failure) and the earliest others
+        picked = [*picked[:MAX_TOLD_EVENTS - 1], picked[-1]]
+    return [events[k] for k in picked]

@@ -11,15 +11,16 @@ from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.eval.errors import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade, matches
 from robotool.eval.reference import BUILTIN_TOOLS
-from robotool.rollout import Rollout, SkillCall
+from robotool.rollout import Event, Rollout, SkillCall
 
 
 def call(skill: str, *args: Any, outcome: str = "done", reason: str | None = None, **measured: float) -> SkillCall:
     return SkillCall(skill=skill, args=list(args), outcome=outcome, reason=reason, measured=measured)
 
 
-def rollout(*calls: SkillCall, success: bool = False, error: str | None = None) -> Rollout:
-    return Rollout(world=0, seed=0, success=success, calls=list(calls), error=error,
+def rollout(*calls: SkillCall, success: bool = False, error: str | None = None,
+            events: tuple[Event, ...] = ()) -> Rollout:
+    return Rollout(world=0, seed=0, success=success, calls=list(calls), error=error, events=list(events),
                    conditions={"goal": success})
 
 
@@ -50,10 +51,12 @@ CASES: dict[str, tuple[str, Rollout, str | None]] = {
         call("get_position", "surfboard"), call("climb_to_position", P)), "logical"),
     "no motion at all": ("milk_reaching", rollout(call("get_graspable_point", "hammer")), "logical"),
     "target clamped to the workspace": ("milk_reaching", rollout(
-        call("get_graspable_point", "hammer"), call("move_to_position", P, outside_workspace=0.2)), "numerical"),
-    "grasp closed on nothing": ("milk_reaching_near", rollout(
-        call("get_graspable_point", "milk"), call("move_to_position", P),
-        call("close_gripper", reason="nothing within 0.02 m of the gripper centre", distance=0.05)), "numerical"),
+        call("get_graspable_point", "hammer"), call("move_to_position", P),
+        events=(Event(kind="clamped", call=1, limit="workspace", measured={"outside_workspace": 0.2}),)),
+        "numerical"),
+    "grasp held nothing": ("milk_reaching_near", rollout(
+        call("get_graspable_point", "milk"), call("move_to_position", P), call("close_gripper"),
+        events=(Event(kind="grasp_failed", call=2, object="milk", cause="on_top"),)), "numerical"),
     "push stalled": ("sofa_traversing", rollout(
         call("push_to_position", "surfboard", P, outcome="stalled"), call("walk_to_position", P)), "numerical"),
     "goal missed by distance": ("sofa_traversing", rollout(
@@ -73,11 +76,21 @@ def test_without_reference_tools_any_tool_counts() -> None:
 
 
 def test_tools_used_counts_named_and_held_objects_but_not_the_target_or_fixed_ones() -> None:
-    world = rollout(call("get_graspable_point", "milk"), call("move_to_position", P),
-                    call("close_gripper", reason="holding hammer"))
+    world = rollout(call("get_graspable_point", "milk"), call("move_to_position", P), call("close_gripper"),
+                    events=(Event(kind="grasped", call=2, object="hammer"),))
     assert tools_used(world, facts("milk_reaching")) == {"hammer"}
     climb = rollout(call("get_position", "sofa"), call("get_position", "box_2"), call("climb_to_position", P))
     assert tools_used(climb, facts("sofa_climbing")) == {"box_2"}
+
+
+def test_classes_read_typed_fields_never_the_reason_text() -> None:
+    words_only = rollout(call("get_graspable_point", "milk"), call("move_to_position", P),
+                         call("close_gripper", reason="holding hammer; clamped; held nothing"))
+    assert tools_used(words_only, facts("milk_reaching")) == set()
+    assert classify(words_only, facts("milk_reaching_near")) == "numerical"  # every step done, goal missed
+    stalled = rollout(call("get_graspable_point", "milk"), call("move_to_position", P, outcome="stalled"),
+                      call("close_gripper"), events=(Event(kind="grasped", call=2, object="milk"),))
+    assert classify(stalled, facts("milk_reaching_near")) == "numerical"
 
 
 def test_reference_tools_may_be_fixed_and_are_no_error_where_the_reference_uses_them() -> None:

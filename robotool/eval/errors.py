@@ -4,7 +4,8 @@ Definitions used here. The *target* is the goal's object; *tools* are the task's
 other than the target, plus the instance's reference tools (which may be fixed, e.g. boxes to climb
 as stairs). A world *used* a tool when the program named it in a skill call (a query such
 as ``get_position("box_1")`` or a motion such as ``push_to_position("box_1", ...)``) or the gripper
-reported holding it. The *needed tools* are the instance's reference tools when known (built-in
+held it (a ``grasped`` event). Everything here reads typed fields (outcomes, events, measured values),
+never the text of a reason. The *needed tools* are the instance's reference tools when known (built-in
 tasks, generated instances), otherwise any tool.
 
 A failed world is classified by the first rule that applies:
@@ -15,8 +16,8 @@ A failed world is classified by the first rule that applies:
 2. ``tool_use`` — the task needs a tool and the program used none of the needed tools, or the task
    needs no tool and the program used one that its reference solution does not use.
 3. The first abnormal call decides: ``refused`` (a limit was violated: a step out of order or a
-   constraint ignored) -> ``logical``; ``stalled``, ``timeout``, a target clamped to the workspace,
-   or a grasp that closed on nothing -> ``numerical``.
+   constraint ignored) -> ``logical``; ``stalled``, ``timeout``, a target clamped to a limit
+   (``clamped`` event) or a grasp that held nothing (``grasp_failed`` event) -> ``numerical``.
 4. No abnormal call: ``logical`` when the program made no motion call or left a needed tool unused
    (a missing step); otherwise ``numerical`` (right objects, every step done, the goal missed by
    distance).
@@ -33,13 +34,13 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict
 
 from robotool.embodiments import skills
-from robotool.rollout import Rollout, SkillCall
+from robotool.rollout import Event, Rollout, SkillCall
 from robotool.scene import Task
 
 FailureClass = Literal["tool_use", "logical", "numerical", "invalid"]
 FAILURE_CLASSES: tuple[FailureClass, ...] = ("tool_use", "logical", "numerical", "invalid")
 
-_HOLDING = "holding "
+_NUMERICAL_EVENTS = frozenset({"clamped", "grasp_failed"})
 
 
 class TaskFacts(BaseModel):
@@ -65,18 +66,13 @@ class TaskFacts(BaseModel):
 def tools_used(rollout: Rollout, facts: TaskFacts) -> set[str]:
     """The tools a world's program named in a skill call or held in the gripper."""
     named = {a for call in rollout.calls for a in call.args if isinstance(a, str)}
-    held = {call.reason.removeprefix(_HOLDING) for call in rollout.calls
-            if call.skill == "close_gripper" and call.reason and call.reason.startswith(_HOLDING)}
+    held = {e.object for e in rollout.events if e.kind == "grasped" and e.object is not None}
     return (named | held) & facts.tools
 
 
-def _numerical_symptom(call: SkillCall) -> bool:
-    """A stall, a timeout, a target clamped to the workspace, or a grasp that closed on nothing."""
-    if call.outcome in ("stalled", "timeout"):
-        return True
-    if call.measured.get("outside_workspace", 0.0) > 0.0:
-        return True
-    return call.skill == "close_gripper" and not (call.reason or "").startswith(_HOLDING)
+def _numerical_symptom(call: SkillCall, events: Sequence[Event]) -> bool:
+    """A stall, a timeout, a target clamped to a limit, or a grasp that held nothing."""
+    return call.outcome in ("stalled", "timeout") or any(e.kind in _NUMERICAL_EVENTS for e in events)
 
 
 def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
@@ -90,10 +86,10 @@ def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
         return "tool_use"
     if not facts.needs_tool and used - (facts.needed or frozenset()):
         return "tool_use"
-    for call in rollout.calls:
+    for k, call in enumerate(rollout.calls):
         if call.outcome == "refused":
             return "logical"
-        if _numerical_symptom(call):
+        if _numerical_symptom(call, [e for e in rollout.events if e.call == k]):
             return "numerical"
     moved = any(c.skill in facts.motion_skills for c in rollout.calls)
     if not moved or (facts.needed is not None and not facts.needed <= used):

@@ -7,7 +7,8 @@ it are clamped and the clamp is recorded. The palm above the centre and the two 
 fingers close along the world y axis on position servos until they meet something or close fully.
 
 ``close_gripper`` holds an object only when both fingers touch it from its sides (not resting on top
-of it), it lies between them, and it is no wider across them than the opening; it is then attached
+of it), it lies between them, and it is no wider across them than the opening (a sheet is pinched
+when both fingertips press on it: they gather a fold of it); it is then attached
 rigidly by the weld ``robot_grasp__<object>`` (one per movable object) at the current pose, as
 grasp-assisted simulators do, and released by ``open_gripper``. Otherwise the call reports what the
 fingers met and why nothing is held, as a typed ``grasp_failed`` event with the measured values.
@@ -26,7 +27,7 @@ from robotool.embodiments import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import WELD_SOLIMP, WELD_SOLREF, Scene
+from robotool.sim.build import WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
 from robotool.sim.embodiment import QueryError, SkillEnd
 
 GRIPPER_BODY = "robot_gripper"
@@ -35,10 +36,10 @@ HOME = (0.1, 0.0, 0.3)  # m, gripper centre at the start
 SPEED = 0.25  # m/s, straight-line reference speed
 SERVO_KP, SERVO_KV, SERVO_FORCE = 2000.0, 80.0, 100.0  # N/m, N s/m, N
 REACHED = 0.005  # m: a move is done when the centre is this close to the target
-STALL_ERROR, STALL_SPEED, STALL_TIME = 0.02, 0.02, 0.3  # m, m/s, s
+STALL_ERROR, STALL_SPEED, STALL_TIME = 0.01, 0.02, 0.3  # m, m/s, s
 TIME_MARGIN = 2.0  # s a move may take beyond distance / speed
 GRIPPER_TIME = 0.3  # s to open or close the fingers
-FINGER_OPEN = 0.038  # m, each finger's centre from the gripper centre when open (0 when fully closed)
+FINGER_OPEN = 0.034  # m, each finger's centre from the gripper centre when open (0 when fully closed)
 FINGER_HALF = (0.008, 0.004, 0.023)  # m, half sizes of a finger (x, y across the closing axis, z)
 FINGER_Z = 0.007  # m, a finger's centre above the gripper centre: the tips reach 0.016 m below it
 FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
@@ -46,6 +47,7 @@ OPENING = 2 * (FINGER_OPEN - FINGER_HALF[1])  # m between the open fingers' inne
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
 PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
+CONTACT_SOLREF, CONTACT_SOLIMP = (0.005, 1.0), (0.95, 0.99, 0.001, 0.5, 2.0)  # the gripper's hard surfaces
 PALM_HALF = (0.02, 0.05, 0.01)  # m
 PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 
@@ -82,13 +84,15 @@ class ArmEmbodiment:
             act.forcerange = [-SERVO_FORCE, SERVO_FORCE]
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         gripper.add_geom(name="robot_palm", type=mujoco.mjtGeom.mjGEOM_BOX, size=PALM_HALF,
-                         pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]], mass=0.5)
+                         pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]], mass=0.5, solref=CONTACT_SOLREF,
+                         solimp=CONTACT_SOLIMP)
         for side, sign in zip(_SIDES, (1.0, -1.0), strict=True):
             finger = gripper.add_body(name=f"robot_finger_{side}", pos=[0, 0, 0], gravcomp=1.0)
             finger.add_joint(name=f"robot_finger_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, sign, 0],
                              range=[0, FINGER_OPEN])
             finger.add_geom(name=f"robot_finger_{side}", type=mujoco.mjtGeom.mjGEOM_BOX, size=FINGER_HALF,
-                            pos=[0, 0, FINGER_Z], mass=0.02, friction=[1.0, 0.005, 0.0001])
+                            pos=[0, 0, FINGER_Z], mass=0.02, friction=[1.0, 0.005, 0.0001],
+                            solref=CONTACT_SOLREF, solimp=CONTACT_SOLIMP)
             act = spec.add_actuator(name=f"robot_finger_{side}", target=f"robot_finger_{side}",
                                     trntype=mujoco.mjtTrn.mjTRN_JOINT)
             act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
@@ -136,6 +140,7 @@ class ArmController:
                                   for i, n in enumerate(names)])
         self.object_geoms = [np.flatnonzero(self.scene.body_object[model.geom_bodyid] == i) for i in range(len(names))]
         self.movable = np.array([o.movable for o in self.scene.task.objects])
+        self.sheet = np.array([is_sheet(o) for o in self.scene.task.objects])
         n = sim.nworld
         self.mode = np.full(n, _IDLE)
         self.started = np.zeros(n)
@@ -308,9 +313,9 @@ class ArmController:
         if not failures:
             one = sorted(i for i in by_finger[0] ^ by_finger[1] if self.grasp_eq[i] >= 0)
             if one:
-                failures.append(("one_finger", one[0], {"opening": grip.gap}))
+                failures.append(("one_finger", one[0], {}))
             else:
-                failures.append(("nothing_between", -1, {"opening": grip.gap} | self._nearest(state, w)))
+                failures.append(("nothing_between", *self._nearest(state, w)))
         cause, i, measured = failures[0]
         event = Event(kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause,
                       measured=measured)
@@ -326,22 +331,25 @@ class ArmController:
         lo, hi = _geom_extents(self.scene, state, w, self.object_geoms[i])
         near = (lo[:, 0] < grip.x[1] + GRIP_TOLERANCE) & (hi[:, 0] > grip.x[0] - GRIP_TOLERANCE)
         if not near.any():
-            return "not_between", {"opening": grip.gap}
+            return "not_between", {}
         lo, hi = lo[near], hi[near]
+        if self.sheet[i]:  # fingertips pressed on a sheet pinch a fold of it
+            return None, {"width": 2 * min(self.scene.task.objects[i].size), "opening": OPENING}
         if grip.z[0] > hi[:, 2].max() - ON_TOP:
             width = float((hi[:, 1] - lo[:, 1]).min())
             return ("too_wide" if width > OPENING else "on_top"), {"width": width, "opening": OPENING}
         if grip.gap <= 0.0:
-            return "not_between", {"opening": grip.gap}
+            return "not_between", {}
         return None, {"width": grip.gap, "opening": OPENING}
 
-    def _nearest(self, state: BatchState, w: int) -> dict[str, float]:
+    def _nearest(self, state: BatchState, w: int) -> tuple[int, dict[str, float]]:
+        """The graspable object whose graspable point is nearest to the gripper centre, and that distance."""
         candidates = np.flatnonzero(self.grasp_eq >= 0)
         if not candidates.size:
-            return {}
+            return -1, {}
         points = graspable_points(self.scene, state)[w, candidates]
         dist = np.linalg.norm(points - state.xpos[w, self.gripper], axis=1)
-        return {"nearest_graspable_point": float(dist.min())}
+        return int(candidates[np.argmin(dist)]), {"nearest": float(dist.min())}
 
     # -- state and queries ---------------------------------------------------------------------
 

@@ -32,9 +32,11 @@ DEFAULT_FRICTION = 0.5
 # constant (2 steps) and an impedance near 1 keep a 50 g cube within a fraction of a degree under the
 # servo's full force.
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
-WELD_SOLIMP = (0.999, 0.9999, 0.001, 0.5, 2.0)
+WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
+SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
+BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
 
 _CLOTH_BUILDER = "robotool.sim.quadruped_cloth:add_cloth"
 
@@ -71,6 +73,11 @@ class Scene:
             return self.object_names.index(name)
         except ValueError:
             raise KeyError(f"no object named {name!r}; objects: {', '.join(self.object_names)}") from None
+
+
+def is_sheet(obj: SceneObject) -> bool:
+    """Whether ``obj`` is a thin sheet (paper, cloth): it bends and cannot push or carry edge-first."""
+    return obj.shape == "cloth" or (obj.shape == "box" and min(obj.size) <= SHEET_THICKNESS)
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:
@@ -127,7 +134,8 @@ def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -
                   pos=[(housing_x0 + sx / 2) / 2, 0, 0], friction=friction)
     face = body.add_body(name=f"{obj.name}__face", pos=[-sx / 2 + depth / 2, 0, 0])
     face.add_joint(name=f"{obj.name}__travel", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                   stiffness=obj.button_stiffness, damping=BUTTON_DAMPING, range=[0, travel],
+                   stiffness=obj.button_stiffness, damping=BUTTON_DAMPING, frictionloss=BUTTON_GUIDE_FRICTION,
+                   range=[0, travel],
                    limited=mujoco.mjtLimited.mjLIMITED_TRUE)
     face.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[depth / 2, 0.4 * sy, 0.4 * sz], mass=0.02,
                   friction=friction, rgba=[0.8, 0.1, 0.1, 1])
