@@ -10,6 +10,7 @@ Outcome = Literal["done", "stalled", "timeout", "refused", "error"]
 EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
 
+
 class SkillCall(BaseModel):
     """One skill call in a world: arguments, how it ended and why, in simulated seconds."""
 
@@ -60,8 +61,10 @@ class Event(BaseModel):
         elif self.kind == "grasp_failed":
             text = f"held nothing: {self._grasp_failure()}"
         elif self.kind == "pushed_out":
-            text = (f"{self.object} was pushed {m.get('pushed', 0.0):.3f} m, to {m.get('outside', 0.0):.3f} m "
-                    f"outside the {self.limit or 'workspace'}" + (f" at {_point(m, '')}" if _point(m, "") else ""))
+            text = (
+                f"{self.object} was pushed {m.get('pushed', 0.0):.3f} m, to {m.get('outside', 0.0):.3f} m "
+                f"outside the {self.limit or 'workspace'}" + (f" at {_point(m, '')}" if _point(m, "") else "")
+            )
         elif self.kind == "fell":
             text = "the robot fell" + (f": {self.detail}" if self.detail else "")
         else:
@@ -71,8 +74,10 @@ class Event(BaseModel):
     def _grasp_failure(self) -> str:
         m, obj = self.measured, self.object
         if self.cause == "too_wide":
-            return (f"{obj} is {m.get('width', 0.0):.3f} m across the fingers, wider than their "
-                    f"{m.get('opening', 0.0):.3f} m opening")
+            return (
+                f"{obj} is {m.get('width', 0.0):.3f} m across the fingers, wider than their "
+                f"{m.get('opening', 0.0):.3f} m opening"
+            )
         if self.cause == "on_top":
             return f"the fingers rested on top of {obj} instead of closing on its sides"
         if self.cause == "one_finger":
@@ -81,8 +86,10 @@ class Event(BaseModel):
             return f"{obj} was not between the fingers"
         if obj is None:
             return "the fingers closed on nothing"
-        return (f"the fingers closed on nothing; the nearest graspable point ({obj}'s) is "
-                f"{m.get('nearest', 0.0):.3f} m from the gripper centre")
+        return (
+            f"the fingers closed on nothing; the nearest graspable point ({obj}'s) is "
+            f"{m.get('nearest', 0.0):.3f} m from the gripper centre"
+        )
 
 
 def _point(measured: dict[str, float], prefix: str) -> str:
@@ -98,9 +105,7 @@ class Rollout(BaseModel):
     world: int
     seed: int
     success: bool
-    conditions: dict[str, bool] = Field(
-        default_factory=dict, description="the goal's named sub-conditions at the end"
-    )
+    conditions: dict[str, bool] = Field(default_factory=dict, description="the goal's named sub-conditions at the end")
     calls: list[SkillCall] = Field(default_factory=list)
     events: list[Event] = Field(default_factory=list, description="what happened, in time order")
     touched: list[str] = Field(default_factory=list, description="objects the robot moved or met")

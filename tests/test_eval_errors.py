@@ -18,10 +18,18 @@ def call(skill: str, *args: Any, outcome: str = "done", reason: str | None = Non
     return SkillCall(skill=skill, args=list(args), outcome=outcome, reason=reason, measured=measured)
 
 
-def rollout(*calls: SkillCall, success: bool = False, error: str | None = None,
-            events: tuple[Event, ...] = ()) -> Rollout:
-    return Rollout(world=0, seed=0, success=success, calls=list(calls), error=error, events=list(events),
-                   conditions={"goal": success})
+def rollout(
+    *calls: SkillCall, success: bool = False, error: str | None = None, events: tuple[Event, ...] = ()
+) -> Rollout:
+    return Rollout(
+        world=0,
+        seed=0,
+        success=success,
+        calls=list(calls),
+        error=error,
+        events=list(events),
+        conditions={"goal": success},
+    )
 
 
 def facts(name: str, known_tools: bool = True) -> TaskFacts:
@@ -31,36 +39,75 @@ def facts(name: str, known_tools: bool = True) -> TaskFacts:
 
 P = [1.0, 0.0, 0.34]
 CASES: dict[str, tuple[str, Rollout, str | None]] = {
-    "reached the goal": ("sofa_traversing", rollout(call("push_to_position", "surfboard", P),
-                                                    call("walk_to_position", P), success=True), None),
+    "reached the goal": (
+        "sofa_traversing",
+        rollout(call("push_to_position", "surfboard", P), call("walk_to_position", P), success=True),
+        None,
+    ),
     "program raised": ("sofa_traversing", rollout(call("get_position", "surfboard"), error="NameError: x"), "invalid"),
     "call ended in error": ("milk_reaching", rollout(call("get_center", "spoon", outcome="error")), "invalid"),
-    "no tool where one is needed": ("sofa_traversing", rollout(
-        call("get_position", "sofa_2"),
-        call("walk_to_position", P, outcome="refused", reason="gap of 0.40 m exceeds the limit of 0.10 m")),
-        "tool_use"),
-    "the wrong tool (cloth cannot bridge)": ("sofa_traversing", rollout(
-        call("push_to_position", "strip_of_cloth", P), call("walk_to_position", P)), "tool_use"),
-    "a tool where none is needed": ("sofa_traversing_small_gap", rollout(
-        call("push_to_position", "surfboard", P), call("walk_to_position", P, outcome="stalled")), "tool_use"),
-    "refused step (constraint ignored)": ("sofa_climbing", rollout(
-        call("get_position", "box_1"), call("get_position", "box_2"),
-        call("climb_to_position", P, outcome="refused", reason="step up of 0.22 m exceeds the limit of 0.12 m")),
-        "logical"),
-    "missing step (chair never moved)": ("cube_lifting", rollout(
-        call("get_position", "surfboard"), call("climb_to_position", P)), "logical"),
+    "no tool where one is needed": (
+        "sofa_traversing",
+        rollout(
+            call("get_position", "sofa_2"),
+            call("walk_to_position", P, outcome="refused", reason="gap of 0.40 m exceeds the limit of 0.10 m"),
+        ),
+        "tool_use",
+    ),
+    "the wrong tool (cloth cannot bridge)": (
+        "sofa_traversing",
+        rollout(call("push_to_position", "strip_of_cloth", P), call("walk_to_position", P)),
+        "tool_use",
+    ),
+    "a tool where none is needed": (
+        "sofa_traversing_small_gap",
+        rollout(call("push_to_position", "surfboard", P), call("walk_to_position", P, outcome="stalled")),
+        "tool_use",
+    ),
+    "refused step (constraint ignored)": (
+        "sofa_climbing",
+        rollout(
+            call("get_position", "box_1"),
+            call("get_position", "box_2"),
+            call("climb_to_position", P, outcome="refused", reason="step up of 0.22 m exceeds the limit of 0.12 m"),
+        ),
+        "logical",
+    ),
+    "missing step (chair never moved)": (
+        "cube_lifting",
+        rollout(call("get_position", "surfboard"), call("climb_to_position", P)),
+        "logical",
+    ),
     "no motion at all": ("milk_reaching", rollout(call("get_graspable_point", "hammer")), "logical"),
-    "target clamped to the workspace": ("milk_reaching", rollout(
-        call("get_graspable_point", "hammer"), call("move_to_position", P),
-        events=(Event(kind="clamped", call=1, limit="workspace", measured={"outside_workspace": 0.2}),)),
-        "numerical"),
-    "grasp held nothing": ("milk_reaching_near", rollout(
-        call("get_graspable_point", "milk"), call("move_to_position", P), call("close_gripper"),
-        events=(Event(kind="grasp_failed", call=2, object="milk", cause="on_top"),)), "numerical"),
-    "push stalled": ("sofa_traversing", rollout(
-        call("push_to_position", "surfboard", P, outcome="stalled"), call("walk_to_position", P)), "numerical"),
-    "goal missed by distance": ("sofa_traversing", rollout(
-        call("push_to_position", "surfboard", P), call("walk_to_position", P)), "numerical"),
+    "target clamped to the workspace": (
+        "milk_reaching",
+        rollout(
+            call("get_graspable_point", "hammer"),
+            call("move_to_position", P),
+            events=(Event(kind="clamped", call=1, limit="workspace", measured={"outside_workspace": 0.2}),),
+        ),
+        "numerical",
+    ),
+    "grasp held nothing": (
+        "milk_reaching_near",
+        rollout(
+            call("get_graspable_point", "milk"),
+            call("move_to_position", P),
+            call("close_gripper"),
+            events=(Event(kind="grasp_failed", call=2, object="milk", cause="on_top"),),
+        ),
+        "numerical",
+    ),
+    "push stalled": (
+        "sofa_traversing",
+        rollout(call("push_to_position", "surfboard", P, outcome="stalled"), call("walk_to_position", P)),
+        "numerical",
+    ),
+    "goal missed by distance": (
+        "sofa_traversing",
+        rollout(call("push_to_position", "surfboard", P), call("walk_to_position", P)),
+        "numerical",
+    ),
 }
 
 
@@ -76,20 +123,31 @@ def test_without_reference_tools_any_tool_counts() -> None:
 
 
 def test_tools_used_counts_named_and_held_objects_but_not_the_target_or_fixed_ones() -> None:
-    world = rollout(call("get_graspable_point", "milk"), call("move_to_position", P), call("close_gripper"),
-                    events=(Event(kind="grasped", call=2, object="hammer"),))
+    world = rollout(
+        call("get_graspable_point", "milk"),
+        call("move_to_position", P),
+        call("close_gripper"),
+        events=(Event(kind="grasped", call=2, object="hammer"),),
+    )
     assert tools_used(world, facts("milk_reaching")) == {"hammer"}
     climb = rollout(call("get_position", "sofa"), call("get_position", "box_2"), call("climb_to_position", P))
     assert tools_used(climb, facts("sofa_climbing")) == {"box_2"}
 
 
 def test_classes_read_typed_fields_never_the_reason_text() -> None:
-    words_only = rollout(call("get_graspable_point", "milk"), call("move_to_position", P),
-                         call("close_gripper", reason="holding hammer; clamped; held nothing"))
+    words_only = rollout(
+        call("get_graspable_point", "milk"),
+        call("move_to_position", P),
+        call("close_gripper", reason="holding hammer; clamped; held nothing"),
+    )
     assert tools_used(words_only, facts("milk_reaching")) == set()
     assert classify(words_only, facts("milk_reaching_near")) == "numerical"  # every step done, goal missed
-    stalled = rollout(call("get_graspable_point", "milk"), call("move_to_position", P, outcome="stalled"),
-                      call("close_gripper"), events=(Event(kind="grasped", call=2, object="milk"),))
+    stalled = rollout(
+        call("get_graspable_point", "milk"),
+        call("move_to_position", P, outcome="stalled"),
+        call("close_gripper"),
+        events=(Event(kind="grasped", call=2, object="milk"),),
+    )
     assert classify(stalled, facts("milk_reaching_near")) == "numerical"
 
 
@@ -98,7 +156,8 @@ def test_reference_tools_may_be_fixed_and_are_no_error_where_the_reference_uses_
     assert tools_used(stairs, facts("vase_lowering")) == {"box_1"}  # fixed boxes used as stairs
     lever = TaskFacts.of(tasks.load("sofa_traversing_small_gap"), needs_tool=False, needed=frozenset({"surfboard"}))
     assert classify(rollout(call("push_to_position", "surfboard", P), call("walk_to_position", P)), lever) == (
-        "numerical")
+        "numerical"
+    )
 
 
 def test_run_class_is_the_most_common_failure() -> None:
@@ -111,13 +170,16 @@ def _concept(kind: str, value: float, satisfied: bool, unit: str = "m") -> KeyCo
     return KeyConcept(name="x", kind=kind, value=value, unit=unit, limit=0.1, limit_name="l", satisfied=satisfied)
 
 
-@pytest.mark.parametrize(("predicted", "ok"), [
-    (_concept("gap_width", 0.40, False), True),
-    (_concept("gap_width", 0.43, False), True),  # within 10%
-    (_concept("gap_width", 0.45, False), False),
-    (_concept("gap_width", 0.40, True), False),  # wrong verdict
-    (_concept("climb_height", 0.40, False), False),  # wrong kind
-])
+@pytest.mark.parametrize(
+    ("predicted", "ok"),
+    [
+        (_concept("gap_width", 0.40, False), True),
+        (_concept("gap_width", 0.43, False), True),  # within 10%
+        (_concept("gap_width", 0.45, False), False),
+        (_concept("gap_width", 0.40, True), False),  # wrong verdict
+        (_concept("climb_height", 0.40, False), False),  # wrong kind
+    ],
+)
 def test_concept_matching_rule(predicted: KeyConcept, ok: bool) -> None:
     assert matches(_concept("gap_width", 0.40, False), predicted) is ok
 

@@ -37,8 +37,9 @@ def _grasp_events(rollout: Any) -> list[Any]:
 def test_closing_beside_the_graspable_point_holds_nothing(sim_scene: Any) -> None:
     """1.5 cm off across the fingers, one finger lands on the carton's top: nothing is held, and the call says why."""
     scene = sim_scene("milk_reaching_near")
-    beside, centred = sim.run_programs(scene, [_grasp_at((0.0, 0.015, 0.0), "milk"),
-                                               _grasp_at((0.0, 0.0, 0.0), "milk")], seed=1)
+    beside, centred = sim.run_programs(
+        scene, [_grasp_at((0.0, 0.015, 0.0), "milk"), _grasp_at((0.0, 0.0, 0.0), "milk")], seed=1
+    )
     assert not beside.success and not beside.conditions["milk_held"]
     (failed,) = _grasp_events(beside)
     assert failed.kind == "grasp_failed" and failed.object == "milk" and failed.cause in ("on_top", "one_finger")
@@ -53,7 +54,7 @@ def test_a_carton_wider_than_the_opening_is_not_held() -> None:
     data = tasks.load("milk_reaching_near").model_dump(mode="json", exclude_defaults=True)
     milk = next(o for o in data["objects"] if o["name"] == "milk")
     x, y = 0.40, 0.15  # clear of the lock
-    milk |= {"center": [x, y, 0.022], "size": [0.044, 0.044, 0.16], "rpy": [90.0, 0.0, 0.0], "graspable_point": [x, y, 0.044]}
+    milk |= {"center": [x, y, 0.022], "rpy": [90.0, 0.0, 0.0], "graspable_point": [x, y, 0.044]}
     task = parse_task(data)
     (r,) = sim.run_programs(task, [_grasp_at((0.0, 0.0, 0.0), "milk")], perturb=False)
     assert not r.success
@@ -178,7 +179,7 @@ def test_papers_button_program_succeeds(sim_scene: Any, run_texts: Any) -> None:
 
 
 def test_papers_hammer_program_fails_and_says_why(sim_scene: Any, run_texts: Any) -> None:
-    """The paper's failed milk program: the carry is clamped, the swept hammer shoves the milk away, the grasp misses."""
+    """The paper's failed milk program: the carry is clamped, the swept hammer shoves the milk away, no grasp."""
     rollouts = run_texts(sim_scene("milk_reaching"), [program("milk_reaching_paper")] * 3, seed=0)
     for r in rollouts:
         assert not r.success and r.error is None

@@ -59,8 +59,13 @@ class TaskFacts(BaseModel):
         """Facts of ``task``; ``needed`` are its reference tools when known."""
         target = task.goal.object
         movable = frozenset(o.name for o in task.objects if o.movable and o.name != target)
-        return cls(target=target, needs_tool=needs_tool, needed=needed, tools=movable | (needed or frozenset()),
-                   motion_skills=frozenset(s.name for s in skills(task.embodiment) if s.kind == "motion"))
+        return cls(
+            target=target,
+            needs_tool=needs_tool,
+            needed=needed,
+            tools=movable | (needed or frozenset()),
+            motion_skills=frozenset(s.name for s in skills(task.embodiment) if s.kind == "motion"),
+        )
 
 
 def tools_used(rollout: Rollout, facts: TaskFacts) -> set[str]:

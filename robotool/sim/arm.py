@@ -76,33 +76,61 @@ class ArmEmbodiment:
         for k, axis in enumerate(_AXES):
             direction = [0.0, 0.0, 0.0]
             direction[k] = 1.0
-            gripper.add_joint(name=f"robot_{axis}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=direction, ref=HOME[k],
-                              range=[lo[k], hi[k]], armature=0.01)
+            gripper.add_joint(
+                name=f"robot_{axis}",
+                type=mujoco.mjtJoint.mjJNT_SLIDE,
+                axis=direction,
+                ref=HOME[k],
+                range=[lo[k], hi[k]],
+                armature=0.01,
+            )
             act = spec.add_actuator(name=f"robot_{axis}", target=f"robot_{axis}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
             act.set_to_position(kp=SERVO_KP, kv=SERVO_KV)
             act.ctrlrange = [lo[k], hi[k]]
             act.forcerange = [-SERVO_FORCE, SERVO_FORCE]
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        gripper.add_geom(name="robot_palm", type=mujoco.mjtGeom.mjGEOM_BOX, size=PALM_HALF,
-                         pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]], mass=0.5, solref=CONTACT_SOLREF,
-                         solimp=CONTACT_SOLIMP)
+        gripper.add_geom(
+            name="robot_palm",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=PALM_HALF,
+            pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]],
+            mass=0.5,
+            solref=CONTACT_SOLREF,
+            solimp=CONTACT_SOLIMP,
+        )
         for side, sign in zip(_SIDES, (1.0, -1.0), strict=True):
             finger = gripper.add_body(name=f"robot_finger_{side}", pos=[0, 0, 0], gravcomp=1.0)
-            finger.add_joint(name=f"robot_finger_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, sign, 0],
-                             range=[0, FINGER_OPEN])
-            finger.add_geom(name=f"robot_finger_{side}", type=mujoco.mjtGeom.mjGEOM_BOX, size=FINGER_HALF,
-                            pos=[0, 0, FINGER_Z], mass=0.02, friction=[1.0, 0.005, 0.0001],
-                            solref=CONTACT_SOLREF, solimp=CONTACT_SOLIMP)
-            act = spec.add_actuator(name=f"robot_finger_{side}", target=f"robot_finger_{side}",
-                                    trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            finger.add_joint(
+                name=f"robot_finger_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, sign, 0], range=[0, FINGER_OPEN]
+            )
+            finger.add_geom(
+                name=f"robot_finger_{side}",
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                size=FINGER_HALF,
+                pos=[0, 0, FINGER_Z],
+                mass=0.02,
+                friction=[1.0, 0.005, 0.0001],
+                solref=CONTACT_SOLREF,
+                solimp=CONTACT_SOLIMP,
+            )
+            act = spec.add_actuator(
+                name=f"robot_finger_{side}", target=f"robot_finger_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT
+            )
             act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
             act.ctrlrange = [0, FINGER_OPEN]
         spec.add_exclude(bodyname1="robot_finger_left", bodyname2="robot_finger_right")
         for obj in task.objects:
             if obj.movable and obj.shape != "cloth":
-                spec.add_equality(name=grasp_eq_name(obj.name), type=mujoco.mjtEq.mjEQ_WELD,
-                                  objtype=mujoco.mjtObj.mjOBJ_BODY, name1=GRIPPER_BODY, name2=obj.name,
-                                  active=False, solref=WELD_SOLREF, solimp=WELD_SOLIMP)
+                spec.add_equality(
+                    name=grasp_eq_name(obj.name),
+                    type=mujoco.mjtEq.mjEQ_WELD,
+                    objtype=mujoco.mjtObj.mjOBJ_BODY,
+                    name1=GRIPPER_BODY,
+                    name2=obj.name,
+                    active=False,
+                    solref=WELD_SOLREF,
+                    solimp=WELD_SOLIMP,
+                )
 
     def controller(self, sim: BatchedSim) -> ArmController:
         """Skill controller for every world of ``sim``."""
@@ -136,8 +164,9 @@ class ArmController:
         self.finger_qpos = np.array([model.jnt_qposadr[model.joint(f"robot_finger_{s}").id] for s in _SIDES])
         self.xyz_dof = np.array([model.jnt_dofadr[model.joint(f"robot_{a}").id] for a in _AXES])
         names = self.scene.object_names
-        self.grasp_eq = np.array([model.equality(grasp_eq_name(n)).id if self._graspable(i) else -1
-                                  for i, n in enumerate(names)])
+        self.grasp_eq = np.array(
+            [model.equality(grasp_eq_name(n)).id if self._graspable(i) else -1 for i, n in enumerate(names)]
+        )
         self.object_geoms = [np.flatnonzero(self.scene.body_object[model.geom_bodyid] == i) for i in range(len(names))]
         self.movable = np.array([o.movable for o in self.scene.task.objects])
         self.sheet = np.array([is_sheet(o) for o in self.scene.task.objects])
@@ -237,8 +266,15 @@ class ArmController:
             here = ", ".join(f"{v:.3f}" for v in pos[k])
             why = "blocked" if stalled[k] else "out of time"
             text = f"{why} at [{here}], {remaining[k]:.3f} m short of the target"
-            ends.append(SkillEnd(int(w), "stalled" if stalled[k] else "timeout",
-                                 "; ".join(t for t in (text, reason) if t), measured, events=events))
+            ends.append(
+                SkillEnd(
+                    int(w),
+                    "stalled" if stalled[k] else "timeout",
+                    "; ".join(t for t in (text, reason) if t),
+                    measured,
+                    events=events,
+                )
+            )
             self.sim.ctrl[w, self.xyz_act] = pos[k]
         for end in ends:
             self.mode[end.world] = _IDLE
@@ -250,8 +286,7 @@ class ArmController:
             return None
         target = ", ".join(f"{clamp[f'target_{a}']:.3f}" for a in _AXES)
         clamped = ", ".join(f"{clamp[f'clamped_{a}']:.3f}" for a in _AXES)
-        return (f"target [{target}] is {clamp['outside_workspace']:.3f} m outside the workspace; "
-                f"clamped to [{clamped}]")
+        return f"target [{target}] is {clamp['outside_workspace']:.3f} m outside the workspace; clamped to [{clamped}]"
 
     def _with_pushed_out(self, state: BatchState, ends: list[SkillEnd]) -> list[SkillEnd]:
         """Add a ``pushed_out`` event for each loose object pushed further out of the workspace during the skill."""
@@ -267,9 +302,18 @@ class ArmController:
             events = list(end.events)
             for i in np.flatnonzero(self.movable & (after - before > PUSHED_OUT) & (np.arange(len(after)) != held[w])):
                 centre = state.xpos[w, self.scene.object_body[i]]
-                events.append(Event(kind="pushed_out", object=self.scene.object_names[i], limit="workspace",
-                                    measured={"pushed": float(pushed[i]), "outside": float(after[i]),
-                                              **{a: float(v) for a, v in zip(_AXES, centre, strict=True)}}))
+                events.append(
+                    Event(
+                        kind="pushed_out",
+                        object=self.scene.object_names[i],
+                        limit="workspace",
+                        measured={
+                            "pushed": float(pushed[i]),
+                            "outside": float(after[i]),
+                            **{a: float(v) for a, v in zip(_AXES, centre, strict=True)},
+                        },
+                    )
+                )
             out.append(replace(end, events=tuple(events)))
         return out
 
@@ -287,9 +331,12 @@ class ArmController:
     def _grip(self, state: BatchState, w: int) -> _Grip:
         c = state.xpos[w, self.gripper]
         q_left, q_right = state.qpos[w, self.finger_qpos]
-        return _Grip(left=float(c[1] + q_left - FINGER_HALF[1]), right=float(c[1] - q_right + FINGER_HALF[1]),
-                     x=(float(c[0] - FINGER_HALF[0]), float(c[0] + FINGER_HALF[0])),
-                     z=(float(c[2] + FINGER_Z - FINGER_HALF[2]), float(c[2] + FINGER_Z + FINGER_HALF[2])))
+        return _Grip(
+            left=float(c[1] + q_left - FINGER_HALF[1]),
+            right=float(c[1] - q_right + FINGER_HALF[1]),
+            x=(float(c[0] - FINGER_HALF[0]), float(c[0] + FINGER_HALF[0])),
+            z=(float(c[2] + FINGER_Z - FINGER_HALF[2]), float(c[2] + FINGER_Z + FINGER_HALF[2])),
+        )
 
     def _grasp(self, state: BatchState, w: int) -> SkillEnd:
         """Hold the object both fingers grip from its sides, if it fits the opening; else say why nothing is held."""
@@ -307,8 +354,13 @@ class ArmController:
             cause, measured = self._fit(state, w, i, grip)
             if cause is None:
                 self.sim.set_weld(np.array([w]), int(self.grasp_eq[i]), True)
-                return SkillEnd(w, "done", f"holding {names[i]}", measured,
-                                events=(Event(kind="grasped", object=names[i], measured=measured),))
+                return SkillEnd(
+                    w,
+                    "done",
+                    f"holding {names[i]}",
+                    measured,
+                    events=(Event(kind="grasped", object=names[i], measured=measured),),
+                )
             failures.append((cause, i, measured))
         if not failures:
             one = sorted(i for i in by_finger[0] ^ by_finger[1] if self.grasp_eq[i] >= 0)
@@ -317,8 +369,9 @@ class ArmController:
             else:
                 failures.append(("nothing_between", *self._nearest(state, w)))
         cause, i, measured = failures[0]
-        event = Event(kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause,
-                      measured=measured)
+        event = Event(
+            kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause, measured=measured
+        )
         return SkillEnd(w, "done", event.describe([]), measured, events=(event,))
 
     def _fit(self, state: BatchState, w: int, i: int, grip: _Grip) -> tuple[GraspFailure | None, dict[str, float]]:

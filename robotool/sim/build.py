@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.scene import PRESS_TRAVEL, SceneObject, Task
+from robotool.scene import SceneObject, Task
 from robotool.sim.embodiment import Embodiment, embodiment_for
 
 TIMESTEP = 0.002  # s, physics step
