@@ -151,15 +151,15 @@ def test_paper_dragged_edge_first_into_the_can_does_not_bring_it_in(sim_scene: A
     """Without the stick, dragging the paper sideways into the can and then in does not bring the can in reach."""
 
     def drag(robot: Any) -> None:
-        p = robot.get_graspable_point("strip_of_paper")
-        can = robot.get_center("can")
+        p, size = robot.get_graspable_point("strip_of_paper"), robot.get_size("strip_of_paper")
+        can, can_size = robot.get_center("can"), robot.get_size("can")
         robot.open_gripper()
         robot.move_to_position([p[0], p[1], p[2] + CLEAR])
         robot.move_to_position(p)
         robot.close_gripper()
-        under = can[1] - p[1] + 0.02  # the paper's -y edge driven into and past the can
-        robot.move_to_position([p[0], p[1] - 0.2 + under, p[2] + 0.001])
-        robot.move_to_position([p[0] - (can[0] - 0.35), p[1] - 0.2 + under, p[2] + 0.001])
+        y = can[1] - can_size[1] / 2 - 0.02 + size[1] / 2  # the paper's near edge driven 2 cm past the can
+        robot.move_to_position([p[0], y, p[2] + 0.001])
+        robot.move_to_position([p[0] - (can[0] - 0.35), y, p[2] + 0.001])
         robot.open_gripper()
         c = robot.get_graspable_point("can")
         robot.move_to_position([c[0], c[1], c[2] + CLEAR])
@@ -169,7 +169,13 @@ def test_paper_dragged_edge_first_into_the_can_does_not_bring_it_in(sim_scene: A
     rollouts = sim.run_programs(sim_scene("can_grasping"), [drag] * 3, seed=2)
     for r in rollouts:
         assert r.error is None and not r.success, r.conditions
-        assert any(e.kind == "clamped" for e in r.events)
+        assert any(e.kind == "clamped" for e in r.events)  # the can stayed beyond the workspace
+
+
+def test_can_pushed_onto_the_paper_rides_on_it(sim_scene: Any, run_texts: Any) -> None:
+    """The paper's intended use: the can pushed onto it with the stick comes along when the paper is pulled."""
+    (r,) = run_texts(sim_scene("can_grasping"), [program("can_grasping")], perturb=False)
+    assert r.success, world_failure(r)
 
 
 def test_papers_button_program_succeeds(sim_scene: Any, run_texts: Any) -> None:

@@ -27,7 +27,7 @@ from robotool.embodiments import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
+from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
 from robotool.sim.embodiment import QueryError, SkillEnd
 
 GRIPPER_BODY = "robot_gripper"
@@ -97,6 +97,7 @@ class ArmEmbodiment:
             mass=0.5,
             solref=CONTACT_SOLREF,
             solimp=CONTACT_SOLIMP,
+            conaffinity=DEFAULT_BIT | SHEET_BIT,
         )
         for side, sign in zip(_SIDES, (1.0, -1.0), strict=True):
             finger = gripper.add_body(name=f"robot_finger_{side}", pos=[0, 0, 0], gravcomp=1.0)
@@ -112,6 +113,7 @@ class ArmEmbodiment:
                 friction=[1.0, 0.005, 0.0001],
                 solref=CONTACT_SOLREF,
                 solimp=CONTACT_SOLIMP,
+                conaffinity=DEFAULT_BIT | SHEET_BIT,
             )
             act = spec.add_actuator(
                 name=f"robot_finger_{side}", target=f"robot_finger_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT

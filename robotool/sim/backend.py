@@ -82,6 +82,9 @@ class BatchedSim(Protocol):
     def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
         """Activate weld ``eq`` at the current relative pose of its two bodies, or deactivate it."""
 
+    def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
+        """Move geom ``geom`` to ``pos`` in its body's frame in ``worlds``."""
+
     def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
         """Cast rays (nworld, nray, 3) from ``pnt`` along ``vec`` against the current geoms.
 

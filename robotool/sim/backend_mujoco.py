@@ -152,6 +152,11 @@ class MujocoSim:
             d.eq_active[eq] = active
             self._eq_active[w, eq] = active
 
+    def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
+        """Move geom ``geom`` in its body's frame, in each world's model copy."""
+        for w in np.asarray(worlds, dtype=int).reshape(-1):
+            self.models[w].geom_pos[geom] = pos
+
     def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
         nworld, nray = pnt.shape[:2]

@@ -1,9 +1,9 @@
 """The mujoco_warp backend: one ``Data`` with ``nworld`` worlds, substeps replayed from a captured graph.
 
 Runs on Warp's ``cuda`` device when there is one, else on ``cpu`` (one thread; for development and
-tests). Per-world friction, mass, inertia and weld ``eq_data`` are batched model fields. Controls are
-written in place (``assign``) so captured graphs see them. A world whose sticky overflow flag is set
-(contacts or constraint rows over ``nconmax``/``njmax``) is marked failed.
+tests). Per-world friction, mass, inertia, weld ``eq_data`` and geom positions (sheet carriers) are
+batched model fields. Controls are written in place (``assign``) so captured graphs see them. A world
+whose sticky overflow flag is set (contacts or constraint rows over ``nconmax``/``njmax``) is marked failed.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import warp as wp
 from robotool.sim.backend import BatchState, Perturbation, touching_from_contacts, weld_relpose
 from robotool.sim.build import Scene
 
-_BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data")
+_BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data", "geom_pos")
 _OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}
 
 
@@ -47,6 +47,7 @@ class WarpSim:
             self.d.qpos.assign(perturbation.initial_qpos(scene).astype(np.float32))
             mjw.forward(self.m, self.d)
         self._eq_data = self.m.eq_data.numpy().copy()
+        self._geom_pos = self.m.geom_pos.numpy().copy()
         self._eq_active = self.d.eq_active.numpy().copy()
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.tile(mjd.mocap_pos, (nworld, 1, 1))
@@ -111,6 +112,12 @@ class WarpSim:
         with wp.ScopedDevice(self.device):
             self.m.eq_data.assign(self._eq_data)
             self.d.eq_active.assign(self._eq_active)
+
+    def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
+        """Move geom ``geom`` in its body's frame in ``worlds`` (a batched model field, written in place)."""
+        self._geom_pos[np.asarray(worlds, dtype=int).reshape(-1), geom] = pos
+        with wp.ScopedDevice(self.device):
+            self.m.geom_pos.assign(self._geom_pos.astype(np.float32))
 
     def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit."""

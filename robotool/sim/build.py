@@ -7,6 +7,9 @@ face on its -x side, on a slide joint with the button's spring (``stiffness``, N
 defaults in :mod:`robotool.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
 after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
+A sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper) collides with the ground and the
+robot only; it meets each other movable object through a carrier geom of its own, in place only while
+the object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object.
 Cloth is built by the quadruped module (``robotool.sim.quadruped_cloth.add_cloth(spec, obj)``).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 """
@@ -34,6 +37,9 @@ DEFAULT_FRICTION = 0.5
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
 WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate
+SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
+SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
+DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets touch the ground and the robot
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
@@ -76,8 +82,9 @@ class Scene:
 
 
 def is_sheet(obj: SceneObject) -> bool:
-    """Whether ``obj`` is a thin sheet (paper, cloth): it bends and cannot push or carry edge-first."""
-    return obj.shape == "cloth" or (obj.shape == "box" and min(obj.size) <= SHEET_THICKNESS)
+    """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper): it cannot push
+    or lift anything with its edge. (Cloth is built as hinged links that drape; see ``quadruped_cloth``.)"""
+    return obj.shape == "box" and min(obj.size) <= SHEET_THICKNESS
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:
@@ -87,14 +94,14 @@ def _quat(rot: np.ndarray) -> np.ndarray:
 
 
 def _add_part(body: mujoco.MjsBody, part: geometry.Part, frame_pos: np.ndarray, frame_rot: np.ndarray,
-              **attrs: object) -> mujoco.MjsGeom:
+              name: str, **attrs: object) -> mujoco.MjsGeom:
     """Add one convex part, given in the world, to a body whose frame is (frame_pos, frame_rot)."""
     pos = frame_rot.T @ (part.center - frame_pos)
     quat = _quat(frame_rot.T @ part.rot)
     if part.kind == "box":
-        geom = body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=part.half, pos=pos, quat=quat)
+        geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=part.half, pos=pos, quat=quat)
     else:
-        geom = body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[part.half[0], part.half[2], 0],
+        geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[part.half[0], part.half[2], 0],
                              pos=pos, quat=quat)
     for key, value in attrs.items():
         setattr(geom, key, value)
@@ -120,8 +127,10 @@ def _add_object(spec: mujoco.MjSpec, obj: SceneObject) -> None:
     if obj.movable:
         body.add_freejoint(name=f"{obj.name}__free")
         attrs["density"] = obj.effective_mass / sum(_part_volume(p) for p in parts)
-    for part in parts:
-        _add_part(body, part, center, rot, **attrs)
+    if is_sheet(obj):  # touches the ground and the robot; other objects only through its carriers
+        attrs |= {"contype": SHEET_BIT, "conaffinity": GROUND_BIT}
+    for k, part in enumerate(parts):
+        _add_part(body, part, center, rot, name=object_geom_name(obj.name, k), **attrs)
 
 
 def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -> None:
@@ -152,7 +161,8 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
     spec.option.timestep = TIMESTEP
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[5, 5, 0.1],
-                            friction=[GROUND_FRICTION, 0.005, 0.0001])
+                            friction=[GROUND_FRICTION, 0.005, 0.0001], contype=DEFAULT_BIT | GROUND_BIT,
+                            conaffinity=DEFAULT_BIT | GROUND_BIT)
     for obj in task.objects:
         if obj.shape == "cloth":
             _add_cloth(spec, obj)
@@ -166,8 +176,50 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
         spec.add_equality(name=f"magnet__{a}__{b}", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
                           name1=a, name2=b, active=False, solref=WELD_SOLREF,
                           solimp=WELD_SOLIMP)
+    _add_sheet_pairs(spec, task)
     embodiment.add_to_spec(spec, task)
     return spec
+
+
+def object_geom_name(obj: str, part: int) -> str:
+    """Name of the geom of part ``part`` of object ``obj``."""
+    return f"{obj}__geom{part}"
+
+
+def sheet_carrier_name(sheet: str, obj: str) -> str:
+    """Name of the geom through which sheet ``sheet`` carries object ``obj``."""
+    return f"{sheet}__carries__{obj}"
+
+
+def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
+    """For every sheet and every other movable object: a carrier geom on the sheet that only that object meets.
+
+    The carrier is a copy of the sheet's box without mass, invisible and without automatic collisions,
+    in an explicit contact pair with each part of the object. It is in place for objects that rest on
+    the sheet at the start and dropped :data:`SHEET_CARRIER_DROP` below it otherwise;
+    :mod:`robotool.sim.sheets` moves it while the world runs.
+    """
+    for sheet in (o for o in task.objects if is_sheet(o) and o.movable):
+        body = spec.body(sheet.name)
+        (part,) = geometry.object_parts(sheet)
+        centre, rot = np.asarray(sheet.center, dtype=float), geometry.rotation_matrix(sheet.rpy)
+        for obj in (o for o in task.objects if o.movable and not is_sheet(o) and o.shape != "cloth"):
+            mu = max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
+            carrier = _add_part(body, part, centre, rot, name=sheet_carrier_name(sheet.name, obj.name),
+                                contype=0, conaffinity=0, mass=0.0, rgba=[0, 0, 0, 0])
+            if not rests_on_sheet(obj, sheet):
+                carrier.pos = np.asarray(carrier.pos) - np.array([0.0, 0.0, SHEET_CARRIER_DROP])
+            for k in range(len(geometry.object_parts(obj))):
+                spec.add_pair(geomname1=sheet_carrier_name(sheet.name, obj.name),
+                              geomname2=object_geom_name(obj.name, k), condim=3,
+                              friction=[mu, mu, 0.005, 0.0001, 0.0001])
+
+
+def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:
+    """Whether ``obj`` stands on ``sheet`` in the task file: its bottom on the sheet's top, its centre over it."""
+    local = geometry.rotation_matrix(sheet.rpy).T @ (np.asarray(obj.center) - np.asarray(sheet.center))
+    over = abs(local[0]) <= sheet.size[0] / 2 and abs(local[1]) <= sheet.size[1] / 2
+    return over and abs(obj.bottom - sheet.top) <= SHEET_RESTING
 
 
 def build(task: Task) -> Scene:

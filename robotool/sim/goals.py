@@ -14,9 +14,10 @@ from typing import Protocol
 
 import numpy as np
 
+from robotool.scene import PRESS_TRAVEL
 from robotool.sim.arm import graspable_points, held_objects
 from robotool.sim.backend import BatchState
-from robotool.sim.build import PRESS_TRAVEL, Scene
+from robotool.sim.build import Scene
 
 _LAZY_GOALS = "robotool.sim.quadruped"
 

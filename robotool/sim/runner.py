@@ -30,6 +30,7 @@ from robotool.sim.embodiment import QueryError, SkillController, SkillEnd
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
+from robotool.sim.sheets import Sheets
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
@@ -117,6 +118,7 @@ class _Run:
         self.box = scene_box(scene.task)
         self.controller: SkillController = scene.embodiment.controller(sim)
         self.magnets = Magnets(scene)
+        self.sheets = Sheets(scene, sim.nworld)
         self.goal: GoalTracker = goal_tracker(scene)
         nworld, nobj = sim.nworld, len(scene.object_names)
         self.touched = np.zeros((nworld, nobj), dtype=bool)
@@ -253,6 +255,7 @@ class _Run:
         """After a control tick: magnets, goal memory, touched objects, failures and caps."""
         alive = self.alive()
         self.magnets.update(self.sim, state, alive)
+        self.sheets.update(self.sim, state, alive)
         self.goal.update(state, alive)
         scene = self.scene
         owner = scene.body_object
