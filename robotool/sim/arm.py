@@ -46,6 +46,8 @@ FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm o
 OPENING = 2 * (FINGER_OPEN - FINGER_HALF[1])  # m between the open fingers' inner faces
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
+CLAMP_TOLERANCE = 1e-4  # m: a target this close to the workspace counts as inside (no clamp is reported)
+ON_SHEET = 0.003  # m: a fingertip this close above a sheet it overlaps presses on it
 PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
 CONTACT_SOLREF, CONTACT_SOLIMP = (0.005, 1.0), (0.95, 0.99, 0.001, 0.5, 2.0)  # the gripper's hard surfaces
 PALM_HALF = (0.02, 0.05, 0.01)  # m
@@ -211,7 +213,7 @@ class ArmController:
         lo, hi = np.asarray(self.limits.workspace_min), np.asarray(self.limits.workspace_max)
         clamped = np.clip(target, lo, hi)
         clamp: dict[str, float] = {}
-        if not np.allclose(clamped, target):
+        if np.linalg.norm(clamped - target) > CLAMP_TOLERANCE:
             clamp = {f"target_{a}": float(t) for a, t in zip(_AXES, target, strict=True)}
             clamp |= {f"clamped_{a}": float(c) for a, c in zip(_AXES, clamped, strict=True)}
             clamp["outside_workspace"] = float(np.linalg.norm(target - clamped))
@@ -350,6 +352,8 @@ class ArmController:
         owner = self.scene.body_object
         touch = state.touching[w][self.finger_body]  # (2, nbody)
         by_finger = [set(owner[np.flatnonzero(t)]) - {-1} for t in touch]
+        for finger, under in zip(by_finger, self._sheets_under(state, w, grip), strict=True):
+            finger |= under
         both = sorted(i for i in by_finger[0] & by_finger[1] if self.grasp_eq[i] >= 0)
         failures: list[tuple[GraspFailure, int, dict[str, float]]] = []
         for i in both:
@@ -375,6 +379,25 @@ class ArmController:
             kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause, measured=measured
         )
         return SkillEnd(w, "done", event.describe([]), measured, events=(event,))
+
+    def _sheets_under(self, state: BatchState, w: int, grip: _Grip) -> list[set[int]]:
+        """For each finger, the sheets its tip presses on: under its footprint, at most ON_SHEET below it."""
+        out: list[set[int]] = [set(), set()]
+        tip = np.array([grip.x, (grip.left, grip.left + 2 * FINGER_HALF[1]),
+                        (grip.right - 2 * FINGER_HALF[1], grip.right)])  # x, y spans of the left and right tips
+        for i in np.flatnonzero(self.sheet):
+            body = self.scene.object_body[i]
+            rot = state.xmat(body)[w]
+            half = np.asarray(self.scene.task.objects[i].size) / 2
+            top = state.xpos[w, body, 2] + float(half.min())
+            if not 0.0 <= grip.z[0] - top + ON_SHEET <= 2 * ON_SHEET:
+                continue
+            for f, ys in enumerate((tip[1], tip[2])):
+                corners = np.array([[x, y, top] for x in tip[0] for y in ys])
+                local = (corners - state.xpos[w, body]) @ rot
+                if np.any(np.all(np.abs(local[:, :2]) <= half[:2], axis=1)):
+                    out[f].add(int(i))
+        return out
 
     def _fit(self, state: BatchState, w: int, i: int, grip: _Grip) -> tuple[GraspFailure | None, dict[str, float]]:
         """Whether both fingers, touching object ``i``, grip it from its sides (else why not).

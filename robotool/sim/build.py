@@ -39,6 +39,7 @@ WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate
 SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
 SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
+SHEET_CARRIER_LIFT = 0.002  # m a carrier stands above its sheet, so what rests on it rests on it alone
 DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets touch the ground and the robot
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
@@ -194,8 +195,9 @@ def sheet_carrier_name(sheet: str, obj: str) -> str:
 def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
     """For every sheet and every other movable object: a carrier geom on the sheet that only that object meets.
 
-    The carrier is a copy of the sheet's box without mass, invisible and without automatic collisions,
-    in an explicit contact pair with each part of the object. It is in place for objects that rest on
+    The carrier is a copy of the sheet's box :data:`SHEET_CARRIER_LIFT` higher (so the object rests on
+    it alone, not half on the table), without mass, invisible and without automatic collisions, in an
+    explicit contact pair with each part of the object. It is in place for objects that rest on
     the sheet at the start and dropped :data:`SHEET_CARRIER_DROP` below it otherwise;
     :mod:`robotool.sim.sheets` moves it while the world runs.
     """
@@ -207,8 +209,8 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
             mu = max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
             carrier = _add_part(body, part, centre, rot, name=sheet_carrier_name(sheet.name, obj.name),
                                 contype=0, conaffinity=0, mass=0.0, rgba=[0, 0, 0, 0])
-            if not rests_on_sheet(obj, sheet):
-                carrier.pos = np.asarray(carrier.pos) - np.array([0.0, 0.0, SHEET_CARRIER_DROP])
+            drop = 0.0 if rests_on_sheet(obj, sheet) else SHEET_CARRIER_DROP
+            carrier.pos = np.asarray(carrier.pos) + np.array([0.0, 0.0, SHEET_CARRIER_LIFT - drop])
             for k in range(len(geometry.object_parts(obj))):
                 spec.add_pair(geomname1=sheet_carrier_name(sheet.name, obj.name),
                               geomname2=object_geom_name(obj.name, k), condim=3,
