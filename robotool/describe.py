@@ -11,7 +11,7 @@ import numpy as np
 
 from robotool.concepts import press_point, start_surface
 from robotool.embodiments import ArmLimits, QuadrupedLimits, skills
-from robotool.scene import SceneObject, Task
+from robotool.scene import PRESS_TRAVEL, SceneObject, Task
 
 
 def _vec(values: tuple[float, ...] | list[float] | np.ndarray) -> str:
@@ -33,7 +33,8 @@ def _shape_words(obj: SceneObject) -> str:
     if obj.shape == "cloth":
         return "flexible cloth strip (it cannot carry load across a gap)"
     if obj.shape == "button":
-        return "button housing; its face on the -x side counts as pressed after 1 cm of travel"
+        return (f"button housing; its face on the -x side counts as pressed after {_num(PRESS_TRAVEL)} m of travel, "
+                f"against a spring of {_num(obj.button_stiffness)} N/m")
     return "box"
 
 
@@ -111,8 +112,10 @@ def _robot_section(task: Task) -> list[str]:
         f"- the gripper centre stays inside the workspace x in [{_num(lo[0])}, {_num(hi[0])}], "
         f"y in [{_num(lo[1])}, {_num(hi[1])}], z in [{_num(lo[2])}, {_num(hi[2])}]; a target outside it is "
         "clamped to the workspace;",
-        f"- close_gripper holds the object whose graspable point is within {_num(limits.grasp_radius)} m of "
-        "the gripper centre; a held object moves rigidly with the gripper and pushes what it meets.",
+        f"- the fingers close along y and open {_num(limits.gripper_opening)} m apart; close_gripper holds an "
+        "object only when both fingers close on its sides and it is no "
+        "wider than the opening (a thin sheet is pinched where both fingertips press on it); a held object moves "
+        "rigidly with the gripper and pushes what it meets; aim the gripper centre at the graspable point.",
     ]
 
 

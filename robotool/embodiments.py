@@ -41,6 +41,9 @@ class ArmLimits(BaseModel):
     grasp_radius: float = Field(
         0.02, gt=0, description="how close the gripper must be to a graspable point, m"
     )
+    gripper_opening: float = Field(
+        0.06, gt=0, le=0.2, description="distance between the open fingers' inner faces, m"
+    )
 
 
 Limits = QuadrupedLimits | ArmLimits
@@ -171,8 +174,8 @@ ARM_SKILLS: tuple[SkillSpec, ...] = (
         returns="None",
         kind="motion",
         semantics=(
-            "Close the fingers; the object whose graspable point lies within the grasp radius of "
-            "the gripper centre is held."
+            "Close the fingers until they meet something or close fully; an object is held when both "
+            "fingers close on its sides and it fits the opening, otherwise the call says why nothing is held."
         ),
     ),
 )

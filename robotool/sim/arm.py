@@ -39,11 +39,9 @@ REACHED = 0.005  # m: a move is done when the centre is this close to the target
 STALL_ERROR, STALL_SPEED, STALL_TIME = 0.01, 0.02, 0.3  # m, m/s, s
 TIME_MARGIN = 2.0  # s a move may take beyond distance / speed
 GRIPPER_TIME = 0.3  # s to open or close the fingers
-FINGER_OPEN = 0.034  # m, each finger's centre from the gripper centre when open (0 when fully closed)
 FINGER_HALF = (0.008, 0.004, 0.023)  # m, half sizes of a finger (x, y across the closing axis, z)
 FINGER_Z = 0.007  # m, a finger's centre above the gripper centre: the tips reach 0.016 m below it
 FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
-OPENING = 2 * (FINGER_OPEN - FINGER_HALF[1])  # m between the open fingers' inner faces
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
 CLAMP_TOLERANCE = 1e-4  # m: a target this close to the workspace counts as inside (no clamp is reported)
@@ -56,6 +54,11 @@ PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 _IDLE, _MOVE, _FINGERS = 0, 1, 2
 _AXES = "xyz"
 _SIDES = ("left", "right")
+
+
+def finger_open(limits: ArmLimits) -> float:
+    """Each finger's offset from the gripper centre when open (0 when fully closed), m."""
+    return limits.gripper_opening / 2 + FINGER_HALF[1]
 
 
 def grasp_eq_name(obj: str) -> str:
@@ -104,7 +107,10 @@ class ArmEmbodiment:
         for side, sign in zip(_SIDES, (1.0, -1.0), strict=True):
             finger = gripper.add_body(name=f"robot_finger_{side}", pos=[0, 0, 0], gravcomp=1.0)
             finger.add_joint(
-                name=f"robot_finger_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, sign, 0], range=[0, FINGER_OPEN]
+                name=f"robot_finger_{side}",
+                type=mujoco.mjtJoint.mjJNT_SLIDE,
+                axis=[0, sign, 0],
+                range=[0, finger_open(self.limits)],
             )
             finger.add_geom(
                 name=f"robot_finger_{side}",
@@ -121,7 +127,7 @@ class ArmEmbodiment:
                 name=f"robot_finger_{side}", target=f"robot_finger_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT
             )
             act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
-            act.ctrlrange = [0, FINGER_OPEN]
+            act.ctrlrange = [0, finger_open(self.limits)]
         spec.add_exclude(bodyname1="robot_finger_left", bodyname2="robot_finger_right")
         for obj in task.objects:
             if obj.movable and obj.shape != "cloth":
@@ -185,7 +191,8 @@ class ArmController:
         self.clamp: list[dict[str, float]] = [{} for _ in range(n)]
         self.start_points = np.zeros((n, len(names), 3))
         sim.ctrl[:, self.xyz_act] = HOME
-        sim.ctrl[:, self.finger_act] = FINGER_OPEN
+        self.finger_open = finger_open(limits)
+        sim.ctrl[:, self.finger_act] = self.finger_open
 
     def _graspable(self, i: int) -> bool:
         obj = self.scene.task.objects[i]
@@ -203,7 +210,7 @@ class ArmController:
         else:
             self.mode[worlds] = _FINGERS
             self.closing[worlds] = skill == "close_gripper"
-            self.sim.ctrl[np.ix_(worlds, self.finger_act)] = 0.0 if skill == "close_gripper" else FINGER_OPEN
+            self.sim.ctrl[np.ix_(worlds, self.finger_act)] = 0.0 if skill == "close_gripper" else self.finger_open
             if skill == "open_gripper":
                 for eq in self.grasp_eq[self.grasp_eq >= 0]:
                     self.sim.set_weld(worlds, eq, False)
@@ -383,8 +390,9 @@ class ArmController:
     def _sheets_under(self, state: BatchState, w: int, grip: _Grip) -> list[set[int]]:
         """For each finger, the sheets its tip presses on: under its footprint, at most ON_SHEET below it."""
         out: list[set[int]] = [set(), set()]
-        tip = np.array([grip.x, (grip.left, grip.left + 2 * FINGER_HALF[1]),
-                        (grip.right - 2 * FINGER_HALF[1], grip.right)])  # x, y spans of the left and right tips
+        tip = np.array(
+            [grip.x, (grip.left, grip.left + 2 * FINGER_HALF[1]), (grip.right - 2 * FINGER_HALF[1], grip.right)]
+        )  # x, y spans of the left and right tips
         for i in np.flatnonzero(self.sheet):
             body = self.scene.object_body[i]
             rot = state.xmat(body)[w]
@@ -412,13 +420,16 @@ class ArmController:
             return "not_between", {}
         lo, hi = lo[near], hi[near]
         if self.sheet[i]:  # fingertips pressed on a sheet pinch a fold of it
-            return None, {"width": 2 * min(self.scene.task.objects[i].size), "opening": OPENING}
+            return None, {"width": 2 * min(self.scene.task.objects[i].size), "opening": self.limits.gripper_opening}
         if grip.z[0] > hi[:, 2].max() - ON_TOP:
             width = float((hi[:, 1] - lo[:, 1]).min())
-            return ("too_wide" if width > OPENING else "on_top"), {"width": width, "opening": OPENING}
+            return ("too_wide" if width > self.limits.gripper_opening else "on_top"), {
+                "width": width,
+                "opening": self.limits.gripper_opening,
+            }
         if grip.gap <= 0.0:
             return "not_between", {}
-        return None, {"width": grip.gap, "opening": OPENING}
+        return None, {"width": grip.gap, "opening": self.limits.gripper_opening}
 
     def _nearest(self, state: BatchState, w: int) -> tuple[int, dict[str, float]]:
         """The graspable object whose graspable point is nearest to the gripper centre, and that distance."""
