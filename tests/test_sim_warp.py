@@ -49,3 +49,10 @@ def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -
     np.testing.assert_allclose(dist_w, dist_c, atol=1e-4)
     np.testing.assert_array_equal(geom_w, geom_c)
     assert dist_c[0, 0] == pytest.approx(0.5 - 0.08) and dist_c[0, 1] == pytest.approx(0.5 - 0.03, abs=1e-3)
+
+
+@pytest.mark.parametrize("task_name", ["can_grasping", "milk_reaching", "milk_reaching_near"])
+def test_reference_programs_solve_the_other_arm_tasks(sim_scene: Any, run_texts: Any, task_name: str) -> None:
+    """Grasps by contact, rigid holds and sheet carriers behave on Warp as on C (fewer worlds: Warp on CPU is slow)."""
+    rollouts = run_texts(sim_scene(task_name), [program(REFERENCE[task_name])] * 2, seed=3, backend="warp")
+    assert all(r.success for r in rollouts), [(r.conditions, r.error) for r in rollouts]
