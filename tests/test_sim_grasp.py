@@ -195,3 +195,34 @@ def test_papers_hammer_program_fails_and_says_why(sim_scene: Any, run_texts: Any
         reason = world_failure(r)
         assert reason.startswith("goal not reached: milk_held")
         assert "clamped" in reason and "milk was pushed" in reason and "held nothing" in reason
+
+
+def test_a_lifted_sheet_carries_nothing(sim_scene: Any) -> None:
+    """Held up by its edge, paper droops: a can resting on it is not carried up into the air."""
+    data = sim_scene("can_grasping").task.model_dump(mode="json", exclude_defaults=True)
+    can = next(o for o in data["objects"] if o["name"] == "can")
+    can["center"] = [0.4, 0.2, 0.0405]  # standing on the paper, within reach
+    heights: list[float] = []
+
+    def lift(robot: Any) -> None:
+        p = robot.get_graspable_point("strip_of_paper")
+        robot.open_gripper()
+        robot.move_to_position([p[0], p[1], p[2] + CLEAR])
+        robot.move_to_position(p)
+        robot.close_gripper()
+        robot.move_to_position([p[0], p[1], 0.15])
+        heights.append(robot.get_center("can")[2])
+
+    (r,) = sim.run_programs(parse_task(data), [lift], perturb=False)
+    assert r.error is None and heights and heights[0] < 0.06, heights
+
+
+def test_button_fields_are_checked() -> None:
+    data = tasks.load("button_pressing").model_dump(mode="json", exclude_defaults=True)
+    for obj, field, value, words in (
+        ("button", "travel", 0.005, "exceed"),
+        ("magnetic_cube1", "stiffness", 100.0, "buttons only"),
+    ):
+        bad = {**data, "objects": [o | {field: value} if o["name"] == obj else o for o in data["objects"]]}
+        with pytest.raises(ValueError, match=words):
+            parse_task(bad)

@@ -4,7 +4,8 @@ A sheet is too limp to push or lift anything with its edge: driven edge-first in
 it buckles or slips under without moving it. An object rests on a sheet only once it got there itself
 (pushed or put onto the sheet while the sheet lay still) or stood on it from the start; from then on the
 sheet's carrier geom for that object is in place (:func:`robotool.sim.build.make_spec`), so the object
-rides on the sheet by friction, until it leaves the sheet's footprint or is lifted off; otherwise the
+rides on the sheet by friction, until it leaves the sheet's footprint, is lifted off, or the sheet
+itself is lifted off the table (held up by an edge, it droops and carries nothing); otherwise the
 carrier lies far below. :meth:`Sheets.update` applies this rule after every control tick, per world.
 """
 
@@ -39,8 +40,10 @@ class Sheets:
         self.half = {s: np.asarray(task.objects[s].size[:2]) / 2 for s, _, _ in self.links}
         self.thickness = {s: min(task.objects[s].size) for s, _, _ in self.links}
         self.depth = {i: task.objects[i].center[2] - task.objects[i].bottom for _, i, _ in self.links}
-        self.placed = {g: model.geom_pos[g] + (0.0 if o else SHEET_CARRIER_DROP) * np.array([0.0, 0.0, 1.0])
-                       for (_, _, g), o in zip(self.links, on, strict=True)}
+        self.placed = {
+            g: model.geom_pos[g] + (0.0 if o else SHEET_CARRIER_DROP) * np.array([0.0, 0.0, 1.0])
+            for (_, _, g), o in zip(self.links, on, strict=True)
+        }
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
         self.previous: np.ndarray | None = None
 
@@ -58,7 +61,8 @@ class Sheets:
             local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
             over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
             top = xpos[:, s, 2] + self.thickness[s] / 2
-            resting = xpos[:, i, 2] - self.depth[i] < top + LIFTED
+            flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
+            resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
             arrive = active & over & resting & ~self.on[:, k] & moved[:, i] & ~moved[:, s]
             leave = active & self.on[:, k] & ~(over & resting)
             for worlds, on in ((np.flatnonzero(arrive), True), (np.flatnonzero(leave), False)):
