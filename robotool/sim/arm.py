@@ -35,6 +35,7 @@ GRASP_EQ_PREFIX = "robot_grasp__"
 HOME = (0.1, 0.0, 0.3)  # m, gripper centre at the start
 SPEED = 0.25  # m/s, straight-line reference speed
 SERVO_KP, SERVO_KV, SERVO_FORCE = 2000.0, 80.0, 100.0  # N/m, N s/m, N
+SERVO_FILTER = 0.05  # s: the servo follows a low-passed reference, so the tick-wise steps do not jerk
 REACHED = 0.005  # m: a move is done when the centre is this close to the target
 STALL_ERROR, STALL_SPEED, STALL_TIME = 0.01, 0.02, 0.3  # m, m/s, s
 TIME_MARGIN = 2.0  # s a move may take beyond distance / speed
@@ -90,7 +91,7 @@ class ArmEmbodiment:
                 armature=0.01,
             )
             act = spec.add_actuator(name=f"robot_{axis}", target=f"robot_{axis}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            act.set_to_position(kp=SERVO_KP, kv=SERVO_KV)
+            act.set_to_position(kp=SERVO_KP, kv=SERVO_KV, timeconst=SERVO_FILTER)
             act.ctrlrange = [lo[k], hi[k]]
             act.forcerange = [-SERVO_FORCE, SERVO_FORCE]
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
@@ -359,7 +360,7 @@ class ArmController:
         owner = self.scene.body_object
         touch = state.touching[w][self.finger_body]  # (2, nbody)
         by_finger = [set(owner[np.flatnonzero(t)]) - {-1} for t in touch]
-        for finger, under in zip(by_finger, self._sheets_under(state, w, grip), strict=True):
+        for finger, under in zip(by_finger, self._resting_under(state, w, grip), strict=True):
             finger |= under
         both = sorted(i for i in by_finger[0] & by_finger[1] if self.grasp_eq[i] >= 0)
         failures: list[tuple[GraspFailure, int, dict[str, float]]] = []
@@ -387,24 +388,26 @@ class ArmController:
         )
         return SkillEnd(w, "done", event.describe([]), measured, events=(event,))
 
-    def _sheets_under(self, state: BatchState, w: int, grip: _Grip) -> list[set[int]]:
-        """For each finger, the sheets its tip presses on: under its footprint, at most ON_SHEET below it."""
+    def _resting_under(self, state: BatchState, w: int, grip: _Grip) -> list[set[int]]:
+        """For each finger, the graspable objects its tip rests on (under its footprint, just below it).
+
+        Contacts report only what the tips press into; a tip resting on a top face, or on a sheet, may sit a
+        hair above it, so this reads the geometry: a tip corner over the object's top, within ON_SHEET.
+        """
         out: list[set[int]] = [set(), set()]
-        tip = np.array(
-            [grip.x, (grip.left, grip.left + 2 * FINGER_HALF[1]), (grip.right - 2 * FINGER_HALF[1], grip.right)]
-        )  # x, y spans of the left and right tips
-        for i in np.flatnonzero(self.sheet):
-            body = self.scene.object_body[i]
-            rot = state.xmat(body)[w]
-            half = np.asarray(self.scene.task.objects[i].size) / 2
-            top = state.xpos[w, body, 2] + float(half.min())
-            if not 0.0 <= grip.z[0] - top + ON_SHEET <= 2 * ON_SHEET:
-                continue
-            for f, ys in enumerate((tip[1], tip[2])):
-                corners = np.array([[x, y, top] for x in tip[0] for y in ys])
-                local = (corners - state.xpos[w, body]) @ rot
-                if np.any(np.all(np.abs(local[:, :2]) <= half[:2], axis=1)):
-                    out[f].add(int(i))
+        tips = [
+            np.array([[x, y] for x in grip.x for y in ys])
+            for ys in ((grip.left, grip.left + 2 * FINGER_HALF[1]), (grip.right - 2 * FINGER_HALF[1], grip.right))
+        ]
+        for i in np.flatnonzero(self.grasp_eq >= 0):
+            geoms = self.object_geoms[i]
+            _, hi = _geom_extents(self.scene, state, w, geoms)
+            for g, top in zip(geoms, hi[:, 2], strict=True):
+                if not -ON_TOP <= grip.z[0] - top <= ON_SHEET:
+                    continue
+                for f, corners in enumerate(tips):
+                    if _over_geom(self.scene, state, w, int(g), corners):
+                        out[f].add(int(i))
         return out
 
     def _fit(self, state: BatchState, w: int, i: int, grip: _Grip) -> tuple[GraspFailure | None, dict[str, float]]:
@@ -458,6 +461,23 @@ class ArmController:
         if skill == "get_size":
             return [float(v) for v in self.scene.task.objects[i].size]
         raise QueryError(f"{skill} is not a query skill of the arm")
+
+
+def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.ndarray) -> bool:
+    """Whether any of the x-y ``points`` lies over the footprint of a box or upright cylinder geom in world ``w``."""
+    model = scene.model
+    body = model.geom_bodyid[geom]
+    body_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
+    geom_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
+    rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
+    centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    local = (np.column_stack([points, np.full(len(points), centre[2])]) - centre) @ rot
+    size = model.geom_size[geom]
+    if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        return bool(np.any(np.hypot(local[:, 0], local[:, 1]) <= size[0]))
+    return bool(np.any(np.all(np.abs(local[:, :2]) <= size[:2], axis=1)))
 
 
 def _geom_extents(scene: Scene, state: BatchState, w: int, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -30,10 +30,10 @@ from robotool.sim.embodiment import Embodiment, embodiment_for
 TIMESTEP = 0.002  # s, physics step
 GROUND_FRICTION = 0.5
 DEFAULT_FRICTION = 0.5
-# Welds (grasps, magnetic joins) are nearly hard: MuJoCo's soft constraints are mass-normalised, so a
-# light object's weld gives way in proportion to 1 / mass under a given force. The shortest stable time
-# constant (2 steps) and an impedance near 1 keep a 50 g cube within a fraction of a degree under the
-# servo's full force.
+# Welds (grasps, magnetic joins) are nearly hard. MuJoCo scales a constraint's stiffness with the
+# bodies' effective mass, so under a given force a light object's weld gives way in proportion to
+# 1 / mass; the shortest stable time constant (2 steps) and an impedance of 0.999 keep a chain of 50 g
+# cubes within about a degree when the servo shoves it sideways with ~40 N (tests/test_sim_grasp.py).
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
 WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate
