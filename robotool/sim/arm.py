@@ -46,7 +46,7 @@ FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm o
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
 CLAMP_TOLERANCE = 1e-4  # m: a target this close to the workspace counts as inside (no clamp is reported)
-ON_SHEET = 0.003  # m: a fingertip this close above a sheet it overlaps presses on it
+ON_SHEET = 0.003  # m: a fingertip this close above a top face (or a sheet) it overlaps rests on it
 PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
 CONTACT_SOLREF, CONTACT_SOLIMP = (0.005, 1.0), (0.95, 0.99, 0.001, 0.5, 2.0)  # the gripper's hard surfaces
 PALM_HALF = (0.02, 0.05, 0.01)  # m
@@ -304,15 +304,15 @@ class ArmController:
         """Add a ``pushed_out`` event for each loose object pushed further out of the workspace during the skill."""
         lo, hi = np.asarray(self.limits.workspace_min), np.asarray(self.limits.workspace_max)
         points = graspable_points(self.scene, state)
-        held = held_objects(self.scene, state)
         out = []
         for end in ends:
             w = end.world
+            carried = self._carried(state, w)
             before = np.linalg.norm(self.start_points[w] - np.clip(self.start_points[w], lo, hi), axis=1)
             after = np.linalg.norm(points[w] - np.clip(points[w], lo, hi), axis=1)
             pushed = np.linalg.norm(points[w] - self.start_points[w], axis=1)
             events = list(end.events)
-            for i in np.flatnonzero(self.movable & (after - before > PUSHED_OUT) & (np.arange(len(after)) != held[w])):
+            for i in np.flatnonzero(self.movable & (after - before > PUSHED_OUT) & ~carried):
                 centre = state.xpos[w, self.scene.object_body[i]]
                 events.append(
                     Event(
@@ -328,6 +328,25 @@ class ArmController:
                 )
             out.append(replace(end, events=tuple(events)))
         return out
+
+    def _carried(self, state: BatchState, w: int) -> np.ndarray:
+        """Objects the gripper carries in world ``w``: held, or joined to what it carries by an active weld."""
+        model, owner = self.scene.model, self.scene.body_object
+        carried = np.zeros(len(self.scene.object_names), dtype=bool)
+        reach = {self.gripper}
+        grown = True
+        while grown:
+            grown = False
+            for eq in np.flatnonzero(state.eq_active[w]):
+                a, b = int(model.eq_obj1id[eq]), int(model.eq_obj2id[eq])
+                for x, y in ((a, b), (b, a)):
+                    if x in reach and y not in reach:
+                        reach.add(y)
+                        grown = True
+        for body in reach:
+            if owner[body] >= 0:
+                carried[owner[body]] = True
+        return carried
 
     def _tick_fingers(self, state: BatchState) -> list[SkillEnd]:
         worlds = np.flatnonzero((self.mode == _FINGERS) & (state.time - self.started >= GRIPPER_TIME - 1e-9))
