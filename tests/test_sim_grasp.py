@@ -10,6 +10,7 @@ import pytest
 from fixtures.reference import program
 
 from robotool import sim, tasks
+from robotool.eval.errors import TaskFacts, classify, tools_used
 from robotool.scene import parse_task
 from robotool.verify import world_failure
 
@@ -195,6 +196,8 @@ def test_papers_hammer_program_fails_and_says_why(sim_scene: Any, run_texts: Any
         reason = world_failure(r)
         assert reason.startswith("goal not reached: milk_held")
         assert "clamped" in reason and "milk was pushed" in reason and "held nothing" in reason
+        facts = TaskFacts.of(sim_scene("milk_reaching").task, needs_tool=True, needed=frozenset({"hammer"}))
+        assert tools_used(r, facts) == {"hammer"} and classify(r, facts) == "numerical"  # from typed events
 
 
 def test_a_lifted_sheet_carries_nothing(sim_scene: Any) -> None:
