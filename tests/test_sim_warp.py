@@ -30,7 +30,7 @@ def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rol
     assert [r.success for r in warp_rollouts] == [r.success for r in c_rollouts] == [True, False, True]
     for w, c in zip(warp_rollouts, c_rollouts, strict=True):
         assert [(k.skill, k.outcome) for k in w.calls] == [(k.skill, k.outcome) for k in c.calls]
-        assert w.sim_time == pytest.approx(c.sim_time, abs=0.1)
+        assert w.sim_time == pytest.approx(c.sim_time, abs=0.3)  # float32 contacts: a stall may end a tick or two apart
 
 
 def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
