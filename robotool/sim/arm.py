@@ -449,7 +449,8 @@ class ArmController:
                 "width": width,
                 "opening": self.limits.gripper_opening,
             }
-        if grip.gap <= 0.0:
+        between = (lo[:, 1] < grip.left) & (hi[:, 1] > grip.right)  # some of it lies between the fingers
+        if grip.gap <= 0.0 or not between.any():
             return "not_between", {}
         return None, {"width": grip.gap, "opening": self.limits.gripper_opening}
 
