@@ -171,10 +171,16 @@ def world_failure(rollout: Rollout) -> str | None:
     else:
         unmet = [name for name, ok in rollout.conditions.items() if not ok]
         head = "goal not reached: " + ", ".join(unmet) if unmet else "goal not reached"
-    told = telling_events(rollout.events)
+    told = telling_events(rollout.events or _call_events(rollout))
     if not told:
         return head
     return head + "; before that: " + "; ".join(e.describe(rollout.calls) for e in told)
+
+
+def _call_events(rollout: Rollout) -> list[Event]:
+    """Events read from the calls' outcomes, for rollouts recorded without events (older results)."""
+    return [Event(kind=c.outcome, call=k, time=c.ended, measured=c.measured, detail=c.reason)
+            for k, c in enumerate(rollout.calls) if c.outcome in ("stalled", "timeout", "refused")]
 
 
 def telling_events(events: Sequence[Event]) -> list[Event]:

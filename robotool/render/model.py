@@ -150,7 +150,7 @@ def render_model(scene: Scene, *, shadows: bool = True) -> RenderModel:
     colours = object_colours(scene.task)
     for g in range(model.ngeom):
         body = model.geom_bodyid[g]
-        if body == 0:
+        if body == 0 or model.geom_rgba[g, 3] == 0:  # invisible helpers (a sheet's carriers) stay unseen
             continue
         obj = scene.body_object[body]
         if obj >= 0:
