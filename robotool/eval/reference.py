@@ -13,7 +13,12 @@ tool" (tool-use error) from "used some of the tools but left a step out" (logica
 from __future__ import annotations
 
 PAPER_TASKS: tuple[str, ...] = (
-    "milk_reaching", "can_grasping", "button_pressing", "sofa_traversing", "sofa_climbing", "cube_lifting",
+    "milk_reaching",
+    "can_grasping",
+    "button_pressing",
+    "sofa_traversing",
+    "sofa_climbing",
+    "cube_lifting",
 )
 """The paper's six tasks, in its column order."""
 
@@ -28,7 +33,11 @@ PAPER_SUCCESS: dict[str, tuple[float, ...]] = {
 """Table 1: method -> success per task in :data:`PAPER_TASKS` order."""
 
 PAPER_SUCCESS_AVERAGE: dict[str, float] = {
-    "robotool": 0.87, "no_analyzer": 0.42, "no_calculator": 0.25, "planner_coder": 0.20, "coder": 0.07,
+    "robotool": 0.87,
+    "no_analyzer": 0.42,
+    "no_calculator": 0.25,
+    "planner_coder": 0.20,
+    "coder": 0.07,
     "RoboTool (real world)": 0.77,
 }
 """Table 1's Average column as printed."""

@@ -40,15 +40,22 @@ _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 class MujocoSim:
     """:class:`~robotool.sim.backend.BatchedSim` on C MuJoCo (deterministic for a given seed)."""
 
-    def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
-                 nthread: int | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        nworld: int,
+        perturbation: Perturbation,
+        *,
+        njmax: int,
+        nconmax: int,
+        nthread: int | None = None,
+    ):
         self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax
         self.models = [copy.copy(scene.model) for _ in range(nworld)]
         self.datas = [mujoco.MjData(m) for m in self.models]
         qpos0 = perturbation.initial_qpos(scene)
         for w, (m, d) in enumerate(zip(self.models, self.datas, strict=True)):
-            perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass,
-                                        inertia=m.body_inertia)
+            perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass, inertia=m.body_inertia)
             d.qpos[:] = qpos0[w]
             mujoco.mj_forward(m, d)
         model = scene.model
@@ -136,10 +143,17 @@ class MujocoSim:
 
     def state(self) -> BatchState:
         """Copies of the gathered state (safe to keep across steps)."""
-        return BatchState(time=self._time.copy(), qpos=self._qpos.copy(), qvel=self._qvel.copy(),
-                          xpos=self._xpos.copy(), xquat=self._xquat.copy(), sensordata=self._sensordata.copy(),
-                          eq_active=self._eq_active.copy(), touching=self._touching.copy(),
-                          failed=list(self._failed))
+        return BatchState(
+            time=self._time.copy(),
+            qpos=self._qpos.copy(),
+            qvel=self._qvel.copy(),
+            xpos=self._xpos.copy(),
+            xquat=self._xquat.copy(),
+            sensordata=self._sensordata.copy(),
+            eq_active=self._eq_active.copy(),
+            touching=self._touching.copy(),
+            failed=list(self._failed),
+        )
 
     def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
         """Attach (at the current relative pose) or detach weld ``eq`` in ``worlds``."""

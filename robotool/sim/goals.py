@@ -48,8 +48,10 @@ class GraspedGoal:
         gripper = self.scene.model.body("robot_gripper").id
         point = graspable_points(self.scene, state)[:, self.index]
         offset = np.linalg.norm(point - state.xpos[:, gripper], axis=1)
-        return {f"{name}_held": held_objects(self.scene, state) == self.index,
-                f"{name}_in_gripper": offset <= 2 * self.radius}
+        return {
+            f"{name}_held": held_objects(self.scene, state) == self.index,
+            f"{name}_in_gripper": offset <= 2 * self.radius,
+        }
 
 
 class PressedGoal:

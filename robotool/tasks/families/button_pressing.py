@@ -40,16 +40,19 @@ def chain_reach(cubes: int) -> float:
     return 0.45 + CUBE / 2 + CUBE * (cubes - 1)
 
 
-def cubes(rng: np.random.Generator, prefix: str, count: int, avoid: list[tuple[float, float, float, float]],
-          magnetic: bool) -> list[SceneObject]:
+def cubes(
+    rng: np.random.Generator, prefix: str, count: int, avoid: list[tuple[float, float, float, float]], magnetic: bool
+) -> list[SceneObject]:
     """``count`` small cubes on the table within reach, clear of ``avoid`` (which grows as they are placed)."""
-    notes = ("a small magnetic cube; magnetic cubes stick together when they touch" if magnetic
-             else "a small wooden cube")
+    notes = (
+        "a small magnetic cube; magnetic cubes stick together when they touch" if magnetic else "a small wooden cube"
+    )
     placed = []
     for i in range(count):
         spot = spot_for(rng, (CUBE, CUBE), (0.15, -0.35, 0.43, 0.35), avoid, 0.03)
-        placed.append(on_top(f"{prefix}{i + 1}", "box", spot, (CUBE, CUBE, CUBE), mass=0.05, magnetic=magnetic,
-                             notes=notes))
+        placed.append(
+            on_top(f"{prefix}{i + 1}", "box", spot, (CUBE, CUBE, CUBE), mass=0.05, magnetic=magnetic, notes=notes)
+        )
         avoid.append((spot[0] - CUBE / 2, spot[1] - CUBE / 2, spot[0] + CUBE / 2, spot[1] + CUBE / 2))
     return placed
 
@@ -59,11 +62,20 @@ def build(rng: np.random.Generator) -> Draft:
     variant = draw_variant(rng)
     layout = draw_layout(rng, arm=True)
     count = {"no_tool": int(rng.integers(3, 5)), "tool": int(rng.integers(3, 5)), "unsolvable": 2}[variant]
-    face = {"no_tool": uniform(rng, 0.30, 0.43), "tool": uniform(rng, 0.47, chain_reach(count) - 0.02),
-            "unsolvable": uniform(rng, chain_reach(2) + 0.035, chain_reach(2) + 0.06)}[variant]
+    face = {
+        "no_tool": uniform(rng, 0.30, 0.43),
+        "tool": uniform(rng, 0.47, chain_reach(count) - 0.02),
+        "unsolvable": uniform(rng, chain_reach(2) + 0.035, chain_reach(2) + 0.06),
+    }[variant]
     by = uniform(rng, -0.15, 0.15)
-    button = on_top("button", "button", (face + BUTTON[0] / 2, by), BUTTON, movable=False,
-                    notes="a button housing; its face on the -x side is pressed by pushing it 1 cm towards +x")
+    button = on_top(
+        "button",
+        "button",
+        (face + BUTTON[0] / 2, by),
+        BUTTON,
+        movable=False,
+        notes="a button housing; its face on the -x side is pressed by pushing it 1 cm towards +x",
+    )
     corridor = (0.10, by - 0.08, face + BUTTON[0], by + 0.08)
     base = (-0.15, -0.15, 0.15, 0.15)
     avoid = [corridor, base]
@@ -73,14 +85,29 @@ def build(rng: np.random.Generator) -> Draft:
         plain = cubes(rng, "wooden_cube", int(rng.integers(1, 3)), avoid, magnetic=False)
         scene += plain
         decoys += [o.name for o in plain]
-    scene += scatter(rng, scene, int(rng.integers(0, 3)), ARM_CLUTTER, (-0.28, -0.44, 0.42, 0.44),
-                     [corridor, base, (0.12, -0.38, 0.46, 0.38)], movable=False, margin=0.04)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 3)),
+        ARM_CLUTTER,
+        (-0.28, -0.44, 0.42, 0.44),
+        [corridor, base, (0.12, -0.38, 0.46, 0.38)],
+        movable=False,
+        margin=0.04,
+    )
     tool = ", ".join(o.name for o in scene if o.magnetic) if variant == "tool" else None
     outside = face - 0.45
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
     return Draft(
-        variant=variant, category="tool_manufacturing", instruction="Press the button.", robot={"type": "arm"},
-        objects=[layout.place(o) for o in scene], goal={"pressed": "button"}, tool=tool, decoys=decoys,
-        layout=layout, varied=f"button face at x = {face:.2f} m ({where}), {count} magnetic cubes; "
-                              f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        variant=variant,
+        category="tool_manufacturing",
+        instruction="Press the button.",
+        robot={"type": "arm"},
+        objects=[layout.place(o) for o in scene],
+        goal={"pressed": "button"},
+        tool=tool,
+        decoys=decoys,
+        layout=layout,
+        varied=f"button face at x = {face:.2f} m ({where}), {count} magnetic cubes; "
+        f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
