@@ -1,7 +1,8 @@
 """Ground-truth key concepts: the quantities that decide whether a task needs a tool.
 
 They are computed from the scene's geometry and the robot's limits alone (never from a task's
-name or category) and grade the Analyzer stage: gap width vs the gap limit, height to climb vs
+name or category), with the legs' limits read as :mod:`robotool.terrain` reads them (one tolerance), and grade
+the Analyzer stage: gap width vs the gap limit, height to climb vs
 the climb limit, how far a target lies outside the arm's workspace, mass vs the push limit, and
 how far a fragile object would fall.
 """
@@ -16,6 +17,7 @@ from pydantic import BaseModel, Field
 from robotool import geometry
 from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject, Task
+from robotool.terrain import TOLERANCE
 
 ConceptKind = Literal[
     "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
@@ -118,7 +120,7 @@ def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]
         if gap > 0:
             concepts.append(KeyConcept(
                 name=f"gap between {start_name} and {obj.name}", kind="gap_width", value=round(gap, 4),
-                limit=limits.max_gap, limit_name="max_gap", satisfied=gap <= limits.max_gap))
+                limit=limits.max_gap, limit_name="max_gap", satisfied=gap <= limits.max_gap + TOLERANCE))
     elif kind == "lifted":
         lift = task.goal.lifted.height  # type: ignore[union-attr]
         concepts.append(KeyConcept(
@@ -146,12 +148,12 @@ def _height_change(
         return [KeyConcept(
             name=f"height to climb from {from_name} onto {to_name}", kind="climb_height",
             value=round(rise, 4), limit=limits.max_step_up, limit_name="max_step_up",
-            satisfied=rise <= limits.max_step_up)]
+            satisfied=rise <= limits.max_step_up + TOLERANCE)]
     if rise < -1e-6:
         return [KeyConcept(
             name=f"height to step down from {from_name} onto {to_name}", kind="drop_height",
             value=round(-rise, 4), limit=limits.max_step_down, limit_name="max_step_down",
-            satisfied=-rise <= limits.max_step_down)]
+            satisfied=-rise <= limits.max_step_down + TOLERANCE)]
     return []
 
 

@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-Outcome = Literal["done", "stalled", "timeout", "refused", "error"]
+Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
 
 class SkillCall(BaseModel):

@@ -19,10 +19,10 @@ import robotool
 from robotool import tasks
 from robotool.cli import main
 
-REFUSALS = {  # quadruped task -> (skill refused, measured key, value) for its tool-free program
-    "sofa_traversing": ("walk_to_position", "gap", 0.40),
-    "sofa_climbing": ("climb_to_position", "step", 0.34),
-    "cube_lifting": ("push_to_position", "mass", 10.0),
+REFUSALS = {  # quadruped task -> (skill refused, measured key, value, tolerance) for its tool-free program
+    "sofa_traversing": ("walk_to_position", "gap", 0.30, 0.02),  # beyond the end of the board reaching over it
+    "sofa_climbing": ("climb_to_position", "step", 0.34, 0.02),
+    "cube_lifting": ("push_to_position", "mass", 10.0, 1.5),  # the cube's mass in the world, perturbed by 15 %
 }
 
 
@@ -64,9 +64,9 @@ def test_tool_free_program_fails_with_the_reason(
     for rollout in data["rollouts"]:
         assert not rollout["success"] and not all(rollout["conditions"].values())
         if task in REFUSALS:
-            skill, key, value = REFUSALS[task]
+            skill, key, value, tolerance = REFUSALS[task]
             (refused,) = [c for c in rollout["calls"] if c["outcome"] == "refused"]
-            assert refused["skill"] == skill and refused["measured"][key] == pytest.approx(value, abs=0.02)
+            assert refused["skill"] == skill and refused["measured"][key] == pytest.approx(value, abs=tolerance)
             assert "exceeds the" in refused["reason"]
             assert f"{skill} refused: {refused['reason']}" in out  # the summary's "why it failed"
             assert f"{key} {refused['measured'][key]:.3g}" in out  # the trace's measured value

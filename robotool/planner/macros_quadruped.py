@@ -26,7 +26,7 @@ INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
 OVERLAP = 0.15  # m a bridge rests on each side of a gap
 CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
 SIDE = 0.25  # m the robot keeps from a board it walks beside
-FALL_OFF = 0.08  # m an object pushed off an edge goes past it (beyond its own half size)
+FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
 MAX_STEPS = 2  # objects a staircase may use below the target
 
 
@@ -382,14 +382,14 @@ class Writer:
         """Push ``name`` to ``xy``; when the push skill's own way to where it lines up is predicted blocked, walk
         there first around what stands in the way."""
         limits = self.quad.limits
-        problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
-        staging = push_staging(self.layout, name, xy, self.quad.half, self.level) if problem else None
+        problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
+        staging = push_staging(self.layout, name, xy, limits, self.level) if problem else None
         if problem and problem.startswith("the way to push") and staging is not None:
             path = detour(self.layout, self.here, staging, limits)
             if walk_violation(self.layout, self.here, path, limits) is None:
                 for via in path:
                     self.walk(via, self.surface, f"walk to where the push of {name} lines up")
-                problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
+                problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
         ref = self.position(name)
         start = self.layout.box(name).center
         self.prog.motion("push_to_position", obj=name, point=Point.at(ref, (*(xy - start), 0.0)),

@@ -2,12 +2,13 @@
 
 Each program runs until it calls a motion skill or ends; query skills are answered at once from the
 current state; the batch then steps, one control tick at a time, until the pending motion skills
-finish (done, stalled, timeout, refused), and the programs whose skill finished are resumed. The
+finish (done, stalled, timeout, refused, fell), and the programs whose skill finished are resumed. The
 runner resumes every such world first and only then waits on each (so sandboxed programs run in
-parallel). A program that errors or ends is finished for its world only. Skill arguments are checked on
-this side of the sandbox, positions against the scene's box (:func:`scene_box`); an exception inside
-the skill controller fails the world it happened in with the reason, never the batch. Each world yields a
-:class:`~robotool.rollout.Rollout`.
+parallel). A program that errors or ends is finished for its world only; its world then runs on for
+``SETTLE_AFTER`` simulated seconds with the robot holding still (what rocks or tips comes to rest, a
+falling object lands) before the goal is read. Skill arguments are checked on this side of the sandbox,
+positions against the scene's box (:func:`scene_box`); an exception inside the skill controller fails the
+world it happened in with the reason, never the batch. Each world yields a :class:`~robotool.rollout.Rollout`.
 """
 
 from __future__ import annotations
@@ -26,12 +27,14 @@ from robotool.rollout import Rollout, SkillCall
 from robotool.scene import Task
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import QueryError, SkillController, SkillEnd
+from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
+SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
+FALL_CONDITION = "robot_has_not_fallen"  # the condition a controller whose robot can fall adds to every goal
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
@@ -46,6 +49,8 @@ class _World:
     pending: SkillCall | None = None
     pending_args: tuple[Any, ...] = ()
     ended: bool = False
+    settle_until: float = np.inf  # simulated time when the ended world's goal is read
+    finished: bool = False
     error: str | None = None
     output: str = ""
     conditions: dict[str, bool] = field(default_factory=dict)
@@ -124,6 +129,11 @@ class _Run:
         self.t0 = np.zeros(nworld)
 
     def alive(self) -> np.ndarray:
+        """Worlds still stepped: running a program, or settling after it."""
+        return np.array([not w.finished for w in self.worlds])
+
+    def running(self) -> np.ndarray:
+        """Worlds whose program has not ended."""
         return np.array([not w.ended for w in self.worlds])
 
     def run(self, seeds: Sequence[int]) -> list[Rollout]:
@@ -143,6 +153,7 @@ class _Run:
             if self.recorder is not None:
                 self.recorder.capture(state, self.sim.mocap_pos)
             self._observe(state)
+            self._finish_settled(state)
             ends = self._tick(state)
             if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one
                 state = self.sim.state()
@@ -171,7 +182,7 @@ class _Run:
             for i in to_wait:
                 message = self.worlds[i].session.wait()
                 if isinstance(message, ProgramEnded):
-                    self._end(i, state, message.error, message.output)
+                    self._end(i, state, message.error, message.output, settle=True)
                 elif self._request(i, state, message):
                     again.append(i)
                 elif not self.worlds[i].ended:
@@ -231,19 +242,40 @@ class _Run:
             resumed.append(end.world)
         return resumed
 
-    def _end(self, i: int, state: BatchState, error: str | None, output: str = "") -> None:
+    def _end(self, i: int, state: BatchState, error: str | None, output: str = "", settle: bool = False) -> None:
+        """The program of world ``i`` ended; with ``settle`` its world runs on before the goal is read."""
         world = self.worlds[i]
         if world.ended:
             return
         world.ended, world.error, world.output = True, error, output
         world.sim_time = float(state.time[i] - self.t0[i])
-        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
         self._mark_held(state, np.arange(self.sim.nworld) == i)
         if world.pending is not None:
             world.pending.outcome, world.pending.reason = "error", error
             world.pending.ended = world.sim_time
             world.pending = None
         world.session.close()
+        if settle and state.failed[i] is None:
+            world.settle_until = float(state.time[i]) + SETTLE_AFTER
+        else:
+            self._read_goal(i, state)
+
+    def _finish_settled(self, state: BatchState) -> None:
+        """Read the goal of every ended world that has settled (or whose physics failed while settling)."""
+        for i, world in enumerate(self.worlds):
+            if world.ended and not world.finished and (state.time[i] >= world.settle_until - 1e-9
+                                                       or state.failed[i] is not None):
+                self._read_goal(i, state)
+
+    def _read_goal(self, i: int, state: BatchState) -> None:
+        world = self.worlds[i]
+        world.finished = True
+        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
+        failures = controller_failures(self.controller)
+        if failures is not None:
+            world.conditions[FALL_CONDITION] = failures[i] is None
+        if state.failed[i] is not None and world.error is None:
+            world.error = f"simulation failed: {state.failed[i]}"
 
     # -- physics bookkeeping -------------------------------------------------------------------
 
@@ -261,7 +293,7 @@ class _Run:
         np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
         self.touched |= touched & alive[:, None]
         self._mark_held(state, alive)
-        for i in np.flatnonzero(alive):
+        for i in np.flatnonzero(alive & self.running()):
             if state.failed[i] is not None:
                 self._end(i, state, f"simulation failed: {state.failed[i]}")
             elif state.time[i] - self.t0[i] > self.max_sim_time:

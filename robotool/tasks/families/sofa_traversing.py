@@ -68,10 +68,13 @@ def build(rng: np.random.Generator) -> Draft:
                         mass=cloth.mass, notes=cloth.notes))
     decoys = [cloth.name]
 
+    overhang = surfboard.center[0] + surfboard.size[0] / 2 - edge  # the template's board reaches over the gap
+
     def board(size_x: float, mass: float | None, notes: str | None) -> SceneObject:
-        """A board on sofa_1 (on the cloth where they overlap), its +x end at the gap's edge like the template's."""
-        return on_top("surfboard", "box", (edge - size_x / 2, surfboard.center[1]), (size_x, *surfboard.size[1:]),
-                      height + cloth.size[2], mass=mass, notes=notes)
+        """A board on sofa_1 (on the cloth where they overlap), its +x end over the gap like the template's, so
+        that the robot has room on sofa_1 to stand behind it and push."""
+        return on_top("surfboard", "box", (edge + overhang - size_x / 2, surfboard.center[1]),
+                      (size_x, *surfboard.size[1:]), height + cloth.size[2], mass=mass, notes=notes)
 
     mass = uniform(rng, 0.85, 1.15) * (surfboard.mass or 3.0)
     if variant != "unsolvable":
@@ -84,7 +87,7 @@ def build(rng: np.random.Generator) -> Draft:
     # Unsolvable scenes have no rigid board at all, only the cloth: a heavy board can be shoved by the walking
     # robot until it wedges across the gap, and a short one can lodge in the gap as a filler.
     x0, y0 = base.robot.position  # type: ignore[misc]
-    start = (uniform(rng, x0 - 0.05, x0), uniform(rng, y0 - 0.1, y0 + 0.1))
+    start = (uniform(rng, x0 - 0.02, x0 + 0.02), uniform(rng, y0 - 0.1, y0 + 0.1))  # the feet on sofa_1
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     area = hull([footprint(o) for o in scene] + [body])
     scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
