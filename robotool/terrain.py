@@ -106,7 +106,7 @@ def scan_paths(
     measured = np.zeros(npath)
     skip = np.zeros(npath, dtype=int)
     rows = np.arange(npath)
-    run = int(round(SLOPE_RUN / SPACING))
+    run = round(SLOPE_RUN / SPACING)
     trail = np.concatenate([np.repeat(current[:, None], run, axis=1), np.full((npath, n), np.nan)], axis=1)
     for k in range(n):
         live = kind == 0

@@ -45,7 +45,7 @@ LEG_SLACK = 0.05  # m a leg reaches below the deepest step down
 LEG_RETRACT = 0.05  # m a leg can pull its foot up above the nominal stance
 OFF = -100.0  # lift setpoint that saturates the motor at zero force
 TILT_DAMPING = 3.0  # N m s/rad on pitch and roll (the legs' joint friction; it never holds the body up)
-ROBOT_GROUP = 3  # geom group of the robot's geoms
+ROBOT_GROUP = 2  # geom group of the robot's geoms (shown by default; rays leave it out)
 GRAVITY = 9.81
 
 
