@@ -108,10 +108,22 @@ def scan_paths(
     rows = np.arange(npath)
     run = round(SLOPE_RUN / SPACING)
     trail = np.concatenate([np.repeat(current[:, None], run, axis=1), np.full((npath, n), np.nan)], axis=1)
-    for k in range(n):
+    changes = np.flatnonzero(np.any(np.abs(np.diff(heights, axis=1)) > 1e-9, axis=0)) + 1
+    busy = np.zeros(n + run + 1, dtype=bool)  # samples within SLOPE_RUN after a change (or the first)
+    for c in np.concatenate([[0], changes]):
+        busy[c : c + run + 1] = True
+    k = 0
+    while k < n:
         live = kind == 0
         if not live.any():
             break
+        if not busy[k]:  # flat for every path since the last change: each keeps its level (or strides on)
+            end = k + int(np.argmax(busy[k:n])) if busy[k:n].any() else n
+            level[live, k:end] = current[live, None]
+            trail[:, k + run : end + run] = current[:, None]
+            skip = np.maximum(skip - (end - k), 0)
+            k = end
+            continue
         h = heights[:, k]
         recent = trail[:, k : k + run]  # the levels over the last SLOPE_RUN
         low, high = np.fmin(np.nanmin(recent, axis=1), current), np.fmax(np.nanmax(recent, axis=1), current)
@@ -156,6 +168,7 @@ def scan_paths(
         ok = kind == 0
         level[ok, k] = current[ok]
         trail[:, k + run] = current
+        k += 1
     return PathScan(level=level, index=index, kind=kind, measured=measured)
 
 

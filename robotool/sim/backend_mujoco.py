@@ -161,12 +161,15 @@ class MujocoSim:
         geom = np.full((nworld, nray), -1, dtype=int)
         hit = np.zeros(1, dtype=np.int32)
         groups = geom_groups(skip_group)
+        pnt, vec = np.ascontiguousarray(pnt, dtype=np.float64), np.ascontiguousarray(vec, dtype=np.float64)
+        ray = mujoco.mj_ray
         for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])) if nray else ():
             m, d = self.models[w], self.datas[w]
-            for r in range(nray):
-                x = mujoco.mj_ray(m, d, pnt[w, r], vec[w, r], groups, 1, exclude_body, hit)
-                if x >= 0:
-                    dist[w, r], geom[w, r] = x, hit[0]
+            found = [(r, x, int(hit[0])) for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
+                     if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0]
+            if found:
+                rows, x, g = zip(*found, strict=True)
+                dist[w, list(rows)], geom[w, list(rows)] = x, g
         return dist, geom
 
     def close(self) -> None:
