@@ -42,6 +42,7 @@ from robotool.terrain import (
     FOOT_RADIUS,
     KINDS,
     LOOKAHEAD,
+    RADIUS_SAMPLES,
     RISE,
     SPACING,
     Finding,
@@ -82,7 +83,6 @@ SUPPORT_MARGIN = -0.02  # m: the support polygon grown by this much before the c
 LOCAL = np.array([-FOOT_RADIUS, 0.0, FOOT_RADIUS, LIFT_AHEAD / 2, LIFT_AHEAD])  # per-tick samples along a foot's path
 SAMPLES = round((BACK + SCAN_AHEAD + LOOKAHEAD) / SPACING) + 1
 BEHIND = round(BACK / SPACING)  # the sample under a foot at scan time
-RADIUS_SAMPLES = int(np.ceil(FOOT_RADIUS / SPACING))
 
 Outcome = tuple[str, str | None, dict[str, float]]
 
@@ -592,7 +592,10 @@ class QuadrupedController:
             w, foot = int(worlds[k]), int(np.argmax(carried[k]))
             where = centres[k, foot, :2]
             self.findings[w] = Finding(
-                "gap", round(float(carried[k, foot]), 3), self.limits.max_gap, (float(where[0]), float(where[1])),
+                "gap",
+                round(float(carried[k, foot]), 3),
+                self.limits.max_gap,
+                (float(where[0]), float(where[1])),
                 FOOT_NAMES[foot],
             )
             self.stop[w] = float(travel[k])
