@@ -150,3 +150,46 @@ def test_goals_are_read_after_the_world_settled(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(runner._Run, "_read_goal", read_goal)
     sim.run_programs(tasks.load("sofa_climbing"), [lambda robot: robot.walk_to_position([0.3, 0.0, 0.0])])
     assert read_at[0] >= ended_at[0] + runner.SETTLE_AFTER - 1e-6
+
+
+def _crate_in_the_way() -> Any:
+    """sofa_climbing's floor with a 0.4 m high crate (too high to climb) between the robot and x = 2."""
+    data = tasks.load("sofa_climbing").model_dump(mode="json", exclude_defaults=True)
+    data["objects"].append(
+        {
+            "name": "crate",
+            "shape": "box",
+            "center": [1.0, 0.0, 0.2],
+            "size": [0.4, 0.6, 0.4],
+            "movable": False,
+            "notes": "a tall crate",
+        }
+    )
+    return parse_task(data)
+
+
+def test_a_walk_goes_around_what_it_cannot_climb_or_refuses_naming_it() -> None:
+    def around(robot: Any) -> None:
+        robot.walk_to_position([1.8, 0.0, 0.0])
+
+    def onto(robot: Any) -> None:
+        robot.walk_to_position([1.0, 0.0, 0.4])
+
+    around_run, onto_run = sim.run_programs(_crate_in_the_way(), [around, onto], perturb=False)
+    (walk,) = around_run.calls
+    assert walk.outcome == "done" and walk.result is None
+    (refused,) = onto_run.calls
+    assert refused.outcome == "refused" and "step up of 0.40 m" in refused.reason
+
+
+def test_a_push_is_refused_when_the_robot_would_stand_over_a_drop() -> None:
+    """The vase lies 0.15 m from the sofa's +y edge: to push it toward -y the robot would stand beyond that edge."""
+
+    def program(robot: Any) -> None:
+        robot.push_to_position("glass_vase", [3.0, 0.3, 0.39])
+
+    data = tasks.load("vase_lowering").model_dump(mode="json", exclude_defaults=True)
+    data["robot"]["position"] = [3.0, 0.0]  # on the sofa, behind the vase
+    (rollout,) = sim.run_programs(parse_task(data), [program], perturb=False)
+    (push,) = rollout.calls
+    assert push.outcome == "refused" and "no clear place to stand" in push.reason and "drop" in push.reason
