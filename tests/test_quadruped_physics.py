@@ -144,7 +144,7 @@ def test_goals_are_read_after_the_world_settled(monkeypatch: pytest.MonkeyPatch)
 
     def read_goal(self: Any, i: int, state: Any) -> None:
         read_at.append(float(state.time[i] - self.t0[i]))
-        ended_at.append(self.worlds[i].sim_time)
+        ended_at.append(self.worlds[i].calls[-1].ended)
         original(self, i, state)
 
     monkeypatch.setattr(runner._Run, "_read_goal", read_goal)

@@ -270,6 +270,7 @@ class _Run:
     def _read_goal(self, i: int, state: BatchState) -> None:
         world = self.worlds[i]
         world.finished = True
+        world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
         world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
         failures = controller_failures(self.controller)
         if failures is not None:
