@@ -106,8 +106,10 @@ class Case:
         return PROGRAMS / f"{self.task}.py"
 
 
-CASES = {"arm": Case("button_pressing", button_pressing, "arm"),
-         "quadruped": Case("sofa_climbing", sofa_climbing, "quadruped")}
+CASES = {
+    "arm": Case("button_pressing", button_pressing, "arm"),
+    "quadruped": Case("sofa_climbing", sofa_climbing, "quadruped"),
+}
 
 
 def check_port(scene: sim.Scene, case: Case, nworld: int = 3) -> None:
@@ -245,15 +247,21 @@ def rollout_replay(rec: Recording) -> RolloutReplay:
         p = pos[worlds[0]]
         if (pos[worlds] != p).any():
             raise SystemExit("active worlds out of step: cannot replay as one rollout")
-        control[worlds, p:p + nstep, :model.nu] = ctrl[:, None]
-        control[worlds, p:p + nstep, model.nu:] = eq_active[:, None]
+        control[worlds, p : p + nstep, : model.nu] = ctrl[:, None]
+        control[worlds, p : p + nstep, model.nu :] = eq_active[:, None]
         pos[worlds] += nstep
     short = np.flatnonzero(steps < length)
     control[short, steps[short], 0] = np.nan  # bad ctrl: rollout stops this world after one more step
     nstate = mujoco.mj_stateSize(model, FULLPHYSICS)
-    return RolloutReplay(models=s.models, initial=rec.initial, warmstart=rec.warmstart, control=control, steps=steps,
-                         state=np.zeros((s.nworld, length, nstate)),
-                         sensordata=np.zeros((s.nworld, length, model.nsensordata)))
+    return RolloutReplay(
+        models=s.models,
+        initial=rec.initial,
+        warmstart=rec.warmstart,
+        control=control,
+        steps=steps,
+        state=np.zeros((s.nworld, length, nstate)),
+        sensordata=np.zeros((s.nworld, length, model.nsensordata)),
+    )
 
 
 def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
@@ -264,9 +272,17 @@ def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
         with rollout.Rollout(nthread=nthread) as pool:
             datas = [mujoco.MjData(rep.models[0]) for _ in range(nthread)]
             start = time.perf_counter()
-            pool.rollout(rep.models, datas, rep.initial, rep.control, control_spec=CONTROL_SPEC,
-                         nstep=rep.control.shape[1], initial_warmstart=rep.warmstart, state=rep.state,
-                         sensordata=rep.sensordata)
+            pool.rollout(
+                rep.models,
+                datas,
+                rep.initial,
+                rep.control,
+                control_spec=CONTROL_SPEC,
+                nstep=rep.control.shape[1],
+                initial_warmstart=rep.warmstart,
+                state=rep.state,
+                sensordata=rep.sensordata,
+            )
             wall = time.perf_counter() - start
     finally:
         mujoco.set_mju_user_warning(previous)
@@ -275,7 +291,7 @@ def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
 
 def rollout_final_qpos(rep: RolloutReplay, nq: int) -> np.ndarray:
     last = rep.state[np.arange(len(rep.steps)), rep.steps - 1]
-    return last[:, 1:1 + nq]  # full physics state: time, qpos, qvel, ...
+    return last[:, 1 : 1 + nq]  # full physics state: time, qpos, qvel, ...
 
 
 def raw_rollout_resting_rate(scene: sim.Scene, nworld: int, nstep: int, nthread: int = 2) -> float:
@@ -303,8 +319,13 @@ def _warp_kernels() -> tuple[Any, Any]:
     import warp as wp
 
     @wp.kernel
-    def apply_tick(tick: wp.array(dtype=int), ctrl_all: wp.array3d(dtype=float), eq_all: wp.array3d(dtype=bool),
-                   ctrl: wp.array2d(dtype=float), eq_active: wp.array2d(dtype=bool)):
+    def apply_tick(
+        tick: wp.array(dtype=int),
+        ctrl_all: wp.array3d(dtype=float),
+        eq_all: wp.array3d(dtype=bool),
+        ctrl: wp.array2d(dtype=float),
+        eq_active: wp.array2d(dtype=bool),
+    ):
         w = wp.tid()
         t = tick[0]
         for j in range(ctrl.shape[1]):
@@ -429,8 +450,10 @@ def measure(scene: sim.Scene, case: Case, backend: str, nworld: int, repeat: int
         rep = rollout_replay(rec)
     else:
         wrep = warp_replay(rec, scene)
-        saved = {k: getattr(wrep.sim.d, k).numpy().copy()
-                 for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")}
+        saved = {
+            k: getattr(wrep.sim.d, k).numpy().copy()
+            for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")
+        }
     run_rate, replay_rate, rest_rate, same = 0.0, 0.0, 0.0, True
     for _ in range(repeat):  # interleaved, so all see the same machine load
         wall, times = runner_pass(scene, case, nworld, backend)
@@ -444,11 +467,16 @@ def measure(scene: sim.Scene, case: Case, backend: str, nworld: int, repeat: int
             rest_rate = max(rest_rate, raw_warp_resting_rate(scene, nworld, per_world, scene.control_substeps))
     replayed = rollout_final_qpos(rep, nq) if backend == "mujoco" else wrep.sim.d.qpos.numpy().astype(float)
     dq = float(np.abs(replayed - expected).max())
-    check = f"{dq:.1e}" + ("" if same else ", runner passes differ!") + (f", {reattached} re-attached!" if reattached
-                                                                        else "")
+    check = (
+        f"{dq:.1e}"
+        + ("" if same else ", runner passes differ!")
+        + (f", {reattached} re-attached!" if reattached else "")
+    )
     label = "mujoco (rollout, 2 thr)" if backend == "mujoco" else "warp (mjw.step graph)"
-    return (f"| {case.embodiment}: {label} | {nworld} | {per_world:,} | {run_rate:,.0f} | {replay_rate:,.0f} | "
-            f"{run_rate / replay_rate:.2f} | {rest_rate:,.0f} | {run_rate / rest_rate:.2f} | {check} |")
+    return (
+        f"| {case.embodiment}: {label} | {nworld} | {per_world:,} | {run_rate:,.0f} | {replay_rate:,.0f} | "
+        f"{run_rate / replay_rate:.2f} | {rest_rate:,.0f} | {run_rate / rest_rate:.2f} | {check} |"
+    )
 
 
 def main() -> None:
@@ -462,11 +490,15 @@ def main() -> None:
     scenes = [sim.build(tasks.load(case.task)) for case in cases]
     for case, scene in zip(cases, scenes, strict=True):
         check_port(scene, case)
-        print(f"{case.embodiment}, task {case.task}: nq={scene.model.nq}, ngeom={scene.model.ngeom}, "
-              f"control every {scene.control_substeps} steps of {scene.model.opt.timestep} s")
+        print(
+            f"{case.embodiment}, task {case.task}: nq={scene.model.nq}, ngeom={scene.model.ngeom}, "
+            f"control every {scene.control_substeps} steps of {scene.model.opt.timestep} s"
+        )
     print(f"load average {os.getloadavg()[0]:.2f}\n")
-    print("| embodiment: backend (raw) | nworld | steps/world | runner (world-steps/s) | raw replay (world-steps/s) "
-          "| runner/replay | raw, resting (world-steps/s) | runner/resting | replay max abs dqpos |")
+    print(
+        "| embodiment: backend (raw) | nworld | steps/world | runner (world-steps/s) | raw replay (world-steps/s) "
+        "| runner/replay | raw, resting (world-steps/s) | runner/resting | replay max abs dqpos |"
+    )
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for backend in args.backends:
         for nworld in args.sizes:

@@ -30,9 +30,7 @@ class Rollout(BaseModel):
     world: int
     seed: int
     success: bool
-    conditions: dict[str, bool] = Field(
-        default_factory=dict, description="the goal's named sub-conditions at the end"
-    )
+    conditions: dict[str, bool] = Field(default_factory=dict, description="the goal's named sub-conditions at the end")
     calls: list[SkillCall] = Field(default_factory=list)
     touched: list[str] = Field(default_factory=list, description="objects the robot moved or met")
     sim_time: float = 0.0

@@ -81,8 +81,11 @@ def test_tool_free_program_fails_with_the_reason(
     [
         ("import os\n", 2, "error: {path}: line 1: import of 'os' is not allowed"),
         ('grasp("milk")\n', 2, "error: {path}: line 1: unknown function 'grasp'; the arm's skills are: get_center"),
-        ("open_gripper()\nmove_to_position([0.5, 0, 0.1]\n", 2, "error: {path}: line 2: syntax error at column 17: "
-         "'(' was never closed"),
+        (
+            "open_gripper()\nmove_to_position([0.5, 0, 0.1]\n",
+            2,
+            "error: {path}: line 2: syntax error at column 17: '(' was never closed",
+        ),
         ("while True:\n    pass\n", 1, "CPU time limit exceeded (2 s)"),
     ],
 )
@@ -102,8 +105,12 @@ def test_bad_program_ends_with_one_line_reason(
 def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:
     path = tmp_path / "loop.py"
     path.write_text("open_gripper()\nwhile True:\n    pass\n")
-    result = subprocess.run([sys.executable, "-m", "robotool", "run", "milk_reaching_near", str(path)],
-                            capture_output=True, text=True, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "robotool", "run", "milk_reaching_near", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stdout + result.stderr
     assert "CPU time limit exceeded (2 s)" in result.stdout and "success rate 0%" in result.stdout
@@ -112,8 +119,9 @@ def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:
 def test_json_report_matches_the_library(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     report = tmp_path / "report.json"
     path = str(program_path("button_pressing"))
-    status, out, _ = run_cli(capsys, "button_pressing", path, "--worlds", "2", "--seed", "4", "--backend", "mujoco",
-                             "--json", str(report))
+    status, out, _ = run_cli(
+        capsys, "button_pressing", path, "--worlds", "2", "--seed", "4", "--backend", "mujoco", "--json", str(report)
+    )
     data: dict[str, Any] = json.loads(report.read_text())
     assert status == 0 and f"wrote the report to {report}" in out
     assert data["success"] is True and data["success_rate"] == 1.0

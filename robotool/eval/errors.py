@@ -58,15 +58,23 @@ class TaskFacts(BaseModel):
         """Facts of ``task``; ``needed`` are its reference tools when known."""
         target = task.goal.object
         movable = frozenset(o.name for o in task.objects if o.movable and o.name != target)
-        return cls(target=target, needs_tool=needs_tool, needed=needed, tools=movable | (needed or frozenset()),
-                   motion_skills=frozenset(s.name for s in skills(task.embodiment) if s.kind == "motion"))
+        return cls(
+            target=target,
+            needs_tool=needs_tool,
+            needed=needed,
+            tools=movable | (needed or frozenset()),
+            motion_skills=frozenset(s.name for s in skills(task.embodiment) if s.kind == "motion"),
+        )
 
 
 def tools_used(rollout: Rollout, facts: TaskFacts) -> set[str]:
     """The tools a world's program named in a skill call or held in the gripper."""
     named = {a for call in rollout.calls for a in call.args if isinstance(a, str)}
-    held = {call.reason.removeprefix(_HOLDING) for call in rollout.calls
-            if call.skill == "close_gripper" and call.reason and call.reason.startswith(_HOLDING)}
+    held = {
+        call.reason.removeprefix(_HOLDING)
+        for call in rollout.calls
+        if call.skill == "close_gripper" and call.reason and call.reason.startswith(_HOLDING)
+    }
     return (named | held) & facts.tools
 
 

@@ -118,8 +118,13 @@ class Layout:
         return parts
 
 
-def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.ndarray], limits: QuadrupedLimits,
-                   exclude: Iterable[str] = ()) -> str | None:
+def walk_violation(
+    layout: Layout,
+    start: np.ndarray,
+    waypoints: Iterable[np.ndarray],
+    limits: QuadrupedLimits,
+    exclude: Iterable[str] = (),
+) -> str | None:
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
     The feet's paths are checked as the simulator checks them (:func:`robotool.terrain.check_walk`). Just outside
@@ -147,14 +152,17 @@ def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.nda
         across = np.stack([points + k * lateral for k in (-width, 0.0, width, -flank, flank)])
         heights = layout.heights(across.reshape(-1, 2), skip).reshape(5, -1)
         if (rub := heights[3:].max(axis=0) - heights[:3].max(axis=0)).max() > BRUSH:
-            return (f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
-                    f"[{goal[0]:.2f}, {goal[1]:.2f}]")
+            return (
+                f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
+                f"[{goal[0]:.2f}, {goal[1]:.2f}]"
+            )
         here = goal
     return None
 
 
-def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits,
-           exclude: Iterable[str] = ()) -> list[np.ndarray]:
+def detour(
+    layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
+) -> list[np.ndarray]:
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else through the
     shortest one (or, failing that, two) of the L-corners and the corners of nearby objects (grown by the body)
     that makes it fine."""
@@ -178,17 +186,19 @@ def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: Quadrupe
             return [via, goal]
     out = [v for v in vias if fine(start, v)]
     into = [v for v in vias if fine(v, goal)]
-    pairs = sorted(((a, b) for a in out for b in into if a is not b),
-                   key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0])
-                                       + np.linalg.norm(goal - p[1])))
+    pairs = sorted(
+        ((a, b) for a in out for b in into if a is not b),
+        key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0]) + np.linalg.norm(goal - p[1])),
+    )
     for a, b in pairs[:40]:  # around two corners
         if fine(a, b):
             return [a, b, goal]
     return [goal]
 
 
-def push_problem(layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float,
-                 here: np.ndarray | None = None) -> tuple[str | None, np.ndarray]:
+def push_problem(
+    layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float, here: np.ndarray | None = None
+) -> tuple[str | None, np.ndarray]:
     """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.sim.quadruped_push`): one
     straight leg per axis, the shorter first, the robot's face against the object's, slid along the face to the
     nearest offset whose sweep (from where it lines up, else from the start pose, to the end of the push plus the
@@ -203,9 +213,14 @@ def push_problem(layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedL
         end_center = box.center.copy()
         end_center[axis] = leg.target
         steps = max(2, int(abs(end_center[axis] - box.center[axis]) / 0.05) + 1)
-        hit = next((h for f in np.linspace(0.0, 1.0, steps)
-                    if (h := layout.collides(box.moved_to(box.center + f * (end_center - box.center)), ignore=[name]))),
-                   None)
+        hit = next(
+            (
+                h
+                for f in np.linspace(0.0, 1.0, steps)
+                if (h := layout.collides(box.moved_to(box.center + f * (end_center - box.center)), ignore=[name]))
+            ),
+            None,
+        )
         if hit:
             return f"{name} would run into {hit}", robot
         pose = _push_pose(layout, name, box, leg, limits, floor)
@@ -223,8 +238,9 @@ def push_problem(layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedL
     return None, robot
 
 
-def push_staging(layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits,
-                 floor: float) -> np.ndarray | None:
+def push_staging(
+    layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float
+) -> np.ndarray | None:
     """Where the push skill lines the robot up for the first leg of a push of ``name`` to ``dest`` (None: no leg, or
     nowhere clear to stand)."""
     box = layout.box(name)
@@ -233,8 +249,9 @@ def push_staging(layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedL
     return None if pose is None else pose[2]
 
 
-def _push_pose(layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits,
-               floor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def _push_pose(
+    layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The skill's choice of start and end poses for one leg, and its staging point (None: nowhere clear)."""
     half = np.asarray(limits.body_size[:2]) / 2
     offsets = lateral_offsets(float(box.hi[1 - leg.axis] - box.lo[1 - leg.axis]), 2 * float(half[1 - leg.axis]))

@@ -54,11 +54,14 @@ class BatchState:
         """Rotation matrices of one body in every world, (nworld, 3, 3)."""
         q = self.xquat[:, body]
         w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-        return np.stack([
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ], axis=1)
+        return np.stack(
+            [
+                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+            ],
+            axis=1,
+        )
 
 
 class BatchedSim(Protocol):
@@ -84,8 +87,9 @@ class BatchedSim(Protocol):
     def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
         """Activate weld ``eq`` at the current relative pose of its two bodies, or deactivate it."""
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1,
-             skip_group: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Cast rays (nworld, nray, 3) from ``pnt`` along ``vec`` against the current geoms.
 
         Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
@@ -112,28 +116,54 @@ class Perturbation:
         return cls(np.ones(nworld), np.ones((nworld, nobj)), np.zeros((nworld, nobj, 3)))
 
     @classmethod
-    def sample(cls, scene: Scene, nworld: int, seed: int, *, friction: float = 0.2, mass: float = 0.15,
-               shift: float = 0.005, yaw_deg: float = 2.0) -> Perturbation:
+    def sample(
+        cls,
+        scene: Scene,
+        nworld: int,
+        seed: int,
+        *,
+        friction: float = 0.2,
+        mass: float = 0.15,
+        shift: float = 0.005,
+        yaw_deg: float = 2.0,
+    ) -> Perturbation:
         """Uniform relative friction and mass noise and small pose noise of movable objects, seeded."""
         rng = np.random.default_rng(seed)
         nobj = len(scene.object_names)
         movable = np.array([o.movable for o in scene.task.objects], dtype=float)
-        offset = np.concatenate([rng.uniform(-shift, shift, (nworld, nobj, 2)),
-                                 rng.uniform(-1, 1, (nworld, nobj, 1)) * np.radians(yaw_deg)], axis=2)
-        return cls(friction_scale=rng.uniform(1 - friction, 1 + friction, nworld),
-                   mass_scale=1 + movable * rng.uniform(-mass, mass, (nworld, nobj)),
-                   offset=offset * movable[None, :, None])
+        offset = np.concatenate(
+            [
+                rng.uniform(-shift, shift, (nworld, nobj, 2)),
+                rng.uniform(-1, 1, (nworld, nobj, 1)) * np.radians(yaw_deg),
+            ],
+            axis=2,
+        )
+        return cls(
+            friction_scale=rng.uniform(1 - friction, 1 + friction, nworld),
+            mass_scale=1 + movable * rng.uniform(-mass, mass, (nworld, nobj)),
+            offset=offset * movable[None, :, None],
+        )
 
     @classmethod
     def for_seeds(cls, scene: Scene, seeds: Sequence[int]) -> Perturbation:
         """World ``w`` perturbed from ``seeds[w]`` alone, so equal seeds give equal worlds in any batch."""
         worlds = [cls.sample(scene, 1, seed) for seed in seeds]
-        return cls(friction_scale=np.concatenate([w.friction_scale for w in worlds]),
-                   mass_scale=np.concatenate([w.mass_scale for w in worlds]),
-                   offset=np.concatenate([w.offset for w in worlds]))
+        return cls(
+            friction_scale=np.concatenate([w.friction_scale for w in worlds]),
+            mass_scale=np.concatenate([w.mass_scale for w in worlds]),
+            offset=np.concatenate([w.offset for w in worlds]),
+        )
 
-    def apply_to_model(self, scene: Scene, model: mujoco.MjModel, world: int, *, friction: np.ndarray,
-                       mass: np.ndarray, inertia: np.ndarray) -> None:
+    def apply_to_model(
+        self,
+        scene: Scene,
+        model: mujoco.MjModel,
+        world: int,
+        *,
+        friction: np.ndarray,
+        mass: np.ndarray,
+        inertia: np.ndarray,
+    ) -> None:
         """Write world ``world``'s friction, mass and inertia into per-world model arrays."""
         friction[:, 0] = scene.model.geom_friction[:, 0] * self.friction_scale[world]
         mass[:] = scene.model.body_mass
@@ -150,13 +180,13 @@ class Perturbation:
             if not scene.task.objects[i].movable:
                 continue
             adr = model.jnt_qposadr[model.joint(f"{name}__free").id]
-            qpos[:, adr:adr + 2] += self.offset[:, i, :2]
+            qpos[:, adr : adr + 2] += self.offset[:, i, :2]
             half = self.offset[:, i, 2] / 2
             dq = np.stack([np.cos(half), 0 * half, 0 * half, np.sin(half)], axis=1)
             for w in range(qpos.shape[0]):
                 out = np.zeros(4)
-                mujoco.mju_mulQuat(out, dq[w], qpos[w, adr + 3:adr + 7])
-                qpos[w, adr + 3:adr + 7] = out
+                mujoco.mju_mulQuat(out, dq[w], qpos[w, adr + 3 : adr + 7])
+                qpos[w, adr + 3 : adr + 7] = out
         return qpos
 
 
@@ -181,8 +211,9 @@ def geom_groups(skip_group: int) -> np.ndarray:
     return groups
 
 
-def touching_from_contacts(nbody: int, geom_body: np.ndarray, world: np.ndarray, geom: np.ndarray,
-                           dist: np.ndarray, nworld: int) -> np.ndarray:
+def touching_from_contacts(
+    nbody: int, geom_body: np.ndarray, world: np.ndarray, geom: np.ndarray, dist: np.ndarray, nworld: int
+) -> np.ndarray:
     """(nworld, nbody, nbody) touching matrix from a flat contact list."""
     out = np.zeros((nworld, nbody, nbody), dtype=bool)
     near = dist <= TOUCH_DISTANCE
@@ -192,8 +223,15 @@ def touching_from_contacts(nbody: int, geom_body: np.ndarray, world: np.ndarray,
     return out
 
 
-def make_sim(scene: Scene, nworld: int, *, backend: BackendName = "mujoco", perturbation: Perturbation | None = None,
-             njmax: int | None = None, nconmax: int | None = None) -> BatchedSim:
+def make_sim(
+    scene: Scene,
+    nworld: int,
+    *,
+    backend: BackendName = "mujoco",
+    perturbation: Perturbation | None = None,
+    njmax: int | None = None,
+    nconmax: int | None = None,
+) -> BatchedSim:
     """A batched simulator of ``nworld`` worlds on ``backend`` (``mujoco`` or ``warp``).
 
     ``njmax``/``nconmax`` (constraint rows and contacts per world) default to the scene's sizes;
@@ -203,8 +241,13 @@ def make_sim(scene: Scene, nworld: int, *, backend: BackendName = "mujoco", pert
         raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(_BACKENDS)}")
     module_name, cls_name = _BACKENDS[backend].split(":")
     cls = getattr(importlib.import_module(module_name), cls_name)
-    return cls(scene, nworld, perturbation or Perturbation.none(scene, nworld),
-               njmax=njmax or scene.njmax, nconmax=nconmax or scene.nconmax)
+    return cls(
+        scene,
+        nworld,
+        perturbation or Perturbation.none(scene, nworld),
+        njmax=njmax or scene.njmax,
+        nconmax=nconmax or scene.nconmax,
+    )
 
 
 @functools.cache

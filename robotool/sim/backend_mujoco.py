@@ -40,15 +40,22 @@ _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 class MujocoSim:
     """:class:`~robotool.sim.backend.BatchedSim` on C MuJoCo (deterministic for a given seed)."""
 
-    def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
-                 nthread: int | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        nworld: int,
+        perturbation: Perturbation,
+        *,
+        njmax: int,
+        nconmax: int,
+        nthread: int | None = None,
+    ):
         self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax
         self.models = [copy.copy(scene.model) for _ in range(nworld)]
         self.datas = [mujoco.MjData(m) for m in self.models]
         qpos0 = perturbation.initial_qpos(scene)
         for w, (m, d) in enumerate(zip(self.models, self.datas, strict=True)):
-            perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass,
-                                        inertia=m.body_inertia)
+            perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass, inertia=m.body_inertia)
             d.qpos[:] = qpos0[w]
             mujoco.mj_forward(m, d)
         model = scene.model
@@ -137,10 +144,17 @@ class MujocoSim:
 
     def state(self) -> BatchState:
         """Copies of the gathered state (safe to keep across steps)."""
-        return BatchState(time=self._time.copy(), qpos=self._qpos.copy(), qvel=self._qvel.copy(),
-                          xpos=self._xpos.copy(), xquat=self._xquat.copy(), sensordata=self._sensordata.copy(),
-                          eq_active=self._eq_active.copy(), touching=self._touching.copy(),
-                          failed=list(self._failed))
+        return BatchState(
+            time=self._time.copy(),
+            qpos=self._qpos.copy(),
+            qvel=self._qvel.copy(),
+            xpos=self._xpos.copy(),
+            xquat=self._xquat.copy(),
+            sensordata=self._sensordata.copy(),
+            eq_active=self._eq_active.copy(),
+            touching=self._touching.copy(),
+            failed=list(self._failed),
+        )
 
     def set_weld(self, worlds: np.ndarray, eq: int, active: bool) -> None:
         """Attach (at the current relative pose) or detach weld ``eq`` in ``worlds``."""
@@ -153,8 +167,9 @@ class MujocoSim:
             d.eq_active[eq] = active
             self._eq_active[w, eq] = active
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1,
-             skip_group: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
         nworld, nray = pnt.shape[:2]
         dist = np.full((nworld, nray), np.inf)
@@ -165,8 +180,11 @@ class MujocoSim:
         ray = mujoco.mj_ray
         for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])) if nray else ():
             m, d = self.models[w], self.datas[w]
-            found = [(r, x, int(hit[0])) for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
-                     if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0]
+            found = [
+                (r, x, int(hit[0]))
+                for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
+                if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0
+            ]
             if found:
                 rows, x, g = zip(*found, strict=True)
                 dist[w, list(rows)], geom[w, list(rows)] = x, g

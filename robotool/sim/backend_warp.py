@@ -23,8 +23,16 @@ _OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}
 class WarpSim:
     """:class:`~robotool.sim.backend.BatchedSim` on mujoco_warp."""
 
-    def __init__(self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int,
-                 device: str | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        nworld: int,
+        perturbation: Perturbation,
+        *,
+        njmax: int,
+        nconmax: int,
+        device: str | None = None,
+    ):
         wp.config.log_level = wp.LOG_ERROR
         wp.config.log_level = wp.LOG_WARNING  # no per-module load messages
         wp.init()
@@ -37,8 +45,11 @@ class WarpSim:
             self.m = mjw.put_model(model, batch_sizes=dict.fromkeys(_BATCHED, nworld))
             self.m.opt.warn_overflow = 0  # overflowing worlds are reported as failed instead
             self.d = mjw.put_data(model, mjd, nworld=nworld, nconmax=nconmax, njmax=njmax)
-            friction, mass, inertia = (self.m.geom_friction.numpy(), self.m.body_mass.numpy(),
-                                       self.m.body_inertia.numpy())
+            friction, mass, inertia = (
+                self.m.geom_friction.numpy(),
+                self.m.body_mass.numpy(),
+                self.m.body_inertia.numpy(),
+            )
             for w in range(nworld):
                 perturbation.apply_to_model(scene, model, w, friction=friction[w], mass=mass[w], inertia=inertia[w])
             self.m.geom_friction.assign(friction)
@@ -67,8 +78,9 @@ class WarpSim:
             graph = self._graphs.get(nstep)
             if graph is None:
                 self._substeps(nstep)  # loads the kernels; capture needs them loaded
-                saved = {k: getattr(self.d, k).numpy().copy() for k in ("qpos", "qvel", "act", "time",
-                                                                        "qacc_warmstart")}
+                saved = {
+                    k: getattr(self.d, k).numpy().copy() for k in ("qpos", "qvel", "act", "time", "qacc_warmstart")
+                }
                 with wp.ScopedCapture() as capture:
                     self._substeps(nstep)
                 for key, value in saved.items():
@@ -81,19 +93,36 @@ class WarpSim:
     def _read(self) -> BatchState:
         d, model = self.d, self.scene.model
         nacon = int(d.nacon.numpy()[0])
-        touching = touching_from_contacts(model.nbody, model.geom_bodyid, d.contact.worldid.numpy()[:nacon],
-                                          d.contact.geom.numpy()[:nacon], d.contact.dist.numpy()[:nacon],
-                                          self.nworld)
+        touching = touching_from_contacts(
+            model.nbody,
+            model.geom_bodyid,
+            d.contact.worldid.numpy()[:nacon],
+            d.contact.geom.numpy()[:nacon],
+            d.contact.dist.numpy()[:nacon],
+            self.nworld,
+        )
         overflow = d.overflow.numpy()
         qpos, qvel = d.qpos.numpy().astype(float), d.qvel.numpy().astype(float)
         finite = np.isfinite(qpos).all(axis=1) & np.isfinite(qvel).all(axis=1)
-        failed = [("overflow: " + ", ".join(name for bit, name in _OVERFLOWS.items() if flags & bit)) if flags
-                  else None if ok else "physics diverged (non-finite state)"
-                  for flags, ok in zip(overflow, finite, strict=True)]
-        return BatchState(time=d.time.numpy().astype(float), qpos=qpos,
-                          qvel=qvel, xpos=d.xpos.numpy().astype(float),
-                          xquat=d.xquat.numpy().astype(float), sensordata=d.sensordata.numpy().astype(float),
-                          eq_active=d.eq_active.numpy().astype(bool), touching=touching, failed=failed)
+        failed = [
+            ("overflow: " + ", ".join(name for bit, name in _OVERFLOWS.items() if flags & bit))
+            if flags
+            else None
+            if ok
+            else "physics diverged (non-finite state)"
+            for flags, ok in zip(overflow, finite, strict=True)
+        ]
+        return BatchState(
+            time=d.time.numpy().astype(float),
+            qpos=qpos,
+            qvel=qvel,
+            xpos=d.xpos.numpy().astype(float),
+            xquat=d.xquat.numpy().astype(float),
+            sensordata=d.sensordata.numpy().astype(float),
+            eq_active=d.eq_active.numpy().astype(bool),
+            touching=touching,
+            failed=failed,
+        )
 
     def state(self) -> BatchState:
         """The state read back after the last step."""
@@ -113,8 +142,9 @@ class WarpSim:
             self.m.eq_data.assign(self._eq_data)
             self.d.eq_active.assign(self._eq_active)
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1,
-             skip_group: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit."""
         nworld, nray = pnt.shape[:2]
         skipped = np.isnan(pnt[:, :1, :1]) if nray else np.zeros((nworld, 1, 1), dtype=bool)
@@ -124,9 +154,18 @@ class WarpSim:
             geom = wp.zeros((nworld, nray), dtype=int)
             normal = wp.zeros((nworld, nray), dtype=wp.vec3)
             groups = wp.types.vector(6, wp.float32)(*(-1 if g else 0 for g in geom_groups(skip_group)))
-            mjw.rays(self.m, self.d, wp.array(start.astype(np.float32), dtype=wp.vec3),
-                     wp.array(vec.astype(np.float32), dtype=wp.vec3), groups, True,
-                     wp.full(nray, exclude_body, dtype=int), dist, geom, normal)
+            mjw.rays(
+                self.m,
+                self.d,
+                wp.array(start.astype(np.float32), dtype=wp.vec3),
+                wp.array(vec.astype(np.float32), dtype=wp.vec3),
+                groups,
+                True,
+                wp.full(nray, exclude_body, dtype=int),
+                dist,
+                geom,
+                normal,
+            )
         d, g = dist.numpy().astype(float), geom.numpy().astype(int)
         miss = (d < 0) | skipped[:, :, 0]
         return np.where(miss, np.inf, d), np.where(miss, -1, g)

@@ -105,4 +105,3 @@ def embodiment_for(task: Task) -> Embodiment:
     module_name, cls_name = _EMBODIMENTS[task.robot.type].split(":")
     cls = getattr(importlib.import_module(module_name), cls_name)
     return cls(task.limits)
-

@@ -63,11 +63,20 @@ def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[Tru
     return [TrustedSession(p, names) for p in programs]
 
 
-def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed: int = 0,
-                 world_seeds: Sequence[int] | None = None,
-                 backend: BackendName = "mujoco", perturb: bool = True, njmax: int | None = None,
-                 nconmax: int | None = None, max_sim_time: float = MAX_SIM_TIME,
-                 max_skill_calls: int = MAX_SKILL_CALLS, recorder: StateRecorder | None = None) -> list[Rollout]:
+def run_sessions(
+    task: Task | Scene,
+    sessions: Sequence[ProgramSession],
+    *,
+    seed: int = 0,
+    world_seeds: Sequence[int] | None = None,
+    backend: BackendName = "mujoco",
+    perturb: bool = True,
+    njmax: int | None = None,
+    nconmax: int | None = None,
+    max_sim_time: float = MAX_SIM_TIME,
+    max_skill_calls: int = MAX_SKILL_CALLS,
+    recorder: StateRecorder | None = None,
+) -> list[Rollout]:
     """Run one program session per world and return one :class:`~robotool.rollout.Rollout` each.
 
     ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
@@ -111,8 +120,15 @@ def run_programs(task: Task | Scene, programs: Sequence[TrustedProgram], **kwarg
 class _Run:
     """One lockstep run; see :func:`run_sessions`."""
 
-    def __init__(self, scene: Scene, sim: BatchedSim, sessions: Sequence[ProgramSession],
-                 max_sim_time: float, max_skill_calls: int, recorder: StateRecorder | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        sim: BatchedSim,
+        sessions: Sequence[ProgramSession],
+        max_sim_time: float,
+        max_skill_calls: int,
+        recorder: StateRecorder | None = None,
+    ):
         self.scene, self.sim, self.recorder = scene, sim, recorder
         self.max_sim_time, self.max_skill_calls = max_sim_time, max_skill_calls
         self.worlds = [_World(s) for s in sessions]
@@ -206,8 +222,11 @@ class _Run:
         try:
             args = check_call(self.embodiment_name, request.name, request.args, self.box)
         except SkillArgumentError as e:
-            world.calls.append(SkillCall(skill=request.name, args=_jsonable(request.args), outcome="error",
-                                         reason=str(e), started=t, ended=t))
+            world.calls.append(
+                SkillCall(
+                    skill=request.name, args=_jsonable(request.args), outcome="error", reason=str(e), started=t, ended=t
+                )
+            )
             world.session.resume(SkillReply(error=str(e)))
             return True
         call = SkillCall(skill=request.name, args=_jsonable(args), outcome="done", started=t, ended=t)
@@ -263,8 +282,11 @@ class _Run:
     def _finish_settled(self, state: BatchState) -> None:
         """Read the goal of every ended world that has settled (or whose physics failed while settling)."""
         for i, world in enumerate(self.worlds):
-            if world.ended and not world.finished and (state.time[i] >= world.settle_until - 1e-9
-                                                       or state.failed[i] is not None):
+            if (
+                world.ended
+                and not world.finished
+                and (state.time[i] >= world.settle_until - 1e-9 or state.failed[i] is not None)
+            ):
                 self._read_goal(i, state)
 
     def _read_goal(self, i: int, state: BatchState) -> None:
@@ -308,9 +330,17 @@ class _Run:
     def _rollout(self, i: int, world: _World, seed: int) -> Rollout:
         names = self.scene.object_names
         success = bool(world.conditions) and all(world.conditions.values()) and world.error is None
-        return Rollout(world=i, seed=seed, success=success, conditions=world.conditions, calls=world.calls,
-                       touched=[names[k] for k in np.flatnonzero(self.touched[i])], sim_time=world.sim_time,
-                       error=world.error, output=world.output)
+        return Rollout(
+            world=i,
+            seed=seed,
+            success=success,
+            conditions=world.conditions,
+            calls=world.calls,
+            touched=[names[k] for k in np.flatnonzero(self.touched[i])],
+            sim_time=world.sim_time,
+            error=world.error,
+            output=world.output,
+        )
 
 
 def _robot_welds(scene: Scene) -> list[tuple[int, int]]:
