@@ -38,6 +38,8 @@ from robotool.tasks.families._common import (
     uniform,
 )
 
+SIDEWAYS_BOARD_WIDTH = 0.75  # m: wider than the robot is long (0.65 m), for scenes turned a quarter
+
 
 def sofas(gap: float, height: float, offset: float = 0.0) -> list[SceneObject]:
     """The template's sofas, ``height`` high, sofa_2 ``gap`` metres beyond sofa_1's +x edge, ``offset`` across."""
@@ -88,6 +90,10 @@ def build(rng: np.random.Generator) -> Draft:
 
     overhang = surfboard.center[0] + surfboard.size[0] / 2 - edge  # the template's board reaches over the gap
 
+    # The robot never turns: in a scene turned a quarter it crosses with its flank leading, its feet as far apart
+    # across the board as its body is long, so the board must be wider than that there.
+    width = surfboard.size[1] if layout.turns % 2 == 0 else SIDEWAYS_BOARD_WIDTH
+
     def board(size_x: float, mass: float | None, notes: str | None) -> SceneObject:
         """A board on sofa_1 (on the cloth where they overlap), its +x end over the gap like the template's, so
         that the robot has room on sofa_1 to stand behind it and push."""
@@ -95,7 +101,7 @@ def build(rng: np.random.Generator) -> Draft:
             "surfboard",
             "box",
             (edge + overhang - size_x / 2, surfboard.center[1]),
-            (size_x, *surfboard.size[1:]),
+            (size_x, width, surfboard.size[2]),
             height + cloth.size[2],
             mass=mass,
             notes=notes,
