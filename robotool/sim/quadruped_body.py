@@ -13,10 +13,11 @@ contacts can be read apart. x and y are driven by force-limited position servos 
 lift motor that can only push up, with a force bounded by :data:`LIFT_FACTOR` times the robot's weight, and pitch
 and roll have torque motors bounded by :data:`TILT_FACTOR` (weight times metres) that the controller uses only to
 hold the body level while the lift carries it; it switches both on only while a foot crosses a step, a small gap or
-a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet. Robot
-contacts are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
-servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot and pushing does not
-lift what is pushed. Robot geoms are in geom group :data:`ROBOT_GROUP`, which the terrain rays skip.
+a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet. The feet
+and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
+servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot. The torso's faces
+grip what they push (:data:`TORSO_FRICTION`), so that an object pushed off-centre turns no more than friction lets
+it. Robot geoms are in geom group :data:`ROBOT_GROUP`, which the terrain rays skip.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ LEG_SLACK = 0.05  # m a leg reaches below the deepest step down
 LEG_RETRACT = 0.05  # m a leg can pull its foot up above the nominal stance
 OFF = -100.0  # lift setpoint that saturates the motor at zero force
 TILT_DAMPING = 3.0  # N m s/rad on pitch and roll (the legs' joint friction; it never holds the body up)
+TORSO_FRICTION = 0.5  # the torso's faces grip what they push (the feet stay frictionless)
 ROBOT_GROUP = 2  # geom group of the robot's geoms (shown by default; rays leave it out)
 GRAVITY = 9.81
 
@@ -131,7 +133,7 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         size=[sx / 2, sy / 2, (sz - BELLY_HEIGHT) / 2],
         pos=[0, 0, torso_z],
         mass=torso_mass,
-        **contact,
+        **(contact | {"condim": 3, "friction": [TORSO_FRICTION, 0.005, 0.0001]}),
     )
     reach = limits.max_step_down + LEG_SLACK
     for i, (px, py) in enumerate(foot_offsets(limits)):
