@@ -285,7 +285,10 @@ class _Run:
             if (
                 world.ended
                 and not world.finished
-                and (state.time[i] >= world.settle_until - 1e-9 or state.failed[i] is not None)
+                and (
+                    state.time[i] >= world.settle_until - self.scene.model.opt.timestep / 2
+                    or state.failed[i] is not None
+                )
             ):
                 self._read_goal(i, state)
 
