@@ -110,7 +110,7 @@ def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:
 
 @pytest.mark.parametrize(
     ("program", "scene"),
-    [("gap_short_walks", "sofa_traversing_small_gap"), ("sofa_short_climbs", "sofa_climbing_low_sofa")],
+    [("gap_one_walk", "sofa_traversing_small_gap"), ("sofa_short_climbs", "sofa_climbing_low_sofa")],
 )
 def test_the_same_walks_succeed_where_the_legs_allow_them(run_texts: Any, program: str, scene: str) -> None:
     rollouts = run_texts(_scene(scene), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
