@@ -46,7 +46,7 @@ LEG_SLACK = 0.05  # m a leg reaches below the deepest step down
 LEG_RETRACT = 0.05  # m a leg can pull its foot up above the nominal stance
 OFF = -100.0  # lift setpoint that saturates the motor at zero force
 TILT_DAMPING = 3.0  # N m s/rad on pitch and roll (the legs' joint friction; it never holds the body up)
-TORSO_FRICTION = 0.5  # the torso's faces grip what they push (the feet stay frictionless)
+TORSO_FRICTION = 0.25  # the torso's faces grip what they push (the feet stay frictionless)
 ROBOT_GROUP = 2  # geom group of the robot's geoms (shown by default; rays leave it out)
 GRAVITY = 9.81
 
