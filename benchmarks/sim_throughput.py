@@ -1,6 +1,7 @@
 """World-steps per second of the lockstep runner on a real arm task, next to raw stepping of the same physics.
 
-For each nworld, the runner executes the button_pressing reference program in nworld perturbed worlds.
+For each embodiment and nworld, the runner executes a reference program in nworld perturbed worlds: the arm's
+button_pressing and the quadruped's sofa_climbing.
 A recording pass (untimed, same seeds) wraps the backend's ``step`` and records each world's initial
 state, the ctrl and ``eq_active`` applied to every active world at every ``step(nstep, active)`` call,
 and the per-world weld ``eq_data`` (relative poses set at attach time). The raw baselines replay exactly
@@ -20,13 +21,13 @@ Both sides count the same world-steps (the recorded ones). The replay is checked
 replayed final qpos of every world is compared with the runner's (printed as max |dqpos|).
 "raw, resting" is the former baseline: the unperturbed scene at rest under constant controls.
 
-The program runs as a trusted callable, :func:`button_pressing`, so that the table measures the
-runner and not the sandbox (``benchmarks/sandbox_overhead.py`` measures that). It is a port of the
-reference program file ``tests/fixtures/programs/button_pressing.py``; before timing, both are run in a
-few worlds and must give identical rollouts.
+The program runs as a trusted callable (:func:`button_pressing`, :func:`sofa_climbing`), so that the table
+measures the runner and not the sandbox (``benchmarks/sandbox_overhead.py`` measures that). Each is a port of
+its reference program file in ``tests/fixtures/programs/``; before timing, both are run in a few worlds and
+must give identical rollouts.
 
-    python benchmarks/sim_throughput.py                       # nworld 1, 16, 64, 256; both backends
-    python benchmarks/sim_throughput.py --sizes 1 16 --backends mujoco
+    python benchmarks/sim_throughput.py                       # nworld 1, 16, 64, 256; both backends, both robots
+    python benchmarks/sim_throughput.py --sizes 64 --backends mujoco --embodiments arm quadruped
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ import contextlib
 import functools
 import os
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,14 +50,13 @@ from robotool import sim, tasks
 from robotool.sandbox import start_sessions
 from robotool.sim.backend import Perturbation, make_sim
 
-TASK = "button_pressing"
-PROGRAM_FILE = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "programs" / "button_pressing.py"
+PROGRAMS = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "programs"
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE  # laid out ctrl, then eq_active
 
 
 def button_pressing(robot: Any) -> None:
-    """PROGRAM_FILE as a trusted callable: chain the magnetic cubes into a stick, press the button."""
+    """programs/button_pressing.py as a trusted callable: chain the magnetic cubes into a stick, press the button."""
     clear, lift = 0.08, 0.004
     g = robot.get_graspable_point("magnetic_cube1")
     robot.open_gripper()
@@ -80,12 +80,44 @@ def button_pressing(robot: Any) -> None:
     robot.move_to_position([face - tip + 0.02, button[1], height])
 
 
-def check_port(scene: sim.Scene, nworld: int = 3) -> None:
+def sofa_climbing(robot: Any) -> None:
+    """programs/sofa_climbing.py as a trusted callable: push box_1 against box_2, climb them onto the sofa."""
+    margin = 0.05
+    box_1, size_1 = robot.get_position("box_1"), robot.get_size("box_1")
+    box_2, size_2 = robot.get_position("box_2"), robot.get_size("box_2")
+    sofa, sofa_size = robot.get_position("sofa"), robot.get_size("sofa")
+    step_x = box_2[0] - size_2[0] / 2 - size_1[0] / 2
+    robot.push_to_position("box_1", [step_x, box_2[1], box_1[2]])
+    robot_size = robot.get_size("robot")
+    robot.walk_to_position([step_x - size_1[0] / 2 - robot_size[0] / 2 - margin, box_2[1], 0.0])
+    robot.climb_to_position([sofa[0] + sofa_size[0] / 2 - robot_size[0] / 2 - margin, box_2[1], sofa[2]])
+
+
+@dataclass(frozen=True)
+class Case:
+    """An embodiment's benchmark: a built-in task and its reference program, trusted and as a file."""
+
+    task: str
+    program: Callable[[Any], None]
+    embodiment: str
+
+    @property
+    def file(self) -> Path:
+        return PROGRAMS / f"{self.task}.py"
+
+
+CASES = {
+    "arm": Case("button_pressing", button_pressing, "arm"),
+    "quadruped": Case("sofa_climbing", sofa_climbing, "quadruped"),
+}
+
+
+def check_port(scene: sim.Scene, case: Case, nworld: int = 3) -> None:
     """The trusted port and the sandboxed program file must roll out identically."""
-    trusted = sim.run_programs(scene, [button_pressing] * nworld, seed=0)
-    sandboxed = sim.run_sessions(scene, start_sessions([PROGRAM_FILE.read_text()] * nworld, "arm"), seed=0)
+    trusted = sim.run_programs(scene, [case.program] * nworld, seed=0)
+    sandboxed = sim.run_sessions(scene, start_sessions([case.file.read_text()] * nworld, case.embodiment), seed=0)
     if [r.model_dump() for r in trusted] != [r.model_dump() for r in sandboxed]:
-        raise SystemExit(f"button_pressing() no longer matches {PROGRAM_FILE}")
+        raise SystemExit(f"{case.program.__name__}() no longer matches {case.file}")
 
 
 # -- recording ---------------------------------------------------------------------------------------
@@ -176,10 +208,10 @@ def recording(backend: str) -> Iterator[Recording]:
         cls.step = original  # type: ignore[method-assign]
 
 
-def runner_pass(scene: sim.Scene, nworld: int, backend: str) -> tuple[float, list[float]]:
+def runner_pass(scene: sim.Scene, case: Case, nworld: int, backend: str) -> tuple[float, list[float]]:
     """(wall seconds, sim_time per world) of one run_programs pass; a world stops when its program ends."""
     start = time.perf_counter()
-    rollouts = sim.run_programs(scene, [button_pressing] * nworld, seed=0, backend=backend)
+    rollouts = sim.run_programs(scene, [case.program] * nworld, seed=0, backend=backend)
     return time.perf_counter() - start, [r.sim_time for r in rollouts]
 
 
@@ -215,15 +247,21 @@ def rollout_replay(rec: Recording) -> RolloutReplay:
         p = pos[worlds[0]]
         if (pos[worlds] != p).any():
             raise SystemExit("active worlds out of step: cannot replay as one rollout")
-        control[worlds, p:p + nstep, :model.nu] = ctrl[:, None]
-        control[worlds, p:p + nstep, model.nu:] = eq_active[:, None]
+        control[worlds, p : p + nstep, : model.nu] = ctrl[:, None]
+        control[worlds, p : p + nstep, model.nu :] = eq_active[:, None]
         pos[worlds] += nstep
     short = np.flatnonzero(steps < length)
     control[short, steps[short], 0] = np.nan  # bad ctrl: rollout stops this world after one more step
     nstate = mujoco.mj_stateSize(model, FULLPHYSICS)
-    return RolloutReplay(models=s.models, initial=rec.initial, warmstart=rec.warmstart, control=control, steps=steps,
-                         state=np.zeros((s.nworld, length, nstate)),
-                         sensordata=np.zeros((s.nworld, length, model.nsensordata)))
+    return RolloutReplay(
+        models=s.models,
+        initial=rec.initial,
+        warmstart=rec.warmstart,
+        control=control,
+        steps=steps,
+        state=np.zeros((s.nworld, length, nstate)),
+        sensordata=np.zeros((s.nworld, length, model.nsensordata)),
+    )
 
 
 def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
@@ -234,9 +272,17 @@ def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
         with rollout.Rollout(nthread=nthread) as pool:
             datas = [mujoco.MjData(rep.models[0]) for _ in range(nthread)]
             start = time.perf_counter()
-            pool.rollout(rep.models, datas, rep.initial, rep.control, control_spec=CONTROL_SPEC,
-                         nstep=rep.control.shape[1], initial_warmstart=rep.warmstart, state=rep.state,
-                         sensordata=rep.sensordata)
+            pool.rollout(
+                rep.models,
+                datas,
+                rep.initial,
+                rep.control,
+                control_spec=CONTROL_SPEC,
+                nstep=rep.control.shape[1],
+                initial_warmstart=rep.warmstart,
+                state=rep.state,
+                sensordata=rep.sensordata,
+            )
             wall = time.perf_counter() - start
     finally:
         mujoco.set_mju_user_warning(previous)
@@ -245,7 +291,7 @@ def rollout_replay_rate(rep: RolloutReplay, nthread: int = 2) -> float:
 
 def rollout_final_qpos(rep: RolloutReplay, nq: int) -> np.ndarray:
     last = rep.state[np.arange(len(rep.steps)), rep.steps - 1]
-    return last[:, 1:1 + nq]  # full physics state: time, qpos, qvel, ...
+    return last[:, 1 : 1 + nq]  # full physics state: time, qpos, qvel, ...
 
 
 def raw_rollout_resting_rate(scene: sim.Scene, nworld: int, nstep: int, nthread: int = 2) -> float:
@@ -273,8 +319,13 @@ def _warp_kernels() -> tuple[Any, Any]:
     import warp as wp
 
     @wp.kernel
-    def apply_tick(tick: wp.array(dtype=int), ctrl_all: wp.array3d(dtype=float), eq_all: wp.array3d(dtype=bool),
-                   ctrl: wp.array2d(dtype=float), eq_active: wp.array2d(dtype=bool)):
+    def apply_tick(
+        tick: wp.array(dtype=int),
+        ctrl_all: wp.array3d(dtype=float),
+        eq_all: wp.array3d(dtype=bool),
+        ctrl: wp.array2d(dtype=float),
+        eq_active: wp.array2d(dtype=bool),
+    ):
         w = wp.tid()
         t = tick[0]
         for j in range(ctrl.shape[1]):
@@ -386,10 +437,10 @@ def raw_warp_resting_rate(scene: sim.Scene, nworld: int, nstep: int, substeps: i
 # -- main ----------------------------------------------------------------------------------------------
 
 
-def measure(scene: sim.Scene, backend: str, nworld: int, repeat: int) -> str:
+def measure(scene: sim.Scene, case: Case, backend: str, nworld: int, repeat: int) -> str:
     """One table row: best of ``repeat`` interleaved runner / replay / resting passes."""
     with recording(backend) as rec:
-        _, sim_times = runner_pass(scene, nworld, backend)
+        _, sim_times = runner_pass(scene, case, nworld, backend)
     steps = world_steps(rec)
     per_world = steps // nworld
     nq = scene.model.nq
@@ -399,11 +450,13 @@ def measure(scene: sim.Scene, backend: str, nworld: int, repeat: int) -> str:
         rep = rollout_replay(rec)
     else:
         wrep = warp_replay(rec, scene)
-        saved = {k: getattr(wrep.sim.d, k).numpy().copy()
-                 for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")}
+        saved = {
+            k: getattr(wrep.sim.d, k).numpy().copy()
+            for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")
+        }
     run_rate, replay_rate, rest_rate, same = 0.0, 0.0, 0.0, True
     for _ in range(repeat):  # interleaved, so all see the same machine load
-        wall, times = runner_pass(scene, nworld, backend)
+        wall, times = runner_pass(scene, case, nworld, backend)
         same &= times == sim_times
         run_rate = max(run_rate, steps / wall)
         if backend == "mujoco":
@@ -414,11 +467,16 @@ def measure(scene: sim.Scene, backend: str, nworld: int, repeat: int) -> str:
             rest_rate = max(rest_rate, raw_warp_resting_rate(scene, nworld, per_world, scene.control_substeps))
     replayed = rollout_final_qpos(rep, nq) if backend == "mujoco" else wrep.sim.d.qpos.numpy().astype(float)
     dq = float(np.abs(replayed - expected).max())
-    check = f"{dq:.1e}" + ("" if same else ", runner passes differ!") + (f", {reattached} re-attached!" if reattached
-                                                                        else "")
+    check = (
+        f"{dq:.1e}"
+        + ("" if same else ", runner passes differ!")
+        + (f", {reattached} re-attached!" if reattached else "")
+    )
     label = "mujoco (rollout, 2 thr)" if backend == "mujoco" else "warp (mjw.step graph)"
-    return (f"| {label} | {nworld} | {per_world:,} | {run_rate:,.0f} | {replay_rate:,.0f} | "
-            f"{run_rate / replay_rate:.2f} | {rest_rate:,.0f} | {run_rate / rest_rate:.2f} | {check} |")
+    return (
+        f"| {case.embodiment}: {label} | {nworld} | {per_world:,} | {run_rate:,.0f} | {replay_rate:,.0f} | "
+        f"{run_rate / replay_rate:.2f} | {rest_rate:,.0f} | {run_rate / rest_rate:.2f} | {check} |"
+    )
 
 
 def main() -> None:
@@ -426,18 +484,26 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1, 16, 64, 256])
     parser.add_argument("--backends", nargs="+", default=["mujoco", "warp"], choices=["mujoco", "warp"])
     parser.add_argument("--repeat", type=int, default=3, help="best of this many interleaved runs")
+    parser.add_argument("--embodiments", nargs="+", default=list(CASES), choices=list(CASES))
     args = parser.parse_args()
-    scene = sim.build(tasks.load(TASK))
-    check_port(scene)
-    print(f"task {TASK}: nq={scene.model.nq}, ngeom={scene.model.ngeom}, "
-          f"control every {scene.control_substeps} steps of {scene.model.opt.timestep} s; "
-          f"load average {os.getloadavg()[0]:.2f}\n")
-    print("| backend (raw) | nworld | steps/world | runner (world-steps/s) | raw replay (world-steps/s) "
-          "| runner/replay | raw, resting (world-steps/s) | runner/resting | replay max abs dqpos |")
+    cases = [CASES[name] for name in args.embodiments]
+    scenes = [sim.build(tasks.load(case.task)) for case in cases]
+    for case, scene in zip(cases, scenes, strict=True):
+        check_port(scene, case)
+        print(
+            f"{case.embodiment}, task {case.task}: nq={scene.model.nq}, ngeom={scene.model.ngeom}, "
+            f"control every {scene.control_substeps} steps of {scene.model.opt.timestep} s"
+        )
+    print(f"load average {os.getloadavg()[0]:.2f}\n")
+    print(
+        "| embodiment: backend (raw) | nworld | steps/world | runner (world-steps/s) | raw replay (world-steps/s) "
+        "| runner/replay | raw, resting (world-steps/s) | runner/resting | replay max abs dqpos |"
+    )
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for backend in args.backends:
         for nworld in args.sizes:
-            print(measure(scene, backend, nworld, args.repeat), flush=True)
+            for case, scene in zip(cases, scenes, strict=True):
+                print(measure(scene, case, backend, nworld, args.repeat), flush=True)
     print(f"\nload average at the end {os.getloadavg()[0]:.2f}")
 
 

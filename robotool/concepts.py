@@ -1,7 +1,8 @@
 """Ground-truth key concepts: the quantities that decide whether a task needs a tool.
 
 They are computed from the scene's geometry and the robot's limits alone (never from a task's
-name or category) and grade the Analyzer stage: gap width vs the gap limit, height to climb vs
+name or category), with the legs' limits read as :mod:`robotool.terrain` reads them (one tolerance), and grade
+the Analyzer stage: gap width vs the gap limit, height to climb vs
 the climb limit, how far a target lies outside the arm's workspace, mass vs the push limit, and
 how far a fragile object would fall.
 """
@@ -16,6 +17,7 @@ from pydantic import BaseModel, Field
 from robotool import geometry
 from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject, Task
+from robotool.terrain import TOLERANCE
 
 ConceptKind = Literal[
     "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
@@ -63,8 +65,14 @@ def _arm_concepts(task: Task, limits: ArmLimits) -> list[KeyConcept]:
         what = f"distance of {obj.name}'s graspable point outside the workspace"
     excess = workspace_excess(point, limits)
     return [
-        KeyConcept(name=what, kind="workspace_excess", value=round(excess, 4), limit=0.0,
-                   limit_name="workspace", satisfied=excess <= 1e-9)
+        KeyConcept(
+            name=what,
+            kind="workspace_excess",
+            value=round(excess, 4),
+            limit=0.0,
+            limit_name="workspace",
+            satisfied=excess <= 1e-9,
+        )
     ]
 
 
@@ -116,51 +124,86 @@ def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]
         concepts += _height_change(f"{start_name}", obj.name, h0, h1, limits)
         gap = widest_gap(task, np.asarray(task.robot.position), np.asarray(obj.center[:2]), h0, h1, limits)
         if gap > 0:
-            concepts.append(KeyConcept(
-                name=f"gap between {start_name} and {obj.name}", kind="gap_width", value=round(gap, 4),
-                limit=limits.max_gap, limit_name="max_gap", satisfied=gap <= limits.max_gap))
+            concepts.append(
+                KeyConcept(
+                    name=f"gap between {start_name} and {obj.name}",
+                    kind="gap_width",
+                    value=round(gap, 4),
+                    limit=limits.max_gap,
+                    limit_name="max_gap",
+                    satisfied=gap <= limits.max_gap + TOLERANCE,
+                )
+            )
     elif kind == "lifted":
         lift = task.goal.lifted.height  # type: ignore[union-attr]
-        concepts.append(KeyConcept(
-            name=f"height {obj.name} must rise, against what the robot can lift by itself", kind="lift_height",
-            value=lift, limit=0.0, limit_name="robot_lift", satisfied=False))
+        concepts.append(
+            KeyConcept(
+                name=f"height {obj.name} must rise, against what the robot can lift by itself",
+                kind="lift_height",
+                value=lift,
+                limit=0.0,
+                limit_name="robot_lift",
+                satisfied=False,
+            )
+        )
         concepts.append(_mass_concept(obj, limits))
     elif kind == "lowered":
         support_name, support_h = surface_under(task, np.asarray(obj.center[:2]), exclude=obj.name)
         if support_name != start_name:
             concepts += _height_change(start_name, support_name, h0, support_h, limits)
         if obj.fragile is not None and obj.bottom > task.goal.lowered.height:  # type: ignore[union-attr]
-            concepts.append(KeyConcept(
-                name=f"fall height of {obj.name} to the ground", kind="fall_height",
-                value=round(obj.bottom, 4), limit=obj.fragile.max_drop, limit_name="max_drop",
-                satisfied=obj.bottom <= obj.fragile.max_drop))
+            concepts.append(
+                KeyConcept(
+                    name=f"fall height of {obj.name} to the ground",
+                    kind="fall_height",
+                    value=round(obj.bottom, 4),
+                    limit=obj.fragile.max_drop,
+                    limit_name="max_drop",
+                    satisfied=obj.bottom <= obj.fragile.max_drop,
+                )
+            )
         concepts.append(_mass_concept(obj, limits))
     return concepts
 
 
-def _height_change(
-    from_name: str, to_name: str, h0: float, h1: float, limits: QuadrupedLimits
-) -> list[KeyConcept]:
+def _height_change(from_name: str, to_name: str, h0: float, h1: float, limits: QuadrupedLimits) -> list[KeyConcept]:
     rise = h1 - h0
     if rise > 1e-6:
-        return [KeyConcept(
-            name=f"height to climb from {from_name} onto {to_name}", kind="climb_height",
-            value=round(rise, 4), limit=limits.max_step_up, limit_name="max_step_up",
-            satisfied=rise <= limits.max_step_up)]
+        return [
+            KeyConcept(
+                name=f"height to climb from {from_name} onto {to_name}",
+                kind="climb_height",
+                value=round(rise, 4),
+                limit=limits.max_step_up,
+                limit_name="max_step_up",
+                satisfied=rise <= limits.max_step_up + TOLERANCE,
+            )
+        ]
     if rise < -1e-6:
-        return [KeyConcept(
-            name=f"height to step down from {from_name} onto {to_name}", kind="drop_height",
-            value=round(-rise, 4), limit=limits.max_step_down, limit_name="max_step_down",
-            satisfied=-rise <= limits.max_step_down)]
+        return [
+            KeyConcept(
+                name=f"height to step down from {from_name} onto {to_name}",
+                kind="drop_height",
+                value=round(-rise, 4),
+                limit=limits.max_step_down,
+                limit_name="max_step_down",
+                satisfied=-rise <= limits.max_step_down + TOLERANCE,
+            )
+        ]
     return []
 
 
 def _mass_concept(obj: SceneObject, limits: QuadrupedLimits) -> KeyConcept:
     mass = obj.effective_mass
     return KeyConcept(
-        name=f"mass of {obj.name}", kind="mass", value=round(mass, 4), unit="kg",
-        limit=limits.max_push_mass, limit_name="max_push_mass",
-        satisfied=obj.movable and mass <= limits.max_push_mass)
+        name=f"mass of {obj.name}",
+        kind="mass",
+        value=round(mass, 4),
+        unit="kg",
+        limit=limits.max_push_mass,
+        limit_name="max_push_mass",
+        satisfied=obj.movable and mass <= limits.max_push_mass,
+    )
 
 
 def widest_gap(

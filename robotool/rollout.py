@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-Outcome = Literal["done", "stalled", "timeout", "refused", "error"]
+Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
 

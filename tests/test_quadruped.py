@@ -1,4 +1,4 @@
-"""The quadruped in C MuJoCo: reference programs, refusals from rays, the lever, cloth and the vase."""
+"""The quadruped in C MuJoCo: reference (and the paper's) programs, refusals from rays, the lever, cloth, the vase."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.scene import parse_task
+from robotool.sim.backend import Perturbation
 
 
 def run(task: Any, name: str, nworld: int, seed: int = 0) -> list[Rollout]:
@@ -26,13 +27,16 @@ def motion_calls(rollout: Rollout) -> list[Any]:
     ("task", "name"),
     [
         ("sofa_traversing", "sofa_traversing"),
+        ("sofa_traversing_small_gap", "sofa_traversing_direct"),
         ("sofa_climbing", "sofa_climbing"),
+        ("sofa_climbing_low_sofa", "sofa_climbing_direct"),
         ("cube_lifting", "cube_lifting"),
+        ("vase_lowering", "vase_lowering"),
+        ("sofa_traversing", "paper_sofa_traversing"),
+        ("sofa_climbing", "paper_sofa_climbing"),
     ],
 )
-def test_reference_program_solves_nine_of_ten_perturbed_worlds(
-    sim_scene: Any, task: str, name: str
-) -> None:
+def test_reference_program_solves_nine_of_ten_perturbed_worlds(sim_scene: Any, task: str, name: str) -> None:
     rollouts = run(sim_scene(task), name, 10, seed=3)
     assert sum(r.success for r in rollouts) >= 9, [motion_calls(r) for r in rollouts if not r.success]
 
@@ -40,19 +44,23 @@ def test_reference_program_solves_nine_of_ten_perturbed_worlds(
 @pytest.mark.parametrize(
     ("task", "name", "skill", "key", "value"),
     [
-        ("sofa_traversing", "sofa_traversing_direct", "walk_to_position", "gap", 0.40),
+        # the surfboard overhangs the gap by 0.10 m: walking straight over it meets the 0.30 m left beyond its end
+        ("sofa_traversing", "sofa_traversing_direct", "walk_to_position", "gap", 0.30),
         ("sofa_climbing", "sofa_climbing_direct", "climb_to_position", "step", 0.34),
-        ("cube_lifting", "cube_lifting_direct", "push_to_position", "mass", 10.0),
+        ("cube_lifting", "cube_lifting_direct", "push_to_position", "mass", None),
     ],
 )
 def test_tool_free_program_is_refused_with_the_measured_value(
-    sim_scene: Any, task: str, name: str, skill: str, key: str, value: float
+    sim_scene: Any, task: str, name: str, skill: str, key: str, value: float | None
 ) -> None:
-    for rollout in run(sim_scene(task), name, 2):
+    scene = sim_scene(task)
+    scales = Perturbation.sample(scene, 2, 0).mass_scale  # the cube's mass is the world's, perturbed
+    masses = scales[:, scene.object_index("cube")] * 10.0 if value is None else [value] * 2
+    for rollout, mass in zip(run(scene, name, 2), masses, strict=True):
         assert not rollout.success
         refused = [c for c in rollout.calls if c.outcome == "refused"]
         assert [c.skill for c in refused] == [skill]
-        assert refused[0].measured[key] == pytest.approx(value, abs=0.02)
+        assert refused[0].measured[key] == pytest.approx(mass, abs=0.02)
         assert "exceeds the" in refused[0].reason and f"{refused[0].measured[key]:.1f}" in refused[0].reason
 
 
@@ -81,9 +89,7 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
     cloth["center"] = [0.95, 0.0, 0.342]  # spans the 0.40 m gap, 0.35 m on each sofa
     for rollout in run(parse_task(data), "sofa_traversing_direct", 2):
         (walk,) = motion_calls(rollout)
-        assert walk.outcome == "refused" and "gap" in walk.measured
-        assert 0.1 < walk.measured["gap"] < 0.4  # the sagging middle, not the whole gap
-        assert not rollout.success
+        assert walk.outcome in ("refused", "fell") and not rollout.success  # the cloth gives way under the feet
 
 
 @pytest.mark.parametrize(
@@ -93,12 +99,10 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
         ("cube_lifting_lever_only", False),  # (c) the chair props the lever
     ],
 )
-def test_lever_needs_both_the_chair_away_and_the_robot_on_it(
-    sim_scene: Any, name: str, lifted: bool
-) -> None:
+def test_lever_needs_both_the_chair_away_and_the_robot_on_it(sim_scene: Any, name: str, lifted: bool) -> None:
     for rollout in run(sim_scene("cube_lifting"), name, 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": lifted}
+        assert rollout.conditions == {"cube_lifted": lifted, "robot_has_not_fallen": True}
 
 
 def test_a_light_robot_does_not_tip_the_lever() -> None:
@@ -106,7 +110,7 @@ def test_a_light_robot_does_not_tip_the_lever() -> None:
     data["robot"]["limits"] = {"mass": 1.0}
     for rollout in run(parse_task(data), "cube_lifting", 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": False}
+        assert rollout.conditions == {"cube_lifted": False, "robot_has_not_fallen": True}
 
 
 @pytest.mark.parametrize(
@@ -118,7 +122,11 @@ def test_a_light_robot_does_not_tip_the_lever() -> None:
 )
 def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: str, unbroken: bool) -> None:
     for rollout in run(sim_scene("vase_lowering"), name, 2):
-        assert rollout.conditions == {"glass_vase_lowered": True, "glass_vase_unbroken": unbroken}
+        assert rollout.conditions == {
+            "glass_vase_lowered": True,
+            "glass_vase_unbroken": unbroken,
+            "robot_has_not_fallen": True,
+        }
         assert rollout.success is unbroken
 
 
@@ -134,17 +142,15 @@ def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
     (rollout,) = sim.run_programs(sim_scene("sofa_climbing"), [probe], perturb=False)
     size, start, box, end = answers
     assert size == [0.65, 0.30, 0.30]
-    assert start == pytest.approx([0.0, 0.0, 0.15], abs=0.01) and box == pytest.approx(
-        [1.0, 0.0, 0.06], abs=0.01
-    )
-    assert end == pytest.approx([0.3, 0.0, 0.15], abs=0.02)
+    assert start == pytest.approx([0.0, 0.0, 0.14], abs=0.015) and box == pytest.approx([1.0, 0.0, 0.06], abs=0.01)
+    assert end == pytest.approx([0.3, 0.0, 0.14], abs=0.02)
     assert rollout.calls[-1].outcome == "error" and "no object named" in rollout.calls[-1].reason
 
 
 def test_a_step_shorter_than_the_feet_span_is_crossed_without_catching_the_legs(run_texts: Any) -> None:
     """box_2 (0.4 m long) is shorter than the feet's span (0.59 m): when the front feet step down past it onto
-    the sofa the rear feet are still over the lower box_1, so nothing but the lift motor carries the body over
-    box_2 (regression: it dropped onto box_2 with its torso and stalled with its rear legs against box_2's side)."""
+    the sofa the rear feet are still over the lower box_1, and the legs keep the torso above box_2 (regression:
+    it dropped onto box_2 with its torso and stalled with its rear legs against box_2's side)."""
     data = tasks.load("sofa_climbing").model_dump(mode="json", exclude_defaults=True)
     objects = {o["name"]: o for o in data["objects"]}
     objects["box_2"]["center"] = [1.4, 0.0, 0.12]  # against box_1, in line

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
+from robotool import geometry, tasks
 from robotool.embodiments import QuadrupedLimits
 from robotool.sim.quadruped_push import Leg, legs, push_pose, route, rule_violation
-from robotool.sim.quadruped_terrain import scan
+from robotool.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01
@@ -19,32 +22,69 @@ def profile(*pieces: tuple[float, float]) -> np.ndarray:
 
 
 @pytest.mark.parametrize(
-    ("pieces", "violation", "measured", "edge"),
+    ("pieces", "kind", "measured", "edge"),
     [
-        ([(0.7, 0.0), (0.5, 0.12), (0.5, 0.24), (0.5, 0.34)], None, 0.0, np.inf),  # a staircase
-        ([(0.7, 0.0), (0.5, 0.34)], "step", 0.34, 0.7),
-        ([(0.7, 0.34), (0.4, 0.0), (0.6, 0.34)], "gap", 0.40, 0.7),
-        ([(0.7, 0.34), (0.08, 0.0), (0.6, 0.34)], None, 0.0, np.inf),  # a small gap is stepped over
-        ([(0.7, 0.34), (0.6, 0.0)], None, 0.0, np.inf),  # a 0.34 m step down is allowed
-        ([(0.7, 0.5), (0.6, 0.0)], "drop", 0.5, 0.7),
-        ([(0.7, 0.34), (0.3, 0.25), (0.6, 0.34)], None, 0.0, np.inf),  # a shallow dip is walked through
-        ([(0.7, 0.34), (0.3, 0.2), (0.6, 0.34)], "gap", 0.3, 0.7),  # a deeper one is a gap
+        ([(0.4, 0.0), (0.5, 0.12), (0.5, 0.24), (0.5, 0.34)], None, 0.0, None),  # a staircase
+        ([(0.4, 0.0), (0.5, 0.34)], "step", 0.34, 0.4),
+        ([(0.4, 0.34), (0.4, 0.0), (0.6, 0.34)], "gap", 0.40, 0.4),
+        ([(0.4, 0.34), (0.08, 0.0), (0.6, 0.34)], None, 0.0, None),  # a small gap is stridden
+        ([(0.4, 0.34), (0.12, 0.0), (0.6, 0.34)], "gap", 0.12, 0.4),  # just over the limit and its tolerance
+        ([(0.4, 0.34), (0.02, 0.0), (0.6, 0.20)], None, 0.0, None),  # a slit narrower than a foot carries it
+        ([(0.4, 0.34), (0.7, 0.0)], None, 0.0, None),  # a 0.34 m step down is allowed
+        ([(0.4, 0.5), (0.7, 0.0)], "drop", 0.5, 0.4),
+        ([(0.4, 0.34), (0.3, 0.25), (0.6, 0.34)], None, 0.0, None),  # a shallow dip is walked through
+        ([(0.4, 0.34), (0.3, 0.2), (0.6, 0.34)], "gap", 0.3, 0.4),  # a deeper one is a gap
     ],
 )
-def test_scan_finds_the_first_violated_limit(
-    pieces: list[tuple[float, float]], violation: str | None, measured: float, edge: float
+def test_scan_finds_the_first_broken_limit(
+    pieces: list[tuple[float, float]], kind: str | None, measured: float, edge: float | None
 ) -> None:
     heights = profile(*pieces)
-    result = scan(heights, SPACING, LIMITS, footprint=(2, 63), feet=float(heights[0]))
-    assert result.violation == violation
-    assert result.measured == pytest.approx(measured, abs=SPACING)
-    assert result.edge == pytest.approx(edge, abs=SPACING)
+    result = scan_paths(heights[None], np.array([heights[0]]), LIMITS)
+    assert result.kind[0] == (0 if kind is None else KINDS.index(kind) + 1)  # type: ignore[arg-type]
+    assert result.measured[0] == pytest.approx(measured, abs=SPACING)
+    if edge is not None:  # where the foot's centre meets it (a round foot meets a step its radius early)
+        assert result.index[0] * SPACING == pytest.approx(edge, abs=FOOT_RADIUS + SPACING)
 
 
-def test_scan_starts_from_the_surface_under_the_feet_not_an_edge_beside_them() -> None:
-    heights = profile((0.6, 0.34), (0.1, 0.41), (0.6, 0.41))  # a board starts under the body's edge
-    assert scan(heights[::-1], SPACING, LIMITS, footprint=(2, 63), feet=0.34).violation is None
-    assert scan(heights, SPACING, LIMITS, footprint=(2, 63), feet=0.34).level[0] < 0.41
+def test_paths_are_scanned_together_and_each_from_its_own_level() -> None:
+    gap, stairs = profile((0.4, 0.34), (0.4, 0.0), (0.6, 0.34)), profile((0.4, 0.0), (0.5, 0.12), (0.5, 0.24))
+    result = scan_paths(np.stack([gap, stairs, gap]), np.array([0.34, 0.0, 0.0]), LIMITS)
+    assert list(result.kind) == [KINDS.index("gap") + 1, 0, KINDS.index("step") + 1]  # the last starts too low
+
+
+def test_a_gap_already_entered_counts_from_its_edge() -> None:
+    """A path that starts 0.2 m inside a gap (its feet held at the near level) measures the whole gap."""
+    heights = profile((0.2, 0.0), (0.6, 0.34))
+    result = scan_paths(heights[None], np.array([0.34]), LIMITS, into_gap=np.array([0.2]))
+    assert result.kind[0] == KINDS.index("gap") + 1 and result.measured[0] == pytest.approx(0.4, abs=SPACING)
+
+
+SOFAS = [geometry.object_parts(o) for o in tasks.load("sofa_traversing_small_gap").objects if o.name.startswith("sofa")]
+WIDE = [geometry.object_parts(o) for o in tasks.load("sofa_traversing").objects if o.name.startswith("sofa")]
+
+
+def heights_over(solids: list) -> Any:
+    return lambda xy: geometry.surface_height(xy, solids)
+
+
+@pytest.mark.parametrize(
+    "waypoints",
+    [
+        [(1.7, 0.0)],  # straight
+        [(1.7, 0.3)],  # diagonal
+        [(x, 0.25 * (-1) ** k) for k, x in enumerate(np.arange(-0.3, 1.8, 0.1))],  # zig-zag
+        [(x, 0.0) for x in np.arange(-0.35, 1.8, 0.05)],  # many short walks
+    ],
+)
+def test_no_path_shape_crosses_a_wide_gap(waypoints: list[tuple[float, float]]) -> None:
+    finding = check_walk(heights_over(WIDE), np.array([-0.4, 0.0]), [np.array(p) for p in waypoints], LIMITS)
+    assert finding is not None and finding.kind in ("gap", "drop", "step")
+    assert "exceeds the limit" in finding.describe() and finding.foot in FOOT_NAMES
+
+
+def test_a_straight_walk_over_a_narrow_gap_is_fine() -> None:
+    assert check_walk(heights_over(SOFAS), np.array([-0.4, 0.0]), [np.array([1.4, 0.0])], LIMITS) is None
 
 
 def test_push_legs_go_shorter_axis_first_and_skip_tiny_ones() -> None:
@@ -72,7 +112,8 @@ def test_route_goes_around_the_object() -> None:
         ({}, None),
         ({"movable": False}, "fixed"),
         ({"under_robot": True}, "standing on it"),
-        ({"mass": 10.0}, "mass 10.0 kg exceeds"),
+        ({"mass": 10.0}, "10.0 kg, exceeds"),
+        ({"mass": 12.0, "riders": ["cube"]}, "with cube riding on it, 12.0 kg, exceeds"),
         ({"robot_support_movable": "surfboard"}, "stands on surfboard"),
         ({"object_support": 0.34}, "not on the robot's surface"),
     ],
@@ -81,6 +122,7 @@ def test_push_rules(changes: dict[str, object], reason: str | None) -> None:
     args: dict[str, object] = {
         "movable": True,
         "mass": 3.0,
+        "riders": [],
         "under_robot": False,
         "robot_support_movable": None,
         "object_support": 0.0,

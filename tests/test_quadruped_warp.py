@@ -30,4 +30,4 @@ def test_tool_free_walk_is_refused_at_the_gap_on_warp(bridge_rollouts: list[Roll
     direct = bridge_rollouts[10]
     (walk,) = [c for c in direct.calls if c.skill == "walk_to_position"]
     assert not direct.success and walk.outcome == "refused"
-    assert walk.measured["gap"] == pytest.approx(0.40, abs=0.02)
+    assert walk.measured["gap"] == pytest.approx(0.30, abs=0.02)  # beyond the end of the overhanging board

@@ -19,10 +19,10 @@ import robotool
 from robotool import tasks
 from robotool.cli import main
 
-REFUSALS = {  # quadruped task -> (skill refused, measured key, value) for its tool-free program
-    "sofa_traversing": ("walk_to_position", "gap", 0.40),
-    "sofa_climbing": ("climb_to_position", "step", 0.34),
-    "cube_lifting": ("push_to_position", "mass", 10.0),
+REFUSALS = {  # quadruped task -> (skill refused, measured key, value, tolerance) for its tool-free program
+    "sofa_traversing": ("walk_to_position", "gap", 0.30, 0.02),  # beyond the end of the board reaching over it
+    "sofa_climbing": ("climb_to_position", "step", 0.34, 0.02),
+    "cube_lifting": ("push_to_position", "mass", 10.0, 1.5),  # the cube's mass in the world, perturbed by 15 %
 }
 
 
@@ -64,9 +64,9 @@ def test_tool_free_program_fails_with_the_reason(
     for rollout in data["rollouts"]:
         assert not rollout["success"] and not all(rollout["conditions"].values())
         if task in REFUSALS:
-            skill, key, value = REFUSALS[task]
+            skill, key, value, tolerance = REFUSALS[task]
             (refused,) = [c for c in rollout["calls"] if c["outcome"] == "refused"]
-            assert refused["skill"] == skill and refused["measured"][key] == pytest.approx(value, abs=0.02)
+            assert refused["skill"] == skill and refused["measured"][key] == pytest.approx(value, abs=tolerance)
             assert "exceeds the" in refused["reason"]
             flat = " ".join(out.replace("│", " ").split())  # table cells fold long reasons over lines
             assert f"{skill}: refused: {refused['reason']}" in flat  # the summary's "why it failed"
@@ -82,8 +82,11 @@ def test_tool_free_program_fails_with_the_reason(
     [
         ("import os\n", 2, "error: {path}: line 1: import of 'os' is not allowed"),
         ('grasp("milk")\n', 2, "error: {path}: line 1: unknown function 'grasp'; the arm's skills are: get_center"),
-        ("open_gripper()\nmove_to_position([0.5, 0, 0.1]\n", 2, "error: {path}: line 2: syntax error at column 17: "
-         "'(' was never closed"),
+        (
+            "open_gripper()\nmove_to_position([0.5, 0, 0.1]\n",
+            2,
+            "error: {path}: line 2: syntax error at column 17: '(' was never closed",
+        ),
         ("while True:\n    pass\n", 1, "CPU time limit exceeded (2 s)"),
     ],
 )
@@ -103,8 +106,12 @@ def test_bad_program_ends_with_one_line_reason(
 def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:
     path = tmp_path / "loop.py"
     path.write_text("open_gripper()\nwhile True:\n    pass\n")
-    result = subprocess.run([sys.executable, "-m", "robotool", "run", "milk_reaching_near", str(path)],
-                            capture_output=True, text=True, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "robotool", "run", "milk_reaching_near", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert result.returncode == 1, result.stderr
     assert "Traceback" not in result.stdout + result.stderr
     assert "CPU time limit exceeded (2 s)" in result.stdout and "success rate 0%" in result.stdout
@@ -113,8 +120,9 @@ def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:
 def test_json_report_matches_the_library(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     report = tmp_path / "report.json"
     path = str(program_path("button_pressing"))
-    status, out, _ = run_cli(capsys, "button_pressing", path, "--worlds", "2", "--seed", "4", "--backend", "mujoco",
-                             "--json", str(report))
+    status, out, _ = run_cli(
+        capsys, "button_pressing", path, "--worlds", "2", "--seed", "4", "--backend", "mujoco", "--json", str(report)
+    )
     data: dict[str, Any] = json.loads(report.read_text())
     assert status == 0 and f"wrote the report to {report}" in out
     assert data["success"] is True and data["success_rate"] == 1.0

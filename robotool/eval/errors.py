@@ -16,8 +16,9 @@ A failed world is classified by the first rule that applies:
 2. ``tool_use`` — the task needs a tool and the program used none of the needed tools, or the task
    needs no tool and the program used one that its reference solution does not use.
 3. The first abnormal call decides: ``refused`` (a limit was violated: a step out of order or a
-   constraint ignored) -> ``logical``; ``stalled``, ``timeout``, a target clamped to a limit
-   (``clamped`` event) or a grasp that held nothing (``grasp_failed`` event) -> ``numerical``.
+   constraint ignored) or ``fell`` (it walked off its support) -> ``logical``; ``stalled``, ``timeout``,
+   a target clamped to a limit (``clamped`` event) or a grasp that held nothing (``grasp_failed`` event)
+   -> ``numerical``.
 4. No abnormal call: ``logical`` when the program made no motion call or left a needed tool unused
    (a missing step); otherwise ``numerical`` (right objects, every step done, the goal missed by
    distance).
@@ -92,7 +93,7 @@ def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
     if not facts.needs_tool and used - (facts.needed or frozenset()):
         return "tool_use"
     for k, call in enumerate(rollout.calls):
-        if call.outcome == "refused":
+        if call.outcome in ("refused", "fell"):
             return "logical"
         if _numerical_symptom(call, [e for e in rollout.events if e.call == k]):
             return "numerical"

@@ -15,12 +15,12 @@ import numpy as np
 from robotool import geometry
 from robotool.embodiments import QuadrupedLimits
 from robotool.scene import SceneObject, Task
-from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_points
+from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
+from robotool.terrain import check_walk
 
 CONTACT = 0.02  # m: boxes closer than this touch
 SAMPLE = 0.02  # m between terrain samples along a walk
 FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
-SLACK = 0.01  # m a measured step, gap or drop may exceed its limit (the simulator's own measurement slack)
 SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks, is in the way
 PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
@@ -118,19 +118,27 @@ class Layout:
         return parts
 
 
-def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.ndarray], limits: QuadrupedLimits,
-                   exclude: Iterable[str] = ()) -> str | None:
+def walk_violation(
+    layout: Layout,
+    start: np.ndarray,
+    waypoints: Iterable[np.ndarray],
+    limits: QuadrupedLimits,
+    exclude: Iterable[str] = (),
+) -> str | None:
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
-    The body (axis-aligned, ``limits.body_size``) reads the highest surface across its width along each
-    straight segment, from its rear edge at the start to its front edge at the end. Just outside its flanks
-    (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet are on: the
-    simulator lifts the body only for what lies under its central band, so the legs would run into it.
+    The feet's paths are checked as the simulator checks them (:func:`robotool.terrain.check_walk`). Just outside
+    the body's flanks (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet
+    are on, or the body would run into it.
     """
+    skip = list(exclude)
+    goals = [np.asarray(g, dtype=float) for g in waypoints]
+    finding = check_walk(lambda xy: layout.heights(xy, skip), np.asarray(start, dtype=float), goals, limits)
+    if finding is not None:
+        return finding.describe()
     half = np.asarray(limits.body_size[:2]) / 2
     here = np.asarray(start, dtype=float)
-    for goal in waypoints:
-        goal = np.asarray(goal, dtype=float)
+    for goal in goals:
         delta = goal - here
         length = float(np.linalg.norm(delta))
         if length < 1e-6:
@@ -138,48 +146,23 @@ def walk_violation(layout: Layout, start: np.ndarray, waypoints: Iterable[np.nda
         u = delta / length
         extent = float(np.abs(u) @ half)
         lateral = np.array([-u[1], u[0]])
-        width = float(np.abs(lateral) @ half) - FOOT_INSET
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
-        rear = here - u * extent
-        points = rear + s[:, None] * u
-        flank = float(np.abs(lateral) @ half) + SIDE_MARGIN
+        points = here - u * extent + s[:, None] * u
+        width, flank = float(np.abs(lateral) @ half) - FOOT_INSET, float(np.abs(lateral) @ half) + SIDE_MARGIN
         across = np.stack([points + k * lateral for k in (-width, 0.0, width, -flank, flank)])
-        heights = layout.heights(across.reshape(-1, 2), exclude).reshape(5, -1)
-        h = heights[:3].max(axis=0)
-        problem = _scan(h, limits)
-        if problem is None and (rub := heights[3:].max(axis=0) - h).max() > BRUSH:
-            problem = f"the body brushes against something {float(rub.max()):.2f} m higher at its side"
-        if problem:
-            return f"{problem} on the way to [{goal[0]:.2f}, {goal[1]:.2f}]"
+        heights = layout.heights(across.reshape(-1, 2), skip).reshape(5, -1)
+        if (rub := heights[3:].max(axis=0) - heights[:3].max(axis=0)).max() > BRUSH:
+            return (
+                f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
+                f"[{goal[0]:.2f}, {goal[1]:.2f}]"
+            )
         here = goal
     return None
 
 
-def _scan(h: np.ndarray, limits: QuadrupedLimits) -> str | None:
-    """The first limit a height profile breaks (step up, gap, drop), in words, or None."""
-    current = float(h[0])
-    k = 1
-    while k < len(h):
-        z = float(h[k])
-        if z - current > limits.max_step_up + SLACK:
-            return f"step up of {z - current:.2f} m"
-        if current - z > limits.max_step_up:
-            back = np.flatnonzero(h[k:] >= current - limits.max_step_up)
-            if back.size:
-                width = back[0] * SAMPLE
-                if width > limits.max_gap + SLACK:
-                    return f"gap of {width:.2f} m"
-                k += int(back[0])
-                continue
-            if current - z > limits.max_step_down + SLACK:
-                return f"drop of {current - z:.2f} m"
-        current = z
-        k += 1
-    return None
-
-
-def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits,
-           exclude: Iterable[str] = ()) -> list[np.ndarray]:
+def detour(
+    layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
+) -> list[np.ndarray]:
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else through the
     shortest one (or, failing that, two) of the L-corners and the corners of nearby objects (grown by the body)
     that makes it fine."""
@@ -203,41 +186,48 @@ def detour(layout: Layout, start: np.ndarray, goal: np.ndarray, limits: Quadrupe
             return [via, goal]
     out = [v for v in vias if fine(start, v)]
     into = [v for v in vias if fine(v, goal)]
-    pairs = sorted(((a, b) for a in out for b in into if a is not b),
-                   key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0])
-                                       + np.linalg.norm(goal - p[1])))
+    pairs = sorted(
+        ((a, b) for a in out for b in into if a is not b),
+        key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0]) + np.linalg.norm(goal - p[1])),
+    )
     for a, b in pairs[:40]:  # around two corners
         if fine(a, b):
             return [a, b, goal]
     return [goal]
 
 
-def push_problem(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndarray, floor: float,
-                 limits: QuadrupedLimits | None = None,
-                 here: np.ndarray | None = None) -> tuple[str | None, np.ndarray]:
+def push_problem(
+    layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float, here: np.ndarray | None = None
+) -> tuple[str | None, np.ndarray]:
     """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.sim.quadruped_push`): one
     straight leg per axis, the shorter first, the robot's face against the object's, slid along the face to the
     nearest offset whose sweep (from where it lines up, else from the start pose, to the end of the push plus the
-    gap) meets nothing above its floor. With ``limits`` and the robot's position ``here``, the walk around the object
-    to where it lines up is predicted too. Returns what blocks it (or None) and where the robot ends."""
+    gap) meets nothing above its floor and keeps its feet over the floor. With the robot's position ``here``, the walk
+    around the object to where it lines up is predicted too. Returns what blocks it (or None) and where the robot
+    ends."""
     box = layout.box(name)
-    half = np.asarray(body_half, dtype=float)
+    half = np.asarray(limits.body_size[:2]) / 2
     robot = np.asarray(here, dtype=float) if here is not None else box.center.copy()
     for leg in legs(box.center, np.asarray(dest, dtype=float)):
         axis = leg.axis
         end_center = box.center.copy()
         end_center[axis] = leg.target
         steps = max(2, int(abs(end_center[axis] - box.center[axis]) / 0.05) + 1)
-        hit = next((h for f in np.linspace(0.0, 1.0, steps)
-                    if (h := layout.collides(box.moved_to(box.center + f * (end_center - box.center)), ignore=[name]))),
-                   None)
+        hit = next(
+            (
+                h
+                for f in np.linspace(0.0, 1.0, steps)
+                if (h := layout.collides(box.moved_to(box.center + f * (end_center - box.center)), ignore=[name]))
+            ),
+            None,
+        )
         if hit:
             return f"{name} would run into {hit}", robot
-        pose = _push_pose(layout, name, box, leg, half, floor)
+        pose = _push_pose(layout, name, box, leg, limits, floor)
         if pose is None:
             return f"no clear place to stand behind {name}", robot
         start, end, staging = pose
-        if limits is not None and here is not None:
+        if here is not None:
             around = route(robot, staging, box.lo - half - GAP / 2, box.hi + half + GAP / 2)
             problem = walk_violation(layout, robot, [*around, start], limits, exclude=[name])
             if problem:
@@ -248,23 +238,31 @@ def push_problem(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndar
     return None, robot
 
 
-def push_staging(layout: Layout, name: str, dest: np.ndarray, body_half: np.ndarray, floor: float) -> np.ndarray | None:
+def push_staging(
+    layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float
+) -> np.ndarray | None:
     """Where the push skill lines the robot up for the first leg of a push of ``name`` to ``dest`` (None: no leg, or
     nowhere clear to stand)."""
     box = layout.box(name)
     first = legs(box.center, np.asarray(dest, dtype=float))
-    pose = _push_pose(layout, name, box, first[0], np.asarray(body_half, dtype=float), floor) if first else None
+    pose = _push_pose(layout, name, box, first[0], limits, floor) if first else None
     return None if pose is None else pose[2]
 
 
-def _push_pose(layout: Layout, name: str, box: Box, leg: Leg, half: np.ndarray,
-               floor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def _push_pose(
+    layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The skill's choice of start and end poses for one leg, and its staging point (None: nowhere clear)."""
+    half = np.asarray(limits.body_size[:2]) / 2
     offsets = lateral_offsets(float(box.hi[1 - leg.axis] - box.lo[1 - leg.axis]), 2 * float(half[1 - leg.axis]))
     poses = [push_pose(box.lo, box.hi, leg, half, float(o)) for o in offsets]
+
+    def heights(xy: np.ndarray) -> np.ndarray:
+        return layout.heights(xy, exclude=[name])
+
     for staging in (PUSH_STAGING, 0.0):
         for start, end in poses:
             behind = start - (end - start) / np.linalg.norm(end - start) * staging
-            if np.all(layout.heights(sweep_points(behind, end, half), exclude=[name]) <= floor + PUSH_RISE):
-                return start, end, start - (end - start) / np.linalg.norm(end - start) * PUSH_STAGING
+            if sweep_problem(heights, behind, end, limits, floor) is None:
+                return start, end, behind
     return None

@@ -26,7 +26,7 @@ INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
 OVERLAP = 0.15  # m a bridge rests on each side of a gap
 CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
 SIDE = 0.25  # m the robot keeps from a board it walks beside
-FALL_OFF = 0.08  # m an object pushed off an edge goes past it (beyond its own half size)
+FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
 MAX_STEPS = 2  # objects a staircase may use below the target
 
 
@@ -62,8 +62,12 @@ class Quadruped:
 
     def pushable(self, obj: SceneObject, level: float) -> bool:
         """Whether the robot may push ``obj`` from a surface at height ``level``."""
-        return (obj.movable and obj.shape != "cloth" and obj.effective_mass <= self.limits.max_push_mass
-                and abs(obj.bottom - level) < LEVEL)
+        return (
+            obj.movable
+            and obj.shape != "cloth"
+            and obj.effective_mass <= self.limits.max_push_mass
+            and abs(obj.bottom - level) < LEVEL
+        )
 
     def extent(self, u: np.ndarray) -> float:
         """Half length of the body along direction ``u``."""
@@ -163,11 +167,13 @@ def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
                 lined[lat] = line
                 inside = quad.top_point(target, d, lined)
                 inside[lat] = np.clip(line, target.lo[lat] + quad.half[lat], target.hi[lat] - quad.half[lat])
-                waypoints = ([(lined, quad.floor_name)] if abs(line - quad.start[lat]) > 0.01 else [])
-                yield Route(pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
-                            waypoints=[*waypoints, (inside, name)],
-                            uses=[(obj.name, "tool: a rigid board to bridge the gap")],
-                            words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.")
+                waypoints = [(lined, quad.floor_name)] if abs(line - quad.start[lat]) > 0.01 else []
+                yield Route(
+                    pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
+                    waypoints=[*waypoints, (inside, name)],
+                    uses=[(obj.name, "tool: a rigid board to bridge the gap")],
+                    words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.",
+                )
 
 
 def _gap(quad: Quadruped, d: np.ndarray, line: float, target: Box) -> tuple[float, float] | None:
@@ -195,13 +201,18 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
     do not already stand against the next."""
     target = quad.task.object(name)
     rise = quad.limits.max_step_up + 0.005
-    steps = [o for o in quad.task.objects if o.name != name and o.shape != "cloth"
-             and quad.floor + 0.02 < o.top < target.top + quad.limits.max_step_up]
+    steps = [
+        o
+        for o in quad.task.objects
+        if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < o.top < target.top + quad.limits.max_step_up
+    ]
     for count in range(1, MAX_STEPS + 1):
         for chain in itertools.permutations(steps, count):
             tops = [quad.floor, *(o.top for o in chain), target.top]
-            if any(b - a > rise or a - b > quad.limits.max_step_down or (abs(b - a) < 0.02 and k < count)
-                   for k, (a, b) in enumerate(itertools.pairwise(tops))):  # the last link may be level with the target
+            if any(
+                b - a > rise or a - b > quad.limits.max_step_down or (abs(b - a) < 0.02 and k < count)
+                for k, (a, b) in enumerate(itertools.pairwise(tops))
+            ):  # the last link may be level with the target
                 continue
             for route in _place_chain(quad, [*chain, target]):
                 route.late = int(tops[-1] < tops[-2])
@@ -223,8 +234,12 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
         if not quad.pushable(obj, quad.floor):
             return
         sides = []
-        others = [b for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
-                  for b in [layout.box(o.name)]]
+        others = [
+            b
+            for o in quad.task.objects
+            if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
+            for b in [layout.box(o.name)]
+        ]
         for direction in DIRECTIONS:
             axis = int(np.argmax(np.abs(direction)))
             lat = 1 - axis
@@ -233,8 +248,10 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
             offsets = [0.0, slide, -slide]
             for other in others:  # flush against something else that stands by the same face
                 if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
-                    offsets += [float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
-                                float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat])]
+                    offsets += [
+                        float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
+                        float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
+                    ]
             reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
             for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
                 xy = nxt_box.center.copy()
@@ -248,8 +265,9 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
             yield route
 
 
-def _chain_route(quad: Quadruped, chain: list[SceneObject],
-                 combo: list[tuple[np.ndarray, np.ndarray | None]]) -> Route | None:
+def _chain_route(
+    quad: Quadruped, chain: list[SceneObject], combo: list[tuple[np.ndarray, np.ndarray | None]]
+) -> Route | None:
     route = Route()
     layout = quad.layout
     for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
@@ -307,9 +325,11 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject],
         previous = stance
         route.uses.append((chain[k].name, f"tool: a step up to {chain[k + 1].name}"))
     names = ", ".join(o.name for o in chain[:-1])
-    route.words = (f"Make a staircase of {names} against {chain[-1].name}"
-                   + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
-                   + f", then climb it onto {chain[-1].name}.")
+    route.words = (
+        f"Make a staircase of {names} against {chain[-1].name}"
+        + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
+        + f", then climb it onto {chain[-1].name}."
+    )
     return route
 
 
@@ -327,8 +347,9 @@ def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray |
     return out
 
 
-def _clear_of_neighbours(quad: Quadruped, layout: Layout, chain: list[SceneObject], k: int, lat: int, lo: float,
-                         hi: float) -> tuple[float, float]:
+def _clear_of_neighbours(
+    quad: Quadruped, layout: Layout, chain: list[SceneObject], k: int, lat: int, lo: float, hi: float
+) -> tuple[float, float]:
     """Narrow the climb line's range ``lo``-``hi`` (across the climb from link ``k`` onto link ``k + 1``) so that the
     body's flanks keep clear of other objects standing beside the two steps; unchanged when no line is clear."""
     axis = 1 - lat
@@ -382,18 +403,23 @@ class Writer:
         """Push ``name`` to ``xy``; when the push skill's own way to where it lines up is predicted blocked, walk
         there first around what stands in the way."""
         limits = self.quad.limits
-        problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
-        staging = push_staging(self.layout, name, xy, self.quad.half, self.level) if problem else None
+        problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
+        staging = push_staging(self.layout, name, xy, limits, self.level) if problem else None
         if problem and problem.startswith("the way to push") and staging is not None:
             path = detour(self.layout, self.here, staging, limits)
             if walk_violation(self.layout, self.here, path, limits) is None:
                 for via in path:
                     self.walk(via, self.surface, f"walk to where the push of {name} lines up")
-                problem, end = push_problem(self.layout, name, xy, self.quad.half, self.level, limits, self.here)
+                problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
         ref = self.position(name)
         start = self.layout.box(name).center
-        self.prog.motion("push_to_position", obj=name, point=Point.at(ref, (*(xy - start), 0.0)),
-                         intent=f"push {name} {why}", explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]")
+        self.prog.motion(
+            "push_to_position",
+            obj=name,
+            point=Point.at(ref, (*(xy - start), 0.0)),
+            intent=f"push {name} {why}",
+            explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]",
+        )
         self.here = end
         self.doubt(problem)
         self.layout = self.layout.with_moved(name, xy)
@@ -464,8 +490,14 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         return
     board = task.object(board_name)
     bbox = quad.layout.box(board_name)
-    under = [o for o in task.objects if o.name not in (board_name, target.name) and o.shape != "cloth"
-             and quad.layout.box(o.name).overlap(bbox) > 0.01 and o.top <= board.top]
+    under = [
+        o
+        for o in task.objects
+        if o.name not in (board_name, target.name)
+        and o.shape != "cloth"
+        and quad.layout.box(o.name).overlap(bbox) > 0.01
+        and o.top <= board.top
+    ]
     fulcrums = [o for o in under if not o.movable]
     props = [o for o in under if o.movable]
     if not fulcrums:
@@ -494,15 +526,19 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         step_on = fulcrum.center - a * (quad.extent(a) + 0.01)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
         end = bbox.center + a * (float(np.abs(a) @ bbox.half) - quad.extent(a) - INSET)
-        path = [(w.here + lat * (side * beside - (w.here - bbox.center) @ lat), "ground"),
-                (step_on + lat * side * beside, "ground")]
+        path = [
+            (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), "ground"),
+            (step_on + lat * side * beside, "ground"),
+        ]
         for xy, surface in path:
             w.walk(xy, surface, "walk beside the board")
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
         w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
-        prog.say((f"Push {', '.join(p.name for p in props)} out from under {board_name}. " if props else "")
-                 + f"Step onto {board_name} by {fulcrums[0].name} and walk to its far end: "
-                 + f"the lever lifts {target.name}.")
+        prog.say(
+            (f"Push {', '.join(p.name for p in props)} out from under {board_name}. " if props else "")
+            + f"Step onto {board_name} by {fulcrums[0].name} and walk to its far end: "
+            + f"the lever lifts {target.name}."
+        )
         yield prog
 
 
@@ -519,8 +555,14 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
     fall = target.bottom
     cushions = [None]
     if tools:
-        cushions += [o for o in task.objects if o.soft and quad.pushable(o, quad.floor) and o.top <= goal.height
-                     and (target.fragile is None or target.bottom - o.top <= target.fragile.max_drop)]
+        cushions += [
+            o
+            for o in task.objects
+            if o.soft
+            and quad.pushable(o, quad.floor)
+            and o.top <= goal.height
+            and (target.fragile is None or target.bottom - o.top <= target.fragile.max_drop)
+        ]
     for direction in (np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1))):
         axis = int(np.argmax(np.abs(direction)))
         edge = support.center[axis] + direction[axis] * support.half[axis]
@@ -548,10 +590,16 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
-                prog.motion("push_to_position", obj=target.name, point=Point.at(ref, (*(dest - tbox.center), 0.0)),
-                            intent=f"push {target.name} off {support_name}'s edge",
-                            explanation=f"its centre {tbox.half[axis] + FALL_OFF:.2f} m past the edge")
-                prog.say((f"Push {pushes[0][0]} beside {support_name}; " if pushes else "")
-                         + f"push {target.name} off {support_name}"
-                         + (f" onto {pushes[0][0]}." if pushes else "."))
+                prog.motion(
+                    "push_to_position",
+                    obj=target.name,
+                    point=Point.at(ref, (*(dest - tbox.center), 0.0)),
+                    intent=f"push {target.name} off {support_name}'s edge",
+                    explanation=f"its centre {tbox.half[axis] + FALL_OFF:.2f} m past the edge",
+                )
+                prog.say(
+                    (f"Push {pushes[0][0]} beside {support_name}; " if pushes else "")
+                    + f"push {target.name} off {support_name}"
+                    + (f" onto {pushes[0][0]}." if pushes else ".")
+                )
                 yield prog

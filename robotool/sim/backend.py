@@ -68,13 +68,15 @@ class BatchedSim(Protocol):
     """``nworld`` copies of one scene stepped together.
 
     ``ctrl`` (nworld, nu) and ``mocap_pos`` (nworld, nmocap, 3) are buffers the controllers write;
-    the backend applies them before each step.
+    the backend applies them before each step. ``body_mass`` is read-only.
     """
 
     scene: Scene
     nworld: int
     ctrl: np.ndarray
     mocap_pos: np.ndarray
+    body_mass: np.ndarray
+    """(nworld, nbody) each world's body masses, perturbations included (kg)."""
 
     def state(self) -> BatchState:
         """The state after the last :meth:`step`."""
@@ -88,11 +90,14 @@ class BatchedSim(Protocol):
     def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
         """Move geom ``geom`` to ``pos`` in its body's frame in ``worlds``."""
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Cast rays (nworld, nray, 3) from ``pnt`` along ``vec`` against the current geoms.
 
         Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
-        (-1 where none), both (nworld, nray). Geoms of ``exclude_body`` are ignored.
+        (-1 where none), both (nworld, nray). Geoms of ``exclude_body`` and geoms in geom group
+        ``skip_group`` are ignored; a world whose first ray starts at NaN is not cast (inf, -1).
         """
 
 
@@ -199,6 +204,14 @@ def weld_relpose(xpos: np.ndarray, xquat: np.ndarray, body1: int, body2: int) ->
     mujoco.mju_mulQuat(data[6:10], inv, xquat[body2])
     data[10] = 1.0  # torquescale
     return data
+
+
+def geom_groups(skip_group: int) -> np.ndarray:
+    """The ray geom-group mask (6,) that leaves out group ``skip_group`` (-1: none left out)."""
+    groups = np.ones(6, dtype=np.uint8)
+    if skip_group >= 0:
+        groups[skip_group] = 0
+    return groups
 
 
 def touching_from_contacts(

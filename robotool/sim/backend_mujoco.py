@@ -16,7 +16,7 @@ from concurrent.futures import ThreadPoolExecutor
 import mujoco
 import numpy as np
 
-from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, weld_relpose
+from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, geom_groups, weld_relpose
 from robotool.sim.build import Scene
 
 _LOG = logging.getLogger("robotool.sim")
@@ -59,6 +59,7 @@ class MujocoSim:
             d.qpos[:] = qpos0[w]
             mujoco.mj_forward(m, d)
         model = scene.model
+        self.body_mass = np.array([m.body_mass for m in self.models]).reshape(nworld, model.nbody)
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.array([d.mocap_pos for d in self.datas]).reshape(nworld, model.nmocap, 3)
         self._time = np.zeros(nworld)
@@ -171,18 +172,27 @@ class MujocoSim:
         for w in np.asarray(worlds, dtype=int).reshape(-1):
             self.models[w].geom_pos[geom] = pos
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
         nworld, nray = pnt.shape[:2]
         dist = np.full((nworld, nray), np.inf)
         geom = np.full((nworld, nray), -1, dtype=int)
         hit = np.zeros(1, dtype=np.int32)
-        for w in range(nworld):
+        groups = geom_groups(skip_group)
+        pnt, vec = np.ascontiguousarray(pnt, dtype=np.float64), np.ascontiguousarray(vec, dtype=np.float64)
+        ray = mujoco.mj_ray
+        for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])) if nray else ():
             m, d = self.models[w], self.datas[w]
-            for r in range(nray):
-                x = mujoco.mj_ray(m, d, pnt[w, r], vec[w, r], None, 1, exclude_body, hit)
-                if x >= 0:
-                    dist[w, r], geom[w, r] = x, hit[0]
+            found = [
+                (r, x, int(hit[0]))
+                for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
+                if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0
+            ]
+            if found:
+                rows, x, g = zip(*found, strict=True)
+                dist[w, list(rows)], geom[w, list(rows)] = x, g
         return dist, geom
 
     def close(self) -> None:

@@ -13,7 +13,7 @@ import mujoco_warp as mjw
 import numpy as np
 import warp as wp
 
-from robotool.sim.backend import BatchState, Perturbation, touching_from_contacts, weld_relpose
+from robotool.sim.backend import BatchState, Perturbation, geom_groups, touching_from_contacts, weld_relpose
 from robotool.sim.build import Scene
 
 _BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data", "geom_pos")
@@ -55,6 +55,7 @@ class WarpSim:
             self.m.geom_friction.assign(friction)
             self.m.body_mass.assign(mass)
             self.m.body_inertia.assign(inertia)
+            self.body_mass = mass.astype(float)
             self.d.qpos.assign(perturbation.initial_qpos(scene).astype(np.float32))
             mjw.forward(self.m, self.d)
         self._eq_data = self.m.eq_data.numpy().copy()
@@ -148,20 +149,24 @@ class WarpSim:
         with wp.ScopedDevice(self.device):
             self.m.geom_pos.assign(self._geom_pos.astype(np.float32))
 
-    def rays(self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    def rays(
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit."""
         nworld, nray = pnt.shape[:2]
+        skipped = np.isnan(pnt[:, :1, :1]) if nray else np.zeros((nworld, 1, 1), dtype=bool)
+        start = np.where(skipped, 0.0, pnt)
         with wp.ScopedDevice(self.device):
             dist = wp.zeros((nworld, nray), dtype=float)
             geom = wp.zeros((nworld, nray), dtype=int)
             normal = wp.zeros((nworld, nray), dtype=wp.vec3)
-            all_groups = wp.types.vector(6, wp.float32)(-1, -1, -1, -1, -1, -1)
+            groups = wp.types.vector(6, wp.float32)(*(-1 if g else 0 for g in geom_groups(skip_group)))
             mjw.rays(
                 self.m,
                 self.d,
-                wp.array(pnt.astype(np.float32), dtype=wp.vec3),
+                wp.array(start.astype(np.float32), dtype=wp.vec3),
                 wp.array(vec.astype(np.float32), dtype=wp.vec3),
-                all_groups,
+                groups,
                 True,
                 wp.full(nray, exclude_body, dtype=int),
                 dist,
@@ -169,4 +174,5 @@ class WarpSim:
                 normal,
             )
         d, g = dist.numpy().astype(float), geom.numpy().astype(int)
-        return np.where(d < 0, np.inf, d), np.where(d < 0, -1, g)
+        miss = (d < 0) | skipped[:, :, 0]
+        return np.where(miss, np.inf, d), np.where(miss, -1, g)

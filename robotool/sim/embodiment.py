@@ -12,7 +12,7 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    motion skill, then, at every control tick (every ``Scene.control_substeps`` physics steps), calls
    :meth:`SkillController.tick` with a fresh :class:`~robotool.sim.backend.BatchState`. ``tick`` reports
    the skills that finished since the last tick (:class:`SkillEnd`, with outcome ``done``, ``stalled``,
-   ``timeout`` or ``refused``, a reason and measured values) and writes the controls for the next
+   ``timeout``, ``refused`` or ``fell``, a reason and measured values) and writes the controls for the next
    interval through the simulator: ``sim.ctrl`` / ``sim.mocap_pos`` (numpy buffers, world first,
    pushed to the backend before each step), ``sim.set_weld(worlds, eq, active)`` (attach at the current
    relative pose, or detach) and ``sim.rays(...)`` for support heights.
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from robotool.scene import Task
     from robotool.sim.backend import BatchedSim, BatchState
 
-EndOutcome = Literal["done", "stalled", "timeout", "refused"]
+EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell"]
 
 _EMBODIMENTS: dict[str, str] = {
     "arm": "robotool.sim.arm:ArmEmbodiment",
@@ -84,6 +84,15 @@ class SkillController(Protocol):
         """Answer a query skill in one world from the current state (raise :class:`QueryError`)."""
 
 
+def controller_failures(controller: SkillController) -> list[str | None] | None:
+    """Per world, why its robot can no longer be trusted (it fell), else None; None for a robot that cannot fall.
+
+    A controller whose robot can fall keeps these in a ``failures`` list attribute.
+    """
+    failures = getattr(controller, "failures", None)
+    return None if failures is None else list(failures)
+
+
 class Embodiment(Protocol):
     """One robot type: how it enters the model and how its skills run."""
 
@@ -102,4 +111,3 @@ def embodiment_for(task: Task) -> Embodiment:
     module_name, cls_name = _EMBODIMENTS[task.robot.type].split(":")
     cls = getattr(importlib.import_module(module_name), cls_name)
     return cls(task.limits)
-

@@ -1,20 +1,22 @@
 """The quadruped embodiment: its skills over batched worlds, its queries and its goal kinds.
 
-Every motion skill is a plan of straight moves (a walk is one move; a push is the approach around the
-object and one push per axis, see :mod:`robotool.sim.quadruped_push`). Each control tick, for every
-world that is moving, downward rays read the terrain from the robot's rear edge to its front edge at
-the move's goal (at most ``LOOKAHEAD`` ahead; :mod:`robotool.sim.quadruped_terrain`). A violated
-limit moves the stopping point to just before its edge; when the robot has stopped there the skill
-is refused with the measured value. The x-y setpoint advances at ``WALK_SPEED`` (waiting while the
-lift motor raises the body for a step up) and the lift motor is on only while a higher accepted
-surface lies under or just ahead of the body. Nothing here reads the task's category or name:
-limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
+Every motion skill is a plan of straight moves: a walk is one move, or a few around an object that stands in its way
+(:func:`~robotool.sim.quadruped_push.route`); a push is the approach around the object and one push per axis
+(:mod:`robotool.sim.quadruped_push`). When a move starts, and again when the terrain under a foot changed or the
+stretch read runs out, downward rays read the path of each of the four feet from just behind it to
+:data:`~robotool.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
+:mod:`robotool.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
+just before it, and once the robot has stopped there the skill is refused with the measured value, the limit and
+where. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell whether a foot
+is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher surface (a step
+up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot is clear.
+Otherwise the lift is off and the robot's weight rests on its feet.
 
-Hooks wanted from the simulator core (local workarounds in use):
-- the per-world (perturbed) body masses in :class:`~robotool.sim.backend.BatchedSim`, for the push
-  mass limit; until then the nominal ``body_subtreemass`` of the compiled model is used;
-- ``rays(..., exclude_body)`` taking several bodies (or a geom group mask); until then rays exclude
-  the robot and a pushed object's hits are read as the floor it rests on.
+Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
+:data:`FALL_TICKS` ticks with the lift off and that tips, or that tilts past :data:`FALL_TILT`, has fallen: its
+skill ends with outcome ``fell`` and a reason that says where and which feet lost support,
+:attr:`QuadrupedController.failures` marks its world failed, and later motion skills there are refused. Nothing here
+reads the task's category or name: limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
 from __future__ import annotations
@@ -31,35 +33,56 @@ from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd
-from robotool.sim.quadruped_body import FOOT_RADIUS, OFF, XY_KP, BodyIds, add_body
+from robotool.sim.quadruped_body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROUP, XY_KP, BodyIds, add_body
 from robotool.sim.quadruped_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
-from robotool.sim.quadruped_push import (
-    GAP,
-    Leg,
-    lateral_offsets,
-    legs,
-    push_pose,
-    route,
-    rule_violation,
-    sweep_points,
+from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, rule_violation, sweep_problem
+from robotool.sim.quadruped_support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
+from robotool.terrain import (
+    FOOT_NAMES,
+    FOOT_RADIUS,
+    KINDS,
+    LOOKAHEAD,
+    RADIUS_SAMPLES,
+    RISE,
+    SPACING,
+    Finding,
+    check_walk,
+    limit_of,
+    scan_paths,
 )
-from robotool.sim.quadruped_terrain import RISE, TOLERANCE, scan
-from robotool.sim.quadruped_terrain import describe as describe_violation
 
 WALK_SPEED = 0.4  # m/s
-SPACING = 0.01  # m between terrain samples along the path
-LOOKAHEAD = 0.6  # m of terrain read ahead of the front edge
-EDGE_SAMPLES = 2  # samples this close to the body's rear and front edges are not under its feet
-LIFT_AHEAD = 0.12  # m ahead of the front edge where a higher surface starts the lift
-CLEARANCE = 0.025  # m the lift carries the feet above the surface they step onto
-STOP_MARGIN = 0.03  # m between the front edge and a refused edge
-ARRIVED = 0.015  # m from a move's goal that counts as there
+SCAN_AHEAD = 1.2  # m of a move read at a time (plus LOOKAHEAD)
+BACK = 0.06  # m read behind each foot (the lift's window over an edge just passed)
+LIFT_AHEAD = 0.10  # m ahead of a foot's centre where a higher surface starts the lift
+HOLD_BEHIND = 0.03  # m past a drop edge over which the lift holds the foot up before letting it down
+CLEARANCE = 0.025  # m the lift carries a foot above the surface it steps onto
+DESCENT_SPEED = 0.15  # m/s at which the lift lets the body down past a drop
+RELEASE = 0.02  # m: a lift setpoint this far below the body is off
+PRESS = 0.01  # m a leg's setpoint reaches below the surface under its foot
+LEG_SPEED = 0.25  # m/s at which a leg changes length
+TORSO_CLEARANCE = 0.02  # m the legs keep the torso above what lies under it
+MAX_HOVER = 0.2  # m of travel a foot may take to cross an edge (a step, or a stride over a gap, takes less)
+TORSO_GRID = np.array([[x, y] for x in (-0.9, 0.0, 0.9) for y in (-0.8, 0.0, 0.8)])  # under the torso, in half sizes
+TILT_GAIN = 2.0  # 1/rad: tilt motor control per rad of pitch or roll while the lift carries the body
+TILT_DAMPING = 0.15  # s/rad: tilt motor control per rad/s of pitch or roll, likewise
+STOP_MARGIN = 0.03  # m between a foot and a refused step's face
+EDGE_MARGIN = 0.01  # m between a foot's centre and a refused gap's or drop's edge
+ARRIVED = 0.015  # m from a move's stopping point that counts as there
 SETTLED_SPEED = 0.03  # m/s: a move ends only once the body is this still
+SETTLED_TURN = 0.2  # rad/s of pitch and roll, likewise
 LEASH = 0.06  # m the setpoint may run ahead of the body
 STALL_TIME = 3.0  # s without 1 cm of progress is a stall
 STAGING = 0.15  # m behind the push pose from where the robot lines up straight along the push
 PUSH_TOLERANCE = 0.06  # m: a push is done when the object's centre is this close to the target
 RAY_HEIGHT = 0.6  # m above the feet where downward rays start (things higher are overhead)
+FALL_TILT = np.radians(35.0)  # a body tilted further has fallen
+FALL_TICKS = 3  # control ticks with the centre of mass outside the feet's support (lift off) that make a fall...
+TIPPING = np.radians(5.0)  # ... once the body tilts this much (a level body with a foot off the ground is not falling)
+SUPPORT_MARGIN = -0.02  # m: the support polygon grown by this much before the centre of mass counts as outside
+LOCAL = np.array([-FOOT_RADIUS, 0.0, FOOT_RADIUS, LIFT_AHEAD / 2, LIFT_AHEAD])  # per-tick samples along a foot's path
+SAMPLES = round((BACK + SCAN_AHEAD + LOOKAHEAD) / SPACING) + 1
+BEHIND = round(BACK / SPACING)  # the sample under a foot at scan time
 
 Outcome = tuple[str, str | None, dict[str, float]]
 
@@ -73,18 +96,6 @@ class _Move:
 
 
 Plan = Generator[_Move, Outcome, Outcome | None]
-
-
-@dataclass
-class _Active:
-    """A motion skill running in one world."""
-
-    plan: Plan
-    move: _Move
-    started: float
-    best: float = np.inf
-    progress_time: float = 0.0
-    refusal: Outcome | None = None
 
 
 class QuadrupedEmbodiment:
@@ -104,12 +115,16 @@ class QuadrupedEmbodiment:
 
 
 class QuadrupedController:
-    """Runs the quadruped's skills in every world of one batched simulator."""
+    """Runs the quadruped's skills in every world of one batched simulator.
+
+    ``failures[w]`` says why world ``w``'s robot can no longer be trusted (it fell), else None.
+    """
 
     def __init__(self, sim: BatchedSim, limits: QuadrupedLimits):
         self.sim, self.limits = sim, limits
         self.scene: Scene = sim.scene
         model = self.scene.model
+        nworld = sim.nworld
         self.ids = BodyIds.of(model)
         self.half = np.array(limits.body_size[:2]) / 2
         self.height = limits.body_size[2]
@@ -117,34 +132,62 @@ class QuadrupedController:
         self.corners = local_corners(self.scene)
         self.geom_object = self.scene.body_object[model.geom_bodyid]
         self.cloth = np.array([o.shape == "cloth" for o in self.scene.task.objects])
-        self.mass = np.array([model.body_subtreemass[b] for b in self.scene.object_body])
-        self.active: list[_Active | None] = [None] * sim.nworld
+        self.movable = np.array([o.movable for o in self.scene.task.objects])
+        self.not_robot = ~self.scene.robot_body
+        self.plans: list[Plan | None] = [None] * nworld
+        self.failures: list[str | None] = [None] * nworld
+        # the move running in each world
+        self.moving = np.zeros(nworld, dtype=bool)
+        self.origin = np.zeros((nworld, 2))  # body position where the move started
+        self.u = np.tile([1.0, 0.0], (nworld, 1))  # its direction
+        self.length = np.zeros(nworld)  # its length
+        self.pushing = np.full(nworld, -1)
+        self.stop = np.zeros(nworld)  # travel along the move where the body must stop
+        self.findings: list[Finding | None] = [None] * nworld
+        self.best = np.full(nworld, np.inf)
+        self.progress_time = np.zeros(nworld)
+        # the last reading of each world's feet paths: index k lies at travel scan_t0 - BACK + k * SPACING
+        self.rescan = np.zeros(nworld, dtype=bool)
+        self.scan_t0 = np.zeros(nworld)
+        self.heights = np.full((nworld, 4, SAMPLES), np.nan)
+        self.level = np.full((nworld, 4, SAMPLES), np.nan)
+        self.lift = np.full(nworld, np.nan)  # lift setpoint (NaN: off)
+        self.outside = np.zeros(nworld, dtype=int)  # ticks the centre of mass has been outside the support
+        self.lost_support = np.full(nworld, None, dtype=object)  # where and how it last left its support
+        self.legs = np.full((nworld, 4), -PRESS)  # the legs' setpoints: standing, each carries its share
+        sim.ctrl[:, self.ids.leg_actuator] = self.legs
+        self.hover_from = np.full((nworld, 4), np.nan)  # travel where each foot began to cross an edge
+        self.halted = np.zeros(nworld, dtype=bool)  # the move was refused for want of footing
+        self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
         self.setpoint = self.state.qpos[:, self.ids.qpos[:2]].copy()
-        self._hold(np.arange(sim.nworld))
+        self._hold(np.arange(nworld))
 
     # -- the controller interface ----------------------------------------------------------------
 
-    def start(
-        self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]
-    ) -> list[SkillEnd]:
-        """Begin a motion skill; pushes that break a rule are refused at once."""
+    def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:
+        """Begin a motion skill; pushes that break a rule, and any motion of a fallen robot, are refused at once."""
         self.state = state
         ends = []
         for w in np.asarray(worlds, dtype=int).reshape(-1):
-            plan = self._push_plan(w, *args) if skill == "push_to_position" else self._walk_plan(args[0])
+            if self.failures[w] is not None:
+                ends.append(
+                    SkillEnd(world=int(w), outcome="refused", reason=f"the robot has fallen ({self.failures[w]})")
+                )
+                continue
+            plan = self._push_plan(w, *args) if skill == "push_to_position" else self._walk_plan(w, args[0])
             end = self._begin(w, plan)
             if end is not None:
                 ends.append(end)
         return ends
 
     def tick(self, state: BatchState) -> list[SkillEnd]:
-        """Report finished skills and write the controls for the next interval."""
+        """Report finished skills and falls, and write the controls for the next interval."""
         self.state = state
-        ends: list[SkillEnd] = []
-        worlds = [w for w, a in enumerate(self.active) if a is not None and state.failed[w] is None]
-        if worlds:
-            self._drive(np.array(worlds), ends)
+        ends = self._falls()
+        worlds = np.flatnonzero(self.moving & np.array([f is None for f in state.failed]))
+        if worlds.size:
+            self._drive(worlds, ends)
         return ends
 
     def query(self, state: BatchState, world: int, skill: str, args: tuple[Any, ...]) -> Any:
@@ -153,8 +196,9 @@ class QuadrupedController:
         if name == "robot":
             if skill == "get_size":
                 return list(self.limits.body_size)
-            feet = state.qpos[world, self.ids.qpos]
-            return [float(feet[0]), float(feet[1]), float(feet[2] + self.height / 2)]
+            centres = feet(state, self.ids)[world]
+            x, y = centres[:, :2].mean(axis=0)
+            return [float(x), float(y), float(centres[:, 2].mean() - FOOT_RADIUS + self.height / 2)]
         try:
             index = self.scene.object_index(name)
         except KeyError as e:
@@ -165,9 +209,33 @@ class QuadrupedController:
 
     # -- skill plans -------------------------------------------------------------------------------
 
-    def _walk_plan(self, target: tuple[float, float, float]) -> Plan:
-        outcome = yield _Move(np.array(target[:2], dtype=float))
-        return outcome
+    def _walk_plan(self, w: int, target: tuple[float, float, float]) -> Plan:
+        """Straight to ``target`` when the feet's paths allow it; else along an L (one axis, then the other) that
+        does; else around the object whose side is too high to climb (refused, naming it, when there is no way
+        round); else straight, to be refused where the legs meet their limit."""
+        goal = np.array(target[:2], dtype=float)
+        here = self._position(w)
+        found = self._check(w, here, [goal])
+        path = [goal]
+        if found is not None:
+            corners = [np.array([goal[0], here[1]]), np.array([here[0], goal[1]])]
+            ways = [[c, goal] for c in corners if min(np.linalg.norm(c - here), np.linalg.norm(goal - c)) > ARRIVED]
+            obstacle = found[1] if found[0].kind == "step" else -1
+            if obstacle >= 0:
+                lo, hi = self._bounds(w, obstacle)
+                if not np.all((goal >= lo) & (goal <= hi)):  # the goal is not on it: go around it
+                    ways.append(route(here, goal, lo - self.half - GAP, hi + self.half + GAP))
+            clear = next((way for way in ways if self._check(w, here, way) is None), None)
+            if clear is not None:
+                path = clear
+            elif obstacle >= 0 and not np.all((goal >= lo) & (goal <= hi)):
+                name = self.scene.object_names[obstacle]
+                return "refused", f"the way is blocked by {name}: {found[0].describe()}", _measured(found[0])
+        for waypoint in path:
+            outcome = yield _Move(waypoint)
+            if outcome[0] != "done":
+                return outcome
+        return None
 
     def _push_plan(self, w: int, name: str, target: tuple[float, float, float]) -> Plan:
         try:
@@ -180,16 +248,13 @@ class QuadrupedController:
         goal = np.array(target[:2], dtype=float)
         for leg in legs(self._centers(self.state)[w, index], goal):
             lo, hi = self._bounds(w, index)
-            pose = self._clear_pose(w, index, leg, lo, hi)
+            pose, problem = self._clear_pose(w, index, leg, lo, hi)
             if pose is None:
-                return "refused", f"cannot push {name}: no clear place to stand behind it", {}
-            start, end = pose
-            robot = self.state.qpos[w, self.ids.qpos[:2]]
-            staging = start - (end - start) / np.linalg.norm(end - start) * STAGING
-            for waypoint in [
-                *route(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2),
-                start,
-            ]:
+                return "refused", f"cannot push {name}: no clear place to stand behind it{problem}", {}
+            start, end, behind = pose
+            robot = self._position(w)
+            staging = start - (end - start) / np.linalg.norm(end - start) * behind
+            for waypoint in [*route(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2), start]:
                 outcome = yield _Move(waypoint)
                 if outcome[0] != "done":
                     return outcome
@@ -197,7 +262,7 @@ class QuadrupedController:
             if outcome[0] not in ("done", "stalled"):
                 return outcome
             back = (start - end) / np.linalg.norm(start - end) * GAP
-            outcome = yield _Move(self.state.qpos[w, self.ids.qpos[:2]] + back)
+            outcome = yield _Move(self._position(w) + back)
             if outcome[0] != "done":
                 return outcome
         miss = float(np.linalg.norm(self._centers(self.state)[w, index, :2] - goal))
@@ -206,26 +271,22 @@ class QuadrupedController:
         return None
 
     def _push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
-        """Check the push rules in world ``w`` from rays under the robot and under the object."""
-        feet_z = self.state.qpos[w, self.ids.qpos[2]]
-        centre = self.state.qpos[w, self.ids.qpos[:2]]
-        foot = self.half - FOOT_RADIUS
-        points = np.array([centre, *(centre + foot * np.array([sx, sy]) for sx in (-1, 1) for sy in (-1, 1))])
-        z, objects = self._heights(w, points, feet_z + 0.05)
+        """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves."""
+        centres = feet(self.state, self.ids)[w]
+        z, objects = self._heights(w, centres[:, :2], float(centres[:, 2].min()) + 0.05)
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
         carriers = [o for o in on if not self.cloth[o]]
-        movable = next(
-            (self.scene.object_names[o] for o in carriers if self.scene.task.objects[o].movable), None
-        )
+        movable = next((self.scene.object_names[o] for o in carriers if self.movable[o]), None)
         obj_lo, obj_hi = self._bounds3(w, index)
         centre_obj = (obj_lo + obj_hi) / 2
-        below, _ = self._heights(
-            w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index]
-        )
+        below, _ = self._heights(w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
+        riders = self._riders(w, index)
+        mass = float(sum(self._mass(w, o) for o in [index, *riders]))
         return rule_violation(
-            movable=self.scene.task.objects[index].movable,
-            mass=float(self.mass[index]),
+            movable=bool(self.movable[index]),
+            mass=round(mass, 3),
+            riders=[self.scene.object_names[o] for o in riders],
             under_robot=bool(np.isin(index, on)),
             robot_support_movable=movable,
             object_support=float(below[0]),
@@ -233,230 +294,453 @@ class QuadrupedController:
             limits=self.limits,
         )
 
+    def _riders(self, w: int, index: int) -> list[int]:
+        """Movable objects that ride on object ``index`` in world ``w``, recursively: higher than what carries them
+        and touching nothing else (but the robot)."""
+        state, owner = self.state, self.scene.body_object
+        centres = self._centers(state)[w]
+        carried = [index]
+        riders: list[int] = []
+        robot = self.scene.robot_body
+        while carried:
+            base = carried.pop()
+            touching = state.touching[w][owner == base].any(axis=0)
+            for other in np.unique(owner[touching & (owner >= 0)]):
+                if (
+                    other == index
+                    or other in riders
+                    or not self.movable[other]
+                    or centres[other, 2] <= centres[base, 2]
+                ):
+                    continue
+                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other)
+                if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
+                    riders.append(int(other))
+                    carried.append(int(other))
+        return riders
+
+    def _mass(self, w: int, index: int) -> float:
+        """World ``w``'s (perturbed) mass of object ``index``, all its bodies."""
+        return float(self.sim.body_mass[w, self.scene.body_object == index].sum())
+
     def _clear_pose(
         self, w: int, index: int, leg: Leg, lo: np.ndarray, hi: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """The push start and end poses nearest straight-on whose sweep meets nothing above the floor.
+    ) -> tuple[tuple[np.ndarray, np.ndarray, float] | None, str]:
+        """The push start and end poses nearest straight-on whose sweep meets nothing above the floor and whose
+        feet stay over the floor (no drop, no gap), with how far behind the start the robot lines up; when there
+        is none, what was wrong under the feet.
 
         Poses whose sweep is clear from the staging point (``STAGING`` behind the start, where the robot lines up)
         come first, so that the robot can line up there; failing those, a clear sweep from the start will do.
         """
-        feet_z = self.state.qpos[w, self.ids.qpos[2]]
-        floor = float(self._heights(w, self.state.qpos[w, self.ids.qpos[:2]][None], feet_z + 0.05)[0][0])
+        centres = feet(self.state, self.ids)[w]
+        floor = float(centres[:, 2].min() - FOOT_RADIUS)
         width = hi[1 - leg.axis] - lo[1 - leg.axis]
         offsets = lateral_offsets(width, 2 * self.half[1 - leg.axis])
         poses = [push_pose(lo, hi, leg, self.half, float(o)) for o in offsets]
+
+        def heights(xy: np.ndarray) -> np.ndarray:
+            z, objects = self._heights(w, xy, floor + RAY_HEIGHT)
+            return np.where(objects == index, floor, z)
+
+        problem = ""
         for staging in (STAGING, 0.0):
             for start, end in poses:
                 behind = start - (end - start) / np.linalg.norm(end - start) * staging
-                z, objects = self._heights(w, sweep_points(behind, end, self.half), floor + RAY_HEIGHT)
-                if np.all((z <= floor + RISE) | (objects == index)):
-                    return start, end
-        return None
+                found = sweep_problem(heights, behind, end, self.limits, floor)
+                if found is None:
+                    return (start, end, staging), ""
+                problem = f": {found}" if "drop" in found else problem
+        return None, problem
 
     # -- running moves -----------------------------------------------------------------------------
 
     def _begin(self, w: int, plan: Plan) -> SkillEnd | None:
+        self.plans[w] = plan
         try:
             move = next(plan)
         except StopIteration as stop:
             return self._end(w, stop.value)
-        self.active[w] = _Active(plan, move, started=float(self.state.time[w]))
-        self._reset_progress(w)
+        self._start_move(w, move)
         return None
 
     def _advance(self, w: int, outcome: Outcome) -> SkillEnd | None:
         """The current move ended with ``outcome``: start the plan's next move or end the skill."""
-        active = self.active[w]
-        assert active is not None
+        plan = self.plans[w]
+        assert plan is not None
         try:
-            active.move = active.plan.send(outcome)
+            move = plan.send(outcome)
         except StopIteration as stop:
             return self._end(w, stop.value)
-        active.refusal = None
-        self._reset_progress(w)
+        self._start_move(w, move)
         return None
 
+    def _start_move(self, w: int, move: _Move) -> None:
+        here = self._position(w)
+        delta = move.goal - here
+        length = float(np.linalg.norm(delta))
+        self.moving[w] = True
+        self.origin[w] = here
+        self.u[w] = delta / length if length > 1e-9 else np.array([1.0, 0.0])
+        self.length[w] = length
+        self.pushing[w] = move.pushing
+        self.stop[w] = 0.0
+        self.findings[w] = None
+        self.rescan[w] = True
+        self.level[w] = np.nan
+        self.hover_from[w] = np.nan
+        self.halted[w] = False
+        self.best[w], self.progress_time[w] = np.inf, float(self.state.time[w])
+
     def _end(self, w: int, outcome: Outcome | None) -> SkillEnd:
-        self.active[w] = None
+        self.plans[w] = None
+        self.moving[w] = False
         self._hold(np.array([w]))
         kind, reason, measured = outcome or ("done", None, {})
         return SkillEnd(world=int(w), outcome=kind, reason=reason, measured=measured)  # type: ignore[arg-type]
-
-    def _reset_progress(self, w: int) -> None:
-        active = self.active[w]
-        assert active is not None
-        active.best, active.progress_time = np.inf, float(self.state.time[w])
 
     def _hold(self, worlds: np.ndarray) -> None:
         """Stand still where the body is, lift motor off."""
         self.setpoint[worlds] = self.state.qpos[worlds][:, self.ids.qpos[:2]]
         self.sim.ctrl[worlds[:, None], self.ids.actuator[:2]] = self.setpoint[worlds]
         self.sim.ctrl[worlds, self.ids.actuator[2]] = OFF
+        self.sim.ctrl[worlds[:, None], self.ids.actuator[3:]] = 0.0
+        self.lift[worlds] = np.nan
 
     def _drive(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
-        """Read the terrain in every moving world, then stop, refuse, advance or lift."""
+        """Read the terrain where needed, then lift, stop, refuse or advance, in all moving worlds at once."""
         state = self.state
-        pos = state.qpos[:, self.ids.qpos]
-        goals = np.array([self.active[w].move.goal for w in worlds])  # type: ignore[union-attr]
-        delta = goals - pos[worlds, :2]
-        dist = np.linalg.norm(delta, axis=1)
-        u = np.where(dist[:, None] > 1e-9, delta / np.maximum(dist, 1e-9)[:, None], np.array([1.0, 0.0]))
-        extent = self._chord(u)  # half length of the body along the direction of travel
-        heights, objects = self._profiles(worlds, u, extent, dist)
+        q = state.qpos[worlds][:, self.ids.qpos]
+        travel = np.einsum("ki,ki->k", q[:, :2] - self.origin[worlds], self.u[worlds])
+        centres = feet(state, self.ids)[worlds]
+        local, local_objects, under_torso = self._local(worlds, centres)
+        index = self._indices(worlds, travel)
+        stale = self.rescan[worlds] | np.any((index < 0) | (index >= SAMPLES), axis=1)
+        stale |= (travel > self.scan_t0[worlds] + SCAN_AHEAD / 2) & (
+            self.length[worlds] > self.scan_t0[worlds] + SCAN_AHEAD
+        )
+        stored = self._gather(self.heights[worlds], index)
+        pushed = (local_objects == self.pushing[worlds][:, None, None]) & (local_objects >= 0)
+        stale |= np.any(~pushed & (np.abs(local - stored) > RISE), axis=(1, 2))
+        if stale.any():
+            self._scan(worlds[stale], travel[stale], centres[stale])
+            index = self._indices(worlds, travel)
+        local = np.where(pushed, self._gather(self.heights[worlds], index), local)
+        waiting = self._lift(worlds, q, travel, centres, local, under_torso, index)
+        self._steer(worlds, q, travel, waiting)
+        self._check_arrival(worlds, q, travel, ends)
+
+    def _indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
+        """Sample indices (k, 5) of the :data:`LOCAL` offsets ahead of the feet in each world's last reading."""
+        t = travel - self.scan_t0[worlds] + BACK
+        return np.round((t[:, None] + LOCAL[None, :]) / SPACING).astype(int)
+
+    @staticmethod
+    def _gather(table: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """``table`` (k, 4, SAMPLES) at ``index`` (k, 5) for every foot -> (k, 4, 5) (NaN out of range)."""
+        ok = (index >= 0) & (index < SAMPLES)
+        out = np.take_along_axis(table, np.clip(index, 0, SAMPLES - 1)[:, None, :].repeat(4, axis=1), axis=2)
+        return np.where(ok[:, None, :], out, np.nan)
+
+    def _local(self, worlds: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Heights and objects (k, 4, 5) at the :data:`LOCAL` offsets along each foot's path, and the highest
+        surface under the torso (k,) (the pushed object left out)."""
+        k = len(worlds)
+        points = centres[:, :, None, :2] + LOCAL[None, None, :, None] * self.u[worlds][:, None, None, :]
+        torso = self.state.qpos[worlds][:, None, self.ids.qpos[:2]] + TORSO_GRID * self.half
+        top = centres[:, :, 2].min(axis=1) + RAY_HEIGHT
+        z, objects = self._cast(worlds, np.concatenate([points.reshape(k, -1, 2), torso], axis=1), top)
+        pushed = (objects == self.pushing[worlds][:, None]) & (objects >= 0)
+        under_torso = np.where(pushed, -np.inf, z)[:, 4 * len(LOCAL) :].max(axis=1)
+        return (z[:, : 4 * len(LOCAL)].reshape(k, 4, -1), objects[:, : 4 * len(LOCAL)].reshape(k, 4, -1), under_torso)
+
+    def _scan(self, worlds: np.ndarray, travel: np.ndarray, centres: np.ndarray) -> None:
+        """Read and check the feet's paths ahead in ``worlds``; set where each must stop and why."""
+        u = self.u[worlds]
+        bottom = centres[:, :, 2] - FOOT_RADIUS
+        ahead = np.clip(self.length[worlds] - travel, 0.0, SCAN_AHEAD) + LOOKAHEAD
+        s = np.minimum(-BACK + np.arange(SAMPLES) * SPACING, ahead[:, None])  # (k, SAMPLES)
+        points = centres[:, :, None, :2] + s[:, None, :, None] * u[:, None, None, :]
+        z, objects = self._cast(worlds, points.reshape(len(worlds), -1, 2), bottom.min(axis=1) + RAY_HEIGHT)
+        z, objects = z.reshape(points.shape[:3]), objects.reshape(points.shape[:3])
+        under = z[:, :, BEHIND - RADIUS_SAMPLES : BEHIND + RADIUS_SAMPLES + 1]
+        actual = np.minimum(bottom + RISE, np.nanmax(under, axis=2))
+        now = self._indices(worlds, travel)[:, 1]
+        before = self._gather(self.level[worlds], now[:, None])[:, :, 0]
+        over_gap = np.nan_to_num(before - actual, nan=0.0) > self.limits.max_step_up  # striding a gap: keep its level
+        start = np.where(over_gap, before, actual)
+        into_gap = np.zeros(over_gap.shape)
+        for k, f in zip(*np.nonzero(over_gap), strict=True):  # how far into it, from the last reading
+            w, i = worlds[k], int(now[k])
+            low = self.heights[w, f, : i + 1] < self.level[w, f, : i + 1] - self.limits.max_step_up
+            edge = np.flatnonzero(~low)
+            into_gap[k, f] = (i - (edge[-1] if edge.size else -1)) * SPACING
+        pushed = (objects == self.pushing[worlds][:, None, None]) & (objects >= 0)
+        z = np.where(pushed, start[:, :, None], z)
+        result = scan_paths(
+            z[:, :, BEHIND:].reshape(-1, SAMPLES - BEHIND), start.reshape(-1), self.limits, into_gap.reshape(-1)
+        )
+        level = np.concatenate(
+            [np.repeat(start[:, :, None], BEHIND, axis=2), result.level.reshape(len(worlds), 4, -1)], axis=2
+        )
+        self.heights[worlds], self.level[worlds] = z, level
+        self.scan_t0[worlds] = travel
+        self.rescan[worlds] = False
+        index = result.index.reshape(len(worlds), 4) + BEHIND
+        kind = result.kind.reshape(len(worlds), 4)
+        measured = result.measured.reshape(len(worlds), 4)
+        meets = travel[:, None] + np.take_along_axis(s, np.minimum(index, SAMPLES - 1), axis=1)
+        past = np.where(kind >= 2, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
+        relevant = (kind > 0) & (meets - past <= self.length[worlds][:, None])
+        margin = np.where(kind >= 2, FOOT_RADIUS + EDGE_MARGIN, STOP_MARGIN)  # centre before an edge, foot a face
+        stop_at = np.where(relevant, meets - margin, np.inf).min(axis=1)
+        limit = np.where(self.length[worlds] > travel + SCAN_AHEAD, travel + SCAN_AHEAD, self.length[worlds])
+        halted = self.halted[worlds]
+        self.stop[worlds] = np.where(halted, self.stop[worlds], np.minimum(limit, stop_at))
         for k, w in enumerate(worlds):
-            active = self.active[w]
-            assert active is not None
-            h = heights[k].copy()
-            pushed = objects[k] == active.move.pushing
-            n = int((min(dist[k], LOOKAHEAD) + 2 * extent[k]) / SPACING) + 1 - EDGE_SAMPLES
-            if active.move.pushing >= 0:
-                h[pushed] = h[0]
-            under = min(round(2 * extent[k] / SPACING), n - 1)
-            footprint = (EDGE_SAMPLES, max(EDGE_SAMPLES, under - EDGE_SAMPLES))
-            result = scan(h[:n], SPACING, self.limits, footprint, feet=pos[w, 2])
-            reach = dist[k]
-            if result.violation is not None:
-                reach = min(reach, max(0.0, result.edge - 2 * extent[k] - STOP_MARGIN))
-                active.refusal = (
-                    "refused",
-                    describe_violation(result.violation, result.measured, self.limits),
-                    {result.violation: round(float(result.measured), 3)},
+            hits = np.flatnonzero(relevant[k])
+            if halted[k]:  # refused already: the move ends where it stopped
+                continue
+            if not hits.size:
+                self.findings[w] = None
+                continue
+            foot = int(hits[np.argmin(meets[k, hits])])
+            where = points[k, foot, index[k, foot]]
+            kind_name = KINDS[int(kind[k, foot]) - 1]
+            self.findings[w] = Finding(
+                kind_name,
+                round(float(measured[k, foot]), 3),
+                limit_of(kind_name, self.limits),
+                (float(where[0]), float(where[1])),
+                FOOT_NAMES[foot],
+            )
+
+    def _lift(
+        self,
+        worlds: np.ndarray,
+        q: np.ndarray,
+        travel: np.ndarray,
+        centres: np.ndarray,
+        local: np.ndarray,
+        under_torso: np.ndarray,
+        index: np.ndarray,
+    ) -> np.ndarray:
+        """Set the legs and the lift; return the worlds (k,) that must wait for a foot to clear an edge.
+
+        Each leg reaches down to the surface under its foot, a little further (``PRESS``) so that it carries its
+        share, the body level over the highest one and its torso :data:`TORSO_CLEARANCE` above what lies under it;
+        legs change length at :data:`LEG_SPEED`. A foot crosses up
+        while the level accepted from just behind it to :data:`LIFT_AHEAD` ahead stands higher than the surface
+        under it (a step up ahead, a stridden gap under it): the lift raises the body until that foot is
+        ``CLEARANCE`` above that level. It crosses down from when the surface under its centre drops below the
+        level it stood at (it bears weight up to the edge) until :data:`HOLD_BEHIND` past it: the lift holds the
+        body. While the lift
+        carries the body the legs keep their length and the tilt motors hold it level; once no foot crosses, the
+        lift lets the body down onto its legs at :data:`DESCENT_SPEED` and switches off once they stand as they
+        should and carry it.
+        """
+        hold_len = round(HOLD_BEHIND / SPACING)
+        span = np.arange(-hold_len - RADIUS_SAMPLES, round(LIFT_AHEAD / SPACING) + 1)
+        window = index[:, 1, None] + span[None, :]  # around each foot's centre
+        values = np.take_along_axis(
+            self.level[worlds], np.clip(window, 0, SAMPLES - 1)[:, None, :].repeat(4, axis=1), axis=2
+        )
+        last = np.round((self.stop[worlds] - self.scan_t0[worlds] + BACK) / SPACING)  # the move's end (the foot's)
+        values = np.where(((window >= 0) & (window < SAMPLES) & (window <= last[:, None]))[:, None, :], values, np.nan)
+        values = np.where(np.isnan(values), -np.inf, values)
+        ahead = values[:, :, hold_len:].max(axis=2)
+        behind = values[:, :, : hold_len + RADIUS_SAMPLES + 1].max(axis=2)  # up to the foot's centre
+        under = local[:, :, :3].max(axis=2)
+        below = local[:, :, 1]  # under the foot's centre: it bears weight up to the edge
+        bottom = centres[:, :, 2] - FOOT_RADIUS
+        up = ahead - under > RISE
+        hold = ~up & (behind - below > RISE)
+        crossing = (up | hold).any(axis=1)
+        crossing &= ~self._no_footing(worlds, travel, up | hold, centres)
+        up &= crossing[:, None]
+        clear = under_torso - BELLY_HEIGHT + TORSO_CLEARANCE  # the lowest the feet's level may be under the torso
+        stance = np.clip(under - np.maximum(under.max(axis=1), clear)[:, None] - PRESS, -self.reach, 0.0)
+        legs = self.legs[worlds]
+        step = np.clip(stance - legs, -LEG_SPEED * self.scene.control_dt, LEG_SPEED * self.scene.control_dt)
+        self.legs[worlds] = np.where(crossing[:, None], legs, legs + step)  # held while the lift carries the body
+        self.sim.ctrl[worlds[:, None], self.ids.leg_actuator] = self.legs[worlds]
+        need = np.where(up, ahead + CLEARANCE, np.where(hold, behind, -np.inf)) - bottom
+        wanted = np.where(crossing, np.maximum(q[:, 2] + need.max(axis=1), clear), np.nan)
+        previous = np.minimum(self.lift[worlds], q[:, 2]) - DESCENT_SPEED * self.scene.control_dt  # NaN: was off
+        target = np.where(np.isnan(wanted), previous, np.fmax(wanted, previous))
+        settled = np.all(np.abs(self.legs[worlds] - stance) < 1e-3, axis=1)  # the legs stand where they should
+        target = np.where(~crossing & settled & (target < q[:, 2] - RELEASE), np.nan, target)  # resting on its legs
+        self.lift[worlds] = target
+        self.sim.ctrl[worlds, self.ids.actuator[2]] = np.where(np.isnan(target), OFF, target)
+        angle, rate = q[:, 3:], self.state.qvel[worlds][:, self.ids.qvel[3:]]
+        level = np.clip(-angle * TILT_GAIN - rate * TILT_DAMPING, -1.0, 1.0) * ~np.isnan(target)[:, None]
+        self.sim.ctrl[worlds[:, None], self.ids.actuator[3:]] = level
+        return np.any(up & (bottom < ahead + CLEARANCE / 2), axis=1)
+
+    def _no_footing(
+        self, worlds: np.ndarray, travel: np.ndarray, crossing: np.ndarray, centres: np.ndarray
+    ) -> np.ndarray:
+        """Worlds (k,) where a foot has been carried further than any edge needs (``crossing``: (k, 4) the feet
+        crossing now): it found no footing. The move stops there, refused, and the lift lets go: what the feet
+        stand on then carries the robot, or not."""
+        start = self.hover_from[worlds]
+        start = np.where(crossing & np.isnan(start), travel[:, None], np.where(crossing, start, np.nan))
+        self.hover_from[worlds] = start
+        carried = np.where(crossing, travel[:, None] - start, 0.0)
+        too_far = (carried > MAX_HOVER).any(axis=1) | self.halted[worlds]
+        for k in np.flatnonzero(too_far & ~self.halted[worlds]):
+            w, foot = int(worlds[k]), int(np.argmax(carried[k]))
+            where = centres[k, foot, :2]
+            self.findings[w] = Finding(
+                "gap",
+                round(float(carried[k, foot]), 3),
+                self.limits.max_gap,
+                (float(where[0]), float(where[1])),
+                FOOT_NAMES[foot],
+            )
+            self.stop[w] = float(travel[k])
+            self.hover_from[w] = np.nan
+            self.halted[w] = True
+        return too_far
+
+    def _steer(self, worlds: np.ndarray, q: np.ndarray, travel: np.ndarray, waiting: np.ndarray) -> None:
+        """Move the x-y setpoints toward the stopping points at walking speed, leashed to the bodies."""
+        body = q[:, :2]
+        sp = self.setpoint[worlds]
+        stop = self.origin[worlds] + self.u[worlds] * self.stop[worlds][:, None]
+        to_stop = stop - sp
+        gap = np.linalg.norm(to_stop, axis=1)
+        go = ~waiting & (gap > 1e-9) & (np.linalg.norm(sp - body, axis=1) < LEASH)
+        step = np.minimum(gap, WALK_SPEED * self.scene.control_dt)
+        direction = to_stop / np.maximum(gap, 1e-9)[:, None]
+        sp = sp + np.where(go[:, None], direction * step[:, None], 0.0)
+        velocity = np.where((go & (gap > step))[:, None], direction * WALK_SPEED, 0.0)
+        self.setpoint[worlds] = sp
+        self.sim.ctrl[worlds[:, None], self.ids.actuator[:2]] = sp + self.lead * velocity
+
+    def _check_arrival(self, worlds: np.ndarray, q: np.ndarray, travel: np.ndarray, ends: list[SkillEnd]) -> None:
+        """End the moves whose body reached its stopping point (done or refused), stalled or ran out of time."""
+        state = self.state
+        now = state.time[worlds]
+        qvel = state.qvel[worlds][:, self.ids.qvel]
+        still = (np.abs(qvel[:, :3]).max(axis=1) < SETTLED_SPEED) & (np.abs(qvel[:, 3:]).max(axis=1) < SETTLED_TURN)
+        stop = self.origin[worlds] + self.u[worlds] * self.stop[worlds][:, None]
+        there = (np.linalg.norm(q[:, :2] - stop, axis=1) < ARRIVED) & still
+        remaining = np.abs(self.length[worlds] - travel)
+        finished = there & (
+            (self.stop[worlds] >= self.length[worlds] - 1e-9) | np.array([self.findings[w] is not None for w in worlds])
+        )
+        better = remaining < self.best[worlds] - 0.01
+        self.best[worlds] = np.where(better, remaining, self.best[worlds])
+        self.progress_time[worlds] = np.where(better, now, self.progress_time[worlds])
+        stalled = ~finished & (now - self.progress_time[worlds] > STALL_TIME)
+        for k in np.flatnonzero(finished | stalled):
+            w = int(worlds[k])
+            finding = self.findings[w]
+            if stalled[k]:
+                outcome: Outcome = (
+                    "stalled",
+                    f"blocked at [{q[k, 0]:.2f}, {q[k, 1]:.2f}], {remaining[k]:.2f} m short of the goal",
+                    {"distance": round(float(remaining[k]), 3)},
                 )
+            elif finding is not None:
+                outcome = ("refused", finding.describe(), _measured(finding))
             else:
-                active.refusal = None
-            stop = pos[w, :2] + u[k] * reach
-            end = self._check_arrival(w, active, reach, dist[k])
+                outcome = ("done", None, {})
+            end = self._advance(w, outcome)
             if end is not None:
                 ends.append(end)
+
+    # -- falls ---------------------------------------------------------------------------------------
+
+    def _falls(self) -> list[SkillEnd]:
+        """Find the robots that fell since the last tick: end their skills and mark their worlds failed."""
+        state = self.state
+        com = centre_of_mass(state, self.ids)
+        centres = feet(state, self.ids)
+        touching = feet_touching(state, self.ids, self.not_robot)
+        held = supported(com, centres, touching, SUPPORT_MARGIN)
+        self.outside = np.where(~held & np.isnan(self.lift), self.outside + 1, 0)
+        self.lost_support[held] = None
+        for w in np.flatnonzero(self.outside == 1):  # where it left its support, and which feet had none
+            x, y = com[w, :2]
+            self.lost_support[w] = f"fell at [{x:.2f}, {y:.2f}]: no support under {unsupported_feet(touching[w])}"
+        angle = tilt(state, self.ids)
+        fell = ((self.outside >= FALL_TICKS) & (angle > TIPPING)) | (angle > FALL_TILT)
+        ends = []
+        for w in np.flatnonzero(fell):
+            if self.failures[w] is not None or state.failed[w] is not None:
                 continue
-            front = int(np.ceil((2 * extent[k] + LIFT_AHEAD) / SPACING)) + 1
-            lift = float(np.nanmax(result.level[: min(front, n)]))
-            rest = float(result.level[0])
-            lifting = lift > rest + RISE
-            belly = self._belly(h, under, pos[w, 2])
-            if belly is not None and (not lifting or belly > lift):
-                lift, lifting = belly, True
-            self.sim.ctrl[w, self.ids.actuator[2]] = lift + CLEARANCE if lifting else OFF
-            waiting = lifting and pos[w, 2] < lift + CLEARANCE / 2
-            self._step_setpoint(w, stop, moving=not waiting)
-
-    def _belly(self, h: np.ndarray, under: int, feet: float) -> float | None:
-        """The height of a surface under the middle of the body that stands higher than both foot rows.
-
-        A step shorter than the feet's span (the body straddles it, front feet past its near edge and rear
-        feet not yet on it, or the other way round) carries no foot: the body is held above it by the lift
-        motor until a foot row is over it again, instead of dropping onto it with its torso and catching
-        its legs on its sides. Only a surface the feet could have stepped onto (within the step limit of
-        the feet) counts. None when there is no such surface.
-        """
-        reach = int(np.ceil(2 * FOOT_RADIUS / SPACING))
-        if under - EDGE_SAMPLES <= 2 * reach:
-            return None
-        rows = max(float(h[EDGE_SAMPLES : reach + 1].max()), float(h[under - reach : under - EDGE_SAMPLES + 1].max()))
-        middle = float(h[reach + 1 : under - reach].max())
-        if middle > rows + RISE and middle - feet <= self.limits.max_step_up + TOLERANCE:
-            return middle
-        return None
-
-    def _check_arrival(self, w: int, active: _Active, reach: float, dist: float) -> SkillEnd | None:
-        """End the move when the body reached its stopping point, stalled or ran out of time."""
-        now = float(self.state.time[w])
-        still = float(np.abs(self.state.qvel[w, self.ids.qvel]).max()) < SETTLED_SPEED
-        if reach < ARRIVED and still:
-            outcome: Outcome = active.refusal or ("done", None, {})
-            if dist < ARRIVED or active.refusal is not None:
-                return self._advance(w, outcome)
-        if dist < active.best - 0.01:
-            active.best, active.progress_time = dist, now
-        elif now - active.progress_time > STALL_TIME:
-            where = self.state.qpos[w, self.ids.qpos]
-            return self._advance(
-                w,
-                (
-                    "stalled",
-                    f"blocked at [{where[0]:.2f}, {where[1]:.2f}], {dist:.2f} m short of the goal",
-                    {"distance": round(dist, 3)},
-                ),
+            x, y = com[w, :2]
+            reason = (
+                self.lost_support[w] or f"fell at [{x:.2f}, {y:.2f}]: tipped over ({np.degrees(angle[w]):.0f} degrees)"
             )
-        return None
-
-    def _step_setpoint(self, w: int, stop: np.ndarray, moving: bool) -> None:
-        """Move the x-y setpoint toward ``stop`` at walking speed, leashed to the body."""
-        body = self.state.qpos[w, self.ids.qpos[:2]]
-        sp = self.setpoint[w]
-        to_stop = stop - sp
-        gap = float(np.linalg.norm(to_stop))
-        velocity = np.zeros(2)
-        if moving and gap > 1e-9 and np.linalg.norm(sp - body) < LEASH:
-            step = min(gap, WALK_SPEED * self.scene.control_dt)
-            sp += to_stop / gap * step
-            if gap > step:
-                velocity = to_stop / gap * WALK_SPEED
-        self.sim.ctrl[w, self.ids.actuator[:2]] = sp + self.lead * velocity
+            self.failures[w] = reason
+            if self.plans[w] is not None:
+                self.plans[w] = None
+                ends.append(
+                    SkillEnd(
+                        world=int(w),
+                        outcome="fell",
+                        reason=reason,
+                        measured={
+                            "x": round(float(x), 3),
+                            "y": round(float(y), 3),
+                            "tilt": round(float(np.degrees(angle[w])), 1),
+                        },
+                    )
+                )
+            self.moving[w] = False
+            self._hold(np.array([w]))
+        return ends
 
     # -- sensing -----------------------------------------------------------------------------------
 
-    def _profiles(
-        self, worlds: np.ndarray, u: np.ndarray, extent: np.ndarray, dist: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Height profiles (len(worlds), n) along each world's direction, highest across the body width."""
-        n = int(np.ceil((LOOKAHEAD + 2 * self.half.max()) / SPACING)) + 1
-        lateral = np.stack([-u[:, 1], u[:, 0]], axis=1)
-        width = self._chord(lateral) - FOOT_RADIUS
-        length = np.minimum(dist, LOOKAHEAD) + 2 * extent
-        s = np.minimum(np.arange(n)[None, :] * SPACING, length[:, None])  # (k, n)
-        pos = self.state.qpos[worlds][:, self.ids.qpos]
-        rear = pos[:, :2] - u * extent[:, None]
-        across = np.array([-1.0, 0.0, 1.0])
-        xy = (
-            rear[:, None, None, :]
-            + s[:, :, None, None] * u[:, None, None, :]
-            + across[None, None, :, None] * (width[:, None, None, None] * lateral[:, None, None, :])
-        )
-        top = pos[:, 2] + RAY_HEIGHT
-        z, objects = self._cast(worlds, xy.reshape(len(worlds), -1, 2), top)
-        z, objects = z.reshape(len(worlds), n, 3), objects.reshape(len(worlds), n, 3)
-        best = z.argmax(axis=2)[..., None]
-        return np.take_along_axis(z, best, 2)[..., 0], np.take_along_axis(objects, best, 2)[..., 0]
+    def _check(self, w: int, here: np.ndarray, path: list[np.ndarray]) -> tuple[Finding, int] | None:
+        """The first finding on a walk through ``path`` in world ``w`` and the object there (-1: none)."""
+        top = float(feet(self.state, self.ids)[w, :, 2].min()) + RAY_HEIGHT
 
-    def _chord(self, u: np.ndarray) -> np.ndarray:
-        """Half length of the body's footprint along directions ``u`` (k, 2) through its centre.
+        def heights(xy: np.ndarray) -> np.ndarray:
+            return self._heights(w, xy, top)[0]
 
-        Diagonal moves read the terrain over this central band; the corners outside it meet what
-        is there physically.
-        """
-        return np.min(self.half / np.maximum(np.abs(u), 1e-9), axis=1)
+        bottom = feet(self.state, self.ids)[w, :, 2] - FOOT_RADIUS
+        finding = check_walk(heights, here, path, self.limits, start_levels=bottom)
+        if finding is None:
+            return None
+        where = np.array(finding.where)
+        ahead = path[0] - here
+        probe = where + ahead / max(float(np.linalg.norm(ahead)), 1e-9) * FOOT_RADIUS
+        _, objects = self._heights(w, probe[None], top)
+        return finding, int(objects[0])
 
-    def _heights(
-        self, w: int, xy: np.ndarray, top: float, exclude: int | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def _heights(self, w: int, xy: np.ndarray, top: float, exclude: int = -1) -> tuple[np.ndarray, np.ndarray]:
         """Surface heights and hit objects (-1: ground or nothing) under points ``xy`` in world ``w``."""
         z, objects = self._cast(np.array([w]), xy[None], np.array([top]), exclude)
         return z[0], objects[0]
 
     def _cast(
-        self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int | None = None
+        self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``."""
+        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``; the robot is
+        never hit."""
         nworld, nray = self.sim.nworld, xy.shape[1]
-        pnt = np.zeros((nworld, nray, 3))
+        pnt = np.full((nworld, nray, 3), np.nan)
         pnt[worlds, :, :2] = xy
         pnt[worlds, :, 2] = top[:, None]
         vec = np.zeros((nworld, nray, 3))
         vec[..., 2] = -1.0
-        body = self.ids.body if exclude is None else exclude
-        dist, geom = self.sim.rays(pnt, vec, exclude_body=body)
+        dist, geom = self.sim.rays(pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
         dist, geom = dist[worlds], geom[worlds]
         hit = np.isfinite(dist)
         z = np.where(hit, top[:, None] - dist, 0.0)
         objects = np.where(hit & (geom >= 0), self.geom_object[np.maximum(geom, 0)], -1)
-        if exclude is not None:  # the robot is not excluded: what is under it is read as its own floor
-            robot = hit & (self.scene.model.geom_bodyid[np.maximum(geom, 0)] == self.ids.body)
-            z = np.where(robot, np.nan, z)
         return z, objects
 
-    # -- object state --------------------------------------------------------------------------------
+    # -- state ---------------------------------------------------------------------------------------
+
+    def _position(self, w: int) -> np.ndarray:
+        """The x-y of the body's slides (the servos' coordinates) in world ``w``."""
+        return self.state.qpos[w, self.ids.qpos[:2]].copy()
 
     def _centers(self, state: BatchState) -> np.ndarray:
         """Object centres (nworld, nobject, 3): body origins; a cloth's is the mean of its links."""
@@ -477,6 +761,15 @@ class QuadrupedController:
     def _bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = self._bounds3(w, index)
         return lo[:2], hi[:2]
+
+
+def _measured(finding: Finding) -> dict[str, float]:
+    return {
+        finding.kind: finding.measured,
+        "limit": finding.limit,
+        "x": round(finding.where[0], 3),
+        "y": round(finding.where[1], 3),
+    }
 
 
 def robot_on_goal(scene: Scene) -> RobotOnGoal:

@@ -1,13 +1,23 @@
-"""The quadruped's physical body: a Go1-sized rigid body on three slide joints, and its actuators.
+"""The quadruped's physical body: a Go1-sized torso on four extendable legs, free to pitch and roll, and its actuators.
 
-The body never rotates. Four capsule legs end in round feet at the corners of its footprint and a
-torso box sits on them, so the bounding box is ``limits.body_size`` and the whole ``limits.mass``
-rests on whatever the feet touch. x and y are driven by force-limited position servos. z has a
-motor that can only push up (force range ``[0, LIFT_FORCE]``): it lifts the body while a step up is
-being crossed and is switched off otherwise, so that standing, the full weight acts on the support.
-Robot contacts are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the
-scene's geoms): the servos, not the feet, carry the sideways forces, so walking does not drag the
-surface underfoot and pushing does not lift what is pushed.
+The root body ``robot`` rides on slides along x, y and z and two hinges, pitch (about y) then roll (about x),
+through its centre of mass; nothing holds its pitch or roll, so it tips over an edge when its centre of mass leaves
+the support of its feet. The torso stands on four legs, each a child body ``robot_foot<i>`` (order
+:data:`robotool.terrain.FOOT_NAMES`) holding a capsule that ends in a round foot at a corner of the footprint, on a
+slide joint ``robot_leg<i>`` along the body's up axis (0: the nominal stance; down to ``max_step_down`` plus
+:data:`LEG_SLACK` below it) driven by a force-limited position servo: the legs' length keeps the body level over
+uneven ground and its torso clear of what lies under it, and the legs' servos carry its weight onto whatever the
+feet touch. The torso's underside rides :data:`BELLY_HEIGHT` above the feet, so that its faces push low objects. The
+bounding box is ``limits.body_size``, the whole ``limits.mass`` rests on the feet's contacts, and each foot's
+contacts can be read apart. x and y are driven by force-limited position servos (the legs' sideways push). z has a
+lift motor that can only push up, with a force bounded by :data:`LIFT_FACTOR` times the robot's weight, and pitch
+and roll have torque motors bounded by :data:`TILT_FACTOR` (weight times metres) that the controller uses only to
+hold the body level while the lift carries it; it switches both on only while a foot crosses a step, a small gap or
+a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet. The feet
+and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
+servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot. The torso's faces
+grip what they push (:data:`TORSO_FRICTION`), so that an object pushed off-centre turns no more than friction lets
+it. Robot geoms are in geom group :data:`ROBOT_GROUP`, which the terrain rays skip.
 """
 
 from __future__ import annotations
@@ -20,47 +30,68 @@ import numpy as np
 from robotool import geometry
 from robotool.embodiments import QuadrupedLimits
 from robotool.scene import Task
+from robotool.terrain import FOOT_RADIUS, foot_offsets
 
 BODY = "robot"
-LEG_HEIGHT = 0.05  # m: torso underside above the feet's bottom (its faces push objects)
-FOOT_RADIUS = 0.03  # m
-LEG_MASS = 0.25  # kg each; the torso carries the rest
+BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its faces push objects)
+LEG_SHARE = 0.02  # of the robot's mass in each leg; the torso carries the rest
 XY_KP = 20000.0  # N/m
-XY_FORCE = 300.0  # N: the most the legs push sideways
+XY_FORCE = 120.0  # N: the most the legs push sideways (about the weight: a blocked push cannot flip the body)
 LIFT_KP = 30000.0  # N/m
-LIFT_FORCE = 600.0  # N
+LIFT_FACTOR = 2.0  # the lift motor's force bound, in robot weights
+TILT_FACTOR = 0.15  # m: the pitch and roll motors' torque bound, in robot weights times this lever
+LEG_KP = 20000.0  # N/m of each leg's servo
+LEG_FACTOR = 2.0  # each leg servo's force bound, in robot weights
+LEG_SLACK = 0.05  # m a leg reaches below the deepest step down
+LEG_RETRACT = 0.05  # m a leg can pull its foot up above the nominal stance
 OFF = -100.0  # lift setpoint that saturates the motor at zero force
+TILT_DAMPING = 3.0  # N m s/rad on pitch and roll (the legs' joint friction; it never holds the body up)
+TORSO_FRICTION = 0.25  # the torso's faces grip what they push (the feet stay frictionless)
+ROBOT_GROUP = 2  # geom group of the robot's geoms (shown by default; rays leave it out)
+GRAVITY = 9.81
 
 
 @dataclass(frozen=True)
 class BodyIds:
-    """Indices of the robot's body, joints and actuators in a compiled model."""
+    """Indices of the robot's bodies, joints and actuators in a compiled model, and its mass layout."""
 
     body: int
-    qpos: np.ndarray  # (3,) qpos addresses of x, y, z (each the world coordinate of the feet's bottom centre)
-    qvel: np.ndarray  # (3,)
-    actuator: np.ndarray  # (3,) x servo, y servo, lift motor
+    feet: np.ndarray  # (4,) foot body ids
+    qpos: np.ndarray  # (5,) qpos addresses of x, y, z, pitch, roll (x, y, z: the world coordinates of the feet's
+    # bottom centre while level)
+    qvel: np.ndarray  # (5,)
+    actuator: np.ndarray  # (5,) x servo, y servo, lift motor, pitch motor, roll motor
+    leg_qpos: np.ndarray  # (4,) qpos addresses of the legs' slides (0: nominal, negative: reaching down)
+    leg_actuator: np.ndarray  # (4,) the legs' servos
     xy_kv: float  # N s/m of the x-y servos
+    masses: np.ndarray  # (5,) the root body's mass, then the feet's
+    com_offsets: np.ndarray  # (5, 3) each body's centre of mass in its own frame
 
     @classmethod
     def of(cls, model: mujoco.MjModel) -> BodyIds:
-        joints = [model.joint(f"{BODY}_{a}") for a in "xyz"]
-        acts = [model.actuator(f"{BODY}_{a}").id for a in ("x", "y", "lift")]
+        joints = [model.joint(f"{BODY}_{a}") for a in ("x", "y", "z", "pitch", "roll")]
+        acts = [model.actuator(f"{BODY}_{a}").id for a in ("x", "y", "lift", "pitch", "roll")]
+        body = model.body(BODY).id
+        feet = np.array([model.body(f"{BODY}_foot{i}").id for i in range(4)])
+        bodies = np.array([body, *feet])
         return cls(
-            body=model.body(BODY).id,
+            body=body,
+            feet=feet,
             qpos=np.array([model.jnt_qposadr[j.id] for j in joints]),
             qvel=np.array([model.jnt_dofadr[j.id] for j in joints]),
             actuator=np.array(acts),
+            leg_qpos=np.array([model.jnt_qposadr[model.joint(f"{BODY}_leg{i}").id] for i in range(4)]),
+            leg_actuator=np.array([model.actuator(f"{BODY}_leg{i}").id for i in range(4)]),
             xy_kv=float(-model.actuator_biasprm[acts[0], 2]),
+            masses=model.body_mass[bodies].copy(),
+            com_offsets=model.body_ipos[bodies].copy(),
         )
 
 
 def start_height(task: Task) -> float:
     """Height of the surface under the robot's start footprint (cloth does not count)."""
     limits = _limits(task)
-    x, y = task.robot.position  # type: ignore[misc]
-    hx, hy = limits.body_size[0] / 2 - FOOT_RADIUS, limits.body_size[1] / 2 - FOOT_RADIUS
-    feet = np.array([[x + sx * hx, y + sy * hy] for sx in (-1, 1) for sy in (-1, 1)])
+    feet = np.asarray(task.robot.position) + foot_offsets(limits)  # type: ignore[arg-type]
     solids = [geometry.object_parts(o) for o in task.objects if o.shape != "cloth"]
     return float(geometry.surface_height(feet, solids).max())
 
@@ -72,48 +103,72 @@ def _limits(task: Task) -> QuadrupedLimits:
 
 
 def add_body(spec: mujoco.MjSpec, task: Task) -> None:
-    """Add the robot body, its slide joints and its three actuators to ``spec``."""
+    """Add the robot body, its joints, its four feet and its five actuators to ``spec``."""
     limits = _limits(task)
     sx, sy, sz = limits.body_size
     x0, y0 = task.robot.position  # type: ignore[misc]
     z0 = start_height(task) + 0.001
+    leg_mass = LEG_SHARE * limits.mass
+    torso_mass = limits.mass - 4 * leg_mass
+    torso_z = (sz + BELLY_HEIGHT) / 2
+    com_z = (torso_mass * torso_z + 4 * leg_mass * (FOOT_RADIUS + BELLY_HEIGHT) / 2) / limits.mass
     body = spec.worldbody.add_body(name=BODY, pos=[x0, y0, z0])
     for axis, ref in zip("xyz", (x0, y0, z0), strict=True):
         body.add_joint(
-            name=f"{BODY}_{axis}",
-            type=mujoco.mjtJoint.mjJNT_SLIDE,
-            axis=np.eye(3)["xyz".index(axis)],
-            ref=ref,
+            name=f"{BODY}_{axis}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=np.eye(3)["xyz".index(axis)], ref=ref
         )
-    contact = {"condim": 1, "priority": 1}
-    torso_mass = limits.mass - 4 * LEG_MASS
+    for name, axis in (("pitch", [0, 1, 0]), ("roll", [1, 0, 0])):
+        body.add_joint(
+            name=f"{BODY}_{name}",
+            type=mujoco.mjtJoint.mjJNT_HINGE,
+            axis=axis,
+            pos=[0, 0, com_z],
+            damping=TILT_DAMPING,
+            armature=0.01,
+        )
+    contact = {"condim": 1, "priority": 1, "group": ROBOT_GROUP}
     body.add_geom(
         name=f"{BODY}_torso",
         type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[sx / 2, sy / 2, (sz - LEG_HEIGHT) / 2],
-        pos=[0, 0, (sz + LEG_HEIGHT) / 2],
+        size=[sx / 2, sy / 2, (sz - BELLY_HEIGHT) / 2],
+        pos=[0, 0, torso_z],
         mass=torso_mass,
-        **contact,
+        **(contact | {"condim": 3, "friction": [TORSO_FRICTION, 0.005, 0.0001]}),
     )
-    hx, hy = sx / 2 - FOOT_RADIUS, sy / 2 - FOOT_RADIUS
-    for i, (px, py) in enumerate((px, py) for px in (-hx, hx) for py in (-hy, hy)):
-        body.add_geom(
+    reach = limits.max_step_down + LEG_SLACK
+    for i, (px, py) in enumerate(foot_offsets(limits)):
+        foot = body.add_body(name=f"{BODY}_foot{i}", pos=[px, py, 0.0])
+        foot.add_joint(
+            name=f"{BODY}_leg{i}",
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=[0, 0, 1],
+            range=[-reach, LEG_RETRACT],
+            armature=0.05,
+        )
+        foot.add_geom(
             name=f"{BODY}_leg{i}",
             type=mujoco.mjtGeom.mjGEOM_CAPSULE,
             size=[FOOT_RADIUS, 0, 0],
-            fromto=[px, py, FOOT_RADIUS, px, py, LEG_HEIGHT],
-            mass=LEG_MASS,
+            fromto=[0, 0, FOOT_RADIUS, 0, 0, BELLY_HEIGHT],
+            mass=leg_mass,
             **contact,
         )
+        leg = spec.add_actuator(name=f"{BODY}_leg{i}", target=f"{BODY}_leg{i}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        leg.set_to_position(kp=LEG_KP, kv=2.0 * np.sqrt(LEG_KP * limits.mass / 4))
+        leg.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        leg.forcerange = [-LEG_FACTOR * limits.mass * GRAVITY, LEG_FACTOR * limits.mass * GRAVITY]
     kv = 2.0 * np.sqrt(XY_KP * limits.mass)
     for axis in "xy":
-        act = spec.add_actuator(
-            name=f"{BODY}_{axis}", target=f"{BODY}_{axis}", trntype=mujoco.mjtTrn.mjTRN_JOINT
-        )
+        act = spec.add_actuator(name=f"{BODY}_{axis}", target=f"{BODY}_{axis}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.set_to_position(kp=XY_KP, kv=kv)
         act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
         act.forcerange = [-XY_FORCE, XY_FORCE]
     lift = spec.add_actuator(name=f"{BODY}_lift", target=f"{BODY}_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     lift.set_to_position(kp=LIFT_KP, kv=2.0 * np.sqrt(LIFT_KP * limits.mass))
     lift.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-    lift.forcerange = [0.0, LIFT_FORCE]
+    lift.forcerange = [0.0, LIFT_FACTOR * limits.mass * GRAVITY]
+    for name in ("pitch", "roll"):
+        tilt = spec.add_actuator(name=f"{BODY}_{name}", target=f"{BODY}_{name}", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        tilt.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        tilt.ctrlrange = [-1.0, 1.0]
+        tilt.gainprm[0] = TILT_FACTOR * limits.mass * GRAVITY  # torque per unit of control

@@ -14,9 +14,9 @@ import numpy as np
 from robotool import geometry
 from robotool.sim.backend import BatchState
 from robotool.sim.build import Scene
-from robotool.sim.quadruped_body import BODY
+from robotool.sim.quadruped_body import BodyIds
+from robotool.sim.quadruped_support import centre_of_mass, feet, feet_touching, supported
 
-ON_TOLERANCE = 0.03  # m: feet this close to an object's top stand on it
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 
 
@@ -36,27 +36,28 @@ def world_corners(state: BatchState, body: int, local: np.ndarray) -> np.ndarray
 
 
 class RobotOnGoal:
-    """``robot_on: obj``: the robot touches ``obj`` and its feet stand at its top, centre over it."""
+    """``robot_on: obj``: the robot's weight rests on ``obj``.
+
+    Its centre of mass lies over the support of the feet that touch ``obj`` (at least three of them), and every foot
+    touches something (none hangs over a gap).
+    """
 
     def __init__(self, scene: Scene):
         self.scene = scene
         self.name = scene.task.goal.object
         self.index = scene.object_index(self.name)
-        self.local = local_corners(scene)[self.index]
-        self.robot = scene.model.body(BODY).id
+        self.ids = BodyIds.of(scene.model)
+        self.target = scene.body_object == self.index
+        self.not_robot = ~scene.robot_body
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        bodies = np.flatnonzero(self.scene.body_object == self.index)
-        touching = state.touching[:, self.robot][:, bodies].any(axis=1)
-        corners = world_corners(state, self.scene.object_body[self.index], self.local)
-        lo, hi = corners.min(axis=1), corners.max(axis=1)
-        feet = state.xpos[:, self.robot]
-        over = np.all((feet[:, :2] >= lo[:, :2]) & (feet[:, :2] <= hi[:, :2]), axis=1)
-        at_top = np.abs(feet[:, 2] - hi[:, 2]) <= ON_TOLERANCE
-        return {f"robot_touches_{self.name}": touching, f"robot_over_{self.name}_top": over & at_top}
+        on_target = feet_touching(state, self.ids, self.target)
+        weight = supported(centre_of_mass(state, self.ids), feet(state, self.ids), on_target)
+        standing = feet_touching(state, self.ids, self.not_robot).all(axis=1)
+        return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
 
 
 class LiftedGoal:
@@ -142,8 +143,6 @@ class LoweredGoal:
         bottom = world_corners(state, self.body, self.local)[:, :, 2].min(axis=1)
         out = {f"{self.name}_lowered": bottom <= self.height}
         if self.falls is not None:
-            broken = (
-                self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)
-            )
+            broken = self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)
             out[f"{self.name}_unbroken"] = ~broken
         return out

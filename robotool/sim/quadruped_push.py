@@ -9,12 +9,14 @@ along the object's face to the nearest clear one that still overlaps the face.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import pairwise
 
 import numpy as np
 
 from robotool.embodiments import QuadrupedLimits
+from robotool.terrain import RISE, foot_offsets, foot_paths
 
 GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
 MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover
@@ -42,20 +44,25 @@ def rule_violation(
     *,
     movable: bool,
     mass: float,
+    riders: list[str],
     under_robot: bool,
     robot_support_movable: str | None,
     object_support: float,
     robot_support: float,
     limits: QuadrupedLimits,
 ) -> tuple[str, dict[str, float]] | None:
-    """The first push rule broken (reason, measured values), or None when the push is allowed."""
+    """The first push rule broken (reason, measured values), or None when the push is allowed.
+
+    ``mass`` is what the push moves: the object's own mass and that of the ``riders`` on it.
+    """
     if not movable:
         return "it is fixed in place", {}
     if under_robot:
         return "the robot is standing on it", {}
     if mass > limits.max_push_mass:
+        riding = f" with {', '.join(riders)} riding on it" if riders else ""
         return (
-            f"its mass {mass:.1f} kg exceeds the push limit of {limits.max_push_mass:.1f} kg",
+            f"its mass{riding}, {mass:.1f} kg, exceeds the push limit of {limits.max_push_mass:.1f} kg",
             {"mass": mass, "limit": limits.max_push_mass},
         )
     if robot_support_movable is not None:
@@ -101,6 +108,30 @@ def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: 
     axes = [np.linspace(lo[k], hi[k], max(2, int(np.ceil((hi[k] - lo[k]) / spacing)) + 1)) for k in range(2)]
     gx, gy = np.meshgrid(*axes, indexing="ij")
     return np.column_stack([gx.ravel(), gy.ravel()])
+
+
+def sweep_problem(
+    heights: Callable[[np.ndarray], np.ndarray],
+    behind: np.ndarray,
+    end: np.ndarray,
+    limits: QuadrupedLimits,
+    floor: float,
+) -> str | None:
+    """What is wrong with a push sweep from ``behind`` to ``end`` (robot centres) over a floor at ``floor``, or None.
+
+    ``heights`` gives the surface under x-y points with the pushed object left out. The body's footprint must meet
+    nothing higher than the floor, and the feet's paths nothing lower (no drop, no gap under where it stands).
+    """
+    half = np.asarray(limits.body_size[:2]) / 2
+    if np.any(heights(sweep_points(behind, end, half)) > floor + RISE):
+        return "something stands in its way"
+    u = (end - behind) / max(float(np.linalg.norm(end - behind)), 1e-9)
+    points = foot_paths(behind + foot_offsets(limits), u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
+    under = heights(points)
+    if under.min() < floor - RISE:
+        k = int(under.argmin())
+        return f"it would stand over a drop of {floor - under[k]:.2f} m at [{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
+    return None
 
 
 def route(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:

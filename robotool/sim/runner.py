@@ -2,12 +2,13 @@
 
 Each program runs until it calls a motion skill or ends; query skills are answered at once from the
 current state; the batch then steps, one control tick at a time, until the pending motion skills
-finish (done, stalled, timeout, refused), and the programs whose skill finished are resumed. The
+finish (done, stalled, timeout, refused, fell), and the programs whose skill finished are resumed. The
 runner resumes every such world first and only then waits on each (so sandboxed programs run in
-parallel). A program that errors or ends is finished for its world only. Skill arguments are checked on
-this side of the sandbox, positions against the scene's box (:func:`scene_box`); an exception inside
-the skill controller fails the world it happened in with the reason, never the batch. Each world yields a
-:class:`~robotool.rollout.Rollout`.
+parallel). A program that errors or ends is finished for its world only; its world then runs on for
+``SETTLE_AFTER`` simulated seconds with the robot holding still (what rocks or tips comes to rest, a
+falling object lands) before the goal is read. Skill arguments are checked on this side of the sandbox,
+positions against the scene's box (:func:`scene_box`); an exception inside the skill controller fails the
+world it happened in with the reason, never the batch. Each world yields a :class:`~robotool.rollout.Rollout`.
 """
 
 from __future__ import annotations
@@ -26,13 +27,15 @@ from robotool.rollout import Event, Rollout, SkillCall
 from robotool.scene import Task
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import QueryError, SkillController, SkillEnd
+from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
+SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
+FALL_CONDITION = "robot_has_not_fallen"  # the condition a controller whose robot can fall adds to every goal
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
@@ -48,6 +51,8 @@ class _World:
     pending: SkillCall | None = None
     pending_args: tuple[Any, ...] = ()
     ended: bool = False
+    settle_until: float = np.inf  # simulated time when the ended world's goal is read
+    finished: bool = False
     error: str | None = None
     output: str = ""
     conditions: dict[str, bool] = field(default_factory=dict)
@@ -60,11 +65,20 @@ def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[Tru
     return [TrustedSession(p, names) for p in programs]
 
 
-def run_sessions(task: Task | Scene, sessions: Sequence[ProgramSession], *, seed: int = 0,
-                 world_seeds: Sequence[int] | None = None,
-                 backend: BackendName = "mujoco", perturb: bool = True, njmax: int | None = None,
-                 nconmax: int | None = None, max_sim_time: float = MAX_SIM_TIME,
-                 max_skill_calls: int = MAX_SKILL_CALLS, recorder: StateRecorder | None = None) -> list[Rollout]:
+def run_sessions(
+    task: Task | Scene,
+    sessions: Sequence[ProgramSession],
+    *,
+    seed: int = 0,
+    world_seeds: Sequence[int] | None = None,
+    backend: BackendName = "mujoco",
+    perturb: bool = True,
+    njmax: int | None = None,
+    nconmax: int | None = None,
+    max_sim_time: float = MAX_SIM_TIME,
+    max_skill_calls: int = MAX_SKILL_CALLS,
+    recorder: StateRecorder | None = None,
+) -> list[Rollout]:
     """Run one program session per world and return one :class:`~robotool.rollout.Rollout` each.
 
     ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
@@ -108,8 +122,15 @@ def run_programs(task: Task | Scene, programs: Sequence[TrustedProgram], **kwarg
 class _Run:
     """One lockstep run; see :func:`run_sessions`."""
 
-    def __init__(self, scene: Scene, sim: BatchedSim, sessions: Sequence[ProgramSession],
-                 max_sim_time: float, max_skill_calls: int, recorder: StateRecorder | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        sim: BatchedSim,
+        sessions: Sequence[ProgramSession],
+        max_sim_time: float,
+        max_skill_calls: int,
+        recorder: StateRecorder | None = None,
+    ):
         self.scene, self.sim, self.recorder = scene, sim, recorder
         self.max_sim_time, self.max_skill_calls = max_sim_time, max_skill_calls
         self.worlds = [_World(s) for s in sessions]
@@ -127,6 +148,11 @@ class _Run:
         self.t0 = np.zeros(nworld)
 
     def alive(self) -> np.ndarray:
+        """Worlds still stepped: running a program, or settling after it."""
+        return np.array([not w.finished for w in self.worlds])
+
+    def running(self) -> np.ndarray:
+        """Worlds whose program has not ended."""
         return np.array([not w.ended for w in self.worlds])
 
     def run(self, seeds: Sequence[int]) -> list[Rollout]:
@@ -146,6 +172,7 @@ class _Run:
             if self.recorder is not None:
                 self.recorder.capture(state, self.sim.mocap_pos)
             self._observe(state)
+            self._finish_settled(state)
             ends = self._tick(state)
             if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one
                 state = self.sim.state()
@@ -174,7 +201,7 @@ class _Run:
             for i in to_wait:
                 message = self.worlds[i].session.wait()
                 if isinstance(message, ProgramEnded):
-                    self._end(i, state, message.error, message.output)
+                    self._end(i, state, message.error, message.output, settle=True)
                 elif self._request(i, state, message):
                     again.append(i)
                 elif not self.worlds[i].ended:
@@ -198,8 +225,11 @@ class _Run:
         try:
             args = check_call(self.embodiment_name, request.name, request.args, self.box)
         except SkillArgumentError as e:
-            world.calls.append(SkillCall(skill=request.name, args=_jsonable(request.args), outcome="error",
-                                         reason=str(e), started=t, ended=t))
+            world.calls.append(
+                SkillCall(
+                    skill=request.name, args=_jsonable(request.args), outcome="error", reason=str(e), started=t, ended=t
+                )
+            )
             world.session.resume(SkillReply(error=str(e)))
             return True
         call = SkillCall(skill=request.name, args=_jsonable(args), outcome="done", started=t, ended=t)
@@ -235,19 +265,47 @@ class _Run:
             resumed.append(end.world)
         return resumed
 
-    def _end(self, i: int, state: BatchState, error: str | None, output: str = "") -> None:
+    def _end(self, i: int, state: BatchState, error: str | None, output: str = "", settle: bool = False) -> None:
+        """The program of world ``i`` ended; with ``settle`` its world runs on before the goal is read."""
         world = self.worlds[i]
         if world.ended:
             return
         world.ended, world.error, world.output = True, error, output
         world.sim_time = float(state.time[i] - self.t0[i])
-        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
         self._mark_held(state, np.arange(self.sim.nworld) == i)
         if world.pending is not None:
             world.pending.outcome, world.pending.reason = "error", error
             world.pending.ended = world.sim_time
             world.pending = None
         world.session.close()
+        if settle and state.failed[i] is None:
+            world.settle_until = float(state.time[i]) + SETTLE_AFTER
+        else:
+            self._read_goal(i, state)
+
+    def _finish_settled(self, state: BatchState) -> None:
+        """Read the goal of every ended world that has settled (or whose physics failed while settling)."""
+        for i, world in enumerate(self.worlds):
+            if (
+                world.ended
+                and not world.finished
+                and (
+                    state.time[i] >= world.settle_until - self.scene.model.opt.timestep / 2
+                    or state.failed[i] is not None
+                )
+            ):
+                self._read_goal(i, state)
+
+    def _read_goal(self, i: int, state: BatchState) -> None:
+        world = self.worlds[i]
+        world.finished = True
+        world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
+        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
+        failures = controller_failures(self.controller)
+        if failures is not None:
+            world.conditions[FALL_CONDITION] = failures[i] is None
+        if state.failed[i] is not None and world.error is None:
+            world.error = f"simulation failed: {state.failed[i]}"
 
     # -- physics bookkeeping -------------------------------------------------------------------
 
@@ -266,7 +324,7 @@ class _Run:
         np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
         self.touched |= touched & alive[:, None]
         self._mark_held(state, alive)
-        for i in np.flatnonzero(alive):
+        for i in np.flatnonzero(alive & self.running()):
             if state.failed[i] is not None:
                 self._end(i, state, f"simulation failed: {state.failed[i]}")
             elif state.time[i] - self.t0[i] > self.max_sim_time:
@@ -280,10 +338,18 @@ class _Run:
     def _rollout(self, i: int, world: _World, seed: int) -> Rollout:
         names = self.scene.object_names
         success = bool(world.conditions) and all(world.conditions.values()) and world.error is None
-        return Rollout(world=i, seed=seed, success=success, conditions=world.conditions, calls=world.calls,
-                       events=world.events,
-                       touched=[names[k] for k in np.flatnonzero(self.touched[i])], sim_time=world.sim_time,
-                       error=world.error, output=world.output)
+        return Rollout(
+            world=i,
+            seed=seed,
+            success=success,
+            conditions=world.conditions,
+            calls=world.calls,
+            events=world.events,
+            touched=[names[k] for k in np.flatnonzero(self.touched[i])],
+            sim_time=world.sim_time,
+            error=world.error,
+            output=world.output,
+        )
 
 
 def _robot_welds(scene: Scene) -> list[tuple[int, int]]:

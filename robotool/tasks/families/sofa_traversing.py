@@ -38,6 +38,8 @@ from robotool.tasks.families._common import (
     uniform,
 )
 
+SIDEWAYS_BOARD_WIDTH = 0.75  # m: wider than the robot is long (0.65 m), for scenes turned a quarter
+
 
 def sofas(gap: float, height: float, offset: float = 0.0) -> list[SceneObject]:
     """The template's sofas, ``height`` high, sofa_2 ``gap`` metres beyond sofa_1's +x edge, ``offset`` across."""
@@ -45,8 +47,14 @@ def sofas(gap: float, height: float, offset: float = 0.0) -> list[SceneObject]:
     x2 = sofa_1.center[0] + sofa_1.size[0] / 2 + gap + sofa_2.size[0] / 2
     return [
         on_top("sofa_1", "box", sofa_1.center[:2], (*sofa_1.size[:2], height), movable=False, notes=sofa_1.notes),
-        on_top("sofa_2", "box", (x2, sofa_1.center[1] + offset), (*sofa_2.size[:2], height), movable=False,
-               notes=sofa_2.notes),
+        on_top(
+            "sofa_2",
+            "box",
+            (x2, sofa_1.center[1] + offset),
+            (*sofa_2.size[:2], height),
+            movable=False,
+            notes=sofa_2.notes,
+        ),
     ]
 
 
@@ -59,41 +67,89 @@ def build(rng: np.random.Generator) -> Draft:
     variant = draw_variant(rng)
     layout = draw_layout(rng, arm=False)
     length = uniform(rng, surfboard.size[0] - 0.1, surfboard.size[0])
-    gap = {"no_tool": uniform(rng, 0.02, 0.09), "tool": uniform(rng, 0.15, length - bearing),
-           "unsolvable": uniform(rng, 0.30, 0.45)}[variant]
+    gap = {
+        "no_tool": uniform(rng, 0.02, 0.09),
+        "tool": uniform(rng, 0.15, length - bearing),
+        "unsolvable": uniform(rng, 0.30, 0.45),
+    }[variant]
     height = uniform(rng, 0.30, 0.38)
     scene = sofas(gap, height, uniform(rng, -0.15, 0.15))
     side = 1 if rng.random() < 0.5 else -1
-    scene.append(on_top(cloth.name, "cloth", (cloth.center[0], side * cloth.center[1]), cloth.size, height,
-                        mass=cloth.mass, notes=cloth.notes))
+    scene.append(
+        on_top(
+            cloth.name,
+            "cloth",
+            (cloth.center[0], side * cloth.center[1]),
+            cloth.size,
+            height,
+            mass=cloth.mass,
+            notes=cloth.notes,
+        )
+    )
     decoys = [cloth.name]
 
+    overhang = surfboard.center[0] + surfboard.size[0] / 2 - edge  # the template's board reaches over the gap
+
+    # The robot never turns: in a scene turned a quarter it crosses with its flank leading, its feet as far apart
+    # across the board as its body is long, so the board must be wider than that there.
+    width = surfboard.size[1] if layout.turns % 2 == 0 else SIDEWAYS_BOARD_WIDTH
+
     def board(size_x: float, mass: float | None, notes: str | None) -> SceneObject:
-        """A board on sofa_1 (on the cloth where they overlap), its +x end at the gap's edge like the template's."""
-        return on_top("surfboard", "box", (edge - size_x / 2, surfboard.center[1]), (size_x, *surfboard.size[1:]),
-                      height + cloth.size[2], mass=mass, notes=notes)
+        """A board on sofa_1 (on the cloth where they overlap), its +x end over the gap like the template's, so
+        that the robot has room on sofa_1 to stand behind it and push."""
+        return on_top(
+            "surfboard",
+            "box",
+            (edge + overhang - size_x / 2, surfboard.center[1]),
+            (size_x, width, surfboard.size[2]),
+            height + cloth.size[2],
+            mass=mass,
+            notes=notes,
+        )
 
     mass = uniform(rng, 0.85, 1.15) * (surfboard.mass or 3.0)
     if variant != "unsolvable":
         scene.append(board(length, r4(mass), surfboard.notes))
         if variant == "tool" and rng.random() < 0.4:
             y = (sofa_1.size[1] / 2 + 0.45) * -side
-            scene.append(on_top("plank", "box", (sofa_1.center[0], y), (1.1, 0.4, 0.05), mass=2.0,
-                                notes="a wooden plank lying on the floor"))
+            scene.append(
+                on_top(
+                    "plank",
+                    "box",
+                    (sofa_1.center[0], y),
+                    (1.1, 0.4, 0.05),
+                    mass=2.0,
+                    notes="a wooden plank lying on the floor",
+                )
+            )
             decoys.append("plank")
     # Unsolvable scenes have no rigid board at all, only the cloth: a heavy board can be shoved by the walking
     # robot until it wedges across the gap, and a short one can lodge in the gap as a filler.
     x0, y0 = base.robot.position  # type: ignore[misc]
-    start = (uniform(rng, x0 - 0.05, x0), uniform(rng, y0 - 0.1, y0 + 0.1))
+    start = (uniform(rng, x0 - 0.02, x0 + 0.02), uniform(rng, y0 - 0.1, y0 + 0.1))  # the feet on sofa_1
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     area = hull([footprint(o) for o in scene] + [body])
-    scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
-                     movable=False, margin=0.1)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 4)),
+        FLOOR_CLUTTER,
+        grow(area, 2.0),
+        [grow(area, 0.5)],
+        movable=False,
+        margin=0.1,
+    )
     tool = "surfboard" if variant == "tool" else None
     return Draft(
-        variant=variant, category=base.category, instruction=base.instruction,
+        variant=variant,
+        category=base.category,
+        instruction=base.instruction,
         robot={"type": "quadruped", "position": list(layout.point(start))},
-        objects=[layout.place(o) for o in scene], goal={"robot_on": "sofa_2"}, tool=tool, decoys=decoys,
-        layout=layout, varied=f"gap of {gap:.2f} m between {height:.2f} m high sofas, {length:.2f} m board; "
-                              f"decoys: {', '.join(decoys)}",
+        objects=[layout.place(o) for o in scene],
+        goal={"robot_on": "sofa_2"},
+        tool=tool,
+        decoys=decoys,
+        layout=layout,
+        varied=f"gap of {gap:.2f} m between {height:.2f} m high sofas, {length:.2f} m board; "
+        f"decoys: {', '.join(decoys)}",
     )

@@ -1,0 +1,81 @@
+"""Where the quadruped's weight rests: its centre of mass, its feet's contacts and the support they give.
+
+The support of a set of feet is the convex hull of their centres in x-y: the centre of mass is supported when it
+lies inside it (three or four feet; with fewer the robot cannot stand). Everything is vectorised over worlds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool.sim.backend import BatchState
+from robotool.sim.quadruped_body import BodyIds
+from robotool.terrain import FOOT_NAMES, FOOT_RADIUS
+
+CYCLE = (0, 2, 3, 1)  # the feet counter-clockwise around the footprint (rear-right, front-right, front-left, ...)
+FOOT_GROUPS = {  # how a set of feet without support is named, from the most specific
+    "front": (2, 3),
+    "rear": (0, 1),
+    "left": (1, 3),
+    "right": (0, 2),
+}
+
+
+def centre_of_mass(state: BatchState, ids: BodyIds) -> np.ndarray:
+    """The robot's centre of mass in every world (nworld, 3); the feet turn with the body."""
+    bodies = np.array([ids.body, *ids.feet])
+    points = state.xpos[:, bodies] + np.einsum("wij,kj->wki", state.xmat(ids.body), ids.com_offsets)
+    return np.einsum("k,wki->wi", ids.masses, points) / ids.masses.sum()
+
+
+def feet(state: BatchState, ids: BodyIds) -> np.ndarray:
+    """The feet's sphere centres in every world (nworld, 4, 3)."""
+    up = state.xmat(ids.body)[:, :, 2]
+    return state.xpos[:, ids.feet] + up[:, None, :] * FOOT_RADIUS
+
+
+def feet_touching(state: BatchState, ids: BodyIds, bodies: np.ndarray) -> np.ndarray:
+    """(nworld, 4) whether each foot touches any of ``bodies`` (a boolean mask over the model's bodies)."""
+    return state.touching[:, ids.feet][:, :, bodies].any(axis=2)
+
+
+def tilt(state: BatchState, ids: BodyIds) -> np.ndarray:
+    """Angle between the body's up axis and the world's, radians (nworld,)."""
+    up = state.xmat(ids.body)[:, 2, 2]
+    return np.arccos(np.clip(up, -1.0, 1.0))
+
+
+def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin: float = 0.0) -> np.ndarray:
+    """(nworld,) whether the centre of mass ``com`` (nworld, >=2) lies inside the support of the touching feet.
+
+    ``foot_xy`` (nworld, 4, >=2); ``margin`` (m) shrinks the support. Fewer than three touching feet support nothing.
+    """
+    nworld = com.shape[0]
+    order = np.array(CYCLE)
+    pts = foot_xy[:, order, :2]
+    on = touching[:, order]
+    inside = on.sum(axis=1) >= 3
+    for j in range(4):  # each touching foot, to the next touching foot counter-clockwise
+        nxt = np.full(nworld, -1)
+        for step in (3, 2, 1):  # the nearest wins: written last
+            k = (j + step) % 4
+            nxt = np.where(on[:, k], k, nxt)
+        a = pts[:, j]
+        b = pts[np.arange(nworld), np.maximum(nxt, 0)]
+        edge = b - a
+        rel = com[:, :2] - a
+        length = np.maximum(np.linalg.norm(edge, axis=1), 1e-9)
+        cross = (edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0]) / length
+        inside &= ~on[:, j] | (cross >= margin)
+    return inside
+
+
+def unsupported_feet(touching: np.ndarray) -> str:
+    """Words for the feet of one world (4,) that touch nothing, e.g. 'the front feet'."""
+    free = {i for i in range(4) if not touching[i]}
+    if not free:
+        return "its feet"
+    for name, group in FOOT_GROUPS.items():
+        if free == set(group):
+            return f"the {name} feet"
+    return "the " + ", ".join(FOOT_NAMES[i] for i in sorted(free)) + (" feet" if len(free) > 1 else " foot")

@@ -1,0 +1,249 @@
+"""The quadruped's legs against the terrain: steps, gaps and drops along the path of every foot.
+
+One module serves the simulator's checks (heights read by rays in each world), the planner's predictions and the
+ground-truth key concepts (heights from the task's geometry), with one tolerance. A move of the body is checked
+foot by foot: each of the four feet sweeps a straight path, sampled every :data:`SPACING` metres, and
+:func:`scan_paths` follows the surface a foot stands on along its path, from the height it stands at now:
+
+- a rise is a step up; over ``max_step_up`` it is a ``step`` finding (a surface that rises or falls that much
+  within :data:`SLOPE_RUN` counts as a step or an edge, however gently each sample changes: a steep slope, such as
+  a strip of cloth sagging into a gap, is no footing);
+- a dip deeper than a climbable step is a gap when the surface comes back up within the path (which runs
+  :data:`LOOKAHEAD` past the move's end, so a move that ends over a gap still sees its far side): wider than
+  ``max_gap`` it is a ``gap`` finding, else the foot strides over it; a dip that does not come back is a step down,
+  deeper than ``max_step_down`` a ``drop`` finding;
+- anything else (a slope, a small change) is followed.
+
+A finding carries its kind, the measured value, the limit, where it starts (x-y) and which foot met it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from robotool.embodiments import QuadrupedLimits
+
+FindingKind = Literal["step", "gap", "drop"]
+KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # codes 1, 2, 3 in :class:`PathScan`
+RISE = 0.015  # m: a change smaller than this is the same surface (noise, slopes between samples)
+TOLERANCE = 0.01  # m: measurement slack allowed over a limit (sampling and pose noise)
+SPACING = 0.01  # m between samples along a foot's path
+LOOKAHEAD = 0.6  # m read past the end of a move, so that a gap's far side is seen
+SLOPE_RUN = 0.15  # m: a surface that rises or falls more than a step within this run is an edge, not a slope
+FOOT_RADIUS = 0.03  # m
+RADIUS_SAMPLES = int(np.ceil(FOOT_RADIUS / SPACING))
+FOOT_NAMES = ("rear-right", "rear-left", "front-right", "front-left")  # the order of :func:`foot_offsets`
+
+Heights = Callable[[np.ndarray], np.ndarray]
+"""Surface heights under x-y points (n, 2) -> (n,)."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """A limit of the legs that a move breaks: what, the measured value, the limit, where and which foot."""
+
+    kind: FindingKind
+    measured: float  # m: the step height, gap width or drop depth
+    limit: float  # m
+    where: tuple[float, float]  # x-y where the foot meets it
+    foot: str
+
+    def describe(self) -> str:
+        """The refusal reason, with the measured value, the limit and where."""
+        what = {"step": "step up", "gap": "gap", "drop": "drop"}[self.kind]
+        return (
+            f"{what} of {self.measured:.2f} m exceeds the limit of {self.limit:.2f} m "
+            f"(at [{self.where[0]:.2f}, {self.where[1]:.2f}], under the {self.foot} foot)"
+        )
+
+
+@dataclass(frozen=True)
+class PathScan:
+    """What :func:`scan_paths` found on each of P paths of n samples."""
+
+    level: np.ndarray  # (P, n) surface the foot stands at over each sample (a stridden gap keeps its near level)
+    index: np.ndarray  # (P,) first sample of the first finding (n when none)
+    kind: np.ndarray  # (P,) 0 none, else 1 + the index in KINDS
+    measured: np.ndarray  # (P,) the finding's measured value
+
+
+def limit_of(kind: FindingKind, limits: QuadrupedLimits) -> float:
+    """The limit a finding of ``kind`` is checked against."""
+    return {"step": limits.max_step_up, "gap": limits.max_gap, "drop": limits.max_step_down}[kind]
+
+
+def foot_support(heights: np.ndarray) -> np.ndarray:
+    """What a round foot rests on along paths (P, n): the highest surface within its radius of each sample.
+
+    A slit narrower than the foot carries it; a gap reads :data:`FOOT_RADIUS` narrower on each side.
+    """
+    padded = np.pad(heights, ((0, 0), (RADIUS_SAMPLES, RADIUS_SAMPLES)), mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * RADIUS_SAMPLES + 1, axis=1)
+    return windows.max(axis=2)
+
+
+def scan_paths(
+    heights: np.ndarray, start: np.ndarray, limits: QuadrupedLimits, into_gap: np.ndarray | None = None
+) -> PathScan:
+    """Follow P foot paths (P, n) of surface heights from the levels ``start`` (P,) (module docstring).
+
+    The heights are first taken as the foot rests on them (:func:`foot_support`); a gap's width is measured
+    between the edges the foot's centre passes, plus the foot's diameter: the width between the surfaces.
+    ``into_gap`` (P,) is how far a path starts inside a gap it is already striding (counted in its width).
+    Vectorised over paths: the loop runs over samples only.
+    """
+    heights = foot_support(np.asarray(heights, dtype=float))
+    npath, n = heights.shape
+    already = np.zeros(npath) if into_gap is None else np.asarray(into_gap, dtype=float)
+    current = np.asarray(start, dtype=float).copy()
+    level = np.full((npath, n), np.nan)
+    index = np.full(npath, n)
+    kind = np.zeros(npath, dtype=int)
+    measured = np.zeros(npath)
+    skip = np.zeros(npath, dtype=int)
+    rows = np.arange(npath)
+    run = round(SLOPE_RUN / SPACING)
+    trail = np.concatenate([np.repeat(current[:, None], run, axis=1), np.full((npath, n), np.nan)], axis=1)
+    changes = np.flatnonzero(np.any(np.abs(np.diff(heights, axis=1)) > 1e-9, axis=0)) + 1
+    busy = np.zeros(n + run + 1, dtype=bool)  # samples within SLOPE_RUN after a change (or the first)
+    for c in np.concatenate([[0], changes]):
+        busy[c : c + run + 1] = True
+    k = 0
+    while k < n:
+        live = kind == 0
+        if not live.any():
+            break
+        if not busy[k]:  # flat for every path since the last change: each keeps its level (or strides on)
+            end = k + int(np.argmax(busy[k:n])) if busy[k:n].any() else n
+            level[live, k:end] = current[live, None]
+            trail[:, k + run : end + run] = current[:, None]
+            skip = np.maximum(skip - (end - k), 0)
+            k = end
+            continue
+        h = heights[:, k]
+        recent = trail[:, k : k + run]  # the levels over the last SLOPE_RUN
+        low, high = np.fmin(np.nanmin(recent, axis=1), current), np.fmax(np.nanmax(recent, axis=1), current)
+        striding = live & (skip > 0)
+        skip[striding] -= 1
+        free = live & ~striding
+        rise = free & (h - current > RISE)
+        too_high = free & (h - low > limits.max_step_up + TOLERANCE)  # a step, or a slope as steep as one
+        _found(too_high, k, 1, h - low, index, kind, measured)
+        climb = rise & ~too_high
+        current[climb] = h[climb]
+        current = np.where(too_high, h, current)
+        dip = free & ~rise & ~too_high & (high - h > limits.max_step_up)
+        if dip.any():
+            rows_dip = rows[dip]
+            current[rows_dip] = high[rows_dip]  # from the top of an edge or of a steep slope down
+            back = heights[rows_dip, k:] >= (current[rows_dip] - limits.max_step_up)[:, None]
+            returns = back.any(axis=1)
+            entered = already[rows_dip] * (k == 0)  # from the near edge to the foot (then one radius, not two)
+            width = np.where(returns, back.argmax(axis=1) * SPACING + 2 * FOOT_RADIUS, 0.0)
+            width = np.where(returns & (entered > 0), width + entered - FOOT_RADIUS, width)
+            gap = np.zeros(npath, dtype=bool)
+            gap[rows_dip] = returns
+            wide = np.zeros(npath)
+            wide[rows_dip] = width
+            too_wide = gap & (wide > limits.max_gap + TOLERANCE)
+            _found(too_wide, k, 2, wide, index, kind, measured)
+            stride = gap & ~too_wide
+            skip[stride] = (
+                np.round(np.maximum(wide[stride] - 2 * FOOT_RADIUS - already[stride] * (k == 0), 0.0) / SPACING).astype(
+                    int
+                )
+                - 1
+            )
+            down = dip & ~gap
+            too_deep = down & (current - h > limits.max_step_down + TOLERANCE)
+            _found(too_deep, k, 3, current - h, index, kind, measured)
+            step_down = down & ~too_deep
+            current[step_down] = h[step_down]
+        follow = free & ~rise & ~dip & ~too_high
+        current[follow] = h[follow]
+        ok = kind == 0
+        level[ok, k] = current[ok]
+        trail[:, k + run] = current
+        k += 1
+    return PathScan(level=level, index=index, kind=kind, measured=measured)
+
+
+def _found(
+    mask: np.ndarray, k: int, code: int, value: np.ndarray, index: np.ndarray, kind: np.ndarray, measured: np.ndarray
+) -> None:
+    index[mask] = k
+    kind[mask] = code
+    measured[mask] = value[mask]
+
+
+def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:
+    """x-y offsets (4, 2) of the feet's centres from the body's centre, level and unrotated (order FOOT_NAMES)."""
+    hx, hy = limits.body_size[0] / 2 - FOOT_RADIUS, limits.body_size[1] / 2 - FOOT_RADIUS
+    return np.array([[sx * hx, sy * hy] for sx in (-1, 1) for sy in (-1, 1)])
+
+
+def foot_paths(feet: np.ndarray, direction: np.ndarray, length: float, back: float = 0.0) -> np.ndarray:
+    """Sample points (4, n, 2) on the feet's straight paths: from ``back`` behind each foot ``feet`` (4, 2) to
+    ``length`` ahead along the unit ``direction``."""
+    t = np.arange(-back, length + SPACING / 2, SPACING)
+    return feet[:, None, :] + t[None, :, None] * np.asarray(direction)[None, None, :]
+
+
+def first_finding(scan: PathScan, points: np.ndarray, limits: QuadrupedLimits) -> tuple[Finding, int] | None:
+    """The earliest finding over the feet of one move (scan of 4 paths, their points (4, n, 2)) and its sample."""
+    hits = np.flatnonzero(scan.kind > 0)
+    if not hits.size:
+        return None
+    foot = int(hits[np.argmin(scan.index[hits])])
+    k = int(scan.index[foot])
+    kind = KINDS[int(scan.kind[foot]) - 1]
+    where = points[foot, k]
+    finding = Finding(
+        kind,
+        round(float(scan.measured[foot]), 3),
+        limit_of(kind, limits),
+        (float(where[0]), float(where[1])),
+        FOOT_NAMES[foot],
+    )
+    return finding, k
+
+
+def check_walk(
+    heights: Heights,
+    start: np.ndarray,
+    waypoints: Iterable[np.ndarray],
+    limits: QuadrupedLimits,
+    start_levels: np.ndarray | None = None,
+) -> Finding | None:
+    """The first finding on an axis-aligned body's walk from ``start`` through ``waypoints`` (x-y), or None.
+
+    Heights come from ``heights``; the feet start at ``start_levels`` (4,) (default: the surface under each foot,
+    no higher than ``RISE`` above them). Each segment's feet carry their levels over from the last; the last segment
+    reads :data:`LOOKAHEAD` past its end.
+    """
+    offsets = foot_offsets(limits)
+    here = np.asarray(start, dtype=float)
+    goals = [np.asarray(g, dtype=float) for g in waypoints]
+    under = heights(here + offsets)
+    levels = under if start_levels is None else np.minimum(np.asarray(start_levels) + RISE, under)
+    for i, goal in enumerate(goals):
+        delta = goal - here
+        length = float(np.linalg.norm(delta))
+        if length < 1e-6:
+            continue
+        u = delta / length
+        ahead = length + (LOOKAHEAD if i == len(goals) - 1 else 0.0)
+        points = foot_paths(here + offsets, u, ahead)
+        h = heights(points.reshape(-1, 2)).reshape(4, -1)
+        scan = scan_paths(h, levels, limits)
+        found = first_finding(scan, points, limits)
+        stop = round(length / SPACING)
+        if found is not None and found[1] - (RADIUS_SAMPLES if found[0].kind != "step" else 0) <= stop:
+            return found[0]
+        levels = scan.level[:, min(stop, scan.level.shape[1] - 1)]
+        here = goal
+    return None
