@@ -240,7 +240,7 @@ def check_call(
     for (param, kind), value in zip(spec.params, args, strict=True):
         if kind == "name":
             if not isinstance(value, str):
-                raise SkillArgumentError(f"{name}: {param} must be an object name, got {reprlib.repr(value)}")
+                raise SkillArgumentError(f"{name}: {param} must be an object name, got {_shown(value)}")
             out.append(value)
             continue
         position = _position(name, param, value)
@@ -254,15 +254,23 @@ def check_call(
     return tuple(out)
 
 
+def _shown(value: object) -> str:
+    """A short repr of a program's argument; an integer too long for decimal text is described instead."""
+    try:
+        return reprlib.repr(value)
+    except ValueError:  # Python refuses to turn an integer of more than 4300 digits into text
+        return f"a {type(value).__name__} too large to show"
+
+
 def _position(skill: str, param: str, value: object) -> tuple[float, float, float]:
     try:
         items = [float(v) for v in value]  # type: ignore[attr-defined]
     except (TypeError, ValueError, OverflowError):
         raise SkillArgumentError(
-            f"{skill}: {param} must be [x, y, z] in metres, got {reprlib.repr(value)}"
+            f"{skill}: {param} must be [x, y, z] in metres, got {_shown(value)}"
         ) from None
     if isinstance(value, str | bytes) or len(items) not in (2, 3):
-        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {reprlib.repr(value)}")
+        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {_shown(value)}")
     if not all(math.isfinite(v) for v in items):
         raise SkillArgumentError(f"{skill}: {param} must be finite, got {items}")
     if len(items) == 2:

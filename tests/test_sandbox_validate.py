@@ -161,3 +161,10 @@ def test_validation_of_100_kb_finishes_in_a_second(code: str) -> None:
     with contextlib.suppress(ProgramRejected):
         validate(code, "arm")
     assert time.process_time() - started < 1.0
+
+
+@pytest.mark.parametrize("argument", ["0x" + "f" * 5000, "[0x" + "f" * 5000 + ", 0, 0]"], ids=["int", "list"])
+def test_an_integer_too_long_to_print_is_a_clear_rejection(argument: str) -> None:
+    """Showing the bad argument must not fail: decimal conversion of such an integer raises ValueError."""
+    with pytest.raises(ProgramRejected, match="too large to show"):
+        validate(f"move_to_position({argument})\n", "arm")
