@@ -120,6 +120,18 @@ def test_helpers_lambdas_and_query_values_work_in_the_worker() -> None:
     assert motions(world) == [("move_to_position", ((0.3, 0.0, 0.2),))]
 
 
+def test_array_methods_that_numpy_implements_in_python_work_in_the_worker() -> None:
+    """numpy's C methods import their Python halves lazily through the program's ``__import__``."""
+    code = (
+        "import numpy as np\n"
+        "a = np.array([1.0, 2.0, 3.5])\n"
+        "print(a.mean(), a.std(), a.clip(0, 2).tolist(), a.round(0).tolist(), a.sum(axis=0), a.max(), a.prod())\n"
+    )
+    (world,) = drive([SandboxSession(code, "arm", FAST)])
+    assert world.ended == ProgramEnded(error=None, output="2.1666666666666665 1.0274023338281628 [1.0, 2.0, 2.0] "
+                                       "[1.0, 2.0, 4.0] 6.5 3.5 7.0\n")
+
+
 def test_motion_error_is_raised_inside_the_program_at_its_line() -> None:
     (world,) = drive([SandboxSession(GRASP, "arm", FAST)], motion_error="target outside the workspace")
     assert world.ended is not None

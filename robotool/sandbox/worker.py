@@ -258,9 +258,18 @@ class _Program:
 
 
 def _import(name: str, _globals: object = None, _locals: object = None, fromlist: object = (), level: int = 0) -> Any:
-    """``import numpy`` and ``import math`` give the allowlisted namespaces; nothing else imports."""
+    """``import numpy`` and ``import math`` give the allowlisted namespaces; nothing else imports.
+
+    C code imports through the running program's ``__import__`` too (numpy's array methods load
+    their Python halves, such as ``numpy._core._methods``, on first use). It passes a list as
+    ``fromlist`` and takes the module from ``sys.modules`` itself, ignoring what this returns; so
+    for a module already loaded this returns None and hands the program nothing. Import statements
+    pass None or a tuple and are refused.
+    """
     if name in _MODULES and not fromlist and level == 0:
         return _MODULES[name]
+    if isinstance(fromlist, list) and name in sys.modules:
+        return None
     raise ImportError(f"import of {_safe_str(name)!r} is not allowed")
 
 
