@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import pytest
 
@@ -107,6 +108,18 @@ def test_a_worker_that_floods_the_host_is_cut_off() -> None:
     assert ended.error == "the worker sent more data than its limits allow"
     assert len(ended.output) == LIMITS.max_output_chars
     assert max_world_bytes(LIMITS) < 10 * 2**20
+
+
+@pytest.mark.parametrize(
+    "sent", [b"", b"\x00\x00\x00\x64", b'\x00\x00\x00\x64{"call": '], ids=["none", "header", "part"]
+)
+def test_a_worker_that_stops_mid_message_is_held_to_the_wall_clock(sent: bytes) -> None:
+    """A worker that sends part of a message and sleeps uses no CPU; the host must not wait for the rest."""
+    code = f"import os, time\nos.write(3, {sent!r})\ntime.sleep(1000)\n"
+    started = time.monotonic()
+    ended = run(code, LIMITS.model_copy(update={"wall_s": 1.0}), unchecked=True)
+    assert ended.error == "wall-clock limit exceeded (1 s of program time)"
+    assert time.monotonic() - started < 10
 
 
 def test_a_batch_keeps_at_most_its_output_budget() -> None:

@@ -8,6 +8,10 @@ Worker to host: :class:`WorkerMessage`, validated by pydantic on arrival.
 from __future__ import annotations
 
 import json
+import os
+import struct
+import time
+from multiprocessing.connection import Connection
 from typing import Any
 
 import numpy as np
@@ -53,6 +57,35 @@ def _small(value: object, *, depth: int) -> bool:
 
 
 GO = b"{}"
+
+
+def receive(conn: Connection, max_bytes: int, deadline: float) -> bytes:
+    """One message from a worker (``Connection.send_bytes`` framing), read in full by ``deadline``
+    (a ``time.monotonic()`` time).
+
+    ``Connection.recv_bytes`` waits for the whole message: a worker that sends part of one and then
+    sleeps, using no CPU time, would hold the host forever. Raises ``TimeoutError`` when the deadline
+    passes, ``EOFError`` when the worker closed its end and ``OSError`` for a message longer than
+    ``max_bytes``.
+    """
+    (size,) = struct.unpack("!i", _read(conn, 4, deadline))
+    if size == -1:
+        (size,) = struct.unpack("!Q", _read(conn, 8, deadline))
+    if not 0 <= size <= max_bytes:
+        raise OSError(f"bad message length {size}")
+    return _read(conn, size, deadline)
+
+
+def _read(conn: Connection, count: int, deadline: float) -> bytes:
+    data = bytearray()
+    while len(data) < count:
+        if not conn.poll(max(deadline - time.monotonic(), 0.0)):
+            raise TimeoutError("the worker's message did not arrive in time")
+        chunk = os.read(conn.fileno(), count - len(data))
+        if not chunk:
+            raise EOFError
+        data += chunk
+    return bytes(data)
 
 
 def max_message_bytes(limits: SandboxLimits) -> int:

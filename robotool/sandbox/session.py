@@ -20,12 +20,14 @@ from robotool.sandbox.messages import (
     encode_start,
     max_message_bytes,
     max_world_bytes,
+    receive,
 )
 from robotool.sandbox.validate import ProgramRejected, validate
 from robotool.sandbox.zygote import Worker, zygote
 
 CLOSED = "closed before the program ended"
 TOO_MUCH_DATA = "the worker sent more data than its limits allow"
+MALFORMED = "the worker sent a malformed message"
 
 
 class OutputBudget:
@@ -106,20 +108,23 @@ class SandboxSession:
         if self._owed_since is None:
             raise RuntimeError("wait() without a pending resume()")
         budget = self.limits.wall_s - self._wall_spent - (time.monotonic() - self._owed_since)
-        if not worker.conn.poll(max(budget, 0.0)):
-            return self._end(f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)")
-        self._wall_spent += time.monotonic() - self._owed_since
-        self._owed_since = None
         try:
-            data = worker.conn.recv_bytes(max_message_bytes(self.limits))
-            self._received += len(data)
-            if self._received > max_world_bytes(self.limits):
-                return self._end(TOO_MUCH_DATA)
-            message = WorkerMessage.model_validate_json(data)
+            data = receive(worker.conn, max_message_bytes(self.limits), time.monotonic() + max(budget, 0.0))
+        except TimeoutError:
+            return self._end(f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)")
         except (EOFError, ConnectionError):  # reset when it died holding an unread reply
             return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
-        except (OSError, ValidationError):
-            return self._end("the worker sent a malformed message")
+        except OSError:
+            return self._end(MALFORMED)
+        self._wall_spent += time.monotonic() - self._owed_since
+        self._owed_since = None
+        self._received += len(data)
+        if self._received > max_world_bytes(self.limits):
+            return self._end(TOO_MUCH_DATA)
+        try:
+            message = WorkerMessage.model_validate_json(data)
+        except ValidationError:
+            return self._end(MALFORMED)
         self._add_output(message.output)
         if message.call is None:
             return self._end(message.error)
