@@ -132,6 +132,12 @@ def test_array_methods_that_numpy_implements_in_python_work_in_the_worker() -> N
                                        "[1.0, 2.0, 4.0] 6.5 3.5 7.0\n")
 
 
+def test_named_unicode_escapes_compile_in_the_worker() -> None:
+    """Compiling ``\\N{...}`` needs the unicodedata module, which the worker's empty root cannot load."""
+    (world,) = drive([SandboxSession('print("90\\N{DEGREE SIGN}")\n', "arm", FAST)])
+    assert world.ended == ProgramEnded(error=None, output="90\u00b0\n")
+
+
 def test_motion_error_is_raised_inside_the_program_at_its_line() -> None:
     (world,) = drive([SandboxSession(GRASP, "arm", FAST)], motion_error="target outside the workspace")
     assert world.ended is not None

@@ -18,6 +18,7 @@ import re
 import resource
 import signal
 import sys
+import unicodedata  # noqa: F401  compiling "\N{...}" imports it; a jailed worker cannot load modules
 import warnings
 from collections.abc import Callable
 from multiprocessing.connection import Connection
