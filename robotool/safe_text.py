@@ -3,21 +3,24 @@
 Generated programs print what they like and name objects as they like; a raw escape byte in that
 text can clear the screen, retitle the window, write the clipboard (OSC 52) or paint a fake success
 line. Every control character, and the Unicode controls that reorder or hide text, is shown as a
-visible escape instead (``\\x1b``, ``\\u202e``).
+visible escape instead (``\\x1b``, ``\\u202e``), as are the invisible characters that hide text
+(soft hyphen, invisible operators, Unicode tag characters) and the line and paragraph separators.
 """
 
 from __future__ import annotations
 
 import re
 
-_UNICODE_CONTROLS = r"\u061c\u200b-\u200f\u202a-\u202e\u2066-\u2069\ufeff"
+_UNICODE_CONTROLS = (
+    r"\u00ad\u061c\u180e\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff\ufff9-\ufffb\U000e0000-\U000e007f"
+)
 _CONTROLS = re.compile(rf"[\x00-\x08\x0b-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 _CONTROLS_AND_BREAKS = re.compile(rf"[\x00-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 
 
 def _visible(match: re.Match[str]) -> str:
     code = ord(match.group())
-    return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+    return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}" if code <= 0xFFFF else f"\\U{code:08x}"
 
 
 def terminal_safe(text: str) -> str:

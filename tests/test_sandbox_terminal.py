@@ -26,6 +26,14 @@ def test_escaping_keeps_text_readable() -> None:
     assert terminal_safe("plain text, ünïcode ✓") == "plain text, ünïcode ✓"
 
 
+def test_invisible_and_line_separating_characters_are_shown() -> None:
+    """Text a terminal would hide or break the line at: line/paragraph separators, soft hyphen,
+    invisible operators, interlinear annotations and Unicode tag characters (hidden "ASCII" text)."""
+    hidden = "\u2028\u2029\u00ad\u2060\u2064\ufff9\U000e0041"
+    assert terminal_safe(f"a{hidden}b") == "a\\u2028\\u2029\\xad\\u2060\\u2064\\ufff9\\U000e0041b"
+    assert one_line("\U000e007f") == "\\U000e007f"
+
+
 def test_run_report_shows_program_bytes_escaped(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
