@@ -10,6 +10,7 @@ import pytest
 from robotool.programs import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import ProgramRejected, SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.messages import max_world_bytes
+from robotool.sandbox.session import OUTPUT_CUT
 from robotool.sandbox.worker import UNDESCRIBABLE
 
 LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=5_000, max_skill_calls=50)
@@ -106,7 +107,7 @@ def test_a_worker_that_floods_the_host_is_cut_off() -> None:
     )
     ended = run(code, unchecked=True)
     assert ended.error == "the worker sent more data than its limits allow"
-    assert len(ended.output) == LIMITS.max_output_chars
+    assert ended.output == "x" * LIMITS.max_output_chars + OUTPUT_CUT
     assert max_world_bytes(LIMITS) < 10 * 2**20
 
 
@@ -132,7 +133,7 @@ def test_a_batch_keeps_at_most_its_output_budget() -> None:
         assert isinstance(ended, ProgramEnded) and ended.error is None
         outputs.append(ended.output)
         session.close()
-    assert [len(o) for o in outputs] == [81, 19, 0]
+    assert outputs == ["y" * 80 + "\n", "y" * 19 + OUTPUT_CUT, OUTPUT_CUT]  # never cut silently
 
 
 def test_a_malformed_message_ends_only_that_world() -> None:

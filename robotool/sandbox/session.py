@@ -28,6 +28,8 @@ from robotool.sandbox.zygote import Worker, zygote
 CLOSED = "closed before the program ended"
 TOO_MUCH_DATA = "the worker sent more data than its limits allow"
 MALFORMED = "the worker sent a malformed message"
+OUTPUT_CUT = "\n[output cut here: the program's or its batch's output limit is reached]\n"
+"""Ends a program's kept output where a limit cut it (once)."""
 
 
 class OutputBudget:
@@ -65,6 +67,7 @@ class SandboxSession:
         self._ended: ProgramEnded | None = None
         self._output: list[str] = []
         self._output_chars = 0
+        self._output_cut = False
         self._calls = 0
         self._started = False
         self._owed_since: float | None = None
@@ -143,12 +146,14 @@ class SandboxSession:
             self._end(CLOSED)
 
     def _add_output(self, text: str) -> None:
-        room = min(self.limits.max_output_chars - self._output_chars, self._batch_output.left)
-        if room > 0 and text:
-            kept = text[:room]
-            self._output.append(kept)
-            self._output_chars += len(kept)
-            self._batch_output.left -= len(kept)
+        room = max(min(self.limits.max_output_chars - self._output_chars, self._batch_output.left), 0)
+        kept = text[:room]
+        self._output.append(kept)
+        self._output_chars += len(kept)
+        self._batch_output.left -= len(kept)
+        if len(kept) < len(text) and not self._output_cut:
+            self._output_cut = True
+            self._output.append(OUTPUT_CUT)
 
     def _death_reason(self, code: int) -> str:
         if code in (-signal.SIGPROF, -signal.SIGXCPU):
