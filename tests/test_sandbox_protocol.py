@@ -65,8 +65,8 @@ def test_no_host_path_appears_in_an_error() -> None:
     "code",
     [
         "import numpy as np\nx = np.array([None, 1])\n",
-        "import numpy as np\nx = np.array([1, 2], dtype='O')\n",
-        "import numpy as np\nx = np.zeros(2, dtype='V8')\n",
+        "import numpy as np\nx = np.array([1, 2], 'O')\n",
+        "import numpy as np\nx = np.zeros(2, 'V8')\n",
         "import numpy as np\nx = np.full(2, 'a', 'O')\n",
     ],
 )

@@ -297,7 +297,11 @@ class _Checker(ast.NodeVisitor):
         else:
             self.visit(func)
         if isinstance(func, ast.Attribute) and func.attr == "astype" and not _numeric_type_only(node):
-            self.reject(node, "astype() takes one numeric type: float, int, bool, np.float64, np.int64 or 'float32'")
+            self.reject(node, f"astype() takes one numeric type: {NUMERIC_TYPES_SHOWN}")
+        elif isinstance(func, ast.Attribute) and func.attr in _REDUCTIONS and len(node.args) > 1:
+            self.reject(node, f".{func.attr}() takes the axis as its only positional argument; name the others")
+        if any(k.arg == "dtype" and not _numeric_type(k.value) for k in node.keywords):
+            self.reject(node, f"dtype= takes one numeric type: {NUMERIC_TYPES_SHOWN}")
         for child in [*node.args, *node.keywords]:
             self.visit(child)
 
@@ -369,11 +373,19 @@ def _module_path(node: ast.Attribute) -> tuple[str, ...] | None:
     return None
 
 
+NUMERIC_TYPES_SHOWN = "float, int, bool, np.float64, np.int64 or 'float32'"
+
+_REDUCTIONS = frozenset({"sum", "mean", "std", "prod", "cumsum"})
+"""Array methods whose second positional parameter is ``dtype`` (which must be checked by name)."""
+
+
 def _numeric_type_only(call: ast.Call) -> bool:
-    """``x.astype(T)`` with ``T`` a numeric builtin, ``np.<numeric type>`` or its name as a string."""
-    if len(call.args) != 1 or call.keywords:
-        return False
-    (arg,) = call.args
+    """``x.astype(T)`` with ``T`` a numeric type (see :func:`_numeric_type`)."""
+    return len(call.args) == 1 and not call.keywords and _numeric_type(call.args[0])
+
+
+def _numeric_type(arg: ast.expr) -> bool:
+    """A numeric builtin, ``np.<numeric type>`` or its name as a string."""
     if isinstance(arg, ast.Name):
         return arg.id in ("float", "int", "bool")
     if isinstance(arg, ast.Constant):
