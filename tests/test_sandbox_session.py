@@ -20,7 +20,7 @@ from robotool.embodiments import skills
 from robotool.programs import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.validate import ProgramRejected
-from robotool.sandbox.zygote import Zygote
+from robotool.sandbox.zygote import Zygote, zygote
 
 HOSTILE = sorted(Path(__file__).parent.joinpath("fixtures", "hostile").glob("*.py"))
 CANARY = Path("/tmp/robotool-sandbox-canary")
@@ -249,6 +249,7 @@ def hostile_batch() -> dict[str, World]:
     """Every corpus program that passes validation, in one batch with two well-behaved programs."""
     stopped = [p for p in HOSTILE if _expectation(p)[0] == "stopped"]
     codes = [GRASP, *(p.read_text() for p in stopped), GRASP]
+    zygote().layers()  # started before counting: its control socket stays open
     fds_before = len(os.listdir("/proc/self/fd"))
     worlds = drive(start_sessions(codes, "arm", FAST))
     assert len(os.listdir("/proc/self/fd")) == fds_before
