@@ -16,7 +16,9 @@ one batch (identical programs once); a program the sandbox rejects is asked for 
 that does not parse. The candidates are ranked (see
 :meth:`~robotool.solution.Candidate.rank_key`). The paper's ablations are the same module with
 stages switched off: see :data:`METHODS`. Repeated runs that should sample afresh set
-``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``).
+``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``). The Repair stage is a predictor of the
+:class:`Proposer` too; :class:`RoboTool` with ``repair_rounds`` shows failed candidates what the simulator
+measured and has them repaired (see :mod:`robotool.repair`).
 
 Temperature: with ``temperature`` set, every LM call uses it; without, a single candidate uses the
 model's default and several candidates spread from 0.7 to 1.0 so that they differ.
@@ -38,11 +40,12 @@ from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES
 from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage
 from robotool.methods import METHODS
+from robotool.repair import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import extract_program
 from robotool.scene import Task
-from robotool.signatures import Analyze, Calculate, Code, Plan, scene_context
-from robotool.solution import Candidate, LMCall, Proposal, StageOutputs
-from robotool.verify import prepare_code, select
+from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
+from robotool.solution import Candidate, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
+from robotool.verify import chosen, prepare_code, select, verify
 
 AdapterName = Literal["chat", "json"]
 SPREAD = (0.7, 1.0)
@@ -81,6 +84,7 @@ class Proposer(dspy.Module):
         self.plan = dspy.Predict(Plan) if planner else None
         self.calculate = dspy.Predict(Calculate) if calculator else None
         self.code = dspy.Predict(Code)
+        self.repair = dspy.Predict(Repair)
         self.candidates = candidates
         self.temperature = temperature
         self.rollout_base = rollout_base
@@ -137,11 +141,7 @@ class Proposer(dspy.Module):
         """
         started = time.perf_counter()
         description = describe(task)
-        settings = CallSettings(
-            adapter=self._adapter(),
-            format_retries=self.format_retries,
-            log=PromptLog(self.log_prompts) if self.log_prompts else None,
-        )
+        settings = self._call_settings()
         shared = StageOutputs()
         notes: list[str] = list(self.compiled_notes)
         analyzer_calls: list[LMCall] = []
@@ -180,6 +180,30 @@ class Proposer(dspy.Module):
             timings={"analyzer": lm_started - started, "candidates": time.perf_counter() - lm_started},
         )
         return dspy.Prediction(proposal=proposal)
+
+    def repair_candidate(
+        self, task: Task, source: Candidate, index: int, sampled: int, settings: CallSettings
+    ) -> tuple[Candidate, RepairAttempt]:
+        """The Repair stage's fix of the failed candidate ``source`` as candidate ``index``, sampled like the
+        proposed candidate ``sampled`` (see :func:`robotool.repair.propose_repair`); not simulated."""
+        return propose_repair(
+            self.repair,
+            task,
+            describe(task),
+            source,
+            index,
+            settings=settings,
+            config=self._config(sampled),
+            salvage=_program_reply,
+        )
+
+    def _call_settings(self) -> CallSettings:
+        """How every stage call of one solve is made (a fresh cancellation flag each time)."""
+        return CallSettings(
+            adapter=self._adapter(),
+            format_retries=self.format_retries,
+            log=PromptLog(self.log_prompts) if self.log_prompts else None,
+        )
 
     def _adapter(self) -> dspy.Adapter:
         """The adapter of every stage call; DSPy's one-shot JSON fallback is off (repairs replace it)."""
@@ -279,15 +303,30 @@ class RoboTool(Proposer):
     """The :class:`Proposer`'s candidates, verified in ``worlds_per_candidate`` perturbed worlds each; the best wins."""
 
     def __init__(
-        self, *, worlds_per_candidate: int = 3, backend: str | None = None, seed: int = 0, **proposer: Any
+        self,
+        *,
+        worlds_per_candidate: int = 3,
+        backend: str | None = None,
+        seed: int = 0,
+        repair_rounds: int = 0,
+        repair_tokens: int | None = None,
+        **proposer: Any,
     ):
-        """``proposer``: the :class:`Proposer`'s options (stages, candidates, sampling, answer format)."""
+        """``proposer``: the :class:`Proposer`'s options (stages, candidates, sampling, answer format);
+        ``repair_rounds``: rounds in which, while no candidate succeeds in every world, the best ``candidates``
+        failures are repaired from their simulator traces (see :mod:`robotool.repair`); ``repair_tokens``: no
+        repair round starts once repairs have used this many tokens."""
         super().__init__(**proposer)
         if worlds_per_candidate < 1:
             raise ValueError("worlds_per_candidate must be at least 1")
+        if repair_rounds < 0:
+            raise ValueError(f"repair_rounds must be at least 0, got {repair_rounds}")
+        if repair_tokens is not None and repair_tokens < 1:
+            raise ValueError(f"repair_tokens must be at least 1, got {repair_tokens}")
         self.worlds_per_candidate = worlds_per_candidate
         self.backend = backend
         self.seed = seed
+        self.repair_budget = RepairBudget(rounds=repair_rounds, width=self.candidates, tokens=repair_tokens)
 
     def forward(self, task: Task) -> dspy.Prediction:
         """Solve ``task``; the prediction carries the :class:`Solution` and the best code.
@@ -296,7 +335,32 @@ class RoboTool(Proposer):
         """
         proposal = super().forward(task).proposal
         solution = select(task, proposal, worlds=self.worlds_per_candidate, seed=self.seed, backend=self.backend)
+        if self.repair_budget.rounds:
+            solution = self._repaired(task, proposal, solution)
         return dspy.Prediction(solution=solution, code=solution.code)
+
+    def _repaired(self, task: Task, proposal: Proposal, solution: Solution) -> Solution:
+        """``solution`` after repair rounds over its verified candidates (unchanged when none ran)."""
+        started = time.perf_counter()
+        candidates = list(solution.candidates)
+        settings = self._call_settings()
+
+        def propose(source: Candidate, index: int) -> tuple[Candidate, RepairAttempt]:
+            sampled = source  # a repair samples like the candidate its line of repairs began with
+            while sampled.repaired_from is not None:
+                sampled = next(c for c in candidates if c.index == sampled.repaired_from)
+            return self.repair_candidate(task, source, index, sampled.index, settings)
+
+        def check(new: list[Candidate]) -> None:
+            verify(task, new, worlds=self.worlds_per_candidate, seed=self.seed, backend=self.backend)
+
+        rounds = repair_rounds(candidates, propose, check, self.repair_budget)
+        if not rounds:
+            return solution
+        timings = {k: v for k, v in solution.timings.items() if k != "total"}
+        repaired = chosen(proposal, candidates, timings | {"repair": time.perf_counter() - started})
+        repaired.repairs = rounds
+        return repaired
 
 
 def _program_reply(text: str) -> dspy.Prediction:

@@ -6,6 +6,7 @@ from pydantic import BaseModel, Field, computed_field
 
 from robotool.rollout import Rollout
 from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
+from robotool.signatures.repair import FailureTrace, RepairScope
 
 
 class StageOutputs(BaseModel):
@@ -69,6 +70,7 @@ class Candidate(BaseModel):
     rollouts: list[Rollout] = Field(default_factory=list)
     lm_calls: list[LMCall] = Field(default_factory=list, description="its LM requests, failed ones included")
     notes: list[str] = Field(default_factory=list, description="what was repaired or ignored in its replies")
+    repaired_from: int | None = Field(None, description="the failed candidate a repair round made this one from")
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -131,6 +133,30 @@ class Proposal(BaseModel):
     timings: dict[str, float] = Field(default_factory=dict, description="seconds by phase")
 
 
+class RepairAttempt(BaseModel):
+    """One failed candidate repaired: what the model was shown, what it changed, and how the new one did."""
+
+    source: int = Field(description="the failed candidate shown to the model")
+    candidate: int = Field(description="the candidate the repair made")
+    shown: FailureTrace = Field(description="the failure trace in the repair prompt")
+    scope: RepairScope
+    diagnosis: str | None = None
+    changed: list[str] = Field(
+        default_factory=list, description="what differs from the source: steps, parameters or code"
+    )
+    success_rate: float = 0.0
+    failure: str | None = Field(None, description="why the repaired candidate failed, if it did")
+
+
+class RepairRound(BaseModel):
+    """One repair round: the failures repaired concurrently and re-verified in one batch."""
+
+    round: int = Field(ge=1)
+    attempts: list[RepairAttempt] = Field(default_factory=list)
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+
+
 class Solution(BaseModel):
     """The result of solving a task: the best code and everything behind the choice."""
 
@@ -144,6 +170,7 @@ class Solution(BaseModel):
     usage: dict[str, TokenUsage] = Field(default_factory=dict, description="tokens by stage, all candidates")
     lm_calls: list[LMCall] = Field(default_factory=list, description="every LM request, failed ones included")
     timings: dict[str, float] = Field(default_factory=dict, description="seconds by phase")
+    repairs: list[RepairRound] = Field(default_factory=list, description="repair rounds, in order")
     notes: list[str] = Field(default_factory=list, description="what the user should know (e.g. which planner)")
 
     @property

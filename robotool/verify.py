@@ -125,11 +125,16 @@ def select(
     started = time.perf_counter()
     candidates = [c.model_copy(deep=True) for c in proposal.candidates]
     verify(task, candidates, worlds=worlds, seed=seed, backend=backend, runner=runner)
+    return chosen(proposal, candidates, proposal.timings | {"verify": time.perf_counter() - started})
+
+
+def chosen(proposal: Proposal, candidates: list[Candidate], timings: dict[str, float]) -> Solution:
+    """The best of a proposal's verified ``candidates`` (repaired ones included) as a :class:`Solution`;
+    ``timings``: seconds by phase, to which their total is added."""
     ranked = rank(candidates)
     best = ranked[0] if ranked and ranked[0].rollouts else None
     calls = proposal.lm_calls + [call for c in candidates for call in c.lm_calls]
-    timings = proposal.timings | {"verify": time.perf_counter() - started}
-    timings["total"] = sum(timings.values())
+    timings = timings | {"total": sum(timings.values())}
     return Solution(
         task=proposal.task,
         method=proposal.method,

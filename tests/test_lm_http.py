@@ -24,6 +24,8 @@ def _rules(script: dict[str, list[str]], **overrides: list[Rule]) -> list[Rule]:
     """One rule per stage answering with its scripted reply, after any override rules for that stage."""
     rules: list[Rule] = []
     for stage, marker in STAGE_MARKERS.items():
+        if stage not in script:
+            continue
         for rule in overrides.get(stage, []):
             rules.append(rule.model_copy(update={"match": marker}))
         rules.append(Rule(match=marker, reply=script[stage][0]))

@@ -195,7 +195,7 @@ def test_save_and_load_round_trip(tmp_path: Path) -> None:
     coder_only = RoboTool.method("coder")
     coder_only.load(tmp_path / "program.json")  # extra stages in the file are ignored
     assert coder_only.code.signature.instructions == "Write short programs."
-    assert [name for name, _ in coder_only.named_predictors()] == ["code"]
+    assert [name for name, _ in coder_only.named_predictors()] == ["code", "repair"]
 
 
 def test_calculator_without_planner_is_refused() -> None:

@@ -13,17 +13,22 @@ from robotool.signatures.models import (
     validation_notes,
 )
 from robotool.signatures.planner import Plan
+from robotool.signatures.repair import FailureTrace, Repair, RepairScope, TracedCall
 
 __all__ = [
     "Analyze",
     "AnalyzedConcept",
     "Calculate",
     "Code",
+    "FailureTrace",
     "KeyConcept",
     "ObjectRole",
     "Plan",
     "PlanStep",
+    "Repair",
+    "RepairScope",
     "StepParameters",
+    "TracedCall",
     "scene_context",
     "validation_notes",
 ]

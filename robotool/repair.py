@@ -1,0 +1,215 @@
+"""Repair rounds: when no candidate succeeds in every world, show the model what the simulator measured.
+
+After verification, the best-progressing failures (ranked as candidates are: goal sub-conditions met,
+skill calls completed) are each given to the Repair stage with a compact :class:`FailureTrace` built from
+their typed rollout records (never from reason text): the calls of the first failed world up to the first
+that did not end ``done`` with their measured values, the goal sub-conditions missed, and in how many
+worlds. The repairs of one round run concurrently; the repaired programs are verified together in one
+batch; the loop stops at the first candidate that succeeds in every world, or when the rounds or the
+token budget are spent. Repaired candidates join the others, so ranking never prefers a repair that did
+worse over a better earlier candidate.
+"""
+
+from __future__ import annotations
+
+import contextvars
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import dspy
+
+from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, call_stage
+from robotool.rollout import Rollout
+from robotool.scene import Task
+from robotool.signatures import FailureTrace, TracedCall, scene_context
+from robotool.signatures.repair import ShownTrace
+from robotool.solution import Candidate, RepairAttempt, RepairRound, rank
+from robotool.verify import prepare_code
+
+
+def failure_trace(candidate: Candidate) -> FailureTrace | None:
+    """The trace of ``candidate``'s first failed world (None when it has no failed world)."""
+    failed = [r for r in candidate.rollouts if not r.success]
+    if not failed:
+        return None
+    world = failed[0]
+    calls = _calls_to_first_failure(world)
+    last = calls[-1] if calls else None
+    failing = last is not None and last.outcome != "done"
+    met = [name for name, ok in world.conditions.items() if ok]
+    measured_miss = failing and last is not None and bool(last.measured) and last.outcome in ("refused", "stalled")
+    numerical = world.error is None and bool(world.calls) and (measured_miss or (not failing and bool(met)))
+    return FailureTrace(
+        worlds=len(candidate.rollouts),
+        failed_worlds=len(failed),
+        world=world.world,
+        calls=calls,
+        calls_made=len(world.calls),
+        error=world.error,
+        conditions_missed=[name for name, ok in world.conditions.items() if not ok],
+        conditions_met=met,
+        scope="parameters" if numerical else "plan",
+    )
+
+
+def _calls_to_first_failure(world: Rollout) -> list[TracedCall]:
+    traced = []
+    for number, call in enumerate(world.calls, start=1):
+        traced.append(
+            TracedCall(
+                number=number,
+                skill=call.skill,
+                args=call.args,
+                outcome=call.outcome,
+                reason=call.reason,
+                measured=call.measured,
+                result=call.result,
+            )
+        )
+        if call.outcome != "done":
+            break
+    return traced
+
+
+@dataclass(frozen=True)
+class RepairBudget:
+    """How much repairing one solve may do."""
+
+    rounds: int
+    width: int = 1
+    """failures repaired per round (concurrently)"""
+    tokens: int | None = None
+    """no new round starts once the repair calls have used this many tokens"""
+
+
+Propose = Callable[[Candidate, int], tuple[Candidate, RepairAttempt]]
+"""Makes the repaired candidate with index ``index`` from a failed one (an LM call; not yet verified)."""
+
+
+def repair_rounds(
+    candidates: list[Candidate],
+    propose: Propose,
+    verify: Callable[[list[Candidate]], None],
+    budget: RepairBudget,
+) -> list[RepairRound]:
+    """Run repair rounds (see the module docstring); repaired candidates are appended to ``candidates``."""
+    rounds: list[RepairRound] = []
+    repaired: set[int] = set()
+    used = 0
+    while len(rounds) < budget.rounds and not _solved(candidates):
+        if budget.tokens is not None and used >= budget.tokens:
+            break
+        sources = _to_repair(candidates, repaired, budget.width)
+        if not sources:
+            break
+        repaired |= {c.index for c in sources}
+        first = max(c.index for c in candidates) + 1
+        made = _concurrently(propose, [(source, first + k) for k, source in enumerate(sources)])
+        new = [candidate for candidate, _ in made]
+        candidates += new
+        verify(new)
+        record = RepairRound(round=len(rounds) + 1)
+        for candidate, attempt in made:
+            attempt.success_rate, attempt.failure = candidate.success_rate, candidate.failure
+            record.attempts.append(attempt)
+            record.prompt_tokens += sum(call.prompt_tokens for call in candidate.lm_calls)
+            record.completion_tokens += sum(call.completion_tokens for call in candidate.lm_calls)
+        used += record.prompt_tokens + record.completion_tokens
+        rounds.append(record)
+    return rounds
+
+
+def _solved(candidates: Sequence[Candidate]) -> bool:
+    return any(c.rollouts and c.success_rate == 1.0 for c in candidates)
+
+
+def _to_repair(candidates: list[Candidate], repaired: set[int], width: int) -> list[Candidate]:
+    """The best-progressing failures with simulator evidence that were not repaired yet."""
+    failures = [c for c in candidates if c.rollouts and c.success_rate < 1.0 and c.index not in repaired]
+    return rank(failures)[:width]
+
+
+def _concurrently(propose: Propose, jobs: list[tuple[Candidate, int]]) -> list[tuple[Candidate, RepairAttempt]]:
+    with ThreadPoolExecutor(max_workers=len(jobs)) as pool:
+        futures = [pool.submit(contextvars.copy_context().run, propose, source, index) for source, index in jobs]
+        outcomes: list[tuple[Candidate, RepairAttempt] | BaseException] = []
+        for future in futures:
+            try:
+                outcomes.append(future.result())
+            except Exception as e:
+                outcomes.append(e)
+    errors = [o for o in outcomes if isinstance(o, BaseException) and not isinstance(o, Cancelled)]
+    if errors:
+        raise errors[0]
+    return [o for o in outcomes if not isinstance(o, BaseException)]
+
+
+def propose_repair(
+    predictor: dspy.Predict,
+    task: Task,
+    description: str,
+    source: Candidate,
+    index: int,
+    *,
+    settings: CallSettings,
+    config: dict[str, Any],
+    salvage: Salvage | None = None,
+) -> tuple[Candidate, RepairAttempt]:
+    """Ask the Repair stage to fix ``source``; the new candidate keeps what the repair did not change.
+
+    ``salvage`` reads the program from a reply that did not follow the answer format.
+    """
+    trace = failure_trace(source)
+    if trace is None:
+        raise ValueError(f"candidate {source.index} has no failed world to repair")
+    candidate = Candidate(index=index, stages=source.stages.model_copy(deep=True), repaired_from=source.index)
+    attempt = RepairAttempt(source=source.index, candidate=index, shown=trace, scope=trace.scope)
+    stages = candidate.stages
+
+    def program_problem(out: dspy.Prediction) -> str | None:
+        candidate.code, rejection = prepare_code(out.code, task)
+        return rejection
+
+    inputs = {
+        "description": description,
+        "failed_steps": stages.steps or [],
+        "failed_parameters": stages.parameters or [],
+        "failed_code": source.code or "",
+        "trace": ShownTrace(trace=trace),
+    }
+    try:
+        with scene_context(task):
+            result = call_stage(
+                predictor,
+                "repair",
+                inputs,
+                settings=settings,
+                candidate=index,
+                config=config,
+                salvage=salvage,
+                check=program_problem,
+            )
+    except StageFailed as e:
+        candidate.lm_calls += e.calls
+        candidate.failure = f"repair: {e.reason}"
+        return candidate, attempt
+    candidate.lm_calls += result.calls
+    candidate.notes += [f"repair: {note}" for note in result.notes]
+    out = result.outputs
+    attempt.diagnosis = out.get("diagnosis")
+    revised_steps, revised_parameters = out.get("revised_steps"), out.get("revised_parameters")
+    if revised_steps and trace.scope == "plan" and revised_steps != stages.steps:
+        stages.steps = revised_steps
+        attempt.changed.append("steps")
+    elif revised_steps and revised_steps != stages.steps:
+        candidate.notes.append("repair: the failure was numerical; the revised plan steps were not used")
+    if revised_parameters and revised_parameters != stages.parameters:
+        stages.parameters = revised_parameters
+        attempt.changed.append("parameters")
+    if candidate.code != source.code:
+        attempt.changed.append("code")
+    candidate.notes.append(f"repair of candidate {source.index}")
+    return candidate, attempt
+

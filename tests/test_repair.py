@@ -1,0 +1,157 @@
+"""Repair rounds with a scripted LM (a labelled test fixture): failures shown what the simulator measured."""
+
+from __future__ import annotations
+
+import json
+
+import dspy
+import pytest
+from fixtures.reference import program
+from fixtures.scripted_lm import STAND_STILL, chat_reply, scripted_lm
+
+from robotool import tasks
+from robotool.program import RoboTool
+from robotool.repair import failure_trace
+from robotool.rollout import Rollout, SkillCall
+from robotool.solution import Candidate
+
+TASK = "sofa_traversing"
+PUSH_AND_WALK = program("sofa_traversing")
+"""The reference program: push the surfboard across the gap, walk over it (fixture)."""
+PUSH_SHORT = PUSH_AND_WALK.replace("FAR_OVERLAP = 0.15 ", "FAR_OVERLAP = -0.15 ")
+"""The same program pushing the board's end to 0.15 m short of sofa_2 (fixture)."""
+assert PUSH_SHORT != PUSH_AND_WALK
+
+STEPS = [
+    {"skill": "push_to_position", "objects": ["surfboard"], "intent": "bridge the gap between the sofas"},
+    {"skill": "walk_to_position", "objects": ["sofa_2"], "intent": "cross on the board"},
+]
+
+
+def _parameters(overlap: float) -> list[dict[str, object]]:
+    return [
+        {"step": 1, "object": "surfboard", "relative_to": "sofa_2", "offset": [-0.95 + overlap, 0.0, 0.21]},
+        {"step": 2, "relative_to": "sofa_2", "offset": [0.2, 0.0, 0.0]},
+    ]
+
+
+def _script(code: str, repairs: list[str]) -> dict[str, list[str]]:
+    """Replies for sofa_traversing: a plan that bridges the gap with the board, then the given programs."""
+    return {
+        "analyzer": [
+            chat_reply(
+                analysis="The gap between the sofas is wider than the robot can step over.",
+                key_concepts=[
+                    {
+                        "name": "gap between sofa_1 and sofa_2",
+                        "kind": "gap_width",
+                        "value": 0.4,
+                        "unit": "m",
+                        "limit": 0.1,
+                        "limit_name": "max_gap",
+                        "satisfied": False,
+                    }
+                ],
+            )
+        ],
+        "planner": [
+            chat_reply(
+                object_roles=[{"name": "surfboard", "properties": "rigid, 0.9 m long", "role": "bridge"}],
+                abstract_plan="Push the surfboard over the gap, then walk across it.",
+                steps=STEPS,
+            )
+        ],
+        "calculator": [chat_reply(calculation="Board end 0.15 m short of sofa_2.", parameters=_parameters(-0.15))],
+        "coder": [chat_reply(code=f"```python\n{code}```")],
+        "repair": repairs,
+    }
+
+
+def _repair_reply(code: str, parameters: list[dict[str, object]] | None = None) -> str:
+    return chat_reply(
+        diagnosis="The board stopped short: the measured gap is still above the limit.",
+        revised_steps=[],
+        revised_parameters=parameters if parameters is not None else _parameters(0.15),
+        code=f"```python\n{code}```",
+    )
+
+
+def _solve(script: dict[str, list[str]], **options: object):
+    lm, engine = scripted_lm(script)
+    program_ = RoboTool(**{"worlds_per_candidate": 2, **options})  # type: ignore[arg-type]
+    with dspy.context(lm=lm, adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):
+        solution = program_(task=tasks.load(TASK)).solution
+    return solution, engine
+
+
+def test_short_push_succeeds_after_one_repair_shown_the_measured_gap() -> None:
+    solution, engine = _solve(_script(PUSH_SHORT, [_repair_reply(PUSH_AND_WALK)]), repair_rounds=2)
+    first = solution.candidates[0]
+    assert first.code == PUSH_SHORT and first.success_rate == 0.0
+    refusal = next(c for c in first.rollouts[0].calls if c.outcome == "refused")
+    gap = refusal.measured["gap"]
+    assert refusal.skill == "walk_to_position" and gap > 0.1
+    assert solution.success and solution.success_rate == 1.0
+    assert len(solution.repairs) == 1 and engine.calls["repair"] == 1  # stopped at the first success
+    attempt = solution.repairs[0].attempts[0]
+    assert (attempt.source, attempt.candidate, attempt.scope) == (0, 1, "parameters")
+    assert attempt.shown.calls[-1].measured == {"gap": gap} and attempt.shown.failed_worlds == 2
+    assert set(attempt.changed) == {"parameters", "code"} and attempt.success_rate == 1.0
+    assert solution.best == 1 and solution.code == PUSH_AND_WALK
+    assert solution.candidates[1].repaired_from == 0
+    assert solution.stages.parameters[0].offset[0] == pytest.approx(-0.8)  # the repaired numbers
+    prompt = next(text for stage, _, text in engine.prompts if stage == "repair")
+    shown = next(line for line in prompt.splitlines() if line.strip().startswith("9. walk_to_position("))
+    assert shown.endswith(f"-> refused: {refusal.reason}; measured gap = {gap:g}")
+    assert "Goal sub-conditions missed: robot_touches_sofa_2, robot_over_sofa_2_top." in prompt
+    assert [c.stage for c in solution.lm_calls].count("repair") == 1 and "repair" in solution.usage
+    saved = json.loads(solution.model_dump_json())
+    assert saved["repairs"][0]["attempts"][0]["shown"]["calls"][-1]["measured"] == {"gap": gap}
+
+
+def test_a_repair_that_does_worse_is_not_returned_over_the_better_failure() -> None:
+    solution, _ = _solve(_script(PUSH_SHORT, [_repair_reply(STAND_STILL)]), repair_rounds=1)
+    assert not solution.success and len(solution.repairs) == 1
+    repaired = solution.candidates[1]
+    assert repaired.repaired_from == 0 and repaired.code == STAND_STILL
+    assert solution.best == 0 and solution.code == PUSH_SHORT
+
+
+def test_repair_rounds_respect_the_round_and_token_budgets() -> None:
+    script = _script(PUSH_SHORT, [_repair_reply(STAND_STILL)])
+    solution, engine = _solve(script, candidates=2, repair_rounds=2, worlds_per_candidate=1)
+    assert [len(r.attempts) for r in solution.repairs] == [2, 2]  # the two best failures each round
+    assert engine.calls["repair"] == 4 and len(solution.candidates) == 6
+    second = {a.source for a in solution.repairs[1].attempts}
+    assert second.isdisjoint({a.source for a in solution.repairs[0].attempts})  # nothing repaired twice
+    solution, engine = _solve(script, repair_rounds=3, repair_tokens=1, worlds_per_candidate=1)
+    assert len(solution.repairs) == 1 and engine.calls["repair"] == 1
+    solution, engine = _solve(script, worlds_per_candidate=1)
+    assert solution.repairs == [] and engine.calls["repair"] == 0
+
+
+def test_trace_is_built_from_typed_records_and_scopes_the_repair() -> None:
+    def world(calls: list[SkillCall], conditions: dict[str, bool], error: str | None = None) -> Rollout:
+        return Rollout(world=0, seed=0, success=False, conditions=conditions, calls=calls, error=error)
+
+    walk = SkillCall(skill="walk_to_position", args=[[1.0, 0.0, 0.0]], outcome="done")
+    refused = walk.model_copy(update={"outcome": "refused", "reason": "some words", "measured": {"gap": 0.21}})
+    after = SkillCall(skill="get_position", args=["sofa_2"], outcome="done")
+    numerical = failure_trace(Candidate(index=0, rollouts=[world([walk, refused, after], {"on": False})]))
+    assert numerical is not None and numerical.scope == "parameters"
+    assert [c.number for c in numerical.calls] == [1, 2] and numerical.calls_made == 3
+    assert numerical.conditions_missed == ["on"] and numerical.calls[-1].measured == {"gap": 0.21}
+    fixed = refused.model_copy(update={"measured": {}, "reason": "it is fixed in place"})
+    plan = failure_trace(Candidate(index=0, rollouts=[world([fixed], {"on": False})]))
+    assert plan is not None and plan.scope == "plan"
+    crashed = failure_trace(Candidate(index=0, rollouts=[world([walk], {"on": True}, error="NameError: x")]))
+    assert crashed is not None and crashed.scope == "plan" and crashed.error == "NameError: x"
+    solved = Rollout(world=0, seed=0, success=True, conditions={"on": True})
+    assert failure_trace(Candidate(index=0, rollouts=[solved])) is None
+
+
+def test_negative_budgets_are_refused() -> None:
+    with pytest.raises(ValueError, match="repair_rounds"):
+        RoboTool(repair_rounds=-1)
+    with pytest.raises(ValueError, match="repair_tokens"):
+        RoboTool(repair_rounds=1, repair_tokens=0)
