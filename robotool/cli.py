@@ -24,6 +24,7 @@ from robotool.cliargs import (
     DEFAULT_WORLDS,
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
+    REPAIR_HELP,
     Parser,
     count,
     make_console,
@@ -202,6 +203,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
         "adapter": args.adapter,
         "format_retries": args.format_retries,
         "log_prompts": args.log_prompts,
+        "repair_rounds": args.repair,
     }
     if args.program is None:
         return RoboTool.method(args.method or "robotool", **options)
@@ -397,6 +399,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="a compiled program (robotool optimize): its optimised prompts and demonstrations",
     )
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
+    p.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")

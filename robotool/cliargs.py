@@ -23,6 +23,10 @@ BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 ADAPTERS = ["chat", "json"]
 ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
 LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
+REPAIR_HELP = (
+    "repair rounds (LM methods): while no candidate succeeds in every world, the best failures are shown what "
+    "the simulator measured and rewritten by the model, then verified again"
+)
 CAPTURED_WIDTH = 120
 """Console width when the output goes to a file or a pipe (rich would squeeze tables to 80 columns)."""
 

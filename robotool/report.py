@@ -66,6 +66,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             _shown("; ".join([c.failure or "solved in every world", *c.notes])),
         )
     console.print(table)
+    print_repairs(solution, console)
     if solution.code:
         safe_code = terminal_safe(solution.code)
         code = Syntax(safe_code, "python").highlight(safe_code)  # Text: no padding on copied lines
@@ -84,6 +85,35 @@ def print_solution(solution: Solution, console: Console) -> None:
             "DSPy's cache, not the model (--no-cache asks the model again)"
         )
     print_sandbox_layers(console)
+
+
+def print_repairs(solution: Solution, console: Console) -> None:
+    """Each repair round: which failure was shown what, what the model changed, and how the repair did."""
+    for record in solution.repairs:
+        tokens = record.prompt_tokens + record.completion_tokens
+        table = Table(title=f"Repair round {record.round} ({tokens} LM tokens)")
+        for column in ("repaired", "shown", "changed", "result"):
+            table.add_column(column, overflow="fold")
+        for attempt in record.attempts:
+            shown = attempt.shown
+            last = shown.calls[-1] if shown.calls else None
+            evidence = [f"{shown.failed_worlds}/{shown.worlds} worlds failed"]
+            if shown.error:
+                evidence.append(shown.error)
+            elif last is not None and last.outcome != "done":
+                measured = ", ".join(f"{k} {v:.3g}" for k, v in last.measured.items())
+                evidence.append(f"{last.skill} {last.outcome}" + (f" ({measured})" if measured else ""))
+            if shown.conditions_missed:
+                evidence.append("missed " + ", ".join(shown.conditions_missed))
+            result = f"{attempt.success_rate:.0%}" + (f": {attempt.failure}" if attempt.failure else "")
+            changed = ", ".join(attempt.changed) or "nothing"
+            table.add_row(
+                f"{attempt.source} -> {attempt.candidate}",
+                escape("; ".join(evidence) + f"; scope {attempt.scope}"),
+                escape(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
+                escape(result),
+            )
+        console.print(table)
 
 
 def _format_args(args: list[object]) -> str:

@@ -280,7 +280,7 @@ def test_eval_flags_reach_every_lm_call(tmp_path: Path, capsys) -> None:
         "calculator": "`calculation`",
         "coder": "`code`",
     }
-    rules = [Rule(match=json_prompts[stage], reply=script[stage][0]) for stage in STAGE_MARKERS]
+    rules = [Rule(match=json_prompts[stage], reply=script[stage][0]) for stage in json_prompts]
     with StandinServer(Script(rules=rules)) as server:
         status = eval_main(
             [

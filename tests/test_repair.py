@@ -3,17 +3,21 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import dspy
 import pytest
 from fixtures.reference import program
-from fixtures.scripted_lm import STAND_STILL, chat_reply, scripted_lm
+from fixtures.scripted_lm import STAGE_MARKERS, STAND_STILL, chat_reply, scripted_lm
+from test_lm_http import _rules
 
 from robotool import tasks
+from robotool.cli import main
 from robotool.program import RoboTool
 from robotool.repair import failure_trace
 from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate
+from robotool.standin import Script, StandinServer
 
 TASK = "sofa_traversing"
 PUSH_AND_WALK = program("sofa_traversing")
@@ -155,3 +159,22 @@ def test_negative_budgets_are_refused() -> None:
         RoboTool(repair_rounds=-1)
     with pytest.raises(ValueError, match="repair_tokens"):
         RoboTool(repair_rounds=1, repair_tokens=0)
+
+
+def test_solve_over_http_shows_the_trace_readably_prints_the_round_and_writes_it(tmp_path: Path, capsys) -> None:
+    script = _script(PUSH_SHORT, [_repair_reply(PUSH_AND_WALK)])
+    report = tmp_path / "r.json"
+    with StandinServer(Script(rules=_rules(script))) as server:
+        args = ["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"]
+        status = main([*args, "--worlds", "1", "--repair", "2", "--json", str(report)])
+        repair = [r for r in server.requests if STAGE_MARKERS["repair"] in r["messages"][-1]["content"]]
+    out = capsys.readouterr().out
+    assert status == 0, out
+    saved = json.loads(report.read_text())
+    assert len(repair) == 1 and len(saved["repairs"]) == 1 and saved["best"] == 1
+    gap = saved["repairs"][0]["attempts"][0]["shown"]["calls"][-1]["measured"]["gap"]
+    text = repair[0]["messages"][-1]["content"]
+    assert "The program ran in 1 perturbed world(s); the goal was missed in 1." in text
+    assert f"-> refused: gap of {gap:.2f} m exceeds the limit of 0.10 m; measured gap = {gap:g}\n" in text
+    assert "Scope of the repair: parameters" in text and "{" not in text.split("[[ ## trace ## ]]")[1].split("[[")[0]
+    assert "Repair round 1" in out and "0 -> 1" in out and "walk_to_position refused" in out

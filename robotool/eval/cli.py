@@ -21,8 +21,10 @@ from robotool.cliargs import (
     DEFAULT_WORLDS,
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
+    REPAIR_HELP,
     Parser,
     cluster_address,
+    count,
     make_console,
     output_file,
     output_folder,
@@ -108,6 +110,7 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
+    p.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
@@ -124,7 +127,9 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         help="the Ray cluster to use with --executor ray, e.g. auto or ray://HOST:10001 "
         "(default: $RAY_ADDRESS, else start Ray here)",
     )
-    p.add_argument("--out", type=output_folder, help="output folder (default: results/<model>-k<K>-w<R>-s<seed>)")
+    p.add_argument(
+        "--out", type=output_folder, help="output folder (default: results/<model>-k<K>[-r<N>]-w<R>-s<seed>)"
+    )
     p.add_argument(
         "--resume",
         action="store_true",
@@ -149,6 +154,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         backend=args.backend,
         seed=args.seed,
         adapter=args.adapter,
+        repair=args.repair,
     )
     return EvalConfig(
         tasks=args.tasks,

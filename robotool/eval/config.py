@@ -1,11 +1,11 @@
 """What an evaluation is asked to do, its defaults, and where its results go.
 
-Output folder: ``--out DIR``, or by default ``results/<model>-k<K>-w<R>-s<seed>`` (``<model>`` is the
-LM's model string made path-safe, ``no-lm`` without one), so the same command always writes to, and
-resumes in, the same folder. The folder holds ``settings.json`` (the :class:`Request` that last wrote
-it: a different request is refused unless ``--resume`` is given), ``journal.jsonl`` (one line per
-finished run, keyed by the content of its inputs) and at the end ``results.json``, ``report.md`` and the
-plots, which cover exactly the runs the last command asked for.
+Output folder: ``--out DIR``, or by default ``results/<model>-k<K>-w<R>-s<seed>`` (``-r<N>`` after ``k<K>``
+with N repair rounds; ``<model>`` is the LM's model string made path-safe, ``no-lm`` without one), so the
+same command always writes to, and resumes in, the same folder. The folder holds ``settings.json`` (the
+:class:`Request` that last wrote it: a different request is refused unless ``--resume`` is given),
+``journal.jsonl`` (one line per finished run, keyed by the content of its inputs) and at the end
+``results.json``, ``report.md`` and the plots, which cover exactly the runs the last command asked for.
 """
 
 from __future__ import annotations
@@ -58,6 +58,7 @@ class Settings(BaseModel):
     backend: str | None = None
     seed: int = Field(0, ge=0, description="base seed of the perturbed worlds")
     adapter: Literal["chat", "json"] | None = Field(None, description="answer format asked of the LM (None: chat)")
+    repair: int = Field(0, ge=0, description="repair rounds after a verification with no full success (LM methods)")
 
 
 class Request(BaseModel):
@@ -135,7 +136,8 @@ class EvalConfig(BaseModel):
             return self.out
         s = self.settings
         model = re.sub(r"[^A-Za-z0-9_.]+", "-", s.lm).strip("-") if s.lm else "no-lm"
-        return DEFAULT_RESULTS / f"{model}-k{s.candidates}-w{s.worlds}-s{s.seed}"
+        repair = f"-r{s.repair}" if s.repair else ""
+        return DEFAULT_RESULTS / f"{model}-k{s.candidates}{repair}-w{s.worlds}-s{s.seed}"
 
     def world_seed(self, run: int) -> int:
         """Seed of run ``run``'s worlds: runs never share a perturbed world."""

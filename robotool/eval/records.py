@@ -39,13 +39,14 @@ class RunKey(BaseModel):
 def inputs_digest(task: Task, method: str, run: int, settings: Settings, context: Mapping[str, object]) -> str:
     """A digest of what decides a run's result: the task's content (every field of the validated task, so an
     edited task file is a new run), the method, the run index, the settings (LM model, temperature,
-    candidates, worlds, backend, seed) and ``context`` (e.g. the API base URL, the resolved backend and the
-    robotool version)."""
+    candidates, worlds, backend, seed, repair rounds: left out when 0, so runs journalled before the setting
+    existed keep their digest) and ``context`` (e.g. the API base URL, the resolved backend and the robotool
+    version)."""
     payload = {
         "task": task.model_dump(mode="json"),
         "method": method,
         "run": run,
-        "settings": settings.model_dump(mode="json"),
+        "settings": settings.model_dump(mode="json", exclude={"repair"} if not settings.repair else None),
         "context": dict(context),
     }
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]

@@ -88,6 +88,7 @@ def _methods(
         temperature=config.settings.temperature,
         adapter=config.settings.adapter,
         log_prompts=config.log_prompts,
+        repair=config.settings.repair,
     )
     solvers, skipped = make_solvers(names, settings, lm, overrides)
     if config.methods is not None and skipped:

@@ -62,7 +62,7 @@ def method_label(method: str) -> str:
 
 class SolverSettings(BaseModel):
     """What every solver shares: worlds per candidate, backend; for LM methods candidates per run, the
-    temperature of every call, the answer format, and the file that logs requests and replies."""
+    temperature of every call, the answer format, the file that logs requests and replies, and repair rounds."""
 
     candidates: int = 1
     worlds: int = 3
@@ -70,6 +70,7 @@ class SolverSettings(BaseModel):
     temperature: float | None = None
     adapter: Literal["chat", "json"] | None = None
     log_prompts: Path | None = None
+    repair: int = 0
 
 
 def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
@@ -90,6 +91,7 @@ def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
             temperature=settings.temperature,
             adapter=settings.adapter,
             log_prompts=settings.log_prompts,
+            repair_rounds=settings.repair,
         )
         with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
             return program(task=task).solution
