@@ -24,8 +24,6 @@ def _rules(script: dict[str, list[str]], **overrides: list[Rule]) -> list[Rule]:
     """One rule per stage answering with its scripted reply, after any override rules for that stage."""
     rules: list[Rule] = []
     for stage, marker in STAGE_MARKERS.items():
-        if stage not in script:
-            continue
         for rule in overrides.get(stage, []):
             rules.append(rule.model_copy(update={"match": marker}))
         rules.append(Rule(match=marker, reply=script[stage][0]))
@@ -280,7 +278,7 @@ def test_eval_flags_reach_every_lm_call(tmp_path: Path, capsys) -> None:
         "calculator": "`calculation`",
         "coder": "`code`",
     }
-    rules = [Rule(match=json_prompts[stage], reply=script[stage][0]) for stage in json_prompts]
+    rules = [Rule(match=json_prompts[stage], reply=script[stage][0]) for stage in STAGE_MARKERS]
     with StandinServer(Script(rules=rules)) as server:
         status = eval_main(
             [

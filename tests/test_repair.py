@@ -8,7 +8,7 @@ from pathlib import Path
 import dspy
 import pytest
 from fixtures.reference import program
-from fixtures.scripted_lm import STAGE_MARKERS, STAND_STILL, chat_reply, scripted_lm
+from fixtures.scripted_lm import REPAIR_MARKER, STAND_STILL, chat_reply, scripted_lm
 from test_lm_http import _rules
 
 from robotool import tasks
@@ -17,7 +17,7 @@ from robotool.program import RoboTool
 from robotool.repair import failure_trace
 from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate
-from robotool.standin import Script, StandinServer
+from robotool.standin import Rule, Script, StandinServer
 
 TASK = "sofa_traversing"
 PUSH_AND_WALK = program("sofa_traversing")
@@ -164,10 +164,11 @@ def test_negative_budgets_are_refused() -> None:
 def test_solve_over_http_shows_the_trace_readably_prints_the_round_and_writes_it(tmp_path: Path, capsys) -> None:
     script = _script(PUSH_SHORT, [_repair_reply(PUSH_AND_WALK)])
     report = tmp_path / "r.json"
-    with StandinServer(Script(rules=_rules(script))) as server:
+    rules = [Rule(match=REPAIR_MARKER, reply=script["repair"][0]), *_rules(script)]  # before the Coder's rule
+    with StandinServer(Script(rules=rules)) as server:
         args = ["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"]
         status = main([*args, "--worlds", "1", "--repair", "2", "--json", str(report)])
-        repair = [r for r in server.requests if STAGE_MARKERS["repair"] in r["messages"][-1]["content"]]
+        repair = [r for r in server.requests if REPAIR_MARKER in r["messages"][-1]["content"]]
     out = capsys.readouterr().out
     assert status == 0, out
     saved = json.loads(report.read_text())
