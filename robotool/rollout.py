@@ -10,6 +10,10 @@ Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
 
+DISTANCES: frozenset[str] = frozenset({"gap", "step", "drop", "distance", "remaining", "outside_workspace"})
+"""Keys of :attr:`SkillCall.measured` whose values are distances in metres: a gap, step or drop at a refusal,
+how far short of its goal a motion stopped, how far outside the workspace a target was."""
+
 
 class SkillCall(BaseModel):
     """One skill call in a world: arguments, how it ended and why, in simulated seconds."""

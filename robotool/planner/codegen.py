@@ -10,7 +10,7 @@ per motion skill. Positions that depend on where objects are when the step runs 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -82,6 +82,23 @@ def _axis_code(ref: Ref | None, offset: float, k: int) -> str:
     return f"{ref.var}[{k}] {sign} {abs(offset):.4f}"
 
 
+@dataclass(frozen=True)
+class Motion:
+    """Where a motion call is in a program: its line, skill, object, target and plan step (from 1)."""
+
+    line: int
+    skill: str
+    obj: str | None
+    point: Point | None
+    step: int
+    explanation: str
+
+
+def _call(skill: str, obj: str | None, point: Point | None) -> str:
+    args = ([repr(obj)] if obj is not None else []) + ([point.code()] if point is not None else [])
+    return f"{skill}({', '.join(args)})"
+
+
 @dataclass
 class Program:
     """A candidate program under construction, with its plan steps, parameters and the objects it uses."""
@@ -89,6 +106,7 @@ class Program:
     lines: list[str] = field(default_factory=list)
     steps: list[PlanStep] = field(default_factory=list)
     parameters: list[StepParameters] = field(default_factory=list)
+    motions: list[Motion] = field(default_factory=list)
     objects: list[str] = field(default_factory=list)
     sentences: list[str] = field(default_factory=list)
     roles: dict[str, str] = field(default_factory=dict)
@@ -117,12 +135,26 @@ class Program:
     def motion(self, skill: str, *, point: Point | None = None, obj: str | None = None,
                objects: Sequence[str] = (), intent: str, explanation: str = "") -> None:
         """Call a motion skill; record its plan step and, for a position, its parameters."""
-        args = ([repr(obj)] if obj is not None else []) + ([point.code()] if point is not None else [])
-        self.lines.append(f"{skill}({', '.join(args)})")
+        self.lines.append(_call(skill, obj, point))
         names = list(dict.fromkeys([*([obj] if obj else []), *objects]))
         self.steps.append(PlanStep(skill=skill, objects=names, intent=intent))
+        self.motions.append(Motion(len(self.lines) - 1, skill, obj, point, len(self.steps), explanation or intent))
         if point is not None:
             self.parameters.append(point.parameters(len(self.steps), obj, explanation or intent))
+
+    def with_target_shifted(self, motion: int, delta: Sequence[float], why: str) -> Program:
+        """A copy whose ``motion``-th motion call (from 0) aims ``delta`` further; ``why`` joins the plan."""
+        move = self.motions[motion]
+        if move.point is None:
+            raise ValueError(f"motion {motion} ({move.skill}) has no target to shift")
+        point = move.point.shifted(delta)
+        moved = replace(move, point=point)
+        copy = replace(self, lines=list(self.lines), motions=list(self.motions), sentences=[*self.sentences, why],
+                       parameters=[point.parameters(p.step, move.obj, f"{move.explanation}; {why}")
+                                   if p.step == move.step else p for p in self.parameters])
+        copy.lines[move.line] = _call(move.skill, move.obj, point)
+        copy.motions[motion] = moved
+        return copy
 
     @property
     def code(self) -> str:

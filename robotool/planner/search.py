@@ -49,10 +49,10 @@ def order(programs: Iterable[Program]) -> list[Program]:
 
 
 def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], StageOutputs], *, worlds: int, seed: int,
-           backend: str | None, budget: Budget) -> tuple[list[Tried], int]:
+           backend: str | None, budget: Budget, start: int = 0) -> tuple[list[Tried], int]:
     """Verify programs in rounds, tier by tier (a round never mixes tiers; each tier already ordered).
 
-    Returns what was tried and how many rounds ran."""
+    Candidates are numbered from ``start``. Returns what was tried and how many rounds ran."""
     started = time.perf_counter()
     tried: list[Tried] = []
     rounds = 0
@@ -61,7 +61,7 @@ def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], S
         if rounds and time.perf_counter() - started > budget.seconds:
             break
         tier = queue[len(tried)][0]
-        batch = [Tried(p, Candidate(index=len(tried) + k, stages=stages(p)))
+        batch = [Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p)))
                  for k, (t, p) in enumerate(queue[len(tried):len(tried) + budget.beam]) if t == tier]
         runnable = []
         for item in batch:

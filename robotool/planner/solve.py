@@ -16,10 +16,12 @@ import numpy as np
 from robotool.concepts import KeyConcept, key_concepts, surface_under
 from robotool.planner import macros_arm, macros_quadruped
 from robotool.planner.codegen import Program
+from robotool.planner.repair import repaired
 from robotool.planner.search import Budget, Tried, order, search
+from robotool.repair import failure_trace
 from robotool.scene import SceneObject, Task
 from robotool.signatures.models import ObjectRole, scene_context
-from robotool.solution import Solution, StageOutputs, rank
+from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank
 
 MACROS: dict[str, Callable[[Task, bool], Iterator[Program]]] = {
     "arm": macros_arm.candidates,
@@ -35,8 +37,12 @@ CALCULATION = ("Numbers come from the task file's geometry (object boxes, surfac
                "when each step runs and the offsets are added to them.")
 
 
-def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True) -> Solution:
-    """Find the shortest program that the simulator shows reaching the goal, without a language model."""
+def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True,
+          repair: bool = True) -> Solution:
+    """Find the shortest program that the simulator shows reaching the goal, without a language model.
+
+    With ``repair``, when no program succeeds in every world, the best failures are re-parameterised from
+    what the simulator measured and verified in one more round (see :mod:`robotool.planner.repair`)."""
     started = time.perf_counter()
     concepts = key_concepts(task)
     allowed = goal_objects(task)
@@ -55,8 +61,13 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     with scene_context(task):
         tried, rounds = search(task, tiers, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
                                backend=backend, budget=BUDGETS[task.embodiment])
+        repairs = []
+        if repair and not any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in tried):
+            repairs = repair_round(task, tried, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
+                                   backend=backend, beam=BUDGETS[task.embodiment].beam)
     verified_at = time.perf_counter()
     solution = _solution(task, tried, concepts, tools)
+    solution.repairs = repairs
     solution.timings = {"generate": generated_at - started, "verify": verified_at - generated_at,
                         "total": time.perf_counter() - started}
     budget = BUDGETS[task.embodiment]
@@ -68,9 +79,44 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     ]
     if not tools:
         solution.notes.append("tools=False: only the goal object (and what it rests on) and the robot were used.")
+    if repairs:
+        attempts = repairs[0].attempts
+        solution.notes.append(f"{len(attempts)} failed program(s) re-parameterised from measured evidence and verified "
+                              f"again; {sum(a.success_rate == 1.0 for a in attempts)} succeeded in every world.")
     if not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
     return solution
+
+
+def repair_round(task: Task, tried: list[Tried], stages: Callable[[Program], StageOutputs], *, worlds: int,
+                 seed: int, backend: str | None, beam: int) -> list[RepairRound]:
+    """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``
+    variants in one batch (appended to ``tried``); the round as the solution records it (none when no failure
+    gave evidence to act on)."""
+    failures = sorted((t for t in tried if t.candidate.rollouts), key=lambda t: t.candidate.rank_key())[:beam]
+    seen = {t.program.code for t in tried}
+    variants: list[tuple[Program, Tried]] = []
+    for source in failures:
+        for variant in repaired(task, source.program, source.candidate):
+            if variant.code not in seen and len(variants) < 2 * beam:
+                seen.add(variant.code)
+                variants.append((variant, source))
+    if not variants:
+        return []
+    new, _ = search(task, [[v for v, _ in variants]], stages, worlds=worlds, seed=seed, backend=backend,
+                    budget=Budget(beam=len(variants), rounds=1, seconds=float("inf")), start=len(tried))
+    record = RepairRound(round=1)
+    for made, (variant, source) in zip(new, variants, strict=True):
+        made.candidate.repaired_from = source.candidate.index
+        made.candidate.notes.append(f"re-parameterised from candidate {source.candidate.index}")
+        trace = failure_trace(source.candidate)
+        assert trace is not None  # a source has a failed world
+        record.attempts.append(RepairAttempt(
+            source=source.candidate.index, candidate=made.candidate.index, shown=trace, scope="parameters",
+            diagnosis=variant.sentences[-1], changed=["parameters", "code"],
+            success_rate=made.candidate.success_rate, failure=made.candidate.failure))
+    tried += new
+    return [record]
 
 
 def goal_objects(task: Task) -> set[str]:
