@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
@@ -9,10 +10,12 @@ import dspy
 import pytest
 from fixtures.reference import program
 from fixtures.scripted_lm import REPAIR_MARKER, STAND_STILL, chat_reply, scripted_lm
+from rich.console import Console
 from test_lm_http import _rules
 
 from robotool import tasks
 from robotool.cli import main
+from robotool.eval import EvalConfig, Settings, evaluate
 from robotool.program import RoboTool
 from robotool.repair import failure_trace
 from robotool.rollout import Rollout, SkillCall
@@ -179,3 +182,21 @@ def test_solve_over_http_shows_the_trace_readably_prints_the_round_and_writes_it
     assert f"-> refused: gap of {gap:.2f} m exceeds the limit of 0.10 m; measured gap = {gap:g}\n" in text
     assert "Scope of the repair: parameters" in text and "{" not in text.split("[[ ## trace ## ]]")[1].split("[[")[0]
     assert "Repair round 1" in out and "0 -> 1" in out and "walk_to_position refused" in out
+
+
+def test_eval_compares_repair_with_plain_sampling_at_equal_lm_calls(tmp_path: Path) -> None:
+    lm, engine = scripted_lm(_script(PUSH_SHORT, [_repair_reply(PUSH_AND_WALK)]))
+    config = EvalConfig(
+        out=tmp_path / "out", tasks=[TASK], methods=["robotool"], settings=Settings(worlds=1, repair=1), pictures=False
+    )
+    results = evaluate(config, lm=lm, console=Console(file=io.StringIO()))
+    budget = results.records[0].equal_budget
+    assert budget is not None and results.records[0].success_rate == 1.0
+    assert (budget.sampled, budget.sampled_calls, budget.sampled_success) == (1, 4, 0.0)  # Analyzer + 3 stages
+    assert (budget.repair_calls, budget.repair_success) == (5, 1.0)
+    assert budget.plain == 2 and budget.plain_calls == 7 and budget.plain_success == 0.0  # K' spends >= the calls
+    assert engine.calls["repair"] == 1 and engine.calls["coder"] == 3
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "Repair against plain sampling at equal LM calls" in report and "1.00 @ 5.0" in report
+    assert (tmp_path / "out" / "repair.png").is_file()
+    assert EvalConfig(settings=Settings(lm="m", repair=2)).out_dir.name == "m-k1-r2-w3-s0"

@@ -65,6 +65,21 @@ class Cost(BaseModel):
     total_wall_s: float
 
 
+class RepairComparison(BaseModel):
+    """A method's mean success and LM calls: best-of-K, K plus repair, and plain best-of-K' at equal calls."""
+
+    method: str
+    runs: int
+    sampled: float = Field(description="mean K")
+    sampled_calls: float
+    sampled_success: float
+    repair_calls: float
+    repair_success: float
+    plain: float = Field(description="mean K'")
+    plain_calls: float
+    plain_success: float
+
+
 class Summary(BaseModel):
     """Everything the tables and plots show."""
 
@@ -75,6 +90,7 @@ class Summary(BaseModel):
     errors: list[Breakdown]
     discrimination: list[Discrimination]
     cost: list[Cost]
+    repair: list[RepairComparison] = Field(default_factory=list, description="runs with repair rounds only")
 
 
 def _cell(values: Sequence[float]) -> Cell:
@@ -137,6 +153,15 @@ def _cost(method: str, records: Sequence[RunRecord]) -> Cost:
         wall_s=mean(r.wall_s for r in records), total_wall_s=sum(r.wall_s for r in records))
 
 
+def _repair(method: str, records: Sequence[RunRecord]) -> RepairComparison | None:
+    budgets = [r.equal_budget for r in records if r.equal_budget is not None]
+    if not budgets:
+        return None
+    fields = [f for f in RepairComparison.model_fields if f not in ("method", "runs")]
+    return RepairComparison(method=method, runs=len(budgets),
+                            **{f: mean(float(getattr(b, f)) for b in budgets) for f in fields})
+
+
 def summarize(records: Sequence[RunRecord], methods: Sequence[str]) -> Summary:
     """All the metrics of ``records``, rows in ``methods`` order (methods without records left out)."""
     by_method: dict[str, list[RunRecord]] = defaultdict(list)
@@ -151,4 +176,5 @@ def summarize(records: Sequence[RunRecord], methods: Sequence[str]) -> Summary:
         errors=[_breakdown(m, by_method[m]) for m in present],
         discrimination=[_discrimination(m, by_method[m]) for m in present],
         cost=[_cost(m, by_method[m]) for m in present],
+        repair=[row for m in present if (row := _repair(m, by_method[m])) is not None],
     )

@@ -1,4 +1,5 @@
-"""PNG plots of a summary (matplotlib, Agg backend): success, error breakdown, discriminative tool use."""
+"""PNG plots of a summary (matplotlib, Agg backend): success, error breakdown, discriminative tool use, and
+repair against plain sampling at equal LM calls."""
 
 from __future__ import annotations
 
@@ -70,4 +71,14 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
         ax.set_xticks(x, [method_label(d.method) for d in summary.discrimination], rotation=25, fontsize=8)
         ax.set(ylabel="tool-use rate", title="Discriminative tool use")
         save(fig, "discrimination.png")
+
+    if summary.repair:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for row in summary.repair:
+            line = ax.plot([row.sampled_calls, row.plain_calls], [row.sampled_success, row.plain_success], "o-",
+                           label=f"{method_label(row.method)}: plain best-of-K -> K'")[0]
+            ax.plot([row.repair_calls], [row.repair_success], "*", markersize=12, color=line.get_color(),
+                    label=f"{method_label(row.method)}: K + repair")
+        ax.set(xlabel="LM calls per run", ylabel="success rate", title="Repair against plain sampling")
+        save(fig, "repair.png")
     return written

@@ -65,6 +65,24 @@ class WorldResult(BaseModel):
     sim_time: float = 0.0
 
 
+class EqualBudget(BaseModel):
+    """A run with repair rounds against plain sampling at the same number of LM calls (``--repair N``).
+
+    ``sampled_*``: the run's K sampled candidates alone (plain best-of-K, before any repair); ``repair_*``:
+    the run as returned, repairs included; ``plain_*``: a second solve sampling K' candidates without repair,
+    K' chosen so that its LM calls match the run's (K' = K when no repair round ran, and nothing is solved again).
+    """
+
+    sampled: int = Field(description="K")
+    sampled_calls: int
+    sampled_success: float
+    repair_calls: int
+    repair_success: float
+    plain: int = Field(description="K'")
+    plain_calls: int
+    plain_success: float
+
+
 class RunRecord(BaseModel):
     """Everything about one run: the instance, the program, its worlds, its grades and its cost."""
 
@@ -88,6 +106,7 @@ class RunRecord(BaseModel):
     wall_s: float = Field(0.0, description="wall time of the whole run as the evaluator measured it")
     notes: list[str] = Field(default_factory=list)
     error: str | None = Field(None, description="the method raised instead of returning a solution")
+    equal_budget: EqualBudget | None = Field(None, description="with repair rounds: plain sampling at equal LM calls")
 
     @property
     def tokens(self) -> int:

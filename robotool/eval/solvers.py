@@ -9,12 +9,15 @@ than cached replies. LM-free methods come from the search planner (``robotool.pl
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, Protocol
 
 from pydantic import BaseModel
 
+from robotool.eval.records import EqualBudget
 from robotool.methods import METHODS as LM_STAGES
 from robotool.scene import Task
 from robotool.solution import Solution
@@ -22,11 +25,21 @@ from robotool.solution import Solution
 if TYPE_CHECKING:
     import dspy
 
+    from robotool.program import RoboTool
+
 
 class Solver(Protocol):
     """Solves one task for one run; ``seed`` seeds the run's perturbed worlds."""
 
-    def __call__(self, task: Task, *, seed: int, run: int) -> Solution: ...
+    def __call__(self, task: Task, *, seed: int, run: int) -> Solution | Compared: ...
+
+
+@dataclass
+class Compared:
+    """A run with repair rounds (``solution``) and plain sampling at the same number of LM calls."""
+
+    solution: Solution
+    equal_budget: EqualBudget
 
 
 class MethodInfo(BaseModel):
@@ -75,28 +88,9 @@ class SolverSettings(BaseModel):
 
 def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
     """The RoboTool program or an ablation, sampling from ``lm``."""
+    from robotool.program import RoboTool
 
-    def solve(task: Task, *, seed: int, run: int) -> Solution:
-        import dspy
-
-        from robotool.program import RoboTool
-
-        program = RoboTool.method(
-            method,
-            candidates=settings.candidates,
-            worlds_per_candidate=settings.worlds,
-            backend=settings.backend,
-            seed=seed,
-            rollout_base=run * settings.candidates,
-            temperature=settings.temperature,
-            adapter=settings.adapter,
-            log_prompts=settings.log_prompts,
-            repair_rounds=settings.repair,
-        )
-        with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
-            return program(task=task).solution
-
-    return solve
+    return _sampling_solver(lambda **options: RoboTool.method(method, **options), lm, settings)
 
 
 def compiled_solver(path: Path, lm: dspy.LM, settings: SolverSettings) -> Solver:
@@ -108,23 +102,34 @@ def compiled_solver(path: Path, lm: dspy.LM, settings: SolverSettings) -> Solver
     from robotool.program import RoboTool
 
     RoboTool.from_compiled(path)
+    return _sampling_solver(lambda **options: RoboTool.from_compiled(path, **options), lm, settings)
 
-    def solve(task: Task, *, seed: int, run: int) -> Solution:
+
+def _sampling_solver(make: Callable[..., RoboTool], lm: dspy.LM, settings: SolverSettings) -> Solver:
+    """Runs of the program ``make(**options)`` builds; with repair rounds, also plain sampling at equal LM calls."""
+
+    def solve(task: Task, *, seed: int, run: int) -> Solution | Compared:
         import dspy
 
-        program = RoboTool.from_compiled(
-            path,
-            candidates=settings.candidates,
-            worlds_per_candidate=settings.worlds,
-            backend=settings.backend,
-            seed=seed,
-            rollout_base=run * settings.candidates,
-            temperature=settings.temperature,
-            adapter=settings.adapter,
-            log_prompts=settings.log_prompts,
-        )
-        with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
-            return program(task=task).solution
+        def sampled(candidates: int, repair: int) -> Solution:
+            program = make(
+                candidates=candidates,
+                worlds_per_candidate=settings.worlds,
+                backend=settings.backend,
+                seed=seed,
+                rollout_base=run * settings.candidates,
+                temperature=settings.temperature,
+                adapter=settings.adapter,
+                log_prompts=settings.log_prompts,
+                repair_rounds=repair,
+            )
+            with dspy.context(lm=lm.copy(rollout_id=run) if run else lm):
+                return program(task=task).solution
+
+        solution = sampled(settings.candidates, settings.repair)
+        if not settings.repair:
+            return solution
+        return Compared(solution, equal_budget(solution, lambda k: sampled(k, 0)))
 
     return solve
 
@@ -135,6 +140,27 @@ def program_stages(path: Path) -> str:
 
     _, info = read_compiled(path)
     return info.method if info else "robotool"
+
+
+def equal_budget(solution: Solution, plain: Callable[[int], Solution]) -> EqualBudget:
+    """``solution`` (with repairs) against ``plain(k)``, plain best-of-k with as many LM calls as it spent."""
+    first = [c for c in solution.candidates if c.repaired_from is None]
+    repair_calls = sum(len(c.lm_calls) for c in solution.candidates if c.repaired_from is not None)
+    first_calls = len(solution.lm_calls) - repair_calls
+    per_candidate = max(1.0, sum(len(c.lm_calls) for c in first) / max(len(first), 1))
+    extra = math.ceil(repair_calls / per_candidate)
+    sampled_success = max((c.success_rate for c in first), default=0.0)
+    other = plain(len(first) + extra) if extra else solution
+    return EqualBudget(
+        sampled=len(first),
+        sampled_calls=first_calls,
+        sampled_success=sampled_success,
+        repair_calls=len(solution.lm_calls),
+        repair_success=solution.success_rate,
+        plain=len(first) + extra,
+        plain_calls=len(other.lm_calls) if extra else first_calls,
+        plain_success=other.success_rate if extra else sampled_success,
+    )
 
 
 def planner_solver(tools: bool, settings: SolverSettings) -> Solver:

@@ -132,8 +132,23 @@ def cost_table(summary: Summary) -> TextTable:
     return table
 
 
+def repair_table(summary: Summary) -> TextTable:
+    """Success against LM calls spent: best-of-K, K plus repair rounds, and plain best-of-K' at equal calls."""
+    table = TextTable(title="Repair against plain sampling at equal LM calls (mean success @ mean LM calls)",
+                      columns=["method", "runs", "best-of-K", "K + repair", "plain best-of-K'"],
+                      note="best-of-K: the run's sampled candidates before any repair; plain best-of-K': a second "
+                           "solve sampling K' candidates without repair, K' chosen to spend the LM calls the run "
+                           "with repair spent.")
+    for c in summary.repair:
+        table.rows.append([method_label(c.method), str(c.runs),
+                           f"{c.sampled_success:.2f} @ {c.sampled_calls:.1f} (K={c.sampled:.1f})",
+                           f"{c.repair_success:.2f} @ {c.repair_calls:.1f}",
+                           f"{c.plain_success:.2f} @ {c.plain_calls:.1f} (K'={c.plain:.1f})"])
+    return table
+
+
 def all_tables(summary: Summary) -> list[TextTable]:
     """Every table with at least one measured row, in report order."""
     tables = [success_table(summary), other_tasks_table(summary), generated_table(summary), concepts_table(summary),
-              errors_table(summary), discrimination_table(summary), cost_table(summary)]
+              errors_table(summary), discrimination_table(summary), cost_table(summary), repair_table(summary)]
     return [t for t in tables if len(t.rows) > t.reference]

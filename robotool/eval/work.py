@@ -17,7 +17,7 @@ from robotool.errors import LMFailureKind, LMUnavailableError
 from robotool.eval.instances import TaskInstance
 from robotool.eval.judge import crashed, judge
 from robotool.eval.records import RunKey, RunRecord
-from robotool.eval.solvers import Solver
+from robotool.eval.solvers import Compared, Solver
 
 
 @dataclass(frozen=True)
@@ -54,9 +54,13 @@ class RunWork:
         key = job.key
         ran = self.stages.get(key.method)
         try:
-            solution = self.solvers[key.method](job.instance.task, seed=job.world_seed, run=key.run)
+            result = self.solvers[key.method](job.instance.task, seed=job.world_seed, run=key.run)
         except LMUnavailableError as e:  # nothing was attempted: not a result
             return NotAttempted(e.kind, str(e))
         except Exception as e:  # a method that raises fails its run, not the evaluation
             return crashed(job.instance, key, job.world_seed, e, time.perf_counter() - begun, stages=ran)
-        return judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun, stages=ran)
+        solution = result.solution if isinstance(result, Compared) else result
+        record = judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun, stages=ran)
+        if isinstance(result, Compared):  # a run with repair rounds, and plain sampling at its LM calls
+            record.equal_budget = result.equal_budget
+        return record
