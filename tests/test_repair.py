@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 from pathlib import Path
@@ -16,6 +17,7 @@ from test_lm_http import _rules
 from robotool import tasks
 from robotool.cli import main
 from robotool.eval import EvalConfig, Settings, evaluate
+from robotool.eval.records import inputs_digest
 from robotool.program import RoboTool
 from robotool.repair import failure_trace
 from robotool.rollout import Rollout, SkillCall
@@ -200,3 +202,25 @@ def test_eval_compares_repair_with_plain_sampling_at_equal_lm_calls(tmp_path: Pa
     assert "Repair against plain sampling at equal LM calls" in report and "1.00 @ 5.0" in report
     assert (tmp_path / "out" / "repair.png").is_file()
     assert EvalConfig(settings=Settings(lm="m", repair=2)).out_dir.name == "m-k1-r2-w3-s0"
+
+
+def test_repair_rounds_are_part_of_a_run_identity_only_when_set() -> None:
+    task = tasks.load(TASK)
+    plain, repaired = Settings(), Settings(repair=1)
+    before = {  # what the digest covered before repair rounds existed
+        "task": task.model_dump(mode="json"),
+        "method": "robotool",
+        "run": 0,
+        "settings": {k: v for k, v in plain.model_dump(mode="json").items() if k != "repair"},
+        "context": {},
+    }
+    old = hashlib.sha256(json.dumps(before, sort_keys=True).encode()).hexdigest()[:16]
+    assert inputs_digest(task, "robotool", 0, plain, {}) == old
+    assert inputs_digest(task, "robotool", 0, repaired, {}) != old
+
+
+@pytest.mark.parametrize("command", [["solve", TASK], ["eval", "--tasks", TASK]])
+def test_a_negative_repair_count_is_a_usage_error(command: list[str], capsys) -> None:
+    with pytest.raises(SystemExit) as stopped:
+        main([*command, "--repair", "-1"])
+    assert stopped.value.code == 2 and "--repair: expected a whole number >= 0" in capsys.readouterr().err
