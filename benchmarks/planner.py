@@ -7,6 +7,7 @@ the median and max planning time in seconds.
 
     python benchmarks/planner.py                                   # seeds 1000-1099, every family, built-ins
     python benchmarks/planner.py --seeds 1000-1019 --families milk_reaching can_grasping --no-builtins
+    python benchmarks/planner.py --no-repair                       # without planner repair
 """
 
 from __future__ import annotations
@@ -57,9 +58,9 @@ def shown(solution: Solution) -> bool:
     return best is not None and abs(best.success_rate - solution.success_rate) < 1e-9
 
 
-def record(row: Row, label: str, task: Task, solvable: bool, needs_tool: bool, worlds: int) -> None:
+def record(row: Row, label: str, task: Task, solvable: bool, needs_tool: bool, worlds: int, repair: bool) -> None:
     started = time.perf_counter()
-    solution = solve(task, worlds=worlds)
+    solution = solve(task, worlds=worlds, repair=repair)
     row.times.append(time.perf_counter() - started)
     row.instances += 1
     row.solvable += solvable
@@ -80,6 +81,7 @@ def main() -> None:
     parser.add_argument("--no-builtins", action="store_true", help="skip the built-in tasks")
     parser.add_argument("--worlds", type=int, default=3, help="perturbed worlds per candidate")
     parser.add_argument("--verbose", action="store_true", help="print every unsolved solvable instance")
+    parser.add_argument("--no-repair", action="store_true", help="give up without re-parameterising failed programs")
     args = parser.parse_args()
     first, _, last = args.seeds.partition("-")
     seeds = range(int(first), int(last or first) + 1)
@@ -88,14 +90,15 @@ def main() -> None:
         row = Row(family)
         for seed in seeds:
             instance = generate(family, seed)
-            record(row, f"{family}/{seed}", instance.task, instance.solvable, instance.needs_tool, args.worlds)
+            record(row, f"{family}/{seed}", instance.task, instance.solvable, instance.needs_tool, args.worlds,
+                   not args.no_repair)
         rows.append(row)
         print(row.line(), flush=True)
     if not args.no_builtins:
         row = Row("built-in tasks")
         for name in tasks.names():
             task = tasks.load(name)
-            record(row, name, task, True, task.category != "no_tool", args.worlds)
+            record(row, name, task, True, task.category != "no_tool", args.worlds, not args.no_repair)
         rows.append(row)
     print("\n| family | instances | solvable | solved/solvable | tool where not needed | false successes "
           "| median s | max s |\n| --- | --- | --- | --- | --- | --- | --- | --- |")
