@@ -133,6 +133,8 @@ def test_repair_rounds_respect_the_round_and_token_budgets() -> None:
     assert engine.calls["repair"] == 4 and len(solution.candidates) == 6
     second = {a.source for a in solution.repairs[1].attempts}
     assert second.isdisjoint({a.source for a in solution.repairs[0].attempts})  # nothing repaired twice
+    temperatures = [t for stage, t, _ in engine.prompts if stage == "repair"]
+    assert sorted(temperatures) == [0.7, 0.7, 1.0, 1.0]  # each line of repairs samples like its first candidate
     solution, engine = _solve(script, repair_rounds=3, repair_tokens=1, worlds_per_candidate=1)
     assert len(solution.repairs) == 1 and engine.calls["repair"] == 1
     solution, engine = _solve(script, worlds_per_candidate=1)
