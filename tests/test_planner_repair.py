@@ -5,6 +5,7 @@ from __future__ import annotations
 from robotool import tasks
 from robotool.planner.codegen import Point, Program
 from robotool.planner.repair import repaired
+from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate
 from robotool.verify import run_codes
 
@@ -35,3 +36,26 @@ def test_no_evidence_means_no_variant() -> None:
     prog.motion("push_to_position", obj="surfboard", point=Point.at(board, (0.55, 0.0, 0.0)), intent="bridge the gap")
     print_only = Candidate(index=0, code="print('x')\n", rollouts=run_codes(task, ["print('x')\n"], worlds=1)[0])
     assert repaired(task, prog, print_only) == []
+
+
+def test_a_drag_that_left_the_target_outside_the_workspace_is_re_aimed_by_the_measured_distance() -> None:
+    task = tasks.load("can_grasping")
+    prog = Program()
+    paper = prog.query("get_graspable_point", "strip_of_paper", (0.3, 0.2, 0.0))
+    prog.motion("move_to_position", point=Point.at(paper), objects=["strip_of_paper"], intent="reach the paper")
+    prog.motion("move_to_position", point=Point.at(paper, (-0.31, 0.0, 0.0)), objects=["strip_of_paper", "can"],
+                intent="drag the paper with the can on it")
+    prog.motion("move_to_position", point=Point.at(None, (0.49, 0.06, 0.08)), objects=["can"], intent="reach the can")
+    calls = [
+        SkillCall(skill="get_graspable_point", args=["strip_of_paper"], outcome="done"),
+        SkillCall(skill="move_to_position", args=[[0.3, 0.2, 0.0]], outcome="done", measured={"remaining": 0.001}),
+        SkillCall(skill="move_to_position", args=[[0.0, 0.2, 0.0]], outcome="done", measured={"remaining": 0.0}),
+        SkillCall(skill="move_to_position", args=[[0.49, 0.06, 0.08]], outcome="done",
+                  measured={"outside_workspace": 0.044, "clamped_x": 0.45, "remaining": 0.0}),
+    ]
+    world = Rollout(world=0, seed=0, success=False, conditions={"can_held": False}, calls=calls)
+    further, less = repaired(task, prog, Candidate(index=0, code=prog.code, rollouts=[world]))
+    assert further.lines[2] == "move_to_position([p1[0] - 0.3840, p1[1], p1[2]])"  # along the drag, 0.044 + margin
+    assert less.lines[2] == "move_to_position([p1[0] - 0.2360, p1[1], p1[2]])"
+    assert further.parameters[1].target == [round(0.3 - 0.384, 4), 0.2, 0.0]
+    assert further.lines[-1] == prog.lines[-1] and further.lines[1] == prog.lines[1]

@@ -1,11 +1,13 @@
 """Planner repair: failed programs re-parameterised from what the simulator measured.
 
 When no program succeeded in every world, the best failures are looked at in their first failed world:
-the first motion call that did not end ``done`` (or, when every call was done, the last one) and the
-distances the simulator measured for it (see :data:`~robotool.rollout.DISTANCES`: a gap still too wide,
-how far short a motion stopped). Each earlier motion that moved an object (a push) is then tried again
-aimed further along its own direction, and less far, by each measured distance plus a margin; the
-simulator decides which variant, if any, works. Nothing here names a task or an object kind.
+the first motion call that measured a distance worth acting on (see :data:`~robotool.rollout.DISTANCES`: a
+gap still too wide at a refusal, how far short a motion stopped, how far outside the workspace a target
+was, how far a grasp was from what it should hold), or else the first that did not end ``done``. Each
+earlier motion that moved an object (a skill acting on an object, such as a push, or a motion whose plan
+step involves two objects, such as a held tool dragging another) is then tried again aimed further along
+its own direction, and less far, by each of those distances plus a margin; the simulator decides which
+variant, if any, works. Nothing here names a task or an object kind.
 """
 
 from __future__ import annotations
@@ -30,11 +32,13 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
         return []
     kinds = {s.name: s.kind for s in skills(task.embodiment)}
     motions = [c for c in failed.calls if kinds.get(c.skill) == "motion"]
-    failing = next((k for k, c in enumerate(motions) if c.outcome != "done"), len(motions) - 1)
+    failing = next((k for k, c in enumerate(motions) if _distances(c)), None)
+    if failing is None:
+        failing = next((k for k, c in enumerate(motions) if c.outcome != "done"), len(motions) - 1)
     if failing < 0:
         return []
     distances = _distances(motions[failing])
-    movers = [k for k, m in enumerate(program.motions[:failing]) if m.obj is not None and m.point is not None]
+    movers = [k for k, m in enumerate(program.motions[:failing]) if m.point is not None and _moves_object(program, k)]
     variants = []
     for k in reversed(movers[-MOVERS:]):
         direction = _direction(task, program, k)
@@ -57,15 +61,27 @@ def _distances(call: SkillCall) -> list[float]:
     return sorted(values)
 
 
-def _direction(task: Task, program: Program, k: int) -> np.ndarray | None:
-    """Unit x-y direction in which motion ``k`` moves its object (from the object's planned start to its target)."""
+def _moves_object(program: Program, k: int) -> bool:
+    """Whether motion ``k`` acts on an object, or its plan step involves two objects (one held, one moved)."""
     move = program.motions[k]
-    assert move.point is not None and move.obj is not None
+    return move.obj is not None or len(program.steps[move.step - 1].objects) >= 2
+
+
+def _direction(task: Task, program: Program, k: int) -> np.ndarray | None:
+    """Unit x-y direction of motion ``k``: from its object's planned start to the target for a skill acting on
+    an object, else from the previous motion's target."""
+    move = program.motions[k]
+    assert move.point is not None
     refs = {ref for ref, _ in move.point.axes}
-    if len(refs) == 1 and (ref := next(iter(refs))) is not None and ref.obj == move.obj:
+    if move.obj is not None and len(refs) == 1 and (ref := next(iter(refs))) is not None and ref.obj == move.obj:
         delta = np.array([offset for _, offset in move.point.axes[:2]])  # aimed relative to the object itself
-    else:
+    elif move.obj is not None:
         delta = move.point.estimate()[:2] - np.asarray(task.object(move.obj).center[:2])
+    else:
+        before = next((m.point for m in reversed(program.motions[:k]) if m.point is not None), None)
+        if before is None:
+            return None
+        delta = move.point.estimate()[:2] - before.estimate()[:2]
     norm = float(np.linalg.norm(delta))
     if norm < 1e-6:
         return None
