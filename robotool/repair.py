@@ -40,7 +40,8 @@ def failure_trace(candidate: Candidate) -> FailureTrace | None:
     failing = last is not None and last.outcome != "done"
     met = [name for name, ok in world.conditions.items() if ok]
     measured_miss = failing and last is not None and bool(last.measured) and last.outcome in ("refused", "stalled")
-    numerical = world.error is None and bool(world.calls) and (measured_miss or (not failing and bool(met)))
+    missed_by = not failing and (bool(met) or any(call.notable_distances() for call in world.calls))
+    numerical = world.error is None and bool(world.calls) and (measured_miss or missed_by)
     return FailureTrace(
         worlds=len(candidate.rollouts),
         failed_worlds=len(failed),

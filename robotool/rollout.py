@@ -12,7 +12,10 @@ GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "n
 
 DISTANCES: frozenset[str] = frozenset({"gap", "step", "drop", "distance", "remaining", "outside_workspace"})
 """Keys of :attr:`SkillCall.measured` whose values are distances in metres: a gap, step or drop at a refusal,
-how far short of its goal a motion stopped, how far outside the workspace a target was."""
+how far short of its goal a motion stopped, how far outside the workspace a target was, how far a grasp was
+from the nearest graspable point."""
+NOTABLE_DISTANCE = 0.01
+"""m: a measured distance at least this large says something went wrong (smaller ones are control noise)."""
 
 
 class SkillCall(BaseModel):
@@ -28,6 +31,10 @@ class SkillCall(BaseModel):
     result: Any = None
     started: float = 0.0
     ended: float = 0.0
+
+    def notable_distances(self) -> dict[str, float]:
+        """The measured distances (see :data:`DISTANCES`) of at least :data:`NOTABLE_DISTANCE`."""
+        return {k: v for k, v in self.measured.items() if k in DISTANCES and v >= NOTABLE_DISTANCE}
 
 
 class Event(BaseModel):

@@ -155,6 +155,11 @@ def test_trace_is_built_from_typed_records_and_scopes_the_repair() -> None:
     fixed = refused.model_copy(update={"measured": {}, "reason": "it is fixed in place"})
     plan = failure_trace(Candidate(index=0, rollouts=[world([fixed], {"on": False})]))
     assert plan is not None and plan.scope == "plan"
+    clamped = walk.model_copy(update={"measured": {"outside_workspace": 0.044, "remaining": 0.0}})
+    missed = failure_trace(Candidate(index=0, rollouts=[world([walk, clamped], {"held": False})]))
+    assert missed is not None and missed.scope == "parameters" and len(missed.calls) == 2
+    aimless = failure_trace(Candidate(index=0, rollouts=[world([walk], {"held": False})]))
+    assert aimless is not None and aimless.scope == "plan"
     crashed = failure_trace(Candidate(index=0, rollouts=[world([walk], {"on": True}, error="NameError: x")]))
     assert crashed is not None and crashed.scope == "plan" and crashed.error == "NameError: x"
     solved = Rollout(world=0, seed=0, success=True, conditions={"on": True})

@@ -16,12 +16,11 @@ import numpy as np
 
 from robotool.embodiments import skills
 from robotool.planner.codegen import Program
-from robotool.rollout import DISTANCES, SkillCall
+from robotool.rollout import SkillCall
 from robotool.scene import Task
 from robotool.solution import Candidate
 
 MARGIN = 0.03  # m added to a measured distance when a target is moved by it
-MIN_DISTANCE = 0.01  # m: smaller measured distances say nothing
 MOVERS = 2  # object-moving motions before the failure that are re-parameterised (latest first)
 
 
@@ -57,8 +56,7 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
 
 def _distances(call: SkillCall) -> list[float]:
     """The distinct distances measured for ``call``, large enough to act on."""
-    values = {round(v, 3) for key, v in call.measured.items() if key in DISTANCES and v >= MIN_DISTANCE}
-    return sorted(values)
+    return sorted({round(v, 3) for v in call.notable_distances().values()})
 
 
 def _moves_object(program: Program, k: int) -> bool:

@@ -44,7 +44,8 @@ class FailureTrace(BaseModel):
     scope: RepairScope = Field(
         "plan",
         description="'parameters' when the calls ran as planned and the failure was in numbers "
-        "(a refusal or stall with measured values, a goal missed after every call was done)",
+        "(a refusal or stall with measured values; a goal missed after every call was done, with some "
+        "sub-condition met or a clamp or missed grasp measured)",
     )
 
 
