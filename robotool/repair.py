@@ -21,7 +21,7 @@ from typing import Any
 import dspy
 
 from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, call_stage
-from robotool.rollout import Rollout
+from robotool.rollout import Rollout, notable_distances
 from robotool.scene import Task
 from robotool.signatures import FailureTrace, TracedCall, scene_context
 from robotool.signatures.repair import ShownTrace
@@ -40,7 +40,7 @@ def failure_trace(candidate: Candidate) -> FailureTrace | None:
     failing = last is not None and last.outcome != "done"
     met = [name for name, ok in world.conditions.items() if ok]
     measured_miss = failing and last is not None and bool(last.measured) and last.outcome in ("refused", "stalled")
-    missed_by = not failing and (bool(met) or any(call.notable_distances() for call in world.calls))
+    missed_by = not failing and (bool(met) or any(notable_distances(call.measured) for call in world.calls))
     numerical = world.error is None and bool(world.calls) and (measured_miss or missed_by)
     return FailureTrace(
         worlds=len(candidate.rollouts),

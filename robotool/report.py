@@ -8,7 +8,7 @@ from rich.syntax import Syntax
 from rich.table import Table
 
 from robotool.execute import RunReport
-from robotool.rollout import Rollout
+from robotool.rollout import Rollout, notable_distances
 from robotool.safe_text import terminal_safe
 from robotool.sandbox import layers_in_use
 from robotool.solution import Solution
@@ -96,13 +96,15 @@ def print_repairs(solution: Solution, console: Console) -> None:
             table.add_column(column, overflow="fold")
         for attempt in record.attempts:
             shown = attempt.shown
-            last = shown.calls[-1] if shown.calls else None
             evidence = [f"{shown.failed_worlds}/{shown.worlds} worlds failed"]
+            notable = next((c for c in shown.calls if c.outcome != "done" or notable_distances(c.measured)), None)
             if shown.error:
                 evidence.append(shown.error)
-            elif last is not None and last.outcome != "done":
-                measured = ", ".join(f"{k} {v:.3g}" for k, v in last.measured.items())
-                evidence.append(f"{last.skill} {last.outcome}" + (f" ({measured})" if measured else ""))
+            elif notable is not None:
+                values = notable_distances(notable.measured) or notable.measured
+                measured = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
+                what = f"call {notable.number} {notable.skill} {notable.outcome}"
+                evidence.append(what + (f" ({measured})" if measured else ""))
             if shown.conditions_missed:
                 evidence.append("missed " + ", ".join(shown.conditions_missed))
             result = f"{attempt.success_rate:.0%}" + (f": {attempt.failure}" if attempt.failure else "")

@@ -18,6 +18,11 @@ NOTABLE_DISTANCE = 0.01
 """m: a measured distance at least this large says something went wrong (smaller ones are control noise)."""
 
 
+def notable_distances(measured: dict[str, float]) -> dict[str, float]:
+    """The distances (see :data:`DISTANCES`) among a call's ``measured`` values of at least :data:`NOTABLE_DISTANCE`."""
+    return {k: v for k, v in measured.items() if k in DISTANCES and v >= NOTABLE_DISTANCE}
+
+
 class SkillCall(BaseModel):
     """One skill call in a world: arguments, how it ended and why, in simulated seconds."""
 
@@ -31,10 +36,6 @@ class SkillCall(BaseModel):
     result: Any = None
     started: float = 0.0
     ended: float = 0.0
-
-    def notable_distances(self) -> dict[str, float]:
-        """The measured distances (see :data:`DISTANCES`) of at least :data:`NOTABLE_DISTANCE`."""
-        return {k: v for k, v in self.measured.items() if k in DISTANCES and v >= NOTABLE_DISTANCE}
 
 
 class Event(BaseModel):

@@ -16,7 +16,7 @@ import numpy as np
 
 from robotool.embodiments import skills
 from robotool.planner.codegen import Program
-from robotool.rollout import SkillCall
+from robotool.rollout import SkillCall, notable_distances
 from robotool.scene import Task
 from robotool.solution import Candidate
 
@@ -56,7 +56,7 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
 
 def _distances(call: SkillCall) -> list[float]:
     """The distinct distances measured for ``call``, large enough to act on."""
-    return sorted({round(v, 3) for v in call.notable_distances().values()})
+    return sorted({round(v, 3) for v in notable_distances(call.measured).values()})
 
 
 def _moves_object(program: Program, k: int) -> bool:
