@@ -111,9 +111,9 @@ def print_repairs(solution: Solution, console: Console) -> None:
             changed = ", ".join(attempt.changed) or "nothing"
             table.add_row(
                 f"{attempt.source} -> {attempt.candidate}",
-                escape("; ".join(evidence) + f"; scope {attempt.scope}"),
-                escape(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
-                escape(result),
+                _shown("; ".join(evidence) + f"; scope {attempt.scope}"),
+                _shown(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
+                _shown(result),
             )
         console.print(table)
 

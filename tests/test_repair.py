@@ -20,6 +20,7 @@ from robotool.eval import EvalConfig, Settings, evaluate
 from robotool.eval.records import inputs_digest
 from robotool.program import RoboTool
 from robotool.repair import failure_trace
+from robotool.report import print_repairs
 from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate
 from robotool.standin import Rule, Script, StandinServer
@@ -231,3 +232,12 @@ def test_a_negative_repair_count_is_a_usage_error(command: list[str], capsys) ->
     with pytest.raises(SystemExit) as stopped:
         main([*command, "--repair", "-1"])
     assert stopped.value.code == 2 and "--repair: expected a whole number >= 0" in capsys.readouterr().err
+
+
+def test_the_repair_table_escapes_control_characters_from_the_model_and_the_program() -> None:
+    solution, _ = _solve(_script(PUSH_SHORT, [_repair_reply(STAND_STILL)]), repair_rounds=1, worlds_per_candidate=1)
+    solution.repairs[0].attempts[0].diagnosis = "moved \x1b[2Jthe board"
+    console = Console(file=io.StringIO(), width=200)
+    print_repairs(solution, console)
+    out = console.file.getvalue()  # type: ignore[attr-defined]
+    assert "\x1b" not in out and "moved" in out
