@@ -216,8 +216,8 @@ def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pyte
     from robotool import verify
     from robotool.program import Proposer
 
-    assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code"]
-    assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code"]
+    assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]
+    assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]
     monkeypatch.setattr(verify, "run_worlds", lambda *a, **k: pytest.fail("the proposer simulated"))
     lm, _ = scripted_lm(arm_script([GRASP_DIRECTLY]))
     with dspy.context(lm=lm, adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):

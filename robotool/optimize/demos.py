@@ -49,7 +49,8 @@ def _solved(example: dspy.Example, *, worlds: int, seed: int, backend: str | Non
 
 
 def stage_demos(program: Proposer, example: dspy.Example, solution: Solution) -> dict[str, dspy.Example]:
-    """One demonstration per predictor of ``program`` from a verified solution."""
+    """One demonstration per stage predictor of ``program`` from a verified solution (none for the Repair
+    stage: a solution shows no failed program and its fix)."""
     stages = solution.stages
     description = describe(example.task)
     concepts = (stages.key_concepts or []) if program.analyze is not None else []
@@ -64,7 +65,11 @@ def stage_demos(program: Proposer, example: dspy.Example, solution: Solution) ->
                                   calculation=stages.calculation, parameters=stages.parameters or []),
         "code": dspy.Example(description=description, steps=steps, parameters=parameters, code=solution.code),
     }
-    return {name: demos[name].with_inputs(*_inputs(predictor)) for name, predictor in program.named_predictors()}
+    return {
+        name: demos[name].with_inputs(*_inputs(predictor))
+        for name, predictor in program.named_predictors()
+        if name in demos
+    }
 
 
 def _inputs(predictor: dspy.Predict) -> list[str]:
