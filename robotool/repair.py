@@ -48,6 +48,7 @@ def failure_trace(candidate: Candidate) -> FailureTrace | None:
         world=world.world,
         calls=calls,
         calls_made=len(world.calls),
+        events=[e for e in world.events if e.call is None or e.call < len(calls)],
         error=world.error,
         conditions_missed=[name for name, ok in world.conditions.items() if not ok],
         conditions_met=met,

@@ -21,7 +21,8 @@ from robotool.eval.records import inputs_digest
 from robotool.program import RoboTool
 from robotool.repair import failure_trace
 from robotool.report import print_repairs
-from robotool.rollout import Rollout, SkillCall
+from robotool.rollout import Event, Rollout, SkillCall
+from robotool.signatures.repair import ShownTrace
 from robotool.solution import Candidate
 from robotool.standin import Rule, Script, StandinServer
 
@@ -163,6 +164,15 @@ def test_trace_is_built_from_typed_records_and_scopes_the_repair() -> None:
     assert aimless is not None and aimless.scope == "plan"
     crashed = failure_trace(Candidate(index=0, rollouts=[world([walk], {"on": True}, error="NameError: x")]))
     assert crashed is not None and crashed.scope == "plan" and crashed.error == "NameError: x"
+    grasp = SkillCall(skill="close_gripper", args=[], outcome="done")
+    too_wide = {"width": 0.08, "opening": 0.06}
+    empty = Event(kind="grasp_failed", call=1, object="can", cause="too_wide", measured=too_wide)
+    late = Event(kind="clamped", call=2, limit="workspace", measured={"outside_workspace": 0.05})
+    with_events = world([walk, grasp, clamped], {"held": False}).model_copy(update={"events": [empty, late]})
+    traced = failure_trace(Candidate(index=0, rollouts=[with_events]))
+    assert traced is not None and traced.events == [empty, late]
+    shown = ShownTrace(trace=traced).format()
+    assert "  - call 2 close_gripper: held nothing: can is 0.080 m across the fingers, wider than their" in shown
     solved = Rollout(world=0, seed=0, success=True, conditions={"on": True})
     assert failure_trace(Candidate(index=0, rollouts=[solved])) is None
 
@@ -191,7 +201,7 @@ def test_solve_over_http_shows_the_trace_readably_prints_the_round_and_writes_it
     assert "The program ran in 1 perturbed world(s); the goal was missed in 1." in text
     assert f"-> refused: gap of {gap:.2f} m exceeds the limit of 0.10 m; measured gap = {gap:g}\n" in text
     assert "Scope of the repair: parameters" in text and "{" not in text.split("[[ ## trace ## ]]")[1].split("[[")[0]
-    assert "Repair round 1" in out and "0 -> 1" in out and "walk_to_position refused" in out
+    assert "Repair round 1" in out and "0 -> 1" in out and f"(gap {gap:.3g})" in out  # the evidence shown
 
 
 def test_eval_compares_repair_with_plain_sampling_at_equal_lm_calls(tmp_path: Path) -> None:

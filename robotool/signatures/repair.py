@@ -7,6 +7,7 @@ from typing import Any, Literal
 import dspy
 from pydantic import BaseModel, Field
 
+from robotool.rollout import Event, SkillCall
 from robotool.signatures.models import PlanStep, StepParameters
 
 RepairScope = Literal["plan", "parameters"]
@@ -38,6 +39,11 @@ class FailureTrace(BaseModel):
         default_factory=list, description="its skill calls up to and including the first that did not end 'done'"
     )
     calls_made: int = Field(0, description="skill calls the program made in that world in all")
+    events: list[Event] = Field(
+        default_factory=list,
+        description="what happened during the calls shown: clamps, grasps that held nothing and why, objects "
+        "pushed out of reach, stalls, refusals, falls",
+    )
     error: str | None = Field(None, description="an error that ended the world (program or simulator), if any")
     conditions_missed: list[str] = Field(default_factory=list, description="goal sub-conditions not met at the end")
     conditions_met: list[str] = Field(default_factory=list, description="goal sub-conditions met at the end")
@@ -69,6 +75,10 @@ class ShownTrace(dspy.Type):
             lines.append(line)
         if not t.calls:
             lines.append("  (no skill call)")
+        if t.events:
+            shown = [SkillCall(skill=c.skill, args=c.args, outcome="done") for c in t.calls]
+            lines.append("What the simulator recorded during them:")
+            lines += [f"  - {event.describe(shown)}" for event in t.events]
         lines.append(f"The program made {t.calls_made} skill call(s) in that world in all.")
         if t.error:
             lines.append(f"The world ended with an error: {t.error}")
