@@ -258,7 +258,9 @@ class Proposer(dspy.Module):
 
         def program_problem(out: dspy.Prediction) -> str | None:
             """Why the Coder's program cannot run (shown to the model), keeping the last program seen."""
-            candidate.code, rejection = prepare_code(out.code, task)
+            candidate.code, rejection, dropped = prepare_code(out.code, task)
+            if dropped and f"coder: {dropped}" not in candidate.notes:
+                candidate.notes.append(f"coder: {dropped}")
             return rejection
 
         stage = "planner"

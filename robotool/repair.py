@@ -171,7 +171,9 @@ def propose_repair(
     stages = candidate.stages
 
     def program_problem(out: dspy.Prediction) -> str | None:
-        candidate.code, rejection = prepare_code(out.code, task)
+        candidate.code, rejection, dropped = prepare_code(out.code, task)
+        if dropped and f"repair: {dropped}" not in candidate.notes:
+            candidate.notes.append(f"repair: {dropped}")
         return rejection
 
     inputs = {

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from robotool.rollout import Event, Rollout
-from robotool.sandbox import ProgramRejected, extract_program, start_sessions, validate
+from robotool.sandbox import ProgramRejected, extract, start_sessions, validate
 from robotool.scene import Task
 from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
@@ -21,17 +21,25 @@ from robotool.sim.recorder import StateRecorder
 from robotool.solution import Candidate, Proposal, Solution, rank, usage_by_stage
 
 
-def prepare_code(text: str, task: Task) -> tuple[str | None, str | None]:
-    """Extract the program from an LM reply and validate it: (code, None) or (code or None, reason)."""
+class PreparedCode(NamedTuple):
+    """An LM reply's program (None when none was found), why it cannot run, and what extraction left out."""
+
+    code: str | None
+    rejection: str | None
+    note: str | None = None
+
+
+def prepare_code(text: str, task: Task) -> PreparedCode:
+    """Extract the program from an LM reply and validate it against the task's embodiment."""
     try:
-        code = extract_program(text)
+        extraction = extract(text)
     except ProgramRejected as e:
-        return None, str(e)
+        return PreparedCode(None, str(e))
     try:
-        validate(code, task.embodiment)
+        validate(extraction.code, task.embodiment)
     except ProgramRejected as e:
-        return code, str(e)
-    return code, None
+        return PreparedCode(extraction.code, str(e), extraction.note)
+    return PreparedCode(extraction.code, None, extraction.note)
 
 
 def run_worlds(

@@ -224,3 +224,11 @@ def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pyte
         proposal = Proposer(candidates=2, temperature=0.5)(task=tasks.load("milk_reaching_near")).proposal
     assert [c.code for c in proposal.candidates] == [GRASP_DIRECTLY, GRASP_DIRECTLY]
     assert all(not c.rollouts for c in proposal.candidates) and proposal.shared.key_concepts
+
+
+def test_a_candidate_says_when_the_extractor_left_part_of_the_coders_reply_out() -> None:
+    # The script fences the Coder's text; prose after the block is left out, and the candidate says so.
+    solution, _ = _solve("milk_reaching_near", arm_script([GRASP_DIRECTLY + "```\nThis lifts the milk."]))
+    assert solution.success and solution.code == GRASP_DIRECTLY
+    notes = solution.candidates[0].notes
+    assert any(n.startswith("coder: 1 non-blank line(s) of the reply") for n in notes), notes

@@ -6,7 +6,7 @@ import contextlib
 
 import pytest
 
-from robotool.sandbox import ProgramRejected, extract_program, validate
+from robotool.sandbox import ProgramRejected, extract, extract_program, validate
 
 PROGRAM = 'import numpy as np\np = np.array(get_center("milk"))\nif p[2] > 0:\n    move_to_position(p)\n'
 
@@ -117,3 +117,12 @@ def test_extraction_of_100_kb_finishes_in_a_second(answer: str) -> None:
 def test_code_after_long_prose_is_still_found() -> None:
     prose = "The plan has several careful steps, explained here.\n" * 1_500
     assert extract_program(prose + PROGRAM) == PROGRAM
+
+
+def test_extraction_counts_the_lines_it_left_out() -> None:
+    assert extract(PROGRAM).dropped_lines == 0 and extract(PROGRAM).note is None
+    fenced = extract(f"Sure! Here is the program:\n```python\n{PROGRAM}```\nIt grasps the milk.\n")
+    assert fenced.code == PROGRAM and fenced.dropped_lines == 2
+    truncated = extract(f"{PROGRAM}move_to_position([0.3, 0,\n")
+    assert truncated.code == PROGRAM and truncated.dropped_lines == 1
+    assert "1 non-blank line(s)" in truncated.note

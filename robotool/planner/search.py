@@ -65,7 +65,7 @@ def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], S
                  for k, (t, p) in enumerate(queue[len(tried):len(tried) + budget.beam]) if t == tier]
         runnable = []
         for item in batch:
-            item.candidate.code, rejection = prepare_code(item.program.code, task)
+            item.candidate.code, rejection, _ = prepare_code(item.program.code, task)
             if rejection is not None:
                 item.candidate.failure = f"planner produced invalid code: {rejection}"
             else:

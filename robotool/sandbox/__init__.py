@@ -6,7 +6,7 @@ the runner's :class:`~robotool.programs.ProgramSession` protocol, behind the ope
 of :mod:`robotool.sandbox.jail` (``layers_in_use`` says which are in force).
 """
 
-from robotool.sandbox.extract import extract_program
+from robotool.sandbox.extract import Extraction, extract, extract_program
 from robotool.sandbox.jail import SandboxLayers, SandboxWarning
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.session import SandboxSession, start_sessions
@@ -14,11 +14,13 @@ from robotool.sandbox.validate import ProgramRejected, validate
 from robotool.sandbox.zygote import layers_in_use
 
 __all__ = [
+    "Extraction",
     "ProgramRejected",
     "SandboxLayers",
     "SandboxLimits",
     "SandboxSession",
     "SandboxWarning",
+    "extract",
     "extract_program",
     "layers_in_use",
     "start_sessions",

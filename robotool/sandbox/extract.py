@@ -7,6 +7,7 @@ import codeop
 import itertools
 import re
 import warnings
+from dataclasses import dataclass
 
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
 
@@ -15,8 +16,28 @@ _PYTHON_TAGS = frozenset({"python", "python3", "py", ""})
 _IMPORTS = {"np": "import numpy as np", "math": "import math"}
 
 
+@dataclass(frozen=True)
+class Extraction:
+    """A program taken from an LM answer, and how many non-blank lines of the answer were left out."""
+
+    code: str
+    dropped_lines: int
+
+    @property
+    def note(self) -> str | None:
+        """A sentence for the user when text was left out (prose, other blocks, lines that do not parse)."""
+        if not self.dropped_lines:
+            return None
+        return f"{self.dropped_lines} non-blank line(s) of the reply outside the program were left out"
+
+
 def extract_program(text: str) -> str:
-    """The Python program in an LM answer, ready for :func:`validate`.
+    """The Python program in an LM answer, ready for :func:`validate` (see :func:`extract`)."""
+    return extract(text).code
+
+
+def extract(text: str) -> Extraction:
+    """The Python program in an LM answer, with a count of the answer's lines left out of it.
 
     Takes the Python (or untagged) Markdown code blocks, joined in order, when there are any (an
     unclosed last block runs to the end); otherwise the longest run of lines that parses as Python,
@@ -30,7 +51,7 @@ def extract_program(text: str) -> str:
     check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
     text = "\n".join(_expand_indent_tabs(line) for line in text.split("\n"))
-    blocks = _fenced_blocks(text)
+    blocks, fence_lines = _fenced_blocks(text)
     code = ("\n\n".join(blocks) if blocks else _longest_parsing_run(text)).strip("\n")
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
@@ -38,12 +59,20 @@ def extract_program(text: str) -> str:
     if not _has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose or names)")
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]
-    return "\n".join([*missing, code]) + "\n"
+    dropped = _non_blank(text) - _non_blank(code) - fence_lines
+    return Extraction(code="\n".join([*missing, code]) + "\n", dropped_lines=max(dropped, 0))
 
 
-def _fenced_blocks(text: str) -> list[str]:
-    """Contents of the Python or untagged fenced blocks, in order (one pass over the fences)."""
+def _non_blank(text: str) -> int:
+    """How many lines of ``text`` hold something other than white space."""
+    return sum(1 for line in text.split("\n") if line.strip())
+
+
+def _fenced_blocks(text: str) -> tuple[list[str], int]:
+    """Contents of the Python or untagged fenced blocks, in order, and how many fence lines enclose them
+    (one pass over the fences)."""
     blocks: list[str] = []
+    fence_lines = 0
     fences = list(_FENCE.finditer(text))
     i = 0
     while i < len(fences):
@@ -54,8 +83,9 @@ def _fenced_blocks(text: str) -> list[str]:
         end = fences[j].start() if j < len(fences) else len(text)
         if opening.group(2).lower() in _PYTHON_TAGS:
             blocks.append(text[opening.end() + 1 : end].strip("\n"))
+            fence_lines += 1 + (j < len(fences))
         i = j + 1
-    return blocks
+    return blocks, fence_lines
 
 
 def _longest_parsing_run(text: str) -> str:
