@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from fixtures.sandbox_driver import run_to_end
 
 from robotool.programs import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import SandboxLimits, SandboxSession, layers_in_use, start_sessions
@@ -24,16 +25,7 @@ LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=2
 
 def run_unchecked(code: str, limits: SandboxLimits = LIMITS) -> ProgramEnded:
     """Run ``code`` without the Python-level checks; skill calls are answered with a fixed point."""
-    session = SandboxSession(code, "arm", limits, test_only_skip_python_checks=True)
-    try:
-        session.resume(None)
-        message = session.wait()
-        while isinstance(message, SkillRequest):
-            session.resume(SkillReply(value=[0.3, 0.0, 0.1]))
-            message = session.wait()
-        return message
-    finally:
-        session.close()
+    return run_to_end(code, limits, unchecked=True)
 
 
 def test_every_layer_is_in_force_on_this_machine() -> None:

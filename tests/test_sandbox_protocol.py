@@ -6,9 +6,10 @@ import json
 import time
 
 import pytest
+from fixtures.sandbox_driver import run_to_end
 
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
-from robotool.sandbox import ProgramRejected, SandboxLimits, SandboxSession, start_sessions, validate
+from robotool.programs import ProgramEnded
+from robotool.sandbox import ProgramRejected, SandboxLimits, start_sessions, validate
 from robotool.sandbox.messages import max_world_bytes
 from robotool.sandbox.session import OUTPUT_CUT
 from robotool.sandbox.worker import UNDESCRIBABLE
@@ -17,16 +18,7 @@ LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=5
 
 
 def run(code: str, limits: SandboxLimits = LIMITS, *, unchecked: bool = False) -> ProgramEnded:
-    session = SandboxSession(code, "arm", limits, test_only_skip_python_checks=unchecked)
-    try:
-        session.resume(None)
-        message = session.wait()
-        while isinstance(message, SkillRequest):
-            session.resume(SkillReply(value=[0.3, 0.0, 0.1]))
-            message = session.wait()
-        return message
-    finally:
-        session.close()
+    return run_to_end(code, limits, unchecked=unchecked)
 
 
 def test_an_error_whose_description_fails_becomes_a_fixed_message() -> None:
