@@ -75,6 +75,8 @@ CASES = [
     ("gap_front_half_over", "no_board"),
     ("gap_back_and_forth", "no_board"),
     ("gap_climb_out", "no_board"),
+    ("gap_raised_target", "no_board"),
+    ("gap_overshoot_and_back", "no_board"),
     ("partial_bridge", "sofa_traversing"),
     ("partial_bridge", "wide_gap"),
     ("cloth_bridge", "sofa_traversing"),
