@@ -39,14 +39,14 @@ def test_every_layer_is_in_force_on_this_machine() -> None:
 
 
 def test_os_calls_are_denied_without_the_python_checks() -> None:
-    """open, create, socket, /proc/<ppid>/environ, kill, fork, exec, setsid, switching off the CPU
-    timer's signal: each fails with EPERM."""
+    """open, create, socket, /proc/<ppid>/environ, kill, fork, exec, setsid, memfd, pidfd, setuid, mkfifo,
+    switching off the CPU timer's signal: each fails with EPERM."""
     canary = Path("/tmp/robotool-escape-canary")
     canary.unlink(missing_ok=True)
     ended = run_unchecked((ESCAPES / "os_calls.py").read_text())
     assert ended.error is None, ended.error
     outcomes = dict(line.rsplit(" ", 2)[:2] for line in ended.output.splitlines())
-    assert len(outcomes) == 17
+    assert len(outcomes) == 21
     assert all(outcome == "denied" for outcome in outcomes.values()), ended.output
     assert all(line.endswith(" 1") for line in ended.output.splitlines())  # EPERM: the seccomp filter
     assert not canary.exists()
