@@ -25,7 +25,7 @@ import dspy
 
 from robotool import tasks
 from robotool.lm import make_lm
-from robotool.program import RoboTool
+from robotool.lm_program import RoboTool
 from robotool.standin import Rule, Script, StandinServer
 
 MAX_CANDIDATES = 8

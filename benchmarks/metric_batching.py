@@ -29,9 +29,9 @@ from robotool.optimize import Metric, RolloutBatcher
 from robotool.optimize.data import example
 from robotool.planner import solve
 from robotool.rollout import Rollout
-from robotool.scene import Task
 from robotool.sim import build
 from robotool.solution import Candidate, Proposal
+from robotool.task_model import Task
 from robotool.verify import run_codes
 
 

@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 
 from robotool import tasks
 from robotool.planner import solve
-from robotool.scene import Task
 from robotool.solution import Solution
+from robotool.task_model import Task
 from robotool.tasks.families import families, generate
 
 

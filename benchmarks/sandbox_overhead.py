@@ -20,7 +20,7 @@ from collections.abc import Callable
 from typing import Any
 
 from robotool import tasks
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import SandboxSession, start_sessions
 from robotool.sandbox.zygote import zygote
 from robotool.sim import build, run_programs, run_sessions

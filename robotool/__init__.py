@@ -18,15 +18,16 @@ if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.env
 from robotool import tasks
 from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.describe import describe
-from robotool.scene import Problem, Task, TaskFileError, load_task
+from robotool.task_file import Problem, TaskFileError, load_task
+from robotool.task_model import Task
 
 if TYPE_CHECKING:
     from robotool.execute import RunReport, run
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
     from robotool.solution import Solution
 
 _LAZY = {
-    "RoboTool": "robotool.program",
+    "RoboTool": "robotool.lm_program",
     "RunReport": "robotool.execute",
     "Solution": "robotool.solution",
     "run": "robotool.execute",

@@ -41,13 +41,14 @@ from robotool.concepts import needs_tool
 from robotool.describe import describe
 from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
-from robotool.methods import METHODS
+from robotool.methods import STAGES_BY_METHOD
 from robotool.sandbox.validate import ProgramRejected
-from robotool.scene import Task, TaskFileError
+from robotool.task_file import TaskFileError
+from robotool.task_model import Task
 from robotool.version import version
 
 if TYPE_CHECKING:
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
     from robotool.rollout import Rollout
     from robotool.sim.recorder import StateRecorder
 
@@ -131,7 +132,7 @@ def cmd_describe(args: argparse.Namespace, console: Console) -> int:
 def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary."""
     from robotool.lm import HOW_TO_CONFIGURE, make_lm
-    from robotool.report import print_solution
+    from robotool.summary import print_solution
 
     task = tasks.load(args.task)
     _check_video_args(args, folder=True)
@@ -192,7 +193,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
         if args.program is not None:
             raise UsageError("--program is a compiled LM program; it does not go with --planner search")
         return None
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
 
     options = {
         "candidates": args.candidates,
@@ -215,7 +216,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
 def cmd_run(args: argparse.Namespace, console: Console) -> int:
     """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
     from robotool.execute import run
-    from robotool.report import print_run
+    from robotool.summary import print_run
 
     task = tasks.load(args.task)
     try:
@@ -389,7 +390,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument(
         "--method",
-        choices=list(METHODS),
+        choices=list(STAGES_BY_METHOD),
         help="the program or an ablation (default: robotool, or the method --program was compiled for)",
     )
     p.add_argument(
@@ -458,7 +459,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         return eval_main(argv[1:], prog="robotool eval")
     if argv[:1] == ["optimize"]:
-        from robotool.optimize.cli import main as optimize_main
+        from robotool.optimize.optimize_cli import main as optimize_main
 
         return optimize_main(argv[1:], prog="robotool optimize")
     parser = build_parser()

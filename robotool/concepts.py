@@ -16,7 +16,8 @@ from pydantic import BaseModel, Field
 
 from robotool import geometry
 from robotool.embodiments import ArmLimits, QuadrupedLimits
-from robotool.scene import SceneObject, Task
+from robotool.scene import SceneObject
+from robotool.task_model import Task
 from robotool.terrain import TOLERANCE
 
 ConceptKind = Literal[

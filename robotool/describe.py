@@ -11,7 +11,8 @@ import numpy as np
 
 from robotool.concepts import press_point, start_surface
 from robotool.embodiments import ArmLimits, QuadrupedLimits, skills
-from robotool.scene import PRESS_TRAVEL, SceneObject, Task
+from robotool.scene import PRESS_TRAVEL, SceneObject
+from robotool.task_model import Task
 
 
 def _vec(values: tuple[float, ...] | list[float] | np.ndarray) -> str:

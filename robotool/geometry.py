@@ -10,14 +10,28 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import Literal, Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from robotool.scene import SceneObject
-
 GROUND_Z = 0.0
+
+
+class Solid(Protocol):
+    """What :func:`object_parts` reads of an object (a :class:`~robotool.scene.SceneObject` is one)."""
+
+    @property
+    def shape(self) -> str: ...
+    @property
+    def center(self) -> tuple[float, float, float]: ...
+    @property
+    def size(self) -> tuple[float, float, float]: ...
+    @property
+    def rpy(self) -> tuple[float, float, float]: ...
+    @property
+    def axis(self) -> Literal["x", "y", "z"]: ...
+    @property
+    def thickness(self) -> float: ...
 
 
 def rotation_matrix(rpy_deg: tuple[float, float, float] | np.ndarray) -> np.ndarray:
@@ -91,7 +105,7 @@ class Part:
         return c.min(axis=0), c.max(axis=0)
 
 
-def object_parts(obj: SceneObject) -> list[Part]:
+def object_parts(obj: Solid) -> list[Part]:
     """The convex parts that make up a task object, placed in the world."""
     center = np.asarray(obj.center, dtype=float)
     size = np.asarray(obj.size, dtype=float)

@@ -1,6 +1,6 @@
 """The RoboTool program and the paper's ablations, as switches of the same stages."""
 
-METHODS: dict[str, dict[str, bool]] = {
+STAGES_BY_METHOD: dict[str, dict[str, bool]] = {
     "robotool": {"analyzer": True, "planner": True, "calculator": True},
     "no_analyzer": {"analyzer": False, "planner": True, "calculator": True},
     "no_calculator": {"analyzer": True, "planner": True, "calculator": False},

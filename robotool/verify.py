@@ -14,11 +14,11 @@ from typing import NamedTuple, Protocol
 
 from robotool.rollout import Event, Rollout
 from robotool.sandbox import ProgramRejected, extract, start_sessions, validate
-from robotool.scene import Task
 from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
 from robotool.solution import Candidate, Proposal, Solution, rank, usage_by_stage
+from robotool.task_model import Task
 
 
 class PreparedCode(NamedTuple):

@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any  # noqa: E402
 
 if TYPE_CHECKING:
     from robotool.rollout import Rollout
-    from robotool.scene import Task
     from robotool.sim import Scene
+    from robotool.task_model import Task
 
 
 def _run_texts(task: "Task | Scene", codes: Sequence[str], **kwargs: Any) -> "list[Rollout]":

@@ -38,13 +38,13 @@ def _must_not_run(*args: object, **kwargs: object) -> None:
 @pytest.fixture
 def no_work(monkeypatch: pytest.MonkeyPatch) -> None:
     """Any solve, run or evaluation that starts fails the test: mistakes are found before work."""
-    import robotool.eval.runner
+    import robotool.eval.sweep
     import robotool.execute
     import robotool.planner
 
     monkeypatch.setattr(robotool.planner, "solve", _must_not_run)
     monkeypatch.setattr(robotool.execute, "run", _must_not_run)
-    monkeypatch.setattr(robotool.eval.runner, "evaluate", _must_not_run)
+    monkeypatch.setattr(robotool.eval.sweep, "evaluate", _must_not_run)
 
 
 def _mistakes(tmp_path: Path) -> list[tuple[list[str], str]]:

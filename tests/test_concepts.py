@@ -6,7 +6,7 @@ import pytest
 
 from robotool import tasks
 from robotool.concepts import key_concepts, needs_tool
-from robotool.scene import parse_task
+from robotool.task_file import parse_task
 
 
 def _concept(name: str, kind: str):

@@ -16,8 +16,8 @@ from robotool.errors import LMUnavailableError
 from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
 from robotool.eval import solvers as eval_solvers
 from robotool.eval.journal import JOURNAL
-from robotool.scene import Task
 from robotool.solution import Solution
+from robotool.task_model import Task
 
 
 class Counting:

@@ -8,7 +8,7 @@ import pytest
 
 from robotool import tasks
 from robotool.eval.config import EvalError
-from robotool.eval.errors import FailureClass
+from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds, select
 from robotool.eval.journal import JOURNAL, Journal

@@ -23,9 +23,9 @@ from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, eva
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import planner_missing
 from robotool.lm import make_lm
-from robotool.scene import Task
 from robotool.solution import Solution
 from robotool.standin import Script, StandinServer
+from robotool.task_model import Task
 
 TESTS = Path(__file__).parent
 

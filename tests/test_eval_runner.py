@@ -20,8 +20,8 @@ from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import METHODS, planner_missing
 from robotool.rollout import Rollout, SkillCall
-from robotool.scene import Task
 from robotool.solution import Candidate, Solution, StageOutputs
+from robotool.task_model import Task
 
 TESTS = Path(__file__).parent
 

@@ -12,9 +12,9 @@ import yaml
 from robotool import tasks
 from robotool.concepts import key_concepts, needs_tool
 from robotool.geometry import object_parts
-from robotool.scene import load_task, parse_task
+from robotool.task_file import load_task, parse_task
 from robotool.tasks.families import sofa_traversing
-from robotool.tasks.families._common import Layout, thing
+from robotool.tasks.families._common import RigidPlacement, thing
 
 SEEDS = range(50)
 FAMILIES = tasks.families()
@@ -117,7 +117,7 @@ def test_arm_layouts_stay_in_reach() -> None:
 def test_mirrored_hook_is_turned_over() -> None:
     """A hook mirrored in y is the mirror image of the original (roll 180), not a copy with its head the same way."""
     hook = thing("hammer", "hook", (0.05, -0.25, 0.015), (0.4, 0.2, 0.03), graspable_point=(-0.05, -0.34, 0.03))
-    mirrored = Layout(mirror="y").place(hook)
+    mirrored = RigidPlacement(mirror="y").place(hook)
     assert mirrored.rpy == (180.0, 0.0, 0.0)
     assert mirrored.graspable_point == (-0.05, 0.34, 0.03)
     before = np.array([p.center for p in object_parts(hook)])
@@ -127,6 +127,6 @@ def test_mirrored_hook_is_turned_over() -> None:
 
 def test_quarter_turn_swaps_sizes() -> None:
     box = thing("sofa", "box", (1.0, 0.0, 0.17), (1.5, 0.9, 0.34), movable=False)
-    turned = Layout(turns=1, shift=(0.5, 0.0)).place(box)
+    turned = RigidPlacement(turns=1, shift=(0.5, 0.0)).place(box)
     assert turned.size == (0.9, 1.5, 0.34) and turned.rpy == (0.0, 0.0, 0.0)
     assert turned.center == (0.5, 1.0, 0.17)

@@ -14,7 +14,7 @@ from robotool import tasks
 from robotool.cli import main
 from robotool.errors import LMUnavailableError
 from robotool.lm import LMConfigError, make_lm
-from robotool.program import RoboTool
+from robotool.lm_program import RoboTool
 from robotool.standin import Rule, Script, StandinServer
 
 TASK = "milk_reaching_near"

@@ -25,10 +25,10 @@ from robotool.compiled import CompiledProgramError
 from robotool.concepts import KeyConcept
 from robotool.eval.reference import PAPER_TASKS
 from robotool.lm import make_lm
-from robotool.optimize import Metric, RolloutBatcher, Settings, optimize
+from robotool.lm_program import Proposer, RoboTool
+from robotool.optimize import Metric, OptimizeSettings, RolloutBatcher, optimize
 from robotool.optimize.data import DatasetError, Splits, builtin, check_training, splits
 from robotool.optimize.feedback import concept_findings
-from robotool.program import Proposer, RoboTool
 from robotool.solution import Candidate, Proposal
 from robotool.standin import Rule, Script, StandinServer
 from robotool.verify import run_codes, select
@@ -43,8 +43,8 @@ def _task_lm(arm_code: str = GRASP_DIRECTLY) -> tuple[dspy.LM, RoutingEngine]:
     return engine_lm(engine), engine
 
 
-def _settings(optimizer: str, **budget: int) -> Settings:
-    return Settings(optimizer=optimizer, families=["milk_reaching"], train=2, val=1, worlds=1, threads=2,
+def _settings(optimizer: str, **budget: int) -> OptimizeSettings:
+    return OptimizeSettings(optimizer=optimizer, families=["milk_reaching"], train=2, val=1, worlds=1, threads=2,
                     budget=budget or {})
 
 
@@ -221,7 +221,7 @@ def test_gepa_with_a_scripted_lm_reflects_on_each_stage_s_feedback(tmp_path: Pat
 def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path) -> None:
     from robotool.cli import main as robotool_main
     from robotool.eval import main as eval_main
-    from robotool.optimize.cli import main as optimize_main
+    from robotool.optimize.optimize_cli import main as optimize_main
 
     out = tmp_path / "p.json"
     assert optimize_main(["--optimizer", "planner-demos", "--families", "milk_reaching", "--train", "1",

@@ -11,9 +11,10 @@ import yaml
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.codegen import Point, Program
-from robotool.scene import Task, parse_task
 from robotool.signatures.models import PlanStep, StepParameters
 from robotool.solution import Solution
+from robotool.task_file import parse_task
+from robotool.task_model import Task
 
 PLANNER = Path(__file__).resolve().parents[1] / "robotool" / "planner"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from robotool import tasks
 from robotool.planner.codegen import Point, Program
-from robotool.planner.repair import repaired
+from robotool.planner.reparameterise import repaired
 from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate
 from robotool.verify import run_codes

@@ -17,8 +17,8 @@ from fixtures.scripted_lm import (
 )
 
 from robotool import tasks
-from robotool.methods import METHODS
-from robotool.program import RoboTool
+from robotool.lm_program import RoboTool
+from robotool.methods import STAGES_BY_METHOD
 
 CASES = {
     "milk_reaching_near": arm_script([GRASP_DIRECTLY]),
@@ -41,7 +41,7 @@ def _solve(task_name: str, script: dict[str, list[str]], method: str = "robotool
     return solution, engine
 
 
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", list(STAGES_BY_METHOD))
 @pytest.mark.parametrize("task_name", list(CASES))
 def test_every_method_solves_with_scripted_lm(task_name: str, method: str) -> None:
     solution, engine = _solve(task_name, CASES[task_name], method)
@@ -214,7 +214,7 @@ def test_code_the_sandbox_rejects_is_asked_for_again_with_the_reason() -> None:
 
 def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
     from robotool import verify
-    from robotool.program import Proposer
+    from robotool.lm_program import Proposer
 
     assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]
     assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]

@@ -10,8 +10,8 @@ from fixtures.reference import program
 from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
-from robotool.scene import parse_task
 from robotool.sim.backend import Perturbation
+from robotool.task_file import parse_task
 
 
 def run(task: Any, name: str, nworld: int, seed: int = 0) -> list[Rollout]:

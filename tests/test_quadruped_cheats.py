@@ -17,7 +17,8 @@ import pytest
 from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
-from robotool.scene import Task, parse_task
+from robotool.task_file import parse_task
+from robotool.task_model import Task
 
 CHEATS = Path(__file__).parent / "fixtures" / "cheats"
 PROGRAMS = Path(__file__).parent / "fixtures" / "programs"

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from robotool import sim, tasks
-from robotool.scene import parse_task
-from robotool.sim import runner
+from robotool.sim import lockstep as runner
 from robotool.sim.backend import make_sim
 from robotool.sim.backend_mujoco import MujocoSim
 from robotool.sim.quadruped_body import ROBOT_GROUP
 from robotool.sim.quadruped_support import feet
+from robotool.task_file import parse_task
 from robotool.terrain import FOOT_RADIUS
 
 GRAVITY = 9.81

@@ -27,8 +27,8 @@ from robotool.render.rollouts import video_paths
 from robotool.render.still import render_scene
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, frame_times, render_video
 from robotool.rollout import Rollout, SkillCall
-from robotool.scene import Task
 from robotool.sim.recorder import StateRecorder
+from robotool.task_model import Task
 
 SMALL = (240, 136)  # px
 VIDEO = (160, 96)  # px, even

@@ -18,13 +18,13 @@ from robotool import tasks
 from robotool.cli import main
 from robotool.eval import EvalConfig, Settings, evaluate
 from robotool.eval.records import inputs_digest
-from robotool.program import RoboTool
-from robotool.repair import failure_trace
-from robotool.report import print_repairs
+from robotool.lm_program import RoboTool
+from robotool.repair_rounds import failure_trace
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.signatures.repair import ShownTrace
 from robotool.solution import Candidate
 from robotool.standin import Rule, Script, StandinServer
+from robotool.summary import print_repairs
 
 TASK = "sofa_traversing"
 PUSH_AND_WALK = program("sofa_traversing")

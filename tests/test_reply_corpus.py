@@ -9,7 +9,7 @@ from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script
 
 from robotool import tasks
 from robotool.lm import make_lm
-from robotool.program import RoboTool
+from robotool.lm_program import RoboTool
 from robotool.standin import Rule, Script, StandinServer
 
 JSON_PROMPTS = {

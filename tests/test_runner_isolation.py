@@ -13,7 +13,7 @@ from robotool import sandbox, sim, tasks
 from robotool.cli import main
 from robotool.embodiments import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
 from robotool.sim.arm import ArmController
-from robotool.sim.runner import scene_box
+from robotool.sim.lockstep import scene_box
 
 
 @pytest.mark.parametrize(

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from fixtures.sandbox_driver import run_to_end
 
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import SandboxLimits, SandboxSession, layers_in_use, start_sessions
 from robotool.sandbox.allowlist import NUMPY_FUNCTIONS, NUMPY_LINALG
 from robotool.sandbox.zygote import Zygote, zygote
@@ -259,7 +259,7 @@ def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatc
 
     from rich.console import Console
 
-    from robotool import report
+    from robotool import summary
     from robotool.sandbox import SandboxWarning, jail
 
     monkeypatch.setattr(jail, "_syscall_filter", lambda: (None, "pyseccomp/libseccomp unavailable: test"))
@@ -267,9 +267,9 @@ def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatc
     assert not layers.seccomp and layers.missing["seccomp filter"] == "pyseccomp/libseccomp unavailable: test"
     with pytest.warns(SandboxWarning, match="WITHOUT the seccomp filter"):
         jail.warn_if_weak(layers)
-    monkeypatch.setattr(report, "layers_in_use", lambda: layers)
+    monkeypatch.setattr(summary, "layers_in_use", lambda: layers)
     console = Console(file=StringIO(), width=200)
-    report.print_sandbox_layers(console)
+    summary.print_sandbox_layers(console)
     shown = console.file.getvalue()  # type: ignore[attr-defined]
     assert "sandbox: PID namespace" in shown and "missing: " in shown and "WARNING: generated programs" in shown
 

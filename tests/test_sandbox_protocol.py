@@ -8,7 +8,7 @@ import time
 import pytest
 from fixtures.sandbox_driver import run_to_end
 
-from robotool.programs import ProgramEnded
+from robotool.program_session import ProgramEnded
 from robotool.sandbox import ProgramRejected, SandboxLimits, start_sessions, validate
 from robotool.sandbox.messages import max_world_bytes
 from robotool.sandbox.session import OUTPUT_CUT

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from robotool.embodiments import skills
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.validate import ProgramRejected
 from robotool.sandbox.zygote import Zygote, zygote

@@ -8,7 +8,7 @@ import pytest
 from fixtures.reference import REFERENCE, TOOL_FREE, program
 
 from robotool import sandbox, sim
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 
 WORLDS = 10
 ARM_TASKS = ["button_pressing", "can_grasping", "milk_reaching", "milk_reaching_near"]

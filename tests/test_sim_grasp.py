@@ -10,8 +10,8 @@ import pytest
 from fixtures.reference import program
 
 from robotool import sim, tasks
-from robotool.eval.errors import TaskFacts, classify, tools_used
-from robotool.scene import parse_task
+from robotool.eval.failure_classes import TaskFacts, classify, tools_used
+from robotool.task_file import parse_task
 from robotool.verify import world_failure
 
 CLEAR = 0.08  # m above a grasp point to approach from

@@ -2,22 +2,22 @@
 
 Modules, one job each: :mod:`~robotool.eval.config` (what to run, defaults, output folder),
 :mod:`~robotool.eval.instances` (which tasks), :mod:`~robotool.eval.solvers` (the methods),
-:mod:`~robotool.eval.runner` (the resumable loop), :mod:`~robotool.eval.work` (one run as a job),
+:mod:`~robotool.eval.sweep` (the resumable loop), :mod:`~robotool.eval.work` (one run as a job),
 :mod:`~robotool.eval.executor` (where runs are carried out: threads here) and
 :mod:`~robotool.eval.ray_executor` (Ray tasks on a cluster), :mod:`~robotool.eval.journal` (durable records),
-:mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.errors` (failure classes),
+:mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.failure_classes` (failure classes),
 :mod:`~robotool.eval.grading` (key-concept accuracy), :mod:`~robotool.eval.metrics`,
 :mod:`~robotool.eval.tables`, :mod:`~robotool.eval.report`, :mod:`~robotool.eval.plots`,
-:mod:`~robotool.eval.reference` (the paper's numbers), :mod:`~robotool.eval.cli`.
+:mod:`~robotool.eval.reference` (the paper's numbers), :mod:`~robotool.eval.eval_cli`.
 """
 
-from robotool.eval.cli import main
 from robotool.eval.config import TIME_BUDGET_S, EvalConfig, EvalError, RunsNotAttempted, Settings
-from robotool.eval.errors import FailureClass, TaskFacts, classify, tools_used
+from robotool.eval.eval_cli import main
+from robotool.eval.failure_classes import FailureClass, TaskFacts, classify, tools_used
 from robotool.eval.grading import ConceptGrade, grade
 from robotool.eval.records import Results, RunKey, RunRecord
-from robotool.eval.runner import evaluate
 from robotool.eval.solvers import METHODS, Solver
+from robotool.eval.sweep import evaluate
 
 __all__ = [
     "METHODS",

@@ -2,6 +2,6 @@
 
 import sys
 
-from robotool.eval.cli import main
+from robotool.eval.eval_cli import main
 
 sys.exit(main())

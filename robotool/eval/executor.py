@@ -20,14 +20,10 @@ import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from types import TracebackType
-from typing import Literal, Protocol, Self, TypeVar
+from typing import Protocol, Self, TypeVar
 
 J = TypeVar("J")
 R = TypeVar("R")
-
-ExecutorName = Literal["local", "ray"]
-EXECUTORS: tuple[ExecutorName, ...] = ("local", "ray")
-
 
 class WorkerLost(RuntimeError):
     """A job's worker was lost on every attempt (killed, out of memory, its machine gone); the message says how."""
@@ -124,25 +120,3 @@ class LocalExecutor:
     ) -> None:
         self.close()
 
-
-RAY_MISSING = "the Ray executor needs Ray, which is not installed: pip install 'robotool[ray]'"
-
-
-def make_executor(name: ExecutorName, *, workers: int, address: str | None = None) -> Executor:
-    """The executor the command line names; ``address`` is the Ray cluster's (None: a Ray on this machine).
-
-    Raises :class:`~robotool.eval.config.EvalError` when Ray is asked for and not installed, or cannot connect.
-    """
-    from robotool.eval.config import EvalError
-
-    if name == "local":
-        if address is not None:
-            raise EvalError("--address needs --executor ray")
-        return LocalExecutor(workers)
-    try:
-        import ray  # noqa: F401
-    except ImportError:
-        raise EvalError(RAY_MISSING) from None
-    from robotool.eval.ray_executor import RayExecutor
-
-    return RayExecutor(address)

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from robotool.concepts import KeyConcept, key_concepts
-from robotool.eval.errors import TaskFacts, classify, run_class, tools_used
+from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import RunKey, RunRecord, WorldResult
-from robotool.methods import METHODS
+from robotool.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
 from robotool.verify import world_failure
 
@@ -27,7 +27,7 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
 
 
 def _has_analyzer(stages: str) -> bool:
-    return bool(METHODS.get(stages, {}).get("analyzer"))
+    return bool(STAGES_BY_METHOD.get(stages, {}).get("analyzer"))
 
 
 def _predicted_concepts(stages: str, solution: Solution) -> list[KeyConcept] | None:

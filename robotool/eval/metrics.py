@@ -6,7 +6,7 @@ the mean over the cell's runs (generated instances: over every seed's runs of th
 error breakdown splits each run's weight of 1 evenly over its worlds, so a method's shares of
 success, tool-use, logical, numerical and invalid sum to 1 and its success share equals its mean
 success; a run that ran nothing counts 1 as invalid. The tool-use rate is the share of worlds whose
-program used a tool (see :mod:`robotool.eval.errors`), separately where the instance needs a tool
+program used a tool (see :mod:`robotool.eval.failure_classes`), separately where the instance needs a tool
 and where it does not.
 """
 
@@ -18,7 +18,7 @@ from statistics import mean
 
 from pydantic import BaseModel, Field
 
-from robotool.eval.errors import FAILURE_CLASSES
+from robotool.eval.failure_classes import FAILURE_CLASSES
 from robotool.eval.records import RunRecord
 
 OUTCOMES: tuple[str, ...] = ("success", *FAILURE_CLASSES)

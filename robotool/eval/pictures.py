@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from robotool.eval.errors import FailureClass
+from robotool.eval.failure_classes import FailureClass
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import Picture, RunRecord, WorldResult
 from robotool.render.overlay import CaptionLine

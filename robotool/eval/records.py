@@ -10,11 +10,11 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from robotool.eval.config import EvalConfig, Settings
-from robotool.eval.errors import FailureClass
+from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.rollout import Rollout
-from robotool.scene import Task
 from robotool.solution import StageOutputs, TokenUsage
+from robotool.task_model import Task
 
 
 class RunKey(BaseModel):

@@ -1,6 +1,6 @@
 """The methods the evaluator compares, and how each one solves a task.
 
-LM methods are the RoboTool program and the paper's ablations (:data:`robotool.methods.METHODS`):
+LM methods are the RoboTool program and the paper's ablations (:data:`robotool.methods.STAGES_BY_METHOD`):
 each run gets its own ``rollout_id`` so that, at a temperature above 0, runs are fresh samples rather
 than cached replies. LM-free methods come from the search planner (``robotool.planner.solve``):
 ``search`` with every object, ``no_tool`` restricted to the target object (the floor).
@@ -18,14 +18,14 @@ from typing import TYPE_CHECKING, Literal, Protocol
 from pydantic import BaseModel
 
 from robotool.eval.records import EqualBudget
-from robotool.methods import METHODS as LM_STAGES
-from robotool.scene import Task
+from robotool.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
+from robotool.task_model import Task
 
 if TYPE_CHECKING:
     import dspy
 
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
 
 
 class Solver(Protocol):
@@ -61,8 +61,8 @@ _LABELS = {
 }
 
 METHODS: dict[str, MethodInfo] = {
-    name: MethodInfo(name=name, label=_LABELS[name], uses_lm=name in LM_STAGES)
-    for name in (*LM_STAGES, "search", "no_tool")
+    name: MethodInfo(name=name, label=_LABELS[name], uses_lm=name in STAGES_BY_METHOD)
+    for name in (*STAGES_BY_METHOD, "search", "no_tool")
 }
 """Every method, in table order: the LM program and its ablations, then the LM-free planner's two."""
 
@@ -88,7 +88,7 @@ class SolverSettings(BaseModel):
 
 def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
     """The RoboTool program or an ablation, sampling from ``lm``."""
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
 
     return _sampling_solver(lambda **options: RoboTool.method(method, **options), lm, settings)
 
@@ -99,7 +99,7 @@ def compiled_solver(path: Path, lm: dspy.LM, settings: SolverSettings) -> Solver
     The file is read and checked now (:class:`~robotool.compiled.CompiledProgramError` when it cannot be
     used) and loaded afresh for each run.
     """
-    from robotool.program import RoboTool
+    from robotool.lm_program import RoboTool
 
     RoboTool.from_compiled(path)
     return _sampling_solver(lambda **options: RoboTool.from_compiled(path, **options), lm, settings)

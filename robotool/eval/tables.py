@@ -102,7 +102,7 @@ def concepts_table(summary: Summary) -> TextTable:
 def errors_table(summary: Summary) -> TextTable:
     """Error breakdown: each method's share of outcomes."""
     table = TextTable(title="Outcomes and error breakdown (share of runs)", columns=["method", *OUTCOMES, "runs"],
-                      note="Classes from rollout traces; rules in robotool/eval/errors.py.")
+                      note="Classes from rollout traces; rules in robotool/eval/failure_classes.py.")
     for b in summary.errors:
         table.rows.append([method_label(b.method), *(_num(b.shares[o]) for o in OUTCOMES), str(b.runs)])
     return table

@@ -4,23 +4,23 @@ Modules, one job each: :mod:`~robotool.optimize.data` (examples and disjoint spl
 :mod:`~robotool.optimize.metric` (verification and the score), :mod:`~robotool.optimize.feedback` (what
 each stage is told), :mod:`~robotool.optimize.batching` (concurrent verifications merged into one batch),
 :mod:`~robotool.optimize.demos` (offline demonstrations from the search planner),
-:mod:`~robotool.optimize.run` (one optimisation run), :mod:`~robotool.optimize.cli` (the command line).
+:mod:`~robotool.optimize.run` (one optimisation run), :mod:`~robotool.optimize.optimize_cli` (the command line).
 """
 
 from robotool.optimize.batching import RolloutBatcher
 from robotool.optimize.data import SEED_RANGES, DatasetError, Splits, dataset, splits
 from robotool.optimize.metric import Metric, metric
-from robotool.optimize.run import OPTIMIZERS, Budget, OptimizeError, Settings, optimize
+from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeSettings, optimize
 
 __all__ = [
     "OPTIMIZERS",
     "SEED_RANGES",
-    "Budget",
     "DatasetError",
     "Metric",
     "OptimizeError",
+    "OptimizeSettings",
+    "OptimizerBudget",
     "RolloutBatcher",
-    "Settings",
     "Splits",
     "dataset",
     "metric",

@@ -2,6 +2,6 @@
 
 import sys
 
-from robotool.optimize.cli import main
+from robotool.optimize.optimize_cli import main
 
 sys.exit(main())

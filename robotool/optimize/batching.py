@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from robotool.rollout import Rollout
-from robotool.scene import Task
+from robotool.task_model import Task
 from robotool.verify import run_worlds
 
 DEFAULT_WINDOW = 0.05
@@ -26,7 +26,7 @@ DEFAULT_WINDOW = 0.05
 
 
 @dataclass
-class _Request:
+class _BatchRequest:
     task: Task
     codes: list[str]
     worlds: int
@@ -58,7 +58,7 @@ class RolloutBatcher:
         self.window = window
         self.batches: list[int] = []
         """How many requests each batch run so far merged (for reports and tests)."""
-        self._pending: list[_Request] = []
+        self._pending: list[_BatchRequest] = []
         self._busy = False
         self._changed = threading.Condition()
 
@@ -74,7 +74,7 @@ class RolloutBatcher:
         """Like :func:`robotool.verify.run_codes`, merged with concurrent calls for the same task."""
         if not codes:
             return []
-        request = _Request(task, list(codes), worlds, seed, backend)
+        request = _BatchRequest(task, list(codes), worlds, seed, backend)
         with self._changed:
             self._pending.append(request)
             while not request.done and self._busy:
@@ -94,7 +94,7 @@ class RolloutBatcher:
             time.sleep(self.window)
             with self._changed:
                 taken, self._pending = self._pending, []
-            groups: dict[tuple[str, str | None], list[_Request]] = {}
+            groups: dict[tuple[str, str | None], list[_BatchRequest]] = {}
             for request in taken:
                 groups.setdefault(request.key, []).append(request)
             for group in groups.values():
@@ -104,7 +104,7 @@ class RolloutBatcher:
                 self._busy = False
                 self._changed.notify_all()
 
-    def _run(self, group: list[_Request]) -> None:
+    def _run(self, group: list[_BatchRequest]) -> None:
         """One batch for requests of the same task; each request gets its own slice of the worlds back."""
         try:
             rollouts = run_worlds(

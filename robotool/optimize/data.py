@@ -19,7 +19,7 @@ import dspy
 from robotool import tasks
 from robotool.concepts import key_concepts, needs_tool
 from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
-from robotool.scene import Task
+from robotool.task_model import Task
 
 Split = Literal["train", "val", "test"]
 SEED_RANGES: dict[Split, range] = {

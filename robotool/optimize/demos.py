@@ -19,7 +19,7 @@ from pydantic import BaseModel
 
 from robotool.compiled import DemoSource
 from robotool.describe import describe
-from robotool.program import Proposer
+from robotool.lm_program import Proposer
 from robotool.solution import Solution
 
 Say = Callable[[str], None]

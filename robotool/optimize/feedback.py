@@ -3,7 +3,7 @@
 Nothing here reads reason text back: the Analyzer is graded concept by concept against
 :func:`robotool.concepts.key_concepts` (kind, value, verdict); each failed world is attributed to the
 stage whose output it points at, from its :class:`~robotool.rollout.SkillCall` outcomes, measured values
-and the tools it used (:func:`robotool.eval.errors.classify`); programs the sandbox refuses are checked
+and the tools it used (:func:`robotool.eval.failure_classes.classify`); programs the sandbox refuses are checked
 again for their line. Texts the simulator or sandbox wrote (a refusal's reason) are quoted, never parsed.
 
 Attribution of a failed world: a program that raised or made a call that errored -> Coder; the wrong
@@ -21,12 +21,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 from robotool.concepts import KeyConcept
-from robotool.eval.errors import TaskFacts, classify, tools_used
+from robotool.eval.failure_classes import TaskFacts, classify, tools_used
 from robotool.eval.grading import ABSOLUTE_TOLERANCE, RELATIVE_TOLERANCE, matches
 from robotool.rollout import Rollout, SkillCall
 from robotool.sandbox import ProgramRejected, validate
-from robotool.scene import Task
 from robotool.solution import Candidate, Solution
+from robotool.task_model import Task
 
 Stage = Literal["analyzer", "planner", "calculator", "coder"]
 STAGES: tuple[Stage, ...] = ("analyzer", "planner", "calculator", "coder")
@@ -35,7 +35,7 @@ TERRAIN = ("step", "gap", "drop")
 
 
 @dataclass(frozen=True)
-class Finding:
+class StageFinding:
     """One piece of evidence about a stage's output, in a sentence a model can act on."""
 
     stage: Stage
@@ -50,12 +50,12 @@ def _verdict(concept: KeyConcept) -> str:
     return "within the limit" if concept.satisfied else "beyond the limit (a tool is needed)"
 
 
-def concept_findings(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept] | None) -> list[Finding]:
+def concept_findings(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept] | None) -> list[StageFinding]:
     """The Analyzer's key concepts against the ground truth: what was missed, misjudged or misread."""
     if not truth:
         return []
     if not predicted:
-        return [Finding("analyzer", f"no key concepts were given; the deciding quantity is {_truth(t)}")
+        return [StageFinding("analyzer", f"no key concepts were given; the deciding quantity is {_truth(t)}")
                 for t in truth]
     findings = []
     for t in truth:
@@ -63,15 +63,15 @@ def concept_findings(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept
             continue
         same_kind = [p for p in predicted if p.kind == t.kind]
         if not same_kind:
-            findings.append(Finding("analyzer", f"missed a deciding quantity: {_truth(t)}"))
+            findings.append(StageFinding("analyzer", f"missed a deciding quantity: {_truth(t)}"))
             continue
         p = min(same_kind, key=lambda c: abs(c.value - t.value))
         tolerance = max(RELATIVE_TOLERANCE * abs(t.value), ABSOLUTE_TOLERANCE.get(t.unit, 0.0))
         if abs(p.value - t.value) > tolerance:
-            findings.append(Finding("analyzer", f"wrong value for {t.kind} ('{p.name}'): you gave "
+            findings.append(StageFinding("analyzer", f"wrong value for {t.kind} ('{p.name}'): you gave "
                                     f"{_number(p.value, p.unit)}, the scene's geometry gives {_truth(t)}"))
         if p.satisfied != t.satisfied:
-            findings.append(Finding("analyzer", f"misjudged the limit for {t.kind} ('{p.name}'): you said "
+            findings.append(StageFinding("analyzer", f"misjudged the limit for {t.kind} ('{p.name}'): you said "
                                     f"{_verdict(p)}, but {_truth(t)}"))
     return findings
 
@@ -91,7 +91,7 @@ def _measured(call: SkillCall) -> str:
     return ", ".join(f"{k} {v:.3f}" for k, v in shown.items())
 
 
-def world_finding(rollout: Rollout, facts: TaskFacts) -> Finding | None:
+def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
     """The stage a failed world points at, with the evidence (None for a world that reached the goal)."""
     kind = classify(rollout, facts)
     if kind is None:
@@ -101,16 +101,16 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> Finding | None:
         bad = next((k for k, c in enumerate(rollout.calls) if c.outcome == "error"), None)
         if bad is not None:
             call = rollout.calls[bad]
-            return Finding("coder", f"{where}: {_call(call, bad)} failed: {call.reason}")
-        return Finding("coder", f"{where}: the program stopped with an error: {rollout.error}")
+            return StageFinding("coder", f"{where}: {_call(call, bad)} failed: {call.reason}")
+        return StageFinding("coder", f"{where}: the program stopped with an error: {rollout.error}")
     used = tools_used(rollout, facts)
     if kind == "tool_use":
         if facts.needs_tool:
             needed = sorted(facts.needed or facts.tools)
-            return Finding("planner", f"{where}: the task needs a tool but the program used none of "
+            return StageFinding("planner", f"{where}: the task needs a tool but the program used none of "
                            f"{', '.join(needed) or 'the movable objects'}")
         extra = sorted(used - (facts.needed or frozenset()))
-        return Finding("planner", f"{where}: a tool was used where none was needed ({', '.join(extra)}); "
+        return StageFinding("planner", f"{where}: a tool was used where none was needed ({', '.join(extra)}); "
                        "the direct way is within the robot's limits")
     for k, call in enumerate(rollout.calls):
         if call.outcome == "refused":
@@ -118,24 +118,24 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> Finding | None:
             evidence = f"{_call(call, k)} was refused: {call.reason}" + (f" (measured: {values})" if values else "")
             stage: Stage = "calculator" if used and any(t in call.measured for t in TERRAIN) else "planner"
             placed = "; the tool was placed so that this is left" if stage == "calculator" else ""
-            return Finding(stage, f"{where}: {evidence}{placed}")
+            return StageFinding(stage, f"{where}: {evidence}{placed}")
         if call.outcome in ("stalled", "timeout") or call.measured.get("outside_workspace", 0.0) > 0.0:
             values = _measured(call)
-            return Finding("calculator", f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
+            return StageFinding("calculator", f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
                            + (f" (measured: {values})" if values else ""))
         if call.skill == "close_gripper" and kind == "numerical" and call.outcome == "done" and not call.reason:
-            return Finding("calculator", f"{where}: {_call(call, k)} closed on nothing: the gripper was not at "
+            return StageFinding("calculator", f"{where}: {_call(call, k)} closed on nothing: the gripper was not at "
                            "the object's graspable point")
     unmet = [name for name, ok in rollout.conditions.items() if not ok]
     if kind == "logical":
         missing = sorted((facts.needed or frozenset()) - used)
         what = f"the needed tool(s) {', '.join(missing)} were never used" if missing else "no motion was made"
-        return Finding("planner", f"{where}: a step is missing: {what}")
-    return Finding("calculator", f"{where}: every step ran but the goal was missed by distance; unmet: "
+        return StageFinding("planner", f"{where}: a step is missing: {what}")
+    return StageFinding("calculator", f"{where}: every step ran but the goal was missed by distance; unmet: "
                    f"{', '.join(unmet) or 'the goal'}")
 
 
-def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> list[Finding]:
+def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> list[StageFinding]:
     """Evidence from one candidate: the stage that gave no usable reply, a refused program, failed worlds."""
     if candidate.failed_stage in STAGES:
         stage: Stage = candidate.failed_stage  # type: ignore[assignment]
@@ -144,13 +144,13 @@ def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> li
                 validate(candidate.code, task.embodiment)
             except ProgramRejected as e:
                 line = f"line {e.line} (`{e.construct}`)" if e.line else f"`{e.construct}`"
-                return [Finding("coder", f"the sandbox refused the program at {line}: {e.reason}")]
-        return [Finding(stage, f"the {stage} gave no usable reply: {candidate.failure}")]
+                return [StageFinding("coder", f"the sandbox refused the program at {line}: {e.reason}")]
+        return [StageFinding(stage, f"the {stage} gave no usable reply: {candidate.failure}")]
     return [f for r in candidate.rollouts if (f := world_finding(r, facts)) is not None]
 
 
 def findings(task: Task, solution: Solution, facts: TaskFacts, truth: Sequence[KeyConcept],
-             analyzed: bool) -> list[Finding]:
+             analyzed: bool) -> list[StageFinding]:
     """Every finding of a verified proposal: the Analyzer's concepts (when it ran), then the chosen candidate's."""
     found = concept_findings(truth, solution.stages.key_concepts) if analyzed else []
     chosen = solution.candidates[solution.best] if solution.best is not None else None
@@ -167,7 +167,7 @@ DUTY: dict[Stage, str] = {
 }
 
 
-def stage_feedback(stage: Stage, score: float, worlds: int, found: Sequence[Finding]) -> str:
+def stage_feedback(stage: Stage, score: float, worlds: int, found: Sequence[StageFinding]) -> str:
     """The feedback for one stage: the outcome, then the evidence about its output, then the rest in brief."""
     outcome = (f"The best program reached the goal in {round(score * worlds)} of {worlds} perturbed simulated "
                f"world(s) (score {score:.2f}).")

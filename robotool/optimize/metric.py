@@ -17,7 +17,7 @@ from typing import Any
 
 import dspy
 
-from robotool.eval.errors import TaskFacts
+from robotool.eval.failure_classes import TaskFacts
 from robotool.optimize.batching import RolloutBatcher
 from robotool.optimize.feedback import STAGES, Stage, findings, stage_feedback
 from robotool.solution import Proposal, Solution
@@ -31,7 +31,7 @@ KEEP = 512
 
 
 class Metric:
-    """Verifies a :class:`~robotool.program.Proposer`'s prediction; see the module docstring."""
+    """Verifies a :class:`~robotool.lm_program.Proposer`'s prediction; see the module docstring."""
 
     def __init__(self, *, worlds: int = 3, seed: int = 0, backend: str | None = None,
                  batcher: RolloutBatcher | None = None):
@@ -53,7 +53,7 @@ class Metric:
         """The proposal in ``pred`` verified in simulation (once per proposal)."""
         proposal = pred.get("proposal")
         if not isinstance(proposal, Proposal):
-            raise TypeError("the metric verifies what a robotool.program.Proposer proposed; compile a Proposer "
+            raise TypeError("the metric verifies what a robotool.lm_program.Proposer proposed; compile a Proposer "
                             "(RoboTool verifies its own candidates)")
         with self._lock:
             kept = self._verdicts.get(id(proposal))

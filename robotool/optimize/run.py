@@ -1,7 +1,7 @@
 """One optimisation run: examples -> validation before -> an optimiser compiles the proposing program ->
 validation after -> a compiled program file.
 
-The student is a :class:`~robotool.program.Proposer` (the four stages, one candidate per task): optimisers
+The student is a :class:`~robotool.lm_program.Proposer` (the four stages, one candidate per task): optimisers
 see exactly its predictors, and the :class:`~robotool.optimize.metric.Metric` verifies what it proposes in
 simulation. The log folder holds ``settings.json`` (what the run was asked to do), the optimiser's own
 checkpoints (GEPA resumes from them; MIPROv2 writes its trials there), the planner's solved instances
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
@@ -22,21 +22,20 @@ import dspy
 from pydantic import BaseModel, Field
 
 from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compiled
+from robotool.lm_program import Proposer
 from robotool.optimize.data import Splits, check_training, splits
-from robotool.optimize.demos import planner_demonstrations
+from robotool.optimize.demos import Say, planner_demonstrations
 from robotool.optimize.metric import Metric
-from robotool.program import Proposer
 
 Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
 OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")
-Say = Callable[[str], None]
 
 
 class OptimizeError(ValueError):
     """The run cannot be set up as asked; the message says why."""
 
 
-class Budget(BaseModel):
+class OptimizerBudget(BaseModel):
     """How much an optimiser may spend (each applies to the optimisers named)."""
 
     auto: Literal["light", "medium", "heavy"] | None = Field(None, description="gepa, mipro: DSPy's preset")
@@ -47,7 +46,7 @@ class Budget(BaseModel):
     demos: int = Field(2, ge=0, description="bootstrap, mipro, simba, planner-demos: demonstrations per stage")
 
 
-class Settings(BaseModel):
+class OptimizeSettings(BaseModel):
     """Everything that decides a run's result (``settings.json``; recorded in the compiled program)."""
 
     optimizer: Optimizer
@@ -63,10 +62,10 @@ class Settings(BaseModel):
     reflection_lm: str | None = None
     temperature: float | None = None
     adapter: Literal["chat", "json"] | None = None
-    budget: Budget = Field(default_factory=Budget)
+    budget: OptimizerBudget = Field(default_factory=OptimizerBudget)
 
 
-class Outcome(BaseModel):
+class OptimizeResult(BaseModel):
     """What a run produced."""
 
     info: CompiledInfo
@@ -75,7 +74,7 @@ class Outcome(BaseModel):
     val: list[str]
 
 
-def student(settings: Settings) -> Proposer:
+def student(settings: OptimizeSettings) -> Proposer:
     """The program an optimiser compiles: the method's stages, one candidate per task."""
     return Proposer.method(settings.method, temperature=settings.temperature, adapter=settings.adapter)
 
@@ -92,7 +91,7 @@ def validate(program: Proposer, examples: Sequence[dspy.Example], metric: Metric
     return sum(scores) / len(scores)
 
 
-def _compile(settings: Settings, program: Proposer, data: Splits, metric: Metric, log: Path,
+def _compile(settings: OptimizeSettings, program: Proposer, data: Splits, metric: Metric, log: Path,
              reflection_lm: dspy.LM | None, say: Say) -> tuple[Proposer, list[DemoSource]]:
     b = settings.budget
     name = settings.optimizer
@@ -129,8 +128,8 @@ def _compile(settings: Settings, program: Proposer, data: Splits, metric: Metric
     return simba.compile(program, trainset=data.train, seed=settings.seed), []
 
 
-def optimize(settings: Settings, *, out: Path, log: Path, lm: dspy.LM | None = None,
-             reflection_lm: dspy.LM | None = None, say: Say = print, data: Splits | None = None) -> Outcome:
+def optimize(settings: OptimizeSettings, *, out: Path, log: Path, lm: dspy.LM | None = None,
+             reflection_lm: dspy.LM | None = None, say: Say = print, data: Splits | None = None) -> OptimizeResult:
     """Run one optimisation (see the module docstring) and write the compiled program to ``out``.
 
     ``data`` replaces the examples drawn from ``settings.families`` (its training set is checked the same way).
@@ -156,15 +155,15 @@ def optimize(settings: Settings, *, out: Path, log: Path, lm: dspy.LM | None = N
                         settings=settings.model_dump(mode="json"), validation=validation, demonstrations=sources)
     save_compiled(compiled, out, info)
     (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
-    return Outcome(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
+    return OptimizeResult(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
 
 
-def _claim(log: Path, settings: Settings) -> None:
+def _claim(log: Path, settings: OptimizeSettings) -> None:
     """Create the log folder, or resume in it when it holds a run with the same settings (else refuse)."""
     path = log / "settings.json"
     if path.exists():
         try:
-            before = Settings.model_validate_json(path.read_text(encoding="utf-8"))
+            before = OptimizeSettings.model_validate_json(path.read_text(encoding="utf-8"))
         except ValueError:
             raise OptimizeError(f"{log} holds a run this version cannot read; choose another --log") from None
         if before != settings:
@@ -178,7 +177,7 @@ def _claim(log: Path, settings: Settings) -> None:
         raise OptimizeError(f"cannot write the log folder {log}: {e.strerror or e}") from None
 
 
-def _measure(program: Proposer, data: Splits, metric: Metric, settings: Settings, lm: dspy.LM | None, when: str,
+def _measure(program: Proposer, data: Splits, metric: Metric, settings: OptimizeSettings, lm: dspy.LM | None, when: str,
              say: Say) -> float | None:
     if lm is None or not data.val:
         return None

@@ -14,8 +14,9 @@ import numpy as np
 
 from robotool import geometry
 from robotool.embodiments import QuadrupedLimits
-from robotool.scene import SceneObject, Task
+from robotool.scene import SceneObject
 from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
+from robotool.task_model import Task
 from robotool.terrain import check_walk
 
 CONTACT = 0.02  # m: boxes closer than this touch

@@ -14,7 +14,8 @@ from robotool.concepts import press_point
 from robotool.embodiments import ArmLimits
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
-from robotool.scene import SceneObject, Task
+from robotool.scene import SceneObject
+from robotool.task_model import Task
 
 CLEAR = 0.08  # m above a grasp point to approach from
 SLIDE = 0.004  # m a held object is lifted off the table while it pushes things

@@ -18,7 +18,8 @@ from robotool.concepts import start_surface, surface_under
 from robotool.embodiments import QuadrupedLimits
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout, detour, push_problem, push_staging, walk_violation
-from robotool.scene import SceneObject, Task
+from robotool.scene import SceneObject
+from robotool.task_model import Task
 
 LEVEL = 0.04  # m: supports closer in height than this are the same surface
 APPROACH = 0.1  # m between the robot and a step when it lines up to climb it

@@ -14,8 +14,8 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from robotool.planner.codegen import Program
-from robotool.scene import Task
 from robotool.solution import Candidate, StageOutputs
+from robotool.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 

@@ -16,12 +16,13 @@ import numpy as np
 from robotool.concepts import KeyConcept, key_concepts, surface_under
 from robotool.planner import macros_arm, macros_quadruped
 from robotool.planner.codegen import Program
-from robotool.planner.repair import repaired
+from robotool.planner.reparameterise import repaired
 from robotool.planner.search import Budget, Tried, order, search
-from robotool.repair import failure_trace
-from robotool.scene import SceneObject, Task
+from robotool.repair_rounds import failure_trace
+from robotool.scene import SceneObject
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank
+from robotool.task_model import Task
 
 MACROS: dict[str, Callable[[Task, bool], Iterator[Program]]] = {
     "arm": macros_arm.candidates,
@@ -42,7 +43,7 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     """Find the shortest program that the simulator shows reaching the goal, without a language model.
 
     With ``repair``, when no program succeeds in every world, the best failures are re-parameterised from
-    what the simulator measured and verified in one more round (see :mod:`robotool.planner.repair`)."""
+    what the simulator measured and verified in one more round (see :mod:`robotool.planner.reparameterise`)."""
     started = time.perf_counter()
     concepts = key_concepts(task)
     allowed = goal_objects(task)

@@ -14,8 +14,8 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.scene import Task
 from robotool.sim.build import Scene, make_spec
+from robotool.task_model import Task
 
 ROBOT_RGBA = (0.93, 0.45, 0.10, 1.0)
 FIXED_RGBA = (0.62, 0.55, 0.48, 1.0)  # furniture and other fixed objects

@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib import font_manager
 from PIL import Image, ImageDraw, ImageFont
 
-Colour = tuple[int, int, int]
+RGB = tuple[int, int, int]
 TEXT = (20, 20, 20)
 BOX = (255, 255, 255, 215)
 CAPTION_BOX = (0, 0, 0, 170)
@@ -24,7 +24,7 @@ class Label:
 
     text: str
     anchor: tuple[float, float]
-    colour: Colour
+    colour: RGB
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class CaptionLine:
     """One line of a caption; ``colour`` marks it (refusals red, success green)."""
 
     text: str
-    colour: Colour = CAPTION_TEXT
+    colour: RGB = CAPTION_TEXT
 
 
 @functools.cache

@@ -24,10 +24,10 @@ from robotool.embodiments import skills
 from robotool.render.model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
-from robotool.scene import Task
 from robotool.sim.arm import HOME as ARM_HOME
 from robotool.sim.build import Scene
 from robotool.sim.recorder import Track
+from robotool.task_model import Task
 
 Colour = str | tuple[float, ...]
 REFUSED = "#d62728"

@@ -8,9 +8,9 @@ from pathlib import Path
 from robotool.execute import run
 from robotool.render.video import VideoInfo, render_video
 from robotool.rollout import Rollout
-from robotool.scene import Task
 from robotool.sim.build import build
 from robotool.sim.recorder import StateRecorder
+from robotool.task_model import Task
 
 
 def video_paths(out: Path, worlds: Sequence[int]) -> dict[int, Path]:

@@ -8,8 +8,8 @@ import numpy as np
 
 from robotool.render.overlay import CaptionLine
 from robotool.render.painter import Painter, RenderError
-from robotool.scene import Task
 from robotool.sim.build import Scene, build
+from robotool.task_model import Task
 
 STILL_SIZE = (960, 540)  # px, width x height
 

@@ -2,7 +2,7 @@
 
 ``extract_program`` turns an LM answer into program text, ``validate`` checks it against the
 allowlist, and ``SandboxSession`` runs it in a worker process under :class:`SandboxLimits`, speaking
-the runner's :class:`~robotool.programs.ProgramSession` protocol, behind the operating-system layers
+the runner's :class:`~robotool.program_session.ProgramSession` protocol, behind the operating-system layers
 of :mod:`robotool.sandbox.jail` (``layers_in_use`` says which are in force).
 """
 

@@ -54,7 +54,7 @@ BUILTINS: frozenset[str] = frozenset(
 """Builtins a program may call. Missing on purpose: type, object, getattr, setattr, vars, dir,
 globals, locals, open, exec, eval, compile, __import__, input, breakpoint, help, memoryview."""
 
-METHODS: frozenset[str] = frozenset(
+VALUE_METHODS: frozenset[str] = frozenset(
     {
         "append", "extend", "insert", "pop", "remove", "index", "count", "copy", "clear", "reverse", "sort",
         "keys", "values", "items", "get", "update", "setdefault", "add", "discard", "union", "intersection",

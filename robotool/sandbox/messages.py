@@ -18,7 +18,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from robotool.embodiments import EmbodimentName
-from robotool.programs import SkillReply
+from robotool.program_session import SkillReply
 from robotool.sandbox.limits import SandboxLimits
 
 

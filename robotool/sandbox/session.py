@@ -1,4 +1,4 @@
-"""Sandboxed programs behind the runner's :class:`~robotool.programs.ProgramSession` protocol."""
+"""Sandboxed programs behind the runner's :class:`~robotool.program_session.ProgramSession` protocol."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pydantic import ValidationError
 
 from robotool.embodiments import EmbodimentName, SkillArgumentError, check_call
-from robotool.programs import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import (
     GO,

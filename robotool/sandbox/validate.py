@@ -35,7 +35,6 @@ from robotool.embodiments import SKILLS, EmbodimentName, SkillArgumentError, che
 from robotool.sandbox.allowlist import (
     BUILTINS,
     MATH_NAMES,
-    METHODS,
     MODULES,
     NOT_ALLOWED_BECAUSE,
     NUMERIC_TYPE_NAMES,
@@ -43,6 +42,7 @@ from robotool.sandbox.allowlist import (
     NUMPY_FUNCTIONS,
     NUMPY_LINALG,
     NUMPY_TYPES,
+    VALUE_METHODS,
 )
 
 MAX_PROGRAM_CHARS = 100_000
@@ -277,7 +277,7 @@ class _Checker(ast.NodeVisitor):
             self.reject(node, f"attribute '{node.attr}' is not allowed: names starting with '_' are private")
         elif not isinstance(node.ctx, ast.Load):
             self.reject(node, "assigning to attributes is not allowed")
-        elif path is None and node.attr not in METHODS:
+        elif path is None and node.attr not in VALUE_METHODS:
             self.reject(node, _refusal(f"attribute '.{node.attr}'", node.attr))
         elif path is not None and path not in _MODULE_ATTRIBUTES:
             self.reject(node, _refusal(".".join(path), path[1]))

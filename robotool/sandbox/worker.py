@@ -29,7 +29,7 @@ import numpy as np
 import numpy.ma
 
 from robotool.embodiments import EmbodimentName, SkillSpec, check_call, skills
-from robotool.programs import SkillCallError
+from robotool.program_session import SkillCallError
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits

@@ -31,7 +31,7 @@ from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_v
 
 from robotool.concepts import ConceptKind, KeyConcept
 from robotool.embodiments import EmbodimentName, skill_names
-from robotool.scene import Task
+from robotool.task_model import Task
 
 __all__ = [
     "AnalyzedConcept",

@@ -11,14 +11,14 @@ Modules, one job each:
 - :mod:`robotool.sim.arm` — the arm embodiment; :mod:`robotool.sim.quadruped` — the quadruped.
 - :mod:`robotool.sim.magnets` — magnetic objects weld on contact.
 - :mod:`robotool.sim.goals` — goal sub-conditions.
-- :mod:`robotool.sim.runner` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
+- :mod:`robotool.sim.lockstep` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
 """
 
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, default_backend, make_sim
 from robotool.sim.build import Scene, build
 from robotool.sim.embodiment import Embodiment, QueryError, SkillController, SkillEnd, embodiment_for
 from robotool.sim.goals import GoalTracker, goal_tracker
-from robotool.sim.runner import run_programs, run_sessions, trusted_sessions
+from robotool.sim.lockstep import run_programs, run_sessions, trusted_sessions
 
 __all__ = [
     "BackendName",

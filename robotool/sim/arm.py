@@ -25,10 +25,10 @@ import numpy as np
 
 from robotool.embodiments import ArmLimits
 from robotool.rollout import Event, GraspFailure
-from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
 from robotool.sim.embodiment import QueryError, SkillEnd
+from robotool.task_model import Task
 
 GRIPPER_BODY = "robot_gripper"
 GRASP_EQ_PREFIX = "robot_grasp__"

@@ -24,8 +24,9 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.scene import SceneObject, Task
+from robotool.scene import SceneObject
 from robotool.sim.embodiment import Embodiment, embodiment_for
+from robotool.task_model import Task
 
 TIMESTEP = 0.002  # s, physics step
 GROUND_FRICTION = 0.5

@@ -36,8 +36,8 @@ if TYPE_CHECKING:
     import mujoco
 
     from robotool.rollout import Event
-    from robotool.scene import Task
     from robotool.sim.backend import BatchedSim, BatchState
+    from robotool.task_model import Task
 
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell"]
 

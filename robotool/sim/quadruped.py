@@ -29,7 +29,6 @@ import mujoco
 import numpy as np
 
 from robotool.embodiments import QuadrupedLimits
-from robotool.scene import Task
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd
@@ -37,6 +36,7 @@ from robotool.sim.quadruped_body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROU
 from robotool.sim.quadruped_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
 from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, rule_violation, sweep_problem
 from robotool.sim.quadruped_support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
+from robotool.task_model import Task
 from robotool.terrain import (
     FOOT_NAMES,
     FOOT_RADIUS,

@@ -29,7 +29,7 @@ import numpy as np
 
 from robotool import geometry
 from robotool.embodiments import QuadrupedLimits
-from robotool.scene import Task
+from robotool.task_model import Task
 from robotool.terrain import FOOT_RADIUS, foot_offsets
 
 BODY = "robot"

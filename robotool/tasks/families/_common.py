@@ -1,7 +1,7 @@
 """What every task family shares: the instance model, variants, layouts (mirror, turn, shift) and clutter.
 
 A family builds its scene in a canonical frame (the built-in template's), then places it with a
-:class:`Layout` and finishes it with :func:`finish`, which validates the task and checks that the
+:class:`RigidPlacement` and finishes it with :func:`finish`, which validates the task and checks that the
 family's intended ``needs_tool`` is what the geometry says (:func:`robotool.concepts.needs_tool`).
 """
 
@@ -18,7 +18,9 @@ from pydantic import BaseModel, ConfigDict
 
 from robotool import geometry
 from robotool.concepts import needs_tool as geometry_needs_tool
-from robotool.scene import Category, SceneObject, Task, parse_task
+from robotool.scene import SceneObject
+from robotool.task_file import parse_task
+from robotool.task_model import Category, Task
 
 Variant = Literal["no_tool", "tool", "unsolvable"]
 CLEARANCE = 0.001  # m between objects that stand against each other, so that rounding never interpenetrates them
@@ -44,7 +46,7 @@ class Instance(BaseModel):
 @functools.cache
 def template(name: str) -> Task:
     """The built-in task a family varies: its objects carry the physically tuned sizes and masses."""
-    from robotool.tasks import load  # the registry imports this package
+    from robotool.tasks.builtin import load  # the registry imports this package
 
     return load(name)
 
@@ -86,7 +88,7 @@ _SYMMETRIC_AXES = {"hook": "z", "button": "yz"}  # local reflections that leave 
 
 
 @dataclass(frozen=True)
-class Layout:
+class RigidPlacement:
     """A rigid placement of a canonical scene: reflect, turn about z by quarter turns, then shift."""
 
     mirror: Literal["", "x", "y"] = ""
@@ -151,15 +153,15 @@ def _orient(obj: SceneObject, matrix: np.ndarray) -> tuple[tuple[float, ...], st
     return size, axis, rpy
 
 
-def draw_layout(rng: np.random.Generator, arm: bool) -> Layout:
+def draw_layout(rng: np.random.Generator, arm: bool) -> RigidPlacement:
     """The arm's layout may only mirror in y (its workspace is symmetric in y alone); a quadruped's scene
     may also turn and shift anywhere on the floor."""
     if arm:
-        return Layout(mirror="y" if rng.random() < 0.5 else "")
+        return RigidPlacement(mirror="y" if rng.random() < 0.5 else "")
     mirror = str(rng.choice(["", "", "x", "y"]))
     turns = int(rng.integers(0, 4))
     shift = (round(float(rng.uniform(-1.5, 1.5)), 2), round(float(rng.uniform(-1.5, 1.5)), 2))
-    return Layout(mirror=mirror, turns=turns, shift=shift)  # type: ignore[arg-type]
+    return RigidPlacement(mirror=mirror, turns=turns, shift=shift)  # type: ignore[arg-type]
 
 
 # --- Clutter --------------------------------------------------------------------------------------------
@@ -269,7 +271,7 @@ class Draft:
     goal: dict[str, Any]
     tool: str | None
     decoys: list[str]
-    layout: Layout
+    layout: RigidPlacement
     varied: str  # what the family varied, in words
 
 

@@ -17,8 +17,8 @@ import numpy as np
 from robotool.embodiments import skills
 from robotool.planner.codegen import Program
 from robotool.rollout import SkillCall, notable_distances
-from robotool.scene import Task
 from robotool.solution import Candidate
+from robotool.task_model import Task
 
 MARGIN = 0.03  # m added to a measured distance when a target is moved by it
 MOVERS = 2  # object-moving motions before the failure that are re-parameterised (latest first)

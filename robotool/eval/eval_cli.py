@@ -37,11 +37,11 @@ from robotool.cliargs import (
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
-from robotool.eval.executor import EXECUTORS, make_executor
+from robotool.eval.executor_choice import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
 from robotool.lm import LMConfigError
-from robotool.scene import TaskFileError
+from robotool.task_file import TaskFileError
 from robotool.version import version
 
 EXIT_NOT_ATTEMPTED = 3
@@ -178,7 +178,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
 
 def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval") -> int:
     """Run the evaluator; returns the exit status."""
-    from robotool.eval.runner import evaluate
+    from robotool.eval.sweep import evaluate
 
     parser = build_parser(prog)
     args = parser.parse_args(argv)

@@ -15,10 +15,10 @@ validated by the sandbox and run in ``worlds_per_candidate`` perturbed worlds, a
 one batch (identical programs once); a program the sandbox rejects is asked for again like a reply
 that does not parse. The candidates are ranked (see
 :meth:`~robotool.solution.Candidate.rank_key`). The paper's ablations are the same module with
-stages switched off: see :data:`METHODS`. Repeated runs that should sample afresh set
+stages switched off: see :data:`STAGES_BY_METHOD`. Repeated runs that should sample afresh set
 ``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``). The Repair stage is a predictor of the
 :class:`Proposer` too; :class:`RoboTool` with ``repair_rounds`` shows failed candidates what the simulator
-measured and has them repaired (see :mod:`robotool.repair`).
+measured and has them repaired (see :mod:`robotool.repair_rounds`).
 
 Temperature: with ``temperature`` set, every LM call uses it; without, a single candidate uses the
 model's default and several candidates spread from 0.7 to 1.0 so that they differ.
@@ -39,12 +39,12 @@ from robotool.describe import describe
 from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES
 from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage
-from robotool.methods import METHODS
-from robotool.repair import RepairBudget, propose_repair, repair_rounds
+from robotool.methods import STAGES_BY_METHOD
+from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import extract_program
-from robotool.scene import Task
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
+from robotool.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
 
 AdapterName = Literal["chat", "json"]
@@ -96,10 +96,10 @@ class Proposer(dspy.Module):
 
     @classmethod
     def method(cls, name: str, **options: Any) -> Self:
-        """The full program or an ablation by name (see :data:`METHODS`)."""
-        if name not in METHODS:
-            raise ValueError(f"unknown method {name!r}; methods: {', '.join(METHODS)}")
-        return cls(**METHODS[name], **options)
+        """The full program or an ablation by name (see :data:`STAGES_BY_METHOD`)."""
+        if name not in STAGES_BY_METHOD:
+            raise ValueError(f"unknown method {name!r}; methods: {', '.join(STAGES_BY_METHOD)}")
+        return cls(**STAGES_BY_METHOD[name], **options)
 
     @classmethod
     def from_compiled(cls, path: Path, **options: Any) -> Self:
@@ -132,7 +132,7 @@ class Proposer(dspy.Module):
             "planner": self.plan is not None,
             "calculator": self.calculate is not None,
         }
-        return next(name for name, switches in METHODS.items() if switches == stages)
+        return next(name for name, switches in STAGES_BY_METHOD.items() if switches == stages)
 
     def forward(self, task: Task) -> dspy.Prediction:
         """Propose candidate programs for ``task``; the prediction carries the :class:`Proposal`.
@@ -185,7 +185,7 @@ class Proposer(dspy.Module):
         self, task: Task, source: Candidate, index: int, sampled: int, settings: CallSettings
     ) -> tuple[Candidate, RepairAttempt]:
         """The Repair stage's fix of the failed candidate ``source`` as candidate ``index``, sampled like the
-        proposed candidate ``sampled`` (see :func:`robotool.repair.propose_repair`); not simulated."""
+        proposed candidate ``sampled`` (see :func:`robotool.repair_rounds.propose_repair`); not simulated."""
         return propose_repair(
             self.repair,
             task,
@@ -316,7 +316,7 @@ class RoboTool(Proposer):
     ):
         """``proposer``: the :class:`Proposer`'s options (stages, candidates, sampling, answer format);
         ``repair_rounds``: rounds in which, while no candidate succeeds in every world, the best ``candidates``
-        failures are repaired from their simulator traces (see :mod:`robotool.repair`); ``repair_tokens``: no
+        failures are repaired from their simulator traces (see :mod:`robotool.repair_rounds`); ``repair_tokens``: no
         repair round starts once repairs have used this many tokens."""
         super().__init__(**proposer)
         if worlds_per_candidate < 1:

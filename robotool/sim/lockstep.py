@@ -22,9 +22,15 @@ import numpy as np
 
 from robotool import geometry
 from robotool.embodiments import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
-from robotool.programs import ProgramEnded, ProgramSession, SkillReply, SkillRequest, TrustedProgram, TrustedSession
+from robotool.program_session import (
+    ProgramEnded,
+    ProgramSession,
+    SkillReply,
+    SkillRequest,
+    TrustedProgram,
+    TrustedSession,
+)
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.scene import Task
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
 from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures
@@ -32,6 +38,7 @@ from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
+from robotool.task_model import Task
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
@@ -60,7 +67,7 @@ class _World:
 
 
 def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[TrustedSession]:
-    """One :class:`~robotool.programs.TrustedSession` per trusted callable ``program(robot)``."""
+    """One :class:`~robotool.program_session.TrustedSession` per trusted callable ``program(robot)``."""
     names = skill_names(task.robot.type)
     return [TrustedSession(p, names) for p in programs]
 

@@ -35,9 +35,9 @@ from robotool.cliargs import (
     warn_if_warp_on_cpu,
 )
 from robotool.errors import LMUnavailableError, RobotoolError
-from robotool.methods import METHODS
+from robotool.methods import STAGES_BY_METHOD
 from robotool.optimize.data import DatasetError, check_families
-from robotool.optimize.run import OPTIMIZERS, Budget, OptimizeError, Outcome, Settings, optimize
+from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeResult, OptimizeSettings, optimize
 from robotool.version import version
 
 EXIT_LM_UNAVAILABLE = 3
@@ -63,7 +63,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
                    "(default: all); the paper's six built-in tasks are never training examples")
     p.add_argument("--train", type=positive_int, default=6, help="training examples")
     p.add_argument("--val", type=count, default=4, help="validation examples (scored before and after)")
-    p.add_argument("--method", choices=list(METHODS), default="robotool", help="which stages the program has")
+    p.add_argument("--method", choices=list(STAGES_BY_METHOD), default="robotool", help="which stages the program has")
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
     p.add_argument("--api-key-env", help="environment variable holding the API key")
@@ -88,22 +88,22 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     return p
 
 
-def settings_from(args: argparse.Namespace) -> Settings:
+def settings_from(args: argparse.Namespace) -> OptimizeSettings:
     """The run the parsed arguments ask for."""
     families = args.families or tasks.families()
     check_families(families)
     if args.auto and args.max_metric_calls:
         raise OptimizeError("--auto and --max-metric-calls are two budgets; give one")
-    return Settings(
+    return OptimizeSettings(
         optimizer=args.optimizer, families=families, train=args.train, val=args.val, method=args.method,
         worlds=args.worlds, seed=args.seed, backend=args.backend, threads=args.threads, lm=args.lm,
         reflection_lm=args.reflection_lm, temperature=args.temperature, adapter=args.adapter,
-        budget=Budget(auto=args.auto, max_metric_calls=args.max_metric_calls, trials=args.trials,
+        budget=OptimizerBudget(auto=args.auto, max_metric_calls=args.max_metric_calls, trials=args.trials,
                       candidates=args.candidates, steps=args.steps, demos=args.demos),
     )
 
 
-def print_outcome(outcome: Outcome, console: Console) -> None:
+def print_outcome(outcome: OptimizeResult, console: Console) -> None:
     """The before/after validation table and where the program went."""
     v = outcome.info.validation
     table = Table(title=f"Validation success ({outcome.info.optimizer}, method {outcome.info.method})")

@@ -22,10 +22,10 @@ import dspy
 
 from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, call_stage
 from robotool.rollout import Rollout, notable_distances
-from robotool.scene import Task
 from robotool.signatures import FailureTrace, TracedCall, scene_context
 from robotool.signatures.repair import ShownTrace
 from robotool.solution import Candidate, RepairAttempt, RepairRound, rank
+from robotool.task_model import Task
 from robotool.verify import prepare_code
 
 

@@ -1,0 +1,302 @@
+"""Reading a task file (YAML or JSON, format 1) and checking it: :func:`load_task`, :func:`parse_task`.
+
+:func:`load_task` reports *every* problem with its field path in a :class:`TaskFileError`, never a raw
+traceback: the model's own checks, then checks that need the whole scene (names, goal, limits, geometry).
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import types
+import typing
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from robotool import geometry
+from robotool.embodiments import LIMITS_MODELS, QuadrupedLimits
+from robotool.goal import GOALS_BY_EMBODIMENT
+from robotool.task_model import Task
+
+RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
+OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate
+GRASP_POINT_TOLERANCE = 0.005  # m: how far outside its object a graspable point may lie
+KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
+    "rotation": "rpy", "orientation": "rpy", "euler": "rpy", "position": "center", "pos": "center",
+    "centre": "center", "dimensions": "size", "extent": "size", "weight": "mass", "type": "shape",
+    "grasp_point": "graspable_point", "grasp": "graspable_point", "handle": "graspable_point", "fixed": "movable",
+    "description": "notes", "note": "notes", "objects_list": "objects", "task": "name", "version": "format",
+}  # fmt: skip
+_ARTICLE = {"arm": "an", "quadruped": "a"}
+
+
+class Problem(BaseModel):
+    """One thing wrong with a task file, at a field path such as ``objects[2].size[0]``."""
+
+    path: str
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.message}" if self.path else self.message
+
+
+class TaskFileError(ValueError):
+    """A task file that cannot be used; ``problems`` lists every problem found (one line when there is one)."""
+
+    def __init__(self, source: str, problems: list[Problem]):
+        self.source = source
+        self.problems = problems
+        if len(problems) == 1:  # one mistake, one line
+            super().__init__(f"{source}: {problems[0]}")
+            return
+        lines = "\n".join(f"  - {p}" for p in problems)
+        super().__init__(f"{source}: {len(problems)} problems\n{lines}")
+
+
+def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
+    """Turn a pydantic error location into ``objects[2](hammer).size[0]``."""
+    out = ""
+    node = raw
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+            node = node[part] if isinstance(node, list) and part < len(node) else None
+            if isinstance(node, Mapping) and isinstance(node.get("name"), str):
+                out += f"({node['name']})"
+        else:
+            out += f".{part}" if out else str(part)
+            node = node.get(part) if isinstance(node, Mapping) else None
+    return out
+
+
+def _friendly(error: Mapping[str, Any]) -> str:
+    kind, msg = error["type"], error["msg"]
+    value = error.get("input")
+    if kind == "extra_forbidden":
+        return "unknown key"
+    if kind == "literal_error":
+        return f"{msg} (got {value!r})"
+    if kind == "string_pattern_mismatch":
+        return f"names use only lowercase letters, digits and '_' (got {value!r})"
+    if kind == "missing":
+        return "required field is missing"
+    if msg.startswith("Value error, "):
+        return msg.removeprefix("Value error, ")
+    if value is not None and not isinstance(value, Mapping | list):
+        return f"{msg} (got {value!r})"
+    return msg
+
+
+def _model_problems(error: ValidationError, raw: Any, model: type[BaseModel] | None = None) -> list[Problem]:
+    problems = []
+    for e in error.errors():
+        loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        # Tagged tuples report a position per element; literal unions add the type name.
+        loc = tuple(p for p in loc if p not in ("tuple[float, float]",))
+        message = _friendly(e)
+        if e["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
+            message = _unknown_key(loc[-1], _keys_at(model or Task, loc[:-1]))
+        problems.append(Problem(path=_format_loc(loc, raw), message=message))
+    return problems
+
+
+def _keys_at(model: type[BaseModel], loc: tuple[int | str, ...]) -> list[str]:
+    """The keys the model nested at ``loc`` accepts (``objects[0].fragile`` -> Fragile's keys)."""
+    current: type[BaseModel] | None = model
+    for part in loc:
+        if current is None:
+            return []
+        if isinstance(part, int):
+            continue
+        field = current.model_fields.get(part)
+        current = _nested_model(field.annotation) if field is not None else None
+    return list(current.model_fields) if current is not None else []
+
+
+def _nested_model(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside an annotation such as ``list[SceneObject]`` or ``Fragile | None``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if typing.get_origin(annotation) in (list, typing.Union, types.UnionType):
+        return next((m for a in typing.get_args(annotation) if (m := _nested_model(a)) is not None), None)
+    return None
+
+
+def _unknown_key(key: str, keys: list[str]) -> str:
+    """``unknown key 'rotation' (did you mean 'rpy'?); keys here: ...``."""
+    guess = KEY_SYNONYMS.get(key.lower())
+    if guess not in keys:
+        close = difflib.get_close_matches(key.lower(), keys, n=1, cutoff=0.6)
+        guess = close[0] if close else None
+    hint = f" (did you mean {guess!r}?)" if guess else ""
+    listing = f"; keys here: {', '.join(keys)}" if keys else ""
+    return f"unknown key {key!r}{hint}{listing}"
+
+
+def _object_path(task: Task, index: int) -> str:
+    return f"objects[{index}]({task.objects[index].name})"
+
+
+def _check_semantics(task: Task) -> list[Problem]:
+    """Checks that need the whole scene: names, goal, limits, geometry."""
+    problems: list[Problem] = []
+    seen: dict[str, int] = {}
+    for i, obj in enumerate(task.objects):
+        if obj.name in seen:
+            problems.append(Problem(path=f"objects[{i}].name",
+                                    message=f"duplicate name {obj.name!r} (also objects[{seen[obj.name]}])"))
+        seen.setdefault(obj.name, i)
+        if obj.name == "robot":
+            problems.append(Problem(path=f"objects[{i}].name",
+                                    message="'robot' is reserved for the robot itself"))
+
+    robot = task.robot
+    limits_ok = True
+    try:
+        task.limits  # noqa: B018 - validates the overrides
+    except ValidationError as e:
+        limits_ok = False
+        model = LIMITS_MODELS[robot.type]
+        for problem in _model_problems(e, robot.limits, model):
+            problems.append(Problem(path=f"robot.limits.{problem.path}", message=problem.message))
+    if robot.type == "quadruped" and robot.position is None:
+        problems.append(Problem(path="robot.position", message="a quadruped needs a start [x, y]"))
+    if robot.type == "arm" and robot.position is not None:
+        problems.append(Problem(path="robot.position",
+                                message="the arm's base is fixed at [0, 0, 0]; remove 'position'"))
+
+    kind = task.goal.kind
+    target = task.goal.object
+    if kind not in GOALS_BY_EMBODIMENT[robot.type]:
+        allowed = ", ".join(sorted(GOALS_BY_EMBODIMENT[robot.type]))
+        message = f"{_ARTICLE[robot.type]} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"
+        problems.append(Problem(path=f"goal.{kind}", message=message))
+    elif target not in seen:
+        problems.append(Problem(path=f"goal.{kind}",
+                                message=f"no object named {target!r} (objects: {', '.join(seen)})"))
+    else:
+        obj = task.objects[seen[target]]
+        if kind == "pressed" and obj.shape != "button":
+            problems.append(Problem(path="goal.pressed", message=f"{target!r} is a {obj.shape}, not a button"))
+        if kind in ("grasped", "lifted", "lowered") and not obj.movable:
+            problems.append(Problem(path=f"goal.{kind}", message=f"{target!r} is fixed and cannot be moved"))
+        if kind == "robot_on" and obj.shape == "cloth":
+            problems.append(Problem(path="goal.robot_on", message=f"{target!r} is a cloth and cannot carry the robot"))
+
+    if limits_ok and len(seen) == len(task.objects):  # geometry needs unique names and limits
+        problems += _check_geometry(task)
+    return problems
+
+
+def _check_geometry(task: Task) -> list[Problem]:
+    parts = {o.name: geometry.object_parts(o) for o in task.objects}
+    problems: list[Problem] = []
+    fixed = [i for i, o in enumerate(task.objects) if not o.movable]
+    for a_pos, i in enumerate(fixed):
+        for j in fixed[a_pos + 1:]:
+            a, b = task.objects[i], task.objects[j]
+            depth = geometry.solids_overlap(parts[a.name], parts[b.name])
+            if depth > OVERLAP_TOLERANCE:
+                problems.append(Problem(path=_object_path(task, j),
+                                        message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m"))
+    for i, obj in enumerate(task.objects):
+        if obj.graspable_point is not None:
+            off = geometry.distance_to_parts(parts[obj.name], obj.graspable_point)
+            if off > GRASP_POINT_TOLERANCE:
+                problems.append(Problem(
+                    path=f"{_object_path(task, i)}.graspable_point",
+                    message=f"{list(obj.graspable_point)} lies {off:.3f} m outside {obj.name!r}; a graspable point "
+                            "is in world coordinates (metres) and must lie within or on its object"))
+        others = {n: p for n, p in parts.items() if n != obj.name}
+        contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
+        if contact.penetration > RESTING_TOLERANCE:
+            problems.append(Problem(path=f"{_object_path(task, i)}.center",
+                                    message=f"sunk {contact.penetration:.3f} m into {contact.into}"))
+        elif contact.gap > RESTING_TOLERANCE:
+            problems.append(Problem(path=f"{_object_path(task, i)}.center",
+                                    message=f"floats {contact.gap:.3f} m above the surface below it"))
+    if task.robot.type == "quadruped" and task.robot.position is not None:
+        problem = _check_start(task, parts)
+        if problem:
+            problems.append(problem)
+    return problems
+
+
+def _check_start(task: Task, parts: dict[str, list[geometry.Part]]) -> Problem | None:
+    """The quadruped must start with its body centre over the surface it stands on."""
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    x, y = task.robot.position  # type: ignore[misc]
+    sx, sy, _ = limits.body_size
+    gx, gy = np.meshgrid(np.linspace(x - sx / 2, x + sx / 2, 9), np.linspace(y - sy / 2, y + sy / 2, 5))
+    footprint = np.column_stack([gx.ravel(), gy.ravel()])
+    solids = [p for n, p in parts.items() if task.object(n).shape != "cloth"]
+    stand = float(geometry.surface_height(footprint, solids).max())
+    under_centre = float(geometry.surface_height(np.array([[x, y]]), solids)[0])
+    if stand - under_centre > limits.max_step_up:
+        return Problem(path="robot.position",
+                       message=f"the robot at [{x}, {y}] is not over a surface: its centre hangs over "
+                               f"a {stand - under_centre:.2f} m drop at the edge of what it would stand on")
+    return None
+
+
+def parse_task(data: Any, source: str = "<task>") -> Task:
+    """Validate already-loaded task data (a mapping), raising :class:`TaskFileError`."""
+    if not isinstance(data, Mapping):
+        raise TaskFileError(source, [Problem(path="", message="a task file must be a mapping of keys")])
+    try:
+        task = Task.model_validate(data)
+    except ValidationError as e:
+        raise TaskFileError(source, _model_problems(e, data)) from None
+    problems = _check_semantics(task)
+    if problems:
+        raise TaskFileError(source, problems)
+    return task
+
+
+def load_task(path: str | Path) -> Task:
+    """Load and validate a YAML or JSON task file."""
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TaskFileError(source, [Problem(path="", message="file not found")]) from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise TaskFileError(source, [Problem(path="", message=f"cannot read the file: {e}")]) from None
+    try:
+        data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
+    except json.JSONDecodeError as e:
+        raise TaskFileError(source, [_syntax_problem("JSON", text, e.lineno, e.colno, e.msg)]) from None
+    except yaml.MarkedYAMLError as e:
+        raise TaskFileError(source, [_yaml_problem(text, e)]) from None
+    except yaml.YAMLError as e:
+        raise TaskFileError(source, [_syntax_problem("YAML", text, None, None, " ".join(str(e).split()))]) from None
+    return parse_task(data, source)
+
+
+def _yaml_problem(text: str, error: yaml.MarkedYAMLError) -> Problem:
+    """Where YAML broke (line, column, the line's text) and, when it says so, where the broken part began."""
+    mark = error.problem_mark or error.context_mark
+    line, column = (mark.line + 1, mark.column + 1) if mark is not None else (None, None)
+    problem = _syntax_problem("YAML", text, line, column, error.problem or error.context or "cannot be read")
+    start = error.context_mark
+    if error.problem_mark is not None and error.context and start is not None and start.line != mark.line:
+        began = text.splitlines()[start.line].strip() if start.line < len(text.splitlines()) else ""
+        problem.message += f" ({error.context} that began at line {start.line + 1}: `{began}`)"
+    return problem
+
+
+def _syntax_problem(kind: str, text: str, line: int | None, column: int | None, what: str) -> Problem:
+    """``not valid YAML at line 3, column 12: <what>: `the offending line```."""
+    if line is None:
+        return Problem(path="", message=f"not valid {kind}: {what}")
+    lines = text.splitlines()
+    shown = lines[line - 1].strip() if 0 < line <= len(lines) else ""
+    where = f"line {line}" + (f", column {column}" if column else "")
+    return Problem(path="", message=f"not valid {kind} at {where}: {what}" + (f": `{shown}`" if shown else ""))

@@ -1,0 +1,60 @@
+"""The whole task file (format 1) as a model: the robot, the scene's objects and the goal (:class:`Task`)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import Field, FiniteFloat, StringConstraints
+
+from robotool.embodiments import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
+from robotool.goal import Goal
+from robotool.scene import Name, SceneObject, StrictModel
+
+Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
+
+
+class Robot(StrictModel):
+    """The robot: its embodiment, start position (quadruped) and limit overrides."""
+
+    type: EmbodimentName
+    position: tuple[FiniteFloat, FiniteFloat] | None = None
+    limits: dict[str, Any] = Field(default_factory=dict)
+
+
+class Task(StrictModel):
+    """A whole task file (format 1)."""
+
+    format: Literal[1]
+    name: Name
+    category: Category
+    instruction: Annotated[str, StringConstraints(min_length=1, strip_whitespace=True)]
+    robot: Robot
+    objects: list[SceneObject]
+    goal: Goal
+
+    @property
+    def embodiment(self) -> EmbodimentName:
+        return self.robot.type
+
+    @property
+    def limits(self) -> QuadrupedLimits | ArmLimits:
+        """The embodiment's limits with this task's overrides applied."""
+        return LIMITS_MODELS[self.robot.type](**self.robot.limits)
+
+    def object(self, name: str) -> SceneObject:
+        """The object with this name (KeyError naming the known objects otherwise)."""
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(f"no object named {name!r}; objects: {', '.join(self.object_names)}")
+
+    @property
+    def object_names(self) -> list[str]:
+        return [o.name for o in self.objects]
+
+    def to_yaml(self) -> str:
+        """The task as a YAML task file."""
+        data = self.model_dump(mode="json", exclude_defaults=True)
+        data["format"] = 1
+        return yaml.safe_dump(data, sort_keys=False)
