@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 from fixtures.reference import REFERENCE, program
 
-from robotool import sandbox, sim, tasks
+from robotool import sandbox, sim, tasks, verify
 from robotool.cli import main
 from robotool.embodiments import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
+from robotool.rollout import Rollout
 from robotool.sim.arm import ArmController
 from robotool.sim.lockstep import scene_box
+from robotool.sim.quadruped import QuadrupedController
 
 
 @pytest.mark.parametrize(
@@ -80,15 +82,80 @@ def test_a_controller_exception_fails_only_its_world(sim_scene: Any, monkeypatch
     assert broken.calls[-1].outcome == "error"
 
 
-def test_an_exception_in_the_batched_tick_ends_the_moving_worlds_with_the_reason(
-    sim_scene: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    def broken_tick(self: ArmController, state: Any) -> Any:
-        raise FloatingPointError("overflow in the servo reference")
+def _tick_raising_in(controller: type, world: int, after: float) -> Any:
+    """``controller.tick`` that does its work and then raises when it ticked ``world`` after ``after`` s: the runner
+    has to undo that work and find the world."""
+    original = controller.tick
 
-    monkeypatch.setattr(ArmController, "tick", broken_tick)
+    def tick(self: Any, state: Any, worlds: np.ndarray | None = None) -> Any:
+        ends = original(self, state, worlds)
+        ticked = np.arange(self.sim.nworld) if worlds is None else np.asarray(worlds)
+        if world in ticked and state.time[world] > after:
+            raise FloatingPointError(f"overflow in world {world}")
+        return ends
+
+    return tick
+
+
+def _same(a: Rollout, b: Rollout) -> bool:
+    return a.model_dump() == b.model_dump()
+
+
+@pytest.mark.parametrize(
+    ("task", "controller", "after"),
+    [("milk_reaching_near", ArmController, 1.0), ("sofa_traversing", QuadrupedController, 3.0)],
+)
+def test_an_exception_in_the_batched_tick_fails_only_its_world(
+    sim_scene: Any, run_texts: Any, monkeypatch: pytest.MonkeyPatch, task: str, controller: type, after: float
+) -> None:
+    scene, code = sim_scene(task), program(REFERENCE[task])
+    undisturbed = run_texts(scene, [code] * 3)
+    monkeypatch.setattr(controller, "tick", _tick_raising_in(controller, 1, after))
+    rollouts = run_texts(scene, [code] * 3)
+    assert _same(rollouts[0], undisturbed[0]) and _same(rollouts[2], undisturbed[2])
+    assert undisturbed[0].success and undisturbed[2].success
+    broken = rollouts[1]
+    skill = broken.calls[-1].skill
+    assert broken.error == f"controller error in {skill}: FloatingPointError: overflow in world 1"
+    assert not broken.success and broken.calls[-1].outcome == "error" and broken.calls[-1].reason == broken.error
+    assert broken.sim_time < undisturbed[1].sim_time
+
+
+def test_an_exception_in_the_batched_tick_spares_the_other_candidates(monkeypatch: pytest.MonkeyPatch) -> None:
+    task = tasks.load("milk_reaching_near")
+    codes = [program(REFERENCE["milk_reaching_near"]), program("milk_reaching")]
+    undisturbed = verify.run_codes(task, codes, worlds=2, backend="mujoco")
+    monkeypatch.setattr(ArmController, "tick", _tick_raising_in(ArmController, 1, 1.0))
+    (first, broken), other = verify.run_codes(task, codes, worlds=2, backend="mujoco")
+    assert _same(first, undisturbed[0][0]) and all(map(_same, other, undisturbed[1]))
+    assert broken.error is not None and broken.error.endswith("FloatingPointError: overflow in world 1")
+
+
+def test_an_exception_in_a_settling_world_fails_it_after_its_program(
+    sim_scene: Any, run_texts: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(ArmController, "tick", _tick_raising_in(ArmController, 1, 0.0))
     codes = [program(REFERENCE["milk_reaching_near"]), "p = get_center('milk')\n"]
-    moving, querying = sim.run_sessions(sim_scene("milk_reaching_near"), sandbox.start_sessions(codes, "arm"))
-    assert moving.error == "controller error in open_gripper: FloatingPointError: overflow in the servo reference"
-    assert moving.calls[-1].outcome == "error"
-    assert querying.error is None and [c.outcome for c in querying.calls] == ["done"]  # no motion: unaffected
+    moving, querying = run_texts(sim_scene("milk_reaching_near"), codes)
+    assert moving.success and moving.error is None
+    assert querying.error == "controller error after the program ended: FloatingPointError: overflow in world 1"
+    assert [c.outcome for c in querying.calls] == ["done"] and not querying.success
+
+
+def test_a_plan_that_raises_in_one_world_ends_that_skill_only(
+    sim_scene: Any, run_texts: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scene, code = sim_scene("sofa_traversing"), program(REFERENCE["sofa_traversing"])
+    undisturbed = run_texts(scene, [code] * 2)
+    original = QuadrupedController._start_move
+
+    def start_move(self: QuadrupedController, w: int, move: Any) -> None:
+        if w == 1 and move.pushing >= 0:  # the push itself, started by the plan after the approach
+            raise ZeroDivisionError("the push's plan broke")
+        original(self, w, move)
+
+    monkeypatch.setattr(QuadrupedController, "_start_move", start_move)
+    fine, broken = run_texts(scene, [code] * 2)
+    assert _same(fine, undisturbed[0]) and fine.success
+    assert broken.error == "controller error in push_to_position: ZeroDivisionError: the push's plan broke"
+    assert broken.calls[-1].outcome == "error"

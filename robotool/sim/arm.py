@@ -27,7 +27,7 @@ from robotool.embodiments import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
-from robotool.sim.embodiment import QueryError, SkillEnd
+from robotool.sim.embodiment import QueryError, SkillEnd, world_mask
 from robotool.task_model import Task
 
 GRIPPER_BODY = "robot_gripper"
@@ -234,12 +234,14 @@ class ArmController:
         for w in worlds:
             self.clamp[w] = clamp
 
-    def tick(self, state: BatchState) -> list[SkillEnd]:
-        """Finish skills that reached their end, then write the servo references for the next interval."""
-        ends = self._tick_moves(state) + self._tick_fingers(state)
+    def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
+        """Finish skills that reached their end, then write the servo references for the next interval (in
+        ``worlds``, every world when None)."""
+        mask = world_mask(self.sim.nworld, worlds)
+        ends = self._tick_moves(state, mask) + self._tick_fingers(state, mask)
         if ends:
             ends = self._with_pushed_out(state, ends)
-        moving = np.flatnonzero(self.mode == _MOVE)
+        moving = np.flatnonzero((self.mode == _MOVE) & mask)
         if moving.size:
             elapsed = state.time[moving] - self.started[moving]
             along = np.minimum(SPEED * elapsed + SPEED * self.scene.control_dt, self.length[moving])
@@ -249,8 +251,8 @@ class ArmController:
             self.sim.ctrl[np.ix_(moving, self.xyz_act)] = ref
         return ends
 
-    def _tick_moves(self, state: BatchState) -> list[SkillEnd]:
-        worlds = np.flatnonzero(self.mode == _MOVE)
+    def _tick_moves(self, state: BatchState, mask: np.ndarray) -> list[SkillEnd]:
+        worlds = np.flatnonzero((self.mode == _MOVE) & mask)
         if not worlds.size:
             return []
         pos = state.xpos[worlds, self.gripper]
@@ -348,8 +350,8 @@ class ArmController:
                 carried[owner[body]] = True
         return carried
 
-    def _tick_fingers(self, state: BatchState) -> list[SkillEnd]:
-        worlds = np.flatnonzero((self.mode == _FINGERS) & (state.time - self.started >= GRIPPER_TIME - 1e-9))
+    def _tick_fingers(self, state: BatchState, mask: np.ndarray) -> list[SkillEnd]:
+        worlds = np.flatnonzero(mask & (self.mode == _FINGERS) & (state.time - self.started >= GRIPPER_TIME - 1e-9))
         ends = []
         for w in worlds:
             self.mode[w] = _IDLE

@@ -17,6 +17,13 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    pushed to the backend before each step), ``sim.set_weld(worlds, eq, active)`` (attach at the current
    relative pose, or detach) and ``sim.rays(...)`` for support heights.
    Query skills are answered at once by :meth:`SkillController.query` from the current state.
+   An exception inside the controller fails only the world it belongs to: ``start`` and ``query`` run per world;
+   per-world work inside ``tick`` that cannot be undone (advancing a plan) ends that world's skill with outcome
+   ``error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner restores the
+   controller's per-world state (its numpy-array and list attributes, the controls and the welds) as it was
+   before the tick and ticks the worlds one by one, failing those that raise again. A controller therefore keeps
+   its per-world state in numpy arrays and lists indexed by world, and ``tick(state, worlds)`` touches only
+   ``worlds``.
 3. **Goals.** Goal sub-conditions are evaluated by :mod:`robotool.sim.goals` from the batched state;
    embodiment-specific goal kinds live in the embodiment's module and are named there.
 
@@ -39,7 +46,7 @@ if TYPE_CHECKING:
     from robotool.sim.backend import BatchedSim, BatchState
     from robotool.task_model import Task
 
-EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell"]
+EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
 _EMBODIMENTS: dict[str, str] = {
     "arm": "robotool.sim.arm:ArmEmbodiment",
@@ -56,7 +63,7 @@ class SkillEnd:
     """
 
     world: int
-    outcome: EndOutcome
+    outcome: EndOutcome  # "error": the controller raised while running the skill; the runner fails the world
     reason: str | None = None
     measured: dict[str, float] = field(default_factory=dict)
     result: Any = None
@@ -77,11 +84,29 @@ class SkillController(Protocol):
         are reported later by :meth:`tick`.
         """
 
-    def tick(self, state: BatchState) -> list[SkillEnd]:
-        """One control tick: report finished skills, then write controls for the next interval."""
+    def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
+        """One control tick in ``worlds`` (all when None; the others are left untouched): report finished skills,
+        then write controls for the next interval."""
 
     def query(self, state: BatchState, world: int, skill: str, args: tuple[Any, ...]) -> Any:
         """Answer a query skill in one world from the current state (raise :class:`QueryError`)."""
+
+
+def describe_error(error: Exception) -> str:
+    """An exception raised inside a controller as one line: its type and message."""
+    return " ".join(f"{type(error).__name__}: {error}".split())[:400]
+
+
+def error_end(world: int, error: Exception) -> SkillEnd:
+    """The end of a skill whose controller raised ``error`` in ``world`` (the runner fails that world only)."""
+    return SkillEnd(world=world, outcome="error", reason=describe_error(error))
+
+
+def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:
+    """(nworld,) True for the worlds in ``worlds`` (every world when None)."""
+    mask = np.zeros(nworld, dtype=bool)
+    mask[slice(None) if worlds is None else np.asarray(worlds, dtype=int)] = True
+    return mask
 
 
 def controller_failures(controller: SkillController) -> list[str | None] | None:

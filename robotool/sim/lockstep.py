@@ -8,7 +8,9 @@ parallel). A program that errors or ends is finished for its world only; its wor
 ``SETTLE_AFTER`` simulated seconds with the robot holding still (what rocks or tips comes to rest, a
 falling object lands) before the goal is read. Skill arguments are checked on this side of the sandbox,
 positions against the scene's box (:func:`scene_box`); an exception inside the skill controller fails the
-world it happened in with the reason, never the batch. Each world yields a :class:`~robotool.rollout.Rollout`.
+world it happened in with the reason, never the batch: when the batched control tick raises, the controller's
+per-world state is put back as it was before the tick and the worlds are ticked one by one.
+Each world yields a :class:`~robotool.rollout.Rollout`.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from robotool.program_session import (
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures
+from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures, describe_error
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
@@ -188,15 +190,22 @@ class _Run:
         return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
 
     def _tick(self, state: BatchState) -> list[SkillEnd]:
-        """The controller's tick; if it raises, the worlds with a motion skill in progress fail with the
-        reason (the batched tick cannot say which world caused it) and the other worlds go on."""
+        """The controller's tick in the alive worlds. If it raises, the controller's per-world state, the controls
+        and the welds are put back as they were and each world is ticked alone: a world whose tick raises again
+        fails with the reason, the others go on exactly as in the batched tick."""
+        worlds = np.flatnonzero(self.alive())
+        before = _TickUndo(self.controller, self.sim, state)
         try:
-            return self.controller.tick(state)
-        except Exception as e:
-            for i, world in enumerate(self.worlds):
-                if not world.ended and world.pending is not None:
-                    self._end(i, state, _controller_error(world.pending.skill, e))
-            return []
+            return self.controller.tick(state, worlds)
+        except Exception:  # find the world(s) it came from
+            before.restore()
+        ends = []
+        for i in worlds:
+            try:
+                ends += self.controller.tick(state, np.array([i]))
+            except Exception as e:  # a controller error in world i fails world i only
+                self._fail(i, state, describe_error(e))
+        return ends
 
     # -- programs ------------------------------------------------------------------------------
 
@@ -217,7 +226,7 @@ class _Run:
                 try:
                     ends = self.controller.start(state, np.array([i]), request.name, self.worlds[i].pending_args)
                 except Exception as e:  # a controller bug fails this world only
-                    self._end(i, state, _controller_error(request.name, e))
+                    self._fail(i, state, describe_error(e))
                     continue
                 again += self._finish_skills(state, ends)
             to_wait = again
@@ -251,8 +260,7 @@ class _Run:
             world.session.resume(SkillReply(error=str(e)))
             return True
         except Exception as e:  # a controller bug fails this world only
-            call.outcome, call.reason = "error", _controller_error(request.name, e)
-            self._end(i, state, call.reason)
+            self._fail(i, state, describe_error(e), request.name)
             return False
         world.session.resume(SkillReply(value=call.result))
         return True
@@ -264,6 +272,9 @@ class _Run:
             world = self.worlds[end.world]
             if world.ended or world.pending is None:
                 continue
+            if end.outcome == "error":  # the controller raised in this world while running the skill
+                self._fail(end.world, state, end.reason or "")
+                continue
             call, world.pending = world.pending, None
             call.outcome, call.reason, call.measured, call.result = end.outcome, end.reason, end.measured, end.result
             call.ended = float(state.time[end.world] - self.t0[end.world])
@@ -271,6 +282,22 @@ class _Run:
             world.session.resume(SkillReply(value=end.result))
             resumed.append(end.world)
         return resumed
+
+    def _fail(self, i: int, state: BatchState, error: str, skill: str | None = None) -> None:
+        """An exception inside the controller (``error``, one line) fails world ``i``: its program ends and its goal
+        is read now; ``skill`` is the query it answered (a motion skill in progress is named by the world)."""
+        world = self.worlds[i]
+        call = world.calls[-1] if skill is not None else world.pending
+        where = f"in {call.skill}" if call is not None else "after the program ended"
+        reason = " ".join(f"controller error {where}: {error}".split())[:500]
+        if call is not None:
+            call.outcome, call.reason = "error", reason
+        if world.ended:  # settling after its program: the goal is read now, with the error
+            world.error = world.error or reason
+            if not world.finished:
+                self._read_goal(i, state)
+            return
+        self._end(i, state, reason)
 
     def _end(self, i: int, state: BatchState, error: str | None, output: str = "", settle: bool = False) -> None:
         """The program of world ``i`` ended; with ``settle`` its world runs on before the goal is read."""
@@ -386,9 +413,29 @@ def scene_box(task: Task) -> SceneBox:
     return SceneBox(lo=(float(lo[0]), float(lo[1]), float(lo[2])), hi=(float(hi[0]), float(hi[1]), float(hi[2])))
 
 
-def _controller_error(skill: str, error: Exception) -> str:
-    """The one-line reason of a world failed by an exception inside the skill controller."""
-    return " ".join(f"controller error in {skill}: {type(error).__name__}: {error}".split())[:500]
+class _TickUndo:
+    """What a control tick may change, saved before it: the controller's numpy-array and list attributes (its
+    per-world state), the controls, the mocap positions and the welds."""
+
+    def __init__(self, controller: SkillController, sim: BatchedSim, state: BatchState):
+        self.controller, self.sim = controller, sim
+        self.attributes = {
+            name: value.copy() if isinstance(value, np.ndarray) else list(value)
+            for name, value in vars(controller).items()
+            if isinstance(value, np.ndarray | list)
+        }
+        self.ctrl, self.mocap_pos = sim.ctrl.copy(), sim.mocap_pos.copy()
+        self.eq_active = state.eq_active.copy()
+
+    def restore(self) -> None:
+        """Put everything back as it was before the tick."""
+        for name, value in self.attributes.items():
+            setattr(self.controller, name, value)
+        self.sim.ctrl[...] = self.ctrl
+        self.sim.mocap_pos[...] = self.mocap_pos
+        changed = self.sim.state().eq_active != self.eq_active
+        for w, eq in zip(*np.nonzero(changed), strict=True):
+            self.sim.set_weld(np.array([w]), int(eq), bool(self.eq_active[w, eq]))
 
 
 def _events_of(end: SkillEnd, call: int, time: float) -> list[Event]:

@@ -31,7 +31,7 @@ import numpy as np
 from robotool.embodiments import QuadrupedLimits
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import Scene
-from robotool.sim.embodiment import QueryError, SkillEnd
+from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
 from robotool.sim.quadruped_body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROUP, XY_KP, BodyIds, add_body
 from robotool.sim.quadruped_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
 from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, rule_violation, sweep_problem
@@ -181,11 +181,13 @@ class QuadrupedController:
                 ends.append(end)
         return ends
 
-    def tick(self, state: BatchState) -> list[SkillEnd]:
-        """Report finished skills and falls, and write the controls for the next interval."""
+    def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
+        """Report finished skills and falls, and write the controls for the next interval (in ``worlds``, every
+        world when None)."""
         self.state = state
-        ends = self._falls()
-        worlds = np.flatnonzero(self.moving & np.array([f is None for f in state.failed]))
+        mask = world_mask(self.sim.nworld, worlds)
+        ends = self._falls(mask)
+        worlds = np.flatnonzero(mask & self.moving & np.array([f is None for f in state.failed]))
         if worlds.size:
             self._drive(worlds, ends)
         return ends
@@ -365,14 +367,18 @@ class QuadrupedController:
         return None
 
     def _advance(self, w: int, outcome: Outcome) -> SkillEnd | None:
-        """The current move ended with ``outcome``: start the plan's next move or end the skill."""
+        """The current move ended with ``outcome``: start the plan's next move or end the skill (with outcome
+        ``error`` when the plan raises: an advanced plan cannot be rolled back, so this world's error is its own)."""
         plan = self.plans[w]
         assert plan is not None
         try:
             move = plan.send(outcome)
+            self._start_move(w, move)
         except StopIteration as stop:
             return self._end(w, stop.value)
-        self._start_move(w, move)
+        except Exception as e:  # any error in this world's plan ends this world's skill only
+            self._end(w, None)
+            return error_end(w, e)
         return None
 
     def _start_move(self, w: int, move: _Move) -> None:
@@ -653,22 +659,22 @@ class QuadrupedController:
 
     # -- falls ---------------------------------------------------------------------------------------
 
-    def _falls(self) -> list[SkillEnd]:
-        """Find the robots that fell since the last tick: end their skills and mark their worlds failed."""
+    def _falls(self, mask: np.ndarray) -> list[SkillEnd]:
+        """Find the robots in ``mask`` that fell since the last tick: end their skills and mark their worlds failed."""
         state = self.state
         com = centre_of_mass(state, self.ids)
         centres = feet(state, self.ids)
         touching = feet_touching(state, self.ids, self.not_robot)
         held = supported(com, centres, touching, SUPPORT_MARGIN)
-        self.outside = np.where(~held & np.isnan(self.lift), self.outside + 1, 0)
-        self.lost_support[held] = None
-        for w in np.flatnonzero(self.outside == 1):  # where it left its support, and which feet had none
+        self.outside = np.where(mask, np.where(~held & np.isnan(self.lift), self.outside + 1, 0), self.outside)
+        self.lost_support[held & mask] = None
+        for w in np.flatnonzero(mask & (self.outside == 1)):  # where it left its support, and which feet had none
             x, y = com[w, :2]
             self.lost_support[w] = f"fell at [{x:.2f}, {y:.2f}]: no support under {unsupported_feet(touching[w])}"
         angle = tilt(state, self.ids)
         fell = ((self.outside >= FALL_TICKS) & (angle > TIPPING)) | (angle > FALL_TILT)
         ends = []
-        for w in np.flatnonzero(fell):
+        for w in np.flatnonzero(fell & mask):
             if self.failures[w] is not None or state.failed[w] is not None:
                 continue
             x, y = com[w, :2]
