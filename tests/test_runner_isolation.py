@@ -14,6 +14,7 @@ from robotool.cli import main
 from robotool.embodiments import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
 from robotool.rollout import Rollout
 from robotool.sim.arm import ArmController
+from robotool.sim.backend_mujoco import MujocoSim
 from robotool.sim.lockstep import scene_box
 from robotool.sim.quadruped import QuadrupedController
 
@@ -159,3 +160,23 @@ def test_a_plan_that_raises_in_one_world_ends_that_skill_only(
     assert _same(fine, undisturbed[0]) and fine.success
     assert broken.error == "controller error in push_to_position: ZeroDivisionError: the push's plan broke"
     assert broken.calls[-1].outcome == "error"
+
+
+def test_a_world_whose_physics_blows_up_fails_alone(
+    sim_scene: Any, run_texts: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scene, code = sim_scene("milk_reaching_near"), program(REFERENCE["milk_reaching_near"])
+    undisturbed = run_texts(scene, [code] * 3)
+    original = MujocoSim._run
+
+    def run(self: MujocoSim, worlds: np.ndarray, nstep: int) -> None:
+        if 1 in worlds and self.datas[1].time > 1.0:
+            self.datas[1].qvel[:] = np.nan  # world 1's simulation blows up
+        original(self, worlds, nstep)
+
+    monkeypatch.setattr(MujocoSim, "_run", run)
+    rollouts = run_texts(scene, [code] * 3)
+    assert _same(rollouts[0], undisturbed[0]) and _same(rollouts[2], undisturbed[2])
+    broken = rollouts[1]
+    assert broken.error == "simulation failed: physics diverged (bad velocity)" and not broken.success
+    assert broken.calls[-1].outcome == "error" and broken.calls[-1].reason == broken.error

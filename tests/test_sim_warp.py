@@ -14,6 +14,7 @@ from fixtures.reference import REFERENCE, TOOL_FREE, program
 from robotool import sim
 
 pytest.importorskip("mujoco_warp")
+from robotool.sim.backend_warp import WarpSim
 
 TASK = "button_pressing"
 PROGRAMS = [program(REFERENCE[TASK]), program(TOOL_FREE[TASK]), program(REFERENCE[TASK])]
@@ -56,3 +57,23 @@ def test_reference_programs_solve_the_other_arm_tasks(sim_scene: Any, run_texts:
     """Grasps by contact, rigid holds and sheet carriers behave on Warp as on C (fewer worlds: Warp on CPU is slow)."""
     rollouts = run_texts(sim_scene(task_name), [program(REFERENCE[task_name])] * 2, seed=3, backend="warp")
     assert all(r.success for r in rollouts), [(r.conditions, r.error) for r in rollouts]
+
+
+def test_a_world_whose_state_turns_non_finite_fails_alone(
+    sim_scene: Any, run_texts: Any, warp_rollouts: list[Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Worlds share Warp's arrays (and its contact pool): one world's NaN state must not reach the others."""
+    original = WarpSim.step
+
+    def step(self: WarpSim, nstep: int, active: np.ndarray) -> None:
+        if self.state().time[1] > 1.0 and np.isfinite(self.state().qpos[1]).all():
+            qpos = self.d.qpos.numpy()
+            qpos[1] = np.nan  # world 1's simulation blows up
+            self.d.qpos.assign(qpos)
+        original(self, nstep, active)
+
+    monkeypatch.setattr(WarpSim, "step", step)
+    rollouts = run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="warp")
+    assert rollouts[0].model_dump() == warp_rollouts[0].model_dump() and rollouts[0].success
+    assert rollouts[2].model_dump() == warp_rollouts[2].model_dump() and rollouts[2].success
+    assert rollouts[1].error == "simulation failed: physics diverged (non-finite state)"
