@@ -129,6 +129,16 @@ def test_warp_without_a_gpu_warns_that_it_runs_on_the_cpu() -> None:
     )
 
 
+@pytest.mark.skipif(default_backend() == "warp", reason="this machine has a CUDA GPU")
+def test_warp_on_the_cpu_adds_no_note_of_its_own() -> None:
+    """The warning above is the only one: Warp's native note that it found no CUDA driver is left out."""
+    pytest.importorskip("mujoco_warp")
+    code = "from robotool.sim.backend_warp import init_warp; init_warp(); import warp; print(warp.is_cpu_available())"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0 and result.stdout.strip() == "True", result.stderr
+    assert result.stderr == ""
+
+
 def test_a_truncated_program_exits_2_naming_its_line_and_nothing_runs(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -254,9 +254,14 @@ def make_sim(
 
 
 @functools.cache
+def cuda_driver_found() -> bool:
+    """Whether this machine has an NVIDIA CUDA driver (without loading Warp)."""
+    return ctypes.util.find_library("cuda") is not None or os.path.exists("/proc/driver/nvidia/version")
+
+
 def default_backend() -> BackendName:
     """``warp`` when Warp sees a CUDA device, else ``mujoco`` (Warp is not even loaded without a driver)."""
-    if ctypes.util.find_library("cuda") is None and not os.path.exists("/proc/driver/nvidia/version"):
+    if not cuda_driver_found():
         return "mujoco"
     try:
         import warp as wp

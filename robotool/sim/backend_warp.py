@@ -8,16 +8,44 @@ whose sticky overflow flag is set (contacts or constraint rows over ``nconmax``/
 
 from __future__ import annotations
 
+import os
+import sys
+
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
 import warp as wp
 
-from robotool.sim.backend import BatchState, Perturbation, geom_groups, touching_from_contacts, weld_relpose
+from robotool.sim.backend import (
+    BatchState,
+    Perturbation,
+    cuda_driver_found,
+    geom_groups,
+    touching_from_contacts,
+    weld_relpose,
+)
 from robotool.sim.build import Scene
 
 _BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data", "geom_pos")
 _OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}
+
+
+def init_warp() -> None:
+    """``wp.init()`` without its banner and per-module load messages; without a CUDA driver, the line Warp's native
+    library prints about it is left out too (the command line says once that warp runs on the CPU)."""
+    wp.config.log_level = wp.LOG_WARNING
+    if cuda_driver_found():
+        wp.init()
+        return
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 class WarpSim:
@@ -33,9 +61,7 @@ class WarpSim:
         nconmax: int,
         device: str | None = None,
     ):
-        wp.config.log_level = wp.LOG_ERROR
-        wp.config.log_level = wp.LOG_WARNING  # no per-module load messages
-        wp.init()
+        init_warp()
         self.scene, self.nworld, self.njmax, self.nconmax = scene, nworld, njmax, nconmax
         self.device = device or ("cuda" if wp.get_cuda_device_count() else "cpu")
         model = scene.model
