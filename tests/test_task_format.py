@@ -16,6 +16,7 @@ from robotool.describe import describe
 from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.execute import run
 from robotool.goal import Goal, LiftGoal
+from robotool.planner import solve
 from robotool.scene import Fragile, SceneObject
 from robotool.task_file import TaskFileError, load_task, parse_task
 from robotool.task_model import Robot, Task
@@ -24,6 +25,7 @@ DOCS = Path(__file__).parent.parent / "docs"
 FORMAT_PAGE = DOCS / "task-format.md"
 EXAMPLE_TASK = DOCS / "examples" / "rolling_pin_lifting.yaml"
 EXAMPLE_PROGRAM = DOCS / "examples" / "rolling_pin_lifting.py"
+LEDGE_TASK = Path(__file__).parent / "fixtures" / "tasks" / "ledge_climbing.yaml"  # also written from the page alone
 
 
 def _task_data(**changes: object) -> dict[str, object]:
@@ -59,6 +61,17 @@ def test_a_task_written_from_the_format_page_loads_describes_and_runs() -> None:
     assert "rolling_pin: cylinder with its axis along x" in describe(task)
     report = run(task, EXAMPLE_PROGRAM.read_text(), worlds=2, backend="mujoco")
     assert report.success, [r.error or r.conditions for r in report.rollouts]
+
+
+def test_a_quadruped_task_written_from_the_format_page_needs_its_tool_and_is_solved() -> None:
+    task = load_task(LEDGE_TASK)
+    assert task.name not in tasks.names()
+    straight = run(task, "p = get_position('ledge')\nclimb_to_position(p)\n", worlds=1, backend="mujoco")
+    (call,) = straight.rollouts[0].calls[1:]
+    assert not straight.success and call.outcome == "refused" and "step" in (call.reason or "")
+    solution = solve(task, worlds=2)
+    assert solution.success_rate == 1.0, solution.candidates[solution.best or 0].failure
+    assert "push_to_position('crate'" in (solution.code or "")
 
 
 def test_an_unknown_key_suggests_the_right_one() -> None:
