@@ -43,7 +43,7 @@ from robotool.methods import STAGES_BY_METHOD
 from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import extract_program
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
-from robotool.solution import Candidate, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
+from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
 from robotool.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
 
@@ -291,13 +291,13 @@ class Proposer(dspy.Module):
                 )
         except StageFailed as e:
             candidate.lm_calls += e.calls
-            candidate.failure, candidate.failed_stage = f"{stage}: {e.reason}", stage
+            candidate.failure = CandidateFailure(stage=stage, kind="no_reply", reason=e.reason)
             return candidate
         except (RobotoolError, Cancelled):
             raise
         except Exception as e:  # a fault in this candidate's stage must not end the others
-            candidate.failure = f"{stage}: {type(e).__name__}: {' '.join(str(e).split())[:300]}"
-            candidate.failed_stage = stage
+            reason = f"{type(e).__name__}: {' '.join(str(e).split())[:300]}"
+            candidate.failure = CandidateFailure(stage=stage, kind="fault", reason=reason)
         return candidate
 
 

@@ -24,7 +24,7 @@ from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, cal
 from robotool.rollout import Rollout, notable_distances
 from robotool.signatures import FailureTrace, TracedCall, scene_context
 from robotool.signatures.repair import ShownTrace
-from robotool.solution import Candidate, RepairAttempt, RepairRound, rank
+from robotool.solution import Candidate, CandidateFailure, RepairAttempt, RepairRound, rank
 from robotool.task_model import Task
 from robotool.verify import prepare_code
 
@@ -197,7 +197,7 @@ def propose_repair(
             )
     except StageFailed as e:
         candidate.lm_calls += e.calls
-        candidate.failure = f"repair: {e.reason}"
+        candidate.failure = CandidateFailure(stage="repair", kind="no_reply", reason=e.reason)
         return candidate, attempt
     candidate.lm_calls += result.calls
     candidate.notes += [f"repair: {note}" for note in result.notes]

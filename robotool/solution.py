@@ -2,11 +2,41 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, Field, computed_field
 
 from robotool.rollout import Rollout
 from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
 from robotool.signatures.repair import FailureTrace, RepairScope
+
+FailureStage = Literal["analyzer", "planner", "calculator", "coder", "repair", "search", "simulation"]
+FailureKind = Literal["no_reply", "fault", "rejected", "worlds_failed"]
+
+
+class CandidateFailure(BaseModel):
+    """Why a candidate failed, as a typed record; ``str()`` renders it for people, and nothing reads that back.
+
+    ``kind`` says what happened at ``stage``: an LM stage or the repair stage gave no usable reply
+    (``no_reply``) or raised (``fault``); the sandbox rejected the search planner's code (``rejected``, stage
+    ``search``); or the program ran and ``failed_worlds`` of its ``worlds`` perturbed worlds missed the goal
+    (``worlds_failed``, stage ``simulation``; ``world`` is the first that did). ``reason`` is the words: the
+    stage's problem, the sandbox's rejection, or why the first failed world failed.
+    """
+
+    stage: FailureStage
+    kind: FailureKind
+    reason: str
+    failed_worlds: int | None = None
+    worlds: int | None = None
+    world: int | None = None
+
+    def __str__(self) -> str:
+        if self.kind == "worlds_failed":
+            return f"{self.failed_worlds}/{self.worlds} worlds failed; world {self.world}: {self.reason}"
+        if self.kind == "rejected":
+            return f"planner produced invalid code: {self.reason}"
+        return f"{self.stage}: {self.reason}"
 
 
 class StageOutputs(BaseModel):
@@ -65,8 +95,7 @@ class Candidate(BaseModel):
     index: int
     code: str | None = None
     stages: StageOutputs = Field(default_factory=StageOutputs)
-    failure: str | None = Field(None, description="why it failed: unparsable reply, rejected code, or rollouts")
-    failed_stage: str | None = Field(None, description="the stage that gave no usable reply, if one did not")
+    failure: CandidateFailure | None = Field(None, description="why it failed: no usable reply, rejected code, worlds")
     rollouts: list[Rollout] = Field(default_factory=list)
     lm_calls: list[LMCall] = Field(default_factory=list, description="its LM requests, failed ones included")
     notes: list[str] = Field(default_factory=list, description="what was repaired or ignored in its replies")
@@ -145,7 +174,7 @@ class RepairAttempt(BaseModel):
         default_factory=list, description="what differs from the source: steps, parameters or code"
     )
     success_rate: float = 0.0
-    failure: str | None = Field(None, description="why the repaired candidate failed, if it did")
+    failure: CandidateFailure | None = Field(None, description="why the repaired candidate failed, if it did")
 
 
 class RepairRound(BaseModel):

@@ -63,7 +63,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            _shown("; ".join([c.failure or "solved in every world", *c.notes])),
+            _shown("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
         )
     console.print(table)
     print_repairs(solution, console)

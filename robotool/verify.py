@@ -17,7 +17,7 @@ from robotool.sandbox import ProgramRejected, extract, start_sessions, validate
 from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
-from robotool.solution import Candidate, Proposal, Solution, rank, usage_by_stage
+from robotool.solution import Candidate, CandidateFailure, Proposal, Solution, rank, usage_by_stage
 from robotool.task_model import Task
 
 
@@ -158,13 +158,14 @@ def chosen(proposal: Proposal, candidates: list[Candidate], timings: dict[str, f
     )
 
 
-def failure_reason(rollouts: Sequence[Rollout]) -> str | None:
-    """One line on why the first failed world failed, with how many worlds failed."""
+def failure_reason(rollouts: Sequence[Rollout]) -> CandidateFailure | None:
+    """Why the first failed world failed, with how many worlds failed (None when every world succeeded)."""
     failed = [(k, r) for k, r in enumerate(rollouts) if not r.success]
     if not failed:
         return None
     k, first = failed[0]
-    return f"{len(failed)}/{len(rollouts)} worlds failed; world {k}: {world_failure(first)}"
+    return CandidateFailure(stage="simulation", kind="worlds_failed", reason=world_failure(first) or "",
+                            failed_worlds=len(failed), worlds=len(rollouts), world=k)
 
 
 MAX_TOLD_EVENTS = 4  # events a one-line failure reason tells, besides what failed

@@ -41,9 +41,8 @@ def test_instances_validate_round_trip_and_follow_the_geometry(family: str) -> N
         assert instance.needs_tool == needs_tool(task)
         assert (task.category == "no_tool") == (not instance.needs_tool)
         assert set(instance.decoys) <= set(task.object_names)
-        for name in (instance.tool or "").split(", "):
-            assert not name or name in task.object_names
-        assert instance.tool is None or instance.solvable
+        assert set(instance.tools) <= set(task.object_names) and len(set(instance.tools)) == len(instance.tools)
+        assert bool(instance.tools) == (instance.solvable and instance.needs_tool)  # a list of names, never text
 
 
 @pytest.mark.parametrize("family", FAMILIES)
@@ -107,9 +106,9 @@ def test_arm_layouts_stay_in_reach() -> None:
     for family in ("milk_reaching", "can_grasping"):
         for seed in SEEDS:
             instance = _instance(family, seed)
-            if not instance.solvable or instance.tool is None:
+            if not instance.solvable or not instance.tools:
                 continue
-            for name in instance.tool.split(", "):
+            for name in instance.tools:
                 x, y, _ = instance.task.object(name).grasp_point
                 assert -0.30 <= x <= 0.45 and -0.45 <= y <= 0.45
 

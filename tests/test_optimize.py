@@ -29,7 +29,7 @@ from robotool.lm_program import Proposer, RoboTool
 from robotool.optimize import Metric, OptimizeSettings, RolloutBatcher, optimize
 from robotool.optimize.data import DatasetError, Splits, builtin, check_training, splits
 from robotool.optimize.feedback import concept_findings
-from robotool.solution import Candidate, Proposal
+from robotool.solution import Candidate, CandidateFailure, Proposal
 from robotool.standin import Rule, Script, StandinServer
 from robotool.verify import run_codes, select
 
@@ -51,8 +51,8 @@ def _settings(optimizer: str, **budget: int) -> OptimizeSettings:
 def _verified(task_name: str, code: str, *, failed_stage: str | None = None) -> tuple[dspy.Example, object]:
     gold = builtin(task_name)
     proposal = Proposal(task=task_name, method="coder",
-                        candidates=[Candidate(index=0, code=code, failed_stage=failed_stage,
-                                              failure=f"{failed_stage}: rejected" if failed_stage else None)])
+                        candidates=[Candidate(index=0, code=code, failure=CandidateFailure(
+                            stage=failed_stage, kind="no_reply", reason="rejected") if failed_stage else None)])
     return gold, select(gold.task, proposal, worlds=1)
 
 

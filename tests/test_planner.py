@@ -116,3 +116,19 @@ def test_solves_generated_staircases_that_once_failed(family: str, seed: int) ->
     instance = tasks.generate(family, seed)
     solution = solve(instance.task, worlds=2)
     assert solution.success, solution.candidates[0].failure if solution.candidates else solution.notes
+
+
+def test_a_predicted_push_problem_is_a_typed_record_rendered_for_people() -> None:
+    import numpy as np
+
+    from robotool.planner.layout import Layout, push_problem
+
+    task = tasks.load("sofa_climbing")
+    layout = Layout(task)
+    block, _ = push_problem(layout, "box_2", np.array([3.0, 1.5]), task.limits, 0.0)
+    assert block is not None and (block.kind, block.object, block.blocker) == ("collides", "box_2", "sofa")
+    assert str(block) == "box_2 would run into sofa"
+    behind_sofa = np.array([4.0, 0.0])  # the robot must cross the sofa to line the push up
+    approach, _ = push_problem(layout, "box_1", np.array([1.0, 1.0]), task.limits, 0.0, here=behind_sofa)
+    assert approach is not None and approach.kind == "approach" and approach.walk
+    assert str(approach) == f"the way to push box_1: {approach.walk}"

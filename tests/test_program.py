@@ -63,15 +63,18 @@ def test_wrong_candidate_loses_to_right_one() -> None:
     best = solution.candidates[solution.best]
     assert best.code == GRASP_DIRECTLY and best.success_rate == 1.0
     loser = next(c for c in solution.candidates if c.index != solution.best)
-    assert loser.success_rate == 0.0 and "goal not reached" in loser.failure
+    assert loser.success_rate == 0.0 and loser.failure is not None and loser.failure.kind == "worlds_failed"
+    assert "goal not reached" in str(loser.failure)
 
 
 def test_unparsable_reply_without_repairs_fails_only_that_candidate() -> None:
     script = arm_script([GRASP_DIRECTLY])
     script["planner"] = ["I would rather not answer in fields.", script["planner"][0]]
     solution, _ = _solve("milk_reaching_near", script, candidates=2, format_retries=0)
-    failed = [c for c in solution.candidates if c.failure and c.failure.startswith("planner:")]
-    assert len(failed) == 1 and "lacks the field(s) steps" in failed[0].failure
+    failed = [c for c in solution.candidates if c.failure and c.failure.stage == "planner"]
+    assert len(failed) == 1 and failed[0].failure.kind == "no_reply"  # type: ignore[union-attr]
+    assert "lacks the field(s) steps" in failed[0].failure.reason  # type: ignore[union-attr]
+    assert str(failed[0].failure).startswith("planner: ")  # rendered for people with its stage
     assert [call.error is not None for call in failed[0].lm_calls] == [True]
     assert solution.success
 
@@ -176,13 +179,14 @@ def test_plan_naming_an_unknown_skill_is_rejected_by_the_model() -> None:
     ]
     solution, _ = _solve("milk_reaching_near", script)
     assert not solution.success
-    assert "unknown skill 'teleport'" in solution.candidates[0].failure
+    assert "unknown skill 'teleport'" in str(solution.candidates[0].failure)
 
 
 def test_rejected_code_fails_its_candidate() -> None:
     solution, _ = _solve("milk_reaching_near", arm_script(["import os\nos.system('true')\n"]))
     assert not solution.success
-    assert solution.candidates[0].failure.startswith("coder:") and "os" in solution.candidates[0].failure
+    failure = solution.candidates[0].failure
+    assert failure is not None and failure.stage == "coder" and "os" in failure.reason
 
 
 def test_save_and_load_round_trip(tmp_path: Path) -> None:

@@ -25,7 +25,7 @@ from robotool.render.painter import Painter
 from robotool.render.plan import plan_figure, write_plan
 from robotool.render.rollouts import video_paths
 from robotool.render.still import render_scene
-from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, frame_times, render_video
+from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, end_lines, frame_times, render_video
 from robotool.rollout import Rollout, SkillCall
 from robotool.sim.recorder import StateRecorder
 from robotool.task_model import Task
@@ -184,6 +184,14 @@ def test_captions_mark_refusals_for_a_while_and_the_goal_at_the_end() -> None:
     assert [line.text for line in caption_at(won, 6.0)] == ["goal reached: robot_on_sofa"]
     broke = rollout.model_copy(update={"conditions": {"vase_low": True, "vase_unbroken": False}})
     assert "vase broke in a fall" in [line.text for line in caption_at(broke, 7.0)]
+
+
+def test_end_lines_leave_out_the_missed_goal_when_the_caption_says_it_already() -> None:
+    failed = Rollout(world=0, seed=0, success=False, conditions={"vase_low": True, "vase_unbroken": False},
+                     error="NameError: x")
+    told = [line.text for line in end_lines(failed)]
+    assert told == ["world failed: NameError: x", "vase broke in a fall", "goal not reached: vase_unbroken false"]
+    assert [line.text for line in end_lines(failed, goal_missed=False)] == told[:2]
 
 
 def test_video_paths_name_each_world_when_there_are_several() -> None:

@@ -50,7 +50,8 @@ def test_reply_parses_to_the_right_program_or_fails_clearly(case: Case, adapter:
         assert len(solution.stages.steps) == 3 and solution.stages.parameters[0].offset == [0.0, 0.0, 0.055]
     else:
         assert not solution.success
-        assert case.expect in (candidate.failure or ""), candidate.failure
-        assert "Traceback" not in candidate.failure and len(candidate.failure) < 400
+        shown = str(candidate.failure or "")
+        assert case.expect in shown, shown
+        assert "Traceback" not in shown and len(shown) < 400
     for note in case.notes if adapter == "chat" else ():
         assert note in notes, notes

@@ -24,8 +24,11 @@ def test_every_candidate_meets_the_same_worlds() -> None:
 def test_failure_reason_names_the_first_failed_world() -> None:
     task = tasks.load("milk_reaching")
     (rollouts,) = run_codes(task, [GRASP], worlds=2)
-    reason = failure_reason(rollouts)
-    assert reason is not None and reason.startswith("2/2 worlds failed; world 0: goal not reached")
+    failure = failure_reason(rollouts)
+    assert failure is not None and (failure.stage, failure.kind) == ("simulation", "worlds_failed")
+    assert (failure.failed_worlds, failure.worlds, failure.world) == (2, 2, 0)
+    assert rollouts[0].error is None and failure.reason.startswith("goal not reached")
+    assert str(failure) == f"2/2 worlds failed; world 0: {failure.reason}"  # the words people read
 
 
 def _candidate(index: int, rollouts: list[Rollout]) -> Candidate:

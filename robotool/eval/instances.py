@@ -7,7 +7,7 @@ success on them measures nothing.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 
 from pydantic import BaseModel, ConfigDict
 
@@ -64,15 +64,7 @@ def generated(family: str, seed: int) -> TaskInstance | None:
     if not getattr(instance, "solvable", True):
         return None
     return TaskInstance(name=family, seed=seed, family=family, task=instance.task,
-                        needs_tool=bool(instance.needs_tool), tools=_tool_set(getattr(instance, "tool", None)))
-
-
-def _tool_set(tool: str | Iterable[str] | None) -> frozenset[str]:
-    """An instance's tools: None, "a", "a, b" or a collection of names."""
-    if tool is None:
-        return frozenset()
-    names = tool.split(",") if isinstance(tool, str) else tool
-    return frozenset(n.strip() for n in names if n.strip())
+                        needs_tool=bool(instance.needs_tool), tools=frozenset(instance.tools))
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:

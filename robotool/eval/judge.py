@@ -62,7 +62,7 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
         "concepts": grade(key_concepts(instance.task), _predicted_concepts(stages or key.method, solution)),
         "code": solution.code,
         "stages": solution.stages,
-        "candidate_failures": [c.failure for c in solution.candidates],
+        "candidate_failures": [str(c.failure) if c.failure else None for c in solution.candidates],
         "rollouts": rollouts,
         "usage": solution.usage,
         "lm_calls": len(solution.lm_calls),

@@ -110,8 +110,9 @@ def _replay(
         instance.task, record.code, [world.world], seed=world.seed - world.world, backend=backend
     )
     again = rollouts[world.world]
-    recorded = (world.failure or "").startswith("goal not reached")  # then the first line says it already
-    extra = [line for line in end_lines(again) if not (recorded and line.text.startswith("goal not reached"))]
+    recorded = next((r for r in record.rollouts if r.world == world.world), None)
+    told = recorded is not None and not recorded.error  # then the caption's first line says the goal was missed
+    extra = end_lines(again, goal_missed=not told)
     now = world_failure(again)
     reproduced = now == world.failure
     if not reproduced:

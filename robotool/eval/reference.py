@@ -6,7 +6,7 @@ as labelled reference rows next to measured rows; they are never mixed into meas
 
 ``BUILTIN_TOOLS`` names, for each built-in task, the objects a working solution uses as tools (the
 paper's solutions; empty for the discriminative variants that need no tool). Generated instances
-carry their own (``Instance.tool``). The error classifier uses them to tell "never used the needed
+carry their own (``Instance.tools``). The error classifier uses them to tell "never used the needed
 tool" (tool-use error) from "used some of the tools but left a step out" (logical error).
 """
 

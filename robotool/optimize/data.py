@@ -55,8 +55,7 @@ def generated(family: str, seed: int) -> dspy.Example | None:
     instance = tasks.generate(family, seed)
     if not instance.solvable:
         return None
-    tools = frozenset(t.strip() for t in (instance.tool or "").split(",") if t.strip())
-    return example(instance.task, family=family, seed=seed, tools=tools)
+    return example(instance.task, family=family, seed=seed, tools=frozenset(instance.tools))
 
 
 def builtin(name: str) -> dspy.Example:

@@ -137,8 +137,9 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
 
 def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> list[StageFinding]:
     """Evidence from one candidate: the stage that gave no usable reply, a refused program, failed worlds."""
-    if candidate.failed_stage in STAGES:
-        stage: Stage = candidate.failed_stage  # type: ignore[assignment]
+    failure = candidate.failure
+    if failure is not None and failure.kind in ("no_reply", "fault") and failure.stage in STAGES:
+        stage: Stage = failure.stage  # type: ignore[assignment]
         if stage == "coder" and candidate.code is not None:
             try:
                 validate(candidate.code, task.embodiment)

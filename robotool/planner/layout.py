@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -197,9 +198,28 @@ def detour(
     return [goal]
 
 
+@dataclass(frozen=True)
+class PushBlock:
+    """What blocks a predicted push of ``object``: it would run into ``blocker`` (``collides``), there is no clear
+    place to stand behind it (``no_stance``), or the walk to where the push lines up breaks a limit (``approach``,
+    the walk's problem in ``walk``). ``str()`` renders it for people."""
+
+    kind: Literal["collides", "no_stance", "approach"]
+    object: str
+    blocker: str | None = None
+    walk: str | None = None
+
+    def __str__(self) -> str:
+        if self.kind == "collides":
+            return f"{self.object} would run into {self.blocker}"
+        if self.kind == "no_stance":
+            return f"no clear place to stand behind {self.object}"
+        return f"the way to push {self.object}: {self.walk}"
+
+
 def push_problem(
     layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float, here: np.ndarray | None = None
-) -> tuple[str | None, np.ndarray]:
+) -> tuple[PushBlock | None, np.ndarray]:
     """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.sim.quadruped_push`): one
     straight leg per axis, the shorter first, the robot's face against the object's, slid along the face to the
     nearest offset whose sweep (from where it lines up, else from the start pose, to the end of the push plus the
@@ -223,16 +243,16 @@ def push_problem(
             None,
         )
         if hit:
-            return f"{name} would run into {hit}", robot
+            return PushBlock("collides", name, blocker=hit), robot
         pose = _push_pose(layout, name, box, leg, limits, floor)
         if pose is None:
-            return f"no clear place to stand behind {name}", robot
+            return PushBlock("no_stance", name), robot
         start, end, staging = pose
         if here is not None:
             around = route(robot, staging, box.lo - half - GAP / 2, box.hi + half + GAP / 2)
             problem = walk_violation(layout, robot, [*around, start], limits, exclude=[name])
             if problem:
-                return f"the way to push {name}: {problem}", robot
+                return PushBlock("approach", name, walk=problem), robot
         robot = end - (end - start) / np.linalg.norm(end - start) * GAP
         box = box.moved_to(end_center)
         layout = layout.with_moved(name, end_center)

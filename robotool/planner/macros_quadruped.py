@@ -406,7 +406,7 @@ class Writer:
         limits = self.quad.limits
         problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
         staging = push_staging(self.layout, name, xy, limits, self.level) if problem else None
-        if problem and problem.startswith("the way to push") and staging is not None:
+        if problem and problem.kind == "approach" and staging is not None:
             path = detour(self.layout, self.here, staging, limits)
             if walk_violation(self.layout, self.here, path, limits) is None:
                 for via in path:
@@ -422,7 +422,7 @@ class Writer:
             explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]",
         )
         self.here = end
-        self.doubt(problem)
+        self.doubt(str(problem) if problem else None)
         self.layout = self.layout.with_moved(name, xy)
         self.refs.pop(name, None)
         self.prog.use(name)

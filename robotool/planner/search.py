@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from robotool.planner.codegen import Program
-from robotool.solution import Candidate, StageOutputs
+from robotool.solution import Candidate, CandidateFailure, StageOutputs
 from robotool.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
@@ -67,7 +67,7 @@ def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], S
         for item in batch:
             item.candidate.code, rejection, _ = prepare_code(item.program.code, task)
             if rejection is not None:
-                item.candidate.failure = f"planner produced invalid code: {rejection}"
+                item.candidate.failure = CandidateFailure(stage="search", kind="rejected", reason=rejection)
             else:
                 runnable.append(item)
         results = run_codes(task, [t.candidate.code for t in runnable], worlds=worlds, seed=seed,  # type: ignore[misc]

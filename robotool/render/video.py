@@ -61,8 +61,10 @@ def _outcome_text(call: SkillCall) -> str:
     return f"{call.skill} {call.outcome}" + (f": {call.reason}" if call.reason else "")
 
 
-def end_lines(rollout: Rollout) -> list[CaptionLine]:
-    """The goal's end state: reached, or the failed conditions (a fragile object's fall named) and the error."""
+def end_lines(rollout: Rollout, *, goal_missed: bool = True) -> list[CaptionLine]:
+    """The goal's end state: reached, or the failed conditions (a fragile object's fall named) and the error.
+
+    ``goal_missed=False`` leaves out the line that says the goal was not reached (for a caption that says so)."""
     if rollout.success:
         return [CaptionLine("goal reached: " + ", ".join(rollout.conditions), GREEN)]
     lines = []
@@ -72,7 +74,8 @@ def end_lines(rollout: Rollout) -> list[CaptionLine]:
     fallen = [name.removesuffix("_unbroken") for name in unmet if name.endswith("_unbroken")]
     if fallen:
         lines.append(CaptionLine(f"{', '.join(fallen)} broke in a fall", RED))
-    lines.append(CaptionLine("goal not reached" + (": " + ", ".join(unmet) + " false" if unmet else ""), RED))
+    if goal_missed:
+        lines.append(CaptionLine("goal not reached" + (": " + ", ".join(unmet) + " false" if unmet else ""), RED))
     return lines
 
 

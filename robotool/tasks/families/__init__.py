@@ -51,7 +51,7 @@ def write_instance(instance: Instance, path: str | Path) -> Path:
     """Write the instance's task file (YAML), its ground truth in a comment header; returns the path."""
     truth = (f"# generated: family {instance.family}, seed {instance.seed}\n"
              f"# needs_tool: {str(instance.needs_tool).lower()}, solvable: {str(instance.solvable).lower()}, "
-             f"tool: {instance.tool or 'none'}, decoys: {', '.join(instance.decoys) or 'none'}\n"
+             f"tool: {', '.join(instance.tools) or 'none'}, decoys: {', '.join(instance.decoys) or 'none'}\n"
              f"# {instance.description}\n")
     path = Path(path)
     path.write_text(truth + instance.task.to_yaml(), encoding="utf-8")

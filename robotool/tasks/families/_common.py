@@ -37,7 +37,7 @@ class Instance(BaseModel):
     task: Task
     needs_tool: bool  # equals robotool.concepts.needs_tool(task)
     solvable: bool  # the scene holds what a solution needs within the robot's limits
-    tool: str | None  # the object(s) a solution uses, comma-separated; None when none is needed
+    tools: list[str]  # the objects a solution uses; empty when none is needed
     decoys: list[str]  # objects that look useful but cannot serve
     mirrored: bool  # the canonical layout was reflected
     description: str  # what was varied, in one sentence
@@ -269,7 +269,7 @@ class Draft:
     robot: dict[str, Any]
     objects: list[SceneObject]
     goal: dict[str, Any]
-    tool: str | None
+    tools: list[str]
     decoys: list[str]
     layout: RigidPlacement
     varied: str  # what the family varied, in words
@@ -291,6 +291,6 @@ def finish(family: str, seed: int, draft: Draft) -> Instance:
         raise AssertionError(f"{name}: built as {draft.variant!r} but the geometry says needs_tool={needs}")
     return Instance(
         family=family, seed=seed, task=task, needs_tool=needs, solvable=draft.variant != "unsolvable",
-        tool=draft.tool, decoys=draft.decoys, mirrored=bool(draft.layout.mirror),
+        tools=draft.tools, decoys=draft.decoys, mirrored=bool(draft.layout.mirror),
         description=f"{draft.varied}; {draft.layout.words()}.",
     )

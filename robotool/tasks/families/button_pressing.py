@@ -95,7 +95,7 @@ def build(rng: np.random.Generator) -> Draft:
         movable=False,
         margin=0.04,
     )
-    tool = ", ".join(o.name for o in scene if o.magnetic) if variant == "tool" else None
+    tools = [o.name for o in scene if o.magnetic] if variant == "tool" else []
     outside = face - 0.45
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
     return Draft(
@@ -105,7 +105,7 @@ def build(rng: np.random.Generator) -> Draft:
         robot={"type": "arm"},
         objects=[layout.place(o) for o in scene],
         goal={"pressed": "button"},
-        tool=tool,
+        tools=tools,
         decoys=decoys,
         layout=layout,
         varied=f"button face at x = {face:.2f} m ({where}), {count} magnetic cubes; "

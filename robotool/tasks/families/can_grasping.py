@@ -73,13 +73,13 @@ def build(rng: np.random.Generator) -> Draft:
     base = (-0.15, -0.15, 0.15, 0.15)
     scene += scatter(rng, scene, int(rng.integers(0, 3)), ARM_CLUTTER, (-0.28, -0.44, 0.42, 0.44),
                      [drag, push, base], movable=True, margin=0.04)
-    tool = {"no_tool": None, "unsolvable": None,
-            "tool": "strip_of_paper" if on_paper else "stick, strip_of_paper"}[variant]
+    tools = {"no_tool": [], "unsolvable": [],
+             "tool": ["strip_of_paper"] if on_paper else ["stick", "strip_of_paper"]}[variant]
     where = ("inside the workspace" if variant == "no_tool"
              else f"{can_xy[0] - 0.45:.2f} m beyond the workspace{' on the paper' if on_paper else ''}")
     return Draft(
         variant=variant, category="sequential_tool_use", instruction="Grasp the can.", robot={"type": "arm"},
-        objects=[layout.place(o) for o in scene], goal={"grasped": "can"}, tool=tool, decoys=decoys,
+        objects=[layout.place(o) for o in scene], goal={"grasped": "can"}, tools=tools, decoys=decoys,
         layout=layout, varied=f"can at x = {can_xy[0]:.2f} m ({where}); "
                               f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

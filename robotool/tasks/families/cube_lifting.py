@@ -86,7 +86,7 @@ def build(rng: np.random.Generator) -> Draft:
         variant=variant, category=base.category, instruction=base.instruction,
         robot={"type": "quadruped", "position": list(layout.point(start))},
         objects=[layout.place(o) for o in scene], goal=base.goal.model_dump(exclude_none=True),
-        tool=None if variant == "unsolvable" else "surfboard", decoys=decoys, layout=layout,
+        tools=[] if variant == "unsolvable" else ["surfboard"], decoys=decoys, layout=layout,
         varied=f"cube of {cube_mass:g} kg, chair of {chair_mass:g} kg at the board's raised end; "
                f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

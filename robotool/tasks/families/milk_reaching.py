@@ -98,10 +98,10 @@ def build(rng: np.random.Generator) -> Draft:
                      [sweep, base, footprint(milk)], movable=True, margin=0.04)
     outside = milk_xy[0] - ARM_REACH_X
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
-    tool = {"no_tool": None, "tool": "hammer", "unsolvable": None}[variant]
+    tools = {"no_tool": [], "tool": ["hammer"], "unsolvable": []}[variant]
     return Draft(
         variant=variant, category="tool_selection", instruction="Grasp the milk carton.", robot={"type": "arm"},
-        objects=[layout.place(o) for o in scene], goal={"grasped": "milk"}, tool=tool, decoys=decoys,
+        objects=[layout.place(o) for o in scene], goal={"grasped": "milk"}, tools=tools, decoys=decoys,
         layout=layout, varied=f"milk at x = {milk_xy[0]:.2f} m ({where}); "
                               f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

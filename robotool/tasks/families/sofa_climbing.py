@@ -78,10 +78,10 @@ def build(rng: np.random.Generator) -> Draft:
     area = hull([footprint(o) for o in scene] + [body])
     scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
                      movable=False, margin=0.1)
-    tool = {"no_tool": None, "unsolvable": None, "tool": "box_1" if one_step else "box_1, box_2"}[variant]
+    tools = {"no_tool": [], "unsolvable": [], "tool": ["box_1"] if one_step else ["box_1", "box_2"]}[variant]
     return Draft(
         variant=variant, category="sequential_tool_use", instruction="You want to stand on top of the sofa.",
         robot={"type": "quadruped", "position": list(layout.point(start))},
-        objects=[layout.place(o) for o in scene], goal={"robot_on": "sofa"}, tool=tool, decoys=decoys,
+        objects=[layout.place(o) for o in scene], goal={"robot_on": "sofa"}, tools=tools, decoys=decoys,
         layout=layout, varied=f"sofa {height:.2f} m high; {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

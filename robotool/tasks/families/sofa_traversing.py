@@ -139,7 +139,7 @@ def build(rng: np.random.Generator) -> Draft:
         movable=False,
         margin=0.1,
     )
-    tool = "surfboard" if variant == "tool" else None
+    tools = ["surfboard"] if variant == "tool" else []
     return Draft(
         variant=variant,
         category=base.category,
@@ -147,7 +147,7 @@ def build(rng: np.random.Generator) -> Draft:
         robot={"type": "quadruped", "position": list(layout.point(start))},
         objects=[layout.place(o) for o in scene],
         goal={"robot_on": "sofa_2"},
-        tool=tool,
+        tools=tools,
         decoys=decoys,
         layout=layout,
         varied=f"gap of {gap:.2f} m between {height:.2f} m high sofas, {length:.2f} m board; "

@@ -77,14 +77,14 @@ def build(rng: np.random.Generator) -> Draft:
     scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
                      movable=False, margin=0.1)
     goal_height = 0.20 if height > MAX_DROP else 0.05
-    tool = {"no_tool": None, "unsolvable": None,
-            "tool": "soft_cushion, box_1, box_2" if cushioned else "box_1, box_2"}[variant]
+    tools = {"no_tool": [], "unsolvable": [],
+             "tool": ["soft_cushion", "box_1", "box_2"] if cushioned else ["box_1", "box_2"]}[variant]
     return Draft(
         variant=variant, category="sequential_tool_use",
         instruction="Put the glass vase down on the ground without breaking it.",
         robot={"type": "quadruped", "position": list(layout.point(start))},
         objects=[layout.place(o) for o in scene],
-        goal={"lowered": {"object": "glass_vase", "height": goal_height}}, tool=tool, decoys=decoys,
+        goal={"lowered": {"object": "glass_vase", "height": goal_height}}, tools=tools, decoys=decoys,
         layout=layout, varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
                               f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
