@@ -34,3 +34,11 @@ def test_the_dev_extra_installs_the_tools_ci_runs() -> None:
     dev = project["optional-dependencies"]["dev"]
     installed = {re.split(r"[<>=!~\[ ]", requirement, maxsplit=1)[0] for requirement in dev}
     assert {command.split()[0] for command in _ci_commands_after_install()} <= installed
+
+
+def test_slow_tests_are_marked_but_the_default_run_keeps_them() -> None:
+    tool = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]
+    pytest_options = tool["pytest"]["ini_options"]
+    assert any(marker.startswith("slow:") for marker in pytest_options["markers"])
+    assert "--strict-markers" in pytest_options["addopts"].split()
+    assert not {"-m", "-k"} & set(pytest_options["addopts"].split()), "the default run must run everything"

@@ -66,6 +66,7 @@ def _comparable(results_json: Path) -> dict[str, object]:
 
 
 @pytest.mark.skipif(planner_missing() is not None, reason="the search planner is not in this checkout")
+@pytest.mark.slow
 def test_ray_sweep_writes_the_same_results_as_the_local_executor(tmp_path: Path, local_ray: None) -> None:
     sweep = ["--tasks", "milk_reaching_near", "sofa_traversing", "--methods", "search", "no_tool", "--worlds", "1"]
     assert main([*sweep, "--out", str(tmp_path / "local")]) == 0
@@ -97,6 +98,7 @@ class DiesOnRay:
         return standin_solution(task, seed=seed, run=run)
 
 
+@pytest.mark.slow
 def test_killed_ray_workers_lose_no_run(tmp_path: Path, local_ray: None) -> None:
     logs = {m: tmp_path / f"{m}.log" for m in ("search", "no_tool")}
     solvers = {
@@ -238,6 +240,7 @@ evaluate(config, solvers={{"search": slow, "no_tool": slow}}, console=Console(qu
 """
 
 
+@pytest.mark.slow
 def test_sigkill_of_a_ray_sweep_then_rerun_records_every_run_once(tmp_path: Path) -> None:
     pytest.importorskip("ray")
     out = tmp_path / "out"

@@ -187,6 +187,7 @@ evaluate(config, solvers={{"search": slow, "no_tool": slow}}, console=Console(qu
 """
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_rerun_records_every_run_once(tmp_path: Path) -> None:
     out = tmp_path / "out"
     script = KILLABLE.format(tests=str(TESTS), out=str(out))

@@ -55,7 +55,9 @@ def _check_consistent(solution: Solution, task: Task) -> None:
     assert {"generate", "verify", "total"} <= set(solution.timings)
 
 
-@pytest.mark.parametrize("name", ["milk_reaching", "button_pressing", "sofa_traversing"])
+@pytest.mark.parametrize(
+    "name", ["milk_reaching", "button_pressing", pytest.param("sofa_traversing", marks=pytest.mark.slow)]
+)
 def test_solves_builtin_tool_tasks(name: str) -> None:
     task = tasks.load(name)
     solution = solve(task, worlds=2)
@@ -110,6 +112,7 @@ def test_planner_source_names_no_task_or_family() -> None:
     assert not found, f"the planner names {found}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("family", "seed"), [("sofa_climbing", 1021), ("sofa_climbing", 1028)])
 def test_solves_generated_staircases_that_once_failed(family: str, seed: int) -> None:
     """Regression: a last step level with the target (1021) and a box that drifted along another's face (1028)."""

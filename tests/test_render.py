@@ -199,6 +199,7 @@ def test_video_paths_name_each_world_when_there_are_several() -> None:
     assert video_paths(Path("out/run.mp4"), [0, 2]) == {0: Path("out/run-world0.mp4"), 2: Path("out/run-world2.mp4")}
 
 
+@pytest.mark.slow
 def test_run_command_writes_the_chosen_world_video(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run.mp4"
     args = ["run", "sofa_traversing", str(program_path("sofa_traversing_direct")), "--backend", "mujoco"]

@@ -16,6 +16,8 @@ from robotool import sim
 pytest.importorskip("mujoco_warp")
 from robotool.sim.backend_warp import WarpSim
 
+pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
+
 TASK = "button_pressing"
 PROGRAMS = [program(REFERENCE[TASK]), program(TOOL_FREE[TASK]), program(REFERENCE[TASK])]
 
