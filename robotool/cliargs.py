@@ -17,6 +17,7 @@ from rich.console import Console
 from rich.text import Text
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
 DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"

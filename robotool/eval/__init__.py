@@ -4,7 +4,8 @@ Modules, one job each: :mod:`~robotool.eval.config` (what to run, defaults, outp
 :mod:`~robotool.eval.instances` (which tasks), :mod:`~robotool.eval.solvers` (the methods),
 :mod:`~robotool.eval.sweep` (the resumable loop), :mod:`~robotool.eval.work` (one run as a job),
 :mod:`~robotool.eval.executor` (where runs are carried out: threads here) and
-:mod:`~robotool.eval.ray_executor` (Ray tasks on a cluster), :mod:`~robotool.eval.journal` (durable records),
+:mod:`~robotool.eval.ray_executor` (Ray tasks on a cluster), :mod:`~robotool.eval.executor_choice` (which one the
+command line names), :mod:`~robotool.eval.journal` (durable records),
 :mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.failure_classes` (failure classes),
 :mod:`~robotool.eval.grading` (key-concept accuracy), :mod:`~robotool.eval.metrics`,
 :mod:`~robotool.eval.tables`, :mod:`~robotool.eval.report`, :mod:`~robotool.eval.plots`,

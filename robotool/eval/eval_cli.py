@@ -19,6 +19,7 @@ from robotool.cliargs import (
     ADAPTERS,
     BACKEND_HELP,
     DEFAULT_WORLDS,
+    EXIT_INTERRUPTED,
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
     REPAIR_HELP,
@@ -46,7 +47,6 @@ from robotool.version import version
 
 EXIT_NOT_ATTEMPTED = 3
 """Some runs could not be attempted (the language model was unavailable); they were not recorded."""
-EXIT_INTERRUPTED = 130
 
 
 def _seeds(text: str) -> list[int]:

@@ -21,6 +21,7 @@ from robotool.cliargs import (
     ADAPTERS,
     BACKEND_HELP,
     DEFAULT_WORLDS,
+    EXIT_INTERRUPTED,
     EXIT_USAGE,
     Parser,
     count,
@@ -41,7 +42,6 @@ from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, Op
 from robotool.version import version
 
 EXIT_LM_UNAVAILABLE = 3
-EXIT_INTERRUPTED = 130
 
 
 def build_parser(prog: str = "python -m robotool.optimize") -> argparse.ArgumentParser:
