@@ -243,7 +243,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         write_plan(args.plan, task, report.rollouts[0], scene=build(task), track=recorder.tracks[0])
         console.print(f"wrote the plan of world 0 to {args.plan}", markup=False, highlight=False)
     if args.video:
-        from robotool.render.rollouts import video_paths
+        from robotool.render.run_videos import video_paths
 
         assert recorder is not None
         _write_videos(task, report.rollouts, recorder, video_paths(args.video, args.video_worlds), console)
@@ -309,7 +309,7 @@ def _run_recorder(args: argparse.Namespace) -> StateRecorder | None:
 def _write_videos(
     task: Task, rollouts: Sequence[Rollout], recorder: StateRecorder, paths: dict[int, Path], console: Console
 ) -> None:
-    from robotool.render.rollouts import write_videos
+    from robotool.render.run_videos import write_videos
 
     with console.status(f"drawing {len(paths)} video(s)"):
         videos = write_videos(task, rollouts, recorder, paths)
@@ -320,7 +320,7 @@ def _write_videos(
 
 def _solve_videos(args: argparse.Namespace, task: Task, code: str | None, console: Console) -> None:
     """Run the best program again in the chosen worlds, recorded, and write their videos to the folder."""
-    from robotool.render.rollouts import rerun_recorded
+    from robotool.render.run_videos import rerun_recorded
 
     if code is None:
         console.print("no program was found, so there is no video", style="yellow", markup=False, highlight=False)

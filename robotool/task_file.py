@@ -20,7 +20,7 @@ from pydantic import BaseModel, ValidationError
 
 from robotool import geometry
 from robotool.embodiments import LIMITS_MODELS, QuadrupedLimits
-from robotool.goal import GOALS_BY_EMBODIMENT
+from robotool.task_goal import GOALS_BY_EMBODIMENT
 from robotool.task_model import Task
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support

@@ -8,8 +8,8 @@ import yaml
 from pydantic import Field, FiniteFloat, StringConstraints
 
 from robotool.embodiments import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
-from robotool.goal import Goal
 from robotool.scene import Name, SceneObject, StrictModel
+from robotool.task_goal import Goal
 
 Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
 

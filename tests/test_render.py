@@ -20,10 +20,10 @@ from PIL import Image
 from robotool import tasks
 from robotool.cli import main
 from robotool.eval.records import Results
-from robotool.render.model import GOAL_RGBA, ROBOT_RGBA
 from robotool.render.painter import Painter
+from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA
 from robotool.render.plan import plan_figure, write_plan
-from robotool.render.rollouts import video_paths
+from robotool.render.run_videos import video_paths
 from robotool.render.still import render_scene
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, end_lines, frame_times, render_video
 from robotool.rollout import Rollout, SkillCall

@@ -15,10 +15,10 @@ from robotool.cli import main
 from robotool.describe import describe
 from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.execute import run
-from robotool.goal import Goal, LiftGoal
 from robotool.planner import solve
 from robotool.scene import Fragile, SceneObject
 from robotool.task_file import TaskFileError, load_task, parse_task
+from robotool.task_goal import Goal, LiftGoal
 from robotool.task_model import Robot, Task
 
 DOCS = Path(__file__).parent.parent / "docs"

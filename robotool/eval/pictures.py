@@ -102,7 +102,7 @@ def _replay(
 
     Returns whether it ended as recorded (same failure); the caption says so when it did not.
     """
-    from robotool.render.rollouts import rerun_recorded
+    from robotool.render.run_videos import rerun_recorded
     from robotool.render.still import render_state
 
     assert record.code is not None

@@ -2,7 +2,7 @@
 validation after -> a compiled program file.
 
 The student is a :class:`~robotool.lm_program.Proposer` (the four stages, one candidate per task): optimisers
-see exactly its predictors, and the :class:`~robotool.optimize.metric.Metric` verifies what it proposes in
+see exactly its predictors, and the :class:`~robotool.optimize.verified_metric.Metric` verifies what it proposes in
 simulation. The log folder holds ``settings.json`` (what the run was asked to do), the optimiser's own
 checkpoints (GEPA resumes from them; MIPROv2 writes its trials there), the planner's solved instances
 (``planner-demos`` reuses them) and the validation scores; DSPy's LM cache makes a rerun of the LM calls
@@ -25,7 +25,7 @@ from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compile
 from robotool.lm_program import Proposer
 from robotool.optimize.data import Splits, check_training, splits
 from robotool.optimize.demos import Say, planner_demonstrations
-from robotool.optimize.metric import Metric
+from robotool.optimize.verified_metric import Metric
 
 Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
 OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")

@@ -15,8 +15,8 @@ from PIL import Image
 
 from robotool.errors import RobotoolError
 from robotool.render.camera import fit_camera, geom_corners, visible_geoms
-from robotool.render.model import ROBOT_RGBA, RenderModel, render_model
 from robotool.render.overlay import CaptionLine, Label, draw_caption, draw_labels, to_image
+from robotool.render.picture_model import ROBOT_RGBA, RenderModel, render_model
 from robotool.sim.build import Scene
 
 GL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri libopengl0"  # Debian packages behind MUJOCO_GL=egl

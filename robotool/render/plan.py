@@ -21,7 +21,7 @@ from matplotlib.patches import Polygon, Rectangle
 
 from robotool import geometry
 from robotool.embodiments import skills
-from robotool.render.model import GOAL_RGBA, ROBOT_RGBA, object_colours
+from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
 from robotool.sim.arm import HOME as ARM_HOME
