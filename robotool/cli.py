@@ -236,7 +236,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         _write(args.json, lambda: args.json.write_text(report.model_dump_json(indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     if args.plan:
-        from robotool.render.plan import write_plan
+        from robotool.render.top_view import write_plan
         from robotool.sim import build
 
         assert recorder is not None

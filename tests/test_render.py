@@ -22,9 +22,9 @@ from robotool.cli import main
 from robotool.eval.records import Results
 from robotool.render.painter import Painter
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA
-from robotool.render.plan import plan_figure, write_plan
 from robotool.render.run_videos import video_paths
 from robotool.render.still import render_scene
+from robotool.render.top_view import plan_figure, write_plan
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, end_lines, frame_times, render_video
 from robotool.rollout import Rollout, SkillCall
 from robotool.sim.recorder import StateRecorder

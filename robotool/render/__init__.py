@@ -7,7 +7,7 @@
 - :mod:`robotool.render.still` — ``render_scene`` (a task at its start) and ``render_state`` (a world at its end).
 - :mod:`robotool.render.video` — recorded states -> captioned frames -> MP4 (PyAV).
 - :mod:`robotool.render.run_videos` — videos of program runs (record chosen worlds, write one MP4 each).
-- :mod:`robotool.render.plan` — a top-down plan of a rollout (matplotlib, no OpenGL).
+- :mod:`robotool.render.top_view` — a top-down plan of a rollout (matplotlib, no OpenGL).
 
 States are recorded during a run by :class:`robotool.sim.recorder.StateRecorder`, only when asked for.
 """
