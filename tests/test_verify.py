@@ -54,3 +54,17 @@ def test_successful_candidates_still_prefer_fewer_objects_and_calls() -> None:
     direct = _candidate(1, [_world(True, {"held": True}, done=3, touched=1)])
     failed = _candidate(2, [_world(False, {"held": True, "lifted": False}, done=9, touched=0)])
     assert [c.index for c in rank([tool_use, failed, direct])] == [1, 0, 2]
+
+
+def test_a_candidate_failure_renders_each_kind_as_people_read_it() -> None:
+    from robotool.solution import CandidateFailure
+
+    assert str(CandidateFailure(stage="coder", kind="no_reply", reason="no code block")) == "coder: no code block"
+    assert str(CandidateFailure(stage="repair", kind="no_reply", reason="empty")) == "repair: empty"
+    assert str(CandidateFailure(stage="planner", kind="fault", reason="KeyError: 'x'")) == "planner: KeyError: 'x'"
+    rejected = CandidateFailure(stage="search", kind="rejected", reason="line 2: import is not allowed")
+    assert str(rejected) == "planner produced invalid code: line 2: import is not allowed"
+    worlds = CandidateFailure(stage="simulation", kind="worlds_failed", reason="goal not reached: held",
+                              failed_worlds=1, worlds=3, world=2)
+    assert str(worlds) == "1/3 worlds failed; world 2: goal not reached: held"
+    assert CandidateFailure.model_validate_json(worlds.model_dump_json()) == worlds  # a record, not a text
