@@ -14,8 +14,12 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "robotool"
 
-ROLE_MODULES = frozenset({"__init__", "__main__"})
-"""Module names whose job is their role in a package, so every package may have one."""
+ROLE_MODULES = frozenset({"__main__"})
+"""Module names whose job is their role in a package, so every package may have one (an ``__init__`` is named as
+its package)."""
+
+PLUG_INS = "robotool.robots."
+"""Plug-in packages (one per robot) whose modules may repeat a role's name: each robot has its own ``skills``."""
 
 SHARED_MODULE_NAMES: dict[str, str] = {
     "planner": "signatures/planner.py is the paper's Planner stage; the planner package is the LM-free search planner",
@@ -150,20 +154,35 @@ def _own_name(module: str) -> str:
     return module.rpartition(".")[2].removesuffix("s")
 
 
-def test_no_two_modules_or_packages_share_a_name() -> None:
+def _plug_in_roles(modules: list[str]) -> bool:
+    """Modules of one role, each in its own plug-in package (``robotool.robots.<robot>.skills`` and the like)."""
+    owners = [m.split(".")[2] if m.startswith(PLUG_INS) and m.count(".") >= 3 else None for m in modules]
+    return None not in owners and len(set(owners)) == len(owners)
+
+
+def shared_module_names(modules: list[str]) -> dict[str, list[str]]:
+    """Names (singular) that more than one module or package has, but for one role in several plug-ins."""
     by_name: dict[str, list[str]] = defaultdict(list)
-    for module, path in _modules().items():
-        if path.stem not in ROLE_MODULES - {"__init__"} and module != "robotool":
+    for module in modules:
+        if module != "robotool" and module.rpartition(".")[2] not in ROLE_MODULES:
             by_name[_own_name(module)].append(module)
-    shared = {name: found for name, found in by_name.items() if len(found) > 1}
+    return {name: found for name, found in by_name.items() if len(found) > 1 and not _plug_in_roles(found)}
+
+
+def test_no_two_modules_or_packages_share_a_name() -> None:
+    shared = shared_module_names(list(_modules()))
     assert set(shared) - set(SHARED_MODULE_NAMES) == set(), f"modules sharing a name: {shared}"
     gone = set(SHARED_MODULE_NAMES) - set(shared)
     assert not gone, f"no longer shared, remove from SHARED_MODULE_NAMES: {gone}"
 
 
-def test_a_plural_twin_is_the_same_name() -> None:
+def test_a_plural_twin_is_the_same_name_and_plug_ins_may_repeat_a_role() -> None:
     assert _own_name("robotool.programs") == _own_name("robotool.program") == "program"
     assert _own_name("robotool.tasks") == _own_name("robotool.sim.task") == "task"
+    per_robot = ["robotool.robots.arm.skills", "robotool.robots.quadruped.skills"]
+    assert shared_module_names(per_robot) == {}
+    assert shared_module_names([*per_robot, "robotool.sim.skills"]) == {"skill": [*per_robot, "robotool.sim.skills"]}
+    assert shared_module_names(["robotool.robots.arm.goals", "robotool.robots.arm.sim.goals"]) != {}
 
 
 def test_no_two_public_classes_share_a_name() -> None:
