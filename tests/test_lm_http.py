@@ -8,7 +8,7 @@ from pathlib import Path
 
 import dspy
 import pytest
-from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script
+from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script, stage_rules
 
 from robotool import tasks
 from robotool.cli import main
@@ -20,16 +20,6 @@ from robotool.standin import Rule, Script, StandinServer
 TASK = "milk_reaching_near"
 
 
-def _rules(script: dict[str, list[str]], **overrides: list[Rule]) -> list[Rule]:
-    """One rule per stage answering with its scripted reply, after any override rules for that stage."""
-    rules: list[Rule] = []
-    for stage, marker in STAGE_MARKERS.items():
-        for rule in overrides.get(stage, []):
-            rules.append(rule.model_copy(update={"match": marker}))
-        rules.append(Rule(match=marker, reply=script[stage][0]))
-    return rules
-
-
 def _solve(server: StandinServer, timeout: float | None = None, **options):
     lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=1, timeout=timeout)
     with dspy.context(lm=lm, adapter=dspy.ChatAdapter(use_json_adapter_fallback=False)):
@@ -37,7 +27,7 @@ def _solve(server: StandinServer, timeout: float | None = None, **options):
 
 
 def test_solves_over_http() -> None:
-    with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+    with StandinServer(Script(rules=stage_rules(arm_script([GRASP_DIRECTLY])))) as server:
         solution = _solve(server)
         assert solution.success
         assert len(server.requests) == 4
@@ -46,7 +36,7 @@ def test_solves_over_http() -> None:
 
 
 def test_rate_limit_is_retried() -> None:
-    rules = _rules(arm_script([GRASP_DIRECTLY]), planner=[Rule(status=429, times=1)])
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), planner=[Rule(status=429, times=1)])
     with StandinServer(Script(rules=rules)) as server:
         solution = _solve(server)
         assert solution.success
@@ -54,7 +44,7 @@ def test_rate_limit_is_retried() -> None:
 
 
 def test_server_errors_on_every_retry_end_the_solve_with_a_typed_error() -> None:
-    rules = _rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(status=500)])
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(status=500)])
     with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
         _solve(server)
     assert raised.value.kind == "retries_exhausted"
@@ -62,7 +52,7 @@ def test_server_errors_on_every_retry_end_the_solve_with_a_typed_error() -> None
 
 
 def test_no_answer_within_the_timeout_ends_the_solve_with_a_typed_error() -> None:
-    rules = _rules(arm_script([GRASP_DIRECTLY]), calculator=[Rule(delay=2.0, reply="late")])
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), calculator=[Rule(delay=2.0, reply="late")])
     with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
         _solve(server, timeout=0.5)
     assert raised.value.kind == "retries_exhausted"
@@ -70,7 +60,7 @@ def test_no_answer_within_the_timeout_ends_the_solve_with_a_typed_error() -> Non
 
 
 def test_malformed_analyzer_reply_leaves_candidates_to_run_without_key_concepts() -> None:
-    rules = _rules(arm_script([GRASP_DIRECTLY]), analyzer=[Rule(reply="{ this is not the format")])
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), analyzer=[Rule(reply="{ this is not the format")])
     with StandinServer(Script(rules=rules)) as server:
         solution = _solve(server, candidates=2)
     assert solution.success and solution.stages.key_concepts is None
@@ -80,7 +70,7 @@ def test_malformed_analyzer_reply_leaves_candidates_to_run_without_key_concepts(
 
 
 def test_cli_solve_against_the_standin(tmp_path: Path, capsys) -> None:
-    with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+    with StandinServer(Script(rules=stage_rules(arm_script([GRASP_DIRECTLY])))) as server:
         status = main(
             [
                 "solve",
@@ -219,7 +209,7 @@ def test_library_raises_a_typed_error_without_a_key(monkeypatch) -> None:
 def test_cli_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) -> None:
     dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=True)
     try:
-        with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+        with StandinServer(Script(rules=stage_rules(arm_script([GRASP_DIRECTLY])))) as server:
             args = ["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--worlds", "1"]
             assert main(args) == 0
             assert "from DSPy's cache" not in capsys.readouterr().out
@@ -232,7 +222,7 @@ def test_cli_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) -
 
 
 def test_cli_logs_prompts_and_the_standin_logs_requests(tmp_path: Path, capsys) -> None:
-    script = Script(rules=_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(reply="Sorry, no.", times=1)]))
+    script = Script(rules=stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(reply="Sorry, no.", times=1)]))
     with StandinServer(script, log=tmp_path / "standin.jsonl") as server:
         status = main(
             [
@@ -321,7 +311,7 @@ def test_eval_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) 
 
     dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=True)
     try:
-        with StandinServer(Script(rules=_rules(arm_script([GRASP_DIRECTLY])))) as server:
+        with StandinServer(Script(rules=stage_rules(arm_script([GRASP_DIRECTLY])))) as server:
             for out in ("first", "second"):  # the second folder runs everything again, from the cache
                 assert (
                     eval_main(

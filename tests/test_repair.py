@@ -10,9 +10,8 @@ from pathlib import Path
 import dspy
 import pytest
 from fixtures.reference import program
-from fixtures.scripted_lm import REPAIR_MARKER, STAND_STILL, chat_reply, scripted_lm
+from fixtures.scripted_lm import REPAIR_MARKER, STAND_STILL, chat_reply, scripted_lm, stage_rules
 from rich.console import Console
-from test_lm_http import _rules
 
 from robotool import tasks
 from robotool.cli import main
@@ -188,7 +187,7 @@ def test_negative_budgets_are_refused() -> None:
 def test_solve_over_http_shows_the_trace_readably_prints_the_round_and_writes_it(tmp_path: Path, capsys) -> None:
     script = _script(PUSH_SHORT, [_repair_reply(PUSH_AND_WALK)])
     report = tmp_path / "r.json"
-    rules = [Rule(match=REPAIR_MARKER, reply=script["repair"][0]), *_rules(script)]  # before the Coder's rule
+    rules = [Rule(match=REPAIR_MARKER, reply=script["repair"][0]), *stage_rules(script)]  # before the Coder's rule
     with StandinServer(Script(rules=rules)) as server:
         args = ["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"]
         status = main([*args, "--worlds", "1", "--repair", "2", "--json", str(report)])

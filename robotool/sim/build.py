@@ -34,7 +34,7 @@ DEFAULT_FRICTION = 0.5
 # Welds (grasps, magnetic joins) are nearly hard. MuJoCo scales a constraint's stiffness with the
 # bodies' effective mass, so under a given force a light object's weld gives way in proportion to
 # 1 / mass; the shortest stable time constant (2 steps) and an impedance of 0.999 keep a chain of 50 g
-# cubes within about a degree when the servo shoves it sideways with ~40 N (tests/test_sim_grasp.py).
+# cubes within about a degree when the servo shoves it sideways with ~40 N (tests/robots/arm/test_grasp.py).
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
 WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate

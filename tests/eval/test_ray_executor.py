@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from fixtures.standin_solution import standin_solution
 from rich.console import Console
-from test_eval_runner import standin_solution
 
 from robotool.errors import LMUnavailableError
 from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
@@ -27,14 +27,15 @@ from robotool.solution import Solution
 from robotool.standin import Script, StandinServer
 from robotool.task_model import Task
 
-TESTS = Path(__file__).parent
+TESTS = Path(__file__).parents[1]
+REPO = TESTS.parent
 
 
 @pytest.fixture(scope="module")
 def local_ray() -> Iterator[None]:
     """A Ray on this machine with 2 CPUs; its workers import this folder's modules (the test solvers)."""
     ray = pytest.importorskip("ray")
-    path = os.pathsep.join(p for p in (str(TESTS), os.environ.get("PYTHONPATH", "")) if p)
+    path = os.pathsep.join(p for p in (str(TESTS), str(REPO), os.environ.get("PYTHONPATH", "")) if p)
     ray.init(num_cpus=2, include_dashboard=False, object_store_memory=80 * 2**20, logging_level=logging.ERROR,
              log_to_driver=False, runtime_env={"env_vars": {"PYTHONPATH": path}})
     try:
@@ -135,7 +136,7 @@ def test_lm_runs_on_ray_match_the_local_executor_over_http(tmp_path: Path, local
     """The LM travels with the Ray task and its workers call the stand-in server over HTTP."""
     from robotool.eval.ray_executor import RayExecutor
 
-    example = TESTS.parent / "examples" / "standin" / "milk_reaching.json"
+    example = REPO / "examples" / "standin" / "milk_reaching.json"
     with StandinServer(Script.model_validate_json(example.read_text())) as server:
         lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=1)
         config = EvalConfig(tasks=["milk_reaching"], methods=["robotool"], settings=Settings(worlds=1),
@@ -226,7 +227,7 @@ import ray
 from rich.console import Console
 from robotool.eval import EvalConfig, Settings, evaluate
 from robotool.eval.ray_executor import RayExecutor
-from test_eval_runner import standin_solution
+from fixtures.standin_solution import standin_solution
 
 def slow(task, *, seed, run):
     time.sleep(0.5)
@@ -244,7 +245,7 @@ evaluate(config, solvers={{"search": slow, "no_tool": slow}}, console=Console(qu
 def test_sigkill_of_a_ray_sweep_then_rerun_records_every_run_once(tmp_path: Path) -> None:
     pytest.importorskip("ray")
     out = tmp_path / "out"
-    path = os.pathsep.join(p for p in (str(TESTS), os.environ.get("PYTHONPATH", "")) if p)
+    path = os.pathsep.join(p for p in (str(TESTS), str(REPO), os.environ.get("PYTHONPATH", "")) if p)
     script = KILLABLE_ON_RAY.format(tests=str(TESTS), out=str(out), path=path)
     journal = out / JOURNAL
     process = subprocess.Popen([sys.executable, "-c", script])

@@ -14,25 +14,16 @@ from pathlib import Path
 import dspy
 import pytest
 from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, scripted_lm
+from fixtures.standin_solution import standin_solution
 from rich.console import Console
 
 from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import METHODS, planner_missing
-from robotool.rollout import Rollout, SkillCall
-from robotool.solution import Candidate, Solution, StageOutputs
+from robotool.solution import Solution
 from robotool.task_model import Task
 
-TESTS = Path(__file__).parent
-
-
-def standin_solution(task: Task, *, seed: int, run: int) -> Solution:
-    """TEST FIXTURE standing in for ``robotool.planner.solve``: a hand-made solved run (no simulation)."""
-    world = Rollout(world=0, seed=seed, success=True, conditions={"goal": True},
-                    calls=[SkillCall(skill="get_position", args=[task.goal.object], outcome="done")])
-    candidate = Candidate(index=0, code="pass", rollouts=[world])
-    return Solution(task=task.name, method="standin", code="pass", best=0, success_rate=1.0,
-                    candidates=[candidate], stages=StageOutputs())
+TESTS = Path(__file__).parents[1]
 
 
 STANDINS = {"search": standin_solution, "no_tool": standin_solution}
@@ -175,7 +166,7 @@ sys.path.insert(0, {tests!r})
 from pathlib import Path
 from rich.console import Console
 from robotool.eval import EvalConfig, Settings, evaluate
-from test_eval_runner import standin_solution
+from fixtures.standin_solution import standin_solution
 
 def slow(task, *, seed, run):
     time.sleep(0.15)

@@ -8,8 +8,8 @@ import json
 from pathlib import Path
 
 import pytest
+from fixtures.standin_solution import standin_solution
 from rich.console import Console
-from test_eval_runner import standin_solution
 
 from robotool import tasks
 from robotool.errors import LMUnavailableError

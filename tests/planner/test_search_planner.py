@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 import yaml
+from fixtures.paths import REPO
 
 from robotool import tasks
 from robotool.planner import solve
@@ -16,7 +16,7 @@ from robotool.solution import Solution
 from robotool.task_file import parse_task
 from robotool.task_model import Task
 
-PLANNER = Path(__file__).resolve().parents[1] / "robotool" / "planner"
+PLANNER = REPO / "robotool" / "planner"
 
 
 def _renamed(task: Task, mirror_y: bool) -> Task:

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from fixtures.paths import FIXTURES
 from fixtures.sandbox_driver import run_to_end
 
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
@@ -19,7 +20,7 @@ from robotool.sandbox import SandboxLimits, SandboxSession, layers_in_use, start
 from robotool.sandbox.allowlist import NUMPY_FUNCTIONS, NUMPY_LINALG
 from robotool.sandbox.zygote import Zygote, zygote
 
-ESCAPES = Path(__file__).parent / "fixtures" / "escapes"
+ESCAPES = FIXTURES / "escapes"
 LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=20_000, max_skill_calls=50)
 
 

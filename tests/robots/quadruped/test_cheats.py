@@ -9,10 +9,10 @@ surfboard can span.
 from __future__ import annotations
 
 import functools
-from pathlib import Path
 from typing import Any
 
 import pytest
+from fixtures.paths import FIXTURES
 
 from robotool import sim, tasks
 from robotool.rollout import Rollout
@@ -20,8 +20,8 @@ from robotool.sandbox import start_sessions
 from robotool.task_file import parse_task
 from robotool.task_model import Task
 
-CHEATS = Path(__file__).parent / "fixtures" / "cheats"
-PROGRAMS = Path(__file__).parent / "fixtures" / "programs"
+CHEATS = FIXTURES / "cheats"
+PROGRAMS = FIXTURES / "programs"
 
 
 def _variant(name: str) -> Task:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fixtures.paths import FIXTURES
 
 from robotool.embodiments import skills
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
@@ -22,7 +23,7 @@ from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, vali
 from robotool.sandbox.validate import ProgramRejected
 from robotool.sandbox.zygote import Zygote, zygote
 
-HOSTILE = sorted(Path(__file__).parent.joinpath("fixtures", "hostile").glob("*.py"))
+HOSTILE = sorted((FIXTURES / "hostile").glob("*.py"))
 CANARY = Path("/tmp/robotool-sandbox-canary")
 FAST = SandboxLimits(cpu_s=0.5, wall_s=20.0, memory_mb=128, max_output_chars=5_000, max_skill_calls=50)
 QUERY_VALUES: dict[str, object] = {
