@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 from pydantic import BaseModel, ConfigDict, Field
 
 
@@ -20,11 +22,32 @@ class SandboxLimits(BaseModel):
         30.0, gt=0, description="wall seconds while the runner waits on the program, summed over its run"
     )
     memory_mb: int = Field(256, gt=0, description="address space the program may add to the worker, MiB")
+    batch_memory_mb: int | None = Field(
+        None,
+        gt=0,
+        description="address space all programs of one batch may add together, MiB (default: half of this "
+        "machine's physical memory); each of N programs gets at most batch_memory_mb / N",
+    )
     max_output_chars: int = Field(20_000, gt=0, description="characters the program may print")
     max_batch_output_chars: int = Field(
         1_000_000, gt=0, description="characters kept from the output of all programs of one batch together"
     )
     max_skill_calls: int = Field(500, gt=0, description="skill calls (queries and motions) per program")
 
+    def for_batch(self, programs: int) -> SandboxLimits:
+        """The limits of each program of a batch of ``programs`` that run at once: ``memory_mb`` cut to
+        an equal share of the batch's memory, so that the batch together cannot exhaust the machine
+        (the worker's address-space limit is what enforces it). Raises ``ValueError`` when a share would
+        be under 1 MiB."""
+        batch_mb = self.batch_memory_mb or _half_of_physical_memory_mb()
+        share = batch_mb // max(programs, 1)
+        if share < 1:
+            raise ValueError(f"a batch of {programs} programs does not fit in {batch_mb} MiB of sandbox memory")
+        return self.model_copy(update={"memory_mb": min(self.memory_mb, share)})
+
     def skill_calls_exceeded(self) -> str:
         return f"skill call limit exceeded (more than {self.max_skill_calls} calls)"
+
+
+def _half_of_physical_memory_mb() -> int:
+    return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2 // 2**20

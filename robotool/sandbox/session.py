@@ -63,7 +63,7 @@ class SandboxSession:
     ):
         self.code = code
         self.embodiment: EmbodimentName = embodiment
-        self.limits = limits or SandboxLimits()
+        self.limits = (limits or SandboxLimits()).for_batch(1)  # a batch's share is already smaller
         self._ended: ProgramEnded | None = None
         self._output: list[str] = []
         self._output_chars = 0
@@ -190,9 +190,10 @@ def start_sessions(
 ) -> list[SandboxSession]:
     """One session per program, their workers spawned in one batch (a rejected program's is released).
 
-    The batch shares one output budget (``limits.max_batch_output_chars``).
+    The batch shares one output budget (``limits.max_batch_output_chars``) and its memory: each program
+    may add at most ``limits.batch_memory_mb / len(codes)`` MiB (see :meth:`SandboxLimits.for_batch`).
     """
-    limits = limits or SandboxLimits()
+    limits = (limits or SandboxLimits()).for_batch(len(codes))
     budget = OutputBudget(limits.max_batch_output_chars)
     workers = zygote().spawn(len(codes))
     return [

@@ -117,6 +117,32 @@ def test_memory_and_cpu_limits_hold_without_the_python_checks() -> None:
     assert spin.error == "CPU time limit exceeded (0.3 s)"
 
 
+def test_a_batch_shares_one_memory_budget() -> None:
+    """Each of a batch's N programs may add ``batch_memory_mb / N``: with only the per-program limit, 256
+    default workers (256 MiB each) could hold 64 GiB at once, more than most hosts have."""
+    limits = LIMITS.model_copy(update={"memory_mb": 256, "batch_memory_mb": 64})
+    fits, too_big = "x = b'x' * 12 * 2**20\nprint(len(x) // 2**20)\n", "x = b'x' * 20 * 2**20\n"
+    sessions = start_sessions([fits, too_big, fits, too_big], "arm", limits)
+    ended = []
+    for session in sessions:
+        session.resume(None)
+        ended.append(session.wait())
+        session.close()
+    share = ProgramEnded(error="memory limit exceeded (16 MiB)")
+    assert ended == [ProgramEnded(error=None, output="12\n"), share, ProgramEnded(error=None, output="12\n"), share]
+    alone = run_unchecked(too_big, limits.model_copy(update={"batch_memory_mb": 8}))
+    assert alone.error == "memory limit exceeded (8 MiB)"  # one program never gets more than the batch
+
+
+def test_the_default_batch_memory_fits_the_machine() -> None:
+    physical_mb = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2**20
+    for programs in (1, 16, 256, 4096):
+        assert SandboxLimits().for_batch(programs).memory_mb * programs <= physical_mb // 2
+    assert SandboxLimits().for_batch(1).memory_mb == 256
+    with pytest.raises(ValueError, match="a batch of 100 programs does not fit in 64 MiB"):
+        SandboxLimits(batch_memory_mb=64).for_batch(100)
+
+
 def test_worker_stderr_never_reaches_the_host(capfd: pytest.CaptureFixture[str]) -> None:
     recursion = f"def {'f' * 5000}(n):\n    return {'f' * 5000}(n + 1)\n{'f' * 5000}(0)\n"
     assert run_unchecked(recursion).error == "line 2: RecursionError: maximum recursion depth exceeded"
@@ -215,6 +241,19 @@ def test_raw_system_calls_from_native_code_are_denied() -> None:
     assert ended.error is None, ended.error
     lines = ended.output.splitlines()
     assert len(lines) == 10 and all(line.endswith(" denied 1") for line in lines), ended.output
+
+
+def test_kernel_interfaces_to_other_processes_and_descriptors_are_denied() -> None:
+    """ptrace, process_vm_readv/writev, userfaultfd, io_uring, bpf, perf events, keyrings, mount, setns,
+    clone3, personality, prctl, TIOCSTI, openat2, file handles, SCM_RIGHTS, executable or shared memory,
+    execveat, getdents, dup/close of the host socket, rlimits, signals to other processes, module loading:
+    each fails with EPERM (mapping the socket is refused by the kernel itself, ENODEV)."""
+    ended = run_unchecked((ESCAPES / "kernel_surfaces.py").read_text())
+    assert ended.error is None, ended.error
+    outcomes = dict(line.rsplit(" ", 1) for line in ended.output.splitlines())
+    assert len(outcomes) == 50
+    assert outcomes.pop("mmap socket denied") == "19"
+    assert set(outcomes.values()) == {"1"} and all(o.endswith(" denied") for o in outcomes), ended.output
 
 
 def test_system_calls_through_a_foreign_abi_kill_the_worker() -> None:
