@@ -173,6 +173,21 @@ class _Skill:
         return f"<skill {self._spec.name}>"
 
 
+class _Print:
+    """The program's ``print``: a bound method's repr would show the worker's internals and an address."""
+
+    __slots__ = ("_program",)
+
+    def __init__(self, program: _Program):
+        self._program = program
+
+    def __call__(self, *args: object, sep: object = None, end: object = None, flush: object = False) -> None:
+        self._program.print(*args, sep=sep, end=end)
+
+    def __repr__(self) -> str:
+        return "<built-in function print>"
+
+
 class _Program:
     """One program's namespace, output buffer and skill-call channel."""
 
@@ -192,7 +207,7 @@ class _Program:
         only tests of the OS layers ask for it (see ``SandboxSession``).
         """
         warnings.showwarning = self.show_warning
-        every_builtin = {**vars(builtins), "print": self.print}
+        every_builtin = {**vars(builtins), "print": _Print(self)}
         self.namespace = {"__builtins__": self.builtins() if python_checks else every_builtin}
         self.namespace.update({spec.name: _Skill(self, spec) for spec in skills(self.embodiment)})
         try:
@@ -216,7 +231,7 @@ class _Program:
 
     def builtins(self) -> dict[str, Any]:
         table = {name: getattr(builtins, name) for name in BUILTINS}
-        table["print"] = self.print
+        table["print"] = _Print(self)
         table["__import__"] = _import
         return table
 

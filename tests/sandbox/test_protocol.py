@@ -44,6 +44,8 @@ def test_reprs_name_skills_and_numpy_functions_without_internals() -> None:
     assert ended.output == "<function np.linalg.norm> <function np.clip>\n"
     ended = run("print(repr(move_to_position))\n", unchecked=True)
     assert ended.output == "<skill move_to_position>\n"
+    ended = run("print(print)\nprint(1, 2, sep=print)\n")
+    assert ended.output == "<built-in function print>\n1<built-in function print>2\n"
 
 
 def test_no_host_path_appears_in_an_error() -> None:
