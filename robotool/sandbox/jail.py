@@ -16,6 +16,11 @@ starts and reported as :class:`SandboxLayers`:
   ends the kernel kills everything left in the PID namespace.
 - **empty root**: each worker ``chroot``s into a directory (mode 0700, owned by the host's user) that
   was deleted right after it was made, so no file can be named, listed or created.
+- **memory cgroup**: the zygote moves into a memory cgroup (v2 ``memory.max``, or v1
+  ``memory.limit_in_bytes``) capped at the sandbox memory budget, so every worker it forks is in it too:
+  however many batches and hosts run at once, their workers together cannot take more of the
+  machine's memory (the kernel kills the largest worker inside the cgroup instead). Sandboxes with
+  the same budget under the same parent cgroup share one.
 - **unprivileged uid**: workers drop to ``nobody`` (when the host runs as root) and every capability
   (also those a user namespace grants), set no-new-privileges and are not dumpable, so their
   ``/proc`` entries and memory are closed to each other.
@@ -31,6 +36,7 @@ import os
 import socket
 import tempfile
 import warnings
+from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict
@@ -161,6 +167,40 @@ def enter_namespaces() -> tuple[list[str], dict[str, str]]:
     return entered, missing
 
 
+def join_memory_cgroup(limit_mb: int) -> str | None:
+    """Move this process (and so every process it forks later) into the memory cgroup
+    ``robotool-sandbox-<limit_mb>mb`` (placed by :func:`_memory_cgroup_directory`), capped at ``limit_mb``;
+    None, or why not."""
+    try:
+        directory, limit_file = _memory_cgroup_directory()
+        directory = directory / f"robotool-sandbox-{limit_mb}mb"
+        directory.mkdir(exist_ok=True)
+        (directory / limit_file).write_text(str(limit_mb * 2**20))
+        (directory / "cgroup.procs").write_text(str(os.getpid()))
+    except (OSError, ValueError) as e:
+        return str(e)
+    return None
+
+
+def _memory_cgroup_directory() -> tuple[Path, str]:
+    """Where to make the sandbox's memory cgroup (v1: inside this process's own; v2: next to it) and the
+    name of its limit file (``memory.max`` on v2, ``memory.limit_in_bytes`` on v1); ``ValueError`` when
+    there is no memory controller to use."""
+    mounts = [line.split() for line in Path("/proc/self/mounts").read_text().splitlines()]
+    for line in Path("/proc/self/cgroup").read_text().splitlines():
+        _, controllers, path = line.split(":", 2)
+        if "memory" in controllers.split(","):
+            v1 = next((m[1] for m in mounts if m[2] == "cgroup" and "memory" in m[3].split(",")), None)
+            if v1 is not None:
+                return Path(v1 + path), "memory.limit_in_bytes"
+        elif controllers == "":  # v2: a process may only sit in a leaf, so the new cgroup is a sibling
+            for mount in (m[1] for m in mounts if m[2] == "cgroup2"):
+                parent = Path(mount + path) if path == "/" else Path(mount + path).parent
+                if "memory" in (parent / "cgroup.subtree_control").read_text().split():
+                    return parent, "memory.max"
+    raise ValueError("no memory cgroup controller is available to this process")
+
+
 class _FilterProgram(ctypes.Structure):
     """``struct sock_fprog``: a BPF program for ``prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ...)``."""
 
@@ -219,8 +259,11 @@ class WorkerJail:
         the zygote; each where it works.
 
         Called in the worker before it waits for its program; whatever fails is absent from the
-        layers the probe reported, and the rest still apply.
+        layers the probe reported, and the rest still apply. The worker also becomes the kernel's first
+        choice when memory runs out (in its cgroup or on the machine), before the zygote or the host.
         """
+        with contextlib.suppress(OSError), open("/proc/self/oom_score_adj", "w") as adjust:
+            adjust.write("1000")
         if self._root_fd is not None:
             with contextlib.suppress(OSError):
                 os.fchdir(self._root_fd)
@@ -250,8 +293,9 @@ class WorkerJail:
                 code = ctypes.get_errno()
                 raise OSError(code, os.strerror(code))
 
-    def probe(self, namespaces: list[str], missing: dict[str, str]) -> SandboxLayers:
-        """Apply every layer in a throw-away child and test each; the layers that held."""
+    def probe(self, namespaces: list[str], missing: dict[str, str], cgroup_problem: str | None) -> SandboxLayers:
+        """Apply every layer in a throw-away child and test each; the layers that held (with the memory
+        cgroup, which the caller joined or could not: ``cgroup_problem``)."""
         read_end, write_end = os.pipe()
         pid = os.fork()
         if pid == 0:  # the probe child: report a bit per layer that held, then exit
@@ -276,6 +320,10 @@ class WorkerJail:
         held = reply[0] if reply else 0
         layers = [f"{name} namespace" if name != "user namespace" else name for name in namespaces]
         missing = dict(missing)
+        if cgroup_problem is None:
+            layers.append("memory cgroup")
+        else:
+            missing["memory cgroup"] = cgroup_problem
         for bit, layer, why in (
             (1, "empty root", "chroot is not permitted"),
             (2, "uid nobody", "the host does not run as root"),

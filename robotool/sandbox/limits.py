@@ -39,7 +39,7 @@ class SandboxLimits(BaseModel):
         an equal share of the batch's memory, so that the batch together cannot exhaust the machine
         (the worker's address-space limit is what enforces it). Raises ``ValueError`` when a share would
         be under 1 MiB."""
-        batch_mb = self.batch_memory_mb or _half_of_physical_memory_mb()
+        batch_mb = self.batch_memory_mb or default_batch_memory_mb()
         share = batch_mb // max(programs, 1)
         if share < 1:
             raise ValueError(f"a batch of {programs} programs does not fit in {batch_mb} MiB of sandbox memory")
@@ -49,5 +49,6 @@ class SandboxLimits(BaseModel):
         return f"skill call limit exceeded (more than {self.max_skill_calls} calls)"
 
 
-def _half_of_physical_memory_mb() -> int:
+def default_batch_memory_mb() -> int:
+    """Half of this machine's physical memory, in MiB: what all sandboxed programs may hold by default."""
     return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2 // 2**20

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from robotool.sandbox import jail, worker
+from robotool.sandbox.limits import default_batch_memory_mb
 
 MAX_SPARES = 256
 """Most idle workers the zygote keeps ready."""
@@ -70,9 +71,10 @@ class Worker(NamedTuple):
 
 
 class Zygote:
-    """Host-side handle on the zygote process."""
+    """Host-side handle on the zygote process, whose workers together may hold at most ``memory_mb`` MiB
+    (default: :func:`~robotool.sandbox.limits.default_batch_memory_mb`) where a memory cgroup is available."""
 
-    def __init__(self) -> None:
+    def __init__(self, memory_mb: int | None = None) -> None:
         self._control, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         self._control.settimeout(_REPLY_TIMEOUT_S)
         package_root = str(Path(__file__).resolve().parents[2])
@@ -86,7 +88,13 @@ class Zygote:
             MKL_NUM_THREADS="1",
         )
         self.process = subprocess.Popen(
-            [sys.executable, "-c", "from robotool.sandbox.zygote import main; main()", str(theirs.fileno())],
+            [
+                sys.executable,
+                "-c",
+                "from robotool.sandbox.zygote import main; main()",
+                str(theirs.fileno()),
+                str(memory_mb or default_batch_memory_mb()),
+            ],
             pass_fds=[theirs.fileno()],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
@@ -328,14 +336,16 @@ def _kill_group(pid: int) -> None:
 
 
 def main() -> None:
-    """Entry point of the zygote process; its one argument is the control socket's descriptor.
+    """Entry point of the zygote process; its arguments are the control socket's descriptor and the
+    memory budget of all its workers together, in MiB.
 
-    Enters the namespaces, and in a new PID namespace forks the server as its init; this process
-    then only waits for the server and exits with its status.
+    Joins the memory cgroup, enters the namespaces, and in a new PID namespace forks the server as its
+    init; this process then only waits for the server and exits with its status.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the host's Ctrl-C is the host's to handle
     jail.die_with_parent()
     control = socket.socket(fileno=int(sys.argv[1]))
+    cgroup_problem = jail.join_memory_cgroup(int(sys.argv[2]))
     namespaces, missing = jail.enter_namespaces()
     if "PID" in namespaces:
         server = os.fork()
@@ -344,6 +354,6 @@ def main() -> None:
             os._exit(os.waitstatus_to_exitcode(os.waitpid(server, 0)[1]) & 0xFF)
         jail.die_with_parent()
     worker_jail = jail.WorkerJail()
-    layers = worker_jail.probe(namespaces, missing)
+    layers = worker_jail.probe(namespaces, missing, cgroup_problem)
     gc.freeze()  # keep the collector off the preloaded objects, so forked workers share their pages
     _Server(control, layers, worker_jail).serve()

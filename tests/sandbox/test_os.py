@@ -134,6 +134,30 @@ def test_a_batch_shares_one_memory_budget() -> None:
     assert alone.error == "memory limit exceeded (8 MiB)"  # one program never gets more than the batch
 
 
+def test_all_workers_of_a_zygote_share_its_memory_cgroup() -> None:
+    """Batches that run at once each keep to their own budget; the memory cgroup bounds them together:
+    two workers allowed 256 MiB each by their limits cannot hold 2 x 64 MiB under a 96 MiB zygote."""
+    fresh = Zygote(memory_mb=96)
+    try:
+        (first, second) = fresh.spawn(2)
+        layers = fresh.layers()
+        if "memory cgroup" not in layers.in_force:
+            pytest.skip(f"no memory cgroup here: {layers.missing['memory cgroup']}")
+        limits = LIMITS.model_copy(update={"memory_mb": 256, "batch_memory_mb": 1024})
+        code = "x = b'x' * 64 * 2**20\nget_center('milk')\nprint(len(x) // 2**20)\n"
+        sessions = [SandboxSession(code, "arm", limits, worker=w) for w in (first, second)]
+        for session in sessions:
+            session.resume(None)
+        ended = [session.wait() for session in sessions]
+        assert ProgramEnded(error="the worker was killed (out of memory?)") in ended
+        assert isinstance(ended[0], SkillRequest) or isinstance(ended[1], SkillRequest)
+        for session in sessions:
+            session.close()
+        assert fresh.alive()
+    finally:
+        fresh.close()
+
+
 def test_the_default_batch_memory_fits_the_machine() -> None:
     physical_mb = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2**20
     for programs in (1, 16, 256, 4096):
@@ -303,7 +327,7 @@ def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatc
     from robotool.sandbox import SandboxWarning, jail
 
     monkeypatch.setattr(jail, "_syscall_filter", lambda: (None, "pyseccomp/libseccomp unavailable: test"))
-    layers = jail.WorkerJail().probe(["PID"], {})
+    layers = jail.WorkerJail().probe(["PID"], {}, None)
     assert not layers.seccomp and layers.missing["seccomp filter"] == "pyseccomp/libseccomp unavailable: test"
     with pytest.warns(SandboxWarning, match="WITHOUT the seccomp filter"):
         jail.warn_if_weak(layers)

@@ -117,6 +117,13 @@ def test_a_worker_that_stops_mid_message_is_held_to_the_wall_clock(sent: bytes) 
     assert time.monotonic() - started < 10
 
 
+def test_output_shaped_like_protocol_frames_stays_output() -> None:
+    """NUL bytes, a length header, a JSON skill call and terminal escapes printed by a program are its output."""
+    fake = '\x00\x00\x00\x1a{"call": "close_gripper"}\x00\x1b[2J\r'
+    ended = run(f"print({fake!r})\nc = get_center('milk')\nprint(len(c))\n")
+    assert ended == ProgramEnded(error=None, output=fake + "\n3\n")
+
+
 def test_a_batch_keeps_at_most_its_output_budget() -> None:
     limits = LIMITS.model_copy(update={"max_batch_output_chars": 100})
     sessions = start_sessions(["print('y' * 80)\n"] * 3, "arm", limits)
