@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 
 import numpy as np
 import pytest
@@ -168,3 +169,33 @@ def test_an_integer_too_long_to_print_is_a_clear_rejection(argument: str) -> Non
     """Showing the bad argument must not fail: decimal conversion of such an integer raises ValueError."""
     with pytest.raises(ProgramRejected, match="too large to show"):
         validate(f"move_to_position({argument})\n", "arm")
+
+
+@pytest.mark.parametrize(
+    ("code", "words"),
+    [
+        ("x = ｅｖａｌ('1')\n", "built-in 'eval' is not allowed"),  # NFKC-normalised by the parser
+        ("x = (1).__ｃlass__\n", "'__class__' is not allowed"),
+        ("f = str.format\n", "'.format' is not allowed"),
+        ("x = list(map(str.format_map, ['{a.__class__}'], [{'a': 1}]))\n", "'.format_map' is not allowed"),
+        ("g = (i for i in [1])\nf = g.gi_frame\n", "'.gi_frame' is not allowed"),
+        ("f = lambda: 0\nc = f.__code__\n", "'__code__' is not allowed"),
+        ("import numpy as np\nnp.sin.at(np.zeros(3), [0])\n", "np.sin.at is not allowed"),
+        ("import numpy as np\nr = np.add.reduce\n", "np.add.reduce is not allowed"),
+        ("import numpy as np\nnp.set_printoptions(formatter={'all': print})\n", "np.set_printoptions is not allowed"),
+        ("import numpy as np\nnp.seterrcall(print)\n", "np.seterrcall is not allowed"),
+        ("import numpy as np\nv = np.vectorize(lambda x: x)\n", "np.vectorize is not allowed"),
+        ("import numpy as np\nu = np.frompyfunc(print, 1, 1)\n", "np.frompyfunc is not allowed"),
+        ("import numpy as np\np = np.zeros(3).ctypes\n", "'.ctypes' is not allowed"),
+        ("import numpy as np\ni = np.zeros(3).__array_interface__\n", "'__array_interface__' is not allowed"),
+        ("import numpy as np\nm = np.memmap('/etc/passwd')\n", "np.memmap is not allowed"),
+        ("import numpy as np\nx = np.load('/etc/passwd', allow_pickle=True)\n", "np.load is not allowed"),
+        ("match 1:\n    case _:\n        pass\n", "match statements are not allowed"),
+        ("class A:\n    pass\n", "class definitions are not allowed"),
+        ("def f():\n    yield 1\n", "yield (generators) is not allowed"),
+        ("x: open = 1\n", "built-in 'open' is not allowed"),
+    ],
+)
+def test_introspection_and_numpy_side_doors_are_refused(code: str, words: str) -> None:
+    with pytest.raises(ProgramRejected, match=re.escape(words)):
+        validate(code, "arm")
