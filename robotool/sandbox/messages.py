@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import struct
 import time
 from multiprocessing.connection import Connection
@@ -74,6 +75,21 @@ def receive(conn: Connection, max_bytes: int, deadline: float) -> bytes:
     if not 0 <= size <= max_bytes:
         raise OSError(f"bad message length {size}")
     return _read(conn, size, deadline)
+
+
+def send(conn: Connection, data: bytes, timeout_s: float) -> None:
+    """One message to a worker (``Connection.send_bytes`` framing), written in full within ``timeout_s``.
+
+    A blocking write would wait for ever on a worker that stops reading once its socket buffer is
+    full (a few hundred unread replies fill it). Raises ``TimeoutError`` when the time runs out and
+    ``OSError`` when the worker is gone.
+    """
+    sock = socket.socket(fileno=conn.fileno())  # borrowed: detached below, never closed here
+    try:
+        sock.settimeout(max(timeout_s, 0.001))  # the total for sendall; 0 would mean non-blocking
+        sock.sendall(struct.pack("!i", len(data)) + data)
+    finally:
+        sock.detach()
 
 
 def _read(conn: Connection, count: int, deadline: float) -> bytes:

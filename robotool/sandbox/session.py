@@ -21,6 +21,7 @@ from robotool.sandbox.messages import (
     max_message_bytes,
     max_world_bytes,
     receive,
+    send,
 )
 from robotool.sandbox.validate import ProgramRejected, validate
 from robotool.sandbox.zygote import Worker, zygote
@@ -81,9 +82,9 @@ class SandboxSession:
             return
         if self._worker is None:
             (self._worker,) = zygote().spawn(1)
-        with contextlib.suppress(OSError):  # a dead worker: wait() reports how it ended
+        with contextlib.suppress(OSError):  # a dead or stuck worker: wait() reports how it ended
             start = encode_start(code, embodiment, self.limits, python_checks=not test_only_skip_python_checks)
-            self._worker.conn.send_bytes(start)
+            send(self._worker.conn, start, self.limits.wall_s)
 
     @property
     def worker_pid(self) -> int | None:
@@ -98,9 +99,13 @@ class SandboxSession:
             raise ValueError("resume(None) starts the program; after that, resume() takes a SkillReply")
         self._started = True
         assert self._worker is not None, "a session has its worker until it ends"
-        with contextlib.suppress(OSError):
-            self._worker.conn.send_bytes(GO if reply is None else encode_reply(reply))
         self._owed_since = time.monotonic()
+        try:  # a worker that stops reading its replies is held to the wall clock too
+            send(self._worker.conn, GO if reply is None else encode_reply(reply), self.limits.wall_s - self._wall_spent)
+        except TimeoutError:
+            self._end(self._wall_clock_exceeded())
+        except OSError:
+            pass  # a dead worker: wait() reports how it ended
 
     def wait(self) -> SkillRequest | ProgramEnded:
         """Block until the program calls a skill or ends (or overruns its wall-clock budget)."""
@@ -114,7 +119,7 @@ class SandboxSession:
         try:
             data = receive(worker.conn, max_message_bytes(self.limits), time.monotonic() + max(budget, 0.0))
         except TimeoutError:
-            return self._end(f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)")
+            return self._end(self._wall_clock_exceeded())
         except (EOFError, ConnectionError):  # reset when it died holding an unread reply
             return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
         except OSError:
@@ -154,6 +159,9 @@ class SandboxSession:
         if len(kept) < len(text) and not self._output_cut:
             self._output_cut = True
             self._output.append(OUTPUT_CUT)
+
+    def _wall_clock_exceeded(self) -> str:
+        return f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)"
 
     def _death_reason(self, code: int) -> str:
         if code in (-signal.SIGPROF, -signal.SIGXCPU):

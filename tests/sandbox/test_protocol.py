@@ -124,6 +124,20 @@ def test_output_shaped_like_protocol_frames_stays_output() -> None:
     assert ended == ProgramEnded(error=None, output=fake + "\n3\n")
 
 
+def test_a_worker_that_stops_reading_its_replies_is_held_to_the_wall_clock() -> None:
+    """Skill calls sent without reading the answers fill the socket buffer: the host's reply must not block."""
+    code = (
+        "import json, time\nfrom multiprocessing.connection import Connection\nhost = Connection(3)\n"
+        "for i in range(500):\n"
+        "    host.send_bytes(json.dumps({'call': 'get_center', 'args': ['milk']}).encode())\n"
+        "time.sleep(1000)\n"
+    )
+    started = time.monotonic()
+    ended = run(code, LIMITS.model_copy(update={"wall_s": 1.0, "max_skill_calls": 500}), unchecked=True)
+    assert ended.error == "wall-clock limit exceeded (1 s of program time)"
+    assert time.monotonic() - started < 10
+
+
 def test_a_batch_keeps_at_most_its_output_budget() -> None:
     limits = LIMITS.model_copy(update={"max_batch_output_chars": 100})
     sessions = start_sessions(["print('y' * 80)\n"] * 3, "arm", limits)
