@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import os
-import socket
+import select
 import struct
 import time
 from multiprocessing.connection import Connection
@@ -77,19 +77,30 @@ def receive(conn: Connection, max_bytes: int, deadline: float) -> bytes:
     return _read(conn, size, deadline)
 
 
-def send(conn: Connection, data: bytes, timeout_s: float) -> None:
-    """One message to a worker (``Connection.send_bytes`` framing), written in full within ``timeout_s``.
+def frame(data: bytes) -> bytes:
+    """``data`` with the length header ``Connection.recv_bytes`` reads (messages to a worker are small)."""
+    return struct.pack("!i", len(data)) + data
 
-    A blocking write would wait for ever on a worker that stops reading once its socket buffer is
-    full (a few hundred unread replies fill it). Raises ``TimeoutError`` when the time runs out and
-    ``OSError`` when the worker is gone.
+
+def write_by(conn: Connection, data: bytes, deadline: float) -> bytes:
+    """Write as much of ``data`` as the socket takes by ``deadline``; what is left (empty when all of it went).
+
+    Never blocks past the deadline: a blocking write would wait for ever on a worker that stops reading
+    once its socket buffer is full (a few hundred unread replies fill it). Raises ``OSError`` when the
+    worker is gone.
     """
-    sock = socket.socket(fileno=conn.fileno())  # borrowed: detached below, never closed here
-    try:
-        sock.settimeout(max(timeout_s, 0.001))  # the total for sendall; 0 would mean non-blocking
-        sock.sendall(struct.pack("!i", len(data)) + data)
-    finally:
-        sock.detach()
+    fd = conn.fileno()
+    os.set_blocking(fd, False)
+    view = memoryview(data)
+    while view:
+        try:
+            view = view[os.write(fd, view) :]
+        except BlockingIOError:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                break
+            select.select([], [fd], [], remaining)
+    return bytes(view)
 
 
 def _read(conn: Connection, count: int, deadline: float) -> bytes:

@@ -18,10 +18,11 @@ from robotool.sandbox.messages import (
     WorkerMessage,
     encode_reply,
     encode_start,
+    frame,
     max_message_bytes,
     max_world_bytes,
     receive,
-    send,
+    write_by,
 )
 from robotool.sandbox.validate import ProgramRejected, validate
 from robotool.sandbox.zygote import Worker, zygote
@@ -74,6 +75,7 @@ class SandboxSession:
         self._owed_since: float | None = None
         self._wall_spent = 0.0
         self._received = 0
+        self._unsent = b""
         self._batch_output = batch_output or OutputBudget(self.limits.max_batch_output_chars)
         self._worker = worker
         rejection = None if test_only_skip_python_checks else _rejection(code, embodiment)
@@ -82,9 +84,8 @@ class SandboxSession:
             return
         if self._worker is None:
             (self._worker,) = zygote().spawn(1)
-        with contextlib.suppress(OSError):  # a dead or stuck worker: wait() reports how it ended
-            start = encode_start(code, embodiment, self.limits, python_checks=not test_only_skip_python_checks)
-            send(self._worker.conn, start, self.limits.wall_s)
+        start = encode_start(code, embodiment, self.limits, python_checks=not test_only_skip_python_checks)
+        self._send(start)
 
     @property
     def worker_pid(self) -> int | None:
@@ -99,13 +100,8 @@ class SandboxSession:
             raise ValueError("resume(None) starts the program; after that, resume() takes a SkillReply")
         self._started = True
         assert self._worker is not None, "a session has its worker until it ends"
+        self._send(GO if reply is None else encode_reply(reply))
         self._owed_since = time.monotonic()
-        try:  # a worker that stops reading its replies is held to the wall clock too
-            send(self._worker.conn, GO if reply is None else encode_reply(reply), self.limits.wall_s - self._wall_spent)
-        except TimeoutError:
-            self._end(self._wall_clock_exceeded())
-        except OSError:
-            pass  # a dead worker: wait() reports how it ended
 
     def wait(self) -> SkillRequest | ProgramEnded:
         """Block until the program calls a skill or ends (or overruns its wall-clock budget)."""
@@ -116,10 +112,14 @@ class SandboxSession:
         if self._owed_since is None:
             raise RuntimeError("wait() without a pending resume()")
         budget = self.limits.wall_s - self._wall_spent - (time.monotonic() - self._owed_since)
+        deadline = time.monotonic() + max(budget, 0.0)
         try:
-            data = receive(worker.conn, max_message_bytes(self.limits), time.monotonic() + max(budget, 0.0))
+            self._unsent = write_by(worker.conn, self._unsent, deadline)
+            if self._unsent:  # the worker stopped reading what it is owed
+                raise TimeoutError
+            data = receive(worker.conn, max_message_bytes(self.limits), deadline)
         except TimeoutError:
-            return self._end(self._wall_clock_exceeded())
+            return self._end(f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)")
         except (EOFError, ConnectionError):  # reset when it died holding an unread reply
             return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
         except OSError:
@@ -160,8 +160,13 @@ class SandboxSession:
             self._output_cut = True
             self._output.append(OUTPUT_CUT)
 
-    def _wall_clock_exceeded(self) -> str:
-        return f"wall-clock limit exceeded ({self.limits.wall_s:g} s of program time)"
+    def _send(self, message: bytes) -> None:
+        """Queue a message to the worker and write what its socket takes now; :meth:`wait` writes the rest
+        within the program's wall time, so the host never blocks on a worker that stops reading."""
+        assert self._worker is not None, "a session has its worker until it ends"
+        self._unsent += frame(message)
+        with contextlib.suppress(OSError):  # a dead worker: wait() reports how it ended
+            self._unsent = write_by(self._worker.conn, self._unsent, deadline=0.0)
 
     def _death_reason(self, code: int) -> str:
         if code in (-signal.SIGPROF, -signal.SIGXCPU):
