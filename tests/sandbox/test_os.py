@@ -105,6 +105,24 @@ def _descendants(pid: int) -> set[int]:
     return found
 
 
+def test_workers_share_no_writable_memory_and_have_no_writable_code() -> None:
+    """Workers are forks of one zygote: a shared writable mapping would be a channel between programs
+    (and to the zygote), and a writable executable one a place for machine code."""
+    workers = zygote().spawn(2)
+    try:
+        for worker in workers:
+            try:
+                maps = Path(f"/proc/{worker.host_pid}/maps").read_text().splitlines()
+            except PermissionError:
+                pytest.skip("a non-dumpable worker's memory map is readable only by root")
+            flags = [line.split()[1] for line in maps]
+            assert flags and not [f for f in flags if "w" in f and ("s" in f or "x" in f)], maps
+    finally:
+        for worker in workers:
+            worker.conn.close()
+            worker.zygote.release(worker.pid)
+
+
 def test_crash_inside_native_code_fails_only_its_world() -> None:
     crash = "import ctypes\nctypes.string_at(0)\n"
     ended = run_unchecked(crash)
