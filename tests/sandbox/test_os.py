@@ -305,6 +305,18 @@ def test_kernel_interfaces_to_other_processes_and_descriptors_are_denied() -> No
     assert set(outcomes.values()) == {"1"} and all(o.endswith(" denied") for o in outcomes), ended.output
 
 
+def test_a_worker_holds_no_descriptor_but_its_standard_streams_and_socket() -> None:
+    """/proc/self/fd cannot be listed in the empty root, but mmap (allowed) tells a closed descriptor (EBADF)
+    from an open one: nothing the host or the zygote had open is left to the program."""
+    code = (
+        "import ctypes\nlibc = ctypes.CDLL(None, use_errno=True)\nlibc.mmap.restype = ctypes.c_void_p\n"
+        "c = ctypes\nlibc.mmap.argtypes = [c.c_void_p, c.c_size_t, c.c_int, c.c_int, c.c_int, c.c_long]\n"
+        "failed = ctypes.c_void_p(-1).value\n"
+        "print([fd for fd in range(4096) if libc.mmap(None, 4096, 1, 2, fd, 0) != failed or ctypes.get_errno() != 9])\n"
+    )
+    assert run_unchecked(code).output == "[0, 1, 2, 3]\n"
+
+
 def test_system_calls_through_a_foreign_abi_kill_the_worker() -> None:
     ended = run_unchecked((ESCAPES / "x32_abi.py").read_text())
     assert ended.error == "the worker was stopped by the sandbox's system-call filter (SIGSYS)"
