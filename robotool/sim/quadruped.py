@@ -562,7 +562,9 @@ class QuadrupedController:
         up = ahead - under > RISE
         hold = ~up & (behind - below > RISE)
         crossing = (up | hold).any(axis=1)
-        crossing &= ~self._no_footing(worlds, travel, up | hold, centres)
+        standing = self._gather(self.level[worlds], index[:, 1:2])[:, :, 0]  # the level accepted under each foot
+        footing = np.abs(below - standing) <= RISE  # a surface the foot could stand on lies under it
+        crossing &= ~self._no_footing(worlds, travel, up | hold, footing, centres)
         up &= crossing[:, None]
         clear = under_torso - BELLY_HEIGHT + TORSO_CLEARANCE  # the lowest the feet's level may be under the torso
         stance = np.clip(under - np.maximum(under.max(axis=1), clear)[:, None] - PRESS, -self.reach, 0.0)
@@ -584,13 +586,15 @@ class QuadrupedController:
         return np.any(up & (bottom < ahead + CLEARANCE / 2), axis=1)
 
     def _no_footing(
-        self, worlds: np.ndarray, travel: np.ndarray, crossing: np.ndarray, centres: np.ndarray
+        self, worlds: np.ndarray, travel: np.ndarray, crossing: np.ndarray, footing: np.ndarray, centres: np.ndarray
     ) -> np.ndarray:
         """Worlds (k,) where a foot has been carried further than any edge needs (``crossing``: (k, 4) the feet
-        crossing now): it found no footing. The move stops there, refused, and the lift lets go: what the feet
-        stand on then carries the robot, or not."""
+        crossing now) since it last passed over footing (``footing``: (k, 4) the surface under the foot's centre
+        is the level it stands at, such as the tread between two steps): it found no footing. The move stops
+        there, refused, and the lift lets go: what the feet stand on then carries the robot, or not."""
         start = self.hover_from[worlds]
-        start = np.where(crossing & np.isnan(start), travel[:, None], np.where(crossing, start, np.nan))
+        fresh = np.isnan(start) | footing
+        start = np.where(crossing & fresh, travel[:, None], np.where(crossing, start, np.nan))
         self.hover_from[worlds] = start
         carried = np.where(crossing, travel[:, None] - start, 0.0)
         too_far = (carried > MAX_HOVER).any(axis=1) | self.halted[worlds]

@@ -193,3 +193,23 @@ def test_a_push_is_refused_when_the_robot_would_stand_over_a_drop() -> None:
     (rollout,) = sim.run_programs(parse_task(data), [program], perturb=False)
     (push,) = rollout.calls
     assert push.outcome == "refused" and "no clear place to stand" in push.reason and "drop" in push.reason
+
+
+def test_a_foot_may_cross_one_edge_after_another_over_a_narrow_tread() -> None:
+    """Fixed steps of 0.08 m and 0.035 m, the lower one a 0.12 m tread (like a roller under a board): each front
+    foot is carried over one edge, passes over the tread's level and is carried over the next. The travel over an
+    edge counts from the last footing, not from the first edge (over both at once it is longer than one needs)."""
+    data = tasks.load("sofa_climbing").model_dump(mode="json", exclude_defaults=True)
+    steps = [(1.06, 0.12, 0.08), (1.52, 0.8, 0.115)]  # centre x, length along x, height
+    data["objects"] += [
+        {"name": f"step_{i}", "shape": "box", "center": [x, -1.0, h / 2], "size": [length, 0.6, h], "movable": False}
+        for i, (x, length, h) in enumerate(steps)
+    ]
+
+    def program(robot: Any) -> None:
+        robot.walk_to_position([0.5, -1.0, 0.0])
+        robot.walk_to_position([1.7, -1.0, 0.0])
+
+    (rollout,) = sim.run_programs(parse_task(data), [program], perturb=False)
+    assert [c.outcome for c in rollout.calls] == ["done", "done"], [(c.outcome, c.reason) for c in rollout.calls]
+    assert rollout.calls[-1].measured == {}
