@@ -1,10 +1,11 @@
 """Ground-truth key concepts: the quantities that decide whether a task needs a tool.
 
 They are computed from the scene's geometry and the robot's limits alone (never from a task's
-name or category), with the legs' limits read as :mod:`robotool.terrain` reads them (one tolerance), and grade
-the Analyzer stage: gap width vs the gap limit, height to climb vs
+name or category) and grade the Analyzer stage: gap width vs the gap limit, height to climb vs
 the climb limit, how far a target lies outside the arm's workspace, mass vs the push limit, and
-how far a fragile object would fall.
+how far a fragile object would fall. Gaps are what :mod:`robotool.terrain` finds under the feet on the straight
+walk to the target (the simulator's and the planner's terrain model: a slit narrower than a foot carries it and
+is no gap), and every leg limit is judged by :func:`robotool.terrain.exceeds`.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from robotool import geometry
 from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
-from robotool.terrain import TOLERANCE
+from robotool.terrain import exceeds, survey_walk
 
 ConceptKind = Literal[
     "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
@@ -123,7 +124,7 @@ def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]
     if kind == "robot_on":
         _, h1 = surface_under(task, np.asarray(obj.center[:2]))
         concepts += _height_change(f"{start_name}", obj.name, h0, h1, limits)
-        gap = widest_gap(task, np.asarray(task.robot.position), np.asarray(obj.center[:2]), h0, h1, limits)
+        gap = gap_on_the_way(task, np.asarray(task.robot.position), np.asarray(obj.center[:2]), limits)
         if gap > 0:
             concepts.append(
                 KeyConcept(
@@ -132,7 +133,7 @@ def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]
                     value=round(gap, 4),
                     limit=limits.max_gap,
                     limit_name="max_gap",
-                    satisfied=gap <= limits.max_gap + TOLERANCE,
+                    satisfied=not exceeds("gap", gap, limits),
                 )
             )
     elif kind == "lifted":
@@ -177,7 +178,7 @@ def _height_change(from_name: str, to_name: str, h0: float, h1: float, limits: Q
                 value=round(rise, 4),
                 limit=limits.max_step_up,
                 limit_name="max_step_up",
-                satisfied=rise <= limits.max_step_up + TOLERANCE,
+                satisfied=not exceeds("step", rise, limits),
             )
         ]
     if rise < -1e-6:
@@ -188,7 +189,7 @@ def _height_change(from_name: str, to_name: str, h0: float, h1: float, limits: Q
                 value=round(-rise, 4),
                 limit=limits.max_step_down,
                 limit_name="max_step_down",
-                satisfied=-rise <= limits.max_step_down + TOLERANCE,
+                satisfied=not exceeds("drop", -rise, limits),
             )
         ]
     return []
@@ -207,46 +208,9 @@ def _mass_concept(obj: SceneObject, limits: QuadrupedLimits) -> KeyConcept:
     )
 
 
-def widest_gap(
-    task: Task, start_xy: np.ndarray, end_xy: np.ndarray, h0: float, h1: float, limits: QuadrupedLimits
-) -> float:
-    """Widest stretch of the straight path over fixed terrain that the robot cannot step into.
-
-    A stretch counts as a gap when its surface lies more than the climb limit below both the start
-    and the target surface: the robot could not climb back out of it.
-    """
-    threshold = min(h0, h1) - limits.max_step_up
-    if threshold <= geometry.GROUND_Z:
-        return 0.0
+def gap_on_the_way(task: Task, start_xy: np.ndarray, end_xy: np.ndarray, limits: QuadrupedLimits) -> float:
+    """Widest gap the feet meet walking straight from ``start_xy`` to ``end_xy`` over the fixed terrain (what no
+    tool changes), as :mod:`robotool.terrain` measures it for the simulator and the planner (0 when none)."""
     solids = list(_solids(task, fixed_only=True).values())
-    s, height = geometry.height_profile(start_xy, end_xy, solids)
-    low = height < threshold
-    direction = (end_xy - start_xy) / max(float(np.linalg.norm(end_xy - start_xy)), 1e-12)
-
-    def is_low(distance: float) -> bool:
-        point = start_xy + distance * direction
-        return bool(geometry.surface_height(point[None, :], solids)[0] < threshold)
-
-    def edge(a: float, b: float) -> float:  # is_low(a) != is_low(b): bisect the crossing
-        low_a = is_low(a)
-        for _ in range(30):
-            mid = (a + b) / 2
-            if is_low(mid) == low_a:
-                a = mid
-            else:
-                b = mid
-        return (a + b) / 2
-
-    widest = 0.0
-    i = 0
-    while i < len(s):
-        if not low[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < len(s) and low[j + 1]:
-            j += 1
-        if i > 0 and j < len(s) - 1:  # bounded on both sides by higher ground
-            widest = max(widest, edge(s[j], s[j + 1]) - edge(s[i - 1], s[i]))
-        i = j + 1
-    return widest
+    survey = survey_walk(lambda xy: geometry.surface_height(xy, solids), start_xy, end_xy, limits)
+    return survey.largest["gap"]

@@ -15,13 +15,16 @@ foot by foot: each of the four feet sweeps a straight path, sampled every :data:
 - anything else (a slope, a small change) is followed.
 
 A finding carries its kind, the measured value, the limit, where it starts (x-y) and which foot met it.
+:func:`check_walk` answers whether a walk keeps within the limits (the simulator's and the planner's question);
+:func:`survey_walk` also measures the edges within them (the key concepts' question), and :func:`exceeds` is the one
+rule that judges a measured value against its limit.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -69,11 +72,18 @@ class PathScan:
     index: np.ndarray  # (P,) first sample of the first finding (n when none)
     kind: np.ndarray  # (P,) 0 none, else 1 + the index in KINDS
     measured: np.ndarray  # (P,) the finding's measured value
+    met: np.ndarray  # (P, n, 3) each kind's edge (KINDS order) met at each sample, within its limit or not (0: none)
 
 
 def limit_of(kind: FindingKind, limits: QuadrupedLimits) -> float:
     """The limit a finding of ``kind`` is checked against."""
     return {"step": limits.max_step_up, "gap": limits.max_gap, "drop": limits.max_step_down}[kind]
+
+
+def exceeds(kind: FindingKind, measured: float | np.ndarray, limits: QuadrupedLimits) -> Any:
+    """Whether a measured step height, gap width or drop depth is beyond the legs' limit (allowing
+    :data:`TOLERANCE`); element-wise for arrays."""
+    return measured > limit_of(kind, limits) + TOLERANCE
 
 
 def foot_support(heights: np.ndarray) -> np.ndarray:
@@ -104,6 +114,7 @@ def scan_paths(
     index = np.full(npath, n)
     kind = np.zeros(npath, dtype=int)
     measured = np.zeros(npath)
+    met = np.zeros((npath, n, len(KINDS)))
     skip = np.zeros(npath, dtype=int)
     rows = np.arange(npath)
     run = round(SLOPE_RUN / SPACING)
@@ -131,9 +142,10 @@ def scan_paths(
         skip[striding] -= 1
         free = live & ~striding
         rise = free & (h - current > RISE)
-        too_high = free & (h - low > limits.max_step_up + TOLERANCE)  # a step, or a slope as steep as one
+        too_high = free & exceeds("step", h - low, limits)  # a step, or a slope as steep as one
         _found(too_high, k, 1, h - low, index, kind, measured)
         climb = rise & ~too_high
+        met[climb | too_high, k, 0] = (h - low)[climb | too_high]
         current[climb] = h[climb]
         current = np.where(too_high, h, current)
         dip = free & ~rise & ~too_high & (high - h > limits.max_step_up)
@@ -149,8 +161,9 @@ def scan_paths(
             gap[rows_dip] = returns
             wide = np.zeros(npath)
             wide[rows_dip] = width
-            too_wide = gap & (wide > limits.max_gap + TOLERANCE)
+            too_wide = gap & exceeds("gap", wide, limits)
             _found(too_wide, k, 2, wide, index, kind, measured)
+            met[gap, k, 1] = wide[gap]
             stride = gap & ~too_wide
             skip[stride] = (
                 np.round(np.maximum(wide[stride] - 2 * FOOT_RADIUS - already[stride] * (k == 0), 0.0) / SPACING).astype(
@@ -159,8 +172,9 @@ def scan_paths(
                 - 1
             )
             down = dip & ~gap
-            too_deep = down & (current - h > limits.max_step_down + TOLERANCE)
+            too_deep = down & exceeds("drop", current - h, limits)
             _found(too_deep, k, 3, current - h, index, kind, measured)
+            met[down, k, 2] = (current - h)[down]
             step_down = down & ~too_deep
             current[step_down] = h[step_down]
         follow = free & ~rise & ~dip & ~too_high
@@ -169,7 +183,7 @@ def scan_paths(
         level[ok, k] = current[ok]
         trail[:, k + run] = current
         k += 1
-    return PathScan(level=level, index=index, kind=kind, measured=measured)
+    return PathScan(level=level, index=index, kind=kind, measured=measured, met=met)
 
 
 def _found(
@@ -242,8 +256,42 @@ def check_walk(
         scan = scan_paths(h, levels, limits)
         found = first_finding(scan, points, limits)
         stop = round(length / SPACING)
-        if found is not None and found[1] - (RADIUS_SAMPLES if found[0].kind != "step" else 0) <= stop:
+        if found is not None and found[1] <= _reach(found[0].kind, stop):
             return found[0]
         levels = scan.level[:, min(stop, scan.level.shape[1] - 1)]
         here = goal
     return None
+
+
+def _reach(kind: FindingKind, stop: int) -> int:
+    """The last sample of a move ending at sample ``stop`` where an edge of ``kind`` counts: a foot meets a step
+    at its face, and a gap or a drop once its centre passes the edge (a foot's radius after it is seen)."""
+    return stop + (RADIUS_SAMPLES if kind != "step" else 0)
+
+
+@dataclass(frozen=True)
+class WalkSurvey:
+    """What the four feet meet on a straight walk: the largest edge of each kind and the first that is too much."""
+
+    largest: dict[FindingKind, float]  # m: the highest step, widest gap and deepest drop met (0 where none)
+    finding: Finding | None  # the first edge beyond its limit, or None
+
+
+def survey_walk(heights: Heights, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits) -> WalkSurvey:
+    """Every step, gap and drop the feet of an axis-aligned body meet walking straight from ``start`` to ``goal``
+    (x-y) over the surfaces ``heights``, read as :func:`check_walk` reads them (from the surface under each foot,
+    :data:`LOOKAHEAD` past the end so that a gap's far side is seen), within their limits or not."""
+    here, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    offsets = foot_offsets(limits)
+    delta = goal - here
+    length = float(np.linalg.norm(delta))
+    largest: dict[FindingKind, float] = dict.fromkeys(KINDS, 0.0)
+    if length < 1e-6:
+        return WalkSurvey(largest, None)
+    points = foot_paths(here + offsets, delta / length, length + LOOKAHEAD)
+    scan = scan_paths(heights(points.reshape(-1, 2)).reshape(4, -1), heights(here + offsets), limits)
+    stop = round(length / SPACING)
+    for i, kind in enumerate(KINDS):
+        largest[kind] = float(scan.met[:, : _reach(kind, stop) + 1, i].max())
+    found = first_finding(scan, points, limits)
+    return WalkSurvey(largest, found[0] if found is not None and found[1] <= _reach(found[0].kind, stop) else None)

@@ -10,7 +10,7 @@ import pytest
 from robotool import geometry, tasks
 from robotool.embodiments import QuadrupedLimits
 from robotool.sim.quadruped_push import Leg, legs, push_pose, route, rule_violation
-from robotool.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths
+from robotool.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01
@@ -45,6 +45,39 @@ def test_scan_finds_the_first_broken_limit(
     assert result.measured[0] == pytest.approx(measured, abs=SPACING)
     if edge is not None:  # where the foot's centre meets it (a round foot meets a step its radius early)
         assert result.index[0] * SPACING == pytest.approx(edge, abs=FOOT_RADIUS + SPACING)
+
+
+
+@pytest.mark.parametrize(
+    ("pieces", "largest"),
+    [
+        ([(0.4, 0.0), (0.5, 0.10), (0.5, 0.20)], {"step": 0.10, "gap": 0.0, "drop": 0.0}),  # within the limits
+        ([(0.4, 0.34), (0.08, 0.0), (0.6, 0.34)], {"step": 0.0, "gap": 0.08, "drop": 0.0}),  # stridden
+        ([(0.4, 0.34), (0.4, 0.0), (0.6, 0.34)], {"step": 0.0, "gap": 0.40, "drop": 0.0}),  # the finding
+        ([(0.4, 0.34), (0.7, 0.0)], {"step": 0.0, "gap": 0.0, "drop": 0.34}),
+    ],
+)
+def test_scan_records_every_edge_met_within_its_limit_or_not(
+    pieces: list[tuple[float, float]], largest: dict[str, float]
+) -> None:
+    heights = profile(*pieces)
+    met = scan_paths(heights[None], np.array([heights[0]]), LIMITS).met[0].max(axis=0)
+    assert dict(zip(KINDS, met, strict=True)) == pytest.approx(largest, abs=SPACING)
+
+
+def test_survey_counts_what_the_feet_meet_up_to_the_goal() -> None:
+    """A 0.08 m gap between two 0.34 m sofas is stridden; a 0.3 m step beyond the goal is not met."""
+
+    def heights(xy: np.ndarray) -> np.ndarray:
+        x = xy[:, 0]
+        return np.where(x < 1.0, 0.34, np.where(x < 1.08, 0.0, np.where(x < 2.5, 0.34, 0.64)))
+
+    survey = survey_walk(heights, np.array([0.0, 0.0]), np.array([1.6, 0.0]), LIMITS)
+    assert survey.finding is None
+    assert survey.largest == pytest.approx({"step": 0.0, "gap": 0.08, "drop": 0.0}, abs=SPACING)
+    farther = survey_walk(heights, np.array([0.0, 0.0]), np.array([2.4, 0.0]), LIMITS)
+    assert farther.finding is not None and farther.finding.kind == "step"
+    assert farther.finding.measured == pytest.approx(0.30, abs=SPACING)
 
 
 def test_paths_are_scanned_together_and_each_from_its_own_level() -> None:
