@@ -75,6 +75,7 @@ LEASH = 0.06  # m the setpoint may run ahead of the body
 STALL_TIME = 3.0  # s without 1 cm of progress is a stall
 STAGING = 0.15  # m behind the push pose from where the robot lines up straight along the push
 PUSH_TOLERANCE = 0.06  # m: a push is done when the object's centre is this close to the target
+SHOVE = 0.03  # m a movable object the robot touches, but has not stood on, may move during a move it is not pushing
 RAY_HEIGHT = 0.6  # m above the feet where downward rays start (things higher are overhead)
 FALL_TILT = np.radians(35.0)  # a body tilted further has fallen
 FALL_TICKS = 3  # control ticks with the centre of mass outside the feet's support (lift off) that make a fall...
@@ -158,6 +159,9 @@ class QuadrupedController:
         sim.ctrl[:, self.ids.leg_actuator] = self.legs
         self.hover_from = np.full((nworld, 4), np.nan)  # travel where each foot began to cross an edge
         self.halted = np.zeros(nworld, dtype=bool)  # the move was refused for want of footing
+        nobj = len(self.scene.object_names)
+        self.move_start = np.zeros((nworld, nobj, 2))  # where the objects' centres were when the move began
+        self.stood = np.zeros((nworld, nobj), dtype=bool)  # objects under a foot at some time during the move
         self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
         self.setpoint = self.state.qpos[:, self.ids.qpos[:2]].copy()
@@ -396,6 +400,8 @@ class QuadrupedController:
         self.level[w] = np.nan
         self.hover_from[w] = np.nan
         self.halted[w] = False
+        self.move_start[w] = self._centers(self.state)[w, :, :2]
+        self.stood[w] = False
         self.best[w], self.progress_time[w] = np.inf, float(self.state.time[w])
 
     def _end(self, w: int, outcome: Outcome | None) -> SkillEnd:
@@ -415,11 +421,15 @@ class QuadrupedController:
 
     def _drive(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
         """Read the terrain where needed, then lift, stop, refuse or advance, in all moving worlds at once."""
+        worlds = self._stop_shoves(worlds, ends)
+        if not worlds.size:
+            return
         state = self.state
         q = state.qpos[worlds][:, self.ids.qpos]
         travel = np.einsum("ki,ki->k", q[:, :2] - self.origin[worlds], self.u[worlds])
         centres = feet(state, self.ids)[worlds]
         local, local_objects, under_torso = self._local(worlds, centres)
+        self._mark_stood(worlds, local_objects[:, :, 1])
         index = self._indices(worlds, travel)
         stale = self.rescan[worlds] | np.any((index < 0) | (index >= SAMPLES), axis=1)
         stale |= (travel > self.scan_t0[worlds] + SCAN_AHEAD / 2) & (
@@ -435,6 +445,34 @@ class QuadrupedController:
         waiting = self._lift(worlds, q, travel, centres, local, under_torso, index)
         self._steer(worlds, q, travel, waiting)
         self._check_arrival(worlds, q, travel, ends)
+
+    def _stop_shoves(self, worlds: np.ndarray, ends: list[SkillEnd]) -> np.ndarray:
+        """End, refused, the moves in ``worlds`` whose robot shoves a movable object: it touches the object, has not
+        stood on it during the move, is not pushing it, and the object has moved more than :data:`SHOVE` since the
+        move began (a walk is no push: it would move things the push rules refuse, such as objects over the push
+        limit). Returns the worlds whose moves go on."""
+        state = self.state
+        touched = state.touching[worlds][:, self.scene.robot_body].any(axis=1)[:, self.scene.object_body]
+        moved = np.linalg.norm(self._centers(state)[worlds, :, :2] - self.move_start[worlds], axis=2)
+        objects = np.arange(len(self.scene.object_names))
+        shoved = touched & self.movable & ~self.cloth & ~self.stood[worlds] & (moved > SHOVE)
+        shoved &= objects[None, :] != self.pushing[worlds][:, None]
+        for k in np.flatnonzero(shoved.any(axis=1)):
+            w, index = int(worlds[k]), int(np.argmax(np.where(shoved[k], moved[k], -1.0)))
+            name = self.scene.object_names[index]
+            reason = (
+                f"the robot ran into {name} and moved it {moved[k, index]:.2f} m "
+                "(a walk or a climb does not push things: push_to_position does, within the push rules)"
+            )
+            end = self._advance(w, ("refused", reason, {"moved": round(float(moved[k, index]), 3)}))
+            if end is not None:
+                ends.append(end)
+        return worlds[~shoved.any(axis=1)]
+
+    def _mark_stood(self, worlds: np.ndarray, under: np.ndarray) -> None:
+        """Remember the objects ``under`` (k, 4) the feet (-1: none) as stood on during the current moves."""
+        rows, feet_ = np.nonzero(under >= 0)
+        self.stood[worlds[rows], under[rows, feet_]] = True
 
     def _indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
         """Sample indices (k, 5) of the :data:`LOCAL` offsets ahead of the feet in each world's last reading."""
