@@ -109,13 +109,11 @@ def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:
     return mask
 
 
-def controller_failures(controller: SkillController) -> list[str | None] | None:
-    """Per world, why its robot can no longer be trusted (it fell), else None; None for a robot that cannot fall.
-
-    A controller whose robot can fall keeps these in a ``failures`` list attribute.
-    """
-    failures = getattr(controller, "failures", None)
-    return None if failures is None else list(failures)
+def controller_conditions(controller: SkillController) -> dict[str, list[bool]]:
+    """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``), from the
+    controller's ``robot_conditions()`` method; none for a controller without one (a robot that cannot fall)."""
+    conditions = getattr(controller, "robot_conditions", None)
+    return {} if conditions is None else conditions()
 
 
 class Embodiment(Protocol):

@@ -35,7 +35,7 @@ from robotool.program_session import (
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_failures, describe_error
+from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_conditions, describe_error
 from robotool.sim.goals import GoalTracker, goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
@@ -44,7 +44,6 @@ from robotool.task_model import Task
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
-FALL_CONDITION = "robot_has_not_fallen"  # the condition a controller whose robot can fall adds to every goal
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
@@ -335,9 +334,8 @@ class _Run:
         world.finished = True
         world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
         world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
-        failures = controller_failures(self.controller)
-        if failures is not None:
-            world.conditions[FALL_CONDITION] = failures[i] is None
+        for name, held in controller_conditions(self.controller).items():
+            world.conditions[name] = held[i]
         if state.failed[i] is not None and world.error is None:
             world.error = f"simulation failed: {state.failed[i]}"
 

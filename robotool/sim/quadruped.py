@@ -15,7 +15,9 @@ Otherwise the lift is off and the robot's weight rests on its feet.
 Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
 :data:`FALL_TICKS` ticks with the lift off and that tips, or that tilts past :data:`FALL_TILT`, has fallen: its
 skill ends with outcome ``fell`` and a reason that says where and which feet lost support,
-:attr:`QuadrupedController.failures` marks its world failed, and later motion skills there are refused. Nothing here
+:attr:`QuadrupedController.failures` marks its world failed, and later motion skills there are refused. A walk or a
+climb is no push: a movable object that the torso has touched, other than one being pushed, and that has moved more
+than :data:`SHOVE` since, was shoved; the move is stopped and refused, naming it, and the world fails. Nothing here
 reads the task's category or name: limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
@@ -75,7 +77,9 @@ LEASH = 0.06  # m the setpoint may run ahead of the body
 STALL_TIME = 3.0  # s without 1 cm of progress is a stall
 STAGING = 0.15  # m behind the push pose from where the robot lines up straight along the push
 PUSH_TOLERANCE = 0.06  # m: a push is done when the object's centre is this close to the target
-SHOVE = 0.03  # m a movable object the robot touches, but has not stood on, may move during a move it is not pushing
+FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
+SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
+SHOVE = 0.03  # m a movable object may move after the torso touched it, unless it is being pushed
 RAY_HEIGHT = 0.6  # m above the feet where downward rays start (things higher are overhead)
 FALL_TILT = np.radians(35.0)  # a body tilted further has fallen
 FALL_TICKS = 3  # control ticks with the centre of mass outside the feet's support (lift off) that make a fall...
@@ -137,6 +141,7 @@ class QuadrupedController:
         self.not_robot = ~self.scene.robot_body
         self.plans: list[Plan | None] = [None] * nworld
         self.failures: list[str | None] = [None] * nworld
+        self.shoves: list[str | None] = [None] * nworld  # the first object each world's robot shoved, and how far
         # the move running in each world
         self.moving = np.zeros(nworld, dtype=bool)
         self.origin = np.zeros((nworld, 2))  # body position where the move started
@@ -159,9 +164,8 @@ class QuadrupedController:
         sim.ctrl[:, self.ids.leg_actuator] = self.legs
         self.hover_from = np.full((nworld, 4), np.nan)  # travel where each foot began to cross an edge
         self.halted = np.zeros(nworld, dtype=bool)  # the move was refused for want of footing
-        nobj = len(self.scene.object_names)
-        self.move_start = np.zeros((nworld, nobj, 2))  # where the objects' centres were when the move began
-        self.stood = np.zeros((nworld, nobj), dtype=bool)  # objects under a foot at some time during the move
+        # where each object's centre was when the torso first touched it (NaN: untouched, or pushed since)
+        self.bumped = np.full((nworld, len(self.scene.object_names), 2), np.nan)
         self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
         self.setpoint = self.state.qpos[:, self.ids.qpos[:2]].copy()
@@ -185,12 +189,21 @@ class QuadrupedController:
                 ends.append(end)
         return ends
 
+    def robot_conditions(self) -> dict[str, list[bool]]:
+        """What every goal also needs, per world: the robot has not fallen, and it shoved nothing by walking into it
+        (what a shove moved, such as a vase pushed off its edge, may not count toward a goal)."""
+        return {
+            FALL_CONDITION: [f is None for f in self.failures],
+            SHOVE_CONDITION: [s is None for s in self.shoves],
+        }
+
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
-        """Report finished skills and falls, and write the controls for the next interval (in ``worlds``, every
-        world when None)."""
+        """Report finished skills, falls and shoves, and write the controls for the next interval (in ``worlds``,
+        every world when None)."""
         self.state = state
         mask = world_mask(self.sim.nworld, worlds)
         ends = self._falls(mask)
+        self._shoves(ends, mask)
         worlds = np.flatnonzero(mask & self.moving & np.array([f is None for f in state.failed]))
         if worlds.size:
             self._drive(worlds, ends)
@@ -400,8 +413,8 @@ class QuadrupedController:
         self.level[w] = np.nan
         self.hover_from[w] = np.nan
         self.halted[w] = False
-        self.move_start[w] = self._centers(self.state)[w, :, :2]
-        self.stood[w] = False
+        if move.pushing >= 0:
+            self.bumped[w, move.pushing] = np.nan
         self.best[w], self.progress_time[w] = np.inf, float(self.state.time[w])
 
     def _end(self, w: int, outcome: Outcome | None) -> SkillEnd:
@@ -421,15 +434,11 @@ class QuadrupedController:
 
     def _drive(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
         """Read the terrain where needed, then lift, stop, refuse or advance, in all moving worlds at once."""
-        worlds = self._stop_shoves(worlds, ends)
-        if not worlds.size:
-            return
         state = self.state
         q = state.qpos[worlds][:, self.ids.qpos]
         travel = np.einsum("ki,ki->k", q[:, :2] - self.origin[worlds], self.u[worlds])
         centres = feet(state, self.ids)[worlds]
         local, local_objects, under_torso = self._local(worlds, centres)
-        self._mark_stood(worlds, local_objects[:, :, 1])
         index = self._indices(worlds, travel)
         stale = self.rescan[worlds] | np.any((index < 0) | (index >= SAMPLES), axis=1)
         stale |= (travel > self.scan_t0[worlds] + SCAN_AHEAD / 2) & (
@@ -446,33 +455,34 @@ class QuadrupedController:
         self._steer(worlds, q, travel, waiting)
         self._check_arrival(worlds, q, travel, ends)
 
-    def _stop_shoves(self, worlds: np.ndarray, ends: list[SkillEnd]) -> np.ndarray:
-        """End, refused, the moves in ``worlds`` whose robot shoves a movable object: it touches the object, has not
-        stood on it during the move, is not pushing it, and the object has moved more than :data:`SHOVE` since the
-        move began (a walk is no push: it would move things the push rules refuse, such as objects over the push
-        limit). Returns the worlds whose moves go on."""
+    def _shoves(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
+        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the torso touches
+        outside a push of it is remembered where it is; once it lies more than :data:`SHOVE` from there, it was
+        shoved (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the
+        push limit, and what it moved may slide or tip on after the robot stops). The world fails
+        (:meth:`robot_conditions`) and a move in progress there is stopped and refused, naming the object."""
         state = self.state
-        touched = state.touching[worlds][:, self.scene.robot_body].any(axis=1)[:, self.scene.object_body]
-        moved = np.linalg.norm(self._centers(state)[worlds, :, :2] - self.move_start[worlds], axis=2)
-        objects = np.arange(len(self.scene.object_names))
-        shoved = touched & self.movable & ~self.cloth & ~self.stood[worlds] & (moved > SHOVE)
-        shoved &= objects[None, :] != self.pushing[worlds][:, None]
-        for k in np.flatnonzero(shoved.any(axis=1)):
-            w, index = int(worlds[k]), int(np.argmax(np.where(shoved[k], moved[k], -1.0)))
-            name = self.scene.object_names[index]
-            reason = (
-                f"the robot ran into {name} and moved it {moved[k, index]:.2f} m "
+        centres = self._centers(state)[:, :, :2]
+        touched = state.touching[:, self.ids.body][:, self.scene.object_body] & self.movable & ~self.cloth
+        touched &= mask[:, None]
+        pushed = (np.arange(len(self.scene.object_names))[None, :] == self.pushing[:, None]) & self.moving[:, None]
+        pushed &= mask[:, None]
+        self.bumped[pushed] = np.nan
+        first = touched & ~pushed & np.isnan(self.bumped[:, :, 0])
+        self.bumped[first] = centres[first]
+        moved = np.nan_to_num(np.linalg.norm(centres - self.bumped, axis=2), nan=0.0)
+        for w in np.flatnonzero(mask & (moved > SHOVE).any(axis=1)):
+            if self.shoves[w] is not None or state.failed[w] is not None:
+                continue
+            index = int(np.argmax(moved[w]))
+            self.shoves[w] = (
+                f"the robot ran into {self.scene.object_names[index]} and moved it {moved[w, index]:.2f} m "
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
-            end = self._advance(w, ("refused", reason, {"moved": round(float(moved[k, index]), 3)}))
-            if end is not None:
-                ends.append(end)
-        return worlds[~shoved.any(axis=1)]
-
-    def _mark_stood(self, worlds: np.ndarray, under: np.ndarray) -> None:
-        """Remember the objects ``under`` (k, 4) the feet (-1: none) as stood on during the current moves."""
-        rows, feet_ = np.nonzero(under >= 0)
-        self.stood[worlds[rows], under[rows, feet_]] = True
+            if self.moving[w] and self.plans[w] is not None:
+                end = self._advance(int(w), ("refused", self.shoves[w], {"moved": round(float(moved[w, index]), 3)}))
+                if end is not None:
+                    ends.append(end)
 
     def _indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
         """Sample indices (k, 5) of the :data:`LOCAL` offsets ahead of the feet in each world's last reading."""

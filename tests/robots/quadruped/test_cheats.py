@@ -1,9 +1,12 @@
 """A corpus of cheating quadruped programs: each must fail in every perturbed world, with a reason one can read.
 
 The programs are files in ``tests/fixtures/cheats/`` (and a few in ``tests/fixtures/programs/``); the scenes are
-built-in tasks and variants of them made here: the sofas without the board (a bare 0.40 m gap), the same turned a
-quarter (the robot crosses with its flank leading), a strip of cloth lying across the gap, and a gap wider than the
-surfboard can span.
+built-in tasks, variants of them made here (the sofas without the board: a bare 0.40 m gap; the same turned a
+quarter: the robot crosses with its flank leading; a strip of cloth lying across the gap; a gap wider than the
+surfboard can span) and layouts no built-in task has, in ``tests/fixtures/layouts/``: scenes mirrored (the robot
+walks toward -x) or turned (toward -y or +y, or on a diagonal), gaps of other widths, boxes in the wrong order or
+missing, a lever whose raised end is at the other side, and objects too heavy to push. Honest programs on the same
+layouts must succeed, so that the corpus cannot pass by refusing everything.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from robotool.task_model import Task
 
 CHEATS = FIXTURES / "cheats"
 PROGRAMS = FIXTURES / "programs"
+LAYOUTS = FIXTURES / "layouts"
 
 
 def _variant(name: str) -> Task:
@@ -49,8 +53,15 @@ def _variant(name: str) -> Task:
 
 @functools.cache
 def _scene(name: str) -> sim.Scene:
-    task = tasks.load(name) if name in tasks.names() else _variant(name)
+    layout = LAYOUTS / f"{name}.yaml"
+    task = tasks.load(name) if name in tasks.names() else tasks.load(layout) if layout.is_file() else _variant(name)
     return sim.build(task)
+
+
+def _text(program: str) -> str:
+    """A program's text: ``programs/NAME`` from the reference programs, else ``NAME`` from the cheats."""
+    folder, name = (PROGRAMS, program.split("/")[1]) if program.startswith("programs/") else (CHEATS, program)
+    return (folder / f"{name}.py").read_text()
 
 
 def failure_reason(rollout: Rollout) -> str:
@@ -93,12 +104,109 @@ CASES = [
 
 @pytest.mark.parametrize(("program", "scene"), CASES)
 def test_cheat_fails_in_every_world_with_a_reason(program: str, scene: str) -> None:
-    path = PROGRAMS / f"{program.split('/')[1]}.py" if program.startswith("programs/") else CHEATS / f"{program}.py"
-    rollouts = sim.run_sessions(_scene(scene), start_sessions([path.read_text()] * 3, "quadruped"), seed=11)
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 3, "quadruped"), seed=11)
     for rollout in rollouts:
         reason = failure_reason(rollout)
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert reason, rollout
+
+
+LAYOUT_CASES = [
+    # the sofas mirrored (toward -x), turned (toward -y, on a diagonal), with gaps of other widths
+    ("gap_one_walk", "traverse_mirrored"),
+    ("gap_one_walk", "traverse_gap_015"),
+    ("gap_one_walk", "traverse_minus_y_bare"),
+    ("gap_one_walk", "traverse_diagonal_bare"),
+    ("toward_short_walks", "traverse_mirrored_bare"),
+    ("toward_short_walks", "traverse_diagonal_bare"),
+    ("toward_tiny_walks", "traverse_gap_015"),
+    ("toward_zigzag", "traverse_mirrored_bare"),
+    ("toward_zigzag", "traverse_minus_y_bare"),
+    ("toward_diagonal", "traverse_mirrored_bare"),
+    ("toward_overshoot_and_back", "traverse_mirrored_bare"),
+    ("toward_front_half_over", "traverse_minus_y_bare"),
+    ("toward_front_half_over", "traverse_gap_015"),
+    ("toward_partial_bridge", "traverse_mirrored"),
+    ("toward_partial_bridge", "traverse_wide_mirrored"),
+    ("toward_partial_bridge", "traverse_minus_y"),
+    ("toward_cloth_bridge", "traverse_mirrored"),
+    ("push_board_under_robot", "traverse_mirrored"),
+    ("push_target_closer", "traverse_mirrored"),
+    ("toward_front_feet_on_target", "traverse_mirrored_bare"),
+    ("absurd_targets", "traverse_mirrored_bare"),
+    ("programs/bridge_any_direction", "traverse_wide_mirrored"),  # honest, but no board spans 0.65 m
+    # the sofa mirrored or turned, boxes in the wrong order or missing
+    ("programs/sofa_climbing_direct", "climb_mirrored"),
+    ("programs/sofa_climbing_direct", "climb_stairs_wrong_order"),
+    ("programs/sofa_climbing_direct", "climb_tall_box_only"),
+    ("climb_tall_box", "climb_mirrored"),
+    ("climb_tall_box", "climb_plus_y"),
+    ("climb_one_box_at_sofa", "climb_mirrored"),
+    ("climb_toward_diagonal", "climb_plus_y"),
+    ("climb_toward_diagonal", "climb_stairs_wrong_order"),
+    ("climb_toward_front_feet", "climb_mirrored"),
+    ("climb_toward_short_climbs", "climb_plus_y"),
+    ("push_box_under_robot", "climb_mirrored"),
+    ("push_sofa_closer", "climb_mirrored"),
+    # the lever mirrored (raised end and chair at +x) or turned, a chair too heavy to push
+    ("lever_with_chair_any_direction", "lever_mirrored"),
+    ("lever_stand_on_cube_end", "lever_mirrored"),
+    ("push_board_with_cube_any_direction", "lever_mirrored"),
+    ("push_board_with_cube_any_direction", "lever_plus_y"),
+    ("programs/cube_lifting_direct", "lever_mirrored"),
+    ("programs/cube_lifting_chair_only", "lever_mirrored"),
+    ("climb_onto_cube", "lever_mirrored"),
+    ("climb_onto_cube", "cube_lifting"),
+    ("programs/lever_any_direction", "lever_heavy_chair"),
+    ("walk_through_chair", "lever_heavy_chair"),
+    ("ram_chair_with_crate", "lever_heavy_chair_crate"),
+    # a vase too heavy to push, shoved by walking into it
+    ("walk_through_vase", "vase_heavy"),
+    ("walk_through_vase", "vase_heavy_at_edge"),  # a shove under 3 cm, then the vase tips off after the walk
+    ("walk_through_vase", "vase_lowering"),
+    ("programs/vase_lowering", "vase_heavy"),
+]
+
+CONTROL_CASES = [
+    ("programs/bridge_any_direction", "traverse_mirrored"),
+    ("programs/bridge_any_direction", "sofa_traversing"),
+    ("gap_one_walk", "traverse_gap_008_mirrored"),
+    ("programs/stairs_any_direction", "climb_mirrored"),
+    ("programs/stairs_any_direction", "sofa_climbing"),
+    ("programs/sofa_climbing_direct", "climb_fixed_stairs"),
+    ("programs/sofa_climbing_direct", "climb_fixed_stairs_minus_y"),
+    ("programs/lever_any_direction", "lever_mirrored"),
+    ("programs/lever_any_direction", "cube_lifting"),
+]
+
+
+@pytest.mark.parametrize(("program", "scene"), LAYOUT_CASES)
+def test_cheat_fails_on_unseen_layouts_in_every_world_with_a_reason(program: str, scene: str) -> None:
+    """Each program runs to its end or to a refused argument: it fails because the world said no, not because
+    it could not run."""
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 2, "quadruped"), seed=11)
+    for rollout in rollouts:
+        assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
+        assert failure_reason(rollout) or rollout.error, rollout
+        assert rollout.error is None or "position" in rollout.error, rollout.error
+
+
+@pytest.mark.parametrize(("program", "scene"), CONTROL_CASES)
+def test_honest_programs_succeed_on_the_same_layouts(run_texts: Any, program: str, scene: str) -> None:
+    rollouts = run_texts(_scene(scene), [_text(program)] * 2, seed=11)
+    assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+
+
+def test_a_walk_that_shoves_an_object_is_refused_naming_it() -> None:
+    """Walking into the 6 kg vase (over the 5 kg push limit) would shove it off the sofa onto the cushion: the walk
+    stops once the vase has moved a few centimetres, refused with what it ran into."""
+    (rollout,) = sim.run_sessions(
+        _scene("vase_heavy"), start_sessions([_text("walk_through_vase")], "quadruped"), perturb=False
+    )
+    refused = [c for c in rollout.calls if c.outcome == "refused"]
+    assert [c.skill for c in refused] == ["walk_to_position"] and not rollout.success
+    assert "ran into glass_vase" in refused[0].reason and refused[0].measured["moved"] > 0.03
+    assert rollout.conditions["robot_shoved_nothing"] is False
 
 
 def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:

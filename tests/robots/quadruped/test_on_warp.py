@@ -1,33 +1,70 @@
-"""The quadruped on mujoco_warp (Warp's CPU device): the surfboard bridge, in one batch of 11 worlds.
+"""The quadruped on mujoco_warp (Warp's CPU device): every built-in quadruped task's reference program and, where
+the task needs a tool, its tool-free program, side by side in one batch per task.
 
-Kept to one task: the first Warp kernel compile is slow on CPU.
+Fewer worlds than on the C backend (ten for the surfboard bridge, two elsewhere): Warp on CPU is slow.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import pytest
-from fixtures.reference import program
+from fixtures.reference import REFERENCE, TOOL_FREE, program
 
+from robotool import tasks
 from robotool.rollout import Rollout
+from robotool.sim.backend import Perturbation
 
 pytest.importorskip("mujoco_warp")
 
+QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
+WORLDS = {"sofa_traversing": 10}  # reference worlds per task (default 2)
+SEED = 5
+
+TOOL_FREE_REFUSAL = {  # task -> (the refused skill, its measured key, the value; None: the world's cube mass)
+    "sofa_traversing": ("walk_to_position", "gap", 0.30),  # beyond the end of the overhanging board
+    "sofa_climbing": ("climb_to_position", "step", 0.34),
+    "cube_lifting": ("push_to_position", "mass", None),
+}
+
 
 @pytest.fixture(scope="session")
-def bridge_rollouts(sim_scene: Any, run_texts: Any) -> list[Rollout]:
-    """Ten perturbed worlds of the bridge program and one tool-free walk, stepped together on Warp."""
-    programs = [program("sofa_traversing")] * 10 + [program("sofa_traversing_direct")]
-    return run_texts(sim_scene("sofa_traversing"), programs, seed=5, backend="warp")
+def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]:
+    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp."""
+    cache: dict[str, list[Rollout]] = {}
+
+    def batch(task: str) -> list[Rollout]:
+        if task not in cache:
+            programs = [program(REFERENCE[task])] * WORLDS.get(task, 2)
+            programs += [program(TOOL_FREE[task])] if task in TOOL_FREE else []
+            cache[task] = run_texts(sim_scene(task), programs, seed=SEED, backend="warp")
+        return cache[task]
+
+    return batch
 
 
-def test_bridge_solves_nine_of_ten_worlds_on_warp(bridge_rollouts: list[Rollout]) -> None:
-    assert sum(r.success for r in bridge_rollouts[:10]) >= 9
+@pytest.mark.parametrize("task", QUADRUPED_TASKS)
+def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], list[Rollout]], task: str) -> None:
+    n = WORLDS.get(task, 2)
+    rollouts = warp_batch(task)[:n]
+    assert sum(r.success for r in rollouts) >= (9 if n == 10 else n), [
+        [(c.skill, c.outcome, c.reason) for c in r.calls if c.outcome != "done"] or r.conditions
+        for r in rollouts
+        if not r.success
+    ]
 
 
-def test_tool_free_walk_is_refused_at_the_gap_on_warp(bridge_rollouts: list[Rollout]) -> None:
-    direct = bridge_rollouts[10]
-    (walk,) = [c for c in direct.calls if c.skill == "walk_to_position"]
-    assert not direct.success and walk.outcome == "refused"
-    assert walk.measured["gap"] == pytest.approx(0.30, abs=0.02)  # beyond the end of the overhanging board
+@pytest.mark.parametrize("task", sorted(TOOL_FREE_REFUSAL))
+def test_tool_free_program_is_refused_with_the_measured_value_on_warp(
+    sim_scene: Any, warp_batch: Callable[[str], list[Rollout]], task: str
+) -> None:
+    skill, key, value = TOOL_FREE_REFUSAL[task]
+    direct = warp_batch(task)[-1]
+    if value is None:  # the cube's mass in that world, perturbed
+        scene = sim_scene(task)
+        n = WORLDS.get(task, 2)
+        value = Perturbation.sample(scene, n + 1, SEED).mass_scale[n, scene.object_index("cube")] * 10.0
+    refused = [c for c in direct.calls if c.outcome == "refused"]
+    assert not direct.success and [c.skill for c in refused] == [skill]
+    assert refused[0].measured[key] == pytest.approx(value, abs=0.02)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from fixtures.reference import program
+from fixtures.reference import REFERENCE, program
 
 from robotool import sim, tasks
 from robotool.rollout import Rollout
@@ -23,21 +23,16 @@ def motion_calls(rollout: Rollout) -> list[Any]:
     return [c for c in rollout.calls if not c.skill.startswith("get_")]
 
 
+QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
+
+
 @pytest.mark.parametrize(
-    ("task", "name"),
-    [
-        ("sofa_traversing", "sofa_traversing"),
-        ("sofa_traversing_small_gap", "sofa_traversing_direct"),
-        ("sofa_climbing", "sofa_climbing"),
-        ("sofa_climbing_low_sofa", "sofa_climbing_direct"),
-        ("cube_lifting", "cube_lifting"),
-        ("vase_lowering", "vase_lowering"),
-        ("sofa_traversing", "paper_sofa_traversing"),
-        ("sofa_climbing", "paper_sofa_climbing"),
-    ],
+    ("task", "name", "seed"),
+    [(task, REFERENCE[task], seed) for task in QUADRUPED_TASKS for seed in (0, 3)]
+    + [("sofa_traversing", "paper_sofa_traversing", 3), ("sofa_climbing", "paper_sofa_climbing", 3)],
 )
-def test_reference_program_solves_nine_of_ten_perturbed_worlds(sim_scene: Any, task: str, name: str) -> None:
-    rollouts = run(sim_scene(task), name, 10, seed=3)
+def test_reference_program_solves_nine_of_ten_perturbed_worlds(sim_scene: Any, task: str, name: str, seed: int) -> None:
+    rollouts = run(sim_scene(task), name, 10, seed=seed)
     assert sum(r.success for r in rollouts) >= 9, [motion_calls(r) for r in rollouts if not r.success]
 
 
@@ -102,7 +97,7 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
 def test_lever_needs_both_the_chair_away_and_the_robot_on_it(sim_scene: Any, name: str, lifted: bool) -> None:
     for rollout in run(sim_scene("cube_lifting"), name, 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": lifted, "robot_has_not_fallen": True}
+        assert rollout.conditions == {"cube_lifted": lifted, "robot_has_not_fallen": True, "robot_shoved_nothing": True}
 
 
 def test_a_light_robot_does_not_tip_the_lever() -> None:
@@ -110,7 +105,7 @@ def test_a_light_robot_does_not_tip_the_lever() -> None:
     data["robot"]["limits"] = {"mass": 1.0}
     for rollout in run(parse_task(data), "cube_lifting", 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": False, "robot_has_not_fallen": True}
+        assert rollout.conditions == {"cube_lifted": False, "robot_has_not_fallen": True, "robot_shoved_nothing": True}
 
 
 @pytest.mark.parametrize(
@@ -126,6 +121,7 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: st
             "glass_vase_lowered": True,
             "glass_vase_unbroken": unbroken,
             "robot_has_not_fallen": True,
+            "robot_shoved_nothing": True,
         }
         assert rollout.success is unbroken
 
