@@ -166,6 +166,8 @@ class QuadrupedController:
         self.halted = np.zeros(nworld, dtype=bool)  # the move was refused for want of footing
         # where each object's centre was when the torso first touched it (NaN: untouched, or pushed since)
         self.bumped = np.full((nworld, len(self.scene.object_names), 2), np.nan)
+        # touched without a break, and without a walk, since a push of it (it may slide on after the push ended)
+        self.pressed = np.zeros((nworld, len(self.scene.object_names)), dtype=bool)
         self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
         self.setpoint = self.state.qpos[:, self.ids.qpos[:2]].copy()
@@ -456,8 +458,9 @@ class QuadrupedController:
         self._check_arrival(worlds, q, travel, ends)
 
     def _shoves(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
-        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the torso touches
-        outside a push of it is remembered where it is; once it lies more than :data:`SHOVE` from there, it was
+        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
+        torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
+        until the next walk) is remembered where it is; once it lies more than :data:`SHOVE` from there, it was
         shoved (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the
         push limit, and what it moved may slide or tip on after the robot stops). The world fails
         (:meth:`robot_conditions`) and a move in progress there is stopped and refused, naming the object."""
@@ -467,8 +470,12 @@ class QuadrupedController:
         touched &= mask[:, None]
         pushed = (np.arange(len(self.scene.object_names))[None, :] == self.pushing[:, None]) & self.moving[:, None]
         pushed &= mask[:, None]
-        self.bumped[pushed] = np.nan
-        first = touched & ~pushed & np.isnan(self.bumped[:, :, 0])
+        for w in np.flatnonzero(pushed.any(axis=1)):  # what the pushed object moves by touching it moves with it
+            pushed[w] |= state.touching[w, self.scene.object_body[self.pushing[w]]][self.scene.object_body]
+        walking = (self.moving & (self.pushing < 0))[:, None]
+        self.pressed = np.where(mask[:, None], pushed | (self.pressed & touched & ~walking), self.pressed)
+        self.bumped[self.pressed] = np.nan
+        first = touched & ~self.pressed & np.isnan(self.bumped[:, :, 0])
         self.bumped[first] = centres[first]
         moved = np.nan_to_num(np.linalg.norm(centres - self.bumped, axis=2), nan=0.0)
         for w in np.flatnonzero(mask & (moved > SHOVE).any(axis=1)):
