@@ -460,10 +460,11 @@ class QuadrupedController:
     def _shoves(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
         torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
-        until the next walk) is remembered where it is; once it lies more than :data:`SHOVE` from there, it was
-        shoved (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the
-        push limit, and what it moved may slide or tip on after the robot stops). The world fails
-        (:meth:`robot_conditions`) and a move in progress there is stopped and refused, naming the object."""
+        until the next walk), and that no foot stands on (a lever tips under the robot), is remembered where it is;
+        once it lies more than :data:`SHOVE` from there, it was shoved (a walk or a climb is no push: it would move
+        things the push rules refuse, such as objects over the push limit, and what it moved may slide or tip on
+        after the robot stops). The world fails (:meth:`robot_conditions`) and a move in progress there is stopped
+        and refused, naming the object."""
         state = self.state
         centres = self._centers(state)[:, :, :2]
         touched = state.touching[:, self.ids.body][:, self.scene.object_body] & self.movable & ~self.cloth
@@ -474,8 +475,9 @@ class QuadrupedController:
             pushed[w] |= state.touching[w, self.scene.object_body[self.pushing[w]]][self.scene.object_body]
         walking = (self.moving & (self.pushing < 0))[:, None]
         self.pressed = np.where(mask[:, None], pushed | (self.pressed & touched & ~walking), self.pressed)
-        self.bumped[self.pressed] = np.nan
-        first = touched & ~self.pressed & np.isnan(self.bumped[:, :, 0])
+        stood_on = state.touching[:, self.ids.feet][:, :, self.scene.object_body].any(axis=1)  # it carries a foot
+        self.bumped[(self.pressed | stood_on) & mask[:, None]] = np.nan
+        first = touched & ~self.pressed & ~stood_on & np.isnan(self.bumped[:, :, 0])
         self.bumped[first] = centres[first]
         moved = np.nan_to_num(np.linalg.norm(centres - self.bumped, axis=2), nan=0.0)
         for w in np.flatnonzero(mask & (moved > SHOVE).any(axis=1)):

@@ -164,6 +164,7 @@ LAYOUT_CASES = [
     ("walk_through_vase", "vase_heavy"),
     ("walk_through_vase", "vase_heavy_at_edge"),  # a shove under 3 cm, then the vase tips off after the walk
     ("walk_through_vase", "vase_lowering"),
+    ("ram_vase_with_book", "vase_heavy_with_book"),
     ("programs/vase_lowering", "vase_heavy"),
 ]
 
