@@ -17,6 +17,7 @@ from robotool.rollout import Rollout
 from robotool.sim.backend import Perturbation
 
 pytest.importorskip("mujoco_warp")
+pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
 
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
 WORLDS = {"sofa_traversing": 10}  # reference worlds per task (default 2)
