@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.concepts import press_point, start_surface
-from robotool.embodiments import ArmLimits, QuadrupedLimits, skills
+from robotool.robots.quadruped.concepts import press_point, start_surface
+from robotool.robots.skills import ArmLimits, QuadrupedLimits, skills
 from robotool.scene import PRESS_TRAVEL, SceneObject
 from robotool.task_model import Task
 

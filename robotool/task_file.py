@@ -19,7 +19,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from robotool import geometry
-from robotool.embodiments import LIMITS_MODELS, QuadrupedLimits
+from robotool.robots.skills import LIMITS_MODELS, QuadrupedLimits
 from robotool.task_goal import GOALS_BY_EMBODIMENT
 from robotool.task_model import Task
 

@@ -7,7 +7,7 @@ from typing import Annotated, Any, Literal
 import yaml
 from pydantic import Field, FiniteFloat, StringConstraints
 
-from robotool.embodiments import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
+from robotool.robots.skills import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
 from robotool.scene import Name, SceneObject, StrictModel
 from robotool.task_goal import Goal
 

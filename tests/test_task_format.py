@@ -13,9 +13,9 @@ from pydantic import BaseModel
 from robotool import tasks
 from robotool.cli import main
 from robotool.describe import describe
-from robotool.embodiments import ArmLimits, QuadrupedLimits
 from robotool.execute import run
 from robotool.planner import solve
+from robotool.robots.skills import ArmLimits, QuadrupedLimits
 from robotool.scene import Fragile, SceneObject
 from robotool.task_file import TaskFileError, load_task, parse_task
 from robotool.task_goal import Goal, LiftGoal

@@ -34,7 +34,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict
 
-from robotool.embodiments import skills
+from robotool.robots.skills import skills
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.task_model import Task
 

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.embodiments import skills
 from robotool.planner.codegen import Program
+from robotool.robots.skills import skills
 from robotool.rollout import SkillCall, notable_distances
 from robotool.solution import Candidate
 from robotool.task_model import Task

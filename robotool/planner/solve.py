@@ -1,6 +1,6 @@
 """``solve``: the LM-free planner end to end, returning the same :class:`Solution` as the RoboTool program.
 
-Key concepts come from :func:`robotool.concepts.key_concepts`; candidate programs from the
+Key concepts come from :func:`robotool.robots.quadruped.concepts.key_concepts`; candidate programs from the
 embodiment's macros; verification from :mod:`robotool.planner.search`. When a key concept is
 violated, programs that use no object besides the goal's own are skipped (the geometry already says
 they cannot work); with ``tools=False`` only those are tried (the evaluator's no-tool floor).
@@ -13,12 +13,13 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from robotool.concepts import KeyConcept, key_concepts, surface_under
-from robotool.planner import macros_arm, macros_quadruped
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
 from robotool.planner.search import Budget, Tried, order, search
 from robotool.repair_rounds import failure_trace
+from robotool.robots.arm import macros as macros_arm
+from robotool.robots.quadruped import macros as macros_quadruped
+from robotool.robots.quadruped.concepts import KeyConcept, key_concepts, surface_under
 from robotool.scene import SceneObject
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank

@@ -20,11 +20,11 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon, Rectangle
 
 from robotool import geometry
-from robotool.embodiments import skills
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
+from robotool.robots.arm.controller import HOME as ARM_HOME
+from robotool.robots.skills import skills
 from robotool.rollout import Rollout, SkillCall
-from robotool.sim.arm import HOME as ARM_HOME
 from robotool.sim.build import Scene
 from robotool.sim.recorder import Track
 from robotool.task_model import Task

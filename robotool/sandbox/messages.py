@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from robotool.embodiments import EmbodimentName
 from robotool.program_session import SkillReply
+from robotool.robots.skills import EmbodimentName
 from robotool.sandbox.limits import SandboxLimits
 
 

@@ -10,8 +10,8 @@ from collections.abc import Sequence
 
 from pydantic import ValidationError
 
-from robotool.embodiments import EmbodimentName, SkillArgumentError, check_call
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
+from robotool.robots.skills import EmbodimentName, SkillArgumentError, check_call
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import (
     GO,

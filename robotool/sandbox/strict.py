@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import ast
 
-from robotool.embodiments import EmbodimentName
+from robotool.robots.skills import EmbodimentName
 from robotool.sandbox.validate import ProgramRejected, validate
 
 

@@ -31,7 +31,7 @@ import ast
 import builtins
 import re
 
-from robotool.embodiments import SKILLS, EmbodimentName, SkillArgumentError, check_call, skills
+from robotool.robots.skills import SKILLS, EmbodimentName, SkillArgumentError, check_call, skills
 from robotool.sandbox.allowlist import (
     BUILTINS,
     MATH_NAMES,

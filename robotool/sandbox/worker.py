@@ -28,8 +28,8 @@ from typing import Any, NoReturn
 import numpy as np
 import numpy.ma
 
-from robotool.embodiments import EmbodimentName, SkillSpec, check_call, skills
 from robotool.program_session import SkillCallError
+from robotool.robots.skills import EmbodimentName, SkillSpec, check_call, skills
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits

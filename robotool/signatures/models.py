@@ -29,8 +29,8 @@ from typing import Annotated, Any, get_args
 
 from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_validator
 
-from robotool.concepts import ConceptKind, KeyConcept
-from robotool.embodiments import EmbodimentName, skill_names
+from robotool.robots.quadruped.concepts import ConceptKind, KeyConcept
+from robotool.robots.skills import EmbodimentName, skill_names
 from robotool.task_model import Task
 
 __all__ = [

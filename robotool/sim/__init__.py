@@ -8,7 +8,8 @@ Modules, one job each:
 - :mod:`robotool.sim.build` — ``build(task) -> Scene`` (the ``MjModel`` made through ``MjSpec``).
 - :mod:`robotool.sim.backend` — the ``BatchedSim`` protocol, ``BatchState``, perturbations, ``make_sim``;
   backends in :mod:`~robotool.sim.backend_mujoco` (C, threads) and :mod:`~robotool.sim.backend_warp`.
-- :mod:`robotool.sim.arm` — the arm embodiment; :mod:`robotool.sim.quadruped` — the quadruped.
+- :mod:`robotool.robots.arm.controller` — the arm embodiment;
+  :mod:`robotool.robots.quadruped.controller` — the quadruped.
 - :mod:`robotool.sim.magnets` — magnetic objects weld on contact.
 - :mod:`robotool.sim.goals` — goal sub-conditions.
 - :mod:`robotool.sim.lockstep` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.

@@ -10,7 +10,7 @@ Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`r
 A sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper) collides with the ground and the
 robot only; it meets each other movable object through a carrier geom of its own, in place only while
 the object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object.
-Cloth is built by the quadruped module (``robotool.sim.quadruped_cloth.add_cloth(spec, obj)``).
+Cloth is built by the quadruped module (``robotool.sim.cloth.add_cloth(spec, obj)``).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 """
 
@@ -46,7 +46,7 @@ BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
 
-_CLOTH_BUILDER = "robotool.sim.quadruped_cloth:add_cloth"
+_CLOTH_BUILDER = "robotool.sim.cloth:add_cloth"
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ class Scene:
 
 def is_sheet(obj: SceneObject) -> bool:
     """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper): it cannot push
-    or lift anything with its edge. (Cloth is built as hinged links that drape; see ``quadruped_cloth``.)"""
+    or lift anything with its edge. (Cloth is built as hinged links that drape; see :mod:`robotool.sim.cloth`.)"""
     return obj.shape == "box" and min(obj.size) <= SHEET_THICKNESS
 
 

@@ -49,8 +49,8 @@ if TYPE_CHECKING:
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
 _EMBODIMENTS: dict[str, str] = {
-    "arm": "robotool.sim.arm:ArmEmbodiment",
-    "quadruped": "robotool.sim.quadruped:QuadrupedEmbodiment",
+    "arm": "robotool.robots.arm.controller:ArmEmbodiment",
+    "quadruped": "robotool.robots.quadruped.controller:QuadrupedEmbodiment",
 }
 
 

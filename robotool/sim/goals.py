@@ -3,7 +3,7 @@
 A :class:`GoalTracker` is updated every control tick (so "at any time" goals such as ``pressed`` can
 remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. ``grasped`` and
 ``pressed`` live here; the quadruped's goal kinds (``robot_on``, ``lifted``, ``lowered``) are
-looked up lazily in :mod:`robotool.sim.quadruped` as ``<kind>_goal(scene) -> GoalTracker``.
+looked up lazily in :mod:`robotool.robots.quadruped.controller` as ``<kind>_goal(scene) -> GoalTracker``.
 """
 
 from __future__ import annotations
@@ -14,12 +14,12 @@ from typing import Protocol
 
 import numpy as np
 
+from robotool.robots.arm.controller import graspable_points, held_objects
 from robotool.scene import PRESS_TRAVEL
-from robotool.sim.arm import graspable_points, held_objects
 from robotool.sim.backend import BatchState
 from robotool.sim.build import Scene
 
-_LAZY_GOALS = "robotool.sim.quadruped"
+_LAZY_GOALS = "robotool.robots.quadruped.controller"
 
 
 class GoalTracker(Protocol):

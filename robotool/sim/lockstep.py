@@ -23,7 +23,6 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.embodiments import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
 from robotool.program_session import (
     ProgramEnded,
     ProgramSession,
@@ -32,6 +31,7 @@ from robotool.program_session import (
     TrustedProgram,
     TrustedSession,
 )
+from robotool.robots.skills import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build

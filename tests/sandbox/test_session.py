@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from fixtures.paths import FIXTURES
 
-from robotool.embodiments import skills
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
+from robotool.robots.skills import skills
 from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.validate import ProgramRejected
 from robotool.sandbox.zygote import Zygote, zygote

@@ -11,12 +11,12 @@ from fixtures.reference import REFERENCE, program
 
 from robotool import sandbox, sim, tasks, verify
 from robotool.cli import main
-from robotool.embodiments import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
+from robotool.robots.arm.controller import ArmController
+from robotool.robots.quadruped.controller import QuadrupedController
+from robotool.robots.skills import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
 from robotool.rollout import Rollout
-from robotool.sim.arm import ArmController
 from robotool.sim.backend_mujoco import MujocoSim
 from robotool.sim.lockstep import scene_box
-from robotool.sim.quadruped import QuadrupedController
 
 
 @pytest.mark.parametrize(

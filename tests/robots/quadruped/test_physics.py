@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from robotool import sim, tasks
+from robotool.robots.quadruped.body import ROBOT_GROUP
+from robotool.robots.quadruped.support import feet
+from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim import lockstep as runner
 from robotool.sim.backend import make_sim
 from robotool.sim.backend_mujoco import MujocoSim
-from robotool.sim.quadruped_body import ROBOT_GROUP
-from robotool.sim.quadruped_support import feet
 from robotool.task_file import parse_task
-from robotool.terrain import FOOT_RADIUS
 
 GRAVITY = 9.81
 SETTLING_TICKS = 4  # control ticks at the start of a move while the legs take their stance

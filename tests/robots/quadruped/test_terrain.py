@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from robotool import geometry, tasks
-from robotool.embodiments import QuadrupedLimits
-from robotool.sim.quadruped_push import Leg, legs, push_pose, route, rule_violation
-from robotool.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
+from robotool.robots.quadruped.push import Leg, legs, push_pose, route, rule_violation
+from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
+from robotool.robots.skills import QuadrupedLimits
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01

@@ -3,7 +3,7 @@
 The root body ``robot`` rides on slides along x, y and z and two hinges, pitch (about y) then roll (about x),
 through its centre of mass; nothing holds its pitch or roll, so it tips over an edge when its centre of mass leaves
 the support of its feet. The torso stands on four legs, each a child body ``robot_foot<i>`` (order
-:data:`robotool.terrain.FOOT_NAMES`) holding a capsule that ends in a round foot at a corner of the footprint, on a
+:data:`.terrain.FOOT_NAMES`) holding a capsule that ends in a round foot at a corner of the footprint, on a
 slide joint ``robot_leg<i>`` along the body's up axis (0: the nominal stance; down to ``max_step_down`` plus
 :data:`LEG_SLACK` below it) driven by a force-limited position servo: the legs' length keeps the body level over
 uneven ground and its torso clear of what lies under it, and the legs' servos carry its weight onto whatever the
@@ -28,9 +28,9 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.embodiments import QuadrupedLimits
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
+from robotool.robots.skills import QuadrupedLimits
 from robotool.task_model import Task
-from robotool.terrain import FOOT_RADIUS, foot_offsets
 
 BODY = "robot"
 BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its faces push objects)

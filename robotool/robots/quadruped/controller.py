@@ -1,11 +1,11 @@
 """The quadruped embodiment: its skills over batched worlds, its queries and its goal kinds.
 
 Every motion skill is a plan of straight moves: a walk is one move, or a few around an object that stands in its way
-(:func:`~robotool.sim.quadruped_push.route`); a push is the approach around the object and one push per axis
-(:mod:`robotool.sim.quadruped_push`). When a move starts, and again when the terrain under a foot changed or the
+(:func:`~robotool.robots.quadruped.push.route`); a push is the approach around the object and one push per axis
+(:mod:`robotool.robots.quadruped.push`). When a move starts, and again when the terrain under a foot changed or the
 stretch read runs out, downward rays read the path of each of the four feet from just behind it to
-:data:`~robotool.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
-:mod:`robotool.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
+:data:`~robotool.robots.quadruped.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
+:mod:`.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
 just before it, and once the robot has stopped there the skill is refused with the measured value, the limit and
 where. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell whether a foot
 is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher surface (a step
@@ -30,16 +30,19 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool.embodiments import QuadrupedLimits
-from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import Scene
-from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
-from robotool.sim.quadruped_body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROUP, XY_KP, BodyIds, add_body
-from robotool.sim.quadruped_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
-from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, rule_violation, sweep_problem
-from robotool.sim.quadruped_support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
-from robotool.task_model import Task
-from robotool.terrain import (
+from robotool.robots.quadruped.body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROUP, XY_KP, BodyIds, add_body
+from robotool.robots.quadruped.push import (
+    GAP,
+    Leg,
+    lateral_offsets,
+    legs,
+    push_pose,
+    route,
+    rule_violation,
+    sweep_problem,
+)
+from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
+from robotool.robots.quadruped.terrain import (
     FOOT_NAMES,
     FOOT_RADIUS,
     KINDS,
@@ -52,6 +55,12 @@ from robotool.terrain import (
     limit_of,
     scan_paths,
 )
+from robotool.robots.skills import QuadrupedLimits
+from robotool.sim.backend import BatchedSim, BatchState
+from robotool.sim.build import Scene
+from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
+from robotool.sim.object_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
+from robotool.task_model import Task
 
 WALK_SPEED = 0.4  # m/s
 SCAN_AHEAD = 1.2  # m of a move read at a time (plus LOOKAHEAD)
@@ -112,7 +121,7 @@ class QuadrupedEmbodiment:
         self.limits = limits
 
     def add_to_spec(self, spec: mujoco.MjSpec, task: Task) -> None:
-        """Add the robot body and its actuators (see :mod:`robotool.sim.quadruped_body`)."""
+        """Add the robot body and its actuators (see :mod:`robotool.robots.quadruped.body`)."""
         add_body(spec, task)
 
     def controller(self, sim: BatchedSim) -> QuadrupedController:

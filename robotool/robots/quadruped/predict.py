@@ -14,11 +14,11 @@ from typing import Literal
 import numpy as np
 
 from robotool import geometry
-from robotool.embodiments import QuadrupedLimits
+from robotool.robots.quadruped.push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
+from robotool.robots.quadruped.terrain import check_walk
+from robotool.robots.skills import QuadrupedLimits
 from robotool.scene import SceneObject
-from robotool.sim.quadruped_push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
 from robotool.task_model import Task
-from robotool.terrain import check_walk
 
 CONTACT = 0.02  # m: boxes closer than this touch
 SAMPLE = 0.02  # m between terrain samples along a walk
@@ -129,7 +129,7 @@ def walk_violation(
 ) -> str | None:
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
-    The feet's paths are checked as the simulator checks them (:func:`robotool.terrain.check_walk`). Just outside
+    The feet's paths are checked as the simulator checks them (:func:`.terrain.check_walk`). Just outside
     the body's flanks (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet
     are on, or the body would run into it.
     """
@@ -220,7 +220,7 @@ class PushBlock:
 def push_problem(
     layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float, here: np.ndarray | None = None
 ) -> tuple[PushBlock | None, np.ndarray]:
-    """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.sim.quadruped_push`): one
+    """Predict a push of ``name`` to ``dest`` (x-y) as the skill makes it (:mod:`robotool.robots.quadruped.push`): one
     straight leg per axis, the shorter first, the robot's face against the object's, slid along the face to the
     nearest offset whose sweep (from where it lines up, else from the start pose, to the end of the push plus the
     gap) meets nothing above its floor and keeps its feet over the floor. With the robot's position ``here``, the walk

@@ -3,9 +3,9 @@
 They are computed from the scene's geometry and the robot's limits alone (never from a task's
 name or category) and grade the Analyzer stage: gap width vs the gap limit, height to climb vs
 the climb limit, how far a target lies outside the arm's workspace, mass vs the push limit, and
-how far a fragile object would fall. Gaps are what :mod:`robotool.terrain` finds under the feet on the straight
+how far a fragile object would fall. Gaps are what :mod:`.terrain` finds under the feet on the straight
 walk to the target (the simulator's and the planner's terrain model: a slit narrower than a foot carries it and
-is no gap), and every leg limit is judged by :func:`robotool.terrain.exceeds`.
+is no gap), and every leg limit is judged by :func:`robotool.robots.quadruped.terrain.exceeds`.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ import numpy as np
 from pydantic import BaseModel, Field
 
 from robotool import geometry
-from robotool.embodiments import ArmLimits, QuadrupedLimits
+from robotool.robots.quadruped.terrain import exceeds, survey_walk
+from robotool.robots.skills import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
-from robotool.terrain import exceeds, survey_walk
 
 ConceptKind = Literal[
     "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
@@ -210,7 +210,7 @@ def _mass_concept(obj: SceneObject, limits: QuadrupedLimits) -> KeyConcept:
 
 def gap_on_the_way(task: Task, start_xy: np.ndarray, end_xy: np.ndarray, limits: QuadrupedLimits) -> float:
     """Widest gap the feet meet walking straight from ``start_xy`` to ``end_xy`` over the fixed terrain (what no
-    tool changes), as :mod:`robotool.terrain` measures it for the simulator and the planner (0 when none)."""
+    tool changes), as :mod:`.terrain` measures it for the simulator and the planner (0 when none)."""
     solids = list(_solids(task, fixed_only=True).values())
     survey = survey_walk(lambda xy: geometry.surface_height(xy, solids), start_xy, end_xy, limits)
     return survey.largest["gap"]

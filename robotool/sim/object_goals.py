@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from robotool import geometry
+from robotool.robots.quadruped.body import BodyIds
+from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported
 from robotool.sim.backend import BatchState
 from robotool.sim.build import Scene
-from robotool.sim.quadruped_body import BodyIds
-from robotool.sim.quadruped_support import centre_of_mass, feet, feet_touching, supported
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 

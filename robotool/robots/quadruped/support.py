@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.quadruped.body import BodyIds
+from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS
 from robotool.sim.backend import BatchState
-from robotool.sim.quadruped_body import BodyIds
-from robotool.terrain import FOOT_NAMES, FOOT_RADIUS
 
 CYCLE = (0, 2, 3, 1)  # the feet counter-clockwise around the footprint (rear-right, front-right, front-left, ...)
 FOOT_GROUPS = {  # how a set of feet without support is named, from the most specific

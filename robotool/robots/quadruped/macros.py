@@ -2,7 +2,7 @@
 object to a placement (against another object's side, across a gap, out of the way, beside an edge),
 stand on a lever's far end, push an object off an edge onto a soft landing.
 
-Each route is predicted with :func:`robotool.planner.layout.walk_violation` on the planned layout; a
+Each route is predicted with :func:`robotool.robots.quadruped.predict.walk_violation` on the planned layout; a
 program whose walk is predicted to break a limit keeps that as its ``doubt`` and is tried late.
 """
 
@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robotool.concepts import start_surface, surface_under
-from robotool.embodiments import QuadrupedLimits
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.planner.layout import Box, Layout, detour, push_problem, push_staging, walk_violation
+from robotool.robots.quadruped.concepts import start_surface, surface_under
+from robotool.robots.quadruped.predict import Box, Layout, detour, push_problem, push_staging, walk_violation
+from robotool.robots.skills import QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

@@ -1,0 +1,1 @@
+"""Robots: the registry of embodiments and one package per robot."""

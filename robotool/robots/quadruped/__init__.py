@@ -1,0 +1,1 @@
+"""The quadruped: a Unitree Go1-sized legged robot."""
