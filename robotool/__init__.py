@@ -16,8 +16,8 @@ if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.env
     os.environ.setdefault("MUJOCO_GL", "egl")
 
 from robotool import tasks
+from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.describe import describe
-from robotool.robots.quadruped.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.task_file import Problem, TaskFileError, load_task
 from robotool.task_model import Task
 

@@ -37,11 +37,11 @@ from robotool.cliargs import (
     temperature,
     warn_if_warp_on_cpu,
 )
+from robotool.concepts import needs_tool
 from robotool.describe import describe
 from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
 from robotool.methods import STAGES_BY_METHOD
-from robotool.robots.quadruped.concepts import needs_tool
 from robotool.sandbox.validate import ProgramRejected
 from robotool.task_file import TaskFileError
 from robotool.task_model import Task

@@ -14,13 +14,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from robotool import geometry
-from robotool.robots.skills import LIMITS_MODELS, QuadrupedLimits
-from robotool.task_goal import GOALS_BY_EMBODIMENT
+from robotool import geometry, robots
 from robotool.task_model import Task
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
@@ -32,7 +29,6 @@ KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
     "grasp_point": "graspable_point", "grasp": "graspable_point", "handle": "graspable_point", "fixed": "movable",
     "description": "notes", "note": "notes", "objects_list": "objects", "task": "name", "version": "format",
 }  # fmt: skip
-_ARTICLE = {"arm": "an", "quadruped": "a"}
 
 
 class Problem(BaseModel):
@@ -161,20 +157,17 @@ def _check_semantics(task: Task) -> list[Problem]:
         task.limits  # noqa: B018 - validates the overrides
     except ValidationError as e:
         limits_ok = False
-        model = LIMITS_MODELS[robot.type]
+        model = robots.get(robot.type).limits
         for problem in _model_problems(e, robot.limits, model):
             problems.append(Problem(path=f"robot.limits.{problem.path}", message=problem.message))
-    if robot.type == "quadruped" and robot.position is None:
-        problems.append(Problem(path="robot.position", message="a quadruped needs a start [x, y]"))
-    if robot.type == "arm" and robot.position is not None:
-        problems.append(Problem(path="robot.position",
-                                message="the arm's base is fixed at [0, 0, 0]; remove 'position'"))
+    robot_type = robots.get(robot.type)
+    problems += robot_type.check_robot(task)
 
     kind = task.goal.kind
     target = task.goal.object
-    if kind not in GOALS_BY_EMBODIMENT[robot.type]:
-        allowed = ", ".join(sorted(GOALS_BY_EMBODIMENT[robot.type]))
-        message = f"{_ARTICLE[robot.type]} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"
+    if kind not in robot_type.goals:
+        allowed = ", ".join(sorted(robot_type.goals))
+        message = f"{robot_type.article} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"
         problems.append(Problem(path=f"goal.{kind}", message=message))
     elif target not in seen:
         problems.append(Problem(path=f"goal.{kind}",
@@ -220,29 +213,8 @@ def _check_geometry(task: Task) -> list[Problem]:
         elif contact.gap > RESTING_TOLERANCE:
             problems.append(Problem(path=f"{_object_path(task, i)}.center",
                                     message=f"floats {contact.gap:.3f} m above the surface below it"))
-    if task.robot.type == "quadruped" and task.robot.position is not None:
-        problem = _check_start(task, parts)
-        if problem:
-            problems.append(problem)
+    problems += robots.get(task.robot.type).check_start(task)
     return problems
-
-
-def _check_start(task: Task, parts: dict[str, list[geometry.Part]]) -> Problem | None:
-    """The quadruped must start with its body centre over the surface it stands on."""
-    limits = task.limits
-    assert isinstance(limits, QuadrupedLimits)
-    x, y = task.robot.position  # type: ignore[misc]
-    sx, sy, _ = limits.body_size
-    gx, gy = np.meshgrid(np.linspace(x - sx / 2, x + sx / 2, 9), np.linspace(y - sy / 2, y + sy / 2, 5))
-    footprint = np.column_stack([gx.ravel(), gy.ravel()])
-    solids = [p for n, p in parts.items() if task.object(n).shape != "cloth"]
-    stand = float(geometry.surface_height(footprint, solids).max())
-    under_centre = float(geometry.surface_height(np.array([[x, y]]), solids)[0])
-    if stand - under_centre > limits.max_step_up:
-        return Problem(path="robot.position",
-                       message=f"the robot at [{x}, {y}] is not over a surface: its centre hangs over "
-                               f"a {stand - under_centre:.2f} m drop at the edge of what it would stand on")
-    return None
 
 
 def parse_task(data: Any, source: str = "<task>") -> Task:

@@ -1,4 +1,5 @@
-"""A task's goal: exactly one condition on one object (:class:`Goal`), and which goals each embodiment has."""
+"""A task's goal: exactly one condition on one object (:class:`Goal`); which goals a robot has is its own
+(``RobotType.goals``)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,6 @@ from pydantic import Field, model_validator
 from robotool.scene import Name, PositiveLength, StrictModel
 
 GoalKind = Literal["robot_on", "grasped", "pressed", "lifted", "lowered"]
-GOALS_BY_EMBODIMENT: dict[str, frozenset[str]] = {
-    "quadruped": frozenset({"robot_on", "lifted", "lowered"}),
-    "arm": frozenset({"grasped", "pressed", "lifted", "lowered"}),
-}
 
 
 class LiftGoal(StrictModel):
@@ -36,8 +33,7 @@ class Goal(StrictModel):
 
     @model_validator(mode="after")
     def _exactly_one(self) -> Goal:
-        given = [k for k in GOALS_BY_EMBODIMENT["quadruped"] | GOALS_BY_EMBODIMENT["arm"]
-                 if getattr(self, k) is not None]
+        given = [k for k in type(self).model_fields if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(
                 "give exactly one of robot_on, grasped, pressed, lifted, lowered "

@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import Field, FiniteFloat, StringConstraints
+from pydantic import BaseModel, Field, FiniteFloat, StringConstraints, field_validator
 
-from robotool.robots.skills import LIMITS_MODELS, ArmLimits, EmbodimentName, QuadrupedLimits
+from robotool import robots
 from robotool.scene import Name, SceneObject, StrictModel
 from robotool.task_goal import Goal
 
@@ -15,11 +15,18 @@ Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing"
 
 
 class Robot(StrictModel):
-    """The robot: its embodiment, start position (quadruped) and limit overrides."""
+    """The robot: its type (a registered robot, see :mod:`robotool.robots`), start position and limit overrides."""
 
-    type: EmbodimentName
+    type: str
     position: tuple[FiniteFloat, FiniteFloat] | None = None
     limits: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("type")
+    @classmethod
+    def _registered(cls, value: str) -> str:
+        if value not in robots.names():
+            raise ValueError(robots.registry.unknown_message(value))
+        return value
 
 
 class Task(StrictModel):
@@ -34,13 +41,14 @@ class Task(StrictModel):
     goal: Goal
 
     @property
-    def embodiment(self) -> EmbodimentName:
+    def embodiment(self) -> str:
+        """The robot type's name."""
         return self.robot.type
 
     @property
-    def limits(self) -> QuadrupedLimits | ArmLimits:
-        """The embodiment's limits with this task's overrides applied."""
-        return LIMITS_MODELS[self.robot.type](**self.robot.limits)
+    def limits(self) -> BaseModel:
+        """The robot's limits with this task's overrides applied (its type's limits model)."""
+        return robots.get(self.robot.type).limits_of(self.robot.limits)
 
     def object(self, name: str) -> SceneObject:
         """The object with this name (KeyError naming the known objects otherwise)."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from robotool import tasks
-from robotool.robots.quadruped.concepts import key_concepts, needs_tool
+from robotool.concepts import key_concepts, needs_tool
 from robotool.task_file import parse_task
 
 

@@ -17,8 +17,8 @@ A failed world is classified by the first rule that applies:
    needs no tool and the program used one that its reference solution does not use.
 3. The first abnormal call decides: ``refused`` (a limit was violated: a step out of order or a
    constraint ignored) or ``fell`` (it walked off its support) -> ``logical``; ``stalled``, ``timeout``,
-   a target clamped to a limit (``clamped`` event) or a grasp that held nothing (``grasp_failed`` event)
-   -> ``numerical``.
+   or an event the robot counts as numerical (``RobotType.numerical_events``, e.g. a target ``clamped`` to a
+   workspace or a grasp that held nothing, ``grasp_failed``) -> ``numerical``.
 4. No abnormal call: ``logical`` when the program made no motion call or left a needed tool unused
    (a missing step); otherwise ``numerical`` (right objects, every step done, the goal missed by
    distance).
@@ -34,14 +34,12 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict
 
-from robotool.robots.skills import skills
+from robotool import robots
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.task_model import Task
 
 FailureClass = Literal["tool_use", "logical", "numerical", "invalid"]
 FAILURE_CLASSES: tuple[FailureClass, ...] = ("tool_use", "logical", "numerical", "invalid")
-
-_NUMERICAL_EVENTS = frozenset({"clamped", "grasp_failed"})
 
 
 class TaskFacts(BaseModel):
@@ -54,18 +52,21 @@ class TaskFacts(BaseModel):
     needed: frozenset[str] | None
     needs_tool: bool
     motion_skills: frozenset[str]
+    robot: str
 
     @classmethod
     def of(cls, task: Task, *, needs_tool: bool, needed: frozenset[str] | None = None) -> TaskFacts:
         """Facts of ``task``; ``needed`` are its reference tools when known."""
         target = task.goal.object
+        robot = robots.get(task.embodiment)
         movable = frozenset(o.name for o in task.objects if o.movable and o.name != target)
         return cls(
             target=target,
             needs_tool=needs_tool,
             needed=needed,
             tools=movable | (needed or frozenset()),
-            motion_skills=frozenset(s.name for s in skills(task.embodiment) if s.kind == "motion"),
+            motion_skills=frozenset(s.name for s in robot.skills if s.kind == "motion"),
+            robot=robot.name,
         )
 
 
@@ -76,9 +77,10 @@ def tools_used(rollout: Rollout, facts: TaskFacts) -> set[str]:
     return (named | held) & facts.tools
 
 
-def _numerical_symptom(call: SkillCall, events: Sequence[Event]) -> bool:
-    """A stall, a timeout, a target clamped to a limit, or a grasp that held nothing."""
-    return call.outcome in ("stalled", "timeout") or any(e.kind in _NUMERICAL_EVENTS for e in events)
+def _numerical_symptom(call: SkillCall, events: Sequence[Event], facts: TaskFacts) -> bool:
+    """A stall, a timeout, or one of the robot's numerical events (a target clamped to a limit, a missed grasp)."""
+    numerical = robots.get(facts.robot).numerical_events
+    return call.outcome in ("stalled", "timeout") or any(e.kind in numerical for e in events)
 
 
 def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
@@ -95,7 +97,7 @@ def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
     for k, call in enumerate(rollout.calls):
         if call.outcome in ("refused", "fell"):
             return "logical"
-        if _numerical_symptom(call, [e for e in rollout.events if e.call == k]):
+        if _numerical_symptom(call, [e for e in rollout.events if e.call == k], facts):
             return "numerical"
     moved = any(c.skill in facts.motion_skills for c in rollout.calls)
     if not moved or (facts.needed is not None and not facts.needed <= used):

@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from pydantic import BaseModel, ConfigDict
 
 from robotool import tasks
+from robotool.concepts import needs_tool
 from robotool.eval.config import EvalError
 from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
-from robotool.robots.quadruped.concepts import needs_tool
 from robotool.task_model import Task
 
 DEFAULT_SEEDS: tuple[int, ...] = (0, 1, 2)

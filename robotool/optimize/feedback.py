@@ -1,16 +1,18 @@
 """Feedback for each stage from typed evidence: ground-truth key concepts, candidates and rollout traces.
 
 Nothing here reads reason text back: the Analyzer is graded concept by concept against
-:func:`robotool.robots.quadruped.concepts.key_concepts` (kind, value, verdict); each failed world is attributed to the
+:func:`robotool.concepts.key_concepts` (kind, value, verdict); each failed world is attributed to the
 stage whose output it points at, from its :class:`~robotool.rollout.SkillCall` outcomes, measured values
 and the tools it used (:func:`robotool.eval.failure_classes.classify`); programs the sandbox refuses are checked
 again for their line. Texts the simulator or sandbox wrote (a refusal's reason) are quoted, never parsed.
 
 Attribution of a failed world: a program that raised or made a call that errored -> Coder; the wrong
 tools (one needed and none used, or one used where none was needed) -> Planner; a refused call -> Planner
-(a step out of order or a limit ignored), except a step, gap or drop refused after a tool was used ->
-Calculator (the tool was placed where it leaves that gap); a stall, a timeout, a target clamped to the
-workspace or a grasp that closed on nothing -> Calculator; no abnormal call: no motion or a needed tool
+(a step out of order or a limit ignored), except a refusal that measured what a tool's placement leaves (the
+robot's ``placement_measures``: a step, gap or drop) after a tool was used -> Calculator (the tool was placed
+where it leaves that gap); a stall, a timeout, a target clamped to the workspace or a call the robot reads as
+a numerical miss (its ``numerical_hint``: a grasp that closed on nothing) -> Calculator; no abnormal call: no
+motion or a needed tool
 left unused -> Planner, else the goal missed by distance -> Calculator.
 """
 
@@ -20,9 +22,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
+from robotool import robots
+from robotool.concepts import KeyConcept
 from robotool.eval.failure_classes import TaskFacts, classify, tools_used
 from robotool.eval.grading import ABSOLUTE_TOLERANCE, RELATIVE_TOLERANCE, matches
-from robotool.robots.quadruped.concepts import KeyConcept
 from robotool.rollout import Rollout, SkillCall
 from robotool.sandbox import ProgramRejected, validate
 from robotool.solution import Candidate, Solution
@@ -30,8 +33,6 @@ from robotool.task_model import Task
 
 Stage = Literal["analyzer", "planner", "calculator", "coder"]
 STAGES: tuple[Stage, ...] = ("analyzer", "planner", "calculator", "coder")
-TERRAIN = ("step", "gap", "drop")
-"""Measured values of a quadruped's refused walk or climb (robotool.sim.quadruped_terrain)."""
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,7 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
             return StageFinding("coder", f"{where}: {_call(call, bad)} failed: {call.reason}")
         return StageFinding("coder", f"{where}: the program stopped with an error: {rollout.error}")
     used = tools_used(rollout, facts)
+    robot = robots.get(facts.robot)
     if kind == "tool_use":
         if facts.needs_tool:
             needed = sorted(facts.needed or facts.tools)
@@ -116,16 +118,17 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
         if call.outcome == "refused":
             values = _measured(call)
             evidence = f"{_call(call, k)} was refused: {call.reason}" + (f" (measured: {values})" if values else "")
-            stage: Stage = "calculator" if used and any(t in call.measured for t in TERRAIN) else "planner"
+            left_by_tool = bool(used) and any(m in call.measured for m in robot.placement_measures)
+            stage: Stage = "calculator" if left_by_tool else "planner"
             placed = "; the tool was placed so that this is left" if stage == "calculator" else ""
             return StageFinding(stage, f"{where}: {evidence}{placed}")
         if call.outcome in ("stalled", "timeout") or call.measured.get("outside_workspace", 0.0) > 0.0:
             values = _measured(call)
             return StageFinding("calculator", f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
                            + (f" (measured: {values})" if values else ""))
-        if call.skill == "close_gripper" and kind == "numerical" and call.outcome == "done" and not call.reason:
-            return StageFinding("calculator", f"{where}: {_call(call, k)} closed on nothing: the gripper was not at "
-                           "the object's graspable point")
+        hint = robot.numerical_hint(call) if kind == "numerical" and call.outcome == "done" else None
+        if hint is not None:
+            return StageFinding("calculator", f"{where}: {_call(call, k)} {hint}")
     unmet = [name for name, ok in rollout.conditions.items() if not ok]
     if kind == "logical":
         missing = sorted((facts.needed or frozenset()) - used)

@@ -2,10 +2,10 @@
 
 ``solve(task)`` returns the same :class:`~robotool.solution.Solution` as the RoboTool program, with
 typed stage outputs, without any language model. Modules: :mod:`~robotool.planner.codegen` (program
-text, plan steps, parameters), :mod:`~robotool.robots.quadruped.predict` (boxes, surfaces, walk prediction),
-:mod:`~robotool.robots.arm.macros` and :mod:`~robotool.robots.quadruped.macros` (the macros and the
-candidate programs they make), :mod:`~robotool.planner.search` (ordering and batched verification),
-:mod:`~robotool.planner.solve` (the whole pipeline).
+text, plan steps, parameters), :mod:`~robotool.planner.layout` (boxes, surfaces, hypothetical placements),
+:mod:`~robotool.planner.search` (ordering and batched verification),
+:mod:`~robotool.planner.solve` (the whole pipeline). Each robot's macros, and the candidate programs they
+make, are in its package (``RobotType.planner``, e.g. ``robotool/robots/<name>/macros.py``).
 """
 
 from robotool.planner.solve import solve

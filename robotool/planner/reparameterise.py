@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool import robots
 from robotool.planner.codegen import Program
-from robotool.robots.skills import skills
 from robotool.rollout import SkillCall, notable_distances
 from robotool.solution import Candidate
 from robotool.task_model import Task
@@ -29,7 +29,7 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
     failed = next((r for r in candidate.rollouts if not r.success), None)
     if failed is None or failed.error is not None:
         return []
-    kinds = {s.name: s.kind for s in skills(task.embodiment)}
+    kinds = {s.name: s.kind for s in robots.get(task.embodiment).skills}
     motions = [c for c in failed.calls if kinds.get(c.skill) == "motion"]
     failing = next((k for k, c in enumerate(motions) if _distances(c)), None)
     if failing is None:

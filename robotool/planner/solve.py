@@ -1,6 +1,6 @@
 """``solve``: the LM-free planner end to end, returning the same :class:`Solution` as the RoboTool program.
 
-Key concepts come from :func:`robotool.robots.quadruped.concepts.key_concepts`; candidate programs from the
+Key concepts come from :func:`robotool.concepts.key_concepts`; candidate programs from the
 embodiment's macros; verification from :mod:`robotool.planner.search`. When a key concept is
 violated, programs that use no object besides the goal's own are skipped (the geometry already says
 they cannot work); with ``tools=False`` only those are tried (the evaluator's no-tool floor).
@@ -9,30 +9,23 @@ they cannot work); with ``tools=False`` only those are tried (the evaluator's no
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 
+from robotool import robots
+from robotool.concepts import KeyConcept, key_concepts, surface_under
+from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
 from robotool.planner.search import Budget, Tried, order, search
 from robotool.repair_rounds import failure_trace
-from robotool.robots.arm import macros as macros_arm
-from robotool.robots.quadruped import macros as macros_quadruped
-from robotool.robots.quadruped.concepts import KeyConcept, key_concepts, surface_under
+from robotool.robots.registry import Planner
 from robotool.scene import SceneObject
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank
 from robotool.task_model import Task
 
-MACROS: dict[str, Callable[[Task, bool], Iterator[Program]]] = {
-    "arm": macros_arm.candidates,
-    "quadruped": macros_quadruped.candidates,
-}
-BUDGETS: dict[str, Budget] = {
-    "arm": Budget(beam=8, rounds=4, seconds=60.0),
-    "quadruped": Budget(beam=3, rounds=3, seconds=90.0),
-}
 KEEP_CALLS = 4  # failed candidates (best first) that keep their rollouts' skill-call traces
 CALCULATION = ("Numbers come from the task file's geometry (object boxes, surfaces under vertical rays, graspable "
                "points, button faces) and the robot's limits; positions of objects that may have moved are queried "
@@ -46,9 +39,10 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     With ``repair``, when no program succeeds in every world, the best failures are re-parameterised from
     what the simulator measured and verified in one more round (see :mod:`robotool.planner.reparameterise`)."""
     started = time.perf_counter()
+    planner = robot_planner(task)
     concepts = key_concepts(task)
     allowed = goal_objects(task)
-    generated = list(MACROS[task.embodiment](task, tools))
+    generated = list(planner.candidates(task, tools))
     tool_free = [p for p in generated if set(p.objects) <= allowed]
     with_tool = [p for p in generated if not set(p.objects) <= allowed]
     needs_tool = any(not c.satisfied for c in concepts)
@@ -62,17 +56,17 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     generated_at = time.perf_counter()
     with scene_context(task):
         tried, rounds = search(task, tiers, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                               backend=backend, budget=BUDGETS[task.embodiment])
+                               backend=backend, budget=planner.budget)
         repairs = []
         if repair and not any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in tried):
             repairs = repair_round(task, tried, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                                   backend=backend, beam=BUDGETS[task.embodiment].beam)
+                                   backend=backend, beam=planner.budget.beam)
     verified_at = time.perf_counter()
     solution = _solution(task, tried, concepts, tools)
     solution.repairs = repairs
     solution.timings = {"generate": generated_at - started, "verify": verified_at - generated_at,
                         "total": time.perf_counter() - started}
-    budget = BUDGETS[task.embodiment]
+    budget = planner.budget
     solution.notes = [
         "Produced by the LM-free search planner (robotool.planner): generate-and-test over geometric skill "
         "macros checked in the batched simulator; no language model was used.",
@@ -88,6 +82,19 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     if not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
     return solution
+
+
+class NoPlannerError(RobotoolError):
+    """The task's robot has no search-planner macros."""
+
+
+def robot_planner(task: Task) -> Planner:
+    """The task's robot's macros and budget (:class:`NoPlannerError` when it has none)."""
+    make = robots.get(task.embodiment).planner
+    if make is None:
+        raise NoPlannerError(f"the search planner has no macros for the {task.embodiment} robot; solve its tasks "
+                             "with a language model (robotool solve --lm ...) or run your own program (robotool run)")
+    return make()
 
 
 def repair_round(task: Task, tried: list[Tried], stages: Callable[[Program], StageOutputs], *, worlds: int,

@@ -1,36 +1,20 @@
-"""A fixed camera that keeps a set of points in view, looking from a side chosen per embodiment.
+"""A fixed camera that keeps a set of points in view, looking from a side chosen per robot.
 
 The points are the corners of every drawn geom's box (robot, tools, furniture, goal markers) over all the
 states to be shown, so the robot's whole path stays in the frame. The camera looks across the longer
-horizontal side of those bounds at an angle that depends on the embodiment, and backs off until every
+horizontal side of those bounds at an angle the robot chose (``RobotType.view``), and backs off until every
 point is inside the picture with a margin.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
+from robotool.robots import View
+
 MARGIN = 1.08  # distance factor over the tightest fit (room for the labels)
 PLANE = mujoco.mjtGeom.mjGEOM_PLANE
-
-
-@dataclass(frozen=True)
-class View:
-    """How an embodiment's scenes are looked at: degrees from the side view, and down from level."""
-
-    turn: float
-    elevation: float
-
-
-VIEWS = {
-    # The quadruped walks along its scene: a three-quarter view from the side shows the heights it climbs.
-    "quadruped": View(turn=-20.0, elevation=-28.0),
-    # The gripper works on a table top: a higher view keeps it from hiding the objects it reaches for.
-    "arm": View(turn=-35.0, elevation=-35.0),
-}
 
 
 def visible_geoms(model: mujoco.MjModel) -> np.ndarray:
@@ -48,9 +32,8 @@ def geom_corners(model: mujoco.MjModel, data: mujoco.MjData, geoms: np.ndarray) 
     return world.reshape(-1, 3)
 
 
-def fit_camera(points: np.ndarray, embodiment: str, aspect: float, fovy_deg: float) -> mujoco.MjvCamera:
+def fit_camera(points: np.ndarray, view: View, aspect: float, fovy_deg: float) -> mujoco.MjvCamera:
     """A free camera that sees every point of ``points`` (n, 3) at ``aspect`` (width / height)."""
-    view = VIEWS[embodiment]
     lo, hi = points.min(axis=0), points.max(axis=0)
     lookat = (lo + hi) / 2
     extent = hi - lo

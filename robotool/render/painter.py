@@ -13,6 +13,7 @@ import mujoco
 import numpy as np
 from PIL import Image
 
+from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.render.camera import fit_camera, geom_corners, visible_geoms
 from robotool.render.overlay import CaptionLine, Label, draw_caption, draw_labels, to_image
@@ -75,7 +76,8 @@ class Painter:
             mujoco.mj_kinematics(model, self.data)
             corners.append(geom_corners(model, self.data, shown))
         self.camera = fit_camera(
-            np.concatenate(corners), self.scene.task.embodiment, width / height, float(model.vis.global_.fovy)
+            np.concatenate(corners), robots.get(self.scene.task.embodiment).view, width / height,
+            float(model.vis.global_.fovy),
         )
         self.set_state(states[0])
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool import geometry
+from robotool import geometry, robots
 from robotool.sim.build import Scene, make_spec
 from robotool.task_model import Task
 
@@ -35,7 +35,6 @@ PALETTE = (
 MARKER_HALF_THICKNESS = 0.001  # m
 MARKER_MARGIN = 0.2  # m the goal-height plane reaches beyond the goal object's footprint
 SHADOW_MAP = 2048  # px, side of the shadow map
-FLOOR_SQUARE = {"arm": 0.1, "quadruped": 0.5}  # m: side of the floor's checker squares, for scale
 
 
 @dataclass(frozen=True)
@@ -99,7 +98,7 @@ def _decorate(spec: mujoco.MjSpec, scene: Scene, marker_height: float | None, sh
         width=512,
         height=512,
     )
-    square = FLOOR_SQUARE[scene.task.embodiment]
+    square = robots.get(scene.task.embodiment).view.floor_square  # m, for scale
     floor = spec.add_material(name="floor", texrepeat=[1 / (2 * square)] * 2, texuniform=True)
     floor.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
     ground = spec.geom("ground")

@@ -19,11 +19,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon, Rectangle
 
-from robotool import geometry
+from robotool import geometry, robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
-from robotool.robots.arm.controller import HOME as ARM_HOME
-from robotool.robots.skills import skills
 from robotool.rollout import Rollout, SkillCall
 from robotool.sim.build import Scene
 from robotool.sim.recorder import Track
@@ -151,13 +149,12 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
 def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
     if path_xy is not None:
         return path_xy[0]
-    position = task.robot.position  # the quadruped's start; the arm's gripper starts at its home
-    return np.asarray(position if position is not None else ARM_HOME[:2], dtype=float)
+    return np.asarray(robots.get(task.embodiment).start_xy(task), dtype=float)
 
 
 def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray) -> None:
-    size = getattr(task.limits, "body_size", None)
-    if size is None:  # an arm's gripper: a marker
+    size = robots.get(task.embodiment).footprint(task)
+    if size is None:  # a robot drawn as a marker (a gripper)
         ax.plot(*at, marker="s", color=ROBOT, markersize=8, label="robot start")
         return
     ax.add_patch(
@@ -184,7 +181,7 @@ def _draw_calls(
     path_xy: np.ndarray | None,
 ) -> None:
     """An arrow per motion skill call, from the robot (or the pushed object) to the call's target."""
-    params = {s.name: [kind for _, kind in s.params] for s in skills(task.embodiment) if s.kind == "motion"}
+    params = {s.name: [kind for _, kind in s.params] for s in robots.get(task.embodiment).skills if s.kind == "motion"}
     robot_at = start.copy()
     step = 0
     for call in rollout.calls:

@@ -1,7 +1,8 @@
-"""The two embodiments: their default limits and their parameterized skills.
+"""What a skill is, and the checks every skill call's arguments pass, whichever robot it belongs to.
 
-Everything that describes what a robot can do lives here, so the scene validator, the description,
-the sandbox allowlist and the simulator read one source of truth.
+Each robot lists its skills as :class:`SkillSpec` records in its own package (``robotool/robots/<name>/``);
+the sandbox, the description, the simulator and the signatures' validation all read that one list through
+the registry (:mod:`robotool.robots.registry`).
 """
 
 from __future__ import annotations
@@ -12,41 +13,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
-
-EmbodimentName = Literal["quadruped", "arm"]
-
-
-class QuadrupedLimits(BaseModel):
-    """Physical limits of a Unitree Go1-sized quadruped (metres, kilograms)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    body_size: tuple[float, float, float] = Field(
-        (0.65, 0.30, 0.30), description="body bounding box x, y, z in metres"
-    )
-    mass: float = Field(12.0, gt=0, description="body mass in kg")
-    max_step_up: float = Field(0.12, gt=0, description="highest step it can climb, m")
-    max_gap: float = Field(0.10, gt=0, description="widest gap it can cross, m")
-    max_step_down: float = Field(0.40, gt=0, description="deepest drop it can step down, m")
-    max_push_mass: float = Field(5.0, gt=0, description="heaviest object it can push, kg")
-
-
-class ArmLimits(BaseModel):
-    """Limits of a Kinova Gen3-like arm with a translating two-finger gripper."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    workspace_min: tuple[float, float, float] = (-0.30, -0.45, 0.0)
-    workspace_max: tuple[float, float, float] = (0.45, 0.45, 0.50)
-    grasp_radius: float = Field(
-        0.02, gt=0, description="how close the gripper must be to a graspable point, m"
-    )
-    gripper_opening: float = Field(
-        0.06, gt=0, le=0.2, description="distance between the open fingers' inner faces, m"
-    )
-
-
-Limits = QuadrupedLimits | ArmLimits
 
 
 class SkillSpec(BaseModel):
@@ -68,133 +34,10 @@ class SkillSpec(BaseModel):
         return f"{self.name}({', '.join(p for p, _ in self.params)})"
 
 
-_QUERY_NAME = (("name", "name"),)
-_POSITION = (("position", "position"),)
-
-QUADRUPED_SKILLS: tuple[SkillSpec, ...] = (
-    SkillSpec(
-        name="get_position",
-        params=_QUERY_NAME,
-        returns="[x, y, z]",
-        kind="query",
-        semantics="Centre of the named object (or 'robot') right now, in metres.",
-    ),
-    SkillSpec(
-        name="get_size",
-        params=_QUERY_NAME,
-        returns="[x, y, z]",
-        kind="query",
-        semantics="Bounding-box size of the named object (or 'robot'), in metres.",
-    ),
-    SkillSpec(
-        name="walk_to_position",
-        params=_POSITION,
-        returns="None",
-        kind="motion",
-        semantics=(
-            "Walk in a straight line until the body centre is over [x, y]; z is ignored. "
-            "The robot stops at the edge of any step up over its climb limit, gap over its gap "
-            "limit or drop over its step-down limit, and the skill is refused."
-        ),
-    ),
-    SkillSpec(
-        name="climb_to_position",
-        params=_POSITION,
-        returns="None",
-        kind="motion",
-        semantics=(
-            "Like walk_to_position, but used to step up onto a higher surface; the same "
-            "step-up, gap and drop limits apply."
-        ),
-    ),
-    SkillSpec(
-        name="push_to_position",
-        params=(("name", "name"), ("position", "position")),
-        returns="None",
-        kind="motion",
-        semantics=(
-            "Walk to the far side of the named object and push it until its centre is at "
-            "[x, y] (z is ignored). Only movable objects up to the push mass limit, on the same "
-            "surface as the robot, while the robot stands on the ground or a fixed object, and "
-            "never the object under the robot."
-        ),
-    ),
-)
-
-ARM_SKILLS: tuple[SkillSpec, ...] = (
-    SkillSpec(
-        name="get_center",
-        params=_QUERY_NAME,
-        returns="[x, y, z]",
-        kind="query",
-        semantics="Centre of the named object right now, in metres.",
-    ),
-    SkillSpec(
-        name="get_graspable_point",
-        params=_QUERY_NAME,
-        returns="[x, y, z]",
-        kind="query",
-        semantics="The point where the gripper can hold the named object right now.",
-    ),
-    SkillSpec(
-        name="get_size",
-        params=_QUERY_NAME,
-        returns="[x, y, z]",
-        kind="query",
-        semantics="Bounding-box size of the named object, in metres.",
-    ),
-    SkillSpec(
-        name="get_workspace_range",
-        params=(),
-        returns="[[x_min, x_max], [y_min, y_max], [z_min, z_max]]",
-        kind="query",
-        semantics="The box the gripper centre can reach.",
-    ),
-    SkillSpec(
-        name="move_to_position",
-        params=_POSITION,
-        returns="None",
-        kind="motion",
-        semantics=(
-            "Move the gripper centre in a straight line to [x, y, z] without rotating. A target "
-            "outside the workspace is clamped to it. A held object moves with the gripper and "
-            "pushes whatever it meets."
-        ),
-    ),
-    SkillSpec(
-        name="open_gripper",
-        params=(),
-        returns="None",
-        kind="motion",
-        semantics="Open the fingers and release whatever is held.",
-    ),
-    SkillSpec(
-        name="close_gripper",
-        params=(),
-        returns="None",
-        kind="motion",
-        semantics=(
-            "Close the fingers until they meet something or close fully; an object is held when both "
-            "fingers close on its sides and it fits the opening, otherwise the call says why nothing is held."
-        ),
-    ),
-)
-
-SKILLS: dict[str, tuple[SkillSpec, ...]] = {"quadruped": QUADRUPED_SKILLS, "arm": ARM_SKILLS}
-LIMITS_MODELS: dict[str, type[QuadrupedLimits] | type[ArmLimits]] = {
-    "quadruped": QuadrupedLimits,
-    "arm": ArmLimits,
-}
-
-
-def skills(embodiment: EmbodimentName) -> tuple[SkillSpec, ...]:
-    """The skills of an embodiment, in the order the description lists them."""
-    return SKILLS[embodiment]
-
-
-def skill_names(embodiment: EmbodimentName) -> frozenset[str]:
-    """Names of an embodiment's skills (the sandbox allowlist)."""
-    return frozenset(s.name for s in SKILLS[embodiment])
+QUERY_NAME = (("name", "name"),)
+"""The parameters of a query about one object."""
+POSITION = (("position", "position"),)
+"""The parameters of a motion to one position."""
 
 
 class SkillArgumentError(ValueError):
@@ -208,7 +51,7 @@ its workspace: farther is refused as a mistake (a wrong unit, a runaway computat
 
 @dataclass(frozen=True)
 class SceneBox:
-    """The axis-aligned box (m) around a scene: its objects, the robot's start and the arm's workspace."""
+    """The axis-aligned box (m) around a scene: its objects, the robot's start and what the robot can reach."""
 
     lo: tuple[float, float, float]
     hi: tuple[float, float, float]
@@ -219,19 +62,14 @@ class SceneBox:
         return math.sqrt(sum(g * g for g in gaps))
 
 
-def check_call(
-    embodiment: EmbodimentName, name: str, args: tuple[object, ...], scene: SceneBox | None = None
-) -> tuple[object, ...]:
-    """Check a skill call's arguments and return them normalized (positions as 3 floats).
+def check_arguments(spec: SkillSpec, args: tuple[object, ...], scene: SceneBox | None = None) -> tuple[object, ...]:
+    """Check a call of ``spec``'s arguments and return them normalized (positions as 3 floats).
 
-    Raises :class:`SkillArgumentError` for an unknown skill, a wrong argument count, a name that
-    is not a string, a position that is not three finite numbers, or (given the ``scene``'s box) a
-    position more than :data:`MAX_DISTANCE_FROM_SCENE` outside it. A 2-number position gets z = 0.
+    Raises :class:`SkillArgumentError` for a wrong argument count, a name that is not a string, a position
+    that is not three finite numbers, or (given the ``scene``'s box) a position more than
+    :data:`MAX_DISTANCE_FROM_SCENE` outside it. A 2-number position gets z = 0.
     """
-    spec = next((s for s in SKILLS[embodiment] if s.name == name), None)
-    if spec is None:
-        known = ", ".join(s.name for s in SKILLS[embodiment])
-        raise SkillArgumentError(f"unknown skill {name!r} for the {embodiment} (skills: {known})")
+    name = spec.name
     if len(args) != len(spec.params):
         raise SkillArgumentError(
             f"{spec.signature} takes {len(spec.params)} argument(s), got {len(args)}"

@@ -12,6 +12,7 @@ import os
 import select
 import struct
 import time
+from collections.abc import Sequence
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -19,7 +20,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from robotool.program_session import SkillReply
-from robotool.robots.skills import EmbodimentName
+from robotool.robots.skills import SkillSpec
 from robotool.sandbox.limits import SandboxLimits
 
 
@@ -126,8 +127,10 @@ def max_world_bytes(limits: SandboxLimits) -> int:
     return 6 * limits.max_output_chars + 65_536 + 4_096 * limits.max_skill_calls
 
 
-def encode_start(code: str, embodiment: EmbodimentName, limits: SandboxLimits, *, python_checks: bool) -> bytes:
-    start = {"code": code, "embodiment": embodiment, "limits": limits.model_dump(), "python_checks": python_checks}
+def encode_start(code: str, skills: Sequence[SkillSpec], limits: SandboxLimits, *, python_checks: bool) -> bytes:
+    """The start message: the program, the robot's skills (the worker defines exactly these), the limits."""
+    start = {"code": code, "skills": [s.model_dump(mode="json") for s in skills], "limits": limits.model_dump(),
+             "python_checks": python_checks}
     return json.dumps(start).encode()
 
 

@@ -10,8 +10,9 @@ from collections.abc import Sequence
 
 from pydantic import ValidationError
 
+from robotool import robots
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
-from robotool.robots.skills import EmbodimentName, SkillArgumentError, check_call
+from robotool.robots.skills import SkillArgumentError
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import (
     GO,
@@ -56,7 +57,7 @@ class SandboxSession:
     def __init__(
         self,
         code: str,
-        embodiment: EmbodimentName,
+        embodiment: str,
         limits: SandboxLimits | None = None,
         *,
         worker: Worker | None = None,
@@ -64,7 +65,7 @@ class SandboxSession:
         test_only_skip_python_checks: bool = False,
     ):
         self.code = code
-        self.embodiment: EmbodimentName = embodiment
+        self.embodiment = embodiment
         self.limits = (limits or SandboxLimits()).for_batch(1)  # a batch's share is already smaller
         self._ended: ProgramEnded | None = None
         self._output: list[str] = []
@@ -84,7 +85,8 @@ class SandboxSession:
             return
         if self._worker is None:
             (self._worker,) = zygote().spawn(1)
-        start = encode_start(code, embodiment, self.limits, python_checks=not test_only_skip_python_checks)
+        skills = robots.get(embodiment).skills
+        start = encode_start(code, skills, self.limits, python_checks=not test_only_skip_python_checks)
         self._send(start)
 
     @property
@@ -140,7 +142,7 @@ class SandboxSession:
         if self._calls > self.limits.max_skill_calls:
             return self._end(self.limits.skill_calls_exceeded())
         try:
-            args = check_call(self.embodiment, message.call, tuple(message.args))
+            args = robots.get(self.embodiment).check_call(message.call, tuple(message.args))
         except SkillArgumentError as e:
             return self._end(str(e))
         return SkillRequest(message.call, args)
@@ -189,7 +191,7 @@ class SandboxSession:
 
 
 @functools.lru_cache(maxsize=256)
-def _rejection(code: str, embodiment: EmbodimentName) -> str | None:
+def _rejection(code: str, embodiment: str) -> str | None:
     """Why the program is rejected, or None; cached, as a batch repeats each candidate in R worlds."""
     try:
         validate(code, embodiment)
@@ -199,7 +201,7 @@ def _rejection(code: str, embodiment: EmbodimentName) -> str | None:
 
 
 def start_sessions(
-    codes: Sequence[str], embodiment: EmbodimentName, limits: SandboxLimits | None = None
+    codes: Sequence[str], embodiment: str, limits: SandboxLimits | None = None
 ) -> list[SandboxSession]:
     """One session per program, their workers spawned in one batch (a rejected program's is released).
 

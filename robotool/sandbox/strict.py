@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import ast
 
-from robotool.robots.skills import EmbodimentName
 from robotool.sandbox.validate import ProgramRejected, validate
 
 
-def check_user_program(code: str, embodiment: EmbodimentName) -> str:
+def check_user_program(code: str, embodiment: str) -> str:
     """Parse ``code`` strictly and check it against the sandbox allowlist; returns it unchanged.
 
     Raises :class:`ProgramRejected`; a syntax error names its line and column.

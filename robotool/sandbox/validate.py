@@ -31,7 +31,8 @@ import ast
 import builtins
 import re
 
-from robotool.robots.skills import SKILLS, EmbodimentName, SkillArgumentError, check_call, skills
+from robotool import robots
+from robotool.robots.skills import SkillArgumentError
 from robotool.sandbox.allowlist import (
     BUILTINS,
     MATH_NAMES,
@@ -111,7 +112,7 @@ def parse_program(code: str) -> ast.Module:
         raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e}") from None
 
 
-def validate(code: str, embodiment: EmbodimentName) -> None:
+def validate(code: str, embodiment: str) -> None:
     """Check a program against the sandbox allowlist; raise :class:`ProgramRejected` if it fails.
 
     The first problem in source order is reported. The work is linear in the program's length:
@@ -179,9 +180,10 @@ class _Checker(ast.NodeVisitor):
     so a name is usable only where the program binds it or where it is an allowed builtin.
     """
 
-    def __init__(self, embodiment: EmbodimentName):
+    def __init__(self, embodiment: str):
         self.embodiment = embodiment
-        self.skills = {s.name: s for s in skills(embodiment)}
+        self.robot = robots.get(embodiment)
+        self.skills = {s.name: s for s in self.robot.skills}
         self.scopes: list[set[str]] = []
         self.bound_anywhere: set[str] = set()
         self.imported: set[str] = set()
@@ -258,9 +260,9 @@ class _Checker(ast.NodeVisitor):
         if hasattr(builtins, name):
             return f"built-in '{name}' is not allowed in programs"
         known = ", ".join(self.skills)
-        for other, specs in SKILLS.items():
-            if other != self.embodiment and any(s.name == name for s in specs):
-                return f"'{name}' is a {other} skill; the {self.embodiment}'s skills are: {known}"
+        for other in robots.robots():
+            if other is not self.robot and other.skill(name) is not None:
+                return f"'{name}' is a {other.name} skill; the {self.embodiment}'s skills are: {known}"
         if name in self.bound_anywhere:
             return f"name '{name}' is not defined here: it is assigned only inside another function"
         if called:
@@ -326,7 +328,7 @@ class _Checker(ast.NodeVisitor):
         except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
             return  # not all literal: the worker checks the values when the call happens
         try:
-            check_call(self.embodiment, name, literal)
+            self.robot.check_call(name, literal)
         except SkillArgumentError as e:
             self.reject(node, str(e))
 

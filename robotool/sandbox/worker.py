@@ -29,7 +29,7 @@ import numpy as np
 import numpy.ma
 
 from robotool.program_session import SkillCallError
-from robotool.robots.skills import EmbodimentName, SkillSpec, check_call, skills
+from robotool.robots.skills import SkillSpec, check_arguments
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
@@ -114,7 +114,7 @@ def serve(fd: int, jail: WorkerJail) -> NoReturn:
         start = json.loads(conn.recv_bytes())
         limits = SandboxLimits.model_validate(start["limits"])
         _apply_limits(limits, address_space)
-        program = _Program(conn, start["embodiment"], limits)
+        program = _Program(conn, tuple(SkillSpec.model_validate(s) for s in start["skills"]), limits)
         code = program.prepare(start["code"], python_checks=start.get("python_checks", True))
         jail.seal()
         conn.recv_bytes()
@@ -191,9 +191,9 @@ class _Print:
 class _Program:
     """One program's namespace, output buffer and skill-call channel."""
 
-    def __init__(self, conn: Connection, embodiment: EmbodimentName, limits: SandboxLimits):
+    def __init__(self, conn: Connection, skills: tuple[SkillSpec, ...], limits: SandboxLimits):
         self.conn = conn
-        self.embodiment = embodiment
+        self.skills = skills
         self.limits = limits
         self.output: list[str] = []
         self.printed = 0
@@ -209,7 +209,7 @@ class _Program:
         warnings.showwarning = self.show_warning
         every_builtin = {**vars(builtins), "print": _Print(self)}
         self.namespace = {"__builtins__": self.builtins() if python_checks else every_builtin}
-        self.namespace.update({spec.name: _Skill(self, spec) for spec in skills(self.embodiment)})
+        self.namespace.update({spec.name: _Skill(self, spec) for spec in self.skills})
         try:
             return compile(code, PROGRAM_FILENAME, "exec")
         except (SyntaxError, ValueError, RecursionError, MemoryError) as e:
@@ -259,7 +259,7 @@ class _Program:
         if unknown:
             raise TypeError(f"{spec.signature} got an unexpected argument {_safe_str(sorted(map(str, unknown))[0])!r}")
         values = (*args, *(kwargs[p] for p in params[len(args) :] if p in kwargs))
-        checked = check_call(self.embodiment, spec.name, values)
+        checked = check_arguments(spec, values)
         if any(isinstance(v, str) and len(v) > MAX_ARGUMENT_CHARS for v in checked):
             raise ValueError(f"{spec.name}: an object name has at most {MAX_ARGUMENT_CHARS} characters")
         self.calls += 1

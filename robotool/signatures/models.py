@@ -5,8 +5,8 @@ where a reply's meaning is clear and strict where it matters:
 
 - numbers may carry a unit (``"0.4 m"``, ``"40 cm"``, ``"2 kg"``); lengths become metres, masses kilograms;
   numbers that are not finite are rejected;
-- a 2-D ``[x, y]`` target or offset for the quadruped (whose motions ignore z) gets z = 0; for the arm it is
-  rejected, since its height matters;
+- a 2-D ``[x, y]`` target or offset for a robot whose motions ignore z (``RobotType.planar``) gets z = 0; for
+  the others it is rejected, since its height matters;
 - names that a plan step or an object role mentions only for information (``"gap"``, ``"floor"``) and that are
   not objects of the scene are ignored with a note;
 - a key concept's missing ``limit_name`` is left empty and a missing ``satisfied`` is read from ``value <= limit``;
@@ -29,8 +29,8 @@ from typing import Annotated, Any, get_args
 
 from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_validator
 
-from robotool.robots.quadruped.concepts import ConceptKind, KeyConcept
-from robotool.robots.skills import EmbodimentName, skill_names
+from robotool import robots
+from robotool.concepts import ConceptKind, KeyConcept
 from robotool.task_model import Task
 
 __all__ = [
@@ -47,7 +47,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class _Scene:
-    embodiment: EmbodimentName
+    planar: bool
     skills: frozenset[str]
     objects: frozenset[str]
 
@@ -59,7 +59,8 @@ _NOTES: contextvars.ContextVar[list[str] | None] = contextvars.ContextVar("robot
 @contextmanager
 def scene_context(task: Task) -> Iterator[None]:
     """Validate stage outputs against ``task`` (its embodiment, skills and object names) inside this block."""
-    scene = _Scene(task.embodiment, skill_names(task.embodiment), frozenset(task.object_names) | {"robot"})
+    robot = robots.get(task.embodiment)
+    scene = _Scene(robot.planar, robot.skill_names, frozenset(task.object_names) | {"robot"})
     token = _SCENE.set(scene)
     try:
         yield
@@ -281,8 +282,8 @@ class StepParameters(BaseModel):
         if value is None:
             return None
         scene = _SCENE.get()
-        if len(value) == 2 and scene is not None and scene.embodiment == "quadruped":
-            return [*value, 0.0]  # the quadruped's motions ignore z
+        if len(value) == 2 and scene is not None and scene.planar:
+            return [*value, 0.0]  # the robot's motions ignore z
         if len(value) != 3:
             raise ValueError(f"must be three numbers [x, y, z] in metres, got {value}")
         return value

@@ -2,16 +2,15 @@
 
 Modules, one job each:
 
-- :mod:`robotool.sim.embodiment` — **the embodiment-controller interface** that the arm and the
-  quadruped implement (model building, skill start/tick/query over batched state, dispatch on
-  ``task.robot.type``).
+- :mod:`robotool.sim.embodiment` — **the embodiment-controller interface** that every robot implements
+  (model building, skill start/tick/query over batched state, found through the robot registry by
+  ``task.robot.type``); each robot's controller lives in its package, ``robotool/robots/<name>/controller.py``.
 - :mod:`robotool.sim.build` — ``build(task) -> Scene`` (the ``MjModel`` made through ``MjSpec``).
 - :mod:`robotool.sim.backend` — the ``BatchedSim`` protocol, ``BatchState``, perturbations, ``make_sim``;
   backends in :mod:`~robotool.sim.backend_mujoco` (C, threads) and :mod:`~robotool.sim.backend_warp`.
-- :mod:`robotool.robots.arm.controller` — the arm embodiment;
-  :mod:`robotool.robots.quadruped.controller` — the quadruped.
 - :mod:`robotool.sim.magnets` — magnetic objects weld on contact.
-- :mod:`robotool.sim.goals` — goal sub-conditions.
+- :mod:`robotool.sim.goals` — goal sub-conditions; :mod:`robotool.sim.object_goals` — lifted and lowered objects.
+- :mod:`robotool.sim.cloth` — cloth as hinged links.
 - :mod:`robotool.sim.lockstep` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
 """
 

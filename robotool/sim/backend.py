@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import ctypes.util
 import functools
-import importlib
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -25,10 +24,7 @@ if TYPE_CHECKING:
 BackendName = Literal["mujoco", "warp"]
 TOUCH_DISTANCE = 0.002  # m: bodies whose geoms are at most this far apart are touching
 
-_BACKENDS: dict[str, str] = {
-    "mujoco": "robotool.sim.backend_mujoco:MujocoSim",
-    "warp": "robotool.sim.backend_warp:WarpSim",
-}
+BACKENDS: tuple[BackendName, ...] = ("mujoco", "warp")
 
 
 @dataclass(frozen=True)
@@ -240,10 +236,9 @@ def make_sim(
     ``njmax``/``nconmax`` (constraint rows and contacts per world) default to the scene's sizes;
     a world that needs more is marked failed.
     """
-    if backend not in _BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(_BACKENDS)}")
-    module_name, cls_name = _BACKENDS[backend].split(":")
-    cls = getattr(importlib.import_module(module_name), cls_name)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(BACKENDS)}")
+    cls = _backend_class(backend)
     return cls(
         scene,
         nworld,
@@ -251,6 +246,17 @@ def make_sim(
         njmax=njmax or scene.njmax,
         nconmax=nconmax or scene.nconmax,
     )
+
+
+def _backend_class(backend: BackendName) -> type[BatchedSim]:
+    """The backend's simulator class, imported when first asked for (Warp takes seconds to load)."""
+    if backend == "warp":
+        from robotool.sim.backend_warp import WarpSim
+
+        return WarpSim
+    from robotool.sim.backend_mujoco import MujocoSim
+
+    return MujocoSim
 
 
 @functools.cache

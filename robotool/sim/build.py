@@ -10,13 +10,12 @@ Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`r
 A sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper) collides with the ground and the
 robot only; it meets each other movable object through a carrier geom of its own, in place only while
 the object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object.
-Cloth is built by the quadruped module (``robotool.sim.cloth.add_cloth(spec, obj)``).
+Cloth is built as hinged links (:func:`robotool.sim.cloth.add_cloth`).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 """
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -25,6 +24,7 @@ import numpy as np
 
 from robotool import geometry
 from robotool.scene import SceneObject
+from robotool.sim.cloth import add_cloth
 from robotool.sim.embodiment import Embodiment, embodiment_for
 from robotool.task_model import Task
 
@@ -45,9 +45,6 @@ DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
-
-_CLOTH_BUILDER = "robotool.sim.cloth:add_cloth"
-
 
 @dataclass(frozen=True)
 class Scene:
@@ -152,11 +149,6 @@ def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -
                   friction=friction, rgba=[0.8, 0.1, 0.1, 1])
 
 
-def _add_cloth(spec: mujoco.MjSpec, obj: SceneObject) -> None:
-    module_name, func_name = _CLOTH_BUILDER.split(":")
-    getattr(importlib.import_module(module_name), func_name)(spec, obj)
-
-
 def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
     """The task's ``MjSpec``: ground, objects, magnet welds, button sensors and the robot."""
     spec = mujoco.MjSpec()
@@ -167,7 +159,7 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
                             conaffinity=DEFAULT_BIT | GROUND_BIT)
     for obj in task.objects:
         if obj.shape == "cloth":
-            _add_cloth(spec, obj)
+            add_cloth(spec, obj)
         else:
             _add_object(spec, obj)
         if obj.shape == "button":

@@ -1,4 +1,4 @@
-"""The embodiment-controller interface that the arm and the quadruped both implement.
+"""The embodiment-controller interface that every robot implements (``RobotType.embodiment``).
 
 An embodiment takes part in three phases, and only talks to the simulator through the
 backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend internals):
@@ -25,19 +25,20 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    its per-world state in numpy arrays and lists indexed by world, and ``tick(state, worlds)`` touches only
    ``worlds``.
 3. **Goals.** Goal sub-conditions are evaluated by :mod:`robotool.sim.goals` from the batched state;
-   embodiment-specific goal kinds live in the embodiment's module and are named there.
+   a robot's own goal kinds are trackers in its package (``RobotType.goal_trackers``).
 
 All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, times seconds.
-:func:`embodiment_for` dispatches on ``task.robot.type`` and imports the quadruped lazily.
+:func:`embodiment_for` asks the robot registry (:mod:`robotool.robots`) for ``task.robot.type``'s embodiment.
 """
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
+
+from robotool import robots
 
 if TYPE_CHECKING:
     import mujoco
@@ -47,12 +48,6 @@ if TYPE_CHECKING:
     from robotool.task_model import Task
 
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
-
-_EMBODIMENTS: dict[str, str] = {
-    "arm": "robotool.robots.arm.controller:ArmEmbodiment",
-    "quadruped": "robotool.robots.quadruped.controller:QuadrupedEmbodiment",
-}
-
 
 @dataclass(frozen=True)
 class SkillEnd:
@@ -131,6 +126,4 @@ class Embodiment(Protocol):
 
 def embodiment_for(task: Task) -> Embodiment:
     """The embodiment for ``task.robot.type``, with the task's limits."""
-    module_name, cls_name = _EMBODIMENTS[task.robot.type].split(":")
-    cls = getattr(importlib.import_module(module_name), cls_name)
-    return cls(task.limits)
+    return robots.get(task.robot.type).embodiment(task.limits)

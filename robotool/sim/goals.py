@@ -1,25 +1,23 @@
 """Goal predicates as named sub-conditions (ManiSkill style), evaluated over batched state.
 
 A :class:`GoalTracker` is updated every control tick (so "at any time" goals such as ``pressed`` can
-remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. ``grasped`` and
-``pressed`` live here; the quadruped's goal kinds (``robot_on``, ``lifted``, ``lowered``) are
-looked up lazily in :mod:`robotool.robots.quadruped.controller` as ``<kind>_goal(scene) -> GoalTracker``.
+remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. The object goals any
+robot may be given live here (``pressed``) and in :mod:`robotool.sim.object_goals` (``lifted``, ``lowered``); a
+robot's own goal kinds (``RobotType.goal_trackers``) are trackers in its package.
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
 
-from robotool.robots.arm.controller import graspable_points, held_objects
+from robotool import robots
 from robotool.scene import PRESS_TRAVEL
 from robotool.sim.backend import BatchState
 from robotool.sim.build import Scene
-
-_LAZY_GOALS = "robotool.robots.quadruped.controller"
+from robotool.sim.object_goals import LiftedGoal, LoweredGoal
 
 
 class GoalTracker(Protocol):
@@ -30,28 +28,6 @@ class GoalTracker(Protocol):
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         """Named sub-conditions now, each (nworld,) bool."""
-
-
-class GraspedGoal:
-    """``grasped: obj``: the gripper holds ``obj`` and its graspable point is still at the gripper."""
-
-    def __init__(self, scene: Scene):
-        self.scene = scene
-        self.index = scene.object_index(scene.task.goal.object)
-        self.radius = scene.task.limits.grasp_radius  # type: ignore[union-attr]
-
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        """Nothing to remember: the goal holds at the end."""
-
-    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        name = self.scene.object_names[self.index]
-        gripper = self.scene.model.body("robot_gripper").id
-        point = graspable_points(self.scene, state)[:, self.index]
-        offset = np.linalg.norm(point - state.xpos[:, gripper], axis=1)
-        return {
-            f"{name}_held": held_objects(self.scene, state) == self.index,
-            f"{name}_in_gripper": offset <= 2 * self.radius,
-        }
 
 
 class PressedGoal:
@@ -72,11 +48,16 @@ class PressedGoal:
         return {f"{self.name}_pressed": seen >= PRESS_TRAVEL}
 
 
-_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {"grasped": GraspedGoal, "pressed": PressedGoal}
+OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
+    "pressed": PressedGoal,
+    "lifted": LiftedGoal,
+    "lowered": LoweredGoal,
+}
+"""Trackers of the goal kinds about objects, which any robot may support."""
 
 
 def goal_tracker(scene: Scene) -> GoalTracker:
-    """The tracker for the scene's goal kind."""
+    """The tracker for the scene's goal kind: an object goal's, or one of the robot's own."""
     kind = scene.task.goal.kind
-    factory = _GOALS.get(kind) or getattr(importlib.import_module(_LAZY_GOALS), f"{kind}_goal")
+    factory = OBJECT_GOALS.get(kind) or robots.get(scene.task.embodiment).goal_trackers()[kind]
     return factory(scene)

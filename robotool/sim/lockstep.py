@@ -22,7 +22,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool import geometry
+from robotool import geometry, robots
 from robotool.program_session import (
     ProgramEnded,
     ProgramSession,
@@ -31,7 +31,7 @@ from robotool.program_session import (
     TrustedProgram,
     TrustedSession,
 )
-from robotool.robots.skills import ArmLimits, SceneBox, SkillArgumentError, check_call, skill_names, skills
+from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
 from robotool.sim.build import Scene, build
@@ -69,7 +69,7 @@ class _World:
 
 def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[TrustedSession]:
     """One :class:`~robotool.program_session.TrustedSession` per trusted callable ``program(robot)``."""
-    names = skill_names(task.robot.type)
+    names = robots.get(task.robot.type).skill_names
     return [TrustedSession(p, names) for p in programs]
 
 
@@ -142,8 +142,8 @@ class _Run:
         self.scene, self.sim, self.recorder = scene, sim, recorder
         self.max_sim_time, self.max_skill_calls = max_sim_time, max_skill_calls
         self.worlds = [_World(s) for s in sessions]
-        self.embodiment_name = scene.task.robot.type
-        self.kinds = {s.name: s.kind for s in skills(self.embodiment_name)}
+        self.robot = robots.get(scene.task.robot.type)
+        self.kinds = {s.name: s.kind for s in self.robot.skills}
         self.box = scene_box(scene.task)
         self.controller: SkillController = scene.embodiment.controller(sim)
         self.magnets = Magnets(scene)
@@ -238,7 +238,7 @@ class _Run:
             self._end(i, state, f"more than {self.max_skill_calls} skill calls")
             return False
         try:
-            args = check_call(self.embodiment_name, request.name, request.args, self.box)
+            args = self.robot.check_call(request.name, request.args, self.box)
         except SkillArgumentError as e:
             world.calls.append(
                 SkillCall(
@@ -399,11 +399,9 @@ def _robot_welds(scene: Scene) -> list[tuple[int, int]]:
 
 
 def scene_box(task: Task) -> SceneBox:
-    """The box around the task's objects, the robot's start and (arm) its workspace, for argument checks."""
+    """The box around the task's objects, the robot's start and what it can reach, for argument checks."""
     corners = [corner for obj in task.objects for part in geometry.object_parts(obj) for corner in part.aabb()]
-    limits = task.limits
-    if isinstance(limits, ArmLimits):
-        corners += [np.array(limits.workspace_min), np.array(limits.workspace_max)]
+    corners += [np.array(point) for point in robots.get(task.robot.type).reach(task.limits)]
     if task.robot.position is not None:
         corners.append(np.array([*task.robot.position, 0.0]))
     points = np.array(corners, dtype=float).reshape(-1, 3)

@@ -1,4 +1,4 @@
-"""The quadruped's goal kinds as named sub-conditions: ``robot_on``, ``lifted`` and ``lowered``.
+"""The object goal kinds that any robot may be given, as named sub-conditions: ``lifted`` and ``lowered``.
 
 Object extents come from the state: every object carries the corners of its parts in its body
 frame, placed each tick by its body pose. A fragile object's falls are followed every control tick:
@@ -12,8 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from robotool import geometry
-from robotool.robots.quadruped.body import BodyIds
-from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported
 from robotool.sim.backend import BatchState
 from robotool.sim.build import Scene
 
@@ -33,31 +31,6 @@ def local_corners(scene: Scene) -> list[np.ndarray]:
 def world_corners(state: BatchState, body: int, local: np.ndarray) -> np.ndarray:
     """Corners (nworld, k, 3) of one object in the world."""
     return state.xpos[:, body, None, :] + np.einsum("wij,kj->wki", state.xmat(body), local)
-
-
-class RobotOnGoal:
-    """``robot_on: obj``: the robot's weight rests on ``obj``.
-
-    Its centre of mass lies over the support of the feet that touch ``obj`` (at least three of them), and every foot
-    touches something (none hangs over a gap).
-    """
-
-    def __init__(self, scene: Scene):
-        self.scene = scene
-        self.name = scene.task.goal.object
-        self.index = scene.object_index(self.name)
-        self.ids = BodyIds.of(scene.model)
-        self.target = scene.body_object == self.index
-        self.not_robot = ~scene.robot_body
-
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        """Nothing to remember: the goal holds at the end."""
-
-    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        on_target = feet_touching(state, self.ids, self.target)
-        weight = supported(centre_of_mass(state, self.ids), feet(state, self.ids), on_target)
-        standing = feet_touching(state, self.ids, self.not_robot).all(axis=1)
-        return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
 
 
 class LiftedGoal:

@@ -7,10 +7,10 @@ from typing import Any
 import pytest
 
 from robotool import tasks
+from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade, matches
 from robotool.eval.reference import BUILTIN_TOOLS
-from robotool.robots.quadruped.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.rollout import Event, Rollout, SkillCall
 
 

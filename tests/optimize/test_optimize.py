@@ -22,13 +22,13 @@ from fixtures.scripted_lm import (
 
 from robotool import tasks
 from robotool.compiled import CompiledProgramError
+from robotool.concepts import KeyConcept
 from robotool.eval.reference import PAPER_TASKS
 from robotool.lm import make_lm
 from robotool.lm_program import Proposer, RoboTool
 from robotool.optimize import Metric, OptimizeSettings, RolloutBatcher, optimize
 from robotool.optimize.data import DatasetError, Splits, builtin, check_training, splits
 from robotool.optimize.feedback import concept_findings
-from robotool.robots.quadruped.concepts import KeyConcept
 from robotool.solution import Candidate, CandidateFailure, Proposal
 from robotool.standin import Rule, Script, StandinServer
 from robotool.verify import run_codes, select

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from fixtures.paths import FIXTURES
 
+from robotool import robots
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
-from robotool.robots.skills import skills
 from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.validate import ProgramRejected
 from robotool.sandbox.zygote import Zygote, zygote
@@ -32,7 +32,7 @@ QUERY_VALUES: dict[str, object] = {
     "get_size": (0.044, 0.044, 0.16),
     "get_workspace_range": [[-0.3, 0.45], [-0.45, 0.45], [0.0, 0.5]],
 }
-QUERIES = {s.name for s in skills("arm") if s.kind == "query"}
+QUERIES = {s.name for s in robots.get("arm").skills if s.kind == "query"}
 
 GRASP = """\
 import numpy as np

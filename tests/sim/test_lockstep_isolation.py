@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from fixtures.reference import REFERENCE, program
 
-from robotool import sandbox, sim, tasks, verify
+from robotool import robots, sandbox, sim, tasks, verify
 from robotool.cli import main
 from robotool.robots.arm.controller import ArmController
 from robotool.robots.quadruped.controller import QuadrupedController
-from robotool.robots.skills import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError, check_call
+from robotool.robots.skills import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError
 from robotool.rollout import Rollout
 from robotool.sim.backend_mujoco import MujocoSim
 from robotool.sim.lockstep import scene_box
@@ -33,7 +33,7 @@ from robotool.sim.lockstep import scene_box
 def test_positions_are_checked_against_the_scene(position: list[Any], reason: str) -> None:
     box = scene_box(tasks.load("sofa_traversing"))
     with pytest.raises(SkillArgumentError, match=reason.replace("[", r"\[").replace("]", r"\]")):
-        check_call("quadruped", "walk_to_position", (position,), box)
+        robots.get("quadruped").check_call("walk_to_position", (position,), box)
 
 
 def test_the_scene_box_covers_objects_robot_and_workspace() -> None:
@@ -43,7 +43,7 @@ def test_the_scene_box_covers_objects_robot_and_workspace() -> None:
         MAX_DISTANCE_FROM_SCENE
     )
     near = (box.hi[0] + MAX_DISTANCE_FROM_SCENE - 0.1, 0.0, 0.1)
-    assert check_call("arm", "move_to_position", (near,), box) == (near,)  # far but sane: clamped by physics
+    assert robots.get("arm").check_call("move_to_position", (near,), box) == (near,)  # far but sane: clamped by physics
 
 
 def test_huge_target_is_refused_in_its_world_only(sim_scene: Any) -> None:

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from robotool import tasks
+from robotool.concepts import key_concepts, needs_tool
 from robotool.geometry import object_parts
-from robotool.robots.quadruped.concepts import key_concepts, needs_tool
 from robotool.task_file import load_task, parse_task
 from robotool.tasks.families import sofa_traversing
 from robotool.tasks.families._common import RigidPlacement, thing

@@ -1,1 +1,88 @@
-"""The arm: a Kinova Gen3-like arm with a translating two-finger gripper."""
+"""The arm: a Kinova Gen3-like arm whose two-finger gripper translates inside a workspace box.
+
+Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
+of this package: :mod:`~robotool.robots.arm.skills` (limits and skills), :mod:`~robotool.robots.arm.describe`,
+:mod:`~robotool.robots.arm.concepts`, :mod:`~robotool.robots.arm.controller` (simulator model and skill
+controller), :mod:`~robotool.robots.arm.goals` (``grasped``) and :mod:`~robotool.robots.arm.macros` (planner).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
+
+from robotool.robots.arm import concepts, describe
+from robotool.robots.arm.skills import ARM_SKILLS, ArmLimits
+from robotool.robots.registry import Planner, RobotType, View
+from robotool.rollout import SkillCall
+from robotool.task_file import Problem
+from robotool.task_model import Task
+
+if TYPE_CHECKING:
+    from robotool.sim.build import Scene
+    from robotool.sim.embodiment import Embodiment
+    from robotool.sim.goals import GoalTracker
+
+
+def _embodiment(limits: ArmLimits) -> Embodiment:
+    from robotool.robots.arm.controller import ArmEmbodiment  # the simulator loads on first use
+
+    return ArmEmbodiment(limits)
+
+
+def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
+    from robotool.robots.arm.goals import GraspedGoal  # the simulator loads on first use
+
+    return {"grasped": GraspedGoal}
+
+
+def _planner() -> Planner:
+    from robotool.planner.search import Budget  # the planner loads on first use
+    from robotool.robots.arm.macros import candidates
+
+    return Planner(candidates=candidates, budget=Budget(beam=8, rounds=4, seconds=60.0))
+
+
+def _check_robot(task: Task) -> list[Problem]:
+    if task.robot.position is not None:
+        return [Problem(path="robot.position", message="the arm's base is fixed at [0, 0, 0]; remove 'position'")]
+    return []
+
+
+def _reach(limits: ArmLimits) -> list[tuple[float, float, float]]:
+    return [limits.workspace_min, limits.workspace_max]
+
+
+def _start_xy(task: Task) -> tuple[float, float]:
+    from robotool.robots.arm.controller import HOME
+
+    return HOME[0], HOME[1]
+
+
+def _numerical_hint(call: SkillCall) -> str | None:
+    if call.skill == "close_gripper" and call.outcome == "done" and not call.reason:
+        return "closed on nothing: the gripper was not at the object's graspable point"
+    return None
+
+
+ROBOT = RobotType(
+    name="arm",
+    article="an",
+    limits=ArmLimits,
+    skills=ARM_SKILLS,
+    goals=frozenset({"grasped", "pressed", "lifted", "lowered"}),
+    embodiment=_embodiment,
+    goal_trackers=_goal_trackers,
+    describe=describe.robot_section,
+    key_concepts=concepts.key_concepts,
+    check_robot=_check_robot,
+    ground="the table top",
+    object_facts=describe.object_facts,
+    reach=_reach,
+    start_xy=_start_xy,
+    planner=_planner,
+    numerical_events=frozenset({"clamped", "grasp_failed"}),
+    numerical_hint=_numerical_hint,
+    # The gripper works on a table top: a higher view keeps it from hiding the objects it reaches for.
+    view=View(turn=-35.0, elevation=-35.0, floor_square=0.1),
+)

@@ -10,10 +10,10 @@ from collections.abc import Iterator
 import numpy as np
 
 from robotool import geometry
+from robotool.concepts import press_point
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.robots.quadruped.concepts import press_point
-from robotool.robots.quadruped.predict import Box
-from robotool.robots.skills import ArmLimits
+from robotool.planner.layout import Box
+from robotool.robots.arm.skills import ArmLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

@@ -1,1 +1,79 @@
-"""The quadruped: a Unitree Go1-sized legged robot."""
+"""The quadruped: a Unitree Go1-sized legged robot that walks, climbs and pushes.
+
+Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
+of this package: :mod:`~robotool.robots.quadruped.skills` (limits and skills), :mod:`~robotool.robots.quadruped.checks`
+(task-file checks), :mod:`~robotool.robots.quadruped.describe`, :mod:`~robotool.robots.quadruped.concepts`, the
+simulator's :mod:`~robotool.robots.quadruped.controller` with its :mod:`~robotool.robots.quadruped.body`,
+:mod:`~robotool.robots.quadruped.push` and :mod:`~robotool.robots.quadruped.support`, the one terrain model of
+its legs (:mod:`~robotool.robots.quadruped.terrain`, read by the controller, the planner and the key concepts),
+:mod:`~robotool.robots.quadruped.goals` (``robot_on``) and the planner's
+:mod:`~robotool.robots.quadruped.macros` with their walk and push prediction
+(:mod:`~robotool.robots.quadruped.predict`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
+
+from robotool.robots.quadruped import checks, concepts, describe
+from robotool.robots.quadruped.skills import QUADRUPED_SKILLS, QuadrupedLimits
+from robotool.robots.registry import Planner, RobotType, View
+from robotool.task_model import Task
+
+if TYPE_CHECKING:
+    from robotool.sim.build import Scene
+    from robotool.sim.embodiment import Embodiment
+    from robotool.sim.goals import GoalTracker
+
+
+def _embodiment(limits: QuadrupedLimits) -> Embodiment:
+    from robotool.robots.quadruped.controller import QuadrupedEmbodiment  # the simulator loads on first use
+
+    return QuadrupedEmbodiment(limits)
+
+
+def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
+    from robotool.robots.quadruped.goals import RobotOnGoal  # the simulator loads on first use
+
+    return {"robot_on": RobotOnGoal}
+
+
+def _planner() -> Planner:
+    from robotool.planner.search import Budget  # the planner loads on first use
+    from robotool.robots.quadruped.macros import candidates
+
+    return Planner(candidates=candidates, budget=Budget(beam=3, rounds=3, seconds=90.0))
+
+
+def _start_xy(task: Task) -> tuple[float, float]:
+    x, y = task.robot.position  # type: ignore[misc]  # checks.check_robot makes it required
+    return x, y
+
+
+def _footprint(task: Task) -> tuple[float, float]:
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    return limits.body_size[0], limits.body_size[1]
+
+
+ROBOT = RobotType(
+    name="quadruped",
+    article="a",
+    limits=QuadrupedLimits,
+    skills=QUADRUPED_SKILLS,
+    goals=frozenset({"robot_on", "lifted", "lowered"}),
+    embodiment=_embodiment,
+    goal_trackers=_goal_trackers,
+    describe=describe.robot_section,
+    key_concepts=concepts.key_concepts,
+    check_robot=checks.check_robot,
+    check_start=checks.check_start,
+    planar=True,
+    start_xy=_start_xy,
+    footprint=_footprint,
+    planner=_planner,
+    placement_measures=frozenset({"step", "gap", "drop"}),
+    # It walks along its scene: a three-quarter view from the side shows the heights it climbs.
+    view=View(turn=-20.0, elevation=-28.0, floor_square=0.5),
+)

@@ -28,8 +28,8 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
-from robotool.robots.skills import QuadrupedLimits
 from robotool.task_model import Task
 
 BODY = "robot"

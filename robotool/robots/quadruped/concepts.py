@@ -1,101 +1,22 @@
-"""Ground-truth key concepts: the quantities that decide whether a task needs a tool.
+"""The quadruped's ground-truth key concepts: gap width vs the gap limit, height to climb or step down vs the
+legs' limits, mass vs the push limit, and how far a fragile object would fall.
 
-They are computed from the scene's geometry and the robot's limits alone (never from a task's
-name or category) and grade the Analyzer stage: gap width vs the gap limit, height to climb vs
-the climb limit, how far a target lies outside the arm's workspace, mass vs the push limit, and
-how far a fragile object would fall. Gaps are what :mod:`.terrain` finds under the feet on the straight
-walk to the target (the simulator's and the planner's terrain model: a slit narrower than a foot carries it and
-is no gap), and every leg limit is judged by :func:`robotool.robots.quadruped.terrain.exceeds`.
+They are computed from the scene's geometry and the robot's limits alone (never from a task's name or category).
+Gaps are what :mod:`.terrain` finds under the feet on the straight walk to the target (the simulator's and the
+planner's terrain model: a slit narrower than a foot carries it and is no gap), and every leg limit is judged by
+:func:`.terrain.exceeds`.
 """
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
-from pydantic import BaseModel, Field
 
 from robotool import geometry
+from robotool.concepts import KeyConcept, load_bearing_solids, surface_under
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import exceeds, survey_walk
-from robotool.robots.skills import ArmLimits, QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
-
-ConceptKind = Literal[
-    "workspace_excess", "climb_height", "drop_height", "gap_width", "mass", "fall_height", "lift_height", "other"
-]
-
-
-class KeyConcept(BaseModel):
-    """One quantity that decides feasibility, compared with the limit it must respect."""
-
-    name: str = Field(description="what is measured, naming the objects, e.g. 'gap between sofa_1 and sofa_2'")
-    kind: ConceptKind = Field(
-        "other",
-        description=(
-            "workspace_excess | climb_height | drop_height | gap_width | mass | fall_height | lift_height | other"
-        ),
-    )
-    value: float = Field(description="the measured value")
-    unit: str = Field("m", description="SI unit of value and limit: m or kg")
-    limit: float = Field(description="the robot or object limit it is compared with")
-    limit_name: str = Field(description="which limit, e.g. 'max_gap' or 'workspace'")
-    satisfied: bool = Field(description="true when the value respects the limit without a tool")
-
-
-def key_concepts(task: Task) -> list[KeyConcept]:
-    """The key concepts of a task, computed from its geometry."""
-    limits = task.limits
-    if isinstance(limits, ArmLimits):
-        return _arm_concepts(task, limits)
-    assert isinstance(limits, QuadrupedLimits)
-    return _quadruped_concepts(task, limits)
-
-
-def needs_tool(task: Task) -> bool:
-    """Whether some key concept is violated, so the task cannot be done without a tool."""
-    return any(not c.satisfied for c in key_concepts(task))
-
-
-def _arm_concepts(task: Task, limits: ArmLimits) -> list[KeyConcept]:
-    obj = task.object(task.goal.object)
-    if task.goal.kind == "pressed":
-        point = press_point(obj)
-        what = f"distance of {obj.name}'s face outside the workspace"
-    else:
-        point = np.asarray(obj.grasp_point)
-        what = f"distance of {obj.name}'s graspable point outside the workspace"
-    excess = workspace_excess(point, limits)
-    return [
-        KeyConcept(
-            name=what,
-            kind="workspace_excess",
-            value=round(excess, 4),
-            limit=0.0,
-            limit_name="workspace",
-            satisfied=excess <= 1e-9,
-        )
-    ]
-
-
-def press_point(button: SceneObject) -> np.ndarray:
-    """Centre of a button's face (its local -x side), world frame."""
-    rot = geometry.rotation_matrix(button.rpy)
-    return np.asarray(button.center) + rot @ np.array([-button.size[0] / 2, 0.0, 0.0])
-
-
-def workspace_excess(point: np.ndarray, limits: ArmLimits) -> float:
-    """Euclidean distance from a point to the arm's workspace box (0 inside)."""
-    lo, hi = np.asarray(limits.workspace_min), np.asarray(limits.workspace_max)
-    return float(np.linalg.norm(np.maximum(lo - point, 0) + np.maximum(point - hi, 0)))
-
-
-def _solids(task: Task, fixed_only: bool) -> dict[str, list[geometry.Part]]:
-    return {
-        o.name: geometry.object_parts(o)
-        for o in task.objects
-        if o.shape != "cloth" and (o.movable is False or not fixed_only)
-    }
 
 
 def start_surface(task: Task) -> tuple[str, float]:
@@ -104,19 +25,10 @@ def start_surface(task: Task) -> tuple[str, float]:
     return surface_under(task, np.array([x, y]))
 
 
-def surface_under(task: Task, xy: np.ndarray, exclude: str = "") -> tuple[str, float]:
-    """The highest load-bearing surface under a point (ignoring ``exclude``): owner and height."""
-    best_name, best = "ground", geometry.GROUND_Z
-    for name, parts in _solids(task, fixed_only=False).items():
-        if name == exclude:
-            continue
-        _, top = geometry.object_interval(parts, xy[None, :])
-        if not np.isnan(top[0]) and top[0] > best:
-            best_name, best = name, float(top[0])
-    return best_name, best
-
-
-def _quadruped_concepts(task: Task, limits: QuadrupedLimits) -> list[KeyConcept]:
+def key_concepts(task: Task) -> list[KeyConcept]:
+    """The quadruped's key concepts of a task: heights to climb or step down, gaps, masses, falls."""
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
     start_name, h0 = start_surface(task)
     obj = task.object(task.goal.object)
     kind = task.goal.kind
@@ -211,6 +123,6 @@ def _mass_concept(obj: SceneObject, limits: QuadrupedLimits) -> KeyConcept:
 def gap_on_the_way(task: Task, start_xy: np.ndarray, end_xy: np.ndarray, limits: QuadrupedLimits) -> float:
     """Widest gap the feet meet walking straight from ``start_xy`` to ``end_xy`` over the fixed terrain (what no
     tool changes), as :mod:`.terrain` measures it for the simulator and the planner (0 when none)."""
-    solids = list(_solids(task, fixed_only=True).values())
+    solids = list(load_bearing_solids(task, fixed_only=True).values())
     survey = survey_walk(lambda xy: geometry.surface_height(xy, solids), start_xy, end_xy, limits)
     return survey.largest["gap"]

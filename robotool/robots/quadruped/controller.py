@@ -1,4 +1,4 @@
-"""The quadruped embodiment: its skills over batched worlds, its queries and its goal kinds.
+"""The quadruped embodiment: its skills over batched worlds and its queries.
 
 Every motion skill is a plan of straight moves: a walk is one move, or a few around an object that stands in its way
 (:func:`~robotool.robots.quadruped.push.route`); a push is the approach around the object and one push per axis
@@ -41,6 +41,7 @@ from robotool.robots.quadruped.push import (
     rule_violation,
     sweep_problem,
 )
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
 from robotool.robots.quadruped.terrain import (
     FOOT_NAMES,
@@ -55,11 +56,10 @@ from robotool.robots.quadruped.terrain import (
     limit_of,
     scan_paths,
 )
-from robotool.robots.skills import QuadrupedLimits
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
-from robotool.sim.object_goals import LiftedGoal, LoweredGoal, RobotOnGoal, local_corners, world_corners
+from robotool.sim.object_goals import local_corners, world_corners
 from robotool.task_model import Task
 
 WALK_SPEED = 0.4  # m/s
@@ -846,18 +846,3 @@ def _measured(finding: Finding) -> dict[str, float]:
         "x": round(finding.where[0], 3),
         "y": round(finding.where[1], 3),
     }
-
-
-def robot_on_goal(scene: Scene) -> RobotOnGoal:
-    """Tracker for ``robot_on`` goals."""
-    return RobotOnGoal(scene)
-
-
-def lifted_goal(scene: Scene) -> LiftedGoal:
-    """Tracker for ``lifted`` goals."""
-    return LiftedGoal(scene)
-
-
-def lowered_goal(scene: Scene) -> LoweredGoal:
-    """Tracker for ``lowered`` goals (fragile objects must arrive unbroken)."""
-    return LoweredGoal(scene)

@@ -14,10 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.robots.quadruped.concepts import start_surface, surface_under
-from robotool.robots.quadruped.predict import Box, Layout, detour, push_problem, push_staging, walk_violation
-from robotool.robots.skills import QuadrupedLimits
+from robotool.planner.layout import Box, Layout
+from robotool.robots.quadruped.concepts import start_surface
+from robotool.robots.quadruped.predict import detour, push_problem, push_staging, walk_violation
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

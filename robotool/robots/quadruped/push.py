@@ -15,8 +15,8 @@ from itertools import pairwise
 
 import numpy as np
 
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
-from robotool.robots.skills import QuadrupedLimits
 
 GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
 MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover

@@ -2,8 +2,8 @@
 
 ``generate(family, seed)`` builds one :class:`Instance` deterministically from
 ``numpy.random.default_rng(seed)``: a valid task file plus whether it needs a tool (decided by the
-geometry, :func:`robotool.robots.quadruped.concepts.needs_tool`), whether it is solvable, which object(s) a
-solution uses, its decoys and a sentence on what was varied. Each family's module documents its randomizations.
+geometry, :func:`robotool.concepts.needs_tool`), whether it is solvable, which object(s) a solution uses,
+its decoys and a sentence on what was varied. Each family's module documents its randomizations.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 A family builds its scene in a canonical frame (the built-in template's), then places it with a
 :class:`RigidPlacement` and finishes it with :func:`finish`, which validates the task and checks that the
-family's intended ``needs_tool`` is what the geometry says (:func:`robotool.robots.quadruped.concepts.needs_tool`).
+family's intended ``needs_tool`` is what the geometry says (:func:`robotool.concepts.needs_tool`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 
 from robotool import geometry
-from robotool.robots.quadruped.concepts import needs_tool as geometry_needs_tool
+from robotool.concepts import needs_tool as geometry_needs_tool
 from robotool.scene import SceneObject
 from robotool.task_file import parse_task
 from robotool.task_model import Category, Task
@@ -35,7 +35,7 @@ class Instance(BaseModel):
     family: str
     seed: int
     task: Task
-    needs_tool: bool  # equals robotool.robots.quadruped.concepts.needs_tool(task)
+    needs_tool: bool  # equals robotool.concepts.needs_tool(task)
     solvable: bool  # the scene holds what a solution needs within the robot's limits
     tools: list[str]  # the objects a solution uses; empty when none is needed
     decoys: list[str]  # objects that look useful but cannot serve

@@ -9,8 +9,8 @@ import pytest
 
 from robotool import geometry, tasks
 from robotool.robots.quadruped.push import Leg, legs, push_pose, route, rule_violation
+from robotool.robots.quadruped.skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
-from robotool.robots.skills import QuadrupedLimits
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01

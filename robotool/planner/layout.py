@@ -1,0 +1,110 @@
+"""The scene as the planner reasons about it: object boxes, surfaces, and hypothetical placements.
+
+Everything here reads only the task file (objects) through :mod:`robotool.geometry`. A :class:`Layout` can
+move objects to hypothetical x-y placements, so a robot's macros can check a placement (does it overlap
+something?) and predict its motions on it before anything is simulated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robotool import geometry
+from robotool.scene import SceneObject
+from robotool.task_model import Task
+
+CONTACT = 0.02  # m: boxes closer than this touch
+
+
+@dataclass(frozen=True)
+class Box:
+    """An object's axis-aligned bounds in the world: x-y ``lo``/``hi`` and heights ``bottom``/``top``."""
+
+    name: str
+    lo: np.ndarray
+    hi: np.ndarray
+    bottom: float
+    top: float
+
+    @classmethod
+    def of(cls, obj: SceneObject) -> Box:
+        bounds = [p.aabb() for p in geometry.object_parts(obj)]
+        lo = np.min([b[0] for b in bounds], axis=0)
+        hi = np.max([b[1] for b in bounds], axis=0)
+        return cls(obj.name, lo[:2], hi[:2], float(lo[2]), float(hi[2]))
+
+    @property
+    def center(self) -> np.ndarray:
+        return (self.lo + self.hi) / 2
+
+    @property
+    def half(self) -> np.ndarray:
+        return (self.hi - self.lo) / 2
+
+    def moved_to(self, xy: np.ndarray) -> Box:
+        """The same box with its x-y centre at ``xy``."""
+        shift = np.asarray(xy, dtype=float) - self.center
+        return Box(self.name, self.lo + shift, self.hi + shift, self.bottom, self.top)
+
+    def overlap(self, other: Box) -> float:
+        """How far the two boxes' x-y footprints overlap (<= 0: apart by that much)."""
+        return float(np.min(np.minimum(self.hi, other.hi) - np.maximum(self.lo, other.lo)))
+
+    def touches(self, other: Box) -> bool:
+        return self.overlap(other) > -CONTACT
+
+
+@dataclass
+class Layout:
+    """Load-bearing solids of a scene (cloth excluded), some possibly moved to new x-y centres."""
+
+    task: Task
+    moved: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def box(self, name: str) -> Box:
+        box = Box.of(self.task.object(name))
+        return box.moved_to(self.moved[name]) if name in self.moved else box
+
+    def boxes(self, exclude: Iterable[str] = ()) -> list[Box]:
+        skip = set(exclude)
+        return [self.box(o.name) for o in self.task.objects if o.name not in skip]
+
+    def with_moved(self, name: str, xy: np.ndarray) -> Layout:
+        """A copy with ``name`` moved so that its x-y centre is ``xy``."""
+        return Layout(self.task, {**self.moved, name: np.asarray(xy, dtype=float)})
+
+    def solids(self, exclude: Iterable[str] = ()) -> list[list[geometry.Part]]:
+        skip = set(exclude)
+        return [self._parts(o.name) for o in self.task.objects if o.shape != "cloth" and o.name not in skip]
+
+    def heights(self, xy: np.ndarray, exclude: Iterable[str] = ()) -> np.ndarray:
+        """Surface height under each point (n, 2)."""
+        return geometry.surface_height(np.atleast_2d(xy), self.solids(exclude))
+
+    def collides(self, box: Box, ignore: Iterable[str] = (), margin: float = 0.005) -> str | None:
+        """The first other object that overlaps ``box``'s x-y footprint (not just touching) somewhere between
+        ``box``'s bottom and top, or None."""
+        skip = {box.name, *ignore}
+        for obj in self.task.objects:
+            if obj.name in skip or obj.shape == "cloth":
+                continue
+            other = self.box(obj.name)
+            if box.overlap(other) <= margin or other.top <= box.bottom + margin or other.bottom >= box.top - margin:
+                continue
+            lo, hi = np.maximum(box.lo, other.lo) + margin, np.minimum(box.hi, other.hi) - margin
+            grid = np.stack(np.meshgrid(np.linspace(lo[0], hi[0], 6), np.linspace(lo[1], hi[1], 6)), -1).reshape(-1, 2)
+            low, high = geometry.object_interval(self._parts(obj.name), grid)
+            if np.any((low < box.top - margin) & (high > box.bottom + margin)):
+                return obj.name
+        return None
+
+    def _parts(self, name: str) -> list[geometry.Part]:
+        obj = self.task.object(name)
+        parts = geometry.object_parts(obj)
+        if name in self.moved:
+            shift = np.append(self.moved[name] - Box.of(obj).center, 0.0)
+            parts = [geometry.Part(p.kind, p.center + shift, p.half, p.rot) for p in parts]
+        return parts

@@ -1,0 +1,31 @@
+"""The arm's own goal kind, ``grasped``, as named sub-conditions over batched state."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool.robots.arm.controller import GRIPPER_BODY, graspable_points, held_objects
+from robotool.sim.backend import BatchState
+from robotool.sim.build import Scene
+
+
+class GraspedGoal:
+    """``grasped: obj``: the gripper holds ``obj`` and its graspable point is still at the gripper."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.index = scene.object_index(scene.task.goal.object)
+        self.radius = scene.task.limits.grasp_radius  # type: ignore[union-attr]
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        """Nothing to remember: the goal holds at the end."""
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        name = self.scene.object_names[self.index]
+        gripper = self.scene.model.body(GRIPPER_BODY).id
+        point = graspable_points(self.scene, state)[:, self.index]
+        offset = np.linalg.norm(point - state.xpos[:, gripper], axis=1)
+        return {
+            f"{name}_held": held_objects(self.scene, state) == self.index,
+            f"{name}_in_gripper": offset <= 2 * self.radius,
+        }

@@ -1,0 +1,30 @@
+"""The quadruped's section of the task description: its body, where it starts and its legs' limits, in words."""
+
+from __future__ import annotations
+
+from robotool.describe import number_text, vector_text
+from robotool.robots.quadruped.concepts import start_surface
+from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.task_model import Task
+
+
+def robot_section(task: Task) -> list[str]:
+    """What the quadruped is, where it starts and its limits, with the task's numbers."""
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    num = number_text
+    on, height = start_surface(task)
+    where = "the ground" if on == "ground" else on
+    return [
+        f"The robot is a quadruped with a body of {vector_text(limits.body_size)} m and a mass of "
+        f"{num(limits.mass)} kg. Its centre starts at x-y {vector_text(task.robot.position or ())}, standing "
+        f"on {where} (surface height {num(height)} m).",
+        "Robot limits:",
+        f"- it climbs up a step of at most {num(limits.max_step_up)} m;",
+        f"- it crosses a gap of at most {num(limits.max_gap)} m;",
+        f"- it steps down a drop of at most {num(limits.max_step_down)} m;",
+        f"- it pushes only movable objects of at most {num(limits.max_push_mass)} kg, only while standing "
+        "on the ground or on a fixed object, only objects on the same surface as itself, and never the "
+        "object it stands on.",
+        "A skill that would break a limit stops the robot where it is and is refused.",
+    ]

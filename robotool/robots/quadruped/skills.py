@@ -1,0 +1,73 @@
+"""The quadruped's limits (what a task file may override) and its skills (what its programs may call)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from robotool.robots.skills import POSITION, QUERY_NAME, SkillSpec
+
+
+class QuadrupedLimits(BaseModel):
+    """Physical limits of a Unitree Go1-sized quadruped (metres, kilograms)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    body_size: tuple[float, float, float] = Field(
+        (0.65, 0.30, 0.30), description="body bounding box x, y, z in metres"
+    )
+    mass: float = Field(12.0, gt=0, description="body mass in kg")
+    max_step_up: float = Field(0.12, gt=0, description="highest step it can climb, m")
+    max_gap: float = Field(0.10, gt=0, description="widest gap it can cross, m")
+    max_step_down: float = Field(0.40, gt=0, description="deepest drop it can step down, m")
+    max_push_mass: float = Field(5.0, gt=0, description="heaviest object it can push, kg")
+
+
+QUADRUPED_SKILLS: tuple[SkillSpec, ...] = (
+    SkillSpec(
+        name="get_position",
+        params=QUERY_NAME,
+        returns="[x, y, z]",
+        kind="query",
+        semantics="Centre of the named object (or 'robot') right now, in metres.",
+    ),
+    SkillSpec(
+        name="get_size",
+        params=QUERY_NAME,
+        returns="[x, y, z]",
+        kind="query",
+        semantics="Bounding-box size of the named object (or 'robot'), in metres.",
+    ),
+    SkillSpec(
+        name="walk_to_position",
+        params=POSITION,
+        returns="None",
+        kind="motion",
+        semantics=(
+            "Walk in a straight line until the body centre is over [x, y]; z is ignored. "
+            "The robot stops at the edge of any step up over its climb limit, gap over its gap "
+            "limit or drop over its step-down limit, and the skill is refused."
+        ),
+    ),
+    SkillSpec(
+        name="climb_to_position",
+        params=POSITION,
+        returns="None",
+        kind="motion",
+        semantics=(
+            "Like walk_to_position, but used to step up onto a higher surface; the same "
+            "step-up, gap and drop limits apply."
+        ),
+    ),
+    SkillSpec(
+        name="push_to_position",
+        params=(("name", "name"), ("position", "position")),
+        returns="None",
+        kind="motion",
+        semantics=(
+            "Walk to the far side of the named object and push it until its centre is at "
+            "[x, y] (z is ignored). Only movable objects up to the push mass limit, on the same "
+            "surface as the robot, while the robot stands on the ground or a fixed object, and "
+            "never the object under the robot."
+        ),
+    ),
+)

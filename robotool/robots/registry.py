@@ -1,0 +1,238 @@
+"""The registry of robot types: what every part of robotool asks about a robot, in one record per robot.
+
+A :class:`RobotType` holds everything that differs between embodiments: the limits model, the skills (the
+sandbox, the describer, the argument checks and the signatures' validation all read this one list), the goal
+kinds the robot supports, its task-file checks, its description section, its ground-truth key concepts, its
+simulator embodiment (model building and skill controller) and goal trackers, its planner macros, its
+error-class rules and its picture settings. Nothing outside a robot's own package names a robot.
+
+The built-in robots (:mod:`robotool.robots.arm`, :mod:`robotool.robots.quadruped`) are registered on the first
+lookup. Robots from other packages are plug-ins, found the same way:
+
+- an entry point in the group ``robotool.robots`` (in the plug-in's ``pyproject.toml``:
+  ``[project.entry-points."robotool.robots"] point = "my_package.point_robot:ROBOT"``);
+- a module named in the environment variable ``ROBOTOOL_ROBOTS`` (comma-separated; processes started from this one
+  inherit it) whose ``ROBOT`` attribute is a :class:`RobotType`;
+- :func:`register` called by a program that embeds robotool.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import os
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from importlib import metadata
+from typing import TYPE_CHECKING, Any
+
+from pydantic import BaseModel
+
+from robotool.errors import RobotoolError
+from robotool.robots.skills import SceneBox, SkillArgumentError, SkillSpec, check_arguments
+
+if TYPE_CHECKING:
+    from robotool.concepts import KeyConcept
+    from robotool.planner.codegen import Program
+    from robotool.planner.search import Budget
+    from robotool.rollout import EventKind, SkillCall
+    from robotool.scene import SceneObject
+    from robotool.sim.build import Scene
+    from robotool.sim.embodiment import Embodiment
+    from robotool.sim.goals import GoalTracker
+    from robotool.task_file import Problem
+    from robotool.task_model import Task
+
+ENTRY_POINT_GROUP = "robotool.robots"
+MODULES_VARIABLE = "ROBOTOOL_ROBOTS"
+
+
+@dataclass(frozen=True)
+class Planner:
+    """A robot's part of the LM-free search planner: its candidate programs and how much to verify."""
+
+    candidates: Callable[[Task, bool], Iterator[Program]]
+    budget: Budget
+
+
+@dataclass(frozen=True)
+class View:
+    """How pictures look at the robot's scenes: camera degrees from the side view and down from level, and the
+    side (m) of the floor's checker squares."""
+
+    turn: float
+    elevation: float
+    floor_square: float
+
+
+def _no_problems(task: Task) -> list[Problem]:
+    return []
+
+
+def _no_facts(obj: SceneObject) -> list[str]:
+    return []
+
+
+def _no_hint(call: SkillCall) -> str | None:
+    return None
+
+
+@dataclass(frozen=True)
+class RobotType:
+    """One embodiment, as the rest of robotool sees it.
+
+    Hooks that need the simulator or the planner import them when called (they are heavy to import and import
+    the scene model themselves); the others are plain functions of the task.
+    """
+
+    name: str
+    """The task file's ``robot.type``."""
+    article: str
+    """'a' or 'an', for sentences such as "a point cannot have a 'grasped' goal"."""
+    limits: type[BaseModel]
+    """The limits model; a task's ``robot.limits`` overrides its defaults."""
+    skills: tuple[SkillSpec, ...]
+    """The skills, in the order the description lists them."""
+    goals: frozenset[str]
+    """The goal kinds (keys of the task file's ``goal``) this robot can be given."""
+    embodiment: Callable[[Any], Embodiment]
+    """The simulator embodiment for a task's limits: model building and the skill controller."""
+    goal_trackers: Callable[[], Mapping[str, Callable[[Scene], GoalTracker]]]
+    """Trackers of the goal kinds only this robot has (the object goals are :mod:`robotool.sim.goals`')."""
+    describe: Callable[[Task], list[str]]
+    """The description's robot section: what the robot is, where it starts, its limits in words."""
+    key_concepts: Callable[[Task], list[KeyConcept]]
+    """The ground-truth quantities that decide whether the task needs a tool."""
+    check_robot: Callable[[Task], list[Problem]] = _no_problems
+    """Task-file problems with the robot's own keys (a start position it needs or cannot have)."""
+    check_start: Callable[[Task], list[Problem]] = _no_problems
+    """Task-file problems with where the robot starts in the scene (run once the scene's geometry is valid)."""
+    ground: str = "the ground"
+    """What z = 0 is, in the description."""
+    object_facts: Callable[[SceneObject], list[str]] = _no_facts
+    """Facts about an object that only this robot's skills use (for a gripper: its graspable point)."""
+    planar: bool = False
+    """Whether the motion skills ignore z, so a 2-D target ``[x, y]`` from a model is read as ``[x, y, 0]``."""
+    reach: Callable[[Any], list[tuple[float, float, float]]] = lambda limits: []
+    """Points (m) the robot can reach beyond the scene's objects (a workspace's corners), for the box that
+    position arguments are checked against."""
+    start_xy: Callable[[Task], tuple[float, float]] = lambda task: (0.0, 0.0)
+    """Where the robot starts in x-y (m), for plans drawn from above."""
+    footprint: Callable[[Task], tuple[float, float] | None] = lambda task: None
+    """The robot's x-y size (m) drawn at its start, or None for a marker."""
+    planner: Callable[[], Planner] | None = None
+    """The robot's search-planner macros (None: the planner cannot solve its tasks)."""
+    numerical_events: frozenset[EventKind] = frozenset()
+    """Events that make a failed call a numerical error (a target clamped to the workspace, a grasp that missed)."""
+    placement_measures: frozenset[str] = frozenset()
+    """Measured values of a refusal that a badly placed tool leaves (a step, gap or drop), for feedback."""
+    numerical_hint: Callable[[SkillCall], str | None] = _no_hint
+    """For a call that ended ``done`` in a world classed numerical: what went wrong, if this call shows it."""
+    view: View = View(turn=-30.0, elevation=-30.0, floor_square=0.25)
+
+    def skill(self, name: str) -> SkillSpec | None:
+        """The skill called ``name``, or None."""
+        return next((s for s in self.skills if s.name == name), None)
+
+    @property
+    def skill_names(self) -> frozenset[str]:
+        """Names of the skills (the sandbox allowlist)."""
+        return frozenset(s.name for s in self.skills)
+
+    def check_call(self, name: str, args: tuple[object, ...], scene: SceneBox | None = None) -> tuple[object, ...]:
+        """Check a call of skill ``name`` (:func:`~robotool.robots.skills.check_arguments`); an unknown skill is a
+        :class:`~robotool.robots.skills.SkillArgumentError` that lists this robot's skills."""
+        spec = self.skill(name)
+        if spec is None:
+            known = ", ".join(s.name for s in self.skills)
+            raise SkillArgumentError(f"unknown skill {name!r} for the {self.name} (skills: {known})")
+        return check_arguments(spec, args, scene)
+
+    def limits_of(self, overrides: Mapping[str, Any]) -> BaseModel:
+        """The limits with a task's overrides applied (pydantic's ValidationError for bad ones)."""
+        return self.limits(**overrides)
+
+
+class UnknownRobotError(RobotoolError, ValueError):
+    """A robot type that is not registered; the message lists the registered ones."""
+
+
+class RobotPluginError(RobotoolError):
+    """A robot plug-in that cannot be loaded; the message names it and why."""
+
+
+_ROBOTS: dict[str, RobotType] = {}
+_LOADED: set[str] = set()  # sources already loaded: "builtin", "entry points", and each module of the variable
+
+
+def register(robot: RobotType) -> None:
+    """Add a robot type; registering the same record again does nothing, another one under a taken name fails."""
+    taken = _ROBOTS.get(robot.name)
+    if taken is not None and taken is not robot:
+        raise RobotPluginError(f"a robot named {robot.name!r} is already registered; choose another name")
+    _ROBOTS[robot.name] = robot
+
+
+def get(name: str) -> RobotType:
+    """The robot type called ``name`` (:class:`UnknownRobotError` naming the registered ones otherwise)."""
+    _load()
+    robot = _ROBOTS.get(name)
+    if robot is None:
+        raise UnknownRobotError(unknown_message(name))
+    return robot
+
+
+def names() -> tuple[str, ...]:
+    """Names of every registered robot type, sorted."""
+    _load()
+    return tuple(sorted(_ROBOTS))
+
+
+def robots() -> tuple[RobotType, ...]:
+    """Every registered robot type, by name."""
+    _load()
+    return tuple(_ROBOTS[n] for n in sorted(_ROBOTS))
+
+
+def unknown_message(name: object) -> str:
+    """``unknown robot type 'pont' (did you mean 'point'?); registered: ...``, with every registered name."""
+    known = names()
+    close = difflib.get_close_matches(str(name), known, n=1, cutoff=0.6) if isinstance(name, str) else []
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return f"unknown robot type {name!r}{hint}; registered: {', '.join(known)}"
+
+
+def _load() -> None:
+    """Register the built-in robots, the entry points' and those of the modules in ``ROBOTOOL_ROBOTS``."""
+    if "builtin" not in _LOADED:
+        _LOADED.add("builtin")
+        from robotool.robots import arm, quadruped  # imported on first use: they import the scene model
+
+        register(arm.ROBOT)
+        register(quadruped.ROBOT)
+    if "entry points" not in _LOADED:
+        _LOADED.add("entry points")
+        for point in metadata.entry_points(group=ENTRY_POINT_GROUP):
+            try:
+                loaded = point.load()
+            except Exception as e:
+                raise RobotPluginError(f"cannot load robot plug-in {point.value!r} (entry point {point.name!r}): "
+                                       f"{type(e).__name__}: {e}") from None
+            _register_loaded(loaded, f"entry point {point.name!r}")
+    for module_name in (m.strip() for m in os.environ.get(MODULES_VARIABLE, "").split(",")):
+        if module_name and module_name not in _LOADED:
+            _LOADED.add(module_name)
+            try:
+                module = importlib.import_module(module_name)
+            except Exception as e:
+                _LOADED.discard(module_name)
+                raise RobotPluginError(f"cannot load robot module {module_name!r} (from {MODULES_VARIABLE}): "
+                                       f"{type(e).__name__}: {e}") from None
+            _register_loaded(module, f"module {module_name!r}")
+
+
+def _register_loaded(loaded: object, source: str) -> None:
+    robot = loaded if isinstance(loaded, RobotType) else getattr(loaded, "ROBOT", None)
+    if not isinstance(robot, RobotType):
+        raise RobotPluginError(f"robot plug-in {source} gives no RobotType (a module needs a ROBOT attribute)")
+    register(robot)

@@ -1,0 +1,137 @@
+"""Robots are plug-ins: a third robot from the test suite (tests/plugins/point_robot.py) registers through the
+``ROBOTOOL_ROBOTS`` variable and runs a task through ``robotool run``, without any change to the package."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from robotool import robots
+from robotool.cli import main
+from robotool.planner.solve import NoPlannerError, solve
+from robotool.robots import registry
+from robotool.task_file import TaskFileError, load_task, parse_task
+
+PLUGINS = Path(__file__).parent / "plugins"
+TASK = """\
+format: 1
+name: puck_to_pad
+category: no_tool
+instruction: Slide onto the pad.
+robot:
+  type: point
+  position: [0.0, 0.0]
+objects:
+  - name: pad
+    shape: box
+    center: [0.6, 0.2, 0.005]
+    size: [0.2, 0.2, 0.01]
+    movable: false
+goal:
+  robot_on: pad
+"""
+ONTO_PAD = 'pad = get_position("pad")\nmove_to([pad[0], pad[1]])\n'
+SHORT_OF_PAD = "move_to([0.3, -0.2])\n"
+
+
+@pytest.fixture
+def point_robot(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """The point robot's module on the path and named in ROBOTOOL_ROBOTS; the registry restored afterwards."""
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    monkeypatch.setenv(robots.MODULES_VARIABLE, "point_robot")
+    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
+    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
+    yield
+
+
+@pytest.fixture
+def task_file(tmp_path: Path) -> Path:
+    path = tmp_path / "puck.yaml"
+    path.write_text(TASK)
+    return path
+
+
+def run(capsys: pytest.CaptureFixture[str], tmp_path: Path, task: Path, code: str) -> tuple[int, str]:
+    program = tmp_path / "program.py"
+    program.write_text(code)
+    status = main(["run", str(task), str(program), "--worlds", "2", "--backend", "mujoco"])
+    out = capsys.readouterr().out
+    assert "Traceback" not in out
+    return status, out
+
+
+def test_a_plugin_robot_runs_a_task_through_robotool_run(
+    point_robot: None,
+    task_file: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("COLUMNS", "200")
+    assert "point" in robots.names()
+    status, out = run(capsys, tmp_path, task_file, ONTO_PAD)
+    assert status == 0, out
+    assert "every world succeeded: success rate 100%" in out
+    status, out = run(capsys, tmp_path, task_file, SHORT_OF_PAD)  # the physics judges the plug-in's goal too
+    assert status != 0
+    assert "robot_over_pad no" in out
+
+
+def test_a_plugin_robot_is_described_and_checked_from_its_record(point_robot: None, task_file: Path) -> None:
+    task = load_task(task_file)
+    assert main(["describe", str(task_file)]) == 0
+    assert robots.get(task.embodiment).skill_names == {"get_position", "move_to"}
+    with pytest.raises(TaskFileError, match="a point robot needs a start"):
+        parse_task({**load_task(task_file).model_dump(mode="json", exclude_defaults=True),
+                    "robot": {"type": "point"}})
+    with pytest.raises(TaskFileError, match="a point cannot have a 'grasped' goal"):
+        parse_task({**task.model_dump(mode="json", exclude_defaults=True), "goal": {"grasped": "pad"}})
+    with pytest.raises(NoPlannerError, match="no macros for the point robot"):
+        solve(task)
+
+
+def test_a_plugin_robot_works_in_a_fresh_process(task_file: Path, tmp_path: Path) -> None:
+    program = tmp_path / "program.py"
+    program.write_text(ONTO_PAD)
+    root = Path(__file__).parent.parent
+    env = {**os.environ, robots.MODULES_VARIABLE: "point_robot", "COLUMNS": "200",
+           "PYTHONPATH": os.pathsep.join([str(root), str(PLUGINS)])}
+    done = subprocess.run([sys.executable, "-m", "robotool", "run", str(task_file), str(program), "--worlds", "1",
+                           "--backend", "mujoco"], env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "success rate 100%" in done.stdout
+
+
+def test_an_unknown_robot_type_lists_the_registered_ones() -> None:
+    data = load_task(Path(__file__).parent.parent / "robotool/tasks/data/sofa_climbing.yaml").model_dump(mode="json")
+    data["robot"]["type"] = "quadrupd"
+    with pytest.raises(TaskFileError) as caught:
+        parse_task(data)
+    assert "robot.type: unknown robot type 'quadrupd' (did you mean 'quadruped'?); registered: arm, quadruped" in str(
+        caught.value
+    )
+
+
+def test_a_plugin_that_cannot_load_is_a_clear_error(
+    monkeypatch: pytest.MonkeyPatch, task_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv(robots.MODULES_VARIABLE, "no_such_robot_module")
+    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
+    assert main(["describe", str(task_file)]) != 0
+    err = capsys.readouterr().err
+    assert "cannot load robot module 'no_such_robot_module' (from ROBOTOOL_ROBOTS): ModuleNotFoundError" in err
+    assert "Traceback" not in err
+
+
+def test_a_taken_name_cannot_be_registered_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
+    arm = robots.get("arm")
+    robots.register(arm)  # the same record again: nothing happens
+    with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
+        robots.register(dataclasses.replace(arm))
