@@ -20,7 +20,7 @@ from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
 from robotool.planner.search import Budget, Tried, order, search
 from robotool.repair_rounds import failure_trace
-from robotool.robots.registry import Planner
+from robotool.robots.registry import SearchMacros
 from robotool.scene import SceneObject
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank
@@ -88,7 +88,7 @@ class NoPlannerError(RobotoolError):
     """The task's robot has no search-planner macros."""
 
 
-def robot_planner(task: Task) -> Planner:
+def robot_planner(task: Task) -> SearchMacros:
     """The task's robot's macros and budget (:class:`NoPlannerError` when it has none)."""
     make = robots.get(task.embodiment).planner
     if make is None:

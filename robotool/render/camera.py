@@ -11,7 +11,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from robotool.robots import View
+from robotool.robots import PictureSettings
 
 MARGIN = 1.08  # distance factor over the tightest fit (room for the labels)
 PLANE = mujoco.mjtGeom.mjGEOM_PLANE
@@ -32,7 +32,7 @@ def geom_corners(model: mujoco.MjModel, data: mujoco.MjData, geoms: np.ndarray) 
     return world.reshape(-1, 3)
 
 
-def fit_camera(points: np.ndarray, view: View, aspect: float, fovy_deg: float) -> mujoco.MjvCamera:
+def fit_camera(points: np.ndarray, view: PictureSettings, aspect: float, fovy_deg: float) -> mujoco.MjvCamera:
     """A free camera that sees every point of ``points`` (n, 3) at ``aspect`` (width / height)."""
     lo, hi = points.min(axis=0), points.max(axis=0)
     lookat = (lo + hi) / 2

@@ -48,7 +48,7 @@ MODULES_VARIABLE = "ROBOTOOL_ROBOTS"
 
 
 @dataclass(frozen=True)
-class Planner:
+class SearchMacros:
     """A robot's part of the LM-free search planner: its candidate programs and how much to verify."""
 
     candidates: Callable[[Task, bool], Iterator[Program]]
@@ -56,7 +56,7 @@ class Planner:
 
 
 @dataclass(frozen=True)
-class View:
+class PictureSettings:
     """How pictures look at the robot's scenes: camera degrees from the side view and down from level, and the
     side (m) of the floor's checker squares."""
 
@@ -120,7 +120,7 @@ class RobotType:
     """Where the robot starts in x-y (m), for plans drawn from above."""
     footprint: Callable[[Task], tuple[float, float] | None] = lambda task: None
     """The robot's x-y size (m) drawn at its start, or None for a marker."""
-    planner: Callable[[], Planner] | None = None
+    planner: Callable[[], SearchMacros] | None = None
     """The robot's search-planner macros (None: the planner cannot solve its tasks)."""
     numerical_events: frozenset[EventKind] = frozenset()
     """Events that make a failed call a numerical error (a target clamped to the workspace, a grasp that missed)."""
@@ -128,7 +128,7 @@ class RobotType:
     """Measured values of a refusal that a badly placed tool leaves (a step, gap or drop), for feedback."""
     numerical_hint: Callable[[SkillCall], str | None] = _no_hint
     """For a call that ended ``done`` in a world classed numerical: what went wrong, if this call shows it."""
-    view: View = View(turn=-30.0, elevation=-30.0, floor_square=0.25)
+    view: PictureSettings = PictureSettings(turn=-30.0, elevation=-30.0, floor_square=0.25)
 
     def skill(self, name: str) -> SkillSpec | None:
         """The skill called ``name``, or None."""

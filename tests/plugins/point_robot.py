@@ -16,7 +16,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from robotool.concepts import KeyConcept
-from robotool.robots import RobotType, View
+from robotool.robots import PictureSettings, RobotType
 from robotool.robots.skills import POSITION, QUERY_NAME, SkillSpec
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import Scene
@@ -174,5 +174,5 @@ ROBOT = RobotType(
     check_robot=_check_robot,
     planar=True,
     start_xy=lambda task: task.robot.position or (0.0, 0.0),
-    view=View(turn=-30.0, elevation=-45.0, floor_square=0.1),
+    view=PictureSettings(turn=-30.0, elevation=-45.0, floor_square=0.1),
 )

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from robotool.robots.arm import concepts, describe
 from robotool.robots.arm.skills import ARM_SKILLS, ArmLimits
-from robotool.robots.registry import Planner, RobotType, View
+from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.rollout import SkillCall
 from robotool.task_file import Problem
 from robotool.task_model import Task
@@ -36,11 +36,11 @@ def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
     return {"grasped": GraspedGoal}
 
 
-def _planner() -> Planner:
+def _planner() -> SearchMacros:
     from robotool.planner.search import Budget  # the planner loads on first use
     from robotool.robots.arm.macros import candidates
 
-    return Planner(candidates=candidates, budget=Budget(beam=8, rounds=4, seconds=60.0))
+    return SearchMacros(candidates=candidates, budget=Budget(beam=8, rounds=4, seconds=60.0))
 
 
 def _check_robot(task: Task) -> list[Problem]:
@@ -84,5 +84,5 @@ ROBOT = RobotType(
     numerical_events=frozenset({"clamped", "grasp_failed"}),
     numerical_hint=_numerical_hint,
     # The gripper works on a table top: a higher view keeps it from hiding the objects it reaches for.
-    view=View(turn=-35.0, elevation=-35.0, floor_square=0.1),
+    view=PictureSettings(turn=-35.0, elevation=-35.0, floor_square=0.1),
 )

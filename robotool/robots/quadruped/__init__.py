@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from robotool.robots.quadruped import checks, concepts, describe
 from robotool.robots.quadruped.skills import QUADRUPED_SKILLS, QuadrupedLimits
-from robotool.robots.registry import Planner, RobotType, View
+from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.task_model import Task
 
 if TYPE_CHECKING:
@@ -39,11 +39,11 @@ def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
     return {"robot_on": RobotOnGoal}
 
 
-def _planner() -> Planner:
+def _planner() -> SearchMacros:
     from robotool.planner.search import Budget  # the planner loads on first use
     from robotool.robots.quadruped.macros import candidates
 
-    return Planner(candidates=candidates, budget=Budget(beam=3, rounds=3, seconds=90.0))
+    return SearchMacros(candidates=candidates, budget=Budget(beam=3, rounds=3, seconds=90.0))
 
 
 def _start_xy(task: Task) -> tuple[float, float]:
@@ -75,5 +75,5 @@ ROBOT = RobotType(
     planner=_planner,
     placement_measures=frozenset({"step", "gap", "drop"}),
     # It walks along its scene: a three-quarter view from the side shows the heights it climbs.
-    view=View(turn=-20.0, elevation=-28.0, floor_square=0.5),
+    view=PictureSettings(turn=-20.0, elevation=-28.0, floor_square=0.5),
 )
