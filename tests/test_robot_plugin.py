@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -135,3 +136,20 @@ def test_a_taken_name_cannot_be_registered_again(monkeypatch: pytest.MonkeyPatch
     robots.register(arm)  # the same record again: nothing happens
     with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
         robots.register(dataclasses.replace(arm))
+
+
+def test_no_module_outside_a_robot_package_names_a_robot() -> None:
+    """Robot-specific code lives in robotool/robots/<name>/; tasks may name robots, and the registry lists the
+    built-in packages it loads."""
+    package = Path(robots.__file__).parent.parent
+    allowed = {package / "robots" / "registry.py"}
+    named = re.compile(r"\b(quadruped|arm)s?\b", re.IGNORECASE)
+    found = [
+        f"{path.relative_to(package)}:{number}: {line.strip()}"
+        for path in sorted(package.rglob("*.py"))
+        if path not in allowed and not path.is_relative_to(package / "tasks")
+        and not any(path.is_relative_to(package / "robots" / name) for name in ("arm", "quadruped"))
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if named.search(line)
+    ]
+    assert not found, "\n".join(found)
