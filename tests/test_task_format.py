@@ -15,8 +15,8 @@ from robotool.cli import main
 from robotool.describe import describe
 from robotool.execute import run
 from robotool.planner import solve
-from robotool.robots.arm.skills import ArmLimits
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.arm.arm_skills import ArmLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.scene import Fragile, SceneObject
 from robotool.task_file import TaskFileError, load_task, parse_task
 from robotool.task_goal import Goal, LiftGoal

@@ -11,8 +11,8 @@ from fixtures.reference import REFERENCE, program
 
 from robotool import robots, sandbox, sim, tasks, verify
 from robotool.cli import main
-from robotool.robots.arm.controller import ArmController
-from robotool.robots.quadruped.controller import QuadrupedController
+from robotool.robots.arm.arm_controller import ArmController
+from robotool.robots.quadruped.quadruped_controller import QuadrupedController
 from robotool.robots.skills import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError
 from robotool.rollout import Rollout
 from robotool.sim.backend_mujoco import MujocoSim

@@ -1,9 +1,9 @@
 """The arm: a Kinova Gen3-like arm whose two-finger gripper translates inside a workspace box.
 
 Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
-of this package: :mod:`~robotool.robots.arm.skills` (limits and skills), :mod:`~robotool.robots.arm.describe`,
-:mod:`~robotool.robots.arm.concepts`, :mod:`~robotool.robots.arm.controller` (simulator model and skill
-controller), :mod:`~robotool.robots.arm.goals` (``grasped``) and :mod:`~robotool.robots.arm.macros` (planner).
+of this package: :mod:`.arm_skills` (limits and skills), :mod:`.arm_description`,
+:mod:`.arm_concepts`, :mod:`.arm_controller` (simulator model and skill
+controller), :mod:`.arm_goals` (``grasped``) and :mod:`.arm_macros` (planner).
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
-from robotool.robots.arm import concepts, describe
-from robotool.robots.arm.skills import ARM_SKILLS, ArmLimits
+from robotool.robots.arm import arm_concepts, arm_description
+from robotool.robots.arm.arm_skills import ARM_SKILLS, ArmLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.rollout import SkillCall
 from robotool.task_file import Problem
@@ -25,20 +25,20 @@ if TYPE_CHECKING:
 
 
 def _embodiment(limits: ArmLimits) -> Embodiment:
-    from robotool.robots.arm.controller import ArmEmbodiment  # the simulator loads on first use
+    from robotool.robots.arm.arm_controller import ArmEmbodiment  # the simulator loads on first use
 
     return ArmEmbodiment(limits)
 
 
 def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
-    from robotool.robots.arm.goals import GraspedGoal  # the simulator loads on first use
+    from robotool.robots.arm.arm_goals import GraspedGoal  # the simulator loads on first use
 
     return {"grasped": GraspedGoal}
 
 
 def _planner() -> SearchMacros:
     from robotool.planner.search import Budget  # the planner loads on first use
-    from robotool.robots.arm.macros import candidates
+    from robotool.robots.arm.arm_macros import candidates
 
     return SearchMacros(candidates=candidates, budget=Budget(beam=8, rounds=4, seconds=60.0))
 
@@ -54,7 +54,7 @@ def _reach(limits: ArmLimits) -> list[tuple[float, float, float]]:
 
 
 def _start_xy(task: Task) -> tuple[float, float]:
-    from robotool.robots.arm.controller import HOME
+    from robotool.robots.arm.arm_controller import HOME
 
     return HOME[0], HOME[1]
 
@@ -73,11 +73,11 @@ ROBOT = RobotType(
     goals=frozenset({"grasped", "pressed", "lifted", "lowered"}),
     embodiment=_embodiment,
     goal_trackers=_goal_trackers,
-    describe=describe.robot_section,
-    key_concepts=concepts.key_concepts,
+    describe=arm_description.robot_section,
+    key_concepts=arm_concepts.key_concepts,
     check_robot=_check_robot,
     ground="the table top",
-    object_facts=describe.object_facts,
+    object_facts=arm_description.object_facts,
     reach=_reach,
     start_xy=_start_xy,
     planner=_planner,

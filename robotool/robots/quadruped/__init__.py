@@ -1,14 +1,14 @@
 """The quadruped: a Unitree Go1-sized legged robot that walks, climbs and pushes.
 
 Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
-of this package: :mod:`~robotool.robots.quadruped.skills` (limits and skills), :mod:`~robotool.robots.quadruped.checks`
-(task-file checks), :mod:`~robotool.robots.quadruped.describe`, :mod:`~robotool.robots.quadruped.concepts`, the
-simulator's :mod:`~robotool.robots.quadruped.controller` with its :mod:`~robotool.robots.quadruped.body`,
-:mod:`~robotool.robots.quadruped.push` and :mod:`~robotool.robots.quadruped.support`, the one terrain model of
-its legs (:mod:`~robotool.robots.quadruped.terrain`, read by the controller, the planner and the key concepts),
-:mod:`~robotool.robots.quadruped.goals` (``robot_on``) and the planner's
-:mod:`~robotool.robots.quadruped.macros` with their walk and push prediction
-(:mod:`~robotool.robots.quadruped.predict`).
+of this package: :mod:`.quadruped_skills` (limits and skills), :mod:`.checks`
+(task-file checks), :mod:`.quadruped_description`, :mod:`.quadruped_concepts`, the
+simulator's :mod:`.quadruped_controller` with its :mod:`.body`,
+:mod:`.push` and :mod:`.support`, the one terrain model of
+its legs (:mod:`.terrain`, read by the controller, the planner and the key concepts),
+:mod:`.quadruped_goals` (``robot_on``) and the planner's
+:mod:`.quadruped_macros` with their walk and push prediction
+(:mod:`.predict`).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
-from robotool.robots.quadruped import checks, concepts, describe
-from robotool.robots.quadruped.skills import QUADRUPED_SKILLS, QuadrupedLimits
+from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description
+from robotool.robots.quadruped.quadruped_skills import QUADRUPED_SKILLS, QuadrupedLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.task_model import Task
 
@@ -28,20 +28,20 @@ if TYPE_CHECKING:
 
 
 def _embodiment(limits: QuadrupedLimits) -> Embodiment:
-    from robotool.robots.quadruped.controller import QuadrupedEmbodiment  # the simulator loads on first use
+    from robotool.robots.quadruped.quadruped_controller import QuadrupedEmbodiment  # the simulator loads on first use
 
     return QuadrupedEmbodiment(limits)
 
 
 def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
-    from robotool.robots.quadruped.goals import RobotOnGoal  # the simulator loads on first use
+    from robotool.robots.quadruped.quadruped_goals import RobotOnGoal  # the simulator loads on first use
 
     return {"robot_on": RobotOnGoal}
 
 
 def _planner() -> SearchMacros:
     from robotool.planner.search import Budget  # the planner loads on first use
-    from robotool.robots.quadruped.macros import candidates
+    from robotool.robots.quadruped.quadruped_macros import candidates
 
     return SearchMacros(candidates=candidates, budget=Budget(beam=3, rounds=3, seconds=90.0))
 
@@ -65,8 +65,8 @@ ROBOT = RobotType(
     goals=frozenset({"robot_on", "lifted", "lowered"}),
     embodiment=_embodiment,
     goal_trackers=_goal_trackers,
-    describe=describe.robot_section,
-    key_concepts=concepts.key_concepts,
+    describe=quadruped_description.robot_section,
+    key_concepts=quadruped_concepts.key_concepts,
     check_robot=checks.check_robot,
     check_start=checks.check_start,
     planar=True,

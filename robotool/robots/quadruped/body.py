@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 
 from robotool import geometry
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
 from robotool.task_model import Task
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool import geometry
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.task_file import Problem
 from robotool.task_model import Task
 

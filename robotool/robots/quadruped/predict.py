@@ -15,7 +15,7 @@ import numpy as np
 
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import check_walk
 
 SAMPLE = 0.02  # m between terrain samples along a walk

@@ -15,7 +15,7 @@ from itertools import pairwise
 
 import numpy as np
 
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
 
 GAP = 0.03  # m between the robot's face and the object's face when it lines up to push

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 
 FindingKind = Literal["step", "gap", "drop"]
 KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # codes 1, 2, 3 in :class:`PathScan`

@@ -9,7 +9,7 @@ import pytest
 
 from robotool import geometry, tasks
 from robotool.robots.quadruped.push import Leg, legs, push_pose, route, rule_violation
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
 
 LIMITS = QuadrupedLimits()

@@ -13,7 +13,7 @@ from robotool import geometry
 from robotool.concepts import press_point
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
-from robotool.robots.arm.skills import ArmLimits
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

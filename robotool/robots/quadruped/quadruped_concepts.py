@@ -13,7 +13,7 @@ import numpy as np
 
 from robotool import geometry
 from robotool.concepts import KeyConcept, load_bearing_solids, surface_under
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import exceeds, survey_walk
 from robotool.scene import SceneObject
 from robotool.task_model import Task

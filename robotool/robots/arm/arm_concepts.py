@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.concepts import KeyConcept, press_point
-from robotool.robots.arm.skills import ArmLimits
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.task_model import Task
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from robotool.describe import number_text, vector_text
-from robotool.robots.arm.skills import ArmLimits
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

@@ -17,9 +17,9 @@ import numpy as np
 from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
-from robotool.robots.quadruped.concepts import start_surface
 from robotool.robots.quadruped.predict import detour, push_problem, push_staging, walk_violation
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_concepts import start_surface
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 

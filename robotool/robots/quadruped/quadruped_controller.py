@@ -41,7 +41,7 @@ from robotool.robots.quadruped.push import (
     rule_violation,
     sweep_problem,
 )
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
 from robotool.robots.quadruped.terrain import (
     FOOT_NAMES,

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from robotool.describe import number_text, vector_text
-from robotool.robots.quadruped.concepts import start_surface
-from robotool.robots.quadruped.skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_concepts import start_surface
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.task_model import Task
 
 

@@ -23,7 +23,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool.robots.arm.skills import ArmLimits
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
