@@ -48,7 +48,8 @@ from mujoco import rollout
 
 from robotool import sim, tasks
 from robotool.sandbox import start_sessions
-from robotool.sim.backend import Perturbation, make_sim
+from robotool.sim.backend import Perturbation
+from robotool.sim.backend_choice import make_sim
 
 PROGRAMS = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "programs"
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS

@@ -18,8 +18,13 @@ if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.env
 from robotool import tasks
 from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.describe import describe
+from robotool.robots import arm, quadruped, registry
 from robotool.task_file import Problem, TaskFileError, load_task
 from robotool.task_model import Task
+
+# The built-in robots; plug-ins register on the registry's first lookup.
+registry.register(arm.ROBOT)
+registry.register(quadruped.ROBOT)
 
 if TYPE_CHECKING:
     from robotool.execute import RunReport, run

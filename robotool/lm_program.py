@@ -34,6 +34,7 @@ from typing import Any, Literal, Self
 
 import dspy
 
+from robotool import robots
 from robotool.compiled import CompiledInfo, check_fits, read_compiled, version_note
 from robotool.describe import describe
 from robotool.errors import RobotoolError
@@ -147,7 +148,7 @@ class Proposer(dspy.Module):
         analyzer_calls: list[LMCall] = []
         if self.analyze is not None:
             try:
-                with scene_context(task):
+                with scene_context(task, robots.get(task.embodiment)):
                     result = call_stage(
                         self.analyze,
                         "analyzer",
@@ -265,7 +266,7 @@ class Proposer(dspy.Module):
 
         stage = "planner"
         try:
-            with scene_context(task):
+            with scene_context(task, robots.get(task.embodiment)):
                 if self.plan is not None:
                     out = run(self.plan, stage, {"description": description, "key_concepts": concepts})
                     stages.object_roles, stages.abstract_plan, stages.steps = (

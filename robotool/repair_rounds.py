@@ -20,6 +20,7 @@ from typing import Any
 
 import dspy
 
+from robotool import robots
 from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, call_stage
 from robotool.rollout import Rollout, notable_distances
 from robotool.signatures import FailureTrace, TracedCall, scene_context
@@ -184,7 +185,7 @@ def propose_repair(
         "trace": ShownTrace(trace=trace),
     }
     try:
-        with scene_context(task):
+        with scene_context(task, robots.get(task.embodiment)):
             result = call_stage(
                 predictor,
                 "repair",

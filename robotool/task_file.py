@@ -19,6 +19,7 @@ from pydantic import BaseModel, ValidationError
 
 from robotool import geometry, robots
 from robotool.task_model import Task
+from robotool.task_problem import Problem
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
 OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate
@@ -29,16 +30,6 @@ KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
     "grasp_point": "graspable_point", "grasp": "graspable_point", "handle": "graspable_point", "fixed": "movable",
     "description": "notes", "note": "notes", "objects_list": "objects", "task": "name", "version": "format",
 }  # fmt: skip
-
-
-class Problem(BaseModel):
-    """One thing wrong with a task file, at a field path such as ``objects[2].size[0]``."""
-
-    path: str
-    message: str
-
-    def __str__(self) -> str:
-        return f"{self.path}: {self.message}" if self.path else self.message
 
 
 class TaskFileError(ValueError):
@@ -221,14 +212,36 @@ def parse_task(data: Any, source: str = "<task>") -> Task:
     """Validate already-loaded task data (a mapping), raising :class:`TaskFileError`."""
     if not isinstance(data, Mapping):
         raise TaskFileError(source, [Problem(path="", message="a task file must be a mapping of keys")])
+    unknown_robot = _unknown_robot_type(data)
     try:
         task = Task.model_validate(data)
     except ValidationError as e:
-        raise TaskFileError(source, _model_problems(e, data)) from None
+        raise TaskFileError(source, _with_robot_problem(_model_problems(e, data), unknown_robot)) from None
+    if unknown_robot is not None:
+        raise TaskFileError(source, [unknown_robot])
     problems = _check_semantics(task)
     if problems:
         raise TaskFileError(source, problems)
     return task
+
+
+def _unknown_robot_type(data: Mapping[str, Any]) -> Problem | None:
+    """``robot.type`` that names no registered robot (the registered ones listed, the closest suggested)."""
+    robot = data.get("robot")
+    kind = robot.get("type") if isinstance(robot, Mapping) else None
+    if isinstance(kind, str) and kind not in robots.names():
+        return Problem(path="robot.type", message=robots.registry.unknown_message(kind))
+    return None
+
+
+def _with_robot_problem(problems: list[Problem], robot: Problem | None) -> list[Problem]:
+    """The model's problems with the robot type's in the place of its key (after format, name, category and
+    instruction, before objects and goal)."""
+    if robot is None:
+        return problems
+    after = ("objects", "goal")
+    at = next((i for i, p in enumerate(problems) if p.path.startswith(after)), len(problems))
+    return [*problems[:at], robot, *problems[at:]]
 
 
 def load_task(path: str | Path) -> Task:

@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, Field, FiniteFloat, StringConstraints, field_validator
+from pydantic import BaseModel, Field, FiniteFloat, StringConstraints
 
-from robotool import robots
+from robotool.robots.limits_table import limits_model
 from robotool.scene import Name, SceneObject, StrictModel
 from robotool.task_goal import Goal
 
@@ -15,18 +15,12 @@ Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing"
 
 
 class Robot(StrictModel):
-    """The robot: its type (a registered robot, see :mod:`robotool.robots`), start position and limit overrides."""
+    """The robot: its type (a registered robot, see :mod:`robotool.robots`; the task-file checks refuse others),
+    start position and limit overrides."""
 
     type: str
     position: tuple[FiniteFloat, FiniteFloat] | None = None
     limits: dict[str, Any] = Field(default_factory=dict)
-
-    @field_validator("type")
-    @classmethod
-    def _registered(cls, value: str) -> str:
-        if value not in robots.names():
-            raise ValueError(robots.registry.unknown_message(value))
-        return value
 
 
 class Task(StrictModel):
@@ -48,7 +42,7 @@ class Task(StrictModel):
     @property
     def limits(self) -> BaseModel:
         """The robot's limits with this task's overrides applied (its type's limits model)."""
-        return robots.get(self.robot.type).limits_of(self.robot.limits)
+        return limits_model(self.robot.type)(**self.robot.limits)
 
     def object(self, name: str) -> SceneObject:
         """The object with this name (KeyError naming the known objects otherwise)."""

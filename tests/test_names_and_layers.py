@@ -34,10 +34,8 @@ SHARED_NAMES: dict[str, str] = {
 }
 """Public names two modules may still share, each with why; a name that no longer collides must leave."""
 
-KNOWN_CYCLES: list[frozenset[str]] = [
-    frozenset({"robotool.sim.backend", "robotool.sim.build", "robotool.sim.embodiment"}),
-]
-"""Import cycles still to be removed (the embodiment registry replaces this one); one that is gone must leave."""
+KNOWN_CYCLES: list[frozenset[str]] = []
+"""Import cycles still to be removed; one that is gone must leave."""
 
 
 PLANNER_INTO_SIMULATOR: set[tuple[str, str]] = {

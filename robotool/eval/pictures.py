@@ -21,7 +21,7 @@ from robotool.render.video import RED, end_lines
 from robotool.verify import world_failure
 
 if TYPE_CHECKING:
-    from robotool.sim.build import Scene
+    from robotool.sim.compiled_scene import Scene
 
 FOLDER = "pictures"
 SIZE = (640, 360)  # px

@@ -40,6 +40,7 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     what the simulator measured and verified in one more round (see :mod:`robotool.planner.reparameterise`)."""
     started = time.perf_counter()
     planner = robot_planner(task)
+    budget = Budget(beam=planner.beam, rounds=planner.rounds, seconds=planner.seconds)
     concepts = key_concepts(task)
     allowed = goal_objects(task)
     generated = list(planner.candidates(task, tools))
@@ -54,19 +55,18 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
         tiers = [order(tool_free), order(with_tool)]
     programs = [p for tier in tiers for p in tier]
     generated_at = time.perf_counter()
-    with scene_context(task):
+    with scene_context(task, robots.get(task.embodiment)):
         tried, rounds = search(task, tiers, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                               backend=backend, budget=planner.budget)
+                               backend=backend, budget=budget)
         repairs = []
         if repair and not any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in tried):
             repairs = repair_round(task, tried, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                                   backend=backend, beam=planner.budget.beam)
+                                   backend=backend, beam=budget.beam)
     verified_at = time.perf_counter()
     solution = _solution(task, tried, concepts, tools)
     solution.repairs = repairs
     solution.timings = {"generate": generated_at - started, "verify": verified_at - generated_at,
                         "total": time.perf_counter() - started}
-    budget = planner.budget
     solution.notes = [
         "Produced by the LM-free search planner (robotool.planner): generate-and-test over geometric skill "
         "macros checked in the batched simulator; no language model was used.",

@@ -18,7 +18,7 @@ from robotool.errors import RobotoolError
 from robotool.render.camera import fit_camera, geom_corners, visible_geoms
 from robotool.render.overlay import CaptionLine, Label, draw_caption, draw_labels, to_image
 from robotool.render.picture_model import ROBOT_RGBA, RenderModel, render_model
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 GL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri libopengl0"  # Debian packages behind MUJOCO_GL=egl
 

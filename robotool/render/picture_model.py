@@ -14,7 +14,8 @@ import mujoco
 import numpy as np
 
 from robotool import geometry, robots
-from robotool.sim.build import Scene, make_spec
+from robotool.sim.build import embodiment_for, make_spec
+from robotool.sim.compiled_scene import Scene
 from robotool.task_model import Task
 
 ROBOT_RGBA = (0.93, 0.45, 0.10, 1.0)
@@ -141,7 +142,7 @@ def render_model(scene: Scene, *, shadows: bool = True) -> RenderModel:
     Without ``shadows`` each frame takes about half the time on a software renderer (for videos).
     """
     marker = _goal_height(scene)
-    spec = make_spec(scene.task, scene.embodiment)
+    spec = make_spec(scene.task, embodiment_for(scene.task))
     _decorate(spec, scene, marker, shadows)
     model = spec.compile()
     if model.nq != scene.model.nq or model.nbody != scene.model.nbody:

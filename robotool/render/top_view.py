@@ -23,7 +23,7 @@ from robotool import geometry, robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 from robotool.sim.recorder import Track
 from robotool.task_model import Task
 

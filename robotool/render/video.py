@@ -22,7 +22,7 @@ from robotool.render.overlay import CaptionLine
 from robotool.render.painter import Painter, RenderError
 from robotool.render.still import scene_title
 from robotool.rollout import Rollout, SkillCall
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 from robotool.sim.recorder import Track
 
 FPS = 30

@@ -6,8 +6,8 @@ kinds the robot supports, its task-file checks, its description section, its gro
 simulator embodiment (model building and skill controller) and goal trackers, its planner macros, its
 error-class rules and its picture settings. Nothing outside a robot's own package names a robot.
 
-The built-in robots (:mod:`robotool.robots.arm`, :mod:`robotool.robots.quadruped`) are registered on the first
-lookup. Robots from other packages are plug-ins, found the same way:
+The built-in robots are registered when :mod:`robotool` is imported (its ``__init__``, the one place that lists
+them). Robots from other packages are plug-ins, loaded on the first lookup:
 
 - an entry point in the group ``robotool.robots`` (in the plug-in's ``pyproject.toml``:
   ``[project.entry-points."robotool.robots"] point = "my_package.point_robot:ROBOT"``);
@@ -29,19 +29,18 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from robotool.errors import RobotoolError
+from robotool.robots import limits_table
 from robotool.robots.skills import SceneBox, SkillArgumentError, SkillSpec, check_arguments
 
 if TYPE_CHECKING:
-    from robotool.concepts import KeyConcept
+    from robotool.key_concept import KeyConcept
     from robotool.planner.codegen import Program
-    from robotool.planner.search import Budget
     from robotool.rollout import EventKind, SkillCall
     from robotool.scene import SceneObject
-    from robotool.sim.build import Scene
-    from robotool.sim.embodiment import Embodiment
-    from robotool.sim.goals import GoalTracker
-    from robotool.task_file import Problem
+    from robotool.sim.compiled_scene import Scene
+    from robotool.sim.embodiment import Embodiment, GoalTracker
     from robotool.task_model import Task
+    from robotool.task_problem import Problem
 
 ENTRY_POINT_GROUP = "robotool.robots"
 MODULES_VARIABLE = "ROBOTOOL_ROBOTS"
@@ -52,7 +51,13 @@ class SearchMacros:
     """A robot's part of the LM-free search planner: its candidate programs and how much to verify."""
 
     candidates: Callable[[Task, bool], Iterator[Program]]
-    budget: Budget
+    """Candidate programs for a task (``tools=False``: without tools), shortest first."""
+    beam: int
+    """Programs per round (one simulator batch)."""
+    rounds: int
+    """Rounds at most."""
+    seconds: float
+    """No new round starts after this much time."""
 
 
 @dataclass(frozen=True)
@@ -162,7 +167,7 @@ class RobotPluginError(RobotoolError):
 
 
 _ROBOTS: dict[str, RobotType] = {}
-_LOADED: set[str] = set()  # sources already loaded: "builtin", "entry points", and each module of the variable
+_LOADED: set[str] = set()  # sources already loaded: "entry points", and each module of the variable
 
 
 def register(robot: RobotType) -> None:
@@ -171,6 +176,7 @@ def register(robot: RobotType) -> None:
     if taken is not None and taken is not robot:
         raise RobotPluginError(f"a robot named {robot.name!r} is already registered; choose another name")
     _ROBOTS[robot.name] = robot
+    limits_table.add(robot.name, robot.limits)
 
 
 def get(name: str) -> RobotType:
@@ -203,13 +209,7 @@ def unknown_message(name: object) -> str:
 
 
 def _load() -> None:
-    """Register the built-in robots, the entry points' and those of the modules in ``ROBOTOOL_ROBOTS``."""
-    if "builtin" not in _LOADED:
-        _LOADED.add("builtin")
-        from robotool.robots import arm, quadruped  # imported on first use: they import the scene model
-
-        register(arm.ROBOT)
-        register(quadruped.ROBOT)
+    """Register the entry points' robots and those of the modules in ``ROBOTOOL_ROBOTS`` (once each)."""
     if "entry points" not in _LOADED:
         _LOADED.add("entry points")
         for point in metadata.entry_points(group=ENTRY_POINT_GROUP):

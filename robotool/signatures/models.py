@@ -25,12 +25,11 @@ import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Annotated, Any, get_args
+from typing import Annotated, Any, Protocol, get_args
 
 from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_validator
 
-from robotool import robots
-from robotool.concepts import ConceptKind, KeyConcept
+from robotool.key_concept import ConceptKind, KeyConcept
 from robotool.task_model import Task
 
 __all__ = [
@@ -56,10 +55,22 @@ _SCENE: contextvars.ContextVar[_Scene | None] = contextvars.ContextVar("robotool
 _NOTES: contextvars.ContextVar[list[str] | None] = contextvars.ContextVar("robotool_notes", default=None)
 
 
+class RobotFacts(Protocol):
+    """What validation needs of the task's robot (a :class:`robotool.robots.RobotType` has it)."""
+
+    @property
+    def planar(self) -> bool:
+        """Whether its motions ignore z (a 2-D target gets z = 0)."""
+
+    @property
+    def skill_names(self) -> frozenset[str]:
+        """Its skills' names."""
+
+
 @contextmanager
-def scene_context(task: Task) -> Iterator[None]:
-    """Validate stage outputs against ``task`` (its embodiment, skills and object names) inside this block."""
-    robot = robots.get(task.embodiment)
+def scene_context(task: Task, robot: RobotFacts) -> Iterator[None]:
+    """Validate stage outputs against ``task`` (its robot's skills, its object names) inside this block;
+    ``robot`` is the task's robot type (``robotool.robots.get(task.embodiment)``)."""
     scene = _Scene(robot.planar, robot.skill_names, frozenset(task.object_names) | {"robot"})
     token = _SCENE.set(scene)
     try:

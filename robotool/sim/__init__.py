@@ -14,10 +14,12 @@ Modules, one job each:
 - :mod:`robotool.sim.lockstep` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
 """
 
-from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, default_backend, make_sim
-from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import Embodiment, QueryError, SkillController, SkillEnd, embodiment_for
-from robotool.sim.goals import GoalTracker, goal_tracker
+from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, default_backend
+from robotool.sim.backend_choice import make_sim
+from robotool.sim.build import build, embodiment_for
+from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import Embodiment, GoalTracker, QueryError, SkillController, SkillEnd
+from robotool.sim.goals import goal_tracker
 from robotool.sim.lockstep import run_programs, run_sessions, trusted_sessions
 
 __all__ = [

@@ -1,6 +1,6 @@
 """The batched-simulator protocol, its state view, per-world perturbations, and backend selection.
 
-Two backends implement :class:`BatchedSim` over the same :class:`~robotool.sim.build.Scene`:
+Two backends implement :class:`BatchedSim` over the same :class:`~robotool.sim.compiled_scene.Scene`:
 ``mujoco`` (C MuJoCo, one ``MjData`` and one ``MjModel`` copy per world, stepped on a thread pool;
 :mod:`robotool.sim.backend_mujoco`) and ``warp`` (mujoco_warp, one ``Data`` with ``nworld`` worlds and a
 captured graph for the substeps; :mod:`robotool.sim.backend_warp`). Controllers only use what is here.
@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 if TYPE_CHECKING:
-    from robotool.sim.build import Scene
+    from robotool.sim.compiled_scene import Scene
 
 BackendName = Literal["mujoco", "warp"]
 TOUCH_DISTANCE = 0.002  # m: bodies whose geoms are at most this far apart are touching
@@ -220,43 +220,6 @@ def touching_from_contacts(
     out[w, b1, b2] = True
     out[w, b2, b1] = True
     return out
-
-
-def make_sim(
-    scene: Scene,
-    nworld: int,
-    *,
-    backend: BackendName = "mujoco",
-    perturbation: Perturbation | None = None,
-    njmax: int | None = None,
-    nconmax: int | None = None,
-) -> BatchedSim:
-    """A batched simulator of ``nworld`` worlds on ``backend`` (``mujoco`` or ``warp``).
-
-    ``njmax``/``nconmax`` (constraint rows and contacts per world) default to the scene's sizes;
-    a world that needs more is marked failed.
-    """
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}; use one of {', '.join(BACKENDS)}")
-    cls = _backend_class(backend)
-    return cls(
-        scene,
-        nworld,
-        perturbation or Perturbation.none(scene, nworld),
-        njmax=njmax or scene.njmax,
-        nconmax=nconmax or scene.nconmax,
-    )
-
-
-def _backend_class(backend: BackendName) -> type[BatchedSim]:
-    """The backend's simulator class, imported when first asked for (Warp takes seconds to load)."""
-    if backend == "warp":
-        from robotool.sim.backend_warp import WarpSim
-
-        return WarpSim
-    from robotool.sim.backend_mujoco import MujocoSim
-
-    return MujocoSim
 
 
 @functools.cache

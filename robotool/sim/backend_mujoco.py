@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, geom_groups, weld_relpose
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 _LOG = logging.getLogger("robotool.sim")
 # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory by default; route them to

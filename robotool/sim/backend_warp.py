@@ -24,7 +24,7 @@ from robotool.sim.backend import (
     touching_from_contacts,
     weld_relpose,
 )
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 _BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data", "geom_pos")
 _OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}

@@ -16,16 +16,16 @@ The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from itertools import combinations
 
 import mujoco
 import numpy as np
 
-from robotool import geometry
+from robotool import geometry, robots
 from robotool.scene import SceneObject
 from robotool.sim.cloth import add_cloth
-from robotool.sim.embodiment import Embodiment, embodiment_for
+from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import Embodiment
 from robotool.task_model import Task
 
 TIMESTEP = 0.002  # s, physics step
@@ -45,40 +45,6 @@ DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
-
-@dataclass(frozen=True)
-class Scene:
-    """A compiled task: the model, its embodiment and the ids that map objects to bodies.
-
-    ``object_body[i]`` is the body of ``object_names[i]``; ``body_object[b]`` the object index of
-    body ``b`` (-1 for the world and the robot; a button's face maps to the button). ``grasp_local``
-    holds each object's graspable point in its body frame.
-    """
-
-    task: Task
-    model: mujoco.MjModel
-    embodiment: Embodiment
-    object_names: tuple[str, ...]
-    object_body: np.ndarray
-    body_object: np.ndarray
-    robot_body: np.ndarray
-    grasp_local: np.ndarray
-    control_substeps: int
-    nconmax: int
-    njmax: int
-
-    @property
-    def control_dt(self) -> float:
-        """Seconds between control ticks."""
-        return self.control_substeps * self.model.opt.timestep
-
-    def object_index(self, name: str) -> int:
-        """Index of a task object by name (KeyError listing the objects otherwise)."""
-        try:
-            return self.object_names.index(name)
-        except ValueError:
-            raise KeyError(f"no object named {name!r}; objects: {', '.join(self.object_names)}") from None
-
 
 def is_sheet(obj: SceneObject) -> bool:
     """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper): it cannot push
@@ -217,8 +183,13 @@ def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:
     return over and abs(obj.bottom - sheet.top) <= SHEET_RESTING
 
 
+def embodiment_for(task: Task) -> Embodiment:
+    """The simulator embodiment of ``task.robot.type`` (from the robot registry), with the task's limits."""
+    return robots.get(task.robot.type).embodiment(task.limits)
+
+
 def build(task: Task) -> Scene:
-    """Compile a task into a :class:`Scene` (model, embodiment, object/body tables, buffer sizes)."""
+    """Compile a task into a :class:`Scene` (model, object/body tables, buffer sizes)."""
     embodiment = embodiment_for(task)
     model = make_spec(task, embodiment).compile()
     names = tuple(o.name for o in task.objects)
@@ -240,6 +211,6 @@ def build(task: Task) -> Scene:
         grasp_local[i] = rot.T @ (np.asarray(obj.grasp_point) - np.asarray(obj.center))
     nconmax = max(32, 8 * model.ngeom)
     njmax = 4 * nconmax + 6 * model.neq + 2 * model.njnt
-    return Scene(task=task, model=model, embodiment=embodiment, object_names=names,
+    return Scene(task=task, model=model, object_names=names,
                  object_body=object_body, body_object=body_object, robot_body=robot_body,
                  grasp_local=grasp_local, control_substeps=embodiment.control_substeps, nconmax=nconmax, njmax=njmax)

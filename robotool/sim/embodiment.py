@@ -28,7 +28,7 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    a robot's own goal kinds are trackers in its package (``RobotType.goal_trackers``).
 
 All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, times seconds.
-:func:`embodiment_for` asks the robot registry (:mod:`robotool.robots`) for ``task.robot.type``'s embodiment.
+:func:`robotool.sim.build.embodiment_for` asks the robot registry for ``task.robot.type``'s embodiment.
 """
 
 from __future__ import annotations
@@ -37,8 +37,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
-
-from robotool import robots
 
 if TYPE_CHECKING:
     import mujoco
@@ -124,6 +122,11 @@ class Embodiment(Protocol):
         """A controller for every world of ``sim`` (built from the scene this embodiment made)."""
 
 
-def embodiment_for(task: Task) -> Embodiment:
-    """The embodiment for ``task.robot.type``, with the task's limits."""
-    return robots.get(task.robot.type).embodiment(task.limits)
+class GoalTracker(Protocol):
+    """Follows one goal in every world."""
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        """Observe the state of the ``active`` worlds after a control tick."""
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        """Named sub-conditions now, each (nworld,) bool."""

@@ -9,25 +9,15 @@ robot's own goal kinds (``RobotType.goal_trackers``) are trackers in its package
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol
 
 import numpy as np
 
 from robotool import robots
 from robotool.scene import PRESS_TRAVEL
 from robotool.sim.backend import BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import GoalTracker
 from robotool.sim.object_goals import LiftedGoal, LoweredGoal
-
-
-class GoalTracker(Protocol):
-    """Follows one goal in every world."""
-
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        """Observe the state of the ``active`` worlds after a control tick."""
-
-    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        """Named sub-conditions now, each (nworld,) bool."""
 
 
 class PressedGoal:

@@ -33,10 +33,19 @@ from robotool.program_session import (
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, make_sim
-from robotool.sim.build import Scene, build
-from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, controller_conditions, describe_error
-from robotool.sim.goals import GoalTracker, goal_tracker
+from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation
+from robotool.sim.backend_choice import make_sim
+from robotool.sim.build import build, embodiment_for
+from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import (
+    GoalTracker,
+    QueryError,
+    SkillController,
+    SkillEnd,
+    controller_conditions,
+    describe_error,
+)
+from robotool.sim.goals import goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
@@ -145,7 +154,7 @@ class _Run:
         self.robot = robots.get(scene.task.robot.type)
         self.kinds = {s.name: s.kind for s in self.robot.skills}
         self.box = scene_box(scene.task)
-        self.controller: SkillController = scene.embodiment.controller(sim)
+        self.controller: SkillController = embodiment_for(scene.task).controller(sim)
         self.magnets = Magnets(scene)
         self.sheets = Sheets(scene, sim.nworld)
         self.goal: GoalTracker = goal_tracker(scene)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 
 class Magnets:

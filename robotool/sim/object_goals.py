@@ -13,7 +13,7 @@ import numpy as np
 
 from robotool import geometry
 from robotool.sim.backend import BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 

@@ -15,7 +15,8 @@ import mujoco
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import SHEET_CARRIER_DROP, Scene, is_sheet, rests_on_sheet, sheet_carrier_name
+from robotool.sim.build import SHEET_CARRIER_DROP, is_sheet, rests_on_sheet, sheet_carrier_name
+from robotool.sim.compiled_scene import Scene
 
 MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it

@@ -19,10 +19,10 @@ from robotool.concepts import KeyConcept
 from robotool.robots import PictureSettings, RobotType
 from robotool.robots.skills import POSITION, QUERY_NAME, SkillSpec
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd
-from robotool.task_file import Problem
 from robotool.task_model import Task
+from robotool.task_problem import Problem
 
 PUCK_BODY = "robot_puck"
 PUCK_HEIGHT = 0.02  # m

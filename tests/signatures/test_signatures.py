@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from pydantic import ValidationError
 
-from robotool import tasks
+from robotool import robots, tasks
 from robotool.signatures import AnalyzedConcept, PlanStep, StepParameters, scene_context, validation_notes
 from robotool.signatures.models import parse_quantity
 
@@ -56,16 +56,16 @@ def test_concept_with_mixed_units_is_rejected() -> None:
 
 
 def test_two_number_targets_are_padded_for_the_quadruped_only() -> None:
-    with scene_context(QUADRUPED):
+    with scene_context(QUADRUPED, robots.get(QUADRUPED.embodiment)):
         step = StepParameters(step=1, object="sofa", target=["1.2 m", 0.5])
         assert step.target == [1.2, 0.5, 0.0]
         assert StepParameters(step=1, relative_to="sofa", offset=[0.1, 0]).offset == [0.1, 0.0, 0.0]
-    with scene_context(ARM), pytest.raises(ValidationError, match="three numbers"):
+    with scene_context(ARM, robots.get(ARM.embodiment)), pytest.raises(ValidationError, match="three numbers"):
         StepParameters(step=1, object="milk", target=[0.3, 0.0])
 
 
 def test_informational_names_are_dropped_with_a_note_but_acted_on_objects_must_exist() -> None:
-    with scene_context(QUADRUPED), validation_notes() as sink:
+    with scene_context(QUADRUPED, robots.get(QUADRUPED.embodiment)), validation_notes() as sink:
         step = PlanStep(skill="climb_to_position", objects=["gap", "sofa"], intent="climb")
         assert step.objects == ["sofa"] and "'gap'" in sink.notes[0]
         with pytest.raises(ValidationError, match="unknown object"):
@@ -81,7 +81,7 @@ def test_key_concepts_with_non_finite_numbers_are_rejected(value: object) -> Non
 
 
 def test_a_skill_written_as_a_call_names_the_skill() -> None:
-    with scene_context(ARM):
+    with scene_context(ARM, robots.get(ARM.embodiment)):
         assert PlanStep(skill=" move_to_position([0.1, 0, 0.2]) ", objects=[]).skill == "move_to_position"
         assert PlanStep(skill="open_gripper()").skill == "open_gripper"
         with pytest.raises(ValidationError, match="unknown skill"):

@@ -15,13 +15,12 @@ from robotool.robots.arm import arm_concepts, arm_description
 from robotool.robots.arm.arm_skills import ARM_SKILLS, ArmLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.rollout import SkillCall
-from robotool.task_file import Problem
 from robotool.task_model import Task
+from robotool.task_problem import Problem
 
 if TYPE_CHECKING:
-    from robotool.sim.build import Scene
-    from robotool.sim.embodiment import Embodiment
-    from robotool.sim.goals import GoalTracker
+    from robotool.sim.compiled_scene import Scene
+    from robotool.sim.embodiment import Embodiment, GoalTracker
 
 
 def _embodiment(limits: ArmLimits) -> Embodiment:
@@ -37,10 +36,9 @@ def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
 
 
 def _planner() -> SearchMacros:
-    from robotool.planner.search import Budget  # the planner loads on first use
-    from robotool.robots.arm.arm_macros import candidates
+    from robotool.robots.arm.arm_macros import candidates  # the planner loads on first use
 
-    return SearchMacros(candidates=candidates, budget=Budget(beam=8, rounds=4, seconds=60.0))
+    return SearchMacros(candidates=candidates, beam=8, rounds=4, seconds=60.0)
 
 
 def _check_robot(task: Task) -> list[Problem]:

@@ -26,7 +26,8 @@ import numpy as np
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, Scene, is_sheet
+from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, is_sheet
+from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, world_mask
 from robotool.task_model import Task
 

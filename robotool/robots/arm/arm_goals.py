@@ -6,7 +6,7 @@ import numpy as np
 
 from robotool.robots.arm.arm_controller import GRIPPER_BODY, graspable_points, held_objects
 from robotool.sim.backend import BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 
 class GraspedGoal:

@@ -22,9 +22,8 @@ from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.task_model import Task
 
 if TYPE_CHECKING:
-    from robotool.sim.build import Scene
-    from robotool.sim.embodiment import Embodiment
-    from robotool.sim.goals import GoalTracker
+    from robotool.sim.compiled_scene import Scene
+    from robotool.sim.embodiment import Embodiment, GoalTracker
 
 
 def _embodiment(limits: QuadrupedLimits) -> Embodiment:
@@ -40,10 +39,9 @@ def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
 
 
 def _planner() -> SearchMacros:
-    from robotool.planner.search import Budget  # the planner loads on first use
-    from robotool.robots.quadruped.quadruped_macros import candidates
+    from robotool.robots.quadruped.quadruped_macros import candidates  # the planner loads on first use
 
-    return SearchMacros(candidates=candidates, budget=Budget(beam=3, rounds=3, seconds=90.0))
+    return SearchMacros(candidates=candidates, beam=3, rounds=3, seconds=90.0)
 
 
 def _start_xy(task: Task) -> tuple[float, float]:

@@ -6,8 +6,8 @@ import numpy as np
 
 from robotool import geometry
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.task_file import Problem
 from robotool.task_model import Task
+from robotool.task_problem import Problem
 
 
 def check_robot(task: Task) -> list[Problem]:

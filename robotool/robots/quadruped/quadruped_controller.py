@@ -57,7 +57,7 @@ from robotool.robots.quadruped.terrain import (
     scan_paths,
 )
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
 from robotool.sim.object_goals import local_corners, world_corners
 from robotool.task_model import Task

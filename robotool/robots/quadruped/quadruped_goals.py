@@ -7,7 +7,7 @@ import numpy as np
 from robotool.robots.quadruped.body import BodyIds
 from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported
 from robotool.sim.backend import BatchState
-from robotool.sim.build import Scene
+from robotool.sim.compiled_scene import Scene
 
 
 class RobotOnGoal:

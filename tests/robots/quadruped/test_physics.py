@@ -14,8 +14,9 @@ from robotool.robots.quadruped.body import ROBOT_GROUP
 from robotool.robots.quadruped.support import feet
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim import lockstep as runner
-from robotool.sim.backend import make_sim
+from robotool.sim.backend_choice import make_sim
 from robotool.sim.backend_mujoco import MujocoSim
+from robotool.sim.build import embodiment_for
 from robotool.task_file import parse_task
 
 GRAVITY = 9.81
@@ -54,7 +55,7 @@ def walk_and_measure(task: Any, moves: list[tuple[str, tuple[float, ...]]], meas
     scene = sim.build(task)
     sim_ = make_sim(scene, 1)
     assert isinstance(sim_, MujocoSim)
-    controller = scene.embodiment.controller(sim_)
+    controller = embodiment_for(scene.task).controller(sim_)
     sim_.step(round(runner.SETTLE_TIME / scene.model.opt.timestep), np.ones(1, dtype=bool))
     ids = controller.ids
     out: dict[str, list] = {"load": [], "gap": [], "lift": []}
@@ -123,7 +124,7 @@ def test_a_robot_whose_centre_of_mass_leaves_its_support_falls_and_may_not_move_
     scene = sim.build(_sofas(gap_widening=0.2))
     sim_ = make_sim(scene, 1)
     assert isinstance(sim_, MujocoSim)
-    controller = scene.embodiment.controller(sim_)
+    controller = embodiment_for(scene.task).controller(sim_)
     data = sim_.datas[0]
     data.qpos[controller.ids.qpos[0]] = 0.85  # sofa_1 ends at x = 0.75
     mujoco.mj_forward(sim_.models[0], data)
