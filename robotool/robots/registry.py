@@ -153,10 +153,6 @@ class RobotType:
             raise SkillArgumentError(f"unknown skill {name!r} for the {self.name} (skills: {known})")
         return check_arguments(spec, args, scene)
 
-    def limits_of(self, overrides: Mapping[str, Any]) -> BaseModel:
-        """The limits with a task's overrides applied (pydantic's ValidationError for bad ones)."""
-        return self.limits(**overrides)
-
 
 class UnknownRobotError(RobotoolError, ValueError):
     """A robot type that is not registered; the message lists the registered ones."""
