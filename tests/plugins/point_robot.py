@@ -20,7 +20,7 @@ from robotool.robots import PictureSettings, RobotType
 from robotool.robots.skills import POSITION, QUERY_NAME, SkillSpec
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.embodiment import QueryError, SkillEnd
+from robotool.sim.embodiment import QueryError, SkillEnd, world_mask
 from robotool.task_model import Task
 from robotool.task_problem import Problem
 
@@ -95,10 +95,13 @@ class PointController:
             self.deadline[int(w)] = float(state.time[w]) + distance / self.limits.speed + 2.0
         return []
 
-    def tick(self, state: BatchState) -> list[SkillEnd]:
+    def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         ends = []
         step = self.limits.speed * self.sim.scene.control_dt
+        ticked = world_mask(self.sim.nworld, worlds)
         for w, target in list(self.target.items()):
+            if not ticked[w]:
+                continue
             here = state.xpos[w, self.body, :2]
             if np.linalg.norm(here - target) <= ARRIVED:
                 ends.append(SkillEnd(world=w, outcome="done"))
