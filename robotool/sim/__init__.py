@@ -4,10 +4,13 @@ Modules, one job each:
 
 - :mod:`robotool.sim.embodiment` — **the embodiment-controller interface** that every robot implements
   (model building, skill start/tick/query over batched state, found through the robot registry by
-  ``task.robot.type``); each robot's controller lives in its package, ``robotool/robots/<name>/controller.py``.
-- :mod:`robotool.sim.build` — ``build(task) -> Scene`` (the ``MjModel`` made through ``MjSpec``).
-- :mod:`robotool.sim.backend` — the ``BatchedSim`` protocol, ``BatchState``, perturbations, ``make_sim``;
-  backends in :mod:`~robotool.sim.backend_mujoco` (C, threads) and :mod:`~robotool.sim.backend_warp`.
+  ``task.robot.type``), and goal trackers; each robot's controller lives in its package,
+  ``robotool/robots/<name>/<name>_controller.py``.
+- :mod:`robotool.sim.build` — ``build(task) -> Scene`` (the ``MjModel`` made through ``MjSpec``, the robot added
+  by ``embodiment_for(task)``); :mod:`robotool.sim.compiled_scene` — ``Scene``, the model and its id tables.
+- :mod:`robotool.sim.backend` — the ``BatchedSim`` protocol, ``BatchState``, perturbations;
+  :mod:`robotool.sim.backend_choice` — ``make_sim``; backends in :mod:`~robotool.sim.backend_mujoco` (C, threads)
+  and :mod:`~robotool.sim.backend_warp`.
 - :mod:`robotool.sim.magnets` — magnetic objects weld on contact.
 - :mod:`robotool.sim.goals` — goal sub-conditions; :mod:`robotool.sim.object_goals` — lifted and lowered objects.
 - :mod:`robotool.sim.cloth` — cloth as hinged links.

@@ -98,7 +98,7 @@ def run_sessions(
 ) -> list[Rollout]:
     """Run one program session per world and return one :class:`~robotool.rollout.Rollout` each.
 
-    ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.build.Scene` (to reuse
+    ``task`` may be a :class:`Task` or an already built :class:`~robotool.sim.compiled_scene.Scene` (to reuse
     the model). World ``w`` is perturbed from ``seed`` (friction, mass, small pose noise) unless
     ``perturb`` is False; with ``world_seeds``, world ``w`` is perturbed from ``world_seeds[w]`` alone,
     so candidates compared in one batch meet the same worlds. ``njmax``/``nconmax`` override the per-world
