@@ -23,7 +23,6 @@ PLUG_INS = "robotool.robots."
 
 SHARED_MODULE_NAMES: dict[str, str] = {
     "planner": "signatures/planner.py is the paper's Planner stage; the planner package is the LM-free search planner",
-    "embodiment": "embodiments.py (limits, skills) and sim/embodiment.py (controllers) become one package per robot",
 }
 """Module or package names (singular and plural alike) two places may still share, each with why; a name that
 no longer collides must leave."""
@@ -38,9 +37,7 @@ KNOWN_CYCLES: list[frozenset[str]] = []
 """Import cycles still to be removed; one that is gone must leave."""
 
 
-PLANNER_INTO_SIMULATOR: set[tuple[str, str]] = {
-    ("robotool.planner.layout", "robotool.sim.quadruped_push"),  # the push geometry both share, to move out of sim
-}
+PLANNER_INTO_SIMULATOR: set[tuple[str, str]] = set()
 """Planner modules that still import a simulator module; one that no longer does must leave."""
 
 

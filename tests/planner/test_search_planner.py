@@ -123,7 +123,9 @@ def test_solves_generated_staircases_that_once_failed(family: str, seed: int) ->
 
 def test_a_predicted_push_problem_is_a_typed_record_rendered_for_people() -> None:
     import numpy as np
-    from robotool.planner.layout import Layout, push_problem
+
+    from robotool.planner.layout import Layout
+    from robotool.robots.quadruped.predict import push_problem
 
     task = tasks.load("sofa_climbing")
     layout = Layout(task)
