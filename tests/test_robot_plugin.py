@@ -9,6 +9,7 @@ import re
 import subprocess
 import sys
 from collections.abc import Iterator
+from importlib import metadata
 from pathlib import Path
 
 import pytest
@@ -155,3 +156,16 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
         if named.search(line)
     ]
     assert not found, "\n".join(found)
+
+
+def test_an_entry_point_registers_its_robot(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An installed package declares ``[project.entry-points."robotool.robots"] point = "point_robot:ROBOT"``."""
+    monkeypatch.syspath_prepend(str(PLUGINS))
+    monkeypatch.delenv(robots.MODULES_VARIABLE, raising=False)
+    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
+    monkeypatch.setattr(registry, "_LOADED", set())
+    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
+    point = metadata.EntryPoint(name="point", value="point_robot:ROBOT", group=robots.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(registry.metadata, "entry_points", lambda group: [point] if group == point.group else [])
+    assert robots.names() == ("arm", "point", "quadruped")
+    assert robots.get("point").skill_names == {"get_position", "move_to"}
