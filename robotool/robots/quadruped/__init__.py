@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING
 
-from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description
+from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description, terrain
 from robotool.robots.quadruped.quadruped_skills import QUADRUPED_SKILLS, QuadrupedLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.task_model import Task
@@ -71,7 +71,7 @@ ROBOT = RobotType(
     start_xy=_start_xy,
     footprint=_footprint,
     planner=_planner,
-    placement_measures=frozenset({"step", "gap", "drop"}),
+    placement_measures=frozenset(terrain.KINDS),  # a refused step, gap or drop measures its kind
     # It walks along its scene: a three-quarter view from the side shows the heights it climbs.
     view=PictureSettings(turn=-20.0, elevation=-28.0, floor_square=0.5),
 )
