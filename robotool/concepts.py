@@ -1,8 +1,9 @@
 """Ground-truth key concepts: the quantities that decide whether a task needs a tool.
 
 They are computed from the scene's geometry and the robot's limits alone (never from a task's name or category),
-by the robot's own rules (``RobotType.key_concepts``, in ``robotool/robots/<name>/concepts.py``), and grade the
-Analyzer stage. Here: the typed record, the dispatch, and the scene geometry that several robots' rules share.
+by the robot's own rules (``RobotType.key_concepts``, in ``robotool/robots/<name>/<name>_concepts.py``), and
+grade the Analyzer stage. Here: the dispatch, and the scene geometry that several robots' rules share; the typed
+record is :class:`robotool.key_concept.KeyConcept`.
 """
 
 from __future__ import annotations
