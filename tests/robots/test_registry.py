@@ -1,5 +1,6 @@
-"""Robots are plug-ins: a third robot from the test suite (tests/plugins/point_robot.py) registers through the
-``ROBOTOOL_ROBOTS`` variable and runs a task through ``robotool run``, without any change to the package."""
+"""Robots are plug-ins: a third robot from the test suite (tests/fixtures/point_robot.py) registers through the
+``ROBOTOOL_ROBOTS`` variable or an entry point and runs a task through ``robotool run``, without any change to the
+package; the registry's errors; no module outside a robot's package names a robot."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from importlib import metadata
 from pathlib import Path
 
 import pytest
+from fixtures.paths import FIXTURES, REPO
 
 from robotool import robots
 from robotool.cli import main
@@ -20,7 +22,8 @@ from robotool.planner.solve import NoPlannerError, solve
 from robotool.robots import limits_table, registry
 from robotool.task_file import TaskFileError, load_task, parse_task
 
-PLUGINS = Path(__file__).parent / "plugins"
+PLUGIN = "fixtures.point_robot"
+"""The point robot's module, as a user names it in ROBOTOOL_ROBOTS (tests/ is on the path)."""
 TASK = """\
 format: 1
 name: puck_to_pad
@@ -44,9 +47,8 @@ SHORT_OF_PAD = "move_to([0.3, -0.2])\n"
 
 @pytest.fixture
 def point_robot(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    """The point robot's module on the path and named in ROBOTOOL_ROBOTS; the registry restored afterwards."""
-    monkeypatch.syspath_prepend(str(PLUGINS))
-    monkeypatch.setenv(robots.MODULES_VARIABLE, "point_robot")
+    """The point robot's module named in ROBOTOOL_ROBOTS; the registry restored afterwards."""
+    monkeypatch.setenv(robots.MODULES_VARIABLE, PLUGIN)
     monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
     monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
     monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
@@ -102,9 +104,8 @@ def test_a_plugin_robot_is_described_and_checked_from_its_record(point_robot: No
 def test_a_plugin_robot_works_in_a_fresh_process(task_file: Path, tmp_path: Path) -> None:
     program = tmp_path / "program.py"
     program.write_text(ONTO_PAD)
-    root = Path(__file__).parent.parent
-    env = {**os.environ, robots.MODULES_VARIABLE: "point_robot", "COLUMNS": "200",
-           "PYTHONPATH": os.pathsep.join([str(root), str(PLUGINS)])}
+    env = {**os.environ, robots.MODULES_VARIABLE: PLUGIN, "COLUMNS": "200",
+           "PYTHONPATH": os.pathsep.join([str(REPO), str(FIXTURES.parent)])}
     done = subprocess.run([sys.executable, "-m", "robotool", "run", str(task_file), str(program), "--worlds", "1",
                            "--backend", "mujoco"], env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stdout + done.stderr
@@ -112,7 +113,7 @@ def test_a_plugin_robot_works_in_a_fresh_process(task_file: Path, tmp_path: Path
 
 
 def test_an_unknown_robot_type_lists_the_registered_ones() -> None:
-    data = load_task(Path(__file__).parent.parent / "robotool/tasks/data/sofa_climbing.yaml").model_dump(mode="json")
+    data = load_task(REPO / "robotool/tasks/data/sofa_climbing.yaml").model_dump(mode="json")
     data["robot"]["type"] = "quadrupd"
     with pytest.raises(TaskFileError) as caught:
         parse_task(data)
@@ -146,7 +147,7 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
     ``__init__`` registers the built-in ones."""
     package = Path(robots.__file__).parent.parent
     allowed = {package / "__init__.py"}
-    named = re.compile(r"\b(quadruped|arm)s?\b", re.IGNORECASE)
+    named = re.compile(r"(?<![/.])\b(quadruped|arm)s?\b", re.IGNORECASE)  # a path such as tests/robots/arm/ is no name
     found = [
         f"{path.relative_to(package)}:{number}: {line.strip()}"
         for path in sorted(package.rglob("*.py"))
@@ -159,13 +160,12 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
 
 
 def test_an_entry_point_registers_its_robot(monkeypatch: pytest.MonkeyPatch) -> None:
-    """An installed package declares ``[project.entry-points."robotool.robots"] point = "point_robot:ROBOT"``."""
-    monkeypatch.syspath_prepend(str(PLUGINS))
+    """An installed package declares ``[project.entry-points."robotool.robots"] point = "<module>:ROBOT"``."""
     monkeypatch.delenv(robots.MODULES_VARIABLE, raising=False)
     monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
     monkeypatch.setattr(registry, "_LOADED", set())
     monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
-    point = metadata.EntryPoint(name="point", value="point_robot:ROBOT", group=robots.ENTRY_POINT_GROUP)
+    point = metadata.EntryPoint(name="point", value=f"{PLUGIN}:ROBOT", group=robots.ENTRY_POINT_GROUP)
     monkeypatch.setattr(registry.metadata, "entry_points", lambda group: [point] if group == point.group else [])
     assert robots.names() == ("arm", "point", "quadruped")
     assert robots.get("point").skill_names == {"get_position", "move_to"}
