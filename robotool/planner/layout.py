@@ -24,7 +24,9 @@ CONTACT = 0.02  # m: boxes closer than this touch
 SAMPLE = 0.02  # m between terrain samples along a walk
 FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
 SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
-BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks, is in the way
+BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
+# is in the way (the torso's underside rides 0.05 m above the feet)
+BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
 PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
 PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep tolerates
 
@@ -129,9 +131,9 @@ def walk_violation(
 ) -> str | None:
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
-    The feet's paths are checked as the simulator checks them (:func:`robotool.terrain.check_walk`). Just outside
-    the body's flanks (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet
-    are on, or the body would run into it.
+    The feet's paths are checked as the simulator checks them (:func:`robotool.terrain.check_walk`). Between the
+    feet's paths (under the torso) and just outside the body's flanks (on a slanted move, the band its corners sweep)
+    nothing may stand higher than what its feet are on, or the body would run into it.
     """
     skip = list(exclude)
     goals = [np.asarray(g, dtype=float) for g in waypoints]
@@ -151,9 +153,16 @@ def walk_violation(
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
         points = here - u * extent + s[:, None] * u
         width, flank = float(np.abs(lateral) @ half) - FOOT_INSET, float(np.abs(lateral) @ half) + SIDE_MARGIN
-        across = np.stack([points + k * lateral for k in (-width, 0.0, width, -flank, flank)])
-        heights = layout.heights(across.reshape(-1, 2), skip).reshape(5, -1)
-        if (rub := heights[3:].max(axis=0) - heights[:3].max(axis=0)).max() > BRUSH:
+        offsets = (-width, width, *np.linspace(-width, width, BELLY_LINES + 2)[1:-1], -flank, flank)
+        across = np.stack([points + k * lateral for k in offsets])
+        heights = layout.heights(across.reshape(-1, 2), skip).reshape(len(offsets), -1)
+        feet, under, sides = heights[:2].max(axis=0), heights[2:-2].max(axis=0), heights[-2:].max(axis=0)
+        if (rise := under - feet).max() > BRUSH:
+            return (
+                f"the body runs into something {float(rise.max()):.2f} m higher than its feet, between them, on the "
+                f"way to [{goal[0]:.2f}, {goal[1]:.2f}]"
+            )
+        if (rub := sides - np.maximum(feet, under)).max() > BRUSH:
             return (
                 f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
                 f"[{goal[0]:.2f}, {goal[1]:.2f}]"

@@ -28,7 +28,8 @@ OVERLAP = 0.15  # m a bridge rests on each side of a gap
 CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
 SIDE = 0.25  # m the robot keeps from a board it walks beside
 FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
-MAX_STEPS = 2  # objects a staircase may use below the target
+MAX_STEPS = 3  # objects a staircase may use below the target
+Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
 
 
 @dataclass
@@ -222,62 +223,76 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
 
 def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
     """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
-    nearest the target first; placements whose steps cannot carry the feet are left out."""
-    options: list[list[tuple[np.ndarray, np.ndarray | None]]] = []  # per link: (direction to next, new centre)
-    layout = quad.layout
-    for k in range(len(chain) - 2, -1, -1):
+    each placed against where the next link will stand, nearest the target first; placements that would overlap
+    something, or whose steps cannot carry the feet, are left out. A link placed against a link that is itself
+    pushed into place continues that link's climb in a straight line."""
+
+    def place(k: int, layout: Layout, combo: list[Placement]) -> Iterator[list[Placement]]:
+        if k < 0:
+            yield combo
+            return
         obj, nxt = chain[k], chain[k + 1]
         box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
         if box.touches(nxt_box):
-            direction = _axis_direction(nxt_box.center - box.center)
-            options.insert(0, [(direction, None)])
-            continue
+            yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo])
+            return
         if not quad.pushable(obj, quad.floor):
             return
-        sides = []
-        others = [
-            b
-            for o in quad.task.objects
-            if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
-            for b in [layout.box(o.name)]
-        ]
-        for direction in DIRECTIONS:
-            axis = int(np.argmax(np.abs(direction)))
-            lat = 1 - axis
-            slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
-            along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
-            offsets = [0.0, slide, -slide]
-            for other in others:  # flush against something else that stands by the same face
-                if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
-                    offsets += [
-                        float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
-                        float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
-                    ]
-            reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
-            for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
-                xy = nxt_box.center.copy()
-                xy[axis] = along
-                xy[lat] += offset
-                sides.append((direction, xy))
-        options.insert(0, sides)
-    for combo in itertools.product(*options):
-        route = _chain_route(quad, chain, list(combo))
-        if route is not None:
-            yield route
+        straight = [combo[0][0]] if combo and combo[0][1] is not None else list(DIRECTIONS)
+        for direction, xy in _sides(quad, layout, obj, nxt, straight):
+            if layout.collides(box.moved_to(xy)) is None:
+                yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo])
+
+    routes = [r for combo in place(len(chain) - 2, quad.layout, []) if (r := _chain_route(quad, chain, combo))]
+    yield from sorted(routes, key=lambda r: _pushed_distance(quad.layout, r))
 
 
-def _chain_route(
-    quad: Quadruped, chain: list[SceneObject], combo: list[tuple[np.ndarray, np.ndarray | None]]
-) -> Route | None:
+def _pushed_distance(layout: Layout, route: Route) -> float:
+    """How far a route's pushes move objects in all."""
+    total = 0.0
+    for name, xy, _ in route.pushes:
+        total += float(np.linalg.norm(xy - layout.box(name).center))
+        layout = layout.with_moved(name, xy)
+    return total
+
+
+def _sides(
+    quad: Quadruped, layout: Layout, obj: SceneObject, nxt: SceneObject, directions: list[np.ndarray]
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction): centred,
+    flush with either end, or flush with something else standing by the same face, as long as the feet can stand
+    across both."""
+    box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
+    others = [
+        layout.box(o.name) for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
+    ]
+    for direction in directions:
+        axis = int(np.argmax(np.abs(direction)))
+        lat = 1 - axis
+        slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
+        along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+        offsets = [0.0, slide, -slide]
+        for other in others:  # flush against something else that stands by the same face
+            if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
+                offsets += [
+                    float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
+                    float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
+                ]
+        reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
+        for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
+            xy = nxt_box.center.copy()
+            xy[axis] = along
+            xy[lat] += offset
+            yield direction, xy
+
+
+def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placement]) -> Route | None:
     route = Route()
     layout = quad.layout
     for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
         d, xy = combo[k]
         obj = chain[k]
         if xy is not None:
-            moved = layout.box(obj.name).moved_to(xy)
-            if layout.collides(moved) is not None:
-                return None
             lined = _lined_up(layout.box(obj.name).center, xy, d)
             if lined is not None:
                 route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
