@@ -17,8 +17,9 @@ import numpy as np
 from robotool.concepts import start_surface, surface_under
 from robotool.embodiments import QuadrupedLimits
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.planner.layout import Box, Layout, detour, push_problem, push_staging, walk_violation
+from robotool.planner.layout import Box, Layout, detour, push_problem, push_route, push_staging, walk_violation
 from robotool.scene import SceneObject
+from robotool.sim.quadruped_push import legs
 from robotool.task_model import Task
 
 LEVEL = 0.04  # m: supports closer in height than this are the same surface
@@ -397,6 +398,26 @@ def _axis_direction(v: np.ndarray) -> np.ndarray:
 # --- writing routes into programs ---------------------------------------------------------------------
 
 
+def _push_plans(layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float) -> Iterator[
+    list[np.ndarray]
+]:
+    """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
+    along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
+    (:func:`robotool.planner.layout.push_route`)."""
+    center = layout.box(name).center
+    yield [xy]
+    parts = legs(center, xy)
+    if len(parts) < 2:
+        return
+    for first in parts:
+        corner = center.copy()
+        corner[first.axis] = first.target
+        yield [corner, xy]
+    around = push_route(layout, name, xy, limits, floor)
+    if around is not None and len(around) > 2:
+        yield around
+
+
 class Writer:
     """Writes pushes and walks into a program, querying positions when they run."""
 
@@ -416,31 +437,60 @@ class Writer:
         return self.refs[name]
 
     def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        """Push ``name`` to ``xy``; when the push skill's own way to where it lines up is predicted blocked, walk
-        there first around what stands in the way."""
-        limits = self.quad.limits
-        problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
-        staging = push_staging(self.layout, name, xy, limits, self.level) if problem else None
-        if problem and problem.kind == "approach" and staging is not None:
-            path = detour(self.layout, self.here, staging, limits)
-            if walk_violation(self.layout, self.here, path, limits) is None:
-                for via in path:
-                    self.walk(via, self.surface, f"walk to where the push of {name} lines up")
-                problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
-        ref = self.position(name)
-        start = self.layout.box(name).center
-        self.prog.motion(
-            "push_to_position",
-            obj=name,
-            point=Point.at(ref, (*(xy - start), 0.0)),
-            intent=f"push {name} {why}",
-            explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]",
-        )
-        self.here = end
-        self.doubt(str(problem) if problem else None)
-        self.layout = self.layout.with_moved(name, xy)
-        self.refs.pop(name, None)
+        """Push ``name`` to ``xy``: in one skill call (the skill pushes along the shorter axis first) or, when that is
+        predicted to fail (the object would run into something, or nowhere clear to stand), one axis at a time in
+        either order, the first way predicted fine; before each push whose own way to where the robot lines up is
+        predicted blocked, the robot walks there around what stands in the way."""
+        xy = np.asarray(xy, dtype=float)
+        predicted = None
+        for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level):
+            found = self._predict_pushes(name, plan)
+            predicted = predicted or found
+            if found[1] is None:
+                predicted = found
+                break
+        assert predicted is not None
+        steps, problem = predicted
+        for path, target, end in steps:
+            for via in path:
+                self.walk(via, self.surface, f"walk to where the push of {name} lines up")
+            ref = self.position(name)
+            start = self.layout.box(name).center
+            self.prog.motion(
+                "push_to_position",
+                obj=name,
+                point=Point.at(ref, (*(target - start), 0.0)),
+                intent=f"push {name} {why}",
+                explanation=f"centre to [{target[0]:.3f}, {target[1]:.3f}]",
+            )
+            self.here = end
+            self.layout = self.layout.with_moved(name, target)
+            self.refs.pop(name, None)
+        self.doubt(problem)
         self.prog.use(name)
+
+    def _predict_pushes(
+        self, name: str, targets: list[np.ndarray]
+    ) -> tuple[list[tuple[list[np.ndarray], np.ndarray, np.ndarray]], str | None]:
+        """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is: for each, the walk
+        to where it lines up when the skill's own way there is blocked (else none), the target and where the robot
+        ends; and the first problem predicted."""
+        layout, here, limits = self.layout, self.here, self.quad.limits
+        steps: list[tuple[list[np.ndarray], np.ndarray, np.ndarray]] = []
+        first = None
+        for xy in targets:
+            problem, end = push_problem(layout, name, xy, limits, self.level, here)
+            path: list[np.ndarray] = []
+            staging = push_staging(layout, name, xy, limits, self.level) if problem else None
+            if problem and problem.kind == "approach" and staging is not None:
+                way = detour(layout, here, staging, limits)
+                if walk_violation(layout, here, way, limits) is None:
+                    path = way
+                    problem, end = push_problem(layout, name, xy, limits, self.level, staging)
+            steps.append((path, xy, end))
+            first = first or (str(problem) if problem else None)
+            layout, here = layout.with_moved(name, xy), end
+        return steps, first
 
     def doubt(self, problem: str | None) -> None:
         """Keep the first predicted problem as the program's doubt."""
