@@ -21,6 +21,7 @@ from robotool.planner.layout import Box, Layout, detour, push_problem, push_rout
 from robotool.scene import SceneObject
 from robotool.sim.quadruped_push import legs
 from robotool.task_model import Task
+from robotool.terrain import foot_offsets
 
 LEVEL = 0.04  # m: supports closer in height than this are the same surface
 APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
@@ -654,6 +655,9 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
                 w.route(route)
                 behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
+                feet = w.layout.heights(behind + foot_offsets(quad.limits), exclude=[target.name])
+                if np.any(np.abs(feet - support.top) > LEVEL / 2):
+                    w.doubt(f"no room for the feet on {support_name} behind {target.name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
                 prog.motion(
