@@ -32,6 +32,7 @@ SIDE = 0.25  # m the robot keeps from a board it walks beside
 FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
 MAX_STEPS = 3  # objects a staircase may use below the target
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
+PushStep = tuple[list[np.ndarray], np.ndarray, np.ndarray]  # walk to where a push lines up, its target, where it ends
 
 
 @dataclass
@@ -399,9 +400,9 @@ def _axis_direction(v: np.ndarray) -> np.ndarray:
 # --- writing routes into programs ---------------------------------------------------------------------
 
 
-def _push_plans(layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float) -> Iterator[
-    list[np.ndarray]
-]:
+def _push_plans(
+    layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float
+) -> Iterator[list[np.ndarray]]:
     """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
     along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
     (:func:`robotool.planner.layout.push_route`)."""
@@ -438,10 +439,10 @@ class Writer:
         return self.refs[name]
 
     def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        """Push ``name`` to ``xy``: in one skill call (the skill pushes along the shorter axis first) or, when that is
-        predicted to fail (the object would run into something, or nowhere clear to stand), one axis at a time in
-        either order, the first way predicted fine; before each push whose own way to where the robot lines up is
-        predicted blocked, the robot walks there around what stands in the way."""
+        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine (else the straight way, its
+        problem kept as the program's doubt): in one skill call, or one axis at a time, or routed around what stands
+        in the way; before each push whose own way to where the robot lines up is predicted blocked, the robot walks
+        there around what stands in the way."""
         xy = np.asarray(xy, dtype=float)
         predicted = None
         for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level):
@@ -470,14 +471,12 @@ class Writer:
         self.doubt(problem)
         self.prog.use(name)
 
-    def _predict_pushes(
-        self, name: str, targets: list[np.ndarray]
-    ) -> tuple[list[tuple[list[np.ndarray], np.ndarray, np.ndarray]], str | None]:
+    def _predict_pushes(self, name: str, targets: list[np.ndarray]) -> tuple[list[PushStep], str | None]:
         """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is: for each, the walk
         to where it lines up when the skill's own way there is blocked (else none), the target and where the robot
         ends; and the first problem predicted."""
         layout, here, limits = self.layout, self.here, self.quad.limits
-        steps: list[tuple[list[np.ndarray], np.ndarray, np.ndarray]] = []
+        steps: list[PushStep] = []
         first = None
         for xy in targets:
             problem, end = push_problem(layout, name, xy, limits, self.level, here)
