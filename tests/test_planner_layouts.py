@@ -1,17 +1,20 @@
 """The search planner on layouts it was not built from (task fixtures under tests/fixtures/layouts/): staircases of
 two and three pushed boxes approached from -x and +y, a gap crossed toward -x, levers reflected and turned along y.
 
-Each is solved with a verified success, and a tool-free attempt fails in simulation."""
+Each is solved with a verified success, and a tool-free attempt fails in simulation. Also the layout predictions
+those need: a walk over a box between the feet, a push routed around a wall."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from robotool import tasks
 from robotool.planner import solve
-from robotool.scene import Task
+from robotool.planner.layout import Box, Layout, push_route, walk_violation
+from robotool.scene import Task, parse_task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 LAYOUTS = Path(__file__).parent / "fixtures" / "layouts"
@@ -56,3 +59,38 @@ def test_unseen_layout_is_not_solved_without_a_tool(name: str) -> None:
     (rollouts,) = run_codes(task, [code], worlds=2, seed=0)
     assert rollouts and not any(r.success for r in rollouts)
     assert failure_reason(rollouts)
+
+
+def test_a_walk_over_a_box_between_the_feet_is_predicted_to_run_into_it() -> None:
+    """The feet pass either side of a 0.24 m box narrower than they are apart; the torso, 0.05 m above the feet,
+    would run into it (the walk would shove it along)."""
+    task = _load("staircase_three")
+    start, goal = np.array([0.2, -0.6]), np.array([0.2, -1.9])  # straight over box_b, centred
+    problem = walk_violation(Layout(task), start, [goal], task.limits)
+    assert problem is not None and "runs into" in problem
+    assert walk_violation(Layout(task), start, [np.array([-0.5, -0.6])], task.limits) is None
+
+
+def test_a_push_is_routed_around_what_stands_in_its_way() -> None:
+    """box_a must reach the far side of a fixed wall: the route goes round the wall's end in axis-aligned legs, and
+    neither the box nor the robot behind it meets the wall on any leg."""
+    task = parse_task({
+        "format": 1, "name": "push_around", "instruction": "Stand on the block.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
+        "objects": [
+            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
+            {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False},
+            {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False},
+        ],
+        "goal": {"robot_on": "block"},
+    })
+    layout, goal = Layout(task), np.array([2.0, 0.0])
+    route = push_route(layout, "box_a", goal, task.limits, 0.0)
+    assert route is not None and len(route) >= 3 and np.allclose(route[-1], goal)
+    box, here = layout.box("box_a"), layout.box("box_a").center
+    wall = layout.box("wall")
+    for target in route:
+        assert np.sum(np.abs(target - here) > 1e-9) == 1  # one axis per leg
+        swept = Box("box_a", np.minimum(here, target) - box.half, np.maximum(here, target) + box.half, 0.0, 0.2)
+        assert swept.overlap(wall) < 0
+        here = target
