@@ -165,7 +165,7 @@ def draw_layout(rng: np.random.Generator, arm: bool) -> RigidPlacement:
     return RigidPlacement(mirror=mirror, turns=turns, shift=shift)  # type: ignore[arg-type]
 
 
-def board_width(layout: Layout, width: float) -> float:
+def board_width(layout: RigidPlacement, width: float) -> float:
     """The width of a board the quadruped walks along (along the template's x): ``width`` as in the template, or
     :data:`SIDEWAYS_BOARD_WIDTH` when the layout turns the scene a quarter. The robot never turns, so it then walks
     along the board flank first, its feet as far apart across the board as its body is long."""

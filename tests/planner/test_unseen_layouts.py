@@ -6,18 +6,18 @@ those need: a walk over a box between the feet, a push routed around a wall."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from fixtures.paths import FIXTURES
 
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout, push_route, walk_violation
-from robotool.scene import Task, parse_task
+from robotool.task_file import parse_task
+from robotool.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
-LAYOUTS = Path(__file__).parent / "fixtures" / "layouts"
+LAYOUTS = FIXTURES / "layouts"
 NAMES = sorted(p.stem for p in LAYOUTS.glob("*.yaml"))
 
 
