@@ -17,9 +17,17 @@ import numpy as np
 from robotool.concepts import start_surface, surface_under
 from robotool.embodiments import QuadrupedLimits
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.planner.layout import Box, Layout, detour, push_problem, push_route, push_staging, walk_violation
+from robotool.planner.layout import (
+    Box,
+    Layout,
+    detour,
+    legs,
+    push_problem,
+    push_route,
+    push_staging,
+    walk_violation,
+)
 from robotool.scene import SceneObject
-from robotool.sim.quadruped_push import legs
 from robotool.task_model import Task
 from robotool.terrain import foot_offsets
 
