@@ -8,6 +8,7 @@ the median and max planning time in seconds.
     python benchmarks/planner.py                                   # seeds 1000-1099, every family, built-ins
     python benchmarks/planner.py --seeds 1000-1019 --families milk_reaching can_grasping --no-builtins
     python benchmarks/planner.py --no-repair                       # without planner repair
+    python benchmarks/planner.py --families                        # the built-in tasks only
 """
 
 from __future__ import annotations
@@ -77,7 +78,8 @@ def record(row: Row, label: str, task: Task, solvable: bool, needs_tool: bool, w
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", default="1000-1099", help="inclusive range, e.g. 1000-1019")
-    parser.add_argument("--families", nargs="*", default=None, help="families to run (default: all)")
+    parser.add_argument("--families", nargs="*", default=None,
+                        help="families to run (default: all; none given: only the built-in tasks)")
     parser.add_argument("--no-builtins", action="store_true", help="skip the built-in tasks")
     parser.add_argument("--worlds", type=int, default=3, help="perturbed worlds per candidate")
     parser.add_argument("--verbose", action="store_true", help="print every unsolved solvable instance")
@@ -86,7 +88,7 @@ def main() -> None:
     first, _, last = args.seeds.partition("-")
     seeds = range(int(first), int(last or first) + 1)
     rows = []
-    for family in args.families or families():
+    for family in families() if args.families is None else args.families:
         row = Row(family)
         for seed in seeds:
             instance = generate(family, seed)

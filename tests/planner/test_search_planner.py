@@ -136,3 +136,11 @@ def test_a_predicted_push_problem_is_a_typed_record_rendered_for_people() -> Non
     approach, _ = push_problem(layout, "box_1", np.array([1.0, 1.0]), task.limits, 0.0, here=behind_sofa)
     assert approach is not None and approach.kind == "approach" and approach.walk
     assert str(approach) == f"the way to push box_1: {approach.walk}"
+
+
+def test_solves_a_lever_turned_a_quarter() -> None:
+    """Regression: in a cube_lifting scene turned a quarter the robot walks along the board flank first; the board
+    used to be narrower than its feet are apart, and every program fell off it."""
+    instance = tasks.generate("cube_lifting", 1003)
+    solution = solve(instance.task, worlds=2)
+    assert solution.success_rate == 1.0, solution.candidates[0].failure if solution.candidates else solution.notes

@@ -129,3 +129,21 @@ def test_quarter_turn_swaps_sizes() -> None:
     turned = RigidPlacement(turns=1, shift=(0.5, 0.0)).place(box)
     assert turned.size == (0.9, 1.5, 0.34) and turned.rpy == (0.0, 0.0, 0.0)
     assert turned.center == (0.5, 1.0, 0.17)
+
+
+@pytest.mark.parametrize(("family", "board"), [("cube_lifting", "surfboard"), ("sofa_traversing", "surfboard")])
+def test_boards_the_robot_walks_along_carry_its_feet_in_any_turn(family: str, board: str) -> None:
+    """The robot never turns: along a board lying along y it walks flank first, its feet as far apart across the
+    board as its body is long, so the board must be wider than that (a 0.55 m lever in a turned scene was not)."""
+    turned = 0
+    for seed in SEEDS:
+        task = _instance(family, seed).task
+        if board not in task.object_names:
+            continue
+        bounds = [p.aabb() for p in object_parts(task.object(board))]
+        extent = np.max([b[1] for b in bounds], axis=0) - np.min([b[0] for b in bounds], axis=0)
+        along = int(np.argmax(extent[:2]))
+        feet_apart = task.limits.body_size[1 - along]  # the body's size across the board
+        assert extent[1 - along] > feet_apart, f"{task.name}: {extent[1 - along]:.2f} m wide"
+        turned += along == 1
+    assert turned  # some scenes are turned a quarter

@@ -7,23 +7,38 @@ predict a walk (:func:`walk_violation`) or a push (:func:`push_problem`) on a pl
 
 from __future__ import annotations
 
+import heapq
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
-from robotool.planner.layout import Box, Layout
-from robotool.robots.quadruped.push import GAP, Leg, lateral_offsets, legs, push_pose, route, sweep_problem
+from robotool.planner.layout import CONTACT, Box, Layout
+from robotool.robots.quadruped.push import (
+    GAP,
+    Leg,
+    lateral_offsets,
+    legs,
+    push_pose,
+    route,
+    sweep_points,
+    sweep_problem,
+)
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import check_walk
+from robotool.robots.quadruped.terrain import RISE, check_walk, foot_offsets, foot_paths
 
 SAMPLE = 0.02  # m between terrain samples along a walk
 FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
 SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
-BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks, is in the way
+BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
+# is in the way (the torso's underside rides 0.05 m above the feet)
+BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
 PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
 PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep tolerates
+LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
+DETOUR_CHECKS = 60  # walks predicted at most when looking for a way around
+LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
 
 
 def walk_violation(
@@ -35,9 +50,9 @@ def walk_violation(
 ) -> str | None:
     """Predict whether walking through ``waypoints`` breaks a limit: the first violation in words, or None.
 
-    The feet's paths are checked as the simulator checks them (:func:`.terrain.check_walk`). Just outside
-    the body's flanks (on a slanted move, the band its corners sweep) nothing may stand higher than what its feet
-    are on, or the body would run into it.
+    The feet's paths are checked as the simulator checks them (:func:`.terrain.check_walk`). Between the
+    feet's paths (under the torso) and just outside the body's flanks (on a slanted move, the band its corners sweep)
+    nothing may stand higher than what its feet are on, or the body would run into it.
     """
     skip = list(exclude)
     goals = [np.asarray(g, dtype=float) for g in waypoints]
@@ -57,9 +72,16 @@ def walk_violation(
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
         points = here - u * extent + s[:, None] * u
         width, flank = float(np.abs(lateral) @ half) - FOOT_INSET, float(np.abs(lateral) @ half) + SIDE_MARGIN
-        across = np.stack([points + k * lateral for k in (-width, 0.0, width, -flank, flank)])
-        heights = layout.heights(across.reshape(-1, 2), skip).reshape(5, -1)
-        if (rub := heights[3:].max(axis=0) - heights[:3].max(axis=0)).max() > BRUSH:
+        offsets = (-width, width, *np.linspace(-width, width, BELLY_LINES + 2)[1:-1], -flank, flank)
+        across = np.stack([points + k * lateral for k in offsets])
+        heights = layout.heights(across.reshape(-1, 2), skip).reshape(len(offsets), -1)
+        feet, under, sides = heights[:2].max(axis=0), heights[2:-2].max(axis=0), heights[-2:].max(axis=0)
+        if (rise := under - feet).max() > BRUSH:
+            return (
+                f"the body runs into something {float(rise.max()):.2f} m higher than its feet, between them, on the "
+                f"way to [{goal[0]:.2f}, {goal[1]:.2f}]"
+            )
+        if (rub := sides - np.maximum(feet, under)).max() > BRUSH:
             return (
                 f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
                 f"[{goal[0]:.2f}, {goal[1]:.2f}]"
@@ -71,36 +93,41 @@ def walk_violation(
 def detour(
     layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
 ) -> list[np.ndarray]:
-    """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else through the
-    shortest one (or, failing that, two) of the L-corners and the corners of nearby objects (grown by the body)
-    that makes it fine."""
+    """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else the shortest way found
+    through the L-corners and the corners of the objects (grown by the body and a margin), each stretch predicted
+    fine (a lazy A* search: a stretch is predicted only when it is the best way left); ``[goal]`` when none is
+    found within :data:`DETOUR_CHECKS` predictions."""
     skip = list(exclude)
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     if walk_violation(layout, start, [goal], limits, skip) is None:
         return [goal]
     half = np.asarray(limits.body_size[:2]) / 2 + 0.1
-    vias = [np.array([goal[0], start[1]]), np.array([start[0], goal[1]])]
+    points = [start, goal, np.array([goal[0], start[1]]), np.array([start[0], goal[1]])]
     for box in layout.boxes(skip):
         lo, hi = box.lo - half, box.hi + half
-        vias += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
-        vias += [np.array([x, goal[1]]) for x in (lo[0], hi[0])] + [np.array([goal[0], y]) for y in (lo[1], hi[1])]
-    vias.sort(key=lambda v: float(np.linalg.norm(v - start) + np.linalg.norm(goal - v)))
-    vias = vias[:24]
-
-    def fine(p: np.ndarray, q: np.ndarray) -> bool:
-        return walk_violation(layout, p, [q], limits, skip) is None
-
-    for via in vias[:12]:
-        if fine(start, via) and fine(via, goal):
-            return [via, goal]
-    out = [v for v in vias if fine(start, v)]
-    into = [v for v in vias if fine(v, goal)]
-    pairs = sorted(
-        ((a, b) for a in out for b in into if a is not b),
-        key=lambda p: float(np.linalg.norm(p[0] - start) + np.linalg.norm(p[1] - p[0]) + np.linalg.norm(goal - p[1])),
-    )
-    for a, b in pairs[:40]:  # around two corners
-        if fine(a, b):
-            return [a, b, goal]
+        points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
+    frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1)]
+    parent: dict[int, int] = {}
+    checks = 0
+    while frontier and checks < DETOUR_CHECKS:
+        _, cost, node, frm = heapq.heappop(frontier)
+        if node in parent:
+            continue
+        if frm >= 0:
+            checks += 1
+            if walk_violation(layout, points[frm], [points[node]], limits, skip) is not None:
+                continue
+        parent[node] = frm
+        if node == 1:
+            path = []
+            while node != 0:
+                path.append(points[node])
+                node = parent[node]
+            return path[::-1]
+        for k, p in enumerate(points):
+            if k not in parent and k != node:
+                g = cost + float(np.linalg.norm(p - points[node]))
+                heapq.heappush(frontier, (g + float(np.linalg.norm(goal - p)), g, k, node))
     return [goal]
 
 
@@ -187,9 +214,95 @@ def _push_pose(
     def heights(xy: np.ndarray) -> np.ndarray:
         return layout.heights(xy, exclude=[name])
 
-    for staging in (PUSH_STAGING, 0.0):
-        for start, end in poses:
-            behind = start - (end - start) / np.linalg.norm(end - start) * staging
-            if sweep_problem(heights, behind, end, limits, floor) is None:
-                return start, end, behind
+    tries = [
+        (start, end, start - (end - start) / np.linalg.norm(end - start) * staging)
+        for staging in (PUSH_STAGING, 0.0)
+        for start, end in poses
+    ]
+    # sweep_problem's two readings (the footprint, the feet's paths) for every try at once; then the first clear one
+    # is confirmed by sweep_problem itself
+    feet = foot_offsets(limits)
+    swept = [sweep_points(behind, end, half) for _, end, behind in tries]
+    paths = [
+        foot_paths(behind + feet, (end - behind) / np.linalg.norm(end - behind), float(np.linalg.norm(end - behind)))
+        .reshape(-1, 2) for _, end, behind in tries
+    ]
+    read = swept + paths
+    z = np.split(heights(np.concatenate(read)), np.cumsum([len(p) for p in read])[:-1])
+    for k, (start, end, behind) in enumerate(tries):
+        clear = z[k].max() <= floor + RISE and z[len(tries) + k].min() >= floor - RISE
+        if clear and sweep_problem(heights, behind, end, limits, floor) is None:
+            return start, end, behind
+    return None
+
+
+def push_route(
+    layout: Layout, name: str, goal: np.ndarray, limits: QuadrupedLimits, floor: float
+) -> list[np.ndarray] | None:
+    """Targets of successive one-axis pushes that bring ``name`` to ``goal`` (x-y) around what stands in the way,
+    the shortest found (each extra leg counts :data:`LEG_COST`), or None.
+
+    The object's centre moves on lanes clear of the other objects' sides (their boxes grown by the object's half size
+    and :data:`LANE`); a leg is kept when the object's swept footprint meets no other object and the robot's, from
+    where it lines up behind the object to the end of the push, meets nothing above the floor at one of the
+    offsets along the face that the push skill may take. Boxes only: the prediction of each push
+    (:func:`push_problem`) is the judge of the route found.
+    """
+    box = layout.box(name)
+    goal = np.asarray(goal, dtype=float)
+    robot = np.asarray(limits.body_size[:2]) / 2
+    blocks = [b for b in layout.boxes(exclude=[name]) if b.top > floor + PUSH_RISE and b.bottom < box.top]
+    lo = np.array([b.lo for b in blocks]).reshape(-1, 2)
+    hi = np.array([b.hi for b in blocks]).reshape(-1, 2)
+    lanes = [
+        sorted({float(box.center[a]), float(goal[a]), *(lo[:, a] - box.half[a] - LANE),
+                *(hi[:, a] + box.half[a] + LANE)})
+        for a in (0, 1)
+    ]
+
+    def clear(rect_lo: np.ndarray, rect_hi: np.ndarray) -> bool:
+        return not np.any(np.all((np.minimum(rect_hi, hi) - np.maximum(rect_lo, lo)) > CONTACT / 4, axis=1))
+
+    def leg_ok(a: int, frm: np.ndarray, to: np.ndarray) -> bool:
+        if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half):
+            return False
+        sign = np.sign(to[a] - frm[a])
+        back = box.half[a] + GAP + robot[a]
+        for offset in lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a])):
+            start, end = frm.copy(), to.copy()
+            start[a] -= sign * (back + PUSH_STAGING)
+            end[a] -= sign * back
+            start[1 - a] += offset
+            end[1 - a] += offset
+            if clear(np.minimum(start, end) - robot, np.maximum(start, end) + robot):
+                return True
+        return False
+
+    nodes = [(i, j) for i in range(len(lanes[0])) for j in range(len(lanes[1]))]
+    at = {n: np.array([lanes[0][n[0]], lanes[1][n[1]]]) for n in nodes}
+    source = (lanes[0].index(float(box.center[0])), lanes[1].index(float(box.center[1])))
+    target = (lanes[0].index(float(goal[0])), lanes[1].index(float(goal[1])))
+    best = {source: 0.0}
+    previous: dict[tuple[int, int], tuple[int, int]] = {}
+    frontier = [(0.0, source)]
+    while frontier:
+        cost, node = heapq.heappop(frontier)
+        if node == target:
+            path = [at[node]]
+            while node in previous:
+                node = previous[node]
+                path.append(at[node])
+            return path[::-1][1:]
+        if cost > best.get(node, np.inf):
+            continue
+        for a in (0, 1):
+            for k in range(len(lanes[a])):
+                nxt = (k, node[1]) if a == 0 else (node[0], k)
+                if nxt == node:
+                    continue
+                step = cost + abs(lanes[a][k] - lanes[a][node[a]]) + LEG_COST
+                if step < best.get(nxt, np.inf) and leg_ok(a, at[node], at[nxt]):
+                    best[nxt] = step
+                    previous[nxt] = node
+                    heapq.heappush(frontier, (step, nxt))
     return None

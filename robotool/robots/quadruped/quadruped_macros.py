@@ -17,9 +17,11 @@ import numpy as np
 from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
-from robotool.robots.quadruped.predict import detour, push_problem, push_staging, walk_violation
+from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
+from robotool.robots.quadruped.push import legs
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 
@@ -30,7 +32,9 @@ OVERLAP = 0.15  # m a bridge rests on each side of a gap
 CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
 SIDE = 0.25  # m the robot keeps from a board it walks beside
 FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
-MAX_STEPS = 2  # objects a staircase may use below the target
+MAX_STEPS = 3  # objects a staircase may use below the target
+Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
+PushStep = tuple[list[np.ndarray], np.ndarray, np.ndarray]  # walk to where a push lines up, its target, where it ends
 
 
 @dataclass
@@ -224,62 +228,76 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
 
 def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
     """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
-    nearest the target first; placements whose steps cannot carry the feet are left out."""
-    options: list[list[tuple[np.ndarray, np.ndarray | None]]] = []  # per link: (direction to next, new centre)
-    layout = quad.layout
-    for k in range(len(chain) - 2, -1, -1):
+    each placed against where the next link will stand, nearest the target first; placements that would overlap
+    something, or whose steps cannot carry the feet, are left out. A link placed against a link that is itself
+    pushed into place continues that link's climb in a straight line."""
+
+    def place(k: int, layout: Layout, combo: list[Placement]) -> Iterator[list[Placement]]:
+        if k < 0:
+            yield combo
+            return
         obj, nxt = chain[k], chain[k + 1]
         box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
         if box.touches(nxt_box):
-            direction = _axis_direction(nxt_box.center - box.center)
-            options.insert(0, [(direction, None)])
-            continue
+            yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo])
+            return
         if not quad.pushable(obj, quad.floor):
             return
-        sides = []
-        others = [
-            b
-            for o in quad.task.objects
-            if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
-            for b in [layout.box(o.name)]
-        ]
-        for direction in DIRECTIONS:
-            axis = int(np.argmax(np.abs(direction)))
-            lat = 1 - axis
-            slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
-            along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
-            offsets = [0.0, slide, -slide]
-            for other in others:  # flush against something else that stands by the same face
-                if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
-                    offsets += [
-                        float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
-                        float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
-                    ]
-            reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
-            for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
-                xy = nxt_box.center.copy()
-                xy[axis] = along
-                xy[lat] += offset
-                sides.append((direction, xy))
-        options.insert(0, sides)
-    for combo in itertools.product(*options):
-        route = _chain_route(quad, chain, list(combo))
-        if route is not None:
-            yield route
+        straight = [combo[0][0]] if combo and combo[0][1] is not None else list(DIRECTIONS)
+        for direction, xy in _sides(quad, layout, obj, nxt, straight):
+            if layout.collides(box.moved_to(xy)) is None:
+                yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo])
+
+    routes = [r for combo in place(len(chain) - 2, quad.layout, []) if (r := _chain_route(quad, chain, combo))]
+    yield from sorted(routes, key=lambda r: _pushed_distance(quad.layout, r))
 
 
-def _chain_route(
-    quad: Quadruped, chain: list[SceneObject], combo: list[tuple[np.ndarray, np.ndarray | None]]
-) -> Route | None:
+def _pushed_distance(layout: Layout, route: Route) -> float:
+    """How far a route's pushes move objects in all."""
+    total = 0.0
+    for name, xy, _ in route.pushes:
+        total += float(np.linalg.norm(xy - layout.box(name).center))
+        layout = layout.with_moved(name, xy)
+    return total
+
+
+def _sides(
+    quad: Quadruped, layout: Layout, obj: SceneObject, nxt: SceneObject, directions: list[np.ndarray]
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction): centred,
+    flush with either end, or flush with something else standing by the same face, as long as the feet can stand
+    across both."""
+    box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
+    others = [
+        layout.box(o.name) for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
+    ]
+    for direction in directions:
+        axis = int(np.argmax(np.abs(direction)))
+        lat = 1 - axis
+        slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
+        along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+        offsets = [0.0, slide, -slide]
+        for other in others:  # flush against something else that stands by the same face
+            if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
+                offsets += [
+                    float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
+                    float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
+                ]
+        reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
+        for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
+            xy = nxt_box.center.copy()
+            xy[axis] = along
+            xy[lat] += offset
+            yield direction, xy
+
+
+def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placement]) -> Route | None:
     route = Route()
     layout = quad.layout
     for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
         d, xy = combo[k]
         obj = chain[k]
         if xy is not None:
-            moved = layout.box(obj.name).moved_to(xy)
-            if layout.collides(moved) is not None:
-                return None
             lined = _lined_up(layout.box(obj.name).center, xy, d)
             if lined is not None:
                 route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
@@ -384,6 +402,26 @@ def _axis_direction(v: np.ndarray) -> np.ndarray:
 # --- writing routes into programs ---------------------------------------------------------------------
 
 
+def _push_plans(
+    layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float
+) -> Iterator[list[np.ndarray]]:
+    """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
+    along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
+    (:func:`robotool.planner.layout.push_route`)."""
+    center = layout.box(name).center
+    yield [xy]
+    parts = legs(center, xy)
+    if len(parts) < 2:
+        return
+    for first in parts:
+        corner = center.copy()
+        corner[first.axis] = first.target
+        yield [corner, xy]
+    around = push_route(layout, name, xy, limits, floor)
+    if around is not None and len(around) > 2:
+        yield around
+
+
 class Writer:
     """Writes pushes and walks into a program, querying positions when they run."""
 
@@ -403,31 +441,58 @@ class Writer:
         return self.refs[name]
 
     def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        """Push ``name`` to ``xy``; when the push skill's own way to where it lines up is predicted blocked, walk
-        there first around what stands in the way."""
-        limits = self.quad.limits
-        problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
-        staging = push_staging(self.layout, name, xy, limits, self.level) if problem else None
-        if problem and problem.kind == "approach" and staging is not None:
-            path = detour(self.layout, self.here, staging, limits)
-            if walk_violation(self.layout, self.here, path, limits) is None:
-                for via in path:
-                    self.walk(via, self.surface, f"walk to where the push of {name} lines up")
-                problem, end = push_problem(self.layout, name, xy, limits, self.level, self.here)
-        ref = self.position(name)
-        start = self.layout.box(name).center
-        self.prog.motion(
-            "push_to_position",
-            obj=name,
-            point=Point.at(ref, (*(xy - start), 0.0)),
-            intent=f"push {name} {why}",
-            explanation=f"centre to [{xy[0]:.3f}, {xy[1]:.3f}]",
-        )
-        self.here = end
-        self.doubt(str(problem) if problem else None)
-        self.layout = self.layout.with_moved(name, xy)
-        self.refs.pop(name, None)
+        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine (else the straight way, its
+        problem kept as the program's doubt): in one skill call, or one axis at a time, or routed around what stands
+        in the way; before each push whose own way to where the robot lines up is predicted blocked, the robot walks
+        there around what stands in the way."""
+        xy = np.asarray(xy, dtype=float)
+        predicted = None
+        for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level):
+            found = self._predict_pushes(name, plan)
+            predicted = predicted or found
+            if found[1] is None:
+                predicted = found
+                break
+        assert predicted is not None
+        steps, problem = predicted
+        for path, target, end in steps:
+            for via in path:
+                self.walk(via, self.surface, f"walk to where the push of {name} lines up")
+            ref = self.position(name)
+            start = self.layout.box(name).center
+            self.prog.motion(
+                "push_to_position",
+                obj=name,
+                point=Point.at(ref, (*(target - start), 0.0)),
+                intent=f"push {name} {why}",
+                explanation=f"centre to [{target[0]:.3f}, {target[1]:.3f}]",
+            )
+            self.here = end
+            self.layout = self.layout.with_moved(name, target)
+            self.refs.pop(name, None)
+        self.doubt(problem)
         self.prog.use(name)
+
+    def _predict_pushes(self, name: str, targets: list[np.ndarray]) -> tuple[list[PushStep], str | None]:
+        """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is: for each, the walk
+        to where it lines up when the skill's own way there is blocked (else none), the target and where the robot
+        ends; and the first problem predicted."""
+        layout, here, limits = self.layout, self.here, self.quad.limits
+        steps: list[PushStep] = []
+        first = None
+        for xy in targets:
+            problem, end = push_problem(layout, name, xy, limits, self.level, here)
+            path: list[np.ndarray] = []
+            staging = push_staging(layout, name, xy, limits, self.level) if problem else None
+            if problem and problem.kind == "approach" and staging is not None:
+                way = detour(layout, here, staging, limits)
+                if walk_violation(layout, here, way, limits) is None:
+                    path = way
+                    problem, end = push_problem(layout, name, xy, limits, self.level, staging)
+            steps.append((path, xy, end))
+            first = first or (str(problem) if problem else None)
+            layout, here = layout.with_moved(name, xy), end
+        return steps, first
 
     def doubt(self, problem: str | None) -> None:
         """Keep the first predicted problem as the program's doubt."""
@@ -591,6 +656,9 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
                 w.route(route)
                 behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
+                feet = w.layout.heights(behind + foot_offsets(quad.limits), exclude=[target.name])
+                if np.any(np.abs(feet - support.top) > LEVEL / 2):
+                    w.doubt(f"no room for the feet on {support_name} behind {target.name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
                 prog.motion(

@@ -24,6 +24,7 @@ from robotool.task_model import Category, Task
 
 Variant = Literal["no_tool", "tool", "unsolvable"]
 CLEARANCE = 0.001  # m between objects that stand against each other, so that rounding never interpenetrates them
+SIDEWAYS_BOARD_WIDTH = 0.75  # m: wider than the quadruped is long (0.65 m), for boards it walks along flank first
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1 on the floor or table
 
 
@@ -162,6 +163,13 @@ def draw_layout(rng: np.random.Generator, arm: bool) -> RigidPlacement:
     turns = int(rng.integers(0, 4))
     shift = (round(float(rng.uniform(-1.5, 1.5)), 2), round(float(rng.uniform(-1.5, 1.5)), 2))
     return RigidPlacement(mirror=mirror, turns=turns, shift=shift)  # type: ignore[arg-type]
+
+
+def board_width(layout: RigidPlacement, width: float) -> float:
+    """The width of a board the quadruped walks along (along the template's x): ``width`` as in the template, or
+    :data:`SIDEWAYS_BOARD_WIDTH` when the layout turns the scene a quarter. The robot never turns, so it then walks
+    along the board flank first, its feet as far apart across the board as its body is long."""
+    return width if layout.turns % 2 == 0 else max(width, SIDEWAYS_BOARD_WIDTH)
 
 
 # --- Clutter --------------------------------------------------------------------------------------------

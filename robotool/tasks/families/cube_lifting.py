@@ -10,7 +10,8 @@ Randomizations:
     - the cube's mass: 6-11 kg (too heavy to push) or 1.5-5 kg (light enough to push, yet the robot still
       cannot raise it by itself: the lever is needed either way);
     - the chair's place along the board's raised end (its height follows the board), the robot's start
-      on the floor on either side of the lever;
+      on the floor on either side of the lever; in scenes turned a quarter the board is wider than the robot
+      is long (the robot never turns, so it walks along the board flank first);
     - decoys: a box too heavy to push elsewhere on the floor; in unsolvable scenes the chair is too heavy
       to push away (6-10 kg) or the cube too heavy for the robot's weight on the lever (25-30 kg);
     - 0-3 fixed pieces of furniture away from the lever; the whole scene mirrored, turned by quarter turns
@@ -29,6 +30,7 @@ from robotool import geometry
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
     Draft,
+    board_width,
     draw_layout,
     draw_variant,
     footprint,
@@ -61,7 +63,8 @@ def build(rng: np.random.Generator) -> Draft:
     # Notes without directions: the layout may mirror or turn the scene.
     scene = [
         roller.model_copy(update={"notes": "a yoga roller lying on its side, fixed to the floor"}),
-        board.model_copy(update={"notes": "a long board lying across the yoga roller; one end rests on the ground "
+        board.model_copy(update={"size": (board.size[0], board_width(layout, board.size[1]), board.size[2]),
+                                 "notes": "a long board lying across the yoga roller; one end rests on the ground "
                                           "under the cube and the other end is raised"}),
         cube.model_copy(update={"mass": cube_mass,
                                 "notes": f"a {'heavy ' if cube_mass > 5 else ''}cube on the lowered end of the board"}),

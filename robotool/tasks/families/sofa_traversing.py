@@ -26,6 +26,7 @@ from robotool.scene import SceneObject
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
     Draft,
+    board_width,
     draw_layout,
     draw_variant,
     footprint,
@@ -37,8 +38,6 @@ from robotool.tasks.families._common import (
     template,
     uniform,
 )
-
-SIDEWAYS_BOARD_WIDTH = 0.75  # m: wider than the robot is long (0.65 m), for scenes turned a quarter
 
 
 def sofas(gap: float, height: float, offset: float = 0.0) -> list[SceneObject]:
@@ -90,9 +89,7 @@ def build(rng: np.random.Generator) -> Draft:
 
     overhang = surfboard.center[0] + surfboard.size[0] / 2 - edge  # the template's board reaches over the gap
 
-    # The robot never turns: in a scene turned a quarter it crosses with its flank leading, its feet as far apart
-    # across the board as its body is long, so the board must be wider than that there.
-    width = surfboard.size[1] if layout.turns % 2 == 0 else SIDEWAYS_BOARD_WIDTH
+    width = board_width(layout, surfboard.size[1])
 
     def board(size_x: float, mass: float | None, notes: str | None) -> SceneObject:
         """A board on sofa_1 (on the cloth where they overlap), its +x end over the gap like the template's, so

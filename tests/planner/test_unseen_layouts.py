@@ -1,0 +1,103 @@
+"""The search planner on layouts it was not built from (task fixtures under tests/fixtures/layouts/): staircases of
+two and three pushed boxes approached from -x and +y, a gap crossed toward -x, levers reflected and turned along y.
+
+Each is solved with a verified success, and a tool-free attempt fails in simulation. Also the layout predictions
+those need: a walk over a box between the feet, a push routed around a wall."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fixtures.paths import FIXTURES
+
+from robotool import tasks
+from robotool.planner import solve
+from robotool.planner.layout import Box, Layout
+from robotool.robots.quadruped.predict import push_route, walk_violation
+from robotool.task_file import parse_task
+from robotool.task_model import Task
+from robotool.verify import failure_reason, prepare_code, run_codes
+
+LAYOUTS = FIXTURES / "layouts"
+NAMES = [  # this module's fixtures in that folder (others there serve the cheat corpus)
+    "gap_toward_minus_x",
+    "lever_along_y",
+    "lever_reversed",
+    "staircase_three",
+    "staircase_two_toward_minus_x",
+    "staircase_two_toward_plus_y",
+]
+
+
+def _load(name: str) -> Task:
+    return tasks.load(LAYOUTS / f"{name}.yaml")
+
+
+def _tool_free_program(task: Task) -> str:
+    """The direct attempt without a tool: walk (or climb) straight onto the target, or push the object to be lifted."""
+    target = task.object(task.goal.object)
+    if task.goal.kind == "robot_on":
+        return f"p = get_position({target.name!r})\nclimb_to_position([p[0], p[1], {target.top:.4f}])\n"
+    return f"p = get_position({target.name!r})\npush_to_position({target.name!r}, [p[0] + 0.3, p[1], p[2]])\n"
+
+
+def test_every_layout_fixture_is_here() -> None:
+    assert all((LAYOUTS / f"{name}.yaml").is_file() for name in NAMES)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_planner_solves_unseen_layout(name: str) -> None:
+    task = _load(name)
+    solution = solve(task, worlds=2)
+    best = next((c for c in solution.candidates if c.index == solution.best), None)
+    assert solution.success_rate == 1.0, best.failure if best else solution.notes
+    assert best is not None and all(r.success for r in best.rollouts)
+    roles = {r.name: r.role for r in solution.stages.object_roles or []}
+    assert any(role.startswith("tool") for role in roles.values())
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_unseen_layout_is_not_solved_without_a_tool(name: str) -> None:
+    task = _load(name)
+    no_tool = solve(task, worlds=2, tools=False)
+    assert not no_tool.success and no_tool.success_rate == 0.0
+    code, rejection, _ = prepare_code(_tool_free_program(task), task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=2, seed=0)
+    assert rollouts and not any(r.success for r in rollouts)
+    assert failure_reason(rollouts)
+
+
+def test_a_walk_over_a_box_between_the_feet_is_predicted_to_run_into_it() -> None:
+    """The feet pass either side of a 0.24 m box narrower than they are apart; the torso, 0.05 m above the feet,
+    would run into it (the walk would shove it along)."""
+    task = _load("staircase_three")
+    start, goal = np.array([0.2, -0.6]), np.array([0.2, -1.9])  # straight over box_b, centred
+    problem = walk_violation(Layout(task), start, [goal], task.limits)
+    assert problem is not None and "runs into" in problem
+    assert walk_violation(Layout(task), start, [np.array([-0.5, -0.6])], task.limits) is None
+
+
+def test_a_push_is_routed_around_what_stands_in_its_way() -> None:
+    """box_a must reach the far side of a fixed wall: the route goes round the wall's end in axis-aligned legs, and
+    neither the box nor the robot behind it meets the wall on any leg."""
+    task = parse_task({
+        "format": 1, "name": "push_around", "instruction": "Stand on the block.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
+        "objects": [
+            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
+            {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False},
+            {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False},
+        ],
+        "goal": {"robot_on": "block"},
+    })
+    layout, goal = Layout(task), np.array([2.0, 0.0])
+    route = push_route(layout, "box_a", goal, task.limits, 0.0)
+    assert route is not None and len(route) >= 3 and np.allclose(route[-1], goal)
+    box, here = layout.box("box_a"), layout.box("box_a").center
+    wall = layout.box("wall")
+    for target in route:
+        assert np.sum(np.abs(target - here) > 1e-9) == 1  # one axis per leg
+        swept = Box("box_a", np.minimum(here, target) - box.half, np.maximum(here, target) + box.half, 0.0, 0.2)
+        assert swept.overlap(wall) < 0
+        here = target
