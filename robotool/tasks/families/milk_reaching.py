@@ -6,7 +6,10 @@ Description:
     carton stands beyond x = 0.45 the arm grasps the handle, reaches the head behind the carton and pulls
     it in. A stuffed toy and a padlock stand near the carton as in the paper.
 Randomizations:
-    - the carton's position: inside the workspace (no tool) or 0.09-0.19 m beyond its +x edge;
+    - the carton's position: inside the workspace (no tool) or 0.09-0.19 m beyond its +x edge; an unsolvable
+      carton stands so far out that neither the small hammer's head gets behind it nor tipping it over toward
+      the arm (a straight stick pressed on its top and dragged back does that) brings its graspable point
+      within the grasp tolerance of the workspace edge;
     - the hammer's length (0.38-0.44 m, always long enough to reach behind a far carton) and place;
     - decoys: a straight stick (it has no head to pull with) and, when no hammer is given, a small hammer
       whose head cannot get behind the carton; the toy and the lock move by up to 2 cm;
@@ -20,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.scene import SceneObject
 from robotool.tasks.families._common import (
     ARM_CLUTTER,
@@ -37,11 +41,22 @@ HOOK_HEAD = 0.20  # length of the hammer's head along y
 HOOK_GRIP = 0.10  # graspable point: this far from the handle's -x end
 MILK = (0.044, 0.044, 0.16)
 MARGIN = 0.03  # how far behind the carton the head must get
+FAR_MILK_X = (0.54, 0.64)  # where a carton out of reach stands (an unsolvable one: as far beyond its bound)
+MILK_GRASP_HEIGHT = 0.135  # the carton's graspable point above its bottom
+GRASP_TOLERANCE = 2 * ArmLimits().grasp_radius  # how far the graspable point may be from the gripper when held
+TIP_MARGIN = 0.06  # m beyond the grasp tolerance a tipped-over carton's graspable point lands (dragging it creeps)
 
 
 def hook_reach(length: float, thickness: float = 0.02) -> float:
     """Farthest x the inner face of a hook's head reaches with its handle held at the workspace edge."""
     return ARM_REACH_X + length - HOOK_GRIP - thickness
+
+
+def unreachable_milk_x(short: float) -> float:
+    """Nearest x of an unsolvable carton: beyond the head of a hook of length ``short``, and, tipped over toward
+    the arm about its near bottom edge, its graspable point lands beyond the grasp tolerance of the workspace."""
+    tip_bound = ARM_REACH_X + GRASP_TOLERANCE + TIP_MARGIN + MILK[0] / 2 + MILK_GRASP_HEIGHT
+    return round(max(hook_reach(short) + MILK[0] + 0.04, tip_bound), 4)
 
 
 def hook(name: str, length: float, xy: tuple[float, float], notes: str) -> SceneObject:
@@ -66,14 +81,14 @@ def build(rng: np.random.Generator) -> Draft:
     if variant == "no_tool":
         milk_xy = (uniform(rng, 0.25, 0.42), uniform(rng, 0.12, 0.30))
     else:
-        milk_xy = (uniform(rng, 0.54, 0.64), uniform(rng, 0.02, 0.14))  # clear of the toy's row
+        milk_xy = (uniform(rng, *FAR_MILK_X), uniform(rng, 0.02, 0.14))  # clear of the toy's row
     length = uniform(rng, 0.38, 0.44)
     handle = (uniform(rng, -0.20, -0.12), uniform(rng, -0.36, -0.30))
     tools: list[SceneObject] = []
     decoys: list[str] = []
     if variant == "unsolvable":
         short = uniform(rng, 0.16, 0.20)
-        milk_xy = (max(milk_xy[0], round(hook_reach(short) + MILK[0] + 0.04, 4)), milk_xy[1])
+        milk_xy = (round(milk_xy[0] - FAR_MILK_X[0] + unreachable_milk_x(short), 4), milk_xy[1])
         tools.append(hook("small_hammer", short, handle, hook_notes))
         decoys.append("small_hammer")
     else:
@@ -82,7 +97,7 @@ def build(rng: np.random.Generator) -> Draft:
         tools.append(stick("stick", uniform(rng, 0.30, 0.40), (-0.25, uniform(rng, 0.34, 0.40)),
                            "a thin straight stick"))
         decoys.append("stick")
-    milk = on_top("milk", "box", milk_xy, MILK, mass=0.25, graspable_point=(*milk_xy, 0.135),
+    milk = on_top("milk", "box", milk_xy, MILK, mass=0.25, graspable_point=(*milk_xy, MILK_GRASP_HEIGHT),
                   notes="a carton of milk")
     scene = [
         milk,
