@@ -4,7 +4,8 @@ The programs are files in ``tests/fixtures/cheats/arm_*.py``: creeping past the 
 huge target coordinates, a held cube let go at the end of a fast run, a single cube rammed at an out-of-reach
 button, paper slid under a can with no stick, and a far milk carton tipped over toward the arm with a straight
 stick (which works in real physics, so a scene the milk family calls unsolvable must keep its carton out of a
-tipped carton's reach). The honest references on the same tasks succeed in their own tests
+tipped carton's reach; the same program grasps a carton close enough, the control). The honest references on the
+same tasks succeed in their own tests
 (tests/test_verify.py, tests/robots/arm/test_skills.py).
 """
 
@@ -17,6 +18,7 @@ from fixtures.paths import FIXTURES
 
 from robotool import tasks
 from robotool.rollout import Rollout
+from robotool.task_file import parse_task
 from robotool.task_model import Task
 from robotool.tasks.families import milk_reaching
 from robotool.verify import world_failure
@@ -50,6 +52,18 @@ def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, 
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert rollout.error is None, rollout.error  # it ran to its end: the world said no
         assert world_failure(rollout), rollout
+
+
+def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None:
+    """The control for the tipping cheat: the same program grasps a carton that stands close enough (0.61 m, where
+    the family used to put unsolvable ones), so its failure above is the carton's distance, not the program."""
+    data = _task("milk_reaching_unsolvable").model_dump(mode="json", exclude_defaults=True)
+    for obj in data["objects"]:
+        if obj["name"] == "milk":
+            obj["center"][0] = obj["graspable_point"][0] = 0.61
+    data["name"] = "milk_within_tipping_reach"
+    rollouts = run_texts(parse_task(data), [(CHEATS / "arm_topple_milk_with_stick.py").read_text()] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
 
 def test_unsolvable_milk_stays_out_of_reach_when_tipped_over() -> None:
