@@ -7,9 +7,9 @@ Description:
     it in. A stuffed toy and a padlock stand near the carton as in the paper.
 Randomizations:
     - the carton's position: inside the workspace (no tool) or 0.09-0.19 m beyond its +x edge; an unsolvable
-      carton stands so far out that neither the small hammer's head gets behind it nor tipping it over toward
-      the arm (a straight stick pressed on its top and dragged back does that) brings its graspable point
-      within the grasp tolerance of the workspace edge;
+      carton stands beyond the reach of everything the arm can hold (each movable object held at its near end at
+      the workspace edge), since anything that touches it can do more than hook it (a straight stick pressed on
+      its top and dragged back tips it over toward the arm);
     - the hammer's length (0.38-0.44 m, always long enough to reach behind a far carton) and place;
     - decoys: a straight stick (it has no head to pull with) and, when no hammer is given, a small hammer
       whose head cannot get behind the carton; the toy and the lock move by up to 2 cm;
@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.scene import SceneObject
 from robotool.tasks.families._common import (
     ARM_CLUTTER,
@@ -43,20 +42,19 @@ MILK = (0.044, 0.044, 0.16)
 MARGIN = 0.03  # how far behind the carton the head must get
 FAR_MILK_X = (0.54, 0.64)  # where a carton out of reach stands (an unsolvable one: as far beyond its bound)
 MILK_GRASP_HEIGHT = 0.135  # the carton's graspable point above its bottom
-GRASP_TOLERANCE = 2 * ArmLimits().grasp_radius  # how far the graspable point may be from the gripper when held
-TIP_MARGIN = 0.06  # m beyond the grasp tolerance a tipped-over carton's graspable point lands (dragging it creeps)
 
 
-def hook_reach(length: float, thickness: float = 0.02) -> float:
-    """Farthest x the inner face of a hook's head reaches with its handle held at the workspace edge."""
-    return ARM_REACH_X + length - HOOK_GRIP - thickness
+def out_of_reach_x(objects: list[SceneObject]) -> float:
+    """Nearest x of a carton that none of the movable ``objects`` reaches: the longest along x, held at its near
+    end with the gripper at the workspace edge, stops ``MARGIN`` short of the carton's near face."""
+    longest = max(right - left for left, _, right, _ in (footprint(o) for o in objects if o.movable))
+    return round(ARM_REACH_X + longest + MARGIN + MILK[0] / 2, 4)
 
 
-def unreachable_milk_x(short: float) -> float:
-    """Nearest x of an unsolvable carton: beyond the head of a hook of length ``short``, and, tipped over toward
-    the arm about its near bottom edge, its graspable point lands beyond the grasp tolerance of the workspace."""
-    tip_bound = ARM_REACH_X + GRASP_TOLERANCE + TIP_MARGIN + MILK[0] / 2 + MILK_GRASP_HEIGHT
-    return round(max(hook_reach(short) + MILK[0] + 0.04, tip_bound), 4)
+def carton(xy: tuple[float, float]) -> SceneObject:
+    """The milk carton standing at ``xy``."""
+    return on_top("milk", "box", xy, MILK, mass=0.25, graspable_point=(*xy, MILK_GRASP_HEIGHT),
+                  notes="a carton of milk")
 
 
 def hook(name: str, length: float, xy: tuple[float, float], notes: str) -> SceneObject:
@@ -87,9 +85,7 @@ def build(rng: np.random.Generator) -> Draft:
     tools: list[SceneObject] = []
     decoys: list[str] = []
     if variant == "unsolvable":
-        short = uniform(rng, 0.16, 0.20)
-        milk_xy = (round(milk_xy[0] - FAR_MILK_X[0] + unreachable_milk_x(short), 4), milk_xy[1])
-        tools.append(hook("small_hammer", short, handle, hook_notes))
+        tools.append(hook("small_hammer", uniform(rng, 0.16, 0.20), handle, hook_notes))
         decoys.append("small_hammer")
     else:
         tools.append(hook("hammer", length, handle, hook_notes))
@@ -97,8 +93,7 @@ def build(rng: np.random.Generator) -> Draft:
         tools.append(stick("stick", uniform(rng, 0.30, 0.40), (-0.25, uniform(rng, 0.34, 0.40)),
                            "a thin straight stick"))
         decoys.append("stick")
-    milk = on_top("milk", "box", milk_xy, MILK, mass=0.25, graspable_point=(*milk_xy, MILK_GRASP_HEIGHT),
-                  notes="a carton of milk")
+    milk = carton(milk_xy)
     scene = [
         milk,
         on_top("stuffed_toy", "box", (uniform(rng, 0.43, 0.47), uniform(rng, -0.07, -0.03)), (0.08, 0.05, 0.05),
@@ -111,6 +106,9 @@ def build(rng: np.random.Generator) -> Draft:
     base = (-0.15, -0.15, 0.15, 0.15)
     scene += scatter(rng, scene, int(rng.integers(0, 3)), ARM_CLUTTER, (-0.28, -0.44, 0.42, 0.44),
                      [sweep, base, footprint(milk)], movable=True, margin=0.04)
+    if variant == "unsolvable":  # as far beyond the reach of everything else as a far carton is beyond 0.54 m
+        milk_xy = (round(milk_xy[0] - FAR_MILK_X[0] + out_of_reach_x(scene[1:]), 4), milk_xy[1])
+        scene[0] = carton(milk_xy)
     outside = milk_xy[0] - ARM_REACH_X
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
     tools = {"no_tool": [], "tool": ["hammer"], "unsolvable": []}[variant]

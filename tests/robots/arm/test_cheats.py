@@ -3,10 +3,9 @@
 The programs are files in ``tests/fixtures/cheats/arm_*.py``: creeping past the workspace edge in small steps,
 huge target coordinates, a held cube let go at the end of a fast run, a single cube rammed at an out-of-reach
 button, paper slid under a can with no stick, and a far milk carton tipped over toward the arm with a straight
-stick (which works in real physics, so a scene the milk family calls unsolvable must keep its carton out of a
-tipped carton's reach; the same program grasps a carton close enough, the control). The honest references on the
-same tasks succeed in their own tests
-(tests/test_verify.py, tests/robots/arm/test_skills.py).
+stick and then dragged in by pressing the stick on it (a scene the milk family calls unsolvable must keep its
+carton out of reach of everything the arm can hold; the same program grasps a carton within reach, the
+control). The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -21,10 +20,11 @@ from robotool.rollout import Rollout
 from robotool.task_file import parse_task
 from robotool.task_model import Task
 from robotool.tasks.families import milk_reaching
+from robotool.tasks.families._common import footprint
 from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
-UNSOLVABLE_MILK_SEED = 64  # the milk family's unsolvable instance with the nearest carton among seeds 0-99
+UNSOLVABLE_MILK_SEED = 64  # an unsolvable instance of the milk family (its carton stood at 0.60 m, in tipping reach)
 
 
 def _task(name: str) -> Task:
@@ -66,13 +66,14 @@ def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
 
-def test_unsolvable_milk_stays_out_of_reach_when_tipped_over() -> None:
-    """Tipped toward the arm about its near bottom edge, an unsolvable carton's graspable point lands beyond the
-    grasp tolerance of the workspace edge, with the perturbation's shift to spare."""
+def test_unsolvable_milk_stands_beyond_the_reach_of_everything_the_arm_can_hold() -> None:
+    """Held at its near end with the gripper at the workspace edge, no movable object reaches an unsolvable carton
+    (with the perturbation's shift to spare)."""
     for seed in range(50):
         instance = tasks.generate("milk_reaching", seed)
         if instance.solvable:
             continue
-        milk = next(o for o in instance.task.objects if o.name == "milk")
-        landed = milk.center[0] - milk.size[0] / 2 - (milk.grasp_point[2] - milk.bottom)
-        assert landed - 0.005 > milk_reaching.ARM_REACH_X + milk_reaching.GRASP_TOLERANCE, (seed, landed)
+        objects = instance.task.objects
+        milk = next(o for o in objects if o.name == "milk")
+        longest = max(footprint(o)[2] - footprint(o)[0] for o in objects if o.movable and o.name != "milk")
+        assert footprint(milk)[0] - 0.005 > milk_reaching.ARM_REACH_X + longest, (seed, footprint(milk))
