@@ -52,6 +52,12 @@ PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to 
 CONTACT_SOLREF, CONTACT_SOLIMP = (0.005, 1.0), (0.95, 0.99, 0.001, 0.5, 2.0)  # the gripper's hard surfaces
 PALM_HALF = (0.02, 0.05, 0.01)  # m
 PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
+# Friction that holds on the table top: with MuJoCo's default pyramidal cone and soft friction, a block pressed
+# from above by a held stick dragged across it crept about 7% of the drag, although the ground (more load, the
+# same coefficient) must hold it still, so repeated presses dragged things in from beyond reach; elliptic cones
+# with friction ten times stiffer than the normal force (impratio) bring the creep under 0.5%
+# (tests/robots/arm/test_cheats.py).
+FRICTION_CONE, IMPRATIO = mujoco.mjtCone.mjCONE_ELLIPTIC, 10.0
 
 _IDLE, _MOVE, _FINGERS = 0, 1, 2
 _AXES = "xyz"
@@ -77,7 +83,9 @@ class ArmEmbodiment:
         self.limits = limits
 
     def add_to_spec(self, spec: mujoco.MjSpec, task: Task) -> None:
-        """Gripper on x/y/z slides with position servos, two colliding fingers, one grasp weld per movable object."""
+        """Gripper on x/y/z slides with position servos, two colliding fingers, one grasp weld per movable object;
+        friction that does not creep."""
+        spec.option.cone, spec.option.impratio = FRICTION_CONE, IMPRATIO
         lo, hi = self.limits.workspace_min, self.limits.workspace_max
         gripper = spec.worldbody.add_body(name=GRIPPER_BODY, pos=HOME, gravcomp=1.0)
         for k, axis in enumerate(_AXES):

@@ -2,10 +2,12 @@
 
 The programs are files in ``tests/fixtures/cheats/arm_*.py``: creeping past the workspace edge in small steps,
 huge target coordinates, a held cube let go at the end of a fast run, a single cube rammed at an out-of-reach
-button, paper slid under a can with no stick, and a far milk carton tipped over toward the arm with a straight
-stick and then dragged in by pressing the stick on it (a scene the milk family calls unsolvable must keep its
-carton out of reach of everything the arm can hold; the same program grasps a carton within reach, the
-control). The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
+button, paper slid under a can with no stick, a flat block beyond reach dragged in by pressing a stick on it again
+and again (MuJoCo's soft pyramidal friction let it creep along; the arm's scenes use elliptic cones), and a far
+milk carton tipped over toward the arm with a straight stick and then dragged in by pressing the stick on it (a
+scene the milk family calls unsolvable must keep its carton out of reach of everything the arm can hold; the same
+program grasps a carton within reach, the control). The honest references on the same tasks succeed in
+tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from robotool.tasks.families._common import footprint
 from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
+LAYOUTS = FIXTURES / "layouts"
 UNSOLVABLE_MILK_SEED = 64  # an unsolvable instance of the milk family (its carton stood at 0.60 m, in tipping reach)
 
 
@@ -32,7 +35,8 @@ def _task(name: str) -> Task:
         instance = tasks.generate("milk_reaching", UNSOLVABLE_MILK_SEED)
         assert not instance.solvable
         return instance.task
-    return tasks.load(name)
+    layout = LAYOUTS / f"{name}.yaml"
+    return tasks.load(layout) if layout.is_file() else tasks.load(name)
 
 
 CASES = [
@@ -42,6 +46,7 @@ CASES = [
     ("arm_ram_one_cube", "button_pressing"),
     ("arm_paper_under_can", "can_grasping"),
     ("arm_topple_milk_with_stick", "milk_reaching_unsolvable"),
+    ("arm_press_drag_block", "arm_block_beyond_reach"),  # friction from above dragged a flat block in (creep)
 ]
 
 
