@@ -13,15 +13,17 @@ Failures that no reply can cure (see :func:`robotool.lm.unavailable`) raise
 
 from __future__ import annotations
 
+import contextvars
 import json
 import re
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import dspy
 from dspy.utils.callback import BaseCallback
@@ -31,6 +33,8 @@ from pydantic import ValidationError
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
 from robotool.signatures import validation_notes
 from robotool.solution import LMCall
+
+T = TypeVar("T")
 
 MAX_SHOWN_REPLY = 8000
 """Characters of a rejected reply shown back to the model when asking again."""
@@ -47,6 +51,24 @@ class StageFailed(Exception):
 
 class Cancelled(Exception):
     """Another part of the same solve hit an error that ends it; this stage did not start."""
+
+
+def run_concurrently(calls: Sequence[Callable[[], T]]) -> list[T]:
+    """Run each call in a thread of its own with the caller's context (it carries ``dspy.context`` overrides), and
+    return the results in order, leaving out calls that were :class:`Cancelled`; the first other exception is
+    raised once every call has ended."""
+    with ThreadPoolExecutor(max_workers=max(len(calls), 1)) as pool:
+        futures = [pool.submit(contextvars.copy_context().run, call) for call in calls]
+        outcomes: list[T | Exception] = []
+        for future in futures:
+            try:
+                outcomes.append(future.result())
+            except Exception as e:
+                outcomes.append(e)
+    errors = [o for o in outcomes if isinstance(o, Exception) and not isinstance(o, Cancelled)]
+    if errors:
+        raise errors[0]
+    return [o for o in outcomes if not isinstance(o, Exception)]
 
 
 _LOG_LOCKS: dict[Path, threading.Lock] = {}

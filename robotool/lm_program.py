@@ -26,9 +26,8 @@ model's default and several candidates spread from 0.7 to 1.0 so that they diffe
 
 from __future__ import annotations
 
-import contextvars
+import functools
 import time
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal, Self
 
@@ -39,7 +38,7 @@ from robotool.compiled import CompiledInfo, check_fits, read_compiled, version_n
 from robotool.describe import describe
 from robotool.errors import RobotoolError
 from robotool.lm import DEFAULT_FORMAT_RETRIES
-from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage
+from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
 from robotool.methods import STAGES_BY_METHOD
 from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import extract_program
@@ -216,21 +215,9 @@ class Proposer(dspy.Module):
 
     def _sample(self, task: Task, description: str, shared: StageOutputs, settings: CallSettings) -> list[Candidate]:
         """Run the per-candidate stages for every candidate concurrently."""
-        with ThreadPoolExecutor(max_workers=self.candidates) as pool:
-            futures = []
-            for k in range(self.candidates):
-                context = contextvars.copy_context()  # carries dspy.context overrides into the thread
-                futures.append(pool.submit(context.run, self._candidate, task, description, shared, k, settings))
-            outcomes = []
-            for future in futures:
-                try:
-                    outcomes.append(future.result())
-                except Exception as e:
-                    outcomes.append(e)
-        errors = [o for o in outcomes if isinstance(o, Exception) and not isinstance(o, Cancelled)]
-        if errors:
-            raise errors[0]
-        return [o for o in outcomes if isinstance(o, Candidate)]
+        return run_concurrently(
+            [functools.partial(self._candidate, task, description, shared, k, settings) for k in range(self.candidates)]
+        )
 
     def _config(self, k: int | None) -> dict[str, Any]:
         """Sampling settings of candidate ``k`` (None: the Analyzer)."""

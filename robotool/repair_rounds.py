@@ -12,16 +12,15 @@ worse over a better earlier candidate.
 
 from __future__ import annotations
 
-import contextvars
+import functools
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
 import dspy
 
 from robotool import robots
-from robotool.lm_calls import CallSettings, Cancelled, Salvage, StageFailed, call_stage
+from robotool.lm_calls import CallSettings, Salvage, StageFailed, call_stage, run_concurrently
 from robotool.rollout import Rollout, notable_distances
 from robotool.signatures import FailureTrace, TracedCall, scene_context
 from robotool.signatures.repair import ShownTrace
@@ -109,7 +108,7 @@ def repair_rounds(
             break
         repaired |= {c.index for c in sources}
         first = max(c.index for c in candidates) + 1
-        made = _concurrently(propose, [(source, first + k) for k, source in enumerate(sources)])
+        made = run_concurrently([functools.partial(propose, source, first + k) for k, source in enumerate(sources)])
         new = [candidate for candidate, _ in made]
         candidates += new
         verify(new)
@@ -132,21 +131,6 @@ def _to_repair(candidates: list[Candidate], repaired: set[int], width: int) -> l
     """The best-progressing failures with simulator evidence that were not repaired yet."""
     failures = [c for c in candidates if c.rollouts and c.success_rate < 1.0 and c.index not in repaired]
     return rank(failures)[:width]
-
-
-def _concurrently(propose: Propose, jobs: list[tuple[Candidate, int]]) -> list[tuple[Candidate, RepairAttempt]]:
-    with ThreadPoolExecutor(max_workers=len(jobs)) as pool:
-        futures = [pool.submit(contextvars.copy_context().run, propose, source, index) for source, index in jobs]
-        outcomes: list[tuple[Candidate, RepairAttempt] | BaseException] = []
-        for future in futures:
-            try:
-                outcomes.append(future.result())
-            except Exception as e:
-                outcomes.append(e)
-    errors = [o for o in outcomes if isinstance(o, BaseException) and not isinstance(o, Cancelled)]
-    if errors:
-        raise errors[0]
-    return [o for o in outcomes if not isinstance(o, BaseException)]
 
 
 def propose_repair(
