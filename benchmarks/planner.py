@@ -1,12 +1,14 @@
 """Solve rate and planning time of the LM-free search planner, per task family and on the built-in tasks.
 
 For every family and seed, ``robotool.planner.solve`` runs on the generated instance; the table counts
-instances, solvable ones, solved/solvable, tool used where none is needed, false successes (a success
-reported on an unsolvable instance, or one the best candidate's rollouts do not show; must be 0), and
-the median and max planning time in seconds.
+instances, solvable ones, solved/solvable (the returned program succeeds in at least one world), the
+share of perturbed worlds in which the returned programs succeed on solvable instances, tool used where
+none is needed, false successes (a success reported on an unsolvable instance, or one the best
+candidate's rollouts do not show; must be 0), and the median and max planning time in seconds.
 
     python benchmarks/planner.py                                   # seeds 1000-1099, every family, built-ins
     python benchmarks/planner.py --seeds 1000-1019 --families milk_reaching can_grasping --no-builtins
+    python benchmarks/planner.py --jobs 2                          # two instances at once
     python benchmarks/planner.py --no-repair                       # without planner repair
     python benchmarks/planner.py --families                        # the built-in tasks only
 """
@@ -16,6 +18,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 from robotool import tasks
@@ -37,12 +40,14 @@ class Row:
     no_tool_instances: int = 0
     false_success: int = 0
     times: list[float] = field(default_factory=list)
+    world_rates: list[float] = field(default_factory=list)
     failures: list[str] = field(default_factory=list)
 
     def line(self) -> str:
         median = statistics.median(self.times) if self.times else 0.0
         rate = f"{self.solved}/{self.solvable} ({100 * self.solved / max(self.solvable, 1):.0f}%)"
-        return (f"| {self.name} | {self.instances} | {self.solvable} | {rate} | "
+        worlds = f"{100 * statistics.fmean(self.world_rates):.0f}%" if self.world_rates else "-"
+        return (f"| {self.name} | {self.instances} | {self.solvable} | {rate} | {worlds} | "
                 f"{self.needless_tool}/{self.no_tool_instances} | {self.false_success} | {median:.1f} | "
                 f"{max(self.times, default=0.0):.1f} |")
 
@@ -59,20 +64,52 @@ def shown(solution: Solution) -> bool:
     return best is not None and abs(best.success_rate - solution.success_rate) < 1e-9
 
 
-def record(row: Row, label: str, task: Task, solvable: bool, needs_tool: bool, worlds: int, repair: bool) -> None:
+@dataclass(frozen=True)
+class Attempt:
+    """One planner run on one instance, as the table counts it."""
+
+    label: str
+    solvable: bool
+    needs_tool: bool
+    success: bool
+    used_tool: bool
+    shown: bool
+    world_rate: float
+    seconds: float
+    failure: str
+
+
+def attempt(label: str, task: Task, solvable: bool, needs_tool: bool, worlds: int, repair: bool) -> Attempt:
+    """Run the planner on one instance."""
     started = time.perf_counter()
     solution = solve(task, worlds=worlds, repair=repair)
-    row.times.append(time.perf_counter() - started)
+    seconds = time.perf_counter() - started
+    best = next((c for c in solution.candidates if c.index == solution.best), None)
+    failure = "" if solution.success else (best.failure if best else None) or "no candidate ran"
+    return Attempt(label, solvable, needs_tool, solution.success, used_tool(solution), shown(solution),
+                   solution.success_rate, seconds,
+                   failure)
+
+
+def attempt_family(family: str, seed: int, worlds: int, repair: bool) -> Attempt:
+    """Generate one family instance and run the planner on it (a picklable job for worker processes)."""
+    instance = generate(family, seed)
+    return attempt(f"{family}/{seed}", instance.task, instance.solvable, instance.needs_tool, worlds, repair)
+
+
+def add(row: Row, result: Attempt) -> None:
+    row.times.append(result.seconds)
     row.instances += 1
-    row.solvable += solvable
-    row.no_tool_instances += not needs_tool
-    if solution.success:
-        row.solved += solvable
-        row.needless_tool += (not needs_tool) and used_tool(solution)
-        row.false_success += (not solvable) or not shown(solution)
-    elif solvable:
-        best = next((c for c in solution.candidates if c.index == solution.best), None)
-        row.failures.append(f"{label}: {(best.failure if best else None) or 'no candidate ran'}")
+    row.solvable += result.solvable
+    row.no_tool_instances += not result.needs_tool
+    if result.solvable:
+        row.world_rates.append(result.world_rate)
+    if result.success:
+        row.solved += result.solvable
+        row.needless_tool += (not result.needs_tool) and result.used_tool
+        row.false_success += (not result.solvable) or not result.shown
+    elif result.solvable:
+        row.failures.append(f"{result.label}: {result.failure}")
 
 
 def main() -> None:
@@ -83,27 +120,30 @@ def main() -> None:
     parser.add_argument("--no-builtins", action="store_true", help="skip the built-in tasks")
     parser.add_argument("--worlds", type=int, default=3, help="perturbed worlds per candidate")
     parser.add_argument("--verbose", action="store_true", help="print every unsolved solvable instance")
+    parser.add_argument("--jobs", type=int, default=1, help="instances planned at once, in worker processes")
     parser.add_argument("--no-repair", action="store_true", help="give up without re-parameterising failed programs")
     args = parser.parse_args()
     first, _, last = args.seeds.partition("-")
     seeds = range(int(first), int(last or first) + 1)
     rows = []
-    for family in families() if args.families is None else args.families:
-        row = Row(family)
-        for seed in seeds:
-            instance = generate(family, seed)
-            record(row, f"{family}/{seed}", instance.task, instance.solvable, instance.needs_tool, args.worlds,
-                   not args.no_repair)
-        rows.append(row)
-        print(row.line(), flush=True)
+    names = families() if args.families is None else args.families
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        pending = {family: [pool.submit(attempt_family, family, seed, args.worlds, not args.no_repair)
+                            for seed in seeds] for family in names}
+        for family in names:
+            row = Row(family)
+            for job in pending[family]:
+                add(row, job.result())
+            rows.append(row)
+            print(row.line(), flush=True)
     if not args.no_builtins:
         row = Row("built-in tasks")
         for name in tasks.names():
             task = tasks.load(name)
-            record(row, name, task, True, task.category != "no_tool", args.worlds, not args.no_repair)
+            add(row, attempt(name, task, True, task.category != "no_tool", args.worlds, not args.no_repair))
         rows.append(row)
-    print("\n| family | instances | solvable | solved/solvable | tool where not needed | false successes "
-          "| median s | max s |\n| --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("\n| family | instances | solvable | solved/solvable | worlds succeeded | tool where not needed "
+          "| false successes | median s | max s |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for row in rows:
         print(row.line())
     if args.verbose:
