@@ -7,7 +7,9 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field
 
 Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
-EventKind = Literal["clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell"]
+EventKind = Literal[
+    "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
+]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
 
 DISTANCES: frozenset[str] = frozenset({"gap", "step", "drop", "distance", "remaining", "outside_workspace"})
@@ -43,10 +45,11 @@ class Event(BaseModel):
 
     ``kind`` says what happened: a motion target ``clamped`` to a limit, a grasp that held ``object``
     (``grasped``) or held nothing (``grasp_failed``, with its ``cause``), an object ``pushed_out`` of
-    the robot's reach, a skill that ``stalled``, ran out of time (``timeout``) or was ``refused``, or the
-    robot ``fell``. ``call`` is the index of the skill call it happened in (None outside calls), ``limit``
-    the robot limit involved (e.g. ``workspace``), ``measured`` the numbers in SI units and ``detail`` the
-    controller's own words, if any.
+    the robot's reach, a skill that ``stalled``, ran out of time (``timeout``) or was ``refused``, the
+    robot ``fell``, or a fragile ``object`` that ``broke`` in a fall (``measured``: ``fall`` and
+    ``max_drop``; ``detail``: what it landed on). ``call`` is the index of the skill call it happened in
+    (None outside calls), ``limit`` the robot limit involved (e.g. ``workspace``), ``measured`` the
+    numbers in SI units and ``detail`` the controller's own words, if any.
     """
 
     kind: EventKind
@@ -79,6 +82,12 @@ class Event(BaseModel):
             )
         elif self.kind == "fell":
             text = "the robot fell" + (f": {self.detail}" if self.detail else "")
+        elif self.kind == "broke":
+            text = (
+                f"{self.object} broke: it fell {m.get('fall', 0.0):.2f} m"
+                + (f" onto {self.detail}" if self.detail else "")
+                + f" (a fall of more than {m.get('max_drop', 0.0):.2f} m onto something hard breaks it)"
+            )
         else:
             text = self.kind + (f": {self.detail}" if self.detail else "")
         return where + text

@@ -71,9 +71,8 @@ def end_lines(rollout: Rollout, *, goal_missed: bool = True) -> list[CaptionLine
     if rollout.error:
         lines.append(CaptionLine(f"world failed: {rollout.error}", RED))
     unmet = [name for name, ok in rollout.conditions.items() if not ok]
-    fallen = [name.removesuffix("_unbroken") for name in unmet if name.endswith("_unbroken")]
-    if fallen:
-        lines.append(CaptionLine(f"{', '.join(fallen)} broke in a fall", RED))
+    for broke in (e for e in rollout.events if e.kind == "broke"):
+        lines.append(CaptionLine(f"{broke.object} broke in a fall of {broke.measured.get('fall', 0.0):.2f} m", RED))
     if goal_missed:
         lines.append(CaptionLine("goal not reached" + (": " + ", ".join(unmet) + " false" if unmet else ""), RED))
     return lines

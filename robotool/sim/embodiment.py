@@ -109,6 +109,13 @@ def controller_conditions(controller: SkillController) -> dict[str, list[bool]]:
     return {} if conditions is None else conditions()
 
 
+def goal_events(goal: GoalTracker, world: int) -> list[Event]:
+    """What the goal saw happen in one world (such as a fragile object breaking), from the tracker's
+    ``events(world)`` method; none for a tracker without one."""
+    events = getattr(goal, "events", None)
+    return [] if events is None else events(world)
+
+
 class Embodiment(Protocol):
     """One robot type: how it enters the model and how its skills run."""
 

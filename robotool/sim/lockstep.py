@@ -44,6 +44,7 @@ from robotool.sim.embodiment import (
     SkillEnd,
     controller_conditions,
     describe_error,
+    goal_events,
 )
 from robotool.sim.goals import goal_tracker
 from robotool.sim.magnets import Magnets
@@ -345,6 +346,8 @@ class _Run:
         world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
         for name, held in controller_conditions(self.controller).items():
             world.conditions[name] = held[i]
+        seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in goal_events(self.goal, i)]
+        world.events = sorted(world.events + seen, key=lambda e: e.time)
         if state.failed[i] is not None and world.error is None:
             world.error = f"simulation failed: {state.failed[i]}"
 
@@ -441,6 +444,12 @@ class _TickUndo:
         changed = self.sim.state().eq_active != self.eq_active
         for w, eq in zip(*np.nonzero(changed), strict=True):
             self.sim.set_weld(np.array([w]), int(eq), bool(self.eq_active[w, eq]))
+
+
+def _during_calls(event: Event, time: float, calls: list[SkillCall]) -> Event:
+    """``event`` at ``time`` (seconds since the world's start), stamped with the call that was running then."""
+    running = [k for k, c in enumerate(calls) if c.started <= time <= c.ended]
+    return event.model_copy(update={"time": time, "call": running[-1] if running else None})
 
 
 def _events_of(end: SkillEnd, call: int, time: float) -> list[Event]:

@@ -4,7 +4,7 @@ Object extents come from the state: every object carries the corners of its part
 frame, placed each tick by its body pose. A fragile object's falls are followed every control tick:
 a fall starts when it was last resting (touching something other than the robot, nearly still) and
 ends when it touches something again; it breaks when its centre dropped more than ``max_drop`` and
-what it landed on is not soft.
+what it landed on is not soft. The first breaking fall of each world is kept as a ``broke`` event.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool import geometry
+from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 
@@ -68,7 +69,8 @@ class FallTracker:
         self.rest_height: np.ndarray | None = None
         self.airborne: np.ndarray | None = None
         self.broken: np.ndarray | None = None
-        self.worst = np.zeros(0)
+        self.breaks: dict[int, Event] = {}
+        self.name = scene.task.objects[index].name
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         touch = state.touching[:, self.bodies][:, :, self.others].any(axis=1)  # (nworld, nbody)
@@ -76,7 +78,7 @@ class FallTracker:
         height = state.xpos[:, self.body, 2]
         if self.rest_height is None:
             self.rest_height, self.airborne = height.copy(), ~supported
-            self.broken, self.worst = np.zeros_like(supported), np.zeros_like(height)
+            self.broken = np.zeros_like(supported)
         assert self.airborne is not None and self.broken is not None
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
         resting = active & supported & (speed < RESTING_SPEED)
@@ -86,9 +88,17 @@ class FallTracker:
             fall = float(self.rest_height[w] - height[w])
             on = self.scene.body_object[np.flatnonzero(touch[w])]
             soft = on.size > 0 and bool(np.all((on >= 0) & self.soft[np.maximum(on, 0)]))
-            self.worst[w] = max(self.worst[w], fall)
-            self.broken[w] |= fall > self.max_drop and not soft
+            if fall > self.max_drop and not soft and not self.broken[w]:
+                self.broken[w] = True
+                self.breaks[w] = Event(kind="broke", time=float(state.time[w]), object=self.name,
+                                       measured={"fall": fall, "max_drop": self.max_drop},
+                                       detail=self._names(on))
         self.airborne = np.where(active, ~supported, self.airborne)
+
+    def _names(self, objects: np.ndarray) -> str:
+        """What a fall landed on: object names, or the ground for the world's own bodies."""
+        names = sorted({self.scene.task.objects[k].name if k >= 0 else "the ground" for k in objects.tolist()})
+        return " and ".join(names) if names else "the ground"
 
     def _dof(self) -> np.ndarray:
         model = self.scene.model
@@ -119,3 +129,8 @@ class LoweredGoal:
             broken = self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)
             out[f"{self.name}_unbroken"] = ~broken
         return out
+
+    def events(self, world: int) -> list[Event]:
+        """The world's ``broke`` event, if its fragile object broke (time in the simulator's clock)."""
+        event = self.falls.breaks.get(world) if self.falls is not None else None
+        return [] if event is None else [event]

@@ -26,13 +26,15 @@ from robotool.render.run_videos import video_paths
 from robotool.render.still import render_scene
 from robotool.render.top_view import plan_figure, write_plan
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, end_lines, frame_times, render_video
-from robotool.rollout import Rollout, SkillCall
+from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.recorder import StateRecorder
 from robotool.task_model import Task
 
 SMALL = (240, 136)  # px
 VIDEO = (160, 96)  # px, even
 FPS = 10
+VASE_BROKE = Event(kind="broke", time=5.0, object="vase", measured={"fall": 0.62, "max_drop": 0.3},
+                   detail="the ground")
 
 
 def status(argv: list[str]) -> int:
@@ -182,15 +184,17 @@ def test_captions_mark_refusals_for_a_while_and_the_goal_at_the_end() -> None:
     assert [line.text for line in caption_at(rollout, 6.5)] == ["goal not reached: robot_on_sofa false"]
     won = rollout.model_copy(update={"success": True, "conditions": {"robot_on_sofa": True}})
     assert [line.text for line in caption_at(won, 6.0)] == ["goal reached: robot_on_sofa"]
-    broke = rollout.model_copy(update={"conditions": {"vase_low": True, "vase_unbroken": False}})
-    assert "vase broke in a fall" in [line.text for line in caption_at(broke, 7.0)]
+    broke = rollout.model_copy(update={"conditions": {"vase_low": True, "vase_unbroken": False},
+                                       "events": [VASE_BROKE]})
+    assert "vase broke in a fall of 0.62 m" in [line.text for line in caption_at(broke, 7.0)]
 
 
 def test_end_lines_leave_out_the_missed_goal_when_the_caption_says_it_already() -> None:
     failed = Rollout(world=0, seed=0, success=False, conditions={"vase_low": True, "vase_unbroken": False},
-                     error="NameError: x")
+                     events=[VASE_BROKE], error="NameError: x")
     told = [line.text for line in end_lines(failed)]
-    assert told == ["world failed: NameError: x", "vase broke in a fall", "goal not reached: vase_unbroken false"]
+    assert told == ["world failed: NameError: x", "vase broke in a fall of 0.62 m",
+                    "goal not reached: vase_unbroken false"]
     assert [line.text for line in end_lines(failed, goal_missed=False)] == told[:2]
 
 

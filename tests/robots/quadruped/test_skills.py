@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import pytest
@@ -12,6 +13,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.sim.backend import Perturbation
 from robotool.task_file import parse_task
+from robotool.verify import world_failure
 
 
 def run(task: Any, name: str, nworld: int, seed: int = 0) -> list[Rollout]:
@@ -124,6 +126,13 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: st
             "robot_shoved_nothing": True,
         }
         assert rollout.success is unbroken
+        broke = [e for e in rollout.events if e.kind == "broke"]
+        assert len(broke) == (0 if unbroken else 1)
+        if not unbroken:  # the failure reason gives the measured fall and what the vase landed on
+            assert broke[0].object == "glass_vase" and broke[0].measured["fall"] > broke[0].measured["max_drop"]
+            assert 0 < broke[0].time <= rollout.sim_time
+            assert re.search(r"glass_vase broke: it fell \d\.\d\d m onto the ground \(a fall of more than",
+                             world_failure(rollout) or "")
 
 
 def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
