@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import robots
+from robotool import geometry, robots
 from robotool.concepts import press_point
 from robotool.robots.registry import RobotType
 from robotool.scene import PRESS_TRAVEL, SceneObject
@@ -45,11 +45,10 @@ def _shape_words(obj: SceneObject) -> str:
 
 
 def _object_line(obj: SceneObject, robot: RobotType) -> str:
-    parts = [
-        f"- {obj.name}: {_shape_words(obj)}; centre {vector_text(obj.center)}, size {vector_text(obj.size)}",
-    ]
+    size = geometry.axis_aligned_size(obj.size, geometry.rotation_matrix(obj.rpy))
+    parts = [f"- {obj.name}: {_shape_words(obj)}; centre {vector_text(obj.center)}, size {vector_text(size)}"]
     if any(obj.rpy):
-        parts.append(f"rotated by roll/pitch/yaw {vector_text(obj.rpy)} degrees")
+        parts.append(f"turned by roll/pitch/yaw {vector_text(obj.rpy)} degrees; its own size {vector_text(obj.size)}")
     parts.append(f"top at z = {number_text(obj.top)}")
     if obj.movable:
         parts.append(f"movable, mass {number_text(obj.effective_mass)} kg")
@@ -97,7 +96,8 @@ def describe(task: Task) -> str:
         f"Task: {task.instruction}",
         f"Success: {_goal_sentence(task)}",
         "",
-        f"Scene (metres, world frame, z up; {robot.ground} is z = 0; sizes are bounding boxes along x, y, z):",
+        f"Scene (metres, world frame, z up; {robot.ground} is z = 0; sizes are along x, y, z, a turned object's "
+        "axes matched to the nearest of them):",
         *(_object_line(o, robot) for o in task.objects),
         "",
         *robot.describe(task),

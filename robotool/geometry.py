@@ -44,6 +44,22 @@ def rotation_matrix(rpy_deg: tuple[float, float, float] | np.ndarray) -> np.ndar
     return rz @ ry @ rx
 
 
+def axis_aligned_size(size: tuple[float, float, float] | np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """A box's size along the world x, y, z after ``rotation`` (box frame to world), each world axis taking the
+    box axis nearest to it: a quarter turn about z swaps the x and y sizes, a tilt of a few degrees changes
+    nothing."""
+    weight = np.abs(np.asarray(rotation, dtype=float))  # [world axis, box axis]
+    out = np.zeros(3)
+    free_world, free_box = {0, 1, 2}, {0, 1, 2}
+    for flat in np.argsort(-weight, axis=None, kind="stable"):
+        world, box = divmod(int(flat), 3)
+        if world in free_world and box in free_box:
+            out[world] = size[box]
+            free_world.remove(world)
+            free_box.remove(box)
+    return out
+
+
 @dataclass(frozen=True)
 class Part:
     """A convex primitive in the world frame.

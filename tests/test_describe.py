@@ -6,6 +6,7 @@ import pytest
 
 from robotool import tasks
 from robotool.describe import describe
+from robotool.task_file import parse_task
 
 
 @pytest.mark.parametrize("name", tasks.names())
@@ -31,3 +32,14 @@ def test_arm_numbers_and_limits() -> None:
     assert "graspable point [0.568, 0.01, 0.135]" in text
     assert "x in [-0.3, 0.45]" in text
     assert "move_to_position(position)" in text
+
+
+def test_a_turned_object_is_described_along_the_world_axes() -> None:
+    data = tasks.load("sofa_climbing").model_dump(mode="json", exclude_defaults=True)
+    box = next(o for o in data["objects"] if o["name"] == "box_1")
+    box["rpy"] = [0, 0, 90]
+    own = box["size"]
+    text = describe(parse_task(data))
+    line = next(line for line in text.splitlines() if line.startswith("- box_1:"))
+    turned = "[" + ", ".join(f"{v:g}" for v in (own[1], own[0], own[2])) + "]"
+    assert f"size {turned}" in line and "turned by roll/pitch/yaw [0, 0, 90] degrees" in line

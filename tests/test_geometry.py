@@ -148,3 +148,21 @@ def test_distance_to_parts_is_zero_inside_and_euclidean_outside() -> None:
     rod = geometry.object_parts(Solid("cylinder", (0.0, 0.0, 0.5), (0.2, 0.2, 1.0)))
     assert geometry.distance_to_parts(rod, (0.3, 0.4, 0.5)) == pytest.approx(0.4)  # 0.5 from the axis, radius 0.1
     assert geometry.distance_to_parts(rod, (0.0, 0.0, 1.2)) == pytest.approx(0.2)  # above the top face
+
+
+@pytest.mark.parametrize(
+    ("rpy", "expected"),
+    [
+        ((0, 0, 0), [2.0, 0.5, 0.1]),
+        ((0, 0, 90), [0.5, 2.0, 0.1]),
+        ((0, 0, -88), [0.5, 2.0, 0.1]),
+        ((0, 0, 2), [2.0, 0.5, 0.1]),  # a perturbation's small turn changes nothing
+        ((90, 0, 0), [2.0, 0.1, 0.5]),  # tipped onto its long edge
+        ((0, 0, 180), [2.0, 0.5, 0.1]),
+    ],
+)
+def test_axis_aligned_size_matches_the_box_axes_to_the_nearest_world_axes(
+    rpy: tuple[float, float, float], expected: list[float]
+) -> None:
+    size = geometry.axis_aligned_size((2.0, 0.5, 0.1), geometry.rotation_matrix(rpy))
+    assert size.tolist() == pytest.approx(expected)

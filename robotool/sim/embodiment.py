@@ -38,11 +38,14 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
 
+from robotool import geometry
+
 if TYPE_CHECKING:
     import mujoco
 
     from robotool.rollout import Event
     from robotool.sim.backend import BatchedSim, BatchState
+    from robotool.sim.compiled_scene import Scene
     from robotool.task_model import Task
 
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
@@ -100,6 +103,16 @@ def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:
     mask = np.zeros(nworld, dtype=bool)
     mask[slice(None) if worlds is None else np.asarray(worlds, dtype=int)] = True
     return mask
+
+
+def size_now(scene: Scene, state: BatchState, world: int, index: int) -> list[float]:
+    """``get_size`` of a task object in one world: its size along x, y, z as it is turned now (see
+    :func:`robotool.geometry.axis_aligned_size`); a cloth, which drapes, keeps its laid-out size."""
+    obj = scene.task.objects[index]
+    turned = (
+        geometry.rotation_matrix(obj.rpy) if obj.shape == "cloth" else state.xmat(scene.object_body[index])[world]
+    )
+    return [float(v) for v in geometry.axis_aligned_size(obj.size, turned)]
 
 
 def controller_conditions(controller: SkillController) -> dict[str, list[bool]]:

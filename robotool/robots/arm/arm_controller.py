@@ -28,7 +28,7 @@ from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, is_sheet
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.embodiment import QueryError, SkillEnd, world_mask
+from robotool.sim.embodiment import QueryError, SkillEnd, size_now, world_mask
 from robotool.task_model import Task
 
 GRIPPER_BODY = "robot_gripper"
@@ -490,7 +490,7 @@ class ArmController:
         if skill == "get_graspable_point":
             return [float(v) for v in graspable_points(self.scene, state)[world, i]]
         if skill == "get_size":
-            return [float(v) for v in self.scene.task.objects[i].size]
+            return size_now(self.scene, state, world, i)
         raise QueryError(f"{skill} is not a query skill of the arm")
 
 

@@ -42,7 +42,10 @@ ARM_SKILLS: tuple[SkillSpec, ...] = (
         params=QUERY_NAME,
         returns="[x, y, z]",
         kind="query",
-        semantics="Bounding-box size of the named object, in metres.",
+        semantics=(
+            "Size of the named object along x, y, z as it is turned right now (a quarter turn about z swaps x "
+            "and y), in metres."
+        ),
     ),
     SkillSpec(
         name="get_workspace_range",

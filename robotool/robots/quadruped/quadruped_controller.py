@@ -58,7 +58,7 @@ from robotool.robots.quadruped.terrain import (
 )
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.embodiment import QueryError, SkillEnd, error_end, world_mask
+from robotool.sim.embodiment import QueryError, SkillEnd, error_end, size_now, world_mask
 from robotool.sim.object_goals import local_corners, world_corners
 from robotool.task_model import Task
 
@@ -234,7 +234,7 @@ class QuadrupedController:
         except KeyError as e:
             raise QueryError(str(e.args[0])) from None
         if skill == "get_size":
-            return list(self.scene.task.objects[index].size)
+            return size_now(self.scene, state, world, index)
         return [float(v) for v in self._centers(state)[world, index]]
 
     # -- skill plans -------------------------------------------------------------------------------

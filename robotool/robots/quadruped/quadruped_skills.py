@@ -35,7 +35,10 @@ QUADRUPED_SKILLS: tuple[SkillSpec, ...] = (
         params=QUERY_NAME,
         returns="[x, y, z]",
         kind="query",
-        semantics="Bounding-box size of the named object (or 'robot'), in metres.",
+        semantics=(
+            "Size of the named object (or 'robot') along x, y, z as it is turned right now (a quarter turn "
+            "about z swaps x and y), in metres."
+        ),
     ),
     SkillSpec(
         name="walk_to_position",
