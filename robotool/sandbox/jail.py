@@ -7,8 +7,8 @@ starts and reported as :class:`SandboxLayers`:
 
 - **seccomp**: a seccomp-bpf filter (compiled once by libseccomp, through ``pyseccomp``), loaded in
   each worker right before the program starts, allows only what a running worker needs: reading
-  and writing its socket to the host, memory management (never executable), time, futexes, signal
-  return and exit.
+  and writing its socket to the host, memory management (never executable, only an allocator's
+  advice), time, plain futex waits and wakes, signal return and exit.
   Every other system call (open, socket, exec, fork, kill, ptrace, sigaction, ...) fails with
   ``EPERM``; a call through a foreign ABI (i386, x32) kills the worker.
 - **namespaces**: the zygote moves into new PID, network, IPC and mount namespaces (inside a user
@@ -48,8 +48,8 @@ SOCKET_FD = 3
 """The worker's socket to the host: the only descriptor it may read or write under seccomp."""
 
 ALLOWED_SYSCALLS: tuple[str, ...] = (
-    "munmap", "mremap", "brk", "madvise",
-    "futex", "clock_gettime", "clock_getres", "gettimeofday", "clock_nanosleep", "nanosleep", "sched_yield",
+    "munmap", "mremap", "brk",
+    "clock_gettime", "clock_getres", "gettimeofday", "clock_nanosleep", "nanosleep", "sched_yield",
     "rt_sigreturn", "getpid", "gettid", "exit", "exit_group",
 )  # fmt: skip
 """System calls a running worker may make with any arguments (found by tracing workers running numpy)."""
@@ -61,6 +61,19 @@ NO_EXEC_SYSCALLS: tuple[str, ...] = ("mmap", "mprotect")
 """System calls a running worker may make only without ``PROT_EXEC``: it never needs new machine code."""
 
 _PROT_EXEC = 4
+
+FUTEX_OPERATIONS: tuple[int, ...] = (0, 1, 9, 10)
+"""``futex`` operations a running worker may use, on its private memory only: wait and wake, plain and with a
+bit set (glibc's locks and condition variables). Not the priority-inheritance and requeue operations, whose
+kernel code is behind several root exploits."""
+
+_FUTEX_PRIVATE = 128
+_FUTEX_CLOCK_REALTIME = 256
+
+MADVISE_ADVICE: tuple[int, ...] = (0, 1, 2, 3, 4, 8, 14, 15)
+"""``madvise`` advice a running worker may give: what allocators use (normal, random, sequential, will
+need, don't need, free, huge pages or not). Not page merging across processes (a side channel), page-out,
+population, fork behaviour or memory poisoning."""
 
 _NAMESPACES: dict[str, int] = {"PID": 0x20000000, "network": 0x40000000, "IPC": 0x08000000, "mount": 0x00020000}
 _CLONE_NEWUSER = 0x10000000
@@ -222,6 +235,12 @@ def _syscall_filter() -> tuple[Any, str | None]:
             syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(0, seccomp.EQ, SOCKET_FD))
         for name in NO_EXEC_SYSCALLS:
             syscall_filter.add_rule(seccomp.ALLOW, name, seccomp.Arg(2, seccomp.MASKED_EQ, _PROT_EXEC, 0))
+        futex_mask = 0xFFFFFFFF & ~_FUTEX_CLOCK_REALTIME  # the kernel reads the operation's low 32 bits only
+        for operation in FUTEX_OPERATIONS:
+            private = seccomp.Arg(1, seccomp.MASKED_EQ, futex_mask, operation | _FUTEX_PRIVATE)
+            syscall_filter.add_rule(seccomp.ALLOW, "futex", private)
+        for advice in MADVISE_ADVICE:
+            syscall_filter.add_rule(seccomp.ALLOW, "madvise", seccomp.Arg(2, seccomp.EQ, advice))
         with tempfile.TemporaryFile() as compiled:
             syscall_filter.export_bpf(compiled)
             compiled.seek(0)

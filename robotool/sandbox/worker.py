@@ -11,6 +11,7 @@ and blocks for the answer. Everything the worker says goes to the host through i
 from __future__ import annotations
 
 import builtins
+import inspect
 import json
 import math
 import os
@@ -59,15 +60,20 @@ class _NumpyFunction:
     only need numbers. The repr names the function, not where it lives in memory.
     """
 
-    __slots__ = ("_function", "_name")
+    __slots__ = ("_dtype_position", "_function", "_name")
 
     def __init__(self, name: str, function: Callable[..., Any]):
         self._name = name
         self._function = function
+        self._dtype_position = _dtype_position(function)
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        if any(kwargs.get(k) is not None for k in _LOOP_TYPE_KEYWORDS):
+            raise TypeError(f"{self._name}: signature= is not allowed in programs; use dtype= with a numeric type")
         if "dtype" in kwargs:
             _check_dtype(np.dtype(kwargs["dtype"]))
+        if self._dtype_position is not None and len(args) > self._dtype_position:
+            _check_dtype(np.dtype(args[self._dtype_position]))
         result = self._function(*args, **kwargs)
         for value in result if isinstance(result, tuple) else (result,):
             if isinstance(value, np.ndarray):
@@ -76,6 +82,17 @@ class _NumpyFunction:
 
     def __repr__(self) -> str:
         return f"<function {self._name}>"
+
+
+_LOOP_TYPE_KEYWORDS = ("signature", "sig")
+"""Keywords of numpy's ufuncs that choose the loop's types, object loops included (``sig`` is an alias)."""
+
+
+def _dtype_position(function: Callable[..., Any]) -> int | None:
+    """Where ``function`` takes ``dtype`` as a positional argument (``np.var(a, axis, dtype)``), or None."""
+    parameters = list(inspect.signature(function).parameters.values())
+    positional = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    return next((i for i, p in enumerate(parameters) if p.name == "dtype" and p.kind in positional), None)
 
 
 def _check_dtype(dtype: np.dtype[Any]) -> None:

@@ -305,6 +305,16 @@ def test_kernel_interfaces_to_other_processes_and_descriptors_are_denied() -> No
     assert set(outcomes.values()) == {"1"} and all(o.endswith(" denied") for o in outcomes), ended.output
 
 
+def test_allowed_system_calls_refuse_the_arguments_a_worker_never_needs() -> None:
+    """futex and madvise are allowed, but not their priority-inheritance and requeue operations, shared
+    futexes, page merging across processes, page-out or poisoning; executable memory stays refused however
+    the protection is spelt. Each fails with EPERM, from the filter."""
+    ended = run_unchecked((ESCAPES / "allowed_call_arguments.py").read_text())
+    assert ended.error is None, ended.error
+    lines = ended.output.splitlines()
+    assert len(lines) == 22 and all(line.endswith(" denied 1") for line in lines), ended.output
+
+
 def test_a_worker_holds_no_descriptor_but_its_standard_streams_and_socket() -> None:
     """/proc/self/fd cannot be listed in the empty root, but mmap (allowed) tells a closed descriptor (EBADF)
     from an open one: nothing the host or the zygote had open is left to the program."""

@@ -12,7 +12,7 @@ from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.sandbox import ProgramRejected, SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.messages import max_world_bytes
 from robotool.sandbox.session import OUTPUT_CUT
-from robotool.sandbox.worker import UNDESCRIBABLE
+from robotool.sandbox.worker import UNDESCRIBABLE, _import
 
 LIMITS = SandboxLimits(cpu_s=2.0, wall_s=20.0, memory_mb=128, max_output_chars=5_000, max_skill_calls=50)
 
@@ -67,6 +67,29 @@ def test_no_host_path_appears_in_an_error() -> None:
 def test_numpy_functions_refuse_object_and_structured_arrays(code: str) -> None:
     ended = run(code)
     assert ended.error is not None and "not allowed in programs" in ended.error
+
+
+@pytest.mark.parametrize(
+    ("function", "args", "typed"),
+    [
+        ("var", ([1.0, 2.0],), ((None, "O"), {})),  # np.var(a, axis, dtype): an object loop, a plain result
+        ("sum", ([1.0, 2.0],), ((None, "O"), {})),
+        ("cumsum", ([1.0, 2.0],), ((None, "V8"), {})),
+        ("power", (2, 3), ((), {"sig": "OO->O"})),  # numpy's hidden alias of signature=
+        ("maximum", (1.0, 2.0), ((), {"signature": ("O", "O", "O")})),
+        ("clip", ([1.0], 0, 1), ((), {"signature": "OOO->O"})),  # clip passes its keywords on to a ufunc
+    ],
+)
+def test_numpy_functions_refuse_object_loops_however_the_type_is_passed(
+    function: str, args: tuple[object, ...], typed: tuple[tuple[object, ...], dict[str, object]]
+) -> None:
+    """The worker's numpy functions check a dtype given by position and refuse loop signatures before
+    numpy runs: the validator cannot see through ``f(*args, **kwargs)`` nor values held in variables."""
+    numpy_function = getattr(_import("numpy"), function)
+    more_args, kwargs = typed
+    with pytest.raises(TypeError, match="not allowed in programs"):
+        numpy_function(*args, *more_args, **kwargs)
+    assert numpy_function(*args) is not None  # the same call without the type works
 
 
 @pytest.mark.parametrize(
