@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import ast
 
-from robotool.sandbox.validate import ProgramRejected, validate
+from robotool.sandbox.validate import ProgramRejected, check_program_size, parse_program, validate
 
 
 def check_user_program(code: str, embodiment: str) -> str:
@@ -16,12 +16,13 @@ def check_user_program(code: str, embodiment: str) -> str:
 
     Raises :class:`ProgramRejected`; a syntax error names its line and column.
     """
+    check_program_size(code)
     try:
         ast.parse(code)
     except SyntaxError as e:
         where = f" at column {e.offset}" if e.offset else ""
         raise ProgramRejected(e.lineno, "syntax", f"syntax error{where}: {e.msg}") from None
-    except (ValueError, RecursionError, MemoryError) as e:
-        raise ProgramRejected(None, "syntax", f"program cannot be parsed: {e or type(e).__name__}") from None
+    except (ValueError, RecursionError, MemoryError):
+        parse_program(code)  # raises the same rejection as for a generated program, with its reason
     validate(code, embodiment)
     return code

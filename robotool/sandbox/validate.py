@@ -12,8 +12,9 @@ refuses. Runaway recursion is stopped by the worker's limits like any other runa
 
 Refused: other imports, classes, ``try``/``with``/``raise``/``global``/``yield``/``async``, any name
 or attribute starting with ``_``, attribute assignment, builtins outside the allowlist (``open``,
-``exec``, ``getattr``, ``type``...), rebinding a skill, module or builtin name, and skill calls whose
-literal arguments the embodiment cannot take.
+``exec``, ``getattr``, ``type``...), rebinding a skill, module or builtin name, numpy types that are not
+numeric (``dtype=``, ufunc loop ``signature=``), ``*``/``**`` into a method on a value, and skill calls
+whose literal arguments the embodiment cannot take.
 
 Why not RestrictedPython (9.0 was read for this): it compiles a much larger language (classes,
 imports through a guarded ``__import__``, any attribute not starting with ``_``) and its safety rests
@@ -99,6 +100,12 @@ def check_parse_cost(text: str, what: str) -> None:
         raise ProgramRejected(None, what, f"{what} has more than {MAX_BRACES} '{{' characters")
 
 
+def check_program_size(code: str) -> None:
+    """Refuse program text longer than :data:`MAX_PROGRAM_CHARS` before anything parses it."""
+    if len(code) > MAX_PROGRAM_CHARS:
+        raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
+
+
 def parse_program(code: str) -> ast.Module:
     """Parse program text, turning every way it can fail into a :class:`ProgramRejected`."""
     check_parse_cost(code, "program")
@@ -118,8 +125,7 @@ def validate(code: str, embodiment: str) -> None:
     The first problem in source order is reported. The work is linear in the program's length:
     one parse, one visit per node, and only the reported problem's source text is cut out.
     """
-    if len(code) > MAX_PROGRAM_CHARS:
-        raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
+    check_program_size(code)
     tree = parse_program(code)
     checker = _Checker(embodiment)
     try:

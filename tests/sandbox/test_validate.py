@@ -11,6 +11,7 @@ import pytest
 
 from robotool.sandbox import ProgramRejected, validate
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG
+from robotool.sandbox.strict import check_user_program
 
 ARM_PROGRAM = """\
 import numpy as np
@@ -102,6 +103,21 @@ def test_pathological_text_is_rejected_not_crashing(code: str) -> None:
 def test_deep_nesting_is_named_in_the_rejection() -> None:
     with pytest.raises(ProgramRejected, match=r"^program is nested too deeply$"):
         validate("f = " + "lambda: " * 11_000 + "1", "arm")
+
+
+@pytest.mark.parametrize(
+    ("code", "words"),
+    [
+        ("x = " + "-" * 99_000 + "1", "^program is nested too deeply$"),  # the parser runs out of memory
+        ("x = 1" + " + 1" * 24_000, "^program is nested too deeply$"),  # the parser's recursion limit
+        ("x = 1\n" * 20_000, "^program is longer than 100000 characters$"),  # refused before it is parsed
+    ],
+)
+def test_a_users_own_file_that_cannot_be_parsed_is_told_why(code: str, words: str) -> None:
+    """The strict reading of a program file gives the same reasons as the validator (a parser that runs out
+    of memory raised an empty MemoryError, shown as "program cannot be parsed: ")."""
+    with pytest.raises(ProgramRejected, match=words):
+        check_user_program(code, "arm")
 
 
 def test_allowlisted_names_exist_where_the_worker_looks_them_up() -> None:
