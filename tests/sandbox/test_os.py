@@ -315,6 +315,16 @@ def test_allowed_system_calls_refuse_the_arguments_a_worker_never_needs() -> Non
     assert len(lines) == 22 and all(line.endswith(" denied 1") for line in lines), ended.output
 
 
+def test_scheduling_kernel_state_and_new_descriptor_kinds_are_denied() -> None:
+    """Real-time scheduling (which would starve the host), I/O priority, kcmp, other processes' robust lists
+    and pages, memory policy, the kernel log, mincore, the LDT, timer/event/signal/notify descriptors, the new
+    mount API, landlock, futex2, rseq, close_range, accounting, kexec, signal actions: each fails with EPERM."""
+    ended = run_unchecked((ESCAPES / "scheduling_and_kernel_state.py").read_text())
+    assert ended.error is None, ended.error
+    lines = ended.output.splitlines()
+    assert len(lines) == 34 and all(line.endswith(" denied 1") for line in lines), ended.output
+
+
 def test_a_worker_holds_no_descriptor_but_its_standard_streams_and_socket() -> None:
     """/proc/self/fd cannot be listed in the empty root, but mmap (allowed) tells a closed descriptor (EBADF)
     from an open one: nothing the host or the zygote had open is left to the program."""
