@@ -154,7 +154,9 @@ def print_trace(rollout: Rollout, console: Console) -> None:
     if rollout.error:
         console.print(f"  [red]error:[/] {_shown(rollout.error)}")
     if rollout.output:
-        console.print(f"  printed: {terminal_safe(rollout.output.strip()[:500])}", markup=False, highlight=False)
+        label = "  printed: "
+        printed = terminal_safe(rollout.output.strip()[:500]).replace("\n", "\n" + " " * len(label))
+        console.print(label + printed, markup=False, highlight=False)  # indented: no line poses as the report's
 
 
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:

@@ -16,6 +16,7 @@ HOSTILE_PRINTS = (
     'print("\\x1b]0;pwned\\x07", end="")  # window title\n'
     'print("\\x1b]52;c;cm0gLXJmIH4=\\x07", end="")  # clipboard (OSC 52)\n'
     'print("\\r\\x1b[32mevery world succeeded\\x1b[0m \\u202e")  # a fake green verdict\n'
+    'print("\\nall worlds succeeded: success rate 100%")  # a line shaped like the report\'s own\n'
     'move_to_position(get_center("milk\\x1b[31m"))\n'
 )
 
@@ -45,6 +46,7 @@ def test_run_report_shows_program_bytes_escaped(
     for raw in ("\x1b", "\x07", "\r", "\u202e"):  # captured output is not a terminal: rich adds none of these
         assert raw not in out, repr(raw)
     assert "\\x1b[2J" in out and "\\x1b]52;c;" in out
+    assert not [line for line in out.splitlines() if line.startswith("all worlds succeeded")], out
     assert "sandbox: " in out and "seccomp filter" in out
 
 
