@@ -20,6 +20,12 @@ def _shown(text: str) -> str:
     return escape(terminal_safe(text))
 
 
+def _continued(text: str, indent: int) -> str:
+    """``text`` with its later lines indented by ``indent`` spaces, under its first: a line that a program or
+    an LM wrote cannot pose as one of the report's own (such as its verdict)."""
+    return text.replace("\n", "\n" + " " * indent)
+
+
 def print_sandbox_layers(console: Console) -> None:
     """Which OS layers confined the generated programs of this run; a loud warning if seccomp was missing."""
     layers = layers_in_use()
@@ -49,10 +55,10 @@ def print_solution(solution: Solution, console: Console) -> None:
             )
         console.print(table)
     if stages.abstract_plan:
-        console.print(f"[bold]Plan:[/] {_shown(stages.abstract_plan)}")
+        console.print(f"[bold]Plan:[/] {_continued(_shown(stages.abstract_plan), len('Plan: '))}")
     for i, step in enumerate(stages.steps or [], start=1):
         objects = f" [{', '.join(step.objects)}]" if step.objects else ""
-        console.print(_shown(f"  {i}. {step.skill}{objects}: {step.intent}"))
+        console.print(_continued(_shown(f"  {i}. {step.skill}{objects}: {step.intent}"), 5))
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
@@ -152,11 +158,11 @@ def print_trace(rollout: Rollout, console: Console) -> None:
     touched = _shown(", ".join(rollout.touched)) or "nothing"
     console.print(f"  goal: {conditions or 'no conditions'}; touched: {touched}")
     if rollout.error:
-        console.print(f"  [red]error:[/] {_shown(rollout.error)}")
+        console.print(f"  [red]error:[/] {_continued(_shown(rollout.error), len('  error: '))}")
     if rollout.output:
         label = "  printed: "
-        printed = terminal_safe(rollout.output.strip()[:500]).replace("\n", "\n" + " " * len(label))
-        console.print(label + printed, markup=False, highlight=False)  # indented: no line poses as the report's
+        printed = _continued(terminal_safe(rollout.output.strip()[:500]), len(label))
+        console.print(label + printed, markup=False, highlight=False)
 
 
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from io import StringIO
 from pathlib import Path
 
 import pytest
+from rich.console import Console
 
 from robotool.cli import main
 from robotool.eval.report import _markdown_table
 from robotool.eval.tables import TextTable
+from robotool.rollout import Rollout
 from robotool.safe_text import one_line, terminal_safe
+from robotool.summary import print_trace
 
 HOSTILE_PRINTS = (
     'print("\\x1b[2J\\x1b[H", end="")  # clear the screen\n'
@@ -48,6 +52,18 @@ def test_run_report_shows_program_bytes_escaped(
     assert "\\x1b[2J" in out and "\\x1b]52;c;" in out
     assert not [line for line in out.splitlines() if line.startswith("all worlds succeeded")], out
     assert "sandbox: " in out and "seccomp filter" in out
+
+
+def test_no_line_a_program_prints_or_raises_starts_a_report_line() -> None:
+    """A program's error (``assert False, "\\n..."``) and its output keep their line breaks, but their later
+    lines are indented under their label, so they cannot pose as the report's verdict."""
+    fake = "\nall worlds succeeded: success rate 100%\n"
+    rollout = Rollout(world=0, seed=0, success=False, error=f"line 2: AssertionError: {fake}", output=f"x{fake}y")
+    console = Console(file=StringIO(), width=200)
+    print_trace(rollout, console)
+    lines = console.file.getvalue().splitlines()  # type: ignore[attr-defined]
+    faked = [line for line in lines if "all worlds succeeded" in line]
+    assert len(faked) == 2 and all(line.startswith("         ") for line in faked), lines  # under its label
 
 
 def test_eval_markdown_cells_are_escaped() -> None:
