@@ -74,10 +74,11 @@ class _NumpyFunction:
             _check_dtype(np.dtype(kwargs["dtype"]))
         if self._dtype_position is not None and len(args) > self._dtype_position:
             _check_dtype(np.dtype(args[self._dtype_position]))
+        for array in _arrays_in((*args, *kwargs.values())):
+            _check_dtype(array.dtype)
         result = self._function(*args, **kwargs)
-        for value in result if isinstance(result, tuple) else (result,):
-            if isinstance(value, np.ndarray):
-                _check_dtype(value.dtype)
+        for array in _arrays_in(result if isinstance(result, tuple) else (result,)):
+            _check_dtype(array.dtype)
         return result
 
     def __repr__(self) -> str:
@@ -93,6 +94,15 @@ def _dtype_position(function: Callable[..., Any]) -> int | None:
     parameters = list(inspect.signature(function).parameters.values())
     positional = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
     return next((i for i, p in enumerate(parameters) if p.name == "dtype" and p.kind in positional), None)
+
+
+def _arrays_in(values: tuple[Any, ...]) -> list[np.ndarray[Any, Any]]:
+    """The arrays among ``values`` and inside the lists and tuples among them (``np.stack([a, b])``)."""
+    found = []
+    for value in values:
+        items = value if isinstance(value, list | tuple) else (value,)
+        found += [item for item in items if isinstance(item, np.ndarray)]
+    return found
 
 
 def _check_dtype(dtype: np.dtype[Any]) -> None:
