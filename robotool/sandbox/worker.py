@@ -129,8 +129,8 @@ def serve(fd: int, jail: WorkerJail) -> NoReturn:
 
     ``fd`` is this worker's socket to the host. The program arrives when its session is created and
     the go when the runner starts it, so the set-up overlaps with whatever the host does in between
-    (building and settling the simulation). The seccomp filter is loaded once the program is
-    compiled, before the go. Never returns.
+    (building and settling the simulation). The seccomp filter is loaded once the limits are set,
+    before the program's text is compiled: the compiler is the first code that reads it. Never returns.
     """
     null = os.open(os.devnull, os.O_RDWR)
     with open("/proc/self/statm") as f:
@@ -142,8 +142,8 @@ def serve(fd: int, jail: WorkerJail) -> NoReturn:
         limits = SandboxLimits.model_validate(start["limits"])
         _apply_limits(limits, address_space)
         program = _Program(conn, tuple(SkillSpec.model_validate(s) for s in start["skills"]), limits)
-        code = program.prepare(start["code"], python_checks=start.get("python_checks", True))
         jail.seal()
+        code = program.prepare(start["code"], python_checks=start.get("python_checks", True))
         conn.recv_bytes()
         error = program.run(code)
         conn.send_bytes(WorkerMessage(error=error, output=program.take_output()).model_dump_json().encode())

@@ -374,6 +374,47 @@ def test_a_worker_still_dies_with_its_zygote_after_dropping_its_uid() -> None:
     assert reply == bytes([9, os.geteuid() == 0, 1])
 
 
+def test_the_program_text_is_compiled_only_under_the_seccomp_filter() -> None:
+    """Compiling hostile text is the first thing that reads it: were the compiler crashable into running
+    code, that code must already be filtered. A worker with a jail double reports when it compiled."""
+    import socket
+    from multiprocessing.connection import Connection
+
+    from robotool import robots
+    from robotool.sandbox import worker
+    from robotool.sandbox.messages import GO, WorkerMessage, encode_start
+
+    class RecordingJail:
+        sealed = False
+
+        def enter(self) -> None:
+            pass
+
+        def seal(self) -> None:
+            self.sealed = True
+
+    host_end, worker_end = socket.socketpair()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            jail = RecordingJail()
+            real_compile = compile
+            worker.compile = lambda *args: real_compile(*args) if jail.sealed else SyntaxError("compiled unfiltered")
+            worker.serve(worker_end.fileno(), jail)  # type: ignore[arg-type]
+        finally:
+            os._exit(1)
+    worker_end.close()
+    host = Connection(host_end.detach())
+    try:
+        host.send_bytes(encode_start("x = 1\n", robots.get("arm").skills, LIMITS, python_checks=True))
+        host.send_bytes(GO)
+        ended = WorkerMessage.model_validate_json(host.recv_bytes())
+    finally:
+        host.close()
+        os.waitpid(pid, 0)
+    assert ended.error is None
+
+
 def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatch) -> None:
     """Without libseccomp the probe reports the filter missing, and the reports warn in red."""
     from io import StringIO
