@@ -106,8 +106,8 @@ def test_numpy_functions_refuse_object_array_arguments() -> None:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="numpy turns a list holding an integer beyond 64 bits into an object array inside an array operator, "
-    "and array operators run unwrapped: the program can hold an object array (the OS layers still hold)",
+    reason="numpy turns a list holding an integer beyond 64 bits into an object array inside an array operator or "
+    "method (x.clip(0, [10**30])), which run unwrapped: the program can hold an object array (the OS layers hold)",
 )
 def test_arithmetic_with_an_integer_beyond_64_bits_gives_no_object_array() -> None:
     ended = run("import numpy as np\nboxed = np.zeros(2) + [10 ** 30, 1]\nboxed[0] = print\nprint(boxed)\n")
