@@ -72,6 +72,10 @@ Missing on purpose: ``format``/``format_map`` (format fields reach attributes by
 NUMERIC_TYPE_NAMES: frozenset[str] = frozenset({"float", "int", "bool", "float64", "int64", "float32", "int32"})
 """What ``.astype(...)`` may convert to: these builtins, ``np.<these>`` or these names as strings."""
 
+LOOP_TYPE_KEYWORDS: frozenset[str] = frozenset({"signature", "sig"})
+"""Keywords of numpy's ufuncs that choose the loop's types, object loops included (``sig`` is an alias; array
+methods such as ``clip`` pass them on): refused by the validator and by the worker's numpy functions."""
+
 NOT_ALLOWED_BECAUSE: dict[str, str] = {
     "format": "str.format can reach private attributes through its fields; use an f-string",
     "format_map": "str.format_map can reach private attributes through its fields; use an f-string",

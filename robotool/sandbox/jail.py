@@ -6,7 +6,7 @@ forge references). So every worker also runs behind these layers, each detected 
 starts and reported as :class:`SandboxLayers`:
 
 - **seccomp**: a seccomp-bpf filter (compiled once by libseccomp, through ``pyseccomp``), loaded in
-  each worker right before the program starts, allows only what a running worker needs: reading
+  each worker before the program's text is compiled, allows only what a running worker needs: reading
   and writing its socket to the host, memory management (never executable, only an allocator's
   advice), time, plain futex waits and wakes, signal return and exit.
   Every other system call (open, socket, exec, fork, kill, ptrace, sigaction, ...) fails with

@@ -36,6 +36,7 @@ from robotool import robots
 from robotool.robots.skills import SkillArgumentError
 from robotool.sandbox.allowlist import (
     BUILTINS,
+    LOOP_TYPE_KEYWORDS,
     MATH_NAMES,
     MODULES,
     NOT_ALLOWED_BECAUSE,
@@ -310,7 +311,7 @@ class _Checker(ast.NodeVisitor):
             self.reject(node, f".{func.attr}() takes the axis as its only positional argument; name the others")
         if any(k.arg == "dtype" and not _numeric_type(k.value) for k in node.keywords):
             self.reject(node, f"dtype= takes one numeric type: {NUMERIC_TYPES_SHOWN}")
-        elif any(k.arg in _LOOP_TYPE_KEYWORDS for k in node.keywords):
+        elif any(k.arg in LOOP_TYPE_KEYWORDS for k in node.keywords):
             self.reject(node, "signature= is not allowed: it picks numpy's internal loop types; use dtype=")
         elif isinstance(func, ast.Attribute) and _module_path(func) is None and _unpacks(node):
             self.reject(node, f"* and ** cannot pass arguments to .{func.attr}(): write each argument out")
@@ -390,11 +391,6 @@ NUMERIC_TYPES_SHOWN = "float, int, bool, np.float64, np.int64 or 'float32'"
 _REDUCTIONS = frozenset({"sum", "mean", "std", "var", "prod", "cumsum"})
 """Array methods and numpy functions whose second or third positional parameter is ``dtype`` (which must be
 checked by name)."""
-
-_LOOP_TYPE_KEYWORDS = frozenset({"signature", "sig"})
-"""Keywords of numpy's ufuncs (array methods such as ``clip`` pass them on) that choose the loop's types,
-object loops included: no dtype check sees them."""
-
 
 def _unpacks(call: ast.Call) -> bool:
     """``f(*args)`` or ``f(**kwargs)``: which parameter gets which value is known only at run time.

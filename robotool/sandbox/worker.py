@@ -31,7 +31,15 @@ import numpy.ma
 
 from robotool.program_session import SkillCallError
 from robotool.robots.skills import SkillSpec, check_arguments
-from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG, NUMPY_TYPES
+from robotool.sandbox.allowlist import (
+    BUILTINS,
+    LOOP_TYPE_KEYWORDS,
+    MATH_NAMES,
+    NUMPY_CONSTANTS,
+    NUMPY_FUNCTIONS,
+    NUMPY_LINALG,
+    NUMPY_TYPES,
+)
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import MAX_ARGUMENT_CHARS, WorkerMessage
@@ -68,7 +76,7 @@ class _NumpyFunction:
         self._dtype_position = _dtype_position(function)
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        if any(kwargs.get(k) is not None for k in _LOOP_TYPE_KEYWORDS):
+        if any(kwargs.get(k) is not None for k in LOOP_TYPE_KEYWORDS):
             raise TypeError(f"{self._name}: signature= is not allowed in programs; use dtype= with a numeric type")
         if "dtype" in kwargs:
             _check_dtype(np.dtype(kwargs["dtype"]))
@@ -83,10 +91,6 @@ class _NumpyFunction:
 
     def __repr__(self) -> str:
         return f"<function {self._name}>"
-
-
-_LOOP_TYPE_KEYWORDS = ("signature", "sig")
-"""Keywords of numpy's ufuncs that choose the loop's types, object loops included (``sig`` is an alias)."""
 
 
 def _dtype_position(function: Callable[..., Any]) -> int | None:
