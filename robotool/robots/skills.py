@@ -8,10 +8,12 @@ the registry (:mod:`robotool.robots.registry`).
 from __future__ import annotations
 
 import math
+import numbers
 import reprlib
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 
@@ -101,14 +103,19 @@ def _shown(value: object) -> str:
 
 
 def _position(skill: str, param: str, value: object) -> tuple[float, float, float]:
+    """A position argument: a list, tuple or 1-D array of 2 or 3 numbers (not text, truth values, sets or
+    mappings, which ``float`` would quietly accept or order at random)."""
+    wrong = SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {_shown(value)}")
+    if isinstance(value, np.ndarray) and value.ndim != 1:
+        raise wrong
+    if not isinstance(value, list | tuple | np.ndarray) or len(value) not in (2, 3):
+        raise wrong
+    if not all(isinstance(v, numbers.Real) and not isinstance(v, bool | np.bool_) for v in value):
+        raise wrong
     try:
-        items = [float(v) for v in value]  # type: ignore[attr-defined]
-    except (TypeError, ValueError, OverflowError):
-        raise SkillArgumentError(
-            f"{skill}: {param} must be [x, y, z] in metres, got {_shown(value)}"
-        ) from None
-    if isinstance(value, str | bytes) or len(items) not in (2, 3):
-        raise SkillArgumentError(f"{skill}: {param} must be [x, y, z] in metres, got {_shown(value)}")
+        items = [float(v) for v in value]
+    except OverflowError:
+        raise SkillArgumentError(f"{skill}: {param} must be finite, got {_shown(value)}") from None
     if not all(math.isfinite(v) for v in items):
         raise SkillArgumentError(f"{skill}: {param} must be finite, got {items}")
     if len(items) == 2:
