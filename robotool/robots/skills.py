@@ -114,8 +114,8 @@ def _position(skill: str, param: str, value: object) -> tuple[float, float, floa
         raise wrong
     try:
         items = [float(v) for v in value]
-    except OverflowError:
-        raise SkillArgumentError(f"{skill}: {param} must be finite, got {_shown(value)}") from None
+    except OverflowError:  # an integer beyond any float
+        raise wrong from None
     if not all(math.isfinite(v) for v in items):
         raise SkillArgumentError(f"{skill}: {param} must be finite, got {items}")
     if len(items) == 2:
