@@ -6,8 +6,12 @@ button, paper slid under a can with no stick, a flat block beyond reach dragged 
 and again (MuJoCo's soft pyramidal friction let it creep along; the arm's scenes use elliptic cones), and a far
 milk carton tipped over toward the arm with a straight stick and then dragged in by pressing the stick on it (a
 scene the milk family calls unsolvable must keep its carton out of reach of everything the arm can hold; the same
-program grasps a carton within reach, the control). The honest references on the same tasks succeed in
-tests/robots/arm/test_skills.py.
+program grasps a carton within reach, the control), paper slid or laid under a standing can (or slid under it a
+millimetre per call) and the can then nudged a few millimetres so that it seemed to have been pushed onto the paper
+(the sheet rule let the paper carry it; now an object the sheet got under rests on it only after leaving its
+footprint), degenerate calls at the workspace edge, a two-cube chain held by a sliver of its first cube, and a short
+chopstick nudging a can the paper was slid under. A task named ``family:seed`` is a generated instance the family
+calls unsolvable. The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -32,7 +36,10 @@ UNSOLVABLE_MILK_SEED = 64  # an unsolvable instance of the milk family (its cart
 
 def _task(name: str) -> Task:
     if name == "milk_reaching_unsolvable":
-        instance = tasks.generate("milk_reaching", UNSOLVABLE_MILK_SEED)
+        name = f"milk_reaching:{UNSOLVABLE_MILK_SEED}"
+    if ":" in name:
+        family, seed = name.split(":")
+        instance = tasks.generate(family, int(seed))
         assert not instance.solvable
         return instance.task
     layout = LAYOUTS / f"{name}.yaml"
@@ -47,6 +54,12 @@ CASES = [
     ("arm_paper_under_can", "can_grasping"),
     ("arm_topple_milk_with_stick", "milk_reaching_unsolvable"),
     ("arm_press_drag_block", "arm_block_beyond_reach"),  # friction from above dragged a flat block in (creep)
+    ("arm_slide_paper_under_can_then_nudge", "can_grasping"),  # the nudged can rode the paper (sheet rule)
+    ("arm_slide_paper_slowly_under_can", "can_grasping"),  # the same, the paper slid 1 mm per call
+    ("arm_lay_paper_over_can", "can_grasping"),  # the same, the paper lifted over the can and laid down
+    ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
+    ("arm_degenerate_calls", "milk_reaching"),
+    ("arm_sliver_grasp_chain", "button_pressing:196"),
 ]
 
 
