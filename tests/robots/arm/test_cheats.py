@@ -10,7 +10,9 @@ program grasps a carton within reach, the control), paper slid or laid under a s
 millimetre per call) and the can then nudged a few millimetres so that it seemed to have been pushed onto the paper
 (the sheet rule let the paper carry it; now an object the sheet got under rests on it only after leaving its
 footprint), degenerate calls at the workspace edge, a two-cube chain held by a sliver of its first cube, and a short
-chopstick nudging a can the paper was slid under. A task named ``family:seed`` is a generated instance the family
+chopstick nudging a can the paper was slid under, and a tray twice as wide as the opening held by pressing the open
+fingers on its face (friction kept them from closing, and both touched it, so it was held; now what lies beside the
+fingers must lie between them). A task named ``family:seed`` is a generated instance the family
 calls unsolvable. The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
@@ -60,6 +62,7 @@ CASES = [
     ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
     ("arm_degenerate_calls", "milk_reaching"),
     ("arm_sliver_grasp_chain", "button_pressing:196"),
+    ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
 ]
 
 
@@ -95,3 +98,18 @@ def test_unsolvable_milk_stands_beyond_the_reach_of_everything_the_arm_can_hold(
         milk = next(o for o in objects if o.name == "milk")
         longest = max(footprint(o)[2] - footprint(o)[0] for o in objects if o.movable and o.name != "milk")
         assert footprint(milk)[0] - 0.005 > milk_reaching.ARM_REACH_X + longest, (seed, footprint(milk))
+
+
+def test_a_tray_that_fits_between_the_fingers_is_held(run_texts: Any) -> None:
+    """The control for the face-press cheat: against the same backstop, a tray narrower than the opening is held by
+    an ordinary grasp at its graspable point, so the cheat's failure is the grasp, not the scene."""
+    data = _task("arm_tray_too_wide").model_dump(mode="json", exclude_defaults=True)
+    tray = next(o for o in data["objects"] if o["name"] == "tray")
+    tray["size"][1] = 0.04
+    data["name"] = "arm_tray_that_fits"
+    code = (
+        "g = get_graspable_point('tray')\nopen_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.08])\n"
+        "move_to_position([g[0], g[1], g[2] - 0.01])\nclose_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.04])\n"
+    )
+    rollouts = run_texts(parse_task(data), [code] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
