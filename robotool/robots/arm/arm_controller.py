@@ -26,7 +26,7 @@ import numpy as np
 
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event, GraspFailure
-from robotool.sim.backend import TOUCH_DISTANCE, BatchedSim, BatchState
+from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, is_sheet
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, size_now, world_mask
@@ -47,7 +47,8 @@ FINGER_Z = 0.007  # m, a finger's centre above the gripper centre: the tips reac
 FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
-SIDE_SLACK = 0.001  # m: beside the fingers, an object they grip may reach this far past their inner faces
+OPENING_GIVE = 1e-4  # m the open fingers' stops may give before what is between them counts as too wide
+SIDE_SLACK = 0.001  # m: beside the fingers, an object they grip may reach this far into them (contact give)
 CLAMP_TOLERANCE = 1e-4  # m: a target this close to the workspace counts as inside (no clamp is reported)
 ON_SHEET = 0.003  # m: a fingertip this close above a top face (or a sheet) it overlaps rests on it
 PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
@@ -446,10 +447,11 @@ class ArmController:
         """Whether both fingers, touching object ``i``, grip it from its sides (else why not).
 
         Fingers that touch an object below its top and stopped apart grip it between them, if beside the
-        fingers (in the slab their x and z spans make, widened by the distance that counts as touching) it
-        lies within the gap: the gap is then its width there. Beside the fingers an object that reaches past
-        one of them touches their front, back or tips, not their inner faces: pressed against its face,
-        friction may keep the open fingers from closing, but they hold nothing. Fingertips at or above its
+        fingers (in the slab their x and z spans make) it lies within the gap, give or take the contacts'
+        give: the gap is then its width there. Beside the fingers an object that reaches further past a
+        finger's inner face lies in front of, behind or under it, or (turned) across their span wider than
+        their opening: pressed against its face, friction may keep the open fingers from closing, but they
+        hold nothing. Fingertips at or above its
         top rest on it: it is too wide to get between the fingers, or the gripper is off to one side.
         """
         lo, hi = _geom_extents(self.scene, state, w, self.object_geoms[i])
@@ -465,13 +467,13 @@ class ArmController:
                 "width": width,
                 "opening": self.limits.gripper_opening,
             }
-        near_x = (grip.x[0] - TOUCH_DISTANCE, grip.x[1] + TOUCH_DISTANCE)  # what may count as touching a finger
-        near_z = (grip.z[0] - TOUCH_DISTANCE, grip.z[1] + TOUCH_DISTANCE)
-        spans = [_y_span_in_slab(self.scene, state, w, int(g), near_x, near_z) for g in self.object_geoms[i]]
+        spans = [_y_span_in_slab(self.scene, state, w, int(g), grip.x, grip.z) for g in self.object_geoms[i]]
         inside = np.array([s for s in spans if s is not None]).reshape(-1, 2)  # its y spans beside the fingers
         between = (inside[:, 0] < grip.left) & (inside[:, 1] > grip.right)  # some of it lies between the fingers
         if grip.gap <= 0.0 or not between.any():
             return "not_between", {}
+        if grip.gap > self.limits.gripper_opening + OPENING_GIVE:  # wedged in, it pushed the open fingers apart
+            return "too_wide", {"width": grip.gap, "opening": self.limits.gripper_opening}
         low, high = float(inside[:, 0].min()), float(inside[:, 1].max())
         if low < grip.right - SIDE_SLACK or high > grip.left + SIDE_SLACK:
             # beside the fingers it reaches past one of them: they pressed on a face in front of (or behind or

@@ -100,16 +100,41 @@ def test_unsolvable_milk_stands_beyond_the_reach_of_everything_the_arm_can_hold(
         assert footprint(milk)[0] - 0.005 > milk_reaching.ARM_REACH_X + longest, (seed, footprint(milk))
 
 
+GRASP_TRAY = (
+    "g = get_graspable_point('tray')\nopen_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.08])\n"
+    "move_to_position([g[0], g[1], g[2] - 0.01])\nclose_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.04])\n"
+)
+
+
+def _tray_task(size: tuple[float, float, float], yaw: float = 0.0, backstop: bool = True) -> Task:
+    """The wide-tray layout with the tray's size and turn about z changed (and its backstop kept or not)."""
+    data = _task("arm_tray_too_wide").model_dump(mode="json", exclude_defaults=True)
+    data["objects"] = [o for o in data["objects"] if backstop or o["name"] != "backstop"]
+    tray = next(o for o in data["objects"] if o["name"] == "tray")
+    tray |= {"size": list(size), "rpy": [0.0, 0.0, yaw]}
+    if not backstop:
+        tray["center"] = [0.2, 0.0, size[2] / 2]
+    data["name"] = "arm_tray_changed"
+    return parse_task(data)
+
+
 def test_a_tray_that_fits_between_the_fingers_is_held(run_texts: Any) -> None:
     """The control for the face-press cheat: against the same backstop, a tray narrower than the opening is held by
     an ordinary grasp at its graspable point, so the cheat's failure is the grasp, not the scene."""
-    data = _task("arm_tray_too_wide").model_dump(mode="json", exclude_defaults=True)
-    tray = next(o for o in data["objects"] if o["name"] == "tray")
-    tray["size"][1] = 0.04
-    data["name"] = "arm_tray_that_fits"
-    code = (
-        "g = get_graspable_point('tray')\nopen_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.08])\n"
-        "move_to_position([g[0], g[1], g[2] - 0.01])\nclose_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.04])\n"
-    )
-    rollouts = run_texts(parse_task(data), [code] * 2, seed=11)
+    rollouts = run_texts(_tray_task((0.05, 0.04, 0.04)), [GRASP_TRAY] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_tray_a_millimetre_wider_than_the_opening_is_not_held(run_texts: Any) -> None:
+    """Pressed on by the open fingers, a tray 1 mm wider than their opening wedged between them in one world (its
+    soft stops gave); wider than the opening across the fingers is too wide, however it got there."""
+    cheat = (CHEATS / "arm_press_fingers_on_face.py").read_text()
+    for rollout in run_texts(_tray_task((0.05, 0.061, 0.04)), [cheat] * 3, seed=11):
+        assert not rollout.success and rollout.error is None and world_failure(rollout), rollout
+
+
+def test_a_stick_turned_across_the_fingers_is_held(run_texts: Any) -> None:
+    """A long stick turned 45 degrees about z still fits between the fingers where they close on it, and is held:
+    the face-press rule looks at what lies beside the fingers, not at the object's whole extent."""
+    rollouts = run_texts(_tray_task((0.3, 0.02, 0.03), yaw=45.0, backstop=False), [GRASP_TRAY] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
