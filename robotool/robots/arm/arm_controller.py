@@ -7,7 +7,8 @@ it are clamped and the clamp is recorded. The palm above the centre and the two 
 fingers close along the world y axis on position servos until they meet something or close fully.
 
 ``close_gripper`` holds an object only when both fingers touch it from its sides (not resting on top
-of it), it lies between them, and it is no wider across them than the opening (a sheet is pinched
+of it, nor pressing their fronts on a face of it), it lies between them (beside the fingers none of it
+reaches past their inner faces), and it is no wider across them than the opening (a sheet is pinched
 when both fingertips press on it: they gather a fold of it); it is then attached
 rigidly by the weld ``robot_grasp__<object>`` (one per movable object) at the current pose, as
 grasp-assisted simulators do, and released by ``open_gripper``. Otherwise the call reports what the

@@ -9,11 +9,12 @@ scene the milk family calls unsolvable must keep its carton out of reach of ever
 program grasps a carton within reach, the control), paper slid or laid under a standing can (or slid under it a
 millimetre per call) and the can then nudged a few millimetres so that it seemed to have been pushed onto the paper
 (the sheet rule let the paper carry it; now an object the sheet got under rests on it only after leaving its
-footprint), degenerate calls at the workspace edge, a two-cube chain held by a sliver of its first cube, and a short
-chopstick nudging a can the paper was slid under, and a tray twice as wide as the opening held by pressing the open
-fingers on its face (friction kept them from closing, and both touched it, so it was held; now what lies beside the
-fingers must lie between them). A task named ``family:seed`` is a generated instance the family
-calls unsolvable. The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
+footprint), a short chopstick nudging a can the paper was slid under, degenerate calls at the workspace edge, a
+two-cube chain held by a sliver of its first cube and a two-cube stack toppled toward a button beyond their reach,
+and a tray twice as wide as the opening held by pressing the open fingers on its face (friction kept them from
+closing, both touched it, and it was held; now what lies beside the fingers must lie between them). A task named
+``family:seed`` is a generated instance the family calls unsolvable. The honest references on the same tasks
+succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -62,6 +63,7 @@ CASES = [
     ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
     ("arm_degenerate_calls", "milk_reaching"),
     ("arm_sliver_grasp_chain", "button_pressing:196"),
+    ("arm_topple_cube_stack", "button_pressing:196"),  # the toppled column lands against the face, unpressed
     ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
 ]
 
