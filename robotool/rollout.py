@@ -103,6 +103,11 @@ class Event(BaseModel):
             return f"the fingers rested on top of {obj} instead of closing on its sides"
         if self.cause == "one_finger":
             return f"only one finger touched {obj}"
+        if self.cause == "not_between" and "span" in m:
+            return (
+                f"{obj} was not between the fingers: beside them it spans {m['span']:.3f} m across, past their "
+                f"{m.get('gap', 0.0):.3f} m gap, so they pressed on its face, not on its sides"
+            )
         if self.cause == "not_between":
             return f"{obj} was not between the fingers"
         if obj is None:

@@ -6,7 +6,10 @@ it buckles or slips under without moving it. An object rests on a sheet only onc
 sheet's carrier geom for that object is in place (:func:`robotool.sim.build.make_spec`), so the object
 rides on the sheet by friction, until it leaves the sheet's footprint, is lifted off, or the sheet
 itself is lifted off the table (held up by an edge, it droops and carries nothing); otherwise the
-carrier lies far below. :meth:`Sheets.update` applies this rule after every control tick, per world.
+carrier lies far below. A sheet slid (or laid) under a standing object got there, not the object: the
+object came over the sheet while the sheet moved more than it did, and until it leaves the sheet's
+footprint again no nudge makes it rest on the sheet. :meth:`Sheets.update` applies this rule after every
+control tick, per world.
 """
 
 from __future__ import annotations
@@ -46,6 +49,8 @@ class Sheets:
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
+        self.over = self.on.copy()  # (nworld, nlink): the object was over its sheet, resting, at the last tick
+        self.slid_under = np.zeros_like(self.on)  # the sheet got under the object, not the other way round
         self.previous: np.ndarray | None = None
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
@@ -55,7 +60,9 @@ class Sheets:
         bodies = self.scene.object_body
         xpos = state.xpos[:, bodies]  # (nworld, nobject, 3)
         previous = xpos if self.previous is None else self.previous
-        moved = np.linalg.norm(xpos - previous, axis=2) > MOVED
+        step = np.linalg.norm(xpos - previous, axis=2)  # (nworld, nobject): how far each moved this tick
+        moved = step > MOVED
+        first = self.previous is None
         self.previous = xpos.copy()
         for k, (s, i, geom) in enumerate(self.links):
             rot = state.xmat(bodies[s])  # (nworld, 3, 3)
@@ -64,7 +71,12 @@ class Sheets:
             top = xpos[:, s, 2] + self.thickness[s] / 2
             flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
             resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
-            arrive = active & over & resting & ~self.on[:, k] & moved[:, i] & ~moved[:, s]
+            came = active & over & resting & ~self.over[:, k]  # came over the sheet during this tick
+            slid = came & (first | (step[:, s] >= step[:, i]))  # ... because the sheet moved (or it was there)
+            self.slid_under[:, k] = np.where(active, (self.slid_under[:, k] | slid) & over & resting,
+                                             self.slid_under[:, k])
+            self.over[:, k] = np.where(active, over & resting, self.over[:, k])
+            arrive = active & over & resting & ~self.on[:, k] & ~self.slid_under[:, k] & moved[:, i] & ~moved[:, s]
             leave = active & self.on[:, k] & ~(over & resting)
             for worlds, on in ((np.flatnonzero(arrive), True), (np.flatnonzero(leave), False)):
                 if worlds.size:

@@ -7,7 +7,8 @@ it are clamped and the clamp is recorded. The palm above the centre and the two 
 fingers close along the world y axis on position servos until they meet something or close fully.
 
 ``close_gripper`` holds an object only when both fingers touch it from its sides (not resting on top
-of it), it lies between them, and it is no wider across them than the opening (a sheet is pinched
+of it, nor pressing their fronts on a face of it), it lies between them (beside the fingers none of it
+reaches past their inner faces), and it is no wider across them than the opening (a sheet is pinched
 when both fingertips press on it: they gather a fold of it); it is then attached
 rigidly by the weld ``robot_grasp__<object>`` (one per movable object) at the current pose, as
 grasp-assisted simulators do, and released by ``open_gripper``. Otherwise the call reports what the
@@ -18,6 +19,7 @@ Each motion skill also reports objects it pushed further out of the workspace (`
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from itertools import combinations
 from typing import Any
 
 import mujoco
@@ -46,6 +48,8 @@ FINGER_Z = 0.007  # m, a finger's centre above the gripper centre: the tips reac
 FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
 GRIP_TOLERANCE = 0.003  # m: geometry within this of a finger counts as next to it
 ON_TOP = 0.002  # m: fingertips less than this below an object's top rest on it
+OPENING_GIVE = 1e-4  # m the open fingers' stops may give before what is between them counts as too wide
+SIDE_SLACK = 0.001  # m: beside the fingers, an object they grip may reach this far into them (contact give)
 CLAMP_TOLERANCE = 1e-4  # m: a target this close to the workspace counts as inside (no clamp is reported)
 ON_SHEET = 0.003  # m: a fingertip this close above a top face (or a sheet) it overlaps rests on it
 PUSHED_OUT = 0.02  # m an object must be pushed further out of the workspace to be reported
@@ -443,9 +447,13 @@ class ArmController:
     def _fit(self, state: BatchState, w: int, i: int, grip: _Grip) -> tuple[GraspFailure | None, dict[str, float]]:
         """Whether both fingers, touching object ``i``, grip it from its sides (else why not).
 
-        Fingers that touch an object below its top and stopped apart grip it between them; the gap is its
-        width there. Fingertips at or above its top rest on it: it is too wide to get between the fingers,
-        or the gripper is off to one side.
+        Fingers that touch an object below its top and stopped apart grip it between them, if beside the
+        fingers (in the slab their x and z spans make) it lies within the gap, give or take the contacts'
+        give: the gap is then its width there. Beside the fingers an object that reaches further past a
+        finger's inner face lies in front of, behind or under it, or (turned) across their span wider than
+        their opening: pressed against its face, friction may keep the open fingers from closing, but they
+        hold nothing. Fingertips at or above its
+        top rest on it: it is too wide to get between the fingers, or the gripper is off to one side.
         """
         lo, hi = _geom_extents(self.scene, state, w, self.object_geoms[i])
         near = (lo[:, 0] < grip.x[1] + GRIP_TOLERANCE) & (hi[:, 0] > grip.x[0] - GRIP_TOLERANCE)
@@ -460,9 +468,18 @@ class ArmController:
                 "width": width,
                 "opening": self.limits.gripper_opening,
             }
-        between = (lo[:, 1] < grip.left) & (hi[:, 1] > grip.right)  # some of it lies between the fingers
+        spans = [_y_span_in_slab(self.scene, state, w, int(g), grip.x, grip.z) for g in self.object_geoms[i]]
+        inside = np.array([s for s in spans if s is not None]).reshape(-1, 2)  # its y spans beside the fingers
+        between = (inside[:, 0] < grip.left) & (inside[:, 1] > grip.right)  # some of it lies between the fingers
         if grip.gap <= 0.0 or not between.any():
             return "not_between", {}
+        if grip.gap > self.limits.gripper_opening + OPENING_GIVE:  # wedged in, it pushed the open fingers apart
+            return "too_wide", {"width": grip.gap, "opening": self.limits.gripper_opening}
+        low, high = float(inside[:, 0].min()), float(inside[:, 1].max())
+        if low < grip.right - SIDE_SLACK or high > grip.left + SIDE_SLACK:
+            # beside the fingers it reaches past one of them: they pressed on a face in front of (or behind or
+            # under) them, not on its sides
+            return "not_between", {"span": high - low, "gap": grip.gap}
         return None, {"width": grip.gap, "opening": self.limits.gripper_opening}
 
     def _nearest(self, state: BatchState, w: int) -> tuple[int, dict[str, float]]:
@@ -509,6 +526,46 @@ def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.nd
     if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
         return bool(np.any(np.hypot(local[:, 0], local[:, 1]) <= size[0]))
     return bool(np.any(np.all(np.abs(local[:, :2]) <= size[:2], axis=1)))
+
+
+SLAB_CYLINDER_SIDES = 32  # a cylinder counts as the prism of this many sides around it (0.5% wider at most)
+
+
+def _y_span_in_slab(
+    scene: Scene, state: BatchState, w: int, geom: int, x: tuple[float, float], z: tuple[float, float]
+) -> tuple[float, float] | None:
+    """Lowest and highest world y of a box or cylinder geom's volume within ``x`` and ``z`` (any y) in world
+    ``w``, or None where it misses that slab: the extremes of a convex polytope, found among its vertices."""
+    model = scene.model
+    body = model.geom_bodyid[geom]
+    body_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
+    geom_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
+    rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
+    centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    size = model.geom_size[geom]
+    if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        turn = np.linspace(0.0, 2 * np.pi, SLAB_CYLINDER_SIDES, endpoint=False)
+        local = np.column_stack([np.cos(turn), np.sin(turn), np.zeros_like(turn)])
+        local = np.vstack([local, [[0, 0, 1], [0, 0, -1]]])
+        reach = np.concatenate([np.full(SLAB_CYLINDER_SIDES, size[0]), [size[1], size[1]]])
+    else:
+        local = np.vstack([np.eye(3), -np.eye(3)])
+        reach = np.concatenate([size[:3], size[:3]])
+    normals = local @ rot.T  # outward face normals in the world: normal . p <= normal . centre + reach
+    offsets = normals @ centre + reach
+    slab = np.array([[-1.0, 0, 0], [1, 0, 0], [0, 0, -1], [0, 0, 1]])
+    normals = np.vstack([normals, slab])
+    offsets = np.concatenate([offsets, [-x[0], x[1], -z[0], z[1]]])
+    triples = np.array(list(combinations(range(len(normals)), 3)))
+    planes = normals[triples]
+    solvable = np.abs(np.linalg.det(planes)) > 1e-12
+    corners = np.linalg.solve(planes[solvable], offsets[triples[solvable]][..., None])[..., 0]
+    corners = corners[np.all(corners @ normals.T <= offsets + 1e-9, axis=1)]
+    if not len(corners):
+        return None
+    return float(corners[:, 1].min()), float(corners[:, 1].max())
 
 
 def _geom_extents(scene: Scene, state: BatchState, w: int, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -6,8 +6,15 @@ button, paper slid under a can with no stick, a flat block beyond reach dragged 
 and again (MuJoCo's soft pyramidal friction let it creep along; the arm's scenes use elliptic cones), and a far
 milk carton tipped over toward the arm with a straight stick and then dragged in by pressing the stick on it (a
 scene the milk family calls unsolvable must keep its carton out of reach of everything the arm can hold; the same
-program grasps a carton within reach, the control). The honest references on the same tasks succeed in
-tests/robots/arm/test_skills.py.
+program grasps a carton within reach, the control), paper slid or laid under a standing can (or slid under it a
+millimetre per call) and the can then nudged a few millimetres so that it seemed to have been pushed onto the paper
+(the sheet rule let the paper carry it; now an object the sheet got under rests on it only after leaving its
+footprint), a short chopstick nudging a can the paper was slid under, degenerate calls at the workspace edge, a
+two-cube chain held by a sliver of its first cube and a two-cube stack toppled toward a button beyond their reach,
+and a tray twice as wide as the opening held by pressing the open fingers on its face (friction kept them from
+closing, both touched it, and it was held; now what lies beside the fingers must lie between them). A task named
+``family:seed`` is a generated instance the family calls unsolvable. The honest references on the same tasks
+succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -32,7 +39,10 @@ UNSOLVABLE_MILK_SEED = 64  # an unsolvable instance of the milk family (its cart
 
 def _task(name: str) -> Task:
     if name == "milk_reaching_unsolvable":
-        instance = tasks.generate("milk_reaching", UNSOLVABLE_MILK_SEED)
+        name = f"milk_reaching:{UNSOLVABLE_MILK_SEED}"
+    if ":" in name:
+        family, seed = name.split(":")
+        instance = tasks.generate(family, int(seed))
         assert not instance.solvable
         return instance.task
     layout = LAYOUTS / f"{name}.yaml"
@@ -47,6 +57,14 @@ CASES = [
     ("arm_paper_under_can", "can_grasping"),
     ("arm_topple_milk_with_stick", "milk_reaching_unsolvable"),
     ("arm_press_drag_block", "arm_block_beyond_reach"),  # friction from above dragged a flat block in (creep)
+    ("arm_slide_paper_under_can_then_nudge", "can_grasping"),  # the nudged can rode the paper (sheet rule)
+    ("arm_slide_paper_slowly_under_can", "can_grasping"),  # the same, the paper slid 1 mm per call
+    ("arm_lay_paper_over_can", "can_grasping"),  # the same, the paper lifted over the can and laid down
+    ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
+    ("arm_degenerate_calls", "milk_reaching"),
+    ("arm_sliver_grasp_chain", "button_pressing:196"),
+    ("arm_topple_cube_stack", "button_pressing:196"),  # the toppled column lands against the face, unpressed
+    ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
 ]
 
 
@@ -82,3 +100,43 @@ def test_unsolvable_milk_stands_beyond_the_reach_of_everything_the_arm_can_hold(
         milk = next(o for o in objects if o.name == "milk")
         longest = max(footprint(o)[2] - footprint(o)[0] for o in objects if o.movable and o.name != "milk")
         assert footprint(milk)[0] - 0.005 > milk_reaching.ARM_REACH_X + longest, (seed, footprint(milk))
+
+
+GRASP_TRAY = (
+    "g = get_graspable_point('tray')\nopen_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.08])\n"
+    "move_to_position([g[0], g[1], g[2] - 0.01])\nclose_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.04])\n"
+)
+
+
+def _tray_task(size: tuple[float, float, float], yaw: float = 0.0, backstop: bool = True) -> Task:
+    """The wide-tray layout with the tray's size and turn about z changed (and its backstop kept or not)."""
+    data = _task("arm_tray_too_wide").model_dump(mode="json", exclude_defaults=True)
+    data["objects"] = [o for o in data["objects"] if backstop or o["name"] != "backstop"]
+    tray = next(o for o in data["objects"] if o["name"] == "tray")
+    tray |= {"size": list(size), "rpy": [0.0, 0.0, yaw]}
+    if not backstop:
+        tray["center"] = [0.2, 0.0, size[2] / 2]
+    data["name"] = "arm_tray_changed"
+    return parse_task(data)
+
+
+def test_a_tray_that_fits_between_the_fingers_is_held(run_texts: Any) -> None:
+    """The control for the face-press cheat: against the same backstop, a tray narrower than the opening is held by
+    an ordinary grasp at its graspable point, so the cheat's failure is the grasp, not the scene."""
+    rollouts = run_texts(_tray_task((0.05, 0.04, 0.04)), [GRASP_TRAY] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_tray_a_millimetre_wider_than_the_opening_is_not_held(run_texts: Any) -> None:
+    """Pressed on by the open fingers, a tray 1 mm wider than their opening wedged between them in one world (its
+    soft stops gave); wider than the opening across the fingers is too wide, however it got there."""
+    cheat = (CHEATS / "arm_press_fingers_on_face.py").read_text()
+    for rollout in run_texts(_tray_task((0.05, 0.061, 0.04)), [cheat] * 3, seed=11):
+        assert not rollout.success and rollout.error is None and world_failure(rollout), rollout
+
+
+def test_a_stick_turned_across_the_fingers_is_held(run_texts: Any) -> None:
+    """A long stick turned 45 degrees about z still fits between the fingers where they close on it, and is held:
+    the face-press rule looks at what lies beside the fingers, not at the object's whole extent."""
+    rollouts = run_texts(_tray_task((0.3, 0.02, 0.03), yaw=45.0, backstop=False), [GRASP_TRAY] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
