@@ -130,6 +130,7 @@ LAYOUT_CASES = [
     ("toward_partial_bridge", "traverse_wide_mirrored"),
     ("toward_partial_bridge", "traverse_minus_y"),
     ("toward_cloth_bridge", "traverse_mirrored"),
+    ("gap_one_walk", "traverse_cloth_crosswise"),  # the cloth's width spans the gap: its links lie across it
     ("push_board_under_robot", "traverse_mirrored"),
     ("push_target_closer", "traverse_mirrored"),
     ("toward_front_feet_on_target", "traverse_mirrored_bare"),
@@ -165,6 +166,8 @@ LAYOUT_CASES = [
     ("walk_through_vase", "vase_heavy_at_edge"),  # a shove under 3 cm, then the vase tips off after the walk
     ("walk_through_vase", "vase_lowering"),
     ("ram_vase_with_book", "vase_heavy_with_book"),
+    # a light box pushed into a step too heavy to push, as a ram, a box length at a time
+    ("ram_heavy_step_with_light_box", "climb_heavy_step_and_light_box"),
     ("programs/vase_lowering", "vase_heavy"),
 ]
 
@@ -208,6 +211,31 @@ def test_a_walk_that_shoves_an_object_is_refused_naming_it() -> None:
     assert [c.skill for c in refused] == ["walk_to_position"] and not rollout.success
     assert "ran into glass_vase" in refused[0].reason and refused[0].measured["moved"] > 0.03
     assert rollout.conditions["robot_shoved_nothing"] is False
+
+
+def test_a_push_that_rams_an_object_over_the_push_limit_is_refused_naming_it() -> None:
+    """The light box (1.5 kg) pushed into the 9 kg step moves it too: the push moves more than the 5 kg the robot may
+    push, so it is stopped, refused with what it moved, and the world fails."""
+    (rollout,) = sim.run_sessions(
+        _scene("climb_heavy_step_and_light_box"),
+        start_sessions([_text("ram_heavy_step_with_light_box")], "quadruped"),
+        perturb=False,
+    )
+    push = next(c for c in rollout.calls if c.outcome == "refused")
+    assert push.skill == "push_to_position" and "rammed heavy_box" in push.reason, push
+    assert push.measured["mass"] == pytest.approx(10.5, abs=0.01) and not rollout.success
+    assert rollout.conditions["robot_shoved_nothing"] is False
+
+
+def test_a_cloth_on_a_movable_crate_does_not_hide_that_the_robot_stands_on_it() -> None:
+    """The rays under the feet see through the cloth: the robot stands on the crate, which is movable, so it may
+    push nothing from there."""
+    (rollout,) = sim.run_sessions(
+        _scene("push_from_cloth_on_crate"), start_sessions([_text("push_from_cloth_covered_crate")], "quadruped"),
+        perturb=False,
+    )
+    (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
+    assert push.outcome == "refused" and "stands on crate, which is movable" in push.reason, push
 
 
 def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:
