@@ -221,8 +221,11 @@ class QuadrupedController:
         self.state = state
         mask = world_mask(self.sim.nworld, worlds)
         ends = self._falls(mask)
-        self._shoves(ends, mask)
-        self._rams(ends, mask)
+        centres = self._centers(state)[:, :, :2]
+        shift = centres - self.last_centres  # each object's travel since the last tick
+        self.last_centres = np.where(mask[:, None, None], centres, self.last_centres)
+        self._shoves(ends, mask, centres, shift)
+        self._rams(ends, mask, centres, shift)
         worlds = np.flatnonzero(mask & self.moving & np.array([f is None for f in state.failed]))
         if worlds.size:
             self._drive(worlds, ends)
@@ -311,7 +314,7 @@ class QuadrupedController:
     def _push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
         """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves."""
         centres = feet(self.state, self.ids)[w]
-        z, objects = self._heights(w, centres[:, :2], float(centres[:, 2].min()) + 0.05)
+        z, objects = self._heights(w, centres[:, :2], float(centres[:, 2].max()) + 0.05)
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
         movable = next((self.scene.object_names[o] for o in on if self.movable[o]), None)
@@ -474,16 +477,17 @@ class QuadrupedController:
         self._steer(worlds, q, travel, waiting)
         self._check_arrival(worlds, q, travel, ends)
 
-    def _shoves(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
+    def _shoves(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
         torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
         until the next walk), and that no foot stands on (a lever tips under the robot), is remembered where it is;
-        once it lies more than :data:`SHOVE` from there, it was shoved (a walk or a climb is no push: it would move
+        while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
+        they are split between steps onto it); once it lies more than :data:`SHOVE` from that place, it was shoved
+        (a walk or a climb is no push: it would move
         things the push rules refuse, such as objects over the push limit, and what it moved may slide or tip on
         after the robot stops). The world fails (:meth:`robot_conditions`) and a move in progress there is stopped
         and refused, naming the object."""
         state = self.state
-        centres = self._centers(state)[:, :, :2]
         touched = state.touching[:, self.ids.body][:, self.scene.object_body] & self.movable & ~self.cloth
         touched &= mask[:, None]
         pushed = (np.arange(len(self.scene.object_names))[None, :] == self.pushing[:, None]) & self.moving[:, None]
@@ -493,7 +497,8 @@ class QuadrupedController:
         walking = (self.moving & (self.pushing < 0))[:, None]
         self.pressed = np.where(mask[:, None], pushed | (self.pressed & touched & ~walking), self.pressed)
         stood_on = state.touching[:, self.ids.feet][:, :, self.scene.object_body].any(axis=1)  # it carries a foot
-        self.bumped[(self.pressed | stood_on) & mask[:, None]] = np.nan
+        excused = (self.pressed | stood_on) & mask[:, None]
+        self.bumped = np.where(excused[:, :, None], self.bumped + shift, self.bumped)
         first = touched & ~self.pressed & ~stood_on & np.isnan(self.bumped[:, :, 0])
         self.bumped[first] = centres[first]
         moved = np.nan_to_num(np.linalg.norm(centres - self.bumped, axis=2), nan=0.0)
@@ -510,7 +515,7 @@ class QuadrupedController:
                 if end is not None:
                     ends.append(end)
 
-    def _rams(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
+    def _rams(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
         objects that the pushed object presses, directly or through others, and whose centres lie beyond its front
         face (what rides on it is checked when the push starts; what it drags by friction is not rammed); the travel
@@ -518,9 +523,7 @@ class QuadrupedController:
         the rammed objects that travelled more than :data:`SHOVE` weigh more than the push limit, the robot shoved
         them (a light object used as a ram moves no more than the robot may push): the world fails
         (:meth:`robot_conditions`) and the push is stopped and refused, naming them."""
-        centres = self._centers(self.state)[:, :, :2]
-        step = np.linalg.norm(centres - self.last_centres, axis=2)
-        self.last_centres = np.where(mask[:, None, None], centres, self.last_centres)
+        step = np.linalg.norm(shift, axis=2)
         for w in np.flatnonzero(mask & self.moving & (self.pushing >= 0)):
             index = int(self.pushing[w])
             lo, hi = self._bounds(w, index)
