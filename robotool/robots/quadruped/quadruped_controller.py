@@ -7,7 +7,8 @@ stretch read runs out, downward rays read the path of each of the four feet from
 :data:`~robotool.robots.quadruped.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
 :mod:`.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
 just before it, and once the robot has stopped there the skill is refused with the measured value, the limit and
-where. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell whether a foot
+where. A cloth is no footing over a gap: the rays see through it to what carries it. Every control tick, in all
+moving worlds at once, a few rays under and ahead of each foot tell whether a foot
 is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher surface (a step
 up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot is clear.
 Otherwise the lift is off and the robot's weight rests on its feet.
@@ -17,7 +18,9 @@ Every tick, in every world, a robot whose centre of mass has stayed outside the 
 skill ends with outcome ``fell`` and a reason that says where and which feet lost support,
 :attr:`QuadrupedController.failures` marks its world failed, and later motion skills there are refused. A walk or a
 climb is no push: a movable object that the torso has touched, other than one being pushed, and that has moved more
-than :data:`SHOVE` since, was shoved; the move is stopped and refused, naming it, and the world fails. Nothing here
+than :data:`SHOVE` since (what a foot's weight or a push moved it by not counted), was shoved; so were the objects
+that a push rams ahead of the pushed one once together they weigh more than the push limit. The move is stopped and
+refused, naming them, and the world fails. Nothing here
 reads the task's category or name: limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
