@@ -7,7 +7,8 @@ stretch read runs out, downward rays read the path of each of the four feet from
 :data:`~robotool.robots.quadruped.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
 :mod:`.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
 just before it, and once the robot has stopped there the skill is refused with the measured value, the limit and
-where. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell whether a foot
+where. A cloth is no footing over a gap: the rays see through it to what carries it. Every control tick, in all
+moving worlds at once, a few rays under and ahead of each foot tell whether a foot
 is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher surface (a step
 up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot is clear.
 Otherwise the lift is off and the robot's weight rests on its feet.
@@ -17,7 +18,9 @@ Every tick, in every world, a robot whose centre of mass has stayed outside the 
 skill ends with outcome ``fell`` and a reason that says where and which feet lost support,
 :attr:`QuadrupedController.failures` marks its world failed, and later motion skills there are refused. A walk or a
 climb is no push: a movable object that the torso has touched, other than one being pushed, and that has moved more
-than :data:`SHOVE` since, was shoved; the move is stopped and refused, naming it, and the world fails. Nothing here
+than :data:`SHOVE` since (what a foot's weight or a push moved it by not counted), was shoved; so were the objects
+that a push rams ahead of the pushed one once together they weigh more than the push limit. The move is stopped and
+refused, naming them, and the world fails. Nothing here
 reads the task's category or name: limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
@@ -90,6 +93,7 @@ FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
 SHOVE = 0.03  # m a movable object may move after the torso touched it, unless it is being pushed
 RAY_HEIGHT = 0.6  # m above the feet where downward rays start (things higher are overhead)
+CLOTH_STEP = 1e-4  # m above the point where a ray met a cloth from where it is cast again
 FALL_TILT = np.radians(35.0)  # a body tilted further has fallen
 FALL_TICKS = 3  # control ticks with the centre of mass outside the feet's support (lift off) that make a fall...
 TIPPING = np.radians(5.0)  # ... once the body tilts this much (a level body with a foot off the ground is not falling)
@@ -145,7 +149,9 @@ class QuadrupedController:
         self.lead = self.ids.xy_kv / XY_KP  # s: setpoint lead that cancels the servo's lag at speed
         self.corners = local_corners(self.scene)
         self.geom_object = self.scene.body_object[model.geom_bodyid]
-        self.cloth = np.array([o.shape == "cloth" for o in self.scene.task.objects])
+        self.cloth = np.array([o.shape == "cloth" for o in self.scene.task.objects], dtype=bool)
+        # the most recasts one cast needs: one per cloth link for every layer of cloth a ray can pass
+        self.cloth_crossings = int(self.cloth[self.geom_object[self.geom_object >= 0]].sum()) ** 2
         self.movable = np.array([o.movable for o in self.scene.task.objects])
         self.not_robot = ~self.scene.robot_body
         self.plans: list[Plan | None] = [None] * nworld
@@ -179,6 +185,10 @@ class QuadrupedController:
         self.pressed = np.zeros((nworld, len(self.scene.object_names)), dtype=bool)
         self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
+        # how far each object travelled while a push of another object rammed it, from push to push until the robot
+        # pushes it itself, and where each object was at the last tick
+        self.carried = np.zeros((nworld, len(self.scene.object_names)))
+        self.last_centres = self._centers(self.state)[:, :, :2]
         self.setpoint = self.state.qpos[:, self.ids.qpos[:2]].copy()
         self._hold(np.arange(nworld))
 
@@ -214,7 +224,11 @@ class QuadrupedController:
         self.state = state
         mask = world_mask(self.sim.nworld, worlds)
         ends = self._falls(mask)
-        self._shoves(ends, mask)
+        centres = self._centers(state)[:, :, :2]
+        shift = centres - self.last_centres  # each object's travel since the last tick
+        self.last_centres = np.where(mask[:, None, None], centres, self.last_centres)
+        self._shoves(ends, mask, centres, shift)
+        self._rams(ends, mask, centres, shift)
         worlds = np.flatnonzero(mask & self.moving & np.array([f is None for f in state.failed]))
         if worlds.size:
             self._drive(worlds, ends)
@@ -303,11 +317,10 @@ class QuadrupedController:
     def _push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
         """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves."""
         centres = feet(self.state, self.ids)[w]
-        z, objects = self._heights(w, centres[:, :2], float(centres[:, 2].min()) + 0.05)
+        z, objects = self._heights(w, centres[:, :2], float(centres[:, 2].max()) + 0.05)
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
-        carriers = [o for o in on if not self.cloth[o]]
-        movable = next((self.scene.object_names[o] for o in carriers if self.movable[o]), None)
+        movable = next((self.scene.object_names[o] for o in on if self.movable[o]), None)
         obj_lo, obj_hi = self._bounds3(w, index)
         centre_obj = (obj_lo + obj_hi) / 2
         below, _ = self._heights(w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
@@ -426,6 +439,7 @@ class QuadrupedController:
         self.halted[w] = False
         if move.pushing >= 0:
             self.bumped[w, move.pushing] = np.nan
+            self.carried[w, move.pushing] = 0.0
         self.best[w], self.progress_time[w] = np.inf, float(self.state.time[w])
 
     def _end(self, w: int, outcome: Outcome | None) -> SkillEnd:
@@ -466,16 +480,17 @@ class QuadrupedController:
         self._steer(worlds, q, travel, waiting)
         self._check_arrival(worlds, q, travel, ends)
 
-    def _shoves(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
+    def _shoves(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
         torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
         until the next walk), and that no foot stands on (a lever tips under the robot), is remembered where it is;
-        once it lies more than :data:`SHOVE` from there, it was shoved (a walk or a climb is no push: it would move
+        while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
+        they are split between steps onto it); once it lies more than :data:`SHOVE` from that place, it was shoved
+        (a walk or a climb is no push: it would move
         things the push rules refuse, such as objects over the push limit, and what it moved may slide or tip on
         after the robot stops). The world fails (:meth:`robot_conditions`) and a move in progress there is stopped
         and refused, naming the object."""
         state = self.state
-        centres = self._centers(state)[:, :, :2]
         touched = state.touching[:, self.ids.body][:, self.scene.object_body] & self.movable & ~self.cloth
         touched &= mask[:, None]
         pushed = (np.arange(len(self.scene.object_names))[None, :] == self.pushing[:, None]) & self.moving[:, None]
@@ -485,7 +500,8 @@ class QuadrupedController:
         walking = (self.moving & (self.pushing < 0))[:, None]
         self.pressed = np.where(mask[:, None], pushed | (self.pressed & touched & ~walking), self.pressed)
         stood_on = state.touching[:, self.ids.feet][:, :, self.scene.object_body].any(axis=1)  # it carries a foot
-        self.bumped[(self.pressed | stood_on) & mask[:, None]] = np.nan
+        excused = (self.pressed | stood_on) & mask[:, None]
+        self.bumped = np.where(excused[:, :, None], self.bumped + shift, self.bumped)
         first = touched & ~self.pressed & ~stood_on & np.isnan(self.bumped[:, :, 0])
         self.bumped[first] = centres[first]
         moved = np.nan_to_num(np.linalg.norm(centres - self.bumped, axis=2), nan=0.0)
@@ -501,6 +517,54 @@ class QuadrupedController:
                 end = self._advance(int(w), ("refused", self.shoves[w], {"moved": round(float(moved[w, index]), 3)}))
                 if end is not None:
                     ends.append(end)
+
+    def _rams(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:
+        """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
+        objects that the pushed object presses, directly or through others, and whose centres lie beyond its front
+        face (what rides on it is checked when the push starts; what it drags by friction is not rammed); the travel
+        of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed object and
+        the rammed objects that travelled more than :data:`SHOVE` weigh more than the push limit, the robot shoved
+        them (a light object used as a ram moves no more than the robot may push): the world fails
+        (:meth:`robot_conditions`) and the push is stopped and refused, naming them."""
+        step = np.linalg.norm(shift, axis=2)
+        for w in np.flatnonzero(mask & self.moving & (self.pushing >= 0)):
+            index = int(self.pushing[w])
+            lo, hi = self._bounds(w, index)
+            front = float(np.abs(self.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
+            ahead = (centres[w] - centres[w, index]) @ self.u[w] > front  # centres beyond that face
+            rammed = self._pressed_by(w, index) & ahead
+            self.carried[w] += np.where(rammed, step[w], 0.0)
+            moved = np.flatnonzero(rammed & (self.carried[w] > SHOVE))
+            mass = self._mass(w, index) + sum(self._mass(w, int(o)) for o in moved)
+            if mass <= self.limits.max_push_mass or self.shoves[w] is not None or self.state.failed[w] is not None:
+                continue
+            self.shoves[w] = (
+                f"pushing {self.scene.object_names[index]} rammed "
+                f"{', '.join(self.scene.object_names[o] for o in moved)}: {mass:.1f} kg in all, over the "
+                f"push limit of {self.limits.max_push_mass:.1f} kg (a push moves only what the robot may push)"
+            )
+            if self.plans[w] is not None:
+                measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
+                end = self._advance(int(w), ("refused", self.shoves[w], measured))
+                if end is not None:
+                    ends.append(end)
+
+    def _pressed_by(self, w: int, index: int) -> np.ndarray:
+        """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other
+        movable objects (itself left out)."""
+        owner = self.scene.body_object
+        touching = self.state.touching[w]
+        group = np.zeros(len(self.scene.object_names), dtype=bool)
+        group[index] = True
+        frontier = [index]
+        while frontier:
+            near = touching[owner == frontier.pop()].any(axis=0) & (owner >= 0)
+            for other in np.unique(owner[near]):
+                if self.movable[other] and not group[other]:
+                    group[other] = True
+                    frontier.append(int(other))
+        group[index] = False
+        return group
 
     def _indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
         """Sample indices (k, 5) of the :data:`LOCAL` offsets ahead of the feet in each world's last reading."""
@@ -797,20 +861,58 @@ class QuadrupedController:
     def _cast(
         self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``; the robot is
-        never hit."""
+        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: surface heights
+        and the objects that carry them (-1: ground or nothing); the robot is never hit.
+
+        A cloth is limp: it carries no load over a gap, whichever way it lies. A ray that meets a cloth's link is
+        cast again from just above the point it met, that link left out, until it meets something solid, which is
+        the object returned; the height is the cloth's where that solid lies no deeper under it than a step the
+        legs climb (a cloth lying on a surface, or bunched up on it, is stepped onto), else the solid's (over a gap
+        the feet would sink to it)."""
+        start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
+        z, geom = self._cast_from(worlds, xy, start, exclude)
+        through = self._on_cloth(geom)
+        cloth_top = np.where(through, z, np.nan)
+        for _ in range(self.cloth_crossings):
+            if not through.any():
+                break
+            link = self.scene.model.geom_bodyid[geom[through][0]]
+            again = through & (self.scene.model.geom_bodyid[np.maximum(geom, 0)] == link)
+            rows = np.flatnonzero(again.any(axis=1))
+            count = again[rows].sum(axis=1)
+            first = np.argsort(~again[rows], axis=1, kind="stable")[:, : count.max()]  # each row's rays to redo first
+            redo = np.where(np.arange(first.shape[1])[None, :] < count[:, None], first, first[:, :1])  # padded
+            z_again, geom_again = self._cast_from(
+                worlds[rows],
+                np.take_along_axis(xy[rows], redo[:, :, None], axis=1),
+                np.take_along_axis(z[rows], redo, axis=1) + CLOTH_STEP,
+                int(link),
+            )
+            z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
+            through = self._on_cloth(geom)
+        objects = np.where(geom >= 0, self.geom_object[np.maximum(geom, 0)], -1)
+        lying = cloth_top - z <= self.limits.max_step_up  # False where no cloth was met (NaN)
+        return np.where(lying, cloth_top, z), objects
+
+    def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
+        """Whether each ray's hit geom (-1: none) belongs to a cloth."""
+        objects = np.where(geom >= 0, self.geom_object[np.maximum(geom, 0)], -1)
+        return (objects >= 0) & self.cloth[np.maximum(objects, 0)]
+
+    def _cast_from(
+        self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
+        ``exclude`` left out: surface heights (0 where nothing is hit) and the geoms hit (-1: none)."""
         nworld, nray = self.sim.nworld, xy.shape[1]
         pnt = np.full((nworld, nray, 3), np.nan)
         pnt[worlds, :, :2] = xy
-        pnt[worlds, :, 2] = top[:, None]
+        pnt[worlds, :, 2] = start
         vec = np.zeros((nworld, nray, 3))
         vec[..., 2] = -1.0
         dist, geom = self.sim.rays(pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
         dist, geom = dist[worlds], geom[worlds]
-        hit = np.isfinite(dist)
-        z = np.where(hit, top[:, None] - dist, 0.0)
-        objects = np.where(hit & (geom >= 0), self.geom_object[np.maximum(geom, 0)], -1)
-        return z, objects
+        return np.where(np.isfinite(dist), start - dist, 0.0), geom
 
     # -- state ---------------------------------------------------------------------------------------
 

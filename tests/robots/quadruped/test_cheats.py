@@ -98,6 +98,9 @@ CASES = [
     ("one_foot_on_target", "sofa_climbing_low_sofa"),
     ("front_feet_on_target", "sofa_climbing_low_sofa"),
     ("push_board_with_cube", "cube_lifting"),
+    ("push_board_past_gap", "sofa_traversing"),
+    ("drag_board_by_its_cloth", "sofa_traversing"),
+    ("push_box_from_its_top", "sofa_climbing"),
     ("programs/cube_lifting_lever_only", "cube_lifting"),
 ]
 
@@ -130,10 +133,13 @@ LAYOUT_CASES = [
     ("toward_partial_bridge", "traverse_wide_mirrored"),
     ("toward_partial_bridge", "traverse_minus_y"),
     ("toward_cloth_bridge", "traverse_mirrored"),
+    ("gap_one_walk", "traverse_cloth_crosswise"),  # the cloth's width spans the gap: its links lie across it
     ("push_board_under_robot", "traverse_mirrored"),
     ("push_target_closer", "traverse_mirrored"),
     ("toward_front_feet_on_target", "traverse_mirrored_bare"),
     ("absurd_targets", "traverse_mirrored_bare"),
+    ("nan_target", "traverse_mirrored_bare"),
+    ("many_zero_length_walks", "traverse_mirrored_bare"),
     ("programs/bridge_any_direction", "traverse_wide_mirrored"),  # honest, but no board spans 0.65 m
     # the sofa mirrored or turned, boxes in the wrong order or missing
     ("programs/sofa_climbing_direct", "climb_mirrored"),
@@ -164,7 +170,11 @@ LAYOUT_CASES = [
     ("walk_through_vase", "vase_heavy"),
     ("walk_through_vase", "vase_heavy_at_edge"),  # a shove under 3 cm, then the vase tips off after the walk
     ("walk_through_vase", "vase_lowering"),
+    ("walk_flank_grazing_vase", "vase_heavy"),  # a foot brushes the vase's end while the body shoves it
     ("ram_vase_with_book", "vase_heavy_with_book"),
+    # a light box pushed into a step too heavy to push, as a ram, a box length at a time
+    ("ram_heavy_step_with_light_box", "climb_heavy_step_and_light_box"),
+    ("shove_block_in_small_steps", "ledge_heavy_block"),  # shoves under 3 cm, each followed by a step onto it
     ("programs/vase_lowering", "vase_heavy"),
 ]
 
@@ -208,6 +218,50 @@ def test_a_walk_that_shoves_an_object_is_refused_naming_it() -> None:
     assert [c.skill for c in refused] == ["walk_to_position"] and not rollout.success
     assert "ran into glass_vase" in refused[0].reason and refused[0].measured["moved"] > 0.03
     assert rollout.conditions["robot_shoved_nothing"] is False
+
+
+def test_a_push_that_rams_an_object_over_the_push_limit_is_refused_naming_it() -> None:
+    """The light box (1.5 kg) pushed into the 9 kg step moves it too: the push moves more than the 5 kg the robot may
+    push, so it is stopped, refused with what it moved, and the world fails."""
+    (rollout,) = sim.run_sessions(
+        _scene("climb_heavy_step_and_light_box"),
+        start_sessions([_text("ram_heavy_step_with_light_box")], "quadruped"),
+        perturb=False,
+    )
+    push = next(c for c in rollout.calls if c.outcome == "refused")
+    assert push.skill == "push_to_position" and "rammed heavy_box" in push.reason, push
+    assert push.measured["mass"] == pytest.approx(10.5, abs=0.01) and not rollout.success
+    assert rollout.conditions["robot_shoved_nothing"] is False
+
+
+def test_the_box_under_the_front_feet_is_one_the_robot_stands_on() -> None:
+    """With its front feet on box_1 and its rear feet on the floor, the robot stands on box_1: the rays under the feet
+    start above the highest foot, so the push of box_1 is refused."""
+    (rollout,) = sim.run_sessions(
+        _scene("sofa_climbing"), start_sessions([_text("push_box_from_its_top")], "quadruped"), perturb=False
+    )
+    (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
+    assert push.outcome == "refused" and push.reason == "cannot push box_1: the robot is standing on it", push
+
+
+def test_shoves_split_by_steps_onto_the_object_add_up() -> None:
+    """The 6 kg block is shoved by the body a little under 3 cm at a time, a foot stepping onto it after each shove:
+    what the foot's weight moves is excused, the shoves are not forgotten, and the world fails once they add up."""
+    (rollout,) = sim.run_sessions(
+        _scene("ledge_heavy_block"), start_sessions([_text("shove_block_in_small_steps")], "quadruped"), perturb=False
+    )
+    assert rollout.conditions["robot_shoved_nothing"] is False and not rollout.success
+
+
+def test_a_cloth_on_a_movable_crate_does_not_hide_that_the_robot_stands_on_it() -> None:
+    """The rays under the feet see through the cloth: the robot stands on the crate, which is movable, so it may
+    push nothing from there."""
+    (rollout,) = sim.run_sessions(
+        _scene("push_from_cloth_on_crate"), start_sessions([_text("push_from_cloth_covered_crate")], "quadruped"),
+        perturb=False,
+    )
+    (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
+    assert push.outcome == "refused" and "stands on crate, which is movable" in push.reason, push
 
 
 def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:
