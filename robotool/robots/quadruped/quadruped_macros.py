@@ -29,7 +29,8 @@ LEVEL = 0.04  # m: supports closer in height than this are the same surface
 APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
 INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
 OVERLAP = 0.15  # m a bridge rests on each side of a gap
-CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
+CLEARANCES = (0.5, 0.2)  # m a prop pushed out from under a board keeps from the board's side: far enough to be left
+# behind by the board's end when friction drags it sideways part of the way, else just clear
 SIDE = 0.25  # m the robot keeps from a board it walks beside
 FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
 MAX_STEPS = 3  # objects a staircase may use below the target
@@ -587,7 +588,8 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
     a[axis] = -np.sign(target.center[axis] - bbox.center[axis]) or 1.0  # toward the far end
     lat = np.array([-a[1], a[0]])
     fulcrum = quad.layout.box(fulcrums[0].name)
-    for side in (np.sign((quad.start - bbox.center) @ lat) or 1.0, -(np.sign((quad.start - bbox.center) @ lat) or 1.0)):
+    near = np.sign((quad.start - bbox.center) @ lat) or 1.0
+    for side, clearance in itertools.product((near, -near), CLEARANCES):
         prog = Program()
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
@@ -597,7 +599,7 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         for prop in props:
             p = quad.layout.box(prop.name)
             out = p.center.copy()
-            away = float(np.abs(lat) @ (bbox.half + p.half)) + CLEARANCE + abs((p.center - bbox.center) @ lat)
+            away = float(np.abs(lat) @ (bbox.half + p.half)) + clearance + abs((p.center - bbox.center) @ lat)
             out -= side * lat * away
             prog.use(prop.name, f"obstacle: props up {board_name}'s far end; push it out of the way")
             along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
