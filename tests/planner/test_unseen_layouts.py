@@ -1,5 +1,6 @@
 """The search planner on layouts it was not built from (task fixtures under tests/fixtures/layouts/): staircases of
-two and three pushed boxes approached from -x and +y, a gap crossed toward -x, levers reflected and turned along y.
+two and three pushed boxes approached from -x and +y, a gap crossed toward -x, levers reflected and turned along y,
+a lever whose prop is reached around a heavy box standing between it and the robot.
 
 Each is solved with a verified success, and a tool-free attempt fails in simulation. Also the layout predictions
 those need: a walk over a box between the feet, a push routed around a wall."""
@@ -22,6 +23,7 @@ LAYOUTS = FIXTURES / "layouts"
 NAMES = [  # this module's fixtures in that folder (others there serve the cheat corpus)
     "gap_toward_minus_x",
     "lever_along_y",
+    "lever_past_a_toolbox",
     "lever_reversed",
     "staircase_three",
     "staircase_two_toward_minus_x",

@@ -29,7 +29,8 @@ LEVEL = 0.04  # m: supports closer in height than this are the same surface
 APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
 INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
 OVERLAP = 0.15  # m a bridge rests on each side of a gap
-CLEARANCE = 0.2  # m an object pushed out of the way keeps from what it was under
+CLEARANCES = (0.5, 0.2)  # m a prop pushed out from under a board keeps from the board's side: far enough to be left
+# behind by the board's end when friction drags it sideways part of the way, else just clear
 SIDE = 0.25  # m the robot keeps from a board it walks beside
 FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
 MAX_STEPS = 3  # objects a staircase may use below the target
@@ -512,6 +513,19 @@ class Writer:
         self.here = np.asarray(xy, dtype=float)
         self.surface = surface
 
+    def around(self, xy: np.ndarray) -> None:
+        """Walk on the floor around what stands between the robot and ``xy`` (:func:`detour`), up to the last turn
+        before it."""
+        for via in detour(self.layout, self.here, xy, self.quad.limits)[:-1]:
+            self.walk(via, self.quad.floor_name, "walk around what stands in the way")
+
+    def floor_walk(self, xy: np.ndarray, intent: str) -> None:
+        """Walk on the floor to ``xy`` around what stands in the way; a walk still predicted to break a limit is
+        kept as the program's doubt."""
+        self.around(xy)
+        self.doubt(walk_violation(self.layout, self.here, [xy], self.quad.limits))
+        self.walk(xy, self.quad.floor_name, intent)
+
     def route(self, route: Route) -> None:
         """Write a whole route; record a predicted violation of its walk as the program's doubt."""
         self.prog.late += route.late
@@ -521,8 +535,7 @@ class Writer:
             self.push(name, xy, why)
         first, surface = route.waypoints[0]
         if surface == self.quad.floor_name:
-            for via in detour(self.layout, self.here, first, self.quad.limits)[:-1]:
-                self.walk(via, surface, "walk around what stands in the way")
+            self.around(first)
         self.doubt(walk_violation(self.layout, self.here, [xy for xy, _ in route.waypoints], self.quad.limits))
         for xy, surface in route.waypoints:
             self.walk(xy, surface, f"walk onto {surface}" if surface != "ground" else "walk into position")
@@ -575,7 +588,8 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
     a[axis] = -np.sign(target.center[axis] - bbox.center[axis]) or 1.0  # toward the far end
     lat = np.array([-a[1], a[0]])
     fulcrum = quad.layout.box(fulcrums[0].name)
-    for side in (np.sign((quad.start - bbox.center) @ lat) or 1.0, -(np.sign((quad.start - bbox.center) @ lat) or 1.0)):
+    near = np.sign((quad.start - bbox.center) @ lat) or 1.0
+    for side, clearance in itertools.product((near, -near), CLEARANCES):
         prog = Program()
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
@@ -585,21 +599,17 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         for prop in props:
             p = quad.layout.box(prop.name)
             out = p.center.copy()
-            away = float(np.abs(lat) @ (bbox.half + p.half)) + CLEARANCE + abs((p.center - bbox.center) @ lat)
+            away = float(np.abs(lat) @ (bbox.half + p.half)) + clearance + abs((p.center - bbox.center) @ lat)
             out -= side * lat * away
             prog.use(prop.name, f"obstacle: props up {board_name}'s far end; push it out of the way")
             along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
-            w.walk(bbox.center + lat * side * beside + a * along, "ground", f"walk beside {prop.name}")
+            w.floor_walk(bbox.center + lat * side * beside + a * along, f"walk beside {prop.name}")
             w.push(prop.name, out, "out from under the board")
         step_on = fulcrum.center - a * (quad.extent(a) + 0.01)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
         end = bbox.center + a * (float(np.abs(a) @ bbox.half) - quad.extent(a) - INSET)
-        path = [
-            (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), "ground"),
-            (step_on + lat * side * beside, "ground"),
-        ]
-        for xy, surface in path:
-            w.walk(xy, surface, "walk beside the board")
+        for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
+            w.floor_walk(xy, "walk beside the board")
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
         w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
         prog.say(
