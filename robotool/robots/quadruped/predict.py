@@ -17,6 +17,7 @@ import numpy as np
 from robotool.planner.layout import CONTACT, Box, Layout
 from robotool.robots.quadruped.push import (
     GAP,
+    SIDE_MARGIN,
     Leg,
     lateral_offsets,
     legs,
@@ -26,11 +27,9 @@ from robotool.robots.quadruped.push import (
     sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import RISE, check_walk, foot_offsets, foot_paths
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths
 
 SAMPLE = 0.02  # m between terrain samples along a walk
-FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
-SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
 # is in the way (the torso's underside rides 0.05 m above the feet)
 BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
@@ -71,7 +70,8 @@ def walk_violation(
         lateral = np.array([-u[1], u[0]])
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
         points = here - u * extent + s[:, None] * u
-        width, flank = float(np.abs(lateral) @ half) - FOOT_INSET, float(np.abs(lateral) @ half) + SIDE_MARGIN
+        width = float(np.abs(lateral) @ half) - FOOT_RADIUS  # the feet's centres (:func:`.terrain.foot_offsets`)
+        flank = float(np.abs(lateral) @ half) + SIDE_MARGIN
         offsets = (-width, width, *np.linspace(-width, width, BELLY_LINES + 2)[1:-1], -flank, flank)
         across = np.stack([points + k * lateral for k in offsets])
         heights = layout.heights(across.reshape(-1, 2), skip).reshape(len(offsets), -1)
