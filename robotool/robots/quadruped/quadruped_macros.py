@@ -8,8 +8,9 @@ program whose walk is predicted to break a limit keeps that as its ``doubt`` and
 
 from __future__ import annotations
 
+import copy
 import itertools
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,7 +19,7 @@ from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
-from robotool.robots.quadruped.push import legs
+from robotool.robots.quadruped.push import lateral_offsets, legs
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import foot_offsets
@@ -66,15 +67,25 @@ class Quadruped:
         self.start = np.asarray(task.robot.position, dtype=float)
         self.floor_name, self.floor = start_surface(task)
         self.layout = Layout(task)
+        self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
 
     def pushable(self, obj: SceneObject, level: float) -> bool:
         """Whether the robot may push ``obj`` from a surface at height ``level``."""
         return (
             obj.movable
+            and obj.name not in self.placed
             and obj.shape != "cloth"
             and obj.effective_mass <= self.limits.max_push_mass
             and abs(obj.bottom - level) < LEVEL
         )
+
+    def after(self, layout: Layout, here: np.ndarray, placed: Iterable[str]) -> Quadruped:
+        """The same robot on the same floor once the scene is rearranged to ``layout`` and it stands at ``here``;
+        the ``placed`` objects are to stay where they are (no route pushes them)."""
+        out = copy.copy(self)
+        out.layout, out.start = layout, np.asarray(here, dtype=float)
+        out.placed = self.placed | frozenset(placed)
+        return out
 
     def extent(self, u: np.ndarray) -> float:
         """Half length of the body along direction ``u``."""
@@ -647,7 +658,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 if quad.layout.collides(cbox.moved_to(spot), ignore=[target.name]) is not None:
                     continue
                 pushes.append((cushion.name, spot))
-            for route in routes_onto(quad, support_name, tools):
+            for route in routes_onto(_after_pushes(quad, pushes), support_name, tools):
                 prog = Program()
                 prog.use(target.name, "target")
                 w = Writer(quad, prog)
@@ -655,9 +666,9 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     prog.use(name, f"tool: a soft landing for {target.name}")
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
                 w.route(route)
-                behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
-                feet = w.layout.heights(behind + foot_offsets(quad.limits), exclude=[target.name])
-                if np.any(np.abs(feet - support.top) > LEVEL / 2):
+                behind = _stance_behind(quad, w.layout, target.name, direction, support.top)
+                if behind is None:
+                    behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
                     w.doubt(f"no room for the feet on {support_name} behind {target.name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
@@ -674,3 +685,33 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     + (f" onto {pushes[0][0]}." if pushes else ".")
                 )
                 yield prog
+
+
+def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quadruped:
+    """``quad`` as the scene will be after ``pushes`` (object, x-y centre) are made, the robot where the last ends:
+    the way onto a surface is planned around what they moved (a cushion pushed beside a sofa stands in the way)."""
+    if not pushes:
+        return quad
+    w = Writer(quad, Program())
+    for name, spot in pushes:
+        w.push(name, spot, "")
+    return quad.after(w.layout, w.here, [name for name, _ in pushes])
+
+
+def _stance_behind(
+    quad: Quadruped, layout: Layout, name: str, direction: np.ndarray, level: float
+) -> np.ndarray | None:
+    """Where to stand behind ``name`` to push it along ``direction``: straight behind it, else slid along its face to
+    the nearest offset the push skill may take (:func:`robotool.robots.quadruped.push.lateral_offsets`) with every
+    foot on the surface at ``level`` it stands on; None when there is no such place."""
+    box = layout.box(name)
+    axis = int(np.argmax(np.abs(direction)))
+    lat = 1 - axis
+    straight = box.center - direction * (box.half[axis] + quad.extent(direction) + 0.05)
+    for offset in lateral_offsets(2 * float(box.half[lat]), 2 * float(quad.half[lat])):
+        stance = straight.copy()
+        stance[lat] += offset
+        feet = layout.heights(stance + foot_offsets(quad.limits), exclude=[name])
+        if np.all(np.abs(feet - level) <= LEVEL / 2):
+            return stance
+    return None
