@@ -36,7 +36,7 @@ BELLY_LINES = 5  # lines between the feet's paths along which the surface under 
 PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
 PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep tolerates
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
-DETOUR_CHECKS = 60  # walks predicted at most when looking for a way around
+DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
 
 
