@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 import itertools
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -19,10 +19,10 @@ from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
-from robotool.robots.quadruped.push import lateral_offsets, legs
+from robotool.robots.quadruped.push import lateral_offsets, legs, sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import foot_offsets
+from robotool.robots.quadruped.terrain import RISE, foot_offsets
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 
@@ -48,8 +48,9 @@ class Route:
     words: str = ""
     late: int = 0  # less likely choices it makes (a step down onto the target: the body rides on a higher step)
 
-    def layout(self, task: Task) -> Layout:
-        out = Layout(task)
+    def layout(self, base: Layout) -> Layout:
+        """``base`` with the route's pushes made."""
+        out = base
         for name, xy, _ in self.pushes:
             out = out.with_moved(name, xy)
         return out
@@ -104,15 +105,41 @@ class Quadruped:
 DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1)))
 FOOT = 0.03  # m the feet sit inside the body's outline: they must be over what the robot stands on
 ENTRIES = 2  # predicted-fine approaches kept for a direct climb
+LANDING_STEP = 0.02  # m between the stops tried when a route's stop on its target is pulled back
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
-    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps."""
-    yield from _direct(quad, name)
-    if not tools:
-        return
-    yield from _bridges(quad, name)
-    yield from _staircases(quad, name)
+    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps; each stops
+    short of what stands on the top (:func:`_landing`)."""
+    found = itertools.chain(_direct(quad, name), *((_bridges(quad, name), _staircases(quad, name)) if tools else ()))
+    for route in found:
+        yield _landing(quad, name, route)
+
+
+def _landing(quad: Quadruped, name: str, route: Route) -> Route:
+    """``route`` with its stop on ``name`` pulled back along the way it arrives, when the walk to the stop is predicted
+    to run into something standing on the top (an object lying ahead of the steps): to the farthest point with every
+    foot on the top, the body's outline (and its side margin) clear of what stands there, and the walk there
+    predicted fine; unchanged when the walk is fine, or when no point is."""
+    last, surface = route.waypoints[-1]
+    if surface != name:
+        return route
+    previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
+    layout = route.layout(quad.layout)
+    if walk_violation(layout, previous, [last], quad.limits) is None:
+        return route
+    top, length = layout.box(name).top, float(np.linalg.norm(last - previous))
+    for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
+        stop = previous + (last - previous) * s / length
+        feet = layout.heights(stop + foot_offsets(quad.limits))
+        body = layout.heights(sweep_points(stop, stop, quad.half))
+        if (
+            np.all(np.abs(feet - top) <= LEVEL / 2)
+            and body.max() <= top + RISE
+            and walk_violation(layout, previous, [stop], quad.limits) is None
+        ):
+            return replace(route, waypoints=[*route.waypoints[:-1], (stop, name)])
+    return route
 
 
 def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
@@ -670,6 +697,8 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 if behind is None:
                     behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
                     w.doubt(f"no room for the feet on {support_name} behind {target.name}")
+                for via in detour(w.layout, w.here, behind, quad.limits)[:-1]:
+                    w.walk(via, support_name, f"walk around what stands on {support_name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
                 prog.motion(
