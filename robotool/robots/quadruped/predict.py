@@ -38,6 +38,8 @@ PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep toler
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
+REMEMBERED = 20_000  # walk predictions kept (the same walks recur across a task's candidate programs)
+_walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
 
 
 def walk_violation(
@@ -55,6 +57,21 @@ def walk_violation(
     """
     skip = list(exclude)
     goals = [np.asarray(g, dtype=float) for g in waypoints]
+    moved = tuple(sorted((name, xy.tobytes()) for name, xy in layout.moved.items()))
+    path = (np.asarray(start, dtype=float).tobytes(), *(g.tobytes() for g in goals))
+    key = (id(layout.task), moved, path, tuple(skip), limits)
+    task, known = _walks.get(key, (None, None))
+    if task is layout.task:  # the entry holds its task, so an id is never reused while it is remembered
+        return known
+    if len(_walks) >= REMEMBERED:
+        _walks.clear()
+    _walks[key] = (layout.task, found := _walk_violation(layout, start, goals, limits, skip))
+    return found
+
+
+def _walk_violation(
+    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
+) -> str | None:
     finding = check_walk(lambda xy: layout.heights(xy, skip), np.asarray(start, dtype=float), goals, limits)
     if finding is not None:
         return finding.describe()

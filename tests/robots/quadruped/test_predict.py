@@ -62,3 +62,19 @@ def test_detour_finds_the_way_round_a_cluttered_floor() -> None:
     way = detour(layout, start, goal, task.limits)
     assert len(way) > 1 and np.allclose(way[-1], goal)
     assert walk_violation(layout, start, way, task.limits) is None
+
+
+def test_remembered_walks_are_told_apart_by_layout_and_task() -> None:
+    """Walk predictions are remembered: the same walk with the step moved away, or on another task with a lower
+    step, is predicted afresh."""
+    tall, low = (
+        parse_task({**_step_task(1.0).model_dump(mode="json", exclude_none=True), "objects": [
+            {"name": "step", "shape": "box", "center": [0.0, 0.5, h / 2], "size": [1.0, 0.4, h], "movable": False}]})
+        for h in (0.3, 0.06)
+    )
+    start, goal = np.array([0.0, 0.0]), np.array([0.0, 0.5])
+    away = Layout(tall).with_moved("step", np.array([3.0, 0.5]))
+    for _ in range(2):
+        assert walk_violation(Layout(tall), start, [goal], tall.limits) is not None
+        assert walk_violation(away, start, [goal], tall.limits) is None
+        assert walk_violation(Layout(low), start, [goal], low.limits) is None
