@@ -20,7 +20,7 @@ from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
 
 GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
 MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover
-OFFSET_STEP = 0.05  # m between candidate lateral offsets
+OFFSET_STEP = 0.02  # m between candidate lateral offsets
 SAME_SURFACE = 0.04  # m: supports closer in height than this are the same surface
 MIN_LEG = 0.02  # m: shorter pushes along an axis are skipped
 SIDE_MARGIN = 0.01  # m beyond the body's outline that must be clear of anything higher than its floor

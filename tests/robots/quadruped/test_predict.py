@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.planner.layout import Layout
-from robotool.robots.quadruped.predict import detour, walk_violation
+from robotool.robots.quadruped.predict import detour, push_staging, walk_violation
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.task_file import parse_task
 from robotool.task_model import Task
@@ -78,3 +78,23 @@ def test_remembered_walks_are_told_apart_by_layout_and_task() -> None:
         assert walk_violation(Layout(tall), start, [goal], tall.limits) is not None
         assert walk_violation(away, start, [goal], tall.limits) is None
         assert walk_violation(Layout(low), start, [goal], low.limits) is None
+
+
+def test_a_push_stance_slides_just_clear_of_what_stands_beside_it() -> None:
+    """A block beside where the robot lines up to push a chair along -x reaches 6 mm past the straight-on stance's
+    flank: the stance slides along the chair's face just clear of it (2 cm), not a coarse step, so the push stays
+    nearly centred."""
+    box = {"shape": "box", "movable": False}
+    task = parse_task({
+        "format": 1, "name": "push_beside", "instruction": "Stand on the step.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [1.5, 0.0]},
+        "objects": [
+            {**box, "name": "chair", "center": [0.0, 0.0, 0.115], "size": [0.4, 0.5, 0.23], "movable": True,
+             "mass": 3.0},
+            {**box, "name": "block", "center": [0.65, -0.322, 0.1], "size": [0.7, 0.356, 0.2]},
+            {**box, "name": "step", "center": [-2.0, 0.0, 0.05], "size": [0.6, 0.6, 0.1]},
+        ],
+        "goal": {"robot_on": "step"},
+    })
+    staging = push_staging(Layout(task), "chair", np.array([-0.8, 0.0]), task.limits, 0.0)
+    assert staging is not None and 0.0 < staging[1] <= 0.02 + 1e-9
