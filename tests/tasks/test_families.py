@@ -13,7 +13,7 @@ from robotool import tasks
 from robotool.concepts import key_concepts, needs_tool
 from robotool.geometry import object_parts
 from robotool.task_file import load_task, parse_task
-from robotool.tasks.families import sofa_traversing
+from robotool.tasks.families import sofa_traversing, vase_lowering
 from robotool.tasks.families._common import RigidPlacement, thing
 
 SEEDS = range(50)
@@ -147,3 +147,19 @@ def test_boards_the_robot_walks_along_carry_its_feet_in_any_turn(family: str, bo
         assert extent[1 - along] > feet_apart, f"{task.name}: {extent[1 - along]:.2f} m wide"
         turned += along == 1
     assert turned  # some scenes are turned a quarter
+
+
+@pytest.mark.parametrize(("turns", "vase_x", "room"), [(0, 2.85, True), (1, 2.85, False), (1, 3.1, True)])
+def test_a_vase_where_the_steps_lead_leaves_room_to_land_only_beside_it(turns: int, vase_x: float, room: bool) -> None:
+    """The vase lies 0.15 m past the sofa's edge, beside the line up the steps. Climbing along its length (no
+    turn), the robot stops on the sofa on a line across the steps that misses the vase; in a quarter-turned scene it
+    climbs flank first on the one line across them and runs into the vase, unless the vase lies farther in."""
+    sofa = thing("sofa", "box", (3.0, 0.2, 0.17), (0.9, 1.5, 0.34), movable=False)
+    step = thing("box_2", "box", (2.35, 0.5, 0.12), (0.4, 0.6, 0.24), movable=False)
+    vase = thing("glass_vase", "box", (vase_x, 0.7, 0.39), (0.3, 0.1, 0.1), mass=0.5)
+    assert vase_lowering.room_to_land(RigidPlacement(turns=turns), sofa, step, vase) is room
+
+
+def test_vase_scenes_without_room_to_land_are_unsolvable() -> None:
+    blocked = [i for i in (_instance("vase_lowering", seed) for seed in range(100)) if "lead onto" in i.description]
+    assert blocked and all(not i.solvable and not i.tools and {"box_1", "box_2"} <= set(i.decoys) for i in blocked)

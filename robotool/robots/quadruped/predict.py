@@ -17,6 +17,7 @@ import numpy as np
 from robotool.planner.layout import CONTACT, Box, Layout
 from robotool.robots.quadruped.push import (
     GAP,
+    SIDE_MARGIN,
     Leg,
     lateral_offsets,
     legs,
@@ -26,11 +27,9 @@ from robotool.robots.quadruped.push import (
     sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import RISE, check_walk, foot_offsets, foot_paths
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths
 
 SAMPLE = 0.02  # m between terrain samples along a walk
-FOOT_INSET = 0.02  # m: the feet sit this far inside the body's outline
-SIDE_MARGIN = 0.01  # m beside the body's flanks (and its corners, on a slanted move) that must be clear
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
 # is in the way (the torso's underside rides 0.05 m above the feet)
 BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
@@ -39,6 +38,8 @@ PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep toler
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
+REMEMBERED = 20_000  # walk predictions kept (the same walks recur across a task's candidate programs)
+_walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
 
 
 def walk_violation(
@@ -56,6 +57,21 @@ def walk_violation(
     """
     skip = list(exclude)
     goals = [np.asarray(g, dtype=float) for g in waypoints]
+    moved = tuple(sorted((name, xy.tobytes()) for name, xy in layout.moved.items()))
+    path = (np.asarray(start, dtype=float).tobytes(), *(g.tobytes() for g in goals))
+    key = (id(layout.task), moved, path, tuple(skip), limits)
+    task, known = _walks.get(key, (None, None))
+    if task is layout.task:  # the entry holds its task, so an id is never reused while it is remembered
+        return known
+    if len(_walks) >= REMEMBERED:
+        _walks.clear()
+    _walks[key] = (layout.task, found := _walk_violation(layout, start, goals, limits, skip))
+    return found
+
+
+def _walk_violation(
+    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
+) -> str | None:
     finding = check_walk(lambda xy: layout.heights(xy, skip), np.asarray(start, dtype=float), goals, limits)
     if finding is not None:
         return finding.describe()
@@ -71,7 +87,8 @@ def walk_violation(
         lateral = np.array([-u[1], u[0]])
         s = np.arange(0.0, length + 2 * extent + 1e-9, SAMPLE)
         points = here - u * extent + s[:, None] * u
-        width, flank = float(np.abs(lateral) @ half) - FOOT_INSET, float(np.abs(lateral) @ half) + SIDE_MARGIN
+        width = float(np.abs(lateral) @ half) - FOOT_RADIUS  # the feet's centres (:func:`.terrain.foot_offsets`)
+        flank = float(np.abs(lateral) @ half) + SIDE_MARGIN
         offsets = (-width, width, *np.linspace(-width, width, BELLY_LINES + 2)[1:-1], -flank, flank)
         across = np.stack([points + k * lateral for k in offsets])
         heights = layout.heights(across.reshape(-1, 2), skip).reshape(len(offsets), -1)

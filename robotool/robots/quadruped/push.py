@@ -20,9 +20,10 @@ from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
 
 GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
 MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover
-OFFSET_STEP = 0.05  # m between candidate lateral offsets
+OFFSET_STEP = 0.02  # m between candidate lateral offsets
 SAME_SURFACE = 0.04  # m: supports closer in height than this are the same surface
 MIN_LEG = 0.02  # m: shorter pushes along an axis are skipped
+SIDE_MARGIN = 0.01  # m beyond the body's outline that must be clear of anything higher than its floor
 
 
 @dataclass(frozen=True)
@@ -102,9 +103,10 @@ def push_pose(
 
 
 def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: float = 0.05) -> np.ndarray:
-    """x-y sample points (n, 2) covering the robot's footprint swept from ``start`` to ``end``."""
-    lo = np.minimum(start, end) - half + 0.01
-    hi = np.maximum(start, end) + half - 0.01
+    """x-y sample points (n, 2) covering the robot's footprint swept from ``start`` to ``end``, grown by
+    :data:`SIDE_MARGIN`."""
+    lo = np.minimum(start, end) - half - SIDE_MARGIN
+    hi = np.maximum(start, end) + half + SIDE_MARGIN
     axes = [np.linspace(lo[k], hi[k], max(2, int(np.ceil((hi[k] - lo[k]) / spacing)) + 1)) for k in range(2)]
     gx, gy = np.meshgrid(*axes, indexing="ij")
     return np.column_stack([gx.ravel(), gy.ravel()])

@@ -8,9 +8,10 @@ program whose walk is predicted to break a limit keeps that as its ``doubt`` and
 
 from __future__ import annotations
 
+import copy
 import itertools
-from collections.abc import Iterator
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -18,10 +19,10 @@ from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
-from robotool.robots.quadruped.push import legs
+from robotool.robots.quadruped.push import lateral_offsets, legs, sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import foot_offsets
+from robotool.robots.quadruped.terrain import RISE, foot_offsets
 from robotool.scene import SceneObject
 from robotool.task_model import Task
 
@@ -48,8 +49,9 @@ class Route:
     words: str = ""
     late: int = 0  # less likely choices it makes (a step down onto the target: the body rides on a higher step)
 
-    def layout(self, task: Task) -> Layout:
-        out = Layout(task)
+    def layout(self, base: Layout) -> Layout:
+        """``base`` with the route's pushes made."""
+        out = base
         for name, xy, _ in self.pushes:
             out = out.with_moved(name, xy)
         return out
@@ -67,15 +69,25 @@ class Quadruped:
         self.start = np.asarray(task.robot.position, dtype=float)
         self.floor_name, self.floor = start_surface(task)
         self.layout = Layout(task)
+        self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
 
     def pushable(self, obj: SceneObject, level: float) -> bool:
         """Whether the robot may push ``obj`` from a surface at height ``level``."""
         return (
             obj.movable
+            and obj.name not in self.placed
             and obj.shape != "cloth"
             and obj.effective_mass <= self.limits.max_push_mass
             and abs(obj.bottom - level) < LEVEL
         )
+
+    def after(self, layout: Layout, here: np.ndarray, placed: Iterable[str]) -> Quadruped:
+        """The same robot on the same floor once the scene is rearranged to ``layout`` and it stands at ``here``;
+        the ``placed`` objects are to stay where they are (no route pushes them)."""
+        out = copy.copy(self)
+        out.layout, out.start = layout, np.asarray(here, dtype=float)
+        out.placed = self.placed | frozenset(placed)
+        return out
 
     def extent(self, u: np.ndarray) -> float:
         """Half length of the body along direction ``u``."""
@@ -94,15 +106,41 @@ class Quadruped:
 DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1)))
 FOOT = 0.03  # m the feet sit inside the body's outline: they must be over what the robot stands on
 ENTRIES = 2  # predicted-fine approaches kept for a direct climb
+LANDING_STEP = 0.02  # m between the stops tried when a route's stop on its target is pulled back
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
-    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps."""
-    yield from _direct(quad, name)
-    if not tools:
-        return
-    yield from _bridges(quad, name)
-    yield from _staircases(quad, name)
+    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps; each stops
+    short of what stands on the top (:func:`_landing`)."""
+    found = itertools.chain(_direct(quad, name), *((_bridges(quad, name), _staircases(quad, name)) if tools else ()))
+    for route in found:
+        yield _landing(quad, name, route)
+
+
+def _landing(quad: Quadruped, name: str, route: Route) -> Route:
+    """``route`` with its stop on ``name`` pulled back along the way it arrives, when the walk to the stop is predicted
+    to run into something standing on the top (an object lying ahead of the steps): to the farthest point with every
+    foot on the top, the body's outline (and its side margin) clear of what stands there, and the walk there
+    predicted fine; unchanged when the walk is fine, or when no point is."""
+    last, surface = route.waypoints[-1]
+    if surface != name:
+        return route
+    previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
+    layout = route.layout(quad.layout)
+    if walk_violation(layout, previous, [last], quad.limits) is None:
+        return route
+    top, length = layout.box(name).top, float(np.linalg.norm(last - previous))
+    for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
+        stop = previous + (last - previous) * s / length
+        feet = layout.heights(stop + foot_offsets(quad.limits))
+        body = layout.heights(sweep_points(stop, stop, quad.half))
+        if (
+            np.all(np.abs(feet - top) <= LEVEL / 2)
+            and body.max() <= top + RISE
+            and walk_violation(layout, previous, [stop], quad.limits) is None
+        ):
+            return replace(route, waypoints=[*route.waypoints[:-1], (stop, name)])
+    return route
 
 
 def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
@@ -657,7 +695,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 if quad.layout.collides(cbox.moved_to(spot), ignore=[target.name]) is not None:
                     continue
                 pushes.append((cushion.name, spot))
-            for route in routes_onto(quad, support_name, tools):
+            for route in routes_onto(_after_pushes(quad, pushes), support_name, tools):
                 prog = Program()
                 prog.use(target.name, "target")
                 w = Writer(quad, prog)
@@ -665,10 +703,12 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     prog.use(name, f"tool: a soft landing for {target.name}")
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
                 w.route(route)
-                behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
-                feet = w.layout.heights(behind + foot_offsets(quad.limits), exclude=[target.name])
-                if np.any(np.abs(feet - support.top) > LEVEL / 2):
+                behind = _stance_behind(quad, w.layout, target.name, direction, support.top)
+                if behind is None:
+                    behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
                     w.doubt(f"no room for the feet on {support_name} behind {target.name}")
+                for via in detour(w.layout, w.here, behind, quad.limits)[:-1]:
+                    w.walk(via, support_name, f"walk around what stands on {support_name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
                 prog.motion(
@@ -684,3 +724,33 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     + (f" onto {pushes[0][0]}." if pushes else ".")
                 )
                 yield prog
+
+
+def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quadruped:
+    """``quad`` as the scene will be after ``pushes`` (object, x-y centre) are made, the robot where the last ends:
+    the way onto a surface is planned around what they moved (a cushion pushed beside a sofa stands in the way)."""
+    if not pushes:
+        return quad
+    w = Writer(quad, Program())
+    for name, spot in pushes:
+        w.push(name, spot, "")
+    return quad.after(w.layout, w.here, [name for name, _ in pushes])
+
+
+def _stance_behind(
+    quad: Quadruped, layout: Layout, name: str, direction: np.ndarray, level: float
+) -> np.ndarray | None:
+    """Where to stand behind ``name`` to push it along ``direction``: straight behind it, else slid along its face to
+    the nearest offset the push skill may take (:func:`robotool.robots.quadruped.push.lateral_offsets`) with every
+    foot on the surface at ``level`` it stands on; None when there is no such place."""
+    box = layout.box(name)
+    axis = int(np.argmax(np.abs(direction)))
+    lat = 1 - axis
+    straight = box.center - direction * (box.half[axis] + quad.extent(direction) + 0.05)
+    for offset in lateral_offsets(2 * float(box.half[lat]), 2 * float(quad.half[lat])):
+        stance = straight.copy()
+        stance[lat] += offset
+        feet = layout.heights(stance + foot_offsets(quad.limits), exclude=[name])
+        if np.all(np.abs(feet - level) <= LEVEL / 2):
+            return stance
+    return None

@@ -11,7 +11,10 @@ Randomizations:
       when the vase must land on the 0.16 m cushion and 0.05 m otherwise;
     - the steps' place along the sofa, the vase's place on it, the cushion's place on the floor;
     - decoys: a sand-filled cushion too heavy to push; in unsolvable scenes the first step is a fixed box
-      too tall to climb (0.28-0.32 m), so the sofa cannot be reached;
+      too tall to climb (0.28-0.32 m), so the sofa cannot be reached; a scene that needs the steps is also
+      unsolvable when the vase lies where they lead onto the sofa, so near its edge that the robot cannot stop
+      there with every foot on the sofa and its body clear of the vase (the robot never turns: across a
+      quarter-turned scene it climbs flank first, on one line across the steps);
     - 0-3 fixed pieces of furniture away from the scene; the whole scene mirrored, turned by quarter
       turns and shifted on the floor.
 Success conditions:
@@ -22,10 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.scene import SceneObject
 from robotool.tasks.families._common import (
     CLEARANCE,
     FLOOR_CLUTTER,
     Draft,
+    RigidPlacement,
     draw_layout,
     draw_variant,
     footprint,
@@ -35,12 +40,16 @@ from robotool.tasks.families._common import (
     on_top,
     scatter,
     spot_for,
+    template,
     uniform,
 )
 
 MAX_DROP = 0.3
 CUSHION = (0.5, 0.5, 0.16)
 STEP = (0.4, 0.6)
+FOOT_INSET = 0.03  # m: the quadruped's feet's centres sit this far inside its body's outline
+SIDE_MARGIN = 0.01  # m its body keeps from what it must not touch
+SAME_LEVEL = 0.015  # m: a step top no higher than this above the sofa's does not meet the body
 
 
 def build(rng: np.random.Generator) -> Draft:
@@ -77,6 +86,9 @@ def build(rng: np.random.Generator) -> Draft:
     scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
                      movable=False, margin=0.1)
     goal_height = 0.20 if height > MAX_DROP else 0.05
+    blocked = variant == "tool" and not room_to_land(layout, scene[0], scene[2], scene[3])
+    if blocked:
+        variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
     tools = {"no_tool": [], "unsolvable": [],
              "tool": ["soft_cushion", "box_1", "box_2"] if cushioned else ["box_1", "box_2"]}[variant]
     return Draft(
@@ -86,5 +98,23 @@ def build(rng: np.random.Generator) -> Draft:
         objects=[layout.place(o) for o in scene],
         goal={"lowered": {"object": "glass_vase", "height": goal_height}}, tools=tools, decoys=decoys,
         layout=layout, varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
-                              f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+                              + ("the vase lies where the steps lead onto the sofa; " if blocked else "")
+                              + f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
+
+
+def room_to_land(layout: RigidPlacement, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
+    """Whether the robot, climbing from ``step`` onto ``sofa`` (along the template's +x, before ``layout`` places the
+    scene), can stop on the sofa with every foot on it and its body clear of ``vase`` and of a higher step behind it.
+
+    The robot never turns, so across a quarter-turned scene its body lies across the climb; it stops as near the
+    sofa's edge as it can, on the line across the step farthest from the vase."""
+    size = np.asarray(template("vase_lowering").limits.body_size[:2])  # type: ignore[attr-defined]
+    half = size / 2 if layout.turns % 2 == 0 else size[::-1] / 2
+    feet = half - FOOT_INSET
+    s, t, v = footprint(sofa), footprint(step), footprint(vase)
+    behind = half[0] + SIDE_MARGIN if step.top > sofa.top + SAME_LEVEL else feet[0]
+    if float(s[0] + behind + half[0] + SIDE_MARGIN) <= v[0]:
+        return True
+    lo, hi = max(t[1], s[1]) + feet[1], min(t[3], s[3]) - feet[1]  # lines with every foot over the step and the sofa
+    return bool(lo <= hi and (lo + half[1] + SIDE_MARGIN <= v[1] or hi - half[1] - SIDE_MARGIN >= v[3]))

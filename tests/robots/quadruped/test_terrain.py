@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from robotool import geometry, tasks
-from robotool.robots.quadruped.push import Leg, legs, push_pose, route, rule_violation
+from robotool.robots.quadruped.push import SIDE_MARGIN, Leg, legs, push_pose, route, rule_violation, sweep_problem
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
+from robotool.scene import SceneObject
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01
@@ -130,6 +131,18 @@ def test_push_pose_stands_behind_the_object_and_ends_where_its_face_lands() -> N
     start, end = push_pose(np.array([0.8, -0.3]), np.array([1.2, 0.3]), Leg(0, 1.95), half, 0.0)
     assert start == pytest.approx([0.8 - 0.325 - 0.03, 0.0])
     assert end[0] - start[0] == pytest.approx(0.95 + 0.03)
+
+
+@pytest.mark.parametrize(("overlap", "clear"), [(0.005, False), (-0.005, False), (-SIDE_MARGIN - 0.005, True)])
+def test_a_push_sweep_keeps_the_whole_outline_clear(overlap: float, clear: bool) -> None:
+    """A 0.16 m block beside the robot's flank: 5 mm inside its outline, or closer to it than the side margin the
+    walk predictions keep, is in the way of the push (the robot would brush or shove it); past the margin it is not."""
+    behind, end = np.array([0.0, 0.0]), np.array([0.0, 1.0])  # a push toward +y: the flank faces +x
+    flank = LIMITS.body_size[0] / 2 - overlap
+    block = {"name": "block", "shape": "box", "center": [flank + 0.25, 0.5, 0.08], "size": [0.5, 0.5, 0.16]}
+    solids = [geometry.object_parts(SceneObject.model_validate(block))]
+    problem = sweep_problem(heights_over(solids), behind, end, LIMITS, 0.0)
+    assert (problem is None) == clear, problem
 
 
 def test_route_goes_around_the_object() -> None:
