@@ -60,3 +60,27 @@ def test_a_drag_that_left_the_target_outside_the_workspace_is_re_aimed_by_the_me
     assert less.lines[2] == "move_to_position([p1[0] - 0.2360, p1[1], p1[2]])"
     assert further.parameters[1].target == [round(0.3 - 0.384, 4), 0.2, 0.0]
     assert further.lines[-1] == prog.lines[-1] and further.lines[1] == prog.lines[1]
+
+
+def test_a_push_that_stopped_short_of_its_target_is_itself_aimed_further() -> None:
+    """A prop pushed out from under a lever stopped 0.17 m short (it turned and slid off the line): the push itself
+    is the motion to re-aim, further along its own direction by the shortfall and less far, as no earlier motion
+    moved anything."""
+    task = tasks.load("cube_lifting")
+    prog = Program()
+    prog.motion("walk_to_position", point=Point.at(None, (0.46, 0.55, 0.0)), intent="walk beside the chair")
+    chair = prog.query("get_position", "chair", (0.462, 0.0, 0.115))
+    prog.motion("push_to_position", obj="chair", point=Point.at(chair, (0.0, 0.9, 0.0)), intent="push it out")
+    prog.motion("walk_to_position", point=Point.at(None, (0.6, 1.4, 0.0)), intent="walk on")
+    calls = [
+        SkillCall(skill="walk_to_position", args=[[0.46, 0.55, 0.0]], outcome="done"),
+        SkillCall(skill="get_position", args=["chair"], outcome="done"),
+        SkillCall(skill="push_to_position", args=["chair", [0.462, 0.9, 0.115]], outcome="stalled",
+                  reason="chair stopped 0.17 m from the target", measured={"distance": 0.17}),
+        SkillCall(skill="walk_to_position", args=[[0.6, 1.4, 0.0]], outcome="done"),
+    ]
+    world = Rollout(world=0, seed=0, success=False, conditions={"cube_lifted": False}, calls=calls)
+    further, less = repaired(task, prog, Candidate(index=0, code=prog.code, rollouts=[world]))
+    assert further.lines[2] == "push_to_position('chair', [p1[0], p1[1] + 1.1000, p1[2]])"  # 0.9 + 0.17 + margin
+    assert less.lines[2] == "push_to_position('chair', [p1[0], p1[1] + 0.7000, p1[2]])"
+    assert further.lines[0] == prog.lines[0] and further.lines[-1] == prog.lines[-1]

@@ -24,6 +24,7 @@ OFFSET_STEP = 0.02  # m between candidate lateral offsets
 SAME_SURFACE = 0.04  # m: supports closer in height than this are the same surface
 MIN_LEG = 0.02  # m: shorter pushes along an axis are skipped
 SIDE_MARGIN = 0.01  # m beyond the body's outline that must be clear of anything higher than its floor
+EXIT_MARGIN = 0.005  # m beyond the side of a box that a route starting inside it steps out to
 
 
 @dataclass(frozen=True)
@@ -137,27 +138,46 @@ def sweep_problem(
 
 
 def route(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[np.ndarray]:
-    """Waypoints (x-y) from ``start`` to ``goal`` around the box ``lo``-``hi`` (robot centre space).
+    """Waypoints (x-y) from ``start`` to ``goal`` around the box ``lo``-``hi`` (robot centre space): the shortest of
+    :func:`routes`."""
+    return routes(start, goal, lo, hi)[0]
 
-    The straight line is kept when it misses the box; otherwise the path goes by the box's corners,
-    the shorter way round.
+
+def routes(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> list[list[np.ndarray]]:
+    """Ways (waypoints, x-y) from ``start`` to ``goal`` around the box ``lo``-``hi`` (robot centre space), shortest
+    first.
+
+    The straight line alone when it misses the box; otherwise the paths by the box's corners, each way round. A
+    start inside the box (the robot right behind an object it has just pushed, which turned) first leaves it
+    straight out through the nearest side. ``[[goal]]`` when there is no way round (the goal inside the box).
     """
+    if np.all((start > lo) & (start < hi)):
+        out = _nearest_exit(start, lo, hi)
+        return [[out, *way] for way in routes(out, goal, lo, hi)]
     if not _crosses(start, goal, lo, hi):
-        return [goal]
+        return [[goal]]
     corners = [np.array([x, y]) for x, y in ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1]))]
-    best: list[np.ndarray] | None = None
-    best_len = np.inf
+    found: dict[tuple[int, ...], tuple[float, list[np.ndarray]]] = {}
     for i in range(4):
         for direction in (1, -1):
             for count in (1, 2, 3):
-                path = [corners[(i + direction * k) % 4] for k in range(count)]
+                ids = tuple((i + direction * k) % 4 for k in range(count))
+                path = [corners[k] for k in ids]
                 points = [start, *path, goal]
-                if any(_crosses(p, q, lo, hi) for p, q in pairwise(points)):
+                if ids in found or any(_crosses(p, q, lo, hi) for p, q in pairwise(points)):
                     continue
-                length = sum(float(np.linalg.norm(q - p)) for p, q in pairwise(points))
-                if length < best_len:
-                    best, best_len = [*path, goal], length
-    return best if best is not None else [goal]
+                found[ids] = (sum(float(np.linalg.norm(q - p)) for p, q in pairwise(points)), [*path, goal])
+    ways = [way for _, way in sorted(found.values(), key=lambda f: f[0])]
+    return ways or [[goal]]
+
+
+def _nearest_exit(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The point just outside the box ``lo``-``hi`` straight out from ``p`` (inside it) through the nearest side."""
+    sides = np.array([p[0] - lo[0], hi[0] - p[0], p[1] - lo[1], hi[1] - p[1]])
+    k = int(np.argmin(sides))
+    out = np.array(p, dtype=float)
+    out[k // 2] = (lo, hi)[k % 2][k // 2] + (EXIT_MARGIN if k % 2 else -EXIT_MARGIN)
+    return out
 
 
 def _crosses(p: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:

@@ -2,13 +2,15 @@
 
 Every motion skill is a plan of straight moves: a walk is one move, or a few around an object that stands in its way
 (:func:`~robotool.robots.quadruped.push.route`); a push is the approach around the object and one push per axis
-(:mod:`robotool.robots.quadruped.push`). When a move starts, and again when the terrain under a foot changed or the
-stretch read runs out, downward rays read the path of each of the four feet from just behind it to
-:data:`~robotool.robots.quadruped.terrain.LOOKAHEAD` past the move's end (at most :data:`SCAN_AHEAD` at a time), and
-:mod:`.terrain` checks every foot's path against the legs' limits: a finding moves the stopping point to
-just before it, and once the robot has stopped there the skill is refused with the measured value, the limit and
-where. A cloth is no footing over a gap: the rays see through it to what carries it. Every control tick, in all
-moving worlds at once, a few rays under and ahead of each foot tell whether a foot
+(:mod:`robotool.robots.quadruped.push`), pushed on along the axis while the object's centre falls short (it turned
+on the way), and, while the object ends off the target (it turned or slid aside), pushed again from where it lies,
+round after round, as long as each brings it closer and a way round it is clear. When a move starts, and again when
+the terrain under a foot changed or the stretch read runs out, downward rays read the path of each of the four feet
+from just behind it to :data:`~robotool.robots.quadruped.terrain.LOOKAHEAD` past the move's end (at most
+:data:`SCAN_AHEAD` at a time), and :mod:`.terrain` checks every foot's path against the legs' limits: a finding
+moves the stopping point to just before it, and once the robot has stopped there the skill is refused with the
+measured value, the limit and where. A cloth is no footing over a gap: the rays see through it to what carries
+it. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell whether a foot
 is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher surface (a step
 up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot is clear.
 Otherwise the lift is off and the robot's weight rests on its feet.
@@ -36,11 +38,13 @@ import numpy as np
 from robotool.robots.quadruped.body import BELLY_HEIGHT, LEG_SLACK, OFF, ROBOT_GROUP, XY_KP, BodyIds, add_body
 from robotool.robots.quadruped.push import (
     GAP,
+    MIN_LEG,
     Leg,
     lateral_offsets,
     legs,
     push_pose,
     route,
+    routes,
     rule_violation,
     sweep_problem,
 )
@@ -89,6 +93,9 @@ LEASH = 0.06  # m the setpoint may run ahead of the body
 STALL_TIME = 3.0  # s without 1 cm of progress is a stall
 STAGING = 0.15  # m behind the push pose from where the robot lines up straight along the push
 PUSH_TOLERANCE = 0.06  # m: a push is done when the object's centre is this close to the target
+FOLLOW_THROUGHS = 2  # pushes on along a leg whose object's centre fell short of the leg's target
+CORRECTIONS = 2  # pushes again from where the object ended when it turned or slid off the line and missed the target
+CORRECTION_GAIN = 0.02  # m a push round must bring the object closer to the target for another round to follow
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
 SHOVE = 0.03  # m a movable object may move after the torso touched it, unless it is being pushed
@@ -286,30 +293,55 @@ class QuadrupedController:
             index = self.scene.object_index(name)
         except KeyError as e:
             return "refused", str(e.args[0]), {}
-        broken = self._push_rules(w, index)
-        if broken is not None:
-            return "refused", f"cannot push {name}: {broken[0]}", broken[1]
         goal = np.array(target[:2], dtype=float)
-        for leg in legs(self._centers(self.state)[w, index], goal):
-            lo, hi = self._bounds(w, index)
-            pose, problem = self._clear_pose(w, index, leg, lo, hi)
-            if pose is None:
-                return "refused", f"cannot push {name}: no clear place to stand behind it{problem}", {}
-            start, end, behind = pose
-            robot = self._position(w)
-            staging = start - (end - start) / np.linalg.norm(end - start) * behind
-            for waypoint in [*route(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2), start]:
-                outcome = yield _Move(waypoint)
+        miss, blocked = np.inf, False
+        for attempt in range(1 + CORRECTIONS):
+            broken = self._push_rules(w, index)
+            if broken is not None:
+                if attempt:  # what it moved changed (it fell off something, something landed on it): no correction
+                    break
+                return "refused", f"cannot push {name}: {broken[0]}", broken[1]
+            for leg in legs(self._centers(self.state)[w, index], goal):
+                lo, hi = self._bounds(w, index)
+                pose, problem = self._clear_pose(w, index, leg, lo, hi)
+                if pose is None:
+                    if attempt:  # no way to correct the drift: the push stopped where it did
+                        break
+                    return "refused", f"cannot push {name}: no clear place to stand behind it{problem}", {}
+                start, end, behind = pose
+                robot = self._position(w)
+                staging = start - (end - start) / np.linalg.norm(end - start) * behind
+                ways = routes(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2)
+                if attempt:  # a correction goes only a way round that the legs can walk, or not at all
+                    way = next((way for way in ways if self._check(w, robot, [*way, start]) is None), None)
+                    if way is None:
+                        break
+                else:
+                    way = ways[0]
+                for waypoint in [*way, start]:
+                    outcome = yield _Move(waypoint)
+                    if outcome[0] != "done":
+                        return outcome
+                outcome = yield _Move(end, pushing=index)
+                if outcome[0] not in ("done", "stalled"):
+                    return outcome
+                blocked |= outcome[0] == "stalled"
+                u = (end - start) / np.linalg.norm(end - start)
+                for _ in range(FOLLOW_THROUGHS):  # it turned on the way: push on until its centre gets there
+                    short = (leg.target - self._centers(self.state)[w, index, leg.axis]) * u[leg.axis]
+                    if blocked or short < MIN_LEG:
+                        break
+                    outcome = yield _Move(self._position(w) + u * short, pushing=index)
+                    if outcome[0] not in ("done", "stalled"):
+                        return outcome
+                    blocked |= outcome[0] == "stalled"
+                back = (start - end) / np.linalg.norm(start - end) * GAP
+                outcome = yield _Move(self._position(w) + back)
                 if outcome[0] != "done":
                     return outcome
-            outcome = yield _Move(end, pushing=index)
-            if outcome[0] not in ("done", "stalled"):
-                return outcome
-            back = (start - end) / np.linalg.norm(start - end) * GAP
-            outcome = yield _Move(self._position(w) + back)
-            if outcome[0] != "done":
-                return outcome
-        miss = float(np.linalg.norm(self._centers(self.state)[w, index, :2] - goal))
+            previous, miss = miss, float(np.linalg.norm(self._centers(self.state)[w, index, :2] - goal))
+            if miss <= PUSH_TOLERANCE or blocked or miss > previous - CORRECTION_GAIN:
+                break
         if miss > PUSH_TOLERANCE:
             return "stalled", f"{name} stopped {miss:.2f} m from the target", {"distance": miss}
         return None

@@ -397,10 +397,11 @@ def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray |
     """Where to push an object first so that its last push toward ``xy`` runs along ``d`` (into the face it is
     to stand against) rather than sliding along that face: the push skill moves along the shorter axis first,
     so when the move across ``d`` is the longer one the object is first lined up across ``d``; None when the
-    push already ends along ``d``."""
+    push already ends along ``d``, or when the object starts past ``xy`` along ``d`` (its last push would run away
+    from the face, and lined up it would stand where the next link does)."""
     axis = int(np.argmax(np.abs(d)))
     delta = np.asarray(xy) - center
-    if abs(delta[1 - axis]) < 0.02 or abs(delta[1 - axis]) <= abs(delta[axis]):
+    if abs(delta[1 - axis]) < 0.02 or abs(delta[1 - axis]) <= abs(delta[axis]) or delta[axis] * d[axis] < 0:
         return None
     out = np.array(center, dtype=float)
     out[1 - axis] = xy[1 - axis]
@@ -446,13 +447,11 @@ def _push_plans(
 ) -> Iterator[list[np.ndarray]]:
     """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
     along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
-    (:func:`robotool.planner.layout.push_route`)."""
+    (:func:`robotool.planner.layout.push_route`), a push along one axis too."""
     center = layout.box(name).center
     yield [xy]
     parts = legs(center, xy)
-    if len(parts) < 2:
-        return
-    for first in parts:
+    for first in parts if len(parts) == 2 else []:
         corner = center.copy()
         corner[first.axis] = first.target
         yield [corner, xy]

@@ -1,5 +1,5 @@
-"""The quadruped's candidate programs for lowering a vase: where the robot stands to push it off, and the way onto
-the sofa planned around the cushion pushed beside it."""
+"""The quadruped's candidate programs: where the robot stands to push a vase off and the way onto the sofa planned
+around the cushion pushed beside it; pushes along one axis that are blocked, routed around (no physics there)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,13 @@ import numpy as np
 
 from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
-from robotool.robots.quadruped.quadruped_macros import candidates
+from robotool.planner.solve import robot_planner
+from robotool.robots.quadruped.predict import push_problem
+from robotool.robots.quadruped.quadruped_macros import _lined_up, _push_plans, candidates
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task_file import parse_task
 from robotool.task_model import Task
+from robotool.tasks.families import generate
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 
@@ -83,3 +86,34 @@ def test_the_robot_stops_short_of_a_vase_lying_ahead_of_the_steps() -> None:
     assert rejection is None and code is not None
     (rollouts,) = run_codes(task, [code], worlds=1, seed=0)
     assert all(r.success for r in rollouts), failure_reason(rollouts)
+
+
+
+def test_an_object_past_its_place_is_not_lined_up_on_the_next_links_spot() -> None:
+    """box_1 is to stand against box_2's -x side (climb toward +x) but starts at a larger x than that spot: lined up
+    across first, it would be pushed onto box_2 itself and its last push would run away from the face."""
+    assert _lined_up(np.array([-0.2, 1.05]), np.array([-0.56, 2.56]), np.array([1.0, 0.0])) is None
+    lined = _lined_up(np.array([-1.2, 1.05]), np.array([-0.56, 2.56]), np.array([1.0, 0.0]))
+    assert lined is not None and lined.tolist() == [-1.2, 2.56]  # from behind the face: lined up, then pushed in
+
+
+def test_a_push_along_one_axis_blocked_by_a_heavy_box_is_routed_around_it() -> None:
+    """box_3 (8 kg, over the push limit) stands in box_1's straight way along y: the planner routes the push around
+    it, and every push of the route is predicted clear."""
+    task = generate("sofa_climbing", 1047).task
+    layout = Layout(task).with_moved("box_2", np.array([2.0, 2.5]))  # out of the way: one push leg, along y
+    goal = np.array([-0.1981, 2.4])
+    plans = list(_push_plans(layout, "box_1", goal, task.limits, 0.0))
+    assert push_problem(layout, "box_1", goal, task.limits, 0.0)[0] is not None  # straight: it runs into box_3
+    routed = [p for p in plans if len(p) > 2]
+    assert routed and np.allclose(routed[0][-1], goal)
+    for target in routed[0]:
+        problem, _ = push_problem(layout, "box_1", target, task.limits, 0.0)
+        assert problem is None, problem
+        layout = layout.with_moved("box_1", target)
+
+
+def test_the_staircase_instance_has_a_program_whose_pushes_are_predicted_clear() -> None:
+    task = generate("sofa_climbing", 1047).task
+    programs = list(robot_planner(task).candidates(task, True))
+    assert any("push_to_position" in p.code and not (p.doubt or "").startswith("box_1 would run") for p in programs)

@@ -13,6 +13,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.sim.backend import Perturbation
 from robotool.task_file import parse_task
+from robotool.tasks.families import generate
 from robotool.verify import world_failure
 
 
@@ -163,3 +164,17 @@ def test_a_step_shorter_than_the_feet_span_is_crossed_without_catching_the_legs(
     for rollout in run_texts(parse_task(data), ["climb_to_position([2.05, 0.0, 0.084])"] * 2):
         assert [c.outcome for c in motion_calls(rollout)] == ["done"], motion_calls(rollout)
         assert rollout.success
+
+
+def test_a_push_that_turns_the_object_off_its_line_is_corrected_until_the_object_is_there() -> None:
+    """A board's raised end rests on the chair, so the robot can push it only from 0.1 m off its centre: the chair
+    turns and slides 0.15-0.25 m sideways. The push pushes on and corrects from the side (walking round the chair,
+    away from the board) until the chair's centre is at the target."""
+    def program(robot: Any) -> None:
+        robot.walk_to_position([1.22, 0.0598, 0.0])
+        chair = robot.get_position("chair")
+        robot.push_to_position("chair", [chair[0] - 0.975, chair[1], chair[2]])
+
+    rollouts = sim.run_programs(generate("cube_lifting", 1022).task, [program] * 3, world_seeds=[0, 1, 2])
+    pushes = [r.calls[-1] for r in rollouts]
+    assert all(p.skill == "push_to_position" and p.outcome == "done" for p in pushes), pushes

@@ -2,13 +2,23 @@
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
 import pytest
 
 from robotool import geometry, tasks
-from robotool.robots.quadruped.push import SIDE_MARGIN, Leg, legs, push_pose, route, rule_violation, sweep_problem
+from robotool.robots.quadruped.push import (
+    SIDE_MARGIN,
+    Leg,
+    legs,
+    push_pose,
+    route,
+    routes,
+    rule_violation,
+    sweep_problem,
+)
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
 from robotool.scene import SceneObject
@@ -150,6 +160,28 @@ def test_route_goes_around_the_object() -> None:
     assert len(route(np.array([-0.5, 0.5]), np.array([-0.5, 2.0]), lo, hi)) == 1
     path = route(np.array([0.5, -0.5]), np.array([0.5, 1.5]), lo, hi)
     assert len(path) == 3 and all(p[0] in (0.0, 1.0) for p in path[:2])
+
+
+def test_a_route_from_inside_the_box_first_steps_out_through_the_nearest_side() -> None:
+    """Right behind an object it has just pushed and turned, the robot's centre lies inside the object's grown box:
+    the way round starts by stepping out, instead of heading straight through the object."""
+    lo, hi = np.array([0.0, 0.0]), np.array([1.0, 1.0])
+    path = route(np.array([0.9, 0.5]), np.array([0.5, -0.5]), lo, hi)
+    assert path[0][0] > 1.0 and path[0][1] == pytest.approx(0.5)  # out through the +x side, the nearest
+    assert path[1] == pytest.approx([1.0, 0.0]) and path[-1] == pytest.approx([0.5, -0.5])
+    ways = routes(np.array([0.9, 0.5]), np.array([0.5, -0.5]), lo, hi)
+    assert len(ways) >= 2 and np.array_equal(ways[0], path)  # the other way round too, longer
+    assert all(_crosses_none(way, lo, hi) for way in ways)
+
+
+def _crosses_none(way: list[np.ndarray], lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether the path from its first waypoint on never passes through the box (sampled)."""
+    for a, b in itertools.pairwise(way):
+        for t in np.linspace(0.0, 1.0, 50)[1:-1]:
+            p = a + t * (b - a)
+            if np.all((p > lo + 1e-6) & (p < hi - 1e-6)):
+                return False
+    return True
 
 
 @pytest.mark.parametrize(
