@@ -3,10 +3,10 @@
 Each world owns a model copy because welds attach at a per-world relative pose (``eq_data``) and
 perturbations change friction and mass per world. ``mj_step(m, d, nstep)`` releases the GIL, so
 worker threads step disjoint chunks of worlds in parallel and gather their state into shared arrays.
-After a world's masses and inertias are perturbed, ``mj_setConst`` recomputes what MuJoCo derives from them
-(subtree masses, inverse weights): left at the nominal values, a perturbed free body's subtree mass no longer
-matched its mass, the ``implicitfast`` integrator no longer treated its gyroscopic forces implicitly, and an
-elongated object tumbling on the floor (a vase pushed off a sofa) gained energy until the world diverged.
+After a world's masses are perturbed, its subtree masses are summed again: left at the nominal values, a perturbed
+free body's subtree mass no longer matched its mass, the ``implicitfast`` integrator no longer treated its gyroscopic
+forces implicitly, and an elongated object tumbling on the floor (a vase pushed off a sofa) gained energy until the
+world diverged. The constraints' inverse weights stay those of the nominal model, as on the warp backend.
 """
 
 from __future__ import annotations
@@ -41,6 +41,14 @@ _WARNING_KINDS = list(_WARNINGS)
 _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 
 
+def subtree_masses(mass: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    """Each body's mass with all its descendants' (``parent``: each body's parent; parents come first)."""
+    out = np.array(mass, dtype=float)
+    for body in range(len(out) - 1, 0, -1):
+        out[parent[body]] += out[body]
+    return out
+
+
 class MujocoSim:
     """:class:`~robotool.sim.backend.BatchedSim` on C MuJoCo (deterministic for a given seed)."""
 
@@ -60,7 +68,7 @@ class MujocoSim:
         qpos0 = perturbation.initial_qpos(scene)
         for w, (m, d) in enumerate(zip(self.models, self.datas, strict=True)):
             perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass, inertia=m.body_inertia)
-            mujoco.mj_setConst(m, d)  # what derives from mass and inertia
+            m.body_subtreemass[:] = subtree_masses(m.body_mass, m.body_parentid)
             d.qpos[:] = qpos0[w]
             mujoco.mj_forward(m, d)
         model = scene.model
