@@ -322,14 +322,16 @@ class QuadrupedController:
                     outcome = yield _Move(waypoint)
                     if outcome[0] != "done":
                         return outcome
+                height = self._centers(self.state)[w, index, 2]
                 outcome = yield _Move(end, pushing=index)
                 if outcome[0] not in ("done", "stalled"):
                     return outcome
                 blocked |= outcome[0] == "stalled"
                 u = (end - start) / np.linalg.norm(end - start)
                 for _ in range(FOLLOW_THROUGHS):  # it turned on the way: push on until its centre gets there
-                    short = (leg.target - self._centers(self.state)[w, index, leg.axis]) * u[leg.axis]
-                    if blocked or short < MIN_LEG:
+                    centre = self._centers(self.state)[w, index]
+                    short = (leg.target - centre[leg.axis]) * u[leg.axis]
+                    if blocked or short < MIN_LEG or abs(centre[2] - height) > RISE:  # (not after it fell off)
                         break
                     outcome = yield _Move(self._position(w) + u * short, pushing=index)
                     if outcome[0] not in ("done", "stalled"):
