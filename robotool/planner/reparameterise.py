@@ -4,10 +4,11 @@ When no program succeeded in every world, the best failures are looked at in the
 the first motion call that measured a distance worth acting on (see :data:`~robotool.rollout.DISTANCES`: a
 gap still too wide at a refusal, how far short a motion stopped, how far outside the workspace a target
 was, how far a grasp was from what it should hold), or else the first that did not end ``done``. Each
-motion up to and including that one that moved an object (a skill acting on an object, such as a push that
-stopped short of its target, or a motion whose plan step involves two objects, such as a held tool dragging
-another) is then tried again aimed further along its own direction, and less far, by each of those distances
-plus a margin; the simulator decides which variant, if any, works. Nothing here names a task or an object kind.
+earlier motion that moved an object (a skill acting on an object, such as a push, or a motion whose plan step
+involves two objects, such as a held tool dragging another), and then that motion itself when it moved an object
+(a push that stopped short of its target), is tried again aimed further along its own direction, and less far, by
+each of those distances plus a margin; the simulator decides which variant, if any, works. Nothing here names a
+task or an object kind.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from robotool.solution import Candidate
 from robotool.task_model import Task
 
 MARGIN = 0.03  # m added to a measured distance when a target is moved by it
-MOVERS = 2  # object-moving motions up to the failure that are re-parameterised (latest first)
+MOVERS = 2  # object-moving motions before the failure that are re-parameterised (latest first), then the failing one
 
 
 def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program]:
@@ -37,11 +38,11 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
     if failing < 0:
         return []
     distances = _distances(motions[failing])
-    movers = [
-        k for k, m in enumerate(program.motions[: failing + 1]) if m.point is not None and _moves_object(program, k)
-    ]
+    up_to_failure = program.motions[: failing + 1]
+    movers = [k for k, m in enumerate(up_to_failure) if m.point is not None and _moves_object(program, k)]
+    earlier = [k for k in movers if k < failing][-MOVERS:]
     variants = []
-    for k in reversed(movers[-MOVERS:]):
+    for k in [*reversed(earlier), *(k for k in movers if k == failing)]:
         direction = _direction(task, program, k)
         if direction is None:
             continue
