@@ -22,6 +22,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.task_file import parse_task
 from robotool.task_model import Task
+from robotool.tasks.families import generate
 
 CHEATS = FIXTURES / "cheats"
 PROGRAMS = FIXTURES / "programs"
@@ -281,3 +282,12 @@ def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:
 def test_the_same_walks_succeed_where_the_legs_allow_them(run_texts: Any, program: str, scene: str) -> None:
     rollouts = run_texts(_scene(scene), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+
+
+@pytest.mark.xfail(strict=True, reason="known gap: a fragile object is read as a step, so a foot can stand on the "
+                   "glass vase (vase_lowering seed 1098, labelled unsolvable, succeeds in one world)")
+def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
+    task = generate("vase_lowering", 1098).task
+    code = (FIXTURES / "cheats" / "step_on_the_vase.py").read_text()
+    rollouts = sim.run_sessions(task, start_sessions([code] * 3, task.embodiment), seed=0)
+    assert not any(r.success for r in rollouts)
