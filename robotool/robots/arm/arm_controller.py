@@ -511,8 +511,8 @@ class ArmController:
         raise QueryError(f"{skill} is not a query skill of the arm")
 
 
-def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.ndarray) -> bool:
-    """Whether any of the x-y ``points`` lies over the footprint of a box or upright cylinder geom in world ``w``."""
+def _geom_pose(scene: Scene, state: BatchState, w: int, geom: int) -> tuple[np.ndarray, np.ndarray]:
+    """World rotation (3, 3) and centre (3,) of a geom in world ``w``, from its body's pose in the state."""
     model = scene.model
     body = model.geom_bodyid[geom]
     body_rot = np.zeros(9)
@@ -520,7 +520,13 @@ def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.nd
     geom_rot = np.zeros(9)
     mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
     rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
-    centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    return rot, state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+
+
+def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.ndarray) -> bool:
+    """Whether any of the x-y ``points`` lies over the footprint of a box or upright cylinder geom in world ``w``."""
+    model = scene.model
+    rot, centre = _geom_pose(scene, state, w, geom)
     local = (np.column_stack([points, np.full(len(points), centre[2])]) - centre) @ rot
     size = model.geom_size[geom]
     if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
@@ -537,13 +543,7 @@ def _y_span_in_slab(
     """Lowest and highest world y of a box or cylinder geom's volume within ``x`` and ``z`` (any y) in world
     ``w``, or None where it misses that slab: the extremes of a convex polytope, found among its vertices."""
     model = scene.model
-    body = model.geom_bodyid[geom]
-    body_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
-    geom_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
-    rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
-    centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    rot, centre = _geom_pose(scene, state, w, geom)
     size = model.geom_size[geom]
     if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
         turn = np.linspace(0.0, 2 * np.pi, SLAB_CYLINDER_SIDES, endpoint=False)
@@ -573,13 +573,7 @@ def _geom_extents(scene: Scene, state: BatchState, w: int, geoms: np.ndarray) ->
     model = scene.model
     lo, hi = np.zeros((len(geoms), 3)), np.zeros((len(geoms), 3))
     for k, g in enumerate(geoms):
-        body = model.geom_bodyid[g]
-        body_rot = np.zeros(9)
-        mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
-        geom_rot = np.zeros(9)
-        mujoco.mju_quat2Mat(geom_rot, model.geom_quat[g])
-        rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
-        centre = state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[g]
+        rot, centre = _geom_pose(scene, state, w, g)
         size = model.geom_size[g]
         if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
             axis = np.abs(rot[:, 2])
