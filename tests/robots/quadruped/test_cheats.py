@@ -103,6 +103,7 @@ CASES = [
     ("drag_board_by_its_cloth", "sofa_traversing"),
     ("push_box_from_its_top", "sofa_climbing"),
     ("programs/cube_lifting_lever_only", "cube_lifting"),
+    ("vase_onto_cushion_edge", "vase_lowering"),
 ]
 
 
