@@ -464,3 +464,14 @@ def test_nothing_outlives_a_host_killed_mid_run() -> None:
     while any(Path(f"/proc/{pid}").exists() for pid in tree) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not [pid for pid in tree if Path(f"/proc/{pid}").exists()]
+
+
+def test_a_program_cannot_raise_its_limits_start_threads_or_reprioritise_the_host() -> None:
+    """Raising the CPU, memory or process limits, a higher priority, lowering the parent's, a thread, a signal to
+    the parent's process group: each is denied (EPERM from the filter; a thread cannot start)."""
+    ended = run_unchecked((ESCAPES / "limits_and_threads.py").read_text())
+    assert ended.error is None, ended.error
+    outcomes = [line.rsplit(" ", 2) for line in ended.output.splitlines()]
+    assert len(outcomes) == 7
+    assert all(outcome == "denied" for _, outcome, _ in outcomes), ended.output
+    assert zygote().alive()
