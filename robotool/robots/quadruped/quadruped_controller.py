@@ -98,6 +98,7 @@ CORRECTIONS = 2  # pushes again from where the object ended when it turned or sl
 CORRECTION_GAIN = 0.02  # m a push round must bring the object closer to the target for another round to follow
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
+CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 SHOVE = 0.03  # m a movable object may move after the torso touched it, unless it is being pushed
 RAY_HEIGHT = 0.6  # m above the feet where downward rays start (things higher are overhead)
 CLOTH_STEP = 1e-4  # m above the point where a ray met a cloth from where it is cast again
@@ -160,10 +161,12 @@ class QuadrupedController:
         # the most recasts one cast needs: one per cloth link for every layer of cloth a ray can pass
         self.cloth_crossings = int(self.cloth[self.geom_object[self.geom_object >= 0]].sum()) ** 2
         self.movable = np.array([o.movable for o in self.scene.task.objects])
+        self.fragile = np.array([o.fragile is not None for o in self.scene.task.objects], dtype=bool)
         self.not_robot = ~self.scene.robot_body
         self.plans: list[Plan | None] = [None] * nworld
         self.failures: list[str | None] = [None] * nworld
         self.shoves: list[str | None] = [None] * nworld  # the first object each world's robot shoved, and how far
+        self.crushes: list[str | None] = [None] * nworld  # the first fragile object each world's robot stood on
         # the move running in each world
         self.moving = np.zeros(nworld, dtype=bool)
         self.origin = np.zeros((nworld, 2))  # body position where the move started
@@ -218,12 +221,16 @@ class QuadrupedController:
         return ends
 
     def robot_conditions(self) -> dict[str, list[bool]]:
-        """What every goal also needs, per world: the robot has not fallen, and it shoved nothing by walking into it
-        (what a shove moved, such as a vase pushed off its edge, may not count toward a goal)."""
-        return {
+        """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
+        (what a shove moved, such as a vase pushed off its edge, may not count toward a goal) and, in a scene with a
+        fragile object, it stood on none (its weight would break it)."""
+        conditions = {
             FALL_CONDITION: [f is None for f in self.failures],
             SHOVE_CONDITION: [s is None for s in self.shoves],
         }
+        if self.fragile.any():
+            conditions[CRUSH_CONDITION] = [c is None for c in self.crushes]
+        return conditions
 
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         """Report finished skills, falls and shoves, and write the controls for the next interval (in ``worlds``,
@@ -236,6 +243,8 @@ class QuadrupedController:
         self.last_centres = np.where(mask[:, None, None], centres, self.last_centres)
         self._shoves(ends, mask, centres, shift)
         self._rams(ends, mask, centres, shift)
+        if self.fragile.any():
+            self._crushes(ends, mask)
         worlds = np.flatnonzero(mask & self.moving & np.array([f is None for f in state.failed]))
         if worlds.size:
             self._drive(worlds, ends)
@@ -549,6 +558,30 @@ class QuadrupedController:
             )
             if self.moving[w] and self.plans[w] is not None:
                 end = self._advance(int(w), ("refused", self.shoves[w], {"moved": round(float(moved[w, index]), 3)}))
+                if end is not None:
+                    ends.append(end)
+
+    def _crushes(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
+        """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
+        centre above the object's centre, or a belly that touches one whose centre lies under the torso, rests the
+        robot's weight on it, which breaks it (a low vase read as a step is no footing). The world fails
+        (:meth:`robot_conditions`) and a move in progress there is stopped and refused, naming the object."""
+        state = self.state
+        bodies = self.scene.object_body[self.fragile]
+        centres = state.xpos[:, bodies]  # (nworld, nfragile, 3)
+        foot_z = feet(state, self.ids)[:, :, 2]
+        by_foot = state.touching[:, self.ids.feet][:, :, bodies] & (foot_z[:, :, None] > centres[:, None, :, 2])
+        torso = state.xpos[:, self.ids.body]
+        under = np.all(np.abs(centres[:, :, :2] - torso[:, None, :2]) < self.half, axis=2)
+        by_belly = state.touching[:, self.ids.body][:, bodies] & under
+        stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
+        for w in np.flatnonzero(stood_on.any(axis=1)):
+            if self.crushes[w] is not None or state.failed[w] is not None:
+                continue
+            name = self.scene.object_names[int(np.flatnonzero(self.fragile)[np.argmax(stood_on[w])])]
+            self.crushes[w] = f"the robot stood on {name}, which is fragile: the robot's weight would break it"
+            if self.moving[w] and self.plans[w] is not None:
+                end = self._advance(int(w), ("refused", self.crushes[w], {}))
                 if end is not None:
                     ends.append(end)
 

@@ -285,10 +285,12 @@ def test_the_same_walks_succeed_where_the_legs_allow_them(run_texts: Any, progra
     assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
 
 
-@pytest.mark.xfail(strict=True, reason="known gap: a fragile object is read as a step, so a foot can stand on the "
-                   "glass vase (vase_lowering seed 1098, labelled unsolvable, succeeds in one world)")
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
+    """vase_lowering seed 1098 (labelled unsolvable): a rear foot stood on the 0.10 m vase, read as a step."""
     task = generate("vase_lowering", 1098).task
     code = (FIXTURES / "cheats" / "step_on_the_vase.py").read_text()
     rollouts = sim.run_sessions(task, start_sessions([code] * 3, task.embodiment), seed=0)
     assert not any(r.success for r in rollouts)
+    for rollout in rollouts:
+        assert rollout.conditions["robot_stood_on_nothing_fragile"] is False
+        assert "stood on glass_vase, which is fragile" in (failure_reason(rollout) or ""), failure_reason(rollout)

@@ -125,6 +125,7 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: st
             "glass_vase_unbroken": unbroken,
             "robot_has_not_fallen": True,
             "robot_shoved_nothing": True,
+            "robot_stood_on_nothing_fragile": True,
         }
         assert rollout.success is unbroken
         broke = [e for e in rollout.events if e.kind == "broke"]
