@@ -22,7 +22,8 @@ skill ends with outcome ``fell`` and a reason that says where and which feet los
 climb is no push: a movable object that the torso has touched, other than one being pushed, and that has moved more
 than :data:`SHOVE` since (what a foot's weight or a push moved it by not counted), was shoved; so were the objects
 that a push rams ahead of the pushed one once together they weigh more than the push limit. The move is stopped and
-refused, naming them, and the world fails. Nothing here
+refused, naming them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase
+reads as a step) breaks it: the move is refused, naming it, and the world fails. Nothing here
 reads the task's category or name: limits come from ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
