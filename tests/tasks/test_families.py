@@ -160,6 +160,14 @@ def test_a_vase_where_the_steps_lead_leaves_room_to_land_only_beside_it(turns: i
     assert vase_lowering.room_to_land(RigidPlacement(turns=turns), sofa, step, vase) is room
 
 
+def test_a_vase_where_the_steps_lead_onto_a_sofa_level_with_them_can_be_pushed_aside_from_the_step() -> None:
+    """The sofa's top is 1 cm below the top step's: the robot on the step pushes the vase out of its way."""
+    sofa = thing("sofa", "box", (3.0, 0.2, 0.115), (0.9, 1.5, 0.23), movable=False)
+    step = thing("box_2", "box", (2.35, 0.5, 0.12), (0.4, 0.6, 0.24), movable=False)
+    vase = thing("glass_vase", "box", (2.85, 0.7, 0.28), (0.3, 0.1, 0.1), mass=0.5)
+    assert vase_lowering.room_to_land(RigidPlacement(turns=1), sofa, step, vase)
+
+
 def test_vase_scenes_without_room_to_land_are_unsolvable() -> None:
     blocked = [i for i in (_instance("vase_lowering", seed) for seed in range(100)) if "lead onto" in i.description]
     assert blocked and all(not i.solvable and not i.tools and {"box_1", "box_2"} <= set(i.decoys) for i in blocked)

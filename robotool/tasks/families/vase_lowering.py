@@ -14,7 +14,8 @@ Randomizations:
       too tall to climb (0.28-0.32 m), so the sofa cannot be reached; a scene that needs the steps is also
       unsolvable when the vase lies where they lead onto the sofa, so near its edge that the robot cannot stop
       there with every foot on the sofa and its body clear of the vase (the robot never turns: across a
-      quarter-turned scene it climbs flank first, on one line across the steps);
+      quarter-turned scene it climbs flank first, on one line across the steps), unless the sofa's top is level
+      with the top step's (within the push's 0.04 m): then the robot, on the step, pushes the vase out of its way;
     - 0-3 fixed pieces of furniture away from the scene; the whole scene mirrored, turned by quarter
       turns and shifted on the floor.
 Success conditions:
@@ -50,6 +51,7 @@ STEP = (0.4, 0.6)
 FOOT_INSET = 0.03  # m: the quadruped's feet's centres sit this far inside its body's outline
 SIDE_MARGIN = 0.01  # m its body keeps from what it must not touch
 SAME_LEVEL = 0.015  # m: a step top no higher than this above the sofa's does not meet the body
+PUSH_LEVEL = 0.04  # m: a robot on the step pushes what rests on a sofa top no farther than this from the step's
 
 
 def build(rng: np.random.Generator) -> Draft:
@@ -105,10 +107,13 @@ def build(rng: np.random.Generator) -> Draft:
 
 def room_to_land(layout: RigidPlacement, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
     """Whether the robot, climbing from ``step`` onto ``sofa`` (along the template's +x, before ``layout`` places the
-    scene), can stop on the sofa with every foot on it and its body clear of ``vase`` and of a higher step behind it.
+    scene), can stop on the sofa with every foot on it and its body clear of ``vase`` and of a higher step behind it,
+    or, on a sofa level with the step, push the vase out of its way from the step first.
 
     The robot never turns, so across a quarter-turned scene its body lies across the climb; it stops as near the
     sofa's edge as it can, on the line across the step farthest from the vase."""
+    if abs(step.top - sofa.top) <= PUSH_LEVEL:
+        return True
     size = np.asarray(template("vase_lowering").limits.body_size[:2])  # type: ignore[attr-defined]
     half = size / 2 if layout.turns % 2 == 0 else size[::-1] / 2
     feet = half - FOOT_INSET

@@ -286,7 +286,8 @@ def test_the_same_walks_succeed_where_the_legs_allow_them(run_texts: Any, progra
 
 
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
-    """vase_lowering seed 1098 (labelled unsolvable): a rear foot stood on the 0.10 m vase, read as a step."""
+    """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
+    vase, read as a step."""
     task = generate("vase_lowering", 1098).task
     code = (FIXTURES / "cheats" / "step_on_the_vase.py").read_text()
     rollouts = sim.run_sessions(task, start_sessions([code] * 3, task.embodiment), seed=0)
@@ -294,3 +295,14 @@ def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     for rollout in rollouts:
         assert rollout.conditions["robot_stood_on_nothing_fragile"] is False
         assert "stood on glass_vase, which is fragile" in (failure_reason(rollout) or ""), failure_reason(rollout)
+
+
+def test_a_scene_solved_by_pushing_the_vase_from_a_step_level_with_the_sofa_is_labelled_solvable() -> None:
+    """vase_lowering seed 1098: the vase lies where the steps lead onto the sofa, but the sofa's top is level with
+    the top step's, so the robot pushes the vase aside from the step, climbs on and pushes it off (a fall of 0.23 m):
+    the program breaks no rule, and the family must not call the scene unsolvable."""
+    instance = generate("vase_lowering", 1098)
+    code = (CHEATS / "push_vase_from_level_step.py").read_text()
+    rollouts = sim.run_sessions(instance.task, start_sessions([code] * 2, "quadruped"), seed=0)
+    assert any(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+    assert instance.solvable
