@@ -2,9 +2,11 @@
 
 Object extents come from the state: every object carries the corners of its parts in its body
 frame, placed each tick by its body pose. A fragile object's falls are followed every control tick:
-a fall starts when it was last resting (touching something other than the robot, nearly still) and
-ends when it touches something again; it breaks when its centre dropped more than ``max_drop`` and
-what it landed on is not soft. The first breaking fall of each world is kept as a ``broke`` event.
+a fall starts where it was last resting (touching something other than the robot, nearly still) and
+lasts until it rests again; it breaks once it touches something hard (not soft, not the robot) with
+its centre more than ``max_drop`` below where it rested. A soft object it glances off on the way, or
+a wall it grazes, does not end the fall, and neither does the tick at which contacts happen to be
+read. The first breaking fall of each world is kept as a ``broke`` event.
 """
 
 from __future__ import annotations
@@ -64,36 +66,34 @@ class FallTracker:
         self.scene, self.max_drop = scene, max_drop
         self.body = scene.object_body[index]
         self.bodies = np.flatnonzero(scene.body_object == index)
-        self.others = ~np.isin(np.arange(scene.model.nbody), self.bodies) & ~scene.robot_body
-        self.soft = np.array([o.soft for o in scene.task.objects])
+        others = ~np.isin(np.arange(scene.model.nbody), self.bodies) & ~scene.robot_body
+        self.others = np.flatnonzero(others)  # the bodies that can carry it or that it can strike
+        soft = np.array([o.soft for o in scene.task.objects])
+        owner = scene.body_object[self.others]
+        self.hard = (owner < 0) | ~soft[np.maximum(owner, 0)]  # per body in ``others``: the ground or not soft
         self.rest_height: np.ndarray | None = None
-        self.airborne: np.ndarray | None = None
         self.broken: np.ndarray | None = None
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
-        touch = state.touching[:, self.bodies][:, :, self.others].any(axis=1)  # (nworld, nbody)
-        supported = touch.any(axis=1)
+        touch = state.touching[:, self.bodies][:, :, self.others].any(axis=1)  # (nworld, len(others))
         height = state.xpos[:, self.body, 2]
         if self.rest_height is None:
-            self.rest_height, self.airborne = height.copy(), ~supported
-            self.broken = np.zeros_like(supported)
-        assert self.airborne is not None and self.broken is not None
+            self.rest_height = height.copy()
+            self.broken = np.zeros(height.shape, dtype=bool)
+        assert self.broken is not None
+        fall = self.rest_height - height  # read before this tick's rest: a landing that stops dead still fell
+        hard = touch & self.hard
+        struck = active & hard.any(axis=1) & (fall > self.max_drop) & ~self.broken
+        for w in np.flatnonzero(struck):
+            self.broken[w] = True
+            self.breaks[w] = Event(kind="broke", time=float(state.time[w]), object=self.name,
+                                   measured={"fall": float(fall[w]), "max_drop": self.max_drop},
+                                   detail=self._names(self.scene.body_object[self.others[hard[w]]]))
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
-        resting = active & supported & (speed < RESTING_SPEED)
+        resting = active & touch.any(axis=1) & (speed < RESTING_SPEED)
         self.rest_height = np.where(resting, height, self.rest_height)
-        landed = active & self.airborne & supported
-        for w in np.flatnonzero(landed):
-            fall = float(self.rest_height[w] - height[w])
-            on = self.scene.body_object[np.flatnonzero(touch[w])]
-            soft = on.size > 0 and bool(np.all((on >= 0) & self.soft[np.maximum(on, 0)]))
-            if fall > self.max_drop and not soft and not self.broken[w]:
-                self.broken[w] = True
-                self.breaks[w] = Event(kind="broke", time=float(state.time[w]), object=self.name,
-                                       measured={"fall": fall, "max_drop": self.max_drop},
-                                       detail=self._names(on))
-        self.airborne = np.where(active, ~supported, self.airborne)
 
     def _names(self, objects: np.ndarray) -> str:
         """What a fall landed on: object names, or the ground for the world's own bodies."""

@@ -306,3 +306,14 @@ def test_a_scene_solved_by_pushing_the_vase_from_a_step_level_with_the_sofa_is_l
     rollouts = sim.run_sessions(instance.task, start_sessions([code] * 2, "quadruped"), seed=0)
     assert any(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
     assert instance.solvable
+
+
+def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
+    """The vase, pushed off the 0.34 m sofa into the slot between it and the cushion, glances off the cushion's edge
+    and grazes the sofa's side on its way down: read at the control ticks it was never clear of everything at once,
+    yet it struck the hard floor more than 0.3 m below where it lay (this world's cushion ends 0.10 m out)."""
+    code = (CHEATS / "vase_into_slot_beside_cushion.py").read_text()
+    (rollout,) = sim.run_sessions(_scene("vase_lowering"), start_sessions([code], "quadruped"), seed=0)
+    assert rollout.conditions["glass_vase_lowered"] and not rollout.success
+    (broke,) = [e for e in rollout.events if e.kind == "broke"]
+    assert broke.detail == "the ground" and broke.measured["fall"] > 0.3, broke
