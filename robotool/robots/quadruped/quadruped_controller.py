@@ -565,7 +565,8 @@ class QuadrupedController:
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
         """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
         centre above the object's centre, or a belly that touches one whose centre lies under the torso, rests the
-        robot's weight on it, which breaks it (a low vase read as a step is no footing). The world fails
+        robot's weight on it, which breaks it (a low vase read as a step is no footing); so does standing on a
+        movable object that rests on it (:meth:`_loaded`: a board lying on a vase). The world fails
         (:meth:`robot_conditions`) and a move in progress there is stopped and refused, naming the object."""
         state = self.state
         bodies = self.scene.object_body[self.fragile]
@@ -576,15 +577,48 @@ class QuadrupedController:
         under = np.all(np.abs(centres[:, :, :2] - torso[:, None, :2]) < self.half, axis=2)
         by_belly = state.touching[:, self.ids.body][:, bodies] & under
         stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
-        for w in np.flatnonzero(stood_on.any(axis=1)):
+        loaded, via = self._loaded(mask)
+        for w in np.flatnonzero((stood_on | loaded[:, self.fragile]).any(axis=1)):
             if self.crushes[w] is not None or state.failed[w] is not None:
                 continue
-            name = self.scene.object_names[int(np.flatnonzero(self.fragile)[np.argmax(stood_on[w])])]
-            self.crushes[w] = f"the robot stood on {name}, which is fragile: the robot's weight would break it"
+            index = int(np.flatnonzero(self.fragile)[np.argmax(stood_on[w] | loaded[w, self.fragile])])
+            name = self.scene.object_names[index]
+            what = name if stood_on[w].any() else f"{self.scene.object_names[via[w, index]]}, which rests on {name}"
+            self.crushes[w] = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
             if self.moving[w] and self.plans[w] is not None:
                 end = self._advance(int(w), ("refused", self.crushes[w], {}))
                 if end is not None:
                     ends.append(end)
+
+    def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
+        ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
+        on (touching it, with its lowest point above that object's centre); a fixed object passes it to the ground.
+        Also (nworld, nobject) the object that passed the weight on to each one."""
+        state, owner = self.state, self.scene.body_object
+        nobject = len(self.scene.object_names)
+        loaded, via = np.zeros((self.sim.nworld, nobject), dtype=bool), np.zeros((self.sim.nworld, nobject), dtype=int)
+        member = (owner[None, :] == np.arange(nobject)[:, None]).astype(float)  # (nobject, nbody)
+        carrier = self.movable & ~self.fragile
+        under_feet = (state.touching[:, self.ids.feet].any(axis=1).astype(float) @ member.T > 0) & carrier
+        worlds = np.flatnonzero(mask & under_feet.any(axis=1))
+        if worlds.size == 0:
+            return loaded, via
+        touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, nobject, nobject)
+        bottom = np.stack([world_corners(state, self.scene.object_body[i], self.corners[i])[worlds, :, 2].min(axis=1)
+                           for i in range(nobject)], axis=1)
+        centre_z = state.xpos[worlds][:, self.scene.object_body, 2]
+        rests_on = touching & (bottom[:, :, None] > centre_z[:, None, :])  # [k, a, b]: a rests on b
+        load = under_feet[worlds]
+        for _ in range(nobject):  # along chains of objects resting on one another
+            passing = rests_on & (load & carrier)[:, :, None]
+            more = load | passing.any(axis=1)
+            via[worlds] = np.where(more & ~load, np.argmax(passing, axis=1), via[worlds])
+            if np.array_equal(more, load):
+                break
+            load = more
+        loaded[worlds] = load
+        return loaded, via
 
     def _rams(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable

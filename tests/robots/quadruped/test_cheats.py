@@ -190,6 +190,7 @@ CONTROL_CASES = [
     ("programs/sofa_climbing_direct", "climb_fixed_stairs_minus_y"),
     ("programs/lever_any_direction", "lever_mirrored"),
     ("programs/lever_any_direction", "cube_lifting"),
+    ("walk_over_board_on_vase", "board_beside_vase"),  # the board bridges the gap clear of the vase
 ]
 
 
@@ -317,3 +318,12 @@ def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
     assert rollout.conditions["glass_vase_lowered"] and not rollout.success
     (broke,) = [e for e in rollout.events if e.kind == "broke"]
     assert broke.detail == "the ground" and broke.measured["fall"] > 0.3, broke
+
+
+def test_standing_on_a_board_that_rests_on_the_vase_breaks_it() -> None:
+    """The feet touch only the board, but the board lies on the glass vase: the robot's weight presses on the glass."""
+    (rollout,) = sim.run_sessions(
+        _scene("board_on_vase"), start_sessions([_text("walk_over_board_on_vase")], "quadruped"), perturb=False
+    )
+    assert not rollout.success and rollout.conditions["robot_stood_on_nothing_fragile"] is False
+    assert failure_reason(rollout).startswith("the robot stood on board, which rests on glass_vase, which is fragile")
