@@ -327,3 +327,15 @@ def test_standing_on_a_board_that_rests_on_the_vase_breaks_it() -> None:
     )
     assert not rollout.success and rollout.conditions["robot_stood_on_nothing_fragile"] is False
     assert failure_reason(rollout).startswith("the robot stood on board, which rests on glass_vase, which is fragile")
+
+
+def test_a_fall_is_read_as_onto_what_the_vase_struck() -> None:
+    """The vase, pushed off the sofa with no cushion under it, strikes a hard rug listed after the cushion in the
+    task file: the rug, not the cushion, is what it landed on, so it breaks in every world."""
+    rollouts = sim.run_sessions(
+        _scene("vase_over_rug"), start_sessions([_text("programs/vase_lowering_no_cushion")] * 3, "quadruped"),
+        seed=11,
+    )
+    for rollout in rollouts:
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert not rollout.success and "rug" in broke.detail and "cushion" not in broke.detail, broke
