@@ -593,7 +593,8 @@ class QuadrupedController:
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
         ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
-        on (touching it, with its lowest point above that object's centre); a fixed object passes it to the ground.
+        on (touching it, that object's centre below its underside along its own up axis: under a board lying flat or
+        leaning on it from the floor); a fixed object passes it to the ground.
         Also (nworld, nobject) the object that passed the weight on to each one."""
         state, owner = self.state, self.scene.body_object
         nobject = len(self.scene.object_names)
@@ -605,10 +606,12 @@ class QuadrupedController:
         if worlds.size == 0:
             return loaded, via
         touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, nobject, nobject)
-        bottom = np.stack([world_corners(state, self.scene.object_body[i], self.corners[i])[worlds, :, 2].min(axis=1)
-                           for i in range(nobject)], axis=1)
-        centre_z = state.xpos[worlds][:, self.scene.object_body, 2]
-        rests_on = touching & (bottom[:, :, None] > centre_z[:, None, :])  # [k, a, b]: a rests on b
+        centres = state.xpos[worlds][:, self.scene.object_body]  # (k, nobject, 3)
+        below = np.stack([  # [k, a, b]: b's centre lies below a's underside, along a's own up axis
+            np.einsum("kj,kbj->kb", state.xmat(self.scene.object_body[a])[worlds, :, 2], centres - centres[:, a, None])
+            < self.corners[a][:, 2].min()
+            for a in range(nobject)], axis=1)
+        rests_on = touching & below  # [k, a, b]: a rests on b (a board lying on it, or leaning on it from the floor)
         load = under_feet[worlds]
         for _ in range(nobject):  # along chains of objects resting on one another
             passing = rests_on & (load & carrier)[:, :, None]

@@ -320,11 +320,14 @@ def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
     assert broke.detail == "the ground" and broke.measured["fall"] > 0.3, broke
 
 
-def test_standing_on_a_board_that_rests_on_the_vase_breaks_it() -> None:
-    """The feet touch only the board, but the board lies on the glass vase: the robot's weight presses on the glass."""
-    (rollout,) = sim.run_sessions(
-        _scene("board_on_vase"), start_sessions([_text("walk_over_board_on_vase")], "quadruped"), perturb=False
-    )
+@pytest.mark.parametrize(
+    ("program", "scene"),
+    [("walk_over_board_on_vase", "board_on_vase"), ("walk_up_board_leaning_on_vase", "ramp_on_vase")],
+)
+def test_standing_on_a_board_that_rests_on_the_vase_breaks_it(program: str, scene: str) -> None:
+    """The feet touch only the board, but the board lies on the glass vase, or leans on it from the floor: the
+    robot's weight presses on the glass."""
+    (rollout,) = sim.run_sessions(_scene(scene), start_sessions([_text(program)], "quadruped"), perturb=False)
     assert not rollout.success and rollout.conditions["robot_stood_on_nothing_fragile"] is False
     assert failure_reason(rollout).startswith("the robot stood on board, which rests on glass_vase, which is fragile")
 
