@@ -84,6 +84,10 @@ class Layout:
         """Surface height under each point (n, 2)."""
         return geometry.surface_height(np.atleast_2d(xy), self.solids(exclude))
 
+    def top_of(self, name: str, xy: np.ndarray) -> np.ndarray:
+        """The top of object ``name`` alone over each point (n, 2); NaN where it is not."""
+        return geometry.object_interval(self._parts(name), np.atleast_2d(xy))[1]
+
     def collides(self, box: Box, ignore: Iterable[str] = (), margin: float = 0.005) -> str | None:
         """The first other object that overlaps ``box``'s x-y footprint (not just touching) somewhere between
         ``box``'s bottom and top, or None."""

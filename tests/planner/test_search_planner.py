@@ -144,3 +144,13 @@ def test_solves_a_lever_turned_a_quarter() -> None:
     instance = tasks.generate("cube_lifting", 1003)
     solution = solve(instance.task, worlds=2)
     assert solution.success_rate == 1.0, solution.candidates[0].failure if solution.candidates else solution.notes
+
+
+@pytest.mark.slow
+def test_lowers_a_vase_lying_where_the_steps_lead_without_standing_on_it() -> None:
+    """vase_lowering seed 1098: the vase lies where the steps lead onto the sofa, level with the top step. The walk
+    onto the sofa was predicted fine with a foot on the vase (a fragile object was read as footing), and the
+    simulator breaks the vase under it; the robot stops short of the vase and pushes it off from the step."""
+    instance = tasks.generate("vase_lowering", 1098)
+    solution = solve(instance.task, worlds=2)
+    assert solution.success, solution.candidates[0].failure if solution.candidates else solution.notes

@@ -75,6 +75,8 @@ def _walk_violation(
     finding = check_walk(lambda xy: layout.heights(xy, skip), np.asarray(start, dtype=float), goals, limits)
     if finding is not None:
         return finding.describe()
+    if (fragile := _fragile_footing(layout, start, goals, limits, skip)) is not None:
+        return fragile
     half = np.asarray(limits.body_size[:2]) / 2
     here = np.asarray(start, dtype=float)
     for goal in goals:
@@ -103,6 +105,32 @@ def _walk_violation(
                 f"the body brushes against something {float(rub.max()):.2f} m higher at its side on the way to "
                 f"[{goal[0]:.2f}, {goal[1]:.2f}]"
             )
+        here = goal
+    return None
+
+
+def _fragile_footing(
+    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
+) -> str | None:
+    """The first fragile object a foot would stand on along the walk, in words (the robot's weight breaks it), or
+    None: a fragile object is no footing, however low."""
+    fragile = [o.name for o in layout.task.objects if o.fragile is not None and o.name not in skip]
+    if not fragile:
+        return None
+    rim = FOOT_RADIUS * np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    here = np.asarray(start, dtype=float)
+    for goal in goals:
+        delta = goal - here
+        length = float(np.linalg.norm(delta))
+        direction = delta / length if length > 1e-6 else np.array([1.0, 0.0])
+        points = (foot_paths(here + foot_offsets(limits), direction, length)[:, :, None, :] + rim).reshape(-1, 2)
+        surface = layout.heights(points, skip)
+        for name in fragile:
+            top = layout.top_of(name, points)
+            on = np.flatnonzero(np.isclose(top, surface, atol=1e-6))
+            if on.size:
+                x, y = points[on[0]]
+                return f"a foot would stand on {name}, which is fragile, at [{x:.2f}, {y:.2f}]"
         here = goal
     return None
 

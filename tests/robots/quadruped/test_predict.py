@@ -114,3 +114,24 @@ def test_a_detour_finds_the_long_way_round_a_lever() -> None:
     way = detour(layout, start, goal, task.limits)
     assert len(way) > 1 and np.allclose(way[-1], goal)
     assert walk_violation(layout, start, way, task.limits) is None
+
+
+def _vase_step_task(fragile: bool) -> Task:
+    """A 0.10 m object lying on the floor across the robot's way: a step the legs climb, unless it is fragile."""
+    vase = {"name": "vase", "shape": "box", "center": [0.0, 0.6, 0.05], "size": [1.0, 0.1, 0.1], "movable": True,
+            "mass": 0.5}
+    return parse_task({
+        "format": 1, "name": "vase_in_the_way", "instruction": "Lower the vase.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [0.0, 0.0]},
+        "objects": [{**vase, **({"fragile": {"max_drop": 0.3}} if fragile else {})}],
+        "goal": {"lowered": {"object": "vase", "height": 0.05}},
+    })
+
+
+def test_a_fragile_object_is_no_footing_however_low() -> None:
+    walk = (np.array([0.0, 0.0]), [np.array([0.0, 1.2])])
+    plain = _vase_step_task(fragile=False)
+    assert walk_violation(Layout(plain), *walk, plain.limits) is None
+    task = _vase_step_task(fragile=True)
+    problem = walk_violation(Layout(task), *walk, task.limits)
+    assert problem is not None and "stand on vase, which is fragile" in problem
