@@ -251,3 +251,28 @@ def test_a_long_object_name_is_the_programs_error() -> None:
 def test_c_functions_reachable_from_allowed_names_end_as_program_errors(code: str, words: str) -> None:
     ended = run(code, LIMITS.model_copy(update={"cpu_s": 1.0}))
     assert ended.error is not None and words in ended.error
+
+
+@pytest.mark.parametrize(
+    "smuggle",
+    [
+        "np.asarray([print])",
+        "np.concatenate([[print], [1]])",
+        "np.where([True], [print], [1])",
+        "np.full(2, print)",
+        "np.tile([print], 2)",
+        "np.repeat([print], 2)",
+        "np.zeros(2) * [print, 1]",
+        "np.clip([print], 0, 1)",
+        "np.sum([[1], [print]])",
+        "np.round([print])",
+        "np.minimum([10 ** 30, 1], 3)",
+        "np.cumsum([10 ** 30, 1])",
+    ],
+)
+def test_numpy_functions_build_no_array_holding_a_builtin(smuggle: str) -> None:
+    """Escape attempts: a builtin (or an integer beyond 64 bits) handed to numpy functions that would build an object
+    array from it, which the program then fills with ``print``; each run ends with a TypeError, before any output."""
+    ended = run(f"import numpy as np\nboxed = {smuggle}\nboxed[0] = print\nboxed[0]('escaped')\n")
+    assert ended.error is not None and "TypeError" in ended.error, ended
+    assert "escaped" not in ended.output
