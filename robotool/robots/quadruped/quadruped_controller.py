@@ -553,14 +553,11 @@ class QuadrupedController:
             if self.shoves[w] is not None or state.failed[w] is not None:
                 continue
             index = int(np.argmax(moved[w]))
-            self.shoves[w] = (
+            self.shoves[w] = reason = (
                 f"the robot ran into {self.scene.object_names[index]} and moved it {moved[w, index]:.2f} m "
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
-            if self.moving[w] and self.plans[w] is not None:
-                end = self._advance(int(w), ("refused", self.shoves[w], {"moved": round(float(moved[w, index]), 3)}))
-                if end is not None:
-                    ends.append(end)
+            self._refuse_move(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray) -> None:
         """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
@@ -584,11 +581,8 @@ class QuadrupedController:
             index = int(np.flatnonzero(self.fragile)[np.argmax(stood_on[w] | loaded[w, self.fragile])])
             name = self.scene.object_names[index]
             what = name if stood_on[w].any() else f"{self.scene.object_names[via[w, index]]}, which rests on {name}"
-            self.crushes[w] = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
-            if self.moving[w] and self.plans[w] is not None:
-                end = self._advance(int(w), ("refused", self.crushes[w], {}))
-                if end is not None:
-                    ends.append(end)
+            self.crushes[w] = reason = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
+            self._refuse_move(int(w), reason, {}, ends)
 
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
@@ -643,16 +637,20 @@ class QuadrupedController:
             mass = self._mass(w, index) + sum(self._mass(w, int(o)) for o in moved)
             if mass <= self.limits.max_push_mass or self.shoves[w] is not None or self.state.failed[w] is not None:
                 continue
-            self.shoves[w] = (
+            self.shoves[w] = reason = (
                 f"pushing {self.scene.object_names[index]} rammed "
                 f"{', '.join(self.scene.object_names[o] for o in moved)}: {mass:.1f} kg in all, over the "
                 f"push limit of {self.limits.max_push_mass:.1f} kg (a push moves only what the robot may push)"
             )
-            if self.plans[w] is not None:
-                measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
-                end = self._advance(int(w), ("refused", self.shoves[w], measured))
-                if end is not None:
-                    ends.append(end)
+            measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
+            self._refuse_move(int(w), reason, measured, ends)
+
+    def _refuse_move(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd]) -> None:
+        """Stop the move in progress in world ``w``, if any: its skill is refused with ``reason``."""
+        if self.moving[w] and self.plans[w] is not None:
+            end = self._advance(w, ("refused", reason, measured))
+            if end is not None:
+                ends.append(end)
 
     def _pressed_by(self, w: int, index: int) -> np.ndarray:
         """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other
