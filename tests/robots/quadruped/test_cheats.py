@@ -342,3 +342,22 @@ def test_a_fall_is_read_as_onto_what_the_vase_struck() -> None:
     for rollout in rollouts:
         (broke,) = [e for e in rollout.events if e.kind == "broke"]
         assert not rollout.success and "rug" in broke.detail and "cushion" not in broke.detail, broke
+
+
+@pytest.mark.parametrize(
+    ("program", "reasons"),
+    [
+        ("climb_onto_sofa_over_the_vase", ("glass_vase", "fell at")),  # stood on it, shoved it or fell over it
+        ("push_vase_from_level_step", ("not on the robot's surface",)),  # the step is 0.04 m above the sofa here
+    ],
+)
+def test_a_vase_where_the_steps_lead_onto_a_lower_sofa_is_out_of_reach(program: str, reasons: tuple[str, ...]) -> None:
+    """vase_lowering seed 1028 (labelled unsolvable): the vase lies where the steps lead onto a sofa 0.04 m lower than
+    the top step, so there is no room to land and no push from the step."""
+    instance = generate("vase_lowering", 1028)
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(instance.task, start_sessions([code] * 3, "quadruped"), seed=0)
+    assert not instance.solvable
+    for rollout in rollouts:
+        assert not rollout.success
+        assert any(r in (failure_reason(rollout) or "") for r in reasons), failure_reason(rollout)
