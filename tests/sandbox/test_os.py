@@ -475,3 +475,12 @@ def test_a_program_cannot_raise_its_limits_start_threads_or_reprioritise_the_hos
     assert len(outcomes) == 7
     assert all(outcome == "denied" for _, outcome, _ in outcomes), ended.output
     assert zygote().alive()
+
+
+def test_the_hosts_name_clocks_and_ipc_are_out_of_reach() -> None:
+    """Setting the host's name or the system clocks, System V and POSIX IPC objects (which a worker could share with
+    another), device nodes, swap and quotas: each fails with EPERM, from the filter."""
+    ended = run_unchecked((ESCAPES / "host_identity_clocks_and_ipc.py").read_text())
+    assert ended.error is None, ended.error
+    lines = ended.output.splitlines()
+    assert len(lines) == 14 and all(line.endswith(" denied 1") for line in lines), ended.output
