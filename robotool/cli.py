@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -50,7 +50,8 @@ from robotool.version import version
 if TYPE_CHECKING:
     from robotool.lm_program import RoboTool
     from robotool.rollout import Rollout
-    from robotool.sim.recorder import StateRecorder
+    from robotool.sim.recorder import StateRecorder, Track
+    from robotool.solution import Solution
 
 RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
@@ -182,7 +183,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
         _write(args.json, lambda: args.json.write_text(solution.model_dump_json(indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     if args.video:
-        _solve_videos(args, task, solution.code, console)
+        _solve_videos(args, task, solution, console)
     return 0 if solution.success else 1
 
 
@@ -246,7 +247,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         from robotool.render.run_videos import video_paths
 
         assert recorder is not None
-        _write_videos(task, report.rollouts, recorder, video_paths(args.video, args.video_worlds), console)
+        _write_videos(task, report.rollouts, recorder.tracks, video_paths(args.video, args.video_worlds), console)
     return 0 if report.success else 1
 
 
@@ -307,28 +308,36 @@ def _run_recorder(args: argparse.Namespace) -> StateRecorder | None:
 
 
 def _write_videos(
-    task: Task, rollouts: Sequence[Rollout], recorder: StateRecorder, paths: dict[int, Path], console: Console
+    task: Task,
+    rollouts: Mapping[int, Rollout] | Sequence[Rollout],
+    tracks: Mapping[int, Track],
+    paths: dict[int, Path],
+    console: Console,
 ) -> None:
     from robotool.render.run_videos import write_videos
 
     with console.status(f"drawing {len(paths)} video(s)"):
-        videos = write_videos(task, rollouts, recorder, paths)
+        videos = write_videos(task, rollouts, tracks, paths)
     for v in videos:
         line = f"wrote {v.path} ({v.frames} frames at {v.fps} fps, {v.duration:.1f} s simulated)"
         console.print(line, markup=False, highlight=False, soft_wrap=True)
 
 
-def _solve_videos(args: argparse.Namespace, task: Task, code: str | None, console: Console) -> None:
-    """Run the best program again in the chosen worlds, recorded, and write their videos to the folder."""
+def _solve_videos(args: argparse.Namespace, task: Task, solution: Solution, console: Console) -> None:
+    """Run the best program again in the chosen worlds, recorded, and write their videos to the folder.
+
+    World ``k`` is the chosen candidate's ``k``-th world, perturbed from the seed its rollout recorded."""
     from robotool.render.run_videos import rerun_recorded
 
-    if code is None:
+    ran = solution.candidates[solution.best].rollouts if solution.best is not None else []
+    if solution.code is None or len(ran) <= max(args.video_worlds):
         console.print("no program was found, so there is no video", style="yellow", markup=False, highlight=False)
         return
     with console.status(f"recording the best program in world(s) {args.video_worlds}"):
-        rollouts, recorder = rerun_recorded(task, code, args.video_worlds, seed=args.seed, backend=args.backend)
+        world_seeds = {w: ran[w].seed for w in args.video_worlds}
+        rollouts, tracks = rerun_recorded(task, solution.code, world_seeds, backend=args.backend)
     paths = {w: args.video / f"{task.name}-world{w}.mp4" for w in args.video_worlds}
-    _write_videos(task, rollouts, recorder, paths, console)
+    _write_videos(task, rollouts, tracks, paths, console)
 
 
 def _add_video_options(p: argparse.ArgumentParser, *, folder: bool, help_text: str) -> None:

@@ -106,9 +106,7 @@ def _replay(
     from robotool.render.still import render_state
 
     assert record.code is not None
-    rollouts, recorder = rerun_recorded(
-        instance.task, record.code, [world.world], seed=world.seed - world.world, backend=backend
-    )
+    rollouts, tracks = rerun_recorded(instance.task, record.code, {world.world: world.seed}, backend=backend)
     again = rollouts[world.world]
     recorded = next((r for r in record.rollouts if r.world == world.world), None)
     told = recorded is not None and not recorded.error  # then the caption's first line says the goal was missed
@@ -117,7 +115,7 @@ def _replay(
     reproduced = now == world.failure
     if not reproduced:
         extra.insert(0, CaptionLine(f"simulated again, it ended otherwise: {now or 'goal reached'}", RED))
-    track = recorder.tracks[world.world]
+    track = tracks[world.world]
     render_state(
         scene,
         track.qpos[-1],

@@ -359,3 +359,16 @@ def test_videos_fall_back_to_mpeg4_without_an_h264_encoder(tmp_path: Path, monke
     with av.open(str(tmp_path / "m.mp4")) as container:
         stream = container.streams.video[0]
         assert stream.codec_context.name == "mpeg4" and sum(1 for _ in container.decode(stream)) == 5
+
+
+def test_evaluation_picture_replays_a_later_candidates_world_from_its_recorded_seed(tmp_path: Path) -> None:
+    # The chosen candidate ran second in its batch, so its world is numbered 1 while it was perturbed from the
+    # run's seed 0: the picture must replay that seed (once reconstructed as index - seed = -1, a crash).
+    from robotool.verify import run_codes
+
+    results = _evaluate_sofa_traversing(
+        tmp_path / "out",
+        lambda task, code, seed: run_codes(task, [code, code], worlds=1, seed=seed, backend="mujoco")[1],
+    )
+    failure = results.pictures[1]
+    assert failure.world == 1 and failure.reproduced is True
