@@ -40,6 +40,7 @@ from robotool.cliargs import (
 from robotool.concepts import needs_tool
 from robotool.describe import describe
 from robotool.errors import RobotoolError
+from robotool.internal_error import report_internal_error
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
 from robotool.methods import STAGES_BY_METHOD
 from robotool.sandbox.validate import ProgramRejected
@@ -485,6 +486,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TaskFileError, LMConfigError, RobotoolError, UsageError, ProgramRejected) as e:
         print_error(errors, str(e))
         return EXIT_USAGE
+    except Exception as e:  # anything else is a bug in robotool, not the user's mistake
+        return report_internal_error(errors, e, f"robotool {args.command}")
 
 
 if __name__ == "__main__":

@@ -41,6 +41,7 @@ from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNot
 from robotool.eval.executor_choice import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
+from robotool.internal_error import report_internal_error
 from robotool.lm import LMConfigError
 from robotool.task_file import TaskFileError
 from robotool.version import version
@@ -187,9 +188,12 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
     errors = make_console(stderr=True)
     console = make_console()
     warn_if_warp_on_cpu(args.backend, errors)
+    folder: Path | None = None  # where an internal error's traceback goes, once known
     try:
+        config = config_from(args)
+        folder = config.out
         with make_executor(args.executor, workers=args.workers, address=args.address) as executor:
-            evaluate(config_from(args), console=console, executor=executor)
+            evaluate(config, console=console, executor=executor)
     except RunsNotAttempted as e:  # before RobotoolError, which it is
         print_error(errors, str(e))
         return EXIT_NOT_ATTEMPTED
@@ -203,6 +207,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
             highlight=False,
         )
         return EXIT_INTERRUPTED
+    except Exception as e:  # anything else is a bug in robotool, not the user's mistake
+        return report_internal_error(errors, e, prog, folder)
     return 0
 
 

@@ -36,6 +36,7 @@ from robotool.cliargs import (
     warn_if_warp_on_cpu,
 )
 from robotool.errors import LMUnavailableError, RobotoolError
+from robotool.internal_error import report_internal_error
 from robotool.methods import STAGES_BY_METHOD
 from robotool.optimize.data import DatasetError, check_families
 from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeResult, OptimizeSettings, optimize
@@ -128,6 +129,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
     args = build_parser(prog).parse_args(argv)
     console, errors = make_console(), make_console(stderr=True)
     warn_if_warp_on_cpu(args.backend, errors)
+    log = Path(args.log or args.out.with_name(f"{args.out.stem}-log"))
     try:
         settings = settings_from(args)
         lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env, temperature=args.temperature,
@@ -137,8 +139,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
                              timeout=args.timeout) if args.reflection_lm else None
         if lm is not None:
             settings = settings.model_copy(update={"lm": lm.model})
-        log = args.log or args.out.with_name(f"{args.out.stem}-log")
-        outcome = optimize(settings, out=args.out, log=Path(log), lm=lm, reflection_lm=reflection,
+        outcome = optimize(settings, out=args.out, log=log, lm=lm, reflection_lm=reflection,
                            say=lambda line: console.print(line, markup=False, highlight=False))
     except LMUnavailableError as e:
         print_error(errors, str(e))
@@ -149,6 +150,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
     except KeyboardInterrupt:
         errors.print("interrupted: run the same command to resume from the log folder", markup=False)
         return EXIT_INTERRUPTED
+    except Exception as e:  # anything else is a bug in robotool, not the user's mistake
+        return report_internal_error(errors, e, prog, log)
     print_outcome(outcome, console)
     return 0
 
