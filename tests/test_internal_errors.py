@@ -42,8 +42,9 @@ def _entry_points(tmp_path: Path) -> dict[str, tuple[str, Callable[[], int]]]:
     }
 
 
-@pytest.mark.parametrize("entry", ["robotool tasks", "robotool eval", "python -m robotool.eval",
-                                   "python -m robotool.optimize"])
+@pytest.mark.parametrize(
+    "entry", ["robotool tasks", "robotool eval", "python -m robotool.eval", "python -m robotool.optimize"]
+)
 def test_an_unexpected_exception_is_one_line_naming_the_traceback_file(
     entry: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -60,8 +61,11 @@ def test_an_unexpected_exception_is_one_line_naming_the_traceback_file(
     assert path.name.startswith(TRACEBACK_PREFIX) and path.is_file()
     text = path.read_text()
     assert "Traceback (most recent call last)" in text and "_boom" in text
-    expected = {"robotool eval": tmp_path / "eval", "python -m robotool.eval": tmp_path / "eval",
-                "python -m robotool.optimize": tmp_path / "p-log"}.get(entry, tmp_path / "tmp")
+    expected = {
+        "robotool eval": tmp_path / "eval",
+        "python -m robotool.eval": tmp_path / "eval",
+        "python -m robotool.optimize": tmp_path / "p-log",
+    }.get(entry, tmp_path / "tmp")
     assert path.parent == expected.resolve()
 
 
