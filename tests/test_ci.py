@@ -1,39 +1,42 @@
-"""CI runs what the README's quick start tells people to run, and the dev extra installs every tool it needs."""
+"""CI runs the README's quick start as written, and the dev extra installs every tool it needs."""
 
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _readme_test_commands() -> list[str]:
-    """The commands of the quick start's second line (the first installs and runs the evaluator)."""
+def _quick_start() -> list[str]:
+    """The README's quick start as .ci/run reads it: one command line per line."""
+    done = subprocess.run([sys.executable, str(ROOT / ".ci" / "quick_start.py")], capture_output=True, text=True,
+                          check=True)
+    return done.stdout.strip().splitlines()
+
+
+def test_ci_runs_the_readme_quick_start_as_written() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     block = re.search(r"## Quick start\s+```bash\n(.*?)```", readme, re.DOTALL)
-    assert block is not None, "README has no quick start block"
-    lines = block.group(1).strip().splitlines()
-    return [command.strip() for command in lines[1].split("&&")]
-
-
-def _ci_commands_after_install() -> list[str]:
-    lines = [line.strip() for line in (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()]
-    install = next(k for k, line in enumerate(lines) if line.startswith("pip install") and ".[dev]" in line)
-    return [line for line in lines[install + 1 :] if line and not line.startswith("#")]
-
-
-def test_ci_runs_the_readme_test_command_lint_first() -> None:
-    assert _ci_commands_after_install() == _readme_test_commands()
-    assert _readme_test_commands()[0].startswith("ruff check")
+    assert block is not None
+    assert _quick_start() == block.group(1).strip().splitlines()
+    lines = _quick_start()
+    assert len(lines) == 2 and lines[0] == 'pip install -e ".[dev]" && python -m robotool.eval'
+    assert lines[1].split("&&")[0].strip().startswith("ruff check"), "lint first, then the tests"
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert "python3 .ci/quick_start.py" in ci and 'bash -o pipefail -c "$line"' in ci
+    assert "^Traceback" in ci and "results/*/results.json" in ci
 
 
 def test_the_dev_extra_installs_the_tools_ci_runs() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
     dev = project["optional-dependencies"]["dev"]
     installed = {re.split(r"[<>=!~\[ ]", requirement, maxsplit=1)[0] for requirement in dev}
-    assert {command.split()[0] for command in _ci_commands_after_install()} <= installed
+    tools = {command.split()[0] for command in _quick_start()[1].split("&&")}
+    assert tools <= installed
 
 
 def test_slow_tests_are_marked_but_the_default_run_keeps_them() -> None:
