@@ -6,16 +6,11 @@ Public API, re-exported by name; everything else may move. The simulator- and DS
 
 from __future__ import annotations
 
-import os
-import sys
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-# MuJoCo picks its OpenGL back end when it is imported; without a display, draw off screen through EGL.
-if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-    os.environ.setdefault("MUJOCO_GL", "egl")
-
-from robotool import tasks
+# gl_backend first: MuJoCo picks its OpenGL back end when it is imported (no display: EGL, where installed).
+from robotool import gl_backend, tasks  # noqa: F401
 from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.describe import describe
 from robotool.robots import arm, quadruped, registry

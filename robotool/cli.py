@@ -36,6 +36,7 @@ from robotool.cliargs import (
     seed,
     temperature,
     warn_if_warp_on_cpu,
+    warnings_in_one_line,
 )
 from robotool.concepts import needs_tool
 from robotool.describe import describe
@@ -474,6 +475,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return optimize_main(argv[1:], prog="robotool optimize")
     parser = build_parser()
     args = parser.parse_args(argv)
+    warnings_in_one_line()
     console = make_console()
     errors = make_console(stderr=True)
     if args.command is None:

@@ -10,11 +10,15 @@ import argparse
 import math
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import NoReturn
 
 from rich.console import Console
 from rich.text import Text
+
+from robotool.errors import RobotoolWarning
+from robotool.safe_text import one_line
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
@@ -158,6 +162,20 @@ def make_console(*, stderr: bool = False) -> Console:
     if stream.isatty() or os.environ.get("COLUMNS"):
         return Console(stderr=stderr)
     return Console(stderr=stderr, width=CAPTURED_WIDTH)
+
+
+def warnings_in_one_line() -> None:
+    """Show robotool's own warnings as one ``warning: ...`` line on stderr (no file, line or source)."""
+    python_format = warnings.formatwarning
+
+    def formatted(
+        message: Warning | str, category: type[Warning], filename: str, lineno: int, line: str | None = None
+    ) -> str:
+        if issubclass(category, RobotoolWarning):
+            return f"warning: {one_line(str(message))}\n"
+        return python_format(message, category, filename, lineno, line)
+
+    warnings.formatwarning = formatted
 
 
 def print_error(errors: Console, message: str) -> None:

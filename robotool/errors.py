@@ -9,6 +9,10 @@ class RobotoolError(Exception):
     """Base class of robotool's user-facing errors; the message is one line that names the fix."""
 
 
+class RobotoolWarning(UserWarning):
+    """Base class of robotool's warnings: one line that says what is missing and how to get it."""
+
+
 LMFailureKind = Literal["no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted"]
 
 

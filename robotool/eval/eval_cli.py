@@ -35,6 +35,7 @@ from robotool.cliargs import (
     seed,
     temperature,
     warn_if_warp_on_cpu,
+    warnings_in_one_line,
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
@@ -183,6 +184,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
 
     parser = build_parser(prog)
     args = parser.parse_args(argv)
+    warnings_in_one_line()
     if args.executor == "ray" and args.log_prompts is not None:  # the file would be written on the workers
         parser.error("--log-prompts writes a file on this machine, so it needs --executor local")
     errors = make_console(stderr=True)

@@ -34,6 +34,7 @@ from robotool.cliargs import (
     seed,
     temperature,
     warn_if_warp_on_cpu,
+    warnings_in_one_line,
 )
 from robotool.errors import LMUnavailableError, RobotoolError
 from robotool.internal_error import report_internal_error
@@ -127,6 +128,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
     from robotool.lm import LMConfigError, make_lm
 
     args = build_parser(prog).parse_args(argv)
+    warnings_in_one_line()
     console, errors = make_console(), make_console(stderr=True)
     warn_if_warp_on_cpu(args.backend, errors)
     log = Path(args.log or args.out.with_name(f"{args.out.stem}-log"))

@@ -13,14 +13,12 @@ import mujoco
 import numpy as np
 from PIL import Image
 
-from robotool import robots
+from robotool import gl_backend, robots
 from robotool.errors import RobotoolError
 from robotool.render.camera import fit_camera, geom_corners, visible_geoms
 from robotool.render.overlay import CaptionLine, Label, draw_caption, draw_labels, to_image
 from robotool.render.picture_model import ROBOT_RGBA, RenderModel, render_model
 from robotool.sim.compiled_scene import Scene
-
-GL_PACKAGES = "libegl1 libegl-mesa0 libgl1-mesa-dri libopengl0"  # Debian packages behind MUJOCO_GL=egl
 
 
 class RenderError(RobotoolError):
@@ -31,13 +29,15 @@ def _renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer
     limit = (model.vis.global_.offwidth, model.vis.global_.offheight)
     if not (16 <= width <= limit[0] and 16 <= height <= limit[1]):
         raise RenderError(f"picture size {width}x{height} is outside 16x16 .. {limit[0]}x{limit[1]} pixels")
+    if gl_backend.UNAVAILABLE is not None:
+        raise RenderError(gl_backend.UNAVAILABLE)
     try:
         return mujoco.Renderer(model, height=height, width=width)
     except Exception as e:  # the GL back ends raise several kinds (ImportError, RuntimeError, their own)
         raise RenderError(
             f"cannot open an OpenGL context for rendering (MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}): {e}; "
             f"without a display, set MUJOCO_GL=egl before Python starts and install the Debian packages "
-            f"{GL_PACKAGES}"
+            f"{gl_backend.GL_PACKAGES}"
         ) from e
 
 

@@ -41,6 +41,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict
 
+from robotool.errors import RobotoolWarning
+
 NOBODY = 65534
 """The uid and gid workers run as when the host is root."""
 
@@ -112,11 +114,12 @@ class SandboxLayers(BaseModel):
         why = self.missing.get("seccomp filter", "unknown reason")
         return (
             f"generated programs run WITHOUT the seccomp filter ({why}): a program that defeats the "
-            "Python-level checks can make any system call its uid allows"
+            "Python-level checks can make any system call its uid allows; install libseccomp "
+            "(Debian: apt-get install libseccomp2)"
         )
 
 
-class SandboxWarning(UserWarning):
+class SandboxWarning(RobotoolWarning):
     """Issued once when workers run without their seccomp filter."""
 
 
