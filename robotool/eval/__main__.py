@@ -4,4 +4,5 @@ import sys
 
 from robotool.eval.eval_cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # not when a pool process imports this module
+    sys.exit(main())

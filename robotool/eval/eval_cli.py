@@ -39,6 +39,7 @@ from robotool.cliargs import (
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
+from robotool.eval.executor import cores
 from robotool.eval.executor_choice import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
@@ -118,6 +119,13 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
     p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
     p.add_argument(
+        "--processes",
+        type=positive_int,
+        default=cores(),
+        help="LM-free runs (pure simulation) in flight at once with --executor local and the mujoco backend, "
+        "each in a process of its own (default: one per core, here %(default)s)",
+    )
+    p.add_argument(
         "--executor",
         choices=EXECUTORS,
         default="local",
@@ -194,7 +202,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
     try:
         config = config_from(args)
         folder = config.out
-        with make_executor(args.executor, workers=args.workers, address=args.address) as executor:
+        with make_executor(
+            args.executor, workers=args.workers, processes=args.processes, address=args.address
+        ) as executor:
             evaluate(config, console=console, executor=executor)
     except RunsNotAttempted as e:  # before RobotoolError, which it is
         print_error(errors, str(e))

@@ -8,17 +8,25 @@ work: the evaluator submits one run (its K x R worlds verified in one batch), an
 verification can be submitted the same way. A job whose worker was lost (killed, out of memory, its
 machine gone) is retried once; a second loss is handed to ``done`` as :class:`WorkerLost`.
 
-The local executor runs the jobs on a thread pool in this process: jobs marked ``exclusive`` (pure
-simulation on the CPU) take turns on a lock, the others (LM runs) overlap.
+The local executor runs the jobs on a thread pool in this process, where the LM runs overlap. Jobs marked
+``exclusive`` (pure simulation on the CPU, such as the LM-free planner's runs) would only take turns on
+Python's interpreter lock there: asked for ``processes`` > 1 (the command line asks for one per core), it
+runs them on the ``mujoco`` backend in that many pool processes, each with its own sandbox; otherwise, or when
+the work cannot be sent to another process, they take turns on a lock. A job whose process died is run again
+once in this process.
 """
 
 from __future__ import annotations
 
-import contextlib
 import contextvars
+import multiprocessing
+import os
+import pickle
 import threading
+import warnings
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from types import TracebackType
 from typing import Protocol, Self, TypeVar
 
@@ -68,10 +76,12 @@ class Executor(Protocol):
 
 
 class LocalExecutor:
-    """Jobs on a thread pool in this process: exclusive jobs one at a time, the others ``workers`` at once."""
+    """Jobs on a thread pool in this process, ``workers`` at once; exclusive jobs in ``processes`` pool processes
+    on the ``mujoco`` backend, or one at a time here."""
 
-    def __init__(self, workers: int) -> None:
+    def __init__(self, workers: int, processes: int = 1) -> None:
         self.workers = workers
+        self.processes = processes
 
     def backend(self, asked: str | None) -> str:
         """``asked``, or this machine's default backend."""
@@ -91,23 +101,40 @@ class LocalExecutor:
     ) -> None:
         """See :meth:`Executor.run`; ``done`` is called from the thread that ran the job."""
         turn = threading.Lock()
+        simulations = sum(1 for job in jobs if exclusive(job))
+        lanes = _simulation_lanes(work, min(simulations, self.processes), backend)
+        processes = _simulation_pool(lanes) if lanes > 1 else None
+
+        def simulate(job: J) -> R:
+            if processes is not None:
+                try:
+                    return processes.submit(work, job).result()
+                except BrokenProcessPool:  # its process died (killed, out of memory): once more, here
+                    pass
+            with turn:
+                return work(job)
 
         def one(job: J) -> None:
             if skip(job):
                 return
-            with turn if exclusive(job) else contextlib.nullcontext():
-                outcome = work(job)
+            outcome = simulate(job) if exclusive(job) else work(job)
             done(job, outcome)
 
-        parallel = 1 if all(exclusive(job) for job in jobs) else self.workers
-        with ThreadPoolExecutor(max_workers=parallel) as pool:
-            futures: list[Future[None]] = [pool.submit(contextvars.copy_context().run, one, job) for job in jobs]
-            try:
-                for future in as_completed(futures):
-                    future.result()
-            except BaseException:
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise
+        parallel = lanes if simulations == len(jobs) else max(self.workers, lanes)
+        try:
+            with ThreadPoolExecutor(max_workers=parallel) as pool:
+                futures: list[Future[None]] = [
+                    pool.submit(contextvars.copy_context().run, one, job) for job in jobs
+                ]
+                try:
+                    for future in as_completed(futures):
+                        future.result()
+                except BaseException:
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    raise
+        finally:
+            if processes is not None:
+                processes.shutdown(wait=True, cancel_futures=True)
 
     def close(self) -> None:
         """Nothing to release: the pool lives only as long as :meth:`run`."""
@@ -120,3 +147,39 @@ class LocalExecutor:
     ) -> None:
         self.close()
 
+
+
+def cores() -> int:
+    """The CPU cores this process may use."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _simulation_lanes(work: Callable[..., object], wanted: int, backend: str) -> int:
+    """How many simulation-only jobs run at once: ``wanted`` on the ``mujoco`` backend when ``work`` can be sent
+    to another process, else 1."""
+    if backend != "mujoco" or wanted < 2:
+        return 1
+    try:
+        pickle.dumps(work)
+    except (pickle.PicklingError, TypeError, AttributeError):
+        return 1
+    return wanted
+
+
+def _simulation_pool(processes: int) -> ProcessPoolExecutor:
+    """``processes`` pool processes, each with its own sandbox, for simulation-only jobs."""
+    from robotool.sandbox.zygote import zygote
+
+    zygote().layers()  # the sandbox's layers, learnt (and a missing one warned of) once, here
+    return ProcessPoolExecutor(
+        max_workers=processes,
+        mp_context=multiprocessing.get_context("forkserver"),  # this process has threads: no plain fork
+        initializer=_quiet_sandbox_warnings,
+    )
+
+
+def _quiet_sandbox_warnings() -> None:
+    """In a pool process: the parent already warned about a missing sandbox layer."""
+    from robotool.sandbox.jail import SandboxWarning
+
+    warnings.simplefilter("ignore", SandboxWarning)
