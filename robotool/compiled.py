@@ -114,6 +114,8 @@ def version_note(path: Path, info: CompiledInfo | None) -> str | None:
     if info is None:
         return f"{path} has no robotool record (a plain DSPy state file): its origin is unknown"
     if info.robotool_version != version():
-        return (f"{path} was compiled with robotool {info.robotool_version}; this is {version()}: "
-                "its prompts may not match this version's stages")
+        return (
+            f"{path} was compiled with robotool {info.robotool_version}; this is {version()}: "
+            "its prompts may not match this version's stages"
+        )
     return None

@@ -14,6 +14,8 @@ Failures that no reply can cure (see :func:`robotool.lm.unavailable`) raise
 from __future__ import annotations
 
 import contextvars
+import copy
+import functools
 import json
 import re
 import threading
@@ -31,6 +33,7 @@ from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError
 from pydantic import ValidationError
 
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
+from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.solution import LMCall
 
@@ -192,8 +195,24 @@ def _attempt_context(settings: CallSettings) -> Iterator[_Recorder]:
     with dspy.track_usage() as tracker:
         recorder = _Recorder(tracker)
         callbacks = [*dspy.settings.get("callbacks", []), recorder]
-        with dspy.context(callbacks=callbacks, adapter=settings.adapter):
+        with dspy.context(callbacks=callbacks, adapter=_reasoning_free(settings.adapter)):
             yield recorder
+
+
+def _reasoning_free(adapter: dspy.Adapter) -> dspy.Adapter:
+    """A copy of ``adapter`` that parses replies without the model's reasoning (``<think>...</think>``), so that
+    a draft inside the reasoning is never read as an answer."""
+    reading = copy.copy(adapter)
+    reading.__class__ = _reasoning_free_class(type(adapter))
+    return reading
+
+
+@functools.cache
+def _reasoning_free_class(kind: type[dspy.Adapter]) -> type[dspy.Adapter]:
+    def parse(self: dspy.Adapter, signature: type[dspy.Signature], completion: str) -> dict[str, Any]:
+        return kind.parse(self, signature, without_reasoning(completion))
+
+    return type(kind.__name__, (kind,), {"parse": parse, "__module__": kind.__module__})
 
 
 def call_stage(
@@ -279,7 +298,7 @@ def _salvaged(
 ) -> tuple[dspy.Prediction | None, str | None, str | None]:
     """From a ``reply`` the adapter rejected: (outputs, None, a note on how they were read), or
     (None, what was wrong with it, None). The adapter's error may hold only part of the reply."""
-    text = reply if reply is not None else error.lm_response or ""
+    text = without_reasoning(reply if reply is not None else error.lm_response or "")
     if not text.strip():
         return None, "the reply was empty", None
     problem = parse_problem(error, signature, adapter)

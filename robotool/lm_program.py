@@ -41,7 +41,7 @@ from robotool.lm import DEFAULT_FORMAT_RETRIES
 from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
 from robotool.methods import STAGES_BY_METHOD
 from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
-from robotool.sandbox import extract_program
+from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
 from robotool.task_model import Task
@@ -354,6 +354,12 @@ class RoboTool(Proposer):
 
 
 def _program_reply(text: str) -> dspy.Prediction:
-    """The Coder's output from a plain chat answer (prose and a code block); raises
-    :class:`~robotool.sandbox.ProgramRejected` (a ValueError) when it holds no program."""
-    return dspy.Prediction(code=extract_program(text))
+    """The Coder's output from a plain chat answer (prose and code blocks): the answer itself, which the stage's
+    check extracts the program from (noting which block it chose, or why the code does not parse); raises
+    :class:`~robotool.sandbox.ProgramRejected` (a ValueError) when it holds no program at all."""
+    try:
+        extract(text)
+    except ProgramRejected as e:
+        if e.construct == "text":  # no program: the reply's format is what was wrong
+            raise
+    return dspy.Prediction(code=text)

@@ -73,9 +73,7 @@ class Methods(NamedTuple):
     stages: dict[str, str]
 
 
-def _methods(
-    config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str
-) -> Methods:
+def _methods(config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str) -> Methods:
     """Solvers to run and methods skipped; a method asked for by name that cannot run is an error."""
     names = config.methods or ([] if config.programs else list(METHODS))
     unknown = [m for m in names if m not in METHODS]
@@ -112,9 +110,7 @@ def _programs(
         if name in METHODS or name in stages:
             raise EvalError(f"--program {path}: its name {name!r} is already a method's; rename the file")
         if lm is None:
-            raise EvalError(
-                f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM"
-            )
+            raise EvalError(f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM")
         try:
             solvers[name] = compiled_solver(path, lm, settings)
             stages[name] = program_stages(path)

@@ -91,45 +91,93 @@ def validate(program: Proposer, examples: Sequence[dspy.Example], metric: Metric
     return sum(scores) / len(scores)
 
 
-def _compile(settings: OptimizeSettings, program: Proposer, data: Splits, metric: Metric, log: Path,
-             reflection_lm: dspy.LM | None, say: Say) -> tuple[Proposer, list[DemoSource]]:
+def _compile(
+    settings: OptimizeSettings,
+    program: Proposer,
+    data: Splits,
+    metric: Metric,
+    log: Path,
+    reflection_lm: dspy.LM | None,
+    say: Say,
+) -> tuple[Proposer, list[DemoSource]]:
     b = settings.budget
     name = settings.optimizer
     if name == "planner-demos":
         say(f"solving {len(data.train)} training instance(s) with the search planner")
-        sources = planner_demonstrations(program, data.train, per_stage=b.demos, worlds=settings.worlds,
-                                         seed=settings.seed, backend=settings.backend, log=log, say=say)
+        sources = planner_demonstrations(
+            program,
+            data.train,
+            per_stage=b.demos,
+            worlds=settings.worlds,
+            seed=settings.seed,
+            backend=settings.backend,
+            log=log,
+            say=say,
+        )
         if not sources:
-            raise OptimizeError("the search planner verified no training instance: no demonstration to keep; "
-                                "try more --train examples or other --families")
+            raise OptimizeError(
+                "the search planner verified no training instance: no demonstration to keep; "
+                "try more --train examples or other --families"
+            )
         return program, sources
     valset = data.val or None
     if name == "gepa":
         if reflection_lm is None:
             raise OptimizeError("gepa needs a reflection model: pass --reflection-lm (or --lm)")
         budget: dict[str, Any] = {"auto": b.auto} if b.auto else {"max_metric_calls": b.max_metric_calls or 60}
-        optimizer = dspy.GEPA(metric=metric, reflection_lm=reflection_lm, num_threads=settings.threads,
-                              log_dir=str(log / "gepa"), seed=settings.seed, **budget)
+        optimizer = dspy.GEPA(
+            metric=metric,
+            reflection_lm=reflection_lm,
+            num_threads=settings.threads,
+            log_dir=str(log / "gepa"),
+            seed=settings.seed,
+            **budget,
+        )
         return optimizer.compile(program, trainset=data.train, valset=valset), []
     if name == "bootstrap":
-        optimizer = dspy.BootstrapFewShot(metric=metric, metric_threshold=1.0, max_bootstrapped_demos=b.demos,
-                                          max_labeled_demos=0, max_rounds=1)
+        optimizer = dspy.BootstrapFewShot(
+            metric=metric, metric_threshold=1.0, max_bootstrapped_demos=b.demos, max_labeled_demos=0, max_rounds=1
+        )
         return optimizer.compile(program, trainset=data.train), []
     if name == "mipro":
-        mipro = dspy.MIPROv2(metric=metric, prompt_model=reflection_lm, auto=b.auto,
-                             num_candidates=None if b.auto else b.candidates, num_threads=settings.threads,
-                             max_bootstrapped_demos=b.demos, max_labeled_demos=0, seed=settings.seed,
-                             log_dir=str(log / "mipro"), metric_threshold=1.0)
+        mipro = dspy.MIPROv2(
+            metric=metric,
+            prompt_model=reflection_lm,
+            auto=b.auto,
+            num_candidates=None if b.auto else b.candidates,
+            num_threads=settings.threads,
+            max_bootstrapped_demos=b.demos,
+            max_labeled_demos=0,
+            seed=settings.seed,
+            log_dir=str(log / "mipro"),
+            metric_threshold=1.0,
+        )
         trials = {} if b.auto else {"num_trials": b.trials}
-        return mipro.compile(program, trainset=data.train, valset=valset, minibatch=False,
-                             data_aware_proposer=False, **trials), []
-    simba = dspy.SIMBA(metric=metric, bsize=min(len(data.train), 8), num_candidates=b.candidates,
-                       max_steps=b.steps, max_demos=b.demos, prompt_model=reflection_lm, num_threads=settings.threads)
+        return mipro.compile(
+            program, trainset=data.train, valset=valset, minibatch=False, data_aware_proposer=False, **trials
+        ), []
+    simba = dspy.SIMBA(
+        metric=metric,
+        bsize=min(len(data.train), 8),
+        num_candidates=b.candidates,
+        max_steps=b.steps,
+        max_demos=b.demos,
+        prompt_model=reflection_lm,
+        num_threads=settings.threads,
+    )
     return simba.compile(program, trainset=data.train, seed=settings.seed), []
 
 
-def optimize(settings: OptimizeSettings, *, out: Path, log: Path, lm: dspy.LM | None = None,
-             reflection_lm: dspy.LM | None = None, say: Say = print, data: Splits | None = None) -> OptimizeResult:
+def optimize(
+    settings: OptimizeSettings,
+    *,
+    out: Path,
+    log: Path,
+    lm: dspy.LM | None = None,
+    reflection_lm: dspy.LM | None = None,
+    say: Say = print,
+    data: Splits | None = None,
+) -> OptimizeResult:
     """Run one optimisation (see the module docstring) and write the compiled program to ``out``.
 
     ``data`` replaces the examples drawn from ``settings.families`` (its training set is checked the same way).
@@ -147,12 +195,22 @@ def optimize(settings: OptimizeSettings, *, out: Path, log: Path, lm: dspy.LM | 
         before = _measure(program, data, metric, settings, lm, "before", say)
         compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
         after = _measure(compiled, data, metric, settings, lm, "after", say)
-    validation = Validation(examples=len(data.val), before=before, after=after,
-                            note=None if lm is not None and data.val else
-                            "not measured: " + ("no validation examples" if not data.val else
-                                                "no language model (pass --lm to measure the stages on one)"))
-    info = CompiledInfo(optimizer=settings.optimizer, method=settings.method,
-                        settings=settings.model_dump(mode="json"), validation=validation, demonstrations=sources)
+    validation = Validation(
+        examples=len(data.val),
+        before=before,
+        after=after,
+        note=None
+        if lm is not None and data.val
+        else "not measured: "
+        + ("no validation examples" if not data.val else "no language model (pass --lm to measure the stages on one)"),
+    )
+    info = CompiledInfo(
+        optimizer=settings.optimizer,
+        method=settings.method,
+        settings=settings.model_dump(mode="json"),
+        validation=validation,
+        demonstrations=sources,
+    )
     save_compiled(compiled, out, info)
     (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
     return OptimizeResult(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
@@ -177,8 +235,9 @@ def _claim(log: Path, settings: OptimizeSettings) -> None:
         raise OptimizeError(f"cannot write the log folder {log}: {e.strerror or e}") from None
 
 
-def _measure(program: Proposer, data: Splits, metric: Metric, settings: OptimizeSettings, lm: dspy.LM | None, when: str,
-             say: Say) -> float | None:
+def _measure(
+    program: Proposer, data: Splits, metric: Metric, settings: OptimizeSettings, lm: dspy.LM | None, when: str, say: Say
+) -> float | None:
     if lm is None or not data.val:
         return None
     say(f"validating {when}: {len(data.val)} example(s) x {settings.worlds} world(s)")

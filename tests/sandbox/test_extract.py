@@ -59,7 +59,10 @@ def test_a_draft_inside_reasoning_is_never_code() -> None:
 
 
 def test_unfenced_python_2_is_rejected_with_its_syntax_error_never_cut_to_the_lines_that_parse() -> None:
-    answer = 'push_to_position("box", [1, 0, 0])\nwalk_to_position([1, 0, 0])\nprint "climbing"\nfor i in xrange(2):\n    climb_to_position([1, 0, 0.2])\n'
+    answer = (
+        'push_to_position("box", [1, 0, 0])\nwalk_to_position([1, 0, 0])\nprint "climbing"\n'
+        "for i in xrange(2):\n    climb_to_position([1, 0, 0.2])\n"
+    )
     with pytest.raises(ProgramRejected, match="line 3: syntax error: Missing parentheses"):
         extract(answer)
     with pytest.raises(ProgramRejected, match="line 1: syntax error"):
