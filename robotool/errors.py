@@ -9,7 +9,9 @@ class RobotoolError(Exception):
     """Base class of robotool's user-facing errors; the message is one line that names the fix."""
 
 
-LMFailureKind = Literal["no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted"]
+LMFailureKind = Literal[
+    "no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted", "not_a_reply"
+]
 
 
 class LMUnavailableError(RobotoolError):

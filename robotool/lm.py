@@ -125,6 +125,12 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
     ):
         fix = "check --lm (or ROBOTOOL_LM)" + (" and that --api-base ends in /v1" if api_base else "")
         return LMUnavailableError("unknown_model", f"{where} does not know the model {model!r}: {fix}")
+    if isinstance(error, dx.LMTransportError) and _connection_dropped(error):
+        return LMUnavailableError(
+            "retries_exhausted",
+            f"{where} dropped the connection without answering on {tries}: check the server and any proxy in front "
+            "of it",
+        )
     if isinstance(error, dx.LMTransportError) and _connection_failed(error):
         target = f"the language-model server at {api_base}" if api_base else f"the provider of {model}"
         fix = (
@@ -151,14 +157,33 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
     return None
 
 
+def _causes(error: BaseException) -> list[BaseException]:
+    """``error`` and the errors it was raised from, outermost first."""
+    seen: list[BaseException] = []
+    current: BaseException | None = error
+    while current is not None and all(current is not e for e in seen):
+        seen.append(current)
+        current = current.__cause__ or current.__context__
+    return seen
+
+
+def _connection_dropped(error: BaseException) -> bool:
+    """Whether a transport error is the server closing or resetting an open connection (not a slow answer)."""
+    for cause in _causes(error):
+        names = {klass.__name__ for klass in type(cause).__mro__}
+        if any("Timeout" in name for name in names) or isinstance(cause, TimeoutError):
+            return False
+        if names & {"ReadError", "RemoteProtocolError", "ConnectionResetError", "BrokenPipeError"}:
+            return True
+        if re.search(r"closed (the )?connection|connection (was )?(reset|closed|aborted)", str(cause), re.IGNORECASE):
+            return True
+    return False
+
+
 def _connection_failed(error: BaseException) -> bool:
     """Whether a transport error, or one it was raised from, is a failure to connect (not a slow answer)."""
-    seen: set[int] = set()
-    current: BaseException | None = error
-    while current is not None and id(current) not in seen:
-        seen.add(id(current))
-        names = {klass.__name__ for klass in type(current).__mro__}
-        if "ConnectError" in names or (isinstance(current, OSError) and not isinstance(current, TimeoutError)):
+    for cause in _causes(error):
+        names = {klass.__name__ for klass in type(cause).__mro__}
+        if "ConnectError" in names or (isinstance(cause, OSError) and not isinstance(cause, TimeoutError)):
             return True
-        current = current.__cause__ or current.__context__
     return False
