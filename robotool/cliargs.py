@@ -16,12 +16,15 @@ from typing import NoReturn
 from rich.console import Console
 from rich.text import Text
 
+from robotool.lm import DEFAULT_TIMEOUT
+
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
 DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 ADAPTERS = ["chat", "json"]
+TIMEOUT_HELP = f"how long to wait for each LM reply (default: {DEFAULT_TIMEOUT:g})"
 ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
 LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
 REPAIR_HELP = (

@@ -218,6 +218,49 @@ def _reasoning_free_class(kind: type[dspy.Adapter]) -> type[dspy.Adapter]:
     return type(kind.__name__, (kind,), {"parse": parse, "__module__": kind.__module__})
 
 
+WaitReport = Callable[[str, int | None, float], None]
+"""Told, while a request waits for its reply, the stage, the candidate (None: shared) and the seconds so far."""
+
+_WAIT_REPORT: contextvars.ContextVar[tuple[WaitReport, float] | None] = contextvars.ContextVar(
+    "robotool_wait_report", default=None
+)
+
+
+@contextmanager
+def reporting_waits(report: WaitReport, every: float = 1.0) -> Iterator[None]:
+    """Inside this block, every ``every`` seconds that a stage's request waits for its reply, ``report`` is told
+    the stage, the candidate and the seconds elapsed (from another thread), so a console can show signs of life."""
+    token = _WAIT_REPORT.set((report, every))
+    try:
+        yield
+    finally:
+        _WAIT_REPORT.reset(token)
+
+
+@contextmanager
+def _waiting(stage: str, candidate: int | None) -> Iterator[None]:
+    """Report the wait for one request (see :func:`reporting_waits`)."""
+    hook = _WAIT_REPORT.get()
+    if hook is None:
+        yield
+        return
+    report, every = hook
+    done = threading.Event()
+    started = time.perf_counter()
+
+    def tick() -> None:
+        while not done.wait(every):
+            report(stage, candidate, time.perf_counter() - started)
+
+    ticker = threading.Thread(target=tick, name=f"robotool-wait-{stage}", daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join()
+
+
 def call_stage(
     predictor: dspy.Predict,
     stage: str,
@@ -247,7 +290,10 @@ def call_stage(
             kwargs |= {"rejected_reply": rejected[0], "reply_problem": rejected[1]}
         with _attempt_context(settings) as recorder, validation_notes() as notes:
             try:
-                outputs, failure = _ask(predictor, signature, kwargs, config or {}, settings, recorder, salvage, notes)
+                with _waiting(stage, candidate):
+                    outputs, failure = _ask(
+                        predictor, signature, kwargs, config or {}, settings, recorder, salvage, notes
+                    )
             except LMUnavailableError:
                 _record(recorder.requests, stage, candidate, attempt, None, settings.log)
                 raise

@@ -61,6 +61,8 @@ class StandinServer:
         self.script = script
         self.log = log
         self.requests: list[dict[str, Any]] = []
+        self.authorizations: list[str | None] = []
+        """The Authorization header of each request, in the order of :attr:`requests`."""
         self._uses = [0] * len(script.rules)
         self._lock = threading.Lock()
         handler = _handler_for(self)
@@ -81,13 +83,14 @@ class StandinServer:
         self._server.shutdown()
         self._server.server_close()
 
-    def pick(self, body: dict[str, Any]) -> Rule | None:
+    def pick(self, body: dict[str, Any], authorization: str | None = None) -> Rule | None:
         """The first rule that matches the request's last user message and has uses left."""
         messages = body.get("messages") or []
         last_user = next((m for m in reversed(messages) if m.get("role") == "user"), {})
         text = _text(last_user.get("content", ""))
         with self._lock:
             self.requests.append(body)
+            self.authorizations.append(authorization)
             for i, rule in enumerate(self.script.rules):
                 if rule.match in text and (rule.times is None or self._uses[i] < rule.times):
                     self._uses[i] += 1
@@ -135,7 +138,7 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
             except json.JSONDecodeError:
                 self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
                 return
-            rule = server.pick(body)
+            rule = server.pick(body, self.headers.get("Authorization"))
             time.sleep(server.script.delay + (rule.delay if rule else 0.0))
             if rule is None:
                 server.record(body, 500, None)

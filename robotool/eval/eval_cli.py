@@ -23,6 +23,7 @@ from robotool.cliargs import (
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
     REPAIR_HELP,
+    TIMEOUT_HELP,
     Parser,
     cluster_address,
     count,
@@ -106,7 +107,7 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         "candidate, 0.7 to 1.0 spread over several)",
     )
     p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")

@@ -23,6 +23,7 @@ from robotool.cliargs import (
     DEFAULT_WORLDS,
     EXIT_INTERRUPTED,
     EXIT_USAGE,
+    TIMEOUT_HELP,
     Parser,
     count,
     make_console,
@@ -84,7 +85,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     p.add_argument("--reflection-api-base", help="base URL for the reflection model (default: --api-base)")
     p.add_argument("--temperature", type=temperature, help="sampling temperature of the stages' calls")
     p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per verification")
     p.add_argument("--seed", type=seed, default=0, help="seed of the perturbed worlds and the optimiser")
