@@ -6,7 +6,8 @@ import pytest
 from pydantic import ValidationError
 
 from robotool import robots, tasks
-from robotool.signatures import AnalyzedConcept, PlanStep, StepParameters, scene_context, validation_notes
+from robotool.sandbox import ProgramRejected, validate
+from robotool.signatures import AnalyzedConcept, Code, PlanStep, Repair, StepParameters, scene_context, validation_notes
 from robotool.signatures.models import parse_quantity
 
 QUADRUPED = tasks.load("sofa_climbing_low_sofa")
@@ -93,3 +94,23 @@ def test_plain_numbers_in_the_unit_the_concept_names_become_si() -> None:
         {"name": "gap", "kind": "gap_width", "value": 40, "limit": 10, "unit": "cm", "satisfied": False}
     )
     assert (concept.value, concept.limit, concept.unit) == (0.4, 0.1, "m")
+
+
+@pytest.mark.parametrize("signature", [Code, Repair], ids=["coder", "repair"])
+def test_the_program_prompts_and_the_sandbox_agree_on_what_a_program_may_contain(signature) -> None:
+    """What the Coder and Repair prompts allow the sandbox accepts, and what they forbid it refuses."""
+    instructions = " ".join(signature.instructions.split())
+    allowed = {"Helper functions (def) are allowed": "def reach(name):\n    move_to_position(get_center(name))\n"}
+    forbidden = {
+        "classes": ("class Plan:\n    pass\n", "class definitions"),
+        "try/except": ("try:\n    open_gripper()\nexcept Exception:\n    pass\n", "try/except"),
+        "with statements": ("with x:\n    pass\n", "with statements"),
+        "generators": ("def steps():\n    yield 1\n", "yield"),
+    }
+    for phrase, program in allowed.items():
+        assert phrase in instructions
+        validate(program + "reach('milk')\n", "arm")
+    for phrase, (program, refusal) in forbidden.items():
+        assert phrase in instructions.split("are allowed;")[1]
+        with pytest.raises(ProgramRejected, match=refusal):
+            validate(program, "arm")
