@@ -58,6 +58,9 @@ class CompiledInfo(BaseModel):
     settings: dict[str, Any] = Field(default_factory=dict)
     validation: Validation | None = None
     demonstrations: list[DemoSource] = Field(default_factory=list)
+    train: list[str] = Field(default_factory=list, description="the task instances it was trained on")
+    val: list[str] = Field(default_factory=list, description="the task instances it was validated on")
+    notes: list[str] = Field(default_factory=list, description="what the optimiser did not do, and why")
 
 
 def save_compiled(program: dspy.Module, path: Path, info: CompiledInfo) -> None:

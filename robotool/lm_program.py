@@ -93,6 +93,8 @@ class Proposer(dspy.Module):
         self.log_prompts = log_prompts
         self.compiled: CompiledInfo | None = None
         self.compiled_notes: list[str] = []
+        self.repair_frozen = False
+        """While set, the Repair stage is not among :meth:`named_parameters` (optimisers leave it as it is)."""
 
     @classmethod
     def method(cls, name: str, **options: Any) -> Self:
@@ -124,6 +126,10 @@ class Proposer(dspy.Module):
         self.compiled = info
         self.compiled_notes = unused + ([note] if (note := version_note(path, info)) else [])
         return self
+
+    def named_parameters(self) -> list[tuple[str, Any]]:
+        """DSPy's parameters of the program, without the Repair stage while :attr:`repair_frozen` is set."""
+        return [(name, p) for name, p in super().named_parameters() if not (self.repair_frozen and name == "repair")]
 
     @property
     def method_name(self) -> str:

@@ -31,6 +31,11 @@ Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
 OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")
 
 
+DEMO_OPTIMIZERS: frozenset[str] = frozenset({"bootstrap"})
+"""Optimisers whose only change is demonstrations (zero kept means an unchanged program)."""
+FROZEN_REPAIR = "the Repair stage is left as it is: the metric verifies proposals and never runs repair rounds"
+
+
 class OptimizeError(ValueError):
     """The run cannot be set up as asked; the message says why."""
 
@@ -191,10 +196,21 @@ def optimize(
     say(f"{len(data.train)} training and {len(data.val)} validation example(s) from {', '.join(settings.families)}")
     metric = Metric(worlds=settings.worlds, seed=settings.seed, backend=settings.backend)
     program = student(settings)
+    notes = [FROZEN_REPAIR]  # the metric verifies proposals and never runs repair rounds
+    say(FROZEN_REPAIR)
     with dspy.context(lm=lm) if lm is not None else contextlib.nullcontext():
         before = _measure(program, data, metric, settings, lm, "before", say)
+        program.repair_frozen = True
         compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
+        compiled.repair_frozen = program.repair_frozen = False
         after = _measure(compiled, data, metric, settings, lm, "after", say)
+    if settings.optimizer in DEMO_OPTIMIZERS and not any(p.demos for _, p in compiled.named_predictors()):
+        kept = (
+            f"{settings.optimizer} kept no demonstration: no training instance's proposal succeeded in every world, "
+            "so the stages' demonstrations are unchanged"
+        )
+        notes.append(kept)
+        say(kept)
     validation = Validation(
         examples=len(data.val),
         before=before,
@@ -210,10 +226,18 @@ def optimize(
         settings=settings.model_dump(mode="json"),
         validation=validation,
         demonstrations=sources,
+        train=[instance_label(e) for e in data.train],
+        val=[instance_label(e) for e in data.val],
+        notes=notes,
     )
     save_compiled(compiled, out, info)
     (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
     return OptimizeResult(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
+
+
+def instance_label(example: dspy.Example) -> str:
+    """How the evaluation names an example's task instance: ``family#seed`` when generated, else its name."""
+    return f"{example.family}#{example.seed}" if example.get("seed") is not None else example.name
 
 
 def _claim(log: Path, settings: OptimizeSettings) -> None:
