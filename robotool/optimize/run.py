@@ -189,7 +189,7 @@ def optimize(
     """
     if settings.optimizer != "planner-demos" and lm is None:
         raise OptimizeError(f"{settings.optimizer} runs the stages on a language model: pass --lm MODEL")
-    _claim(log, settings)
+    _claim(log, settings, say)
     if data is None:
         data = splits(settings.families, train=settings.train, val=settings.val, paper_tasks=False)
     check_training(data.train)
@@ -240,15 +240,18 @@ def instance_label(example: dspy.Example) -> str:
     return f"{example.family}#{example.seed}" if example.get("seed") is not None else example.name
 
 
-def _claim(log: Path, settings: OptimizeSettings) -> None:
-    """Create the log folder, or resume in it when it holds a run with the same settings (else refuse)."""
+def _claim(log: Path, settings: OptimizeSettings, say: Say) -> None:
+    """Create the log folder, or resume in it when it holds a run with the same settings, or a GEPA run that
+    this one extends with a larger metric-call budget (else refuse)."""
     path = log / "settings.json"
     if path.exists():
         try:
             before = OptimizeSettings.model_validate_json(path.read_text(encoding="utf-8"))
         except ValueError:
             raise OptimizeError(f"{log} holds a run this version cannot read; choose another --log") from None
-        if before != settings:
+        if (grown := _grown_budget(before, settings)) is not None:
+            say(f"resuming the GEPA run in {log} with a larger budget: {grown[0]} -> {grown[1]} metric calls")
+        elif before != settings:
             mine, theirs = settings.model_dump(), before.model_dump()
             changed = ", ".join(k for k in mine if mine[k] != theirs[k])
             raise OptimizeError(f"{log} holds a run with other settings ({changed}); choose another --log")
@@ -257,6 +260,18 @@ def _claim(log: Path, settings: OptimizeSettings) -> None:
         path.write_text(settings.model_dump_json(indent=1), encoding="utf-8")
     except OSError as e:
         raise OptimizeError(f"cannot write the log folder {log}: {e.strerror or e}") from None
+
+
+def _grown_budget(before: OptimizeSettings, now: OptimizeSettings) -> tuple[int, int] | None:
+    """(old, new) metric-call budgets when ``now`` is the GEPA run ``before`` with only a larger budget, else None."""
+    if now.optimizer != "gepa" or before.model_copy(update={"budget": now.budget}) != now:
+        return None
+    if before.budget.model_copy(update={"max_metric_calls": now.budget.max_metric_calls}) != now.budget:
+        return None
+    if before.budget.auto or now.budget.auto:
+        return None
+    old, new = before.budget.max_metric_calls or 60, now.budget.max_metric_calls or 60
+    return (old, new) if new > old else None
 
 
 def _measure(

@@ -240,6 +240,28 @@ def test_gepa_with_a_scripted_lm_reflects_on_each_stage_s_feedback(tmp_path: Pat
     assert "Nothing points at the Analyzer's output" in shown and "point at the Planner" in shown
 
 
+def test_a_gepa_run_resumes_with_a_larger_budget_and_refuses_other_changes(tmp_path: Path) -> None:
+    from robotool.optimize.run import OptimizeError
+
+    lm, engine = _task_lm(arm_code=STAND_STILL)
+    reflection = ReflectionEngine("GEPA-PROPOSED: move the gripper to the milk before closing it.")
+    data = Splits(train=[builtin(ARM)], val=[builtin(ARM)], test=[])
+    said: list[str] = []
+
+    def run(**budget: int) -> None:
+        optimize(_settings("gepa", **budget), out=tmp_path / "p.json", log=tmp_path / "log", lm=lm,
+                 reflection_lm=engine_lm(reflection), data=data, say=said.append)
+
+    with dspy.context(adapter=CHAT):
+        run(max_metric_calls=4)
+        first = len(reflection.shown)
+        run(max_metric_calls=8)
+        with pytest.raises(OptimizeError, match="holds a run with other settings"):
+            run(max_metric_calls=6)  # a smaller budget is another run
+    assert any("resuming the GEPA run" in line and "4 -> 8 metric calls" in line for line in said)
+    assert len(reflection.shown) > first  # the extended run reflected further
+
+
 # -- offline compilation and compiled programs everywhere -------------------------------------------
 
 
