@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-from collections.abc import Sequence
+import logging
+from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
@@ -201,7 +202,9 @@ def optimize(
     with dspy.context(lm=lm) if lm is not None else contextlib.nullcontext():
         before = _measure(program, data, metric, settings, lm, "before", say)
         program.repair_frozen = True
-        compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
+        say(f"the optimiser's own log lines and progress bars go to {log / NOISE_LOG}")
+        with noise_to(log / NOISE_LOG):
+            compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
         compiled.repair_frozen = program.repair_frozen = False
         after = _measure(compiled, data, metric, settings, lm, "after", say)
     if settings.optimizer in DEMO_OPTIMIZERS and not any(p.demos for _, p in compiled.named_predictors()):
@@ -233,6 +236,28 @@ def optimize(
     save_compiled(compiled, out, info)
     (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
     return OptimizeResult(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
+
+
+NOISE_LOG = "dspy.log"
+"""The file in the log folder that receives DSPy's (and GEPA's, Optuna's) log lines and progress bars."""
+
+
+@contextlib.contextmanager
+def noise_to(path: Path) -> Iterator[None]:
+    """Send what the optimisers write to stderr (DSPy's INFO lines and tracebacks, progress bars, Optuna's trial
+    lines) to ``path`` instead of the console, inside this block."""
+    try:
+        f = path.open("a", encoding="utf-8")
+    except OSError as e:
+        raise OptimizeError(f"cannot write {path}: {e.strerror or e}") from None
+    optuna = logging.getLogger("optuna")
+    handlers = optuna.handlers[:]
+    optuna.handlers = [logging.StreamHandler(f)]
+    try:
+        with f, contextlib.redirect_stderr(f):
+            yield
+    finally:
+        optuna.handlers = handlers
 
 
 def instance_label(example: dspy.Example) -> str:

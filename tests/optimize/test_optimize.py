@@ -183,7 +183,7 @@ def test_bootstrap_sees_no_repair_stage_and_says_when_it_kept_no_demonstration(t
     assert program.repair.signature.instructions == Repair.instructions and program.compiled.train == [ARM]
 
 
-def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: Path) -> None:
+def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: Path, capfd) -> None:
     lm, engine = _task_lm()
     reflection = ReflectionEngine("Always query positions right before every motion (MIPRO-PROPOSED).")
     data = Splits(train=[builtin(ARM), builtin(QUADRUPED)], val=[builtin(ARM)], test=[])
@@ -195,6 +195,9 @@ def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: 
     assert stored["robotool"]["optimizer"] == "mipro" and set(stored) >= {"analyze", "plan", "calculate", "code"}
     # the metric never runs repair rounds: the Repair stage is frozen, stored as it was
     assert stored["repair"]["signature"]["instructions"] == Repair.instructions and not stored["repair"]["demos"]
+    err = capfd.readouterr().err  # DSPy's trial lines and progress bars went to the log file, not the console
+    assert "Trial" not in err and "Average Metric" not in err
+    assert "Trial" in (tmp_path / "log" / "dspy.log").read_text()
 
 
 def test_simba_on_two_training_examples(tmp_path: Path) -> None:
@@ -243,7 +246,7 @@ def test_gepa_with_a_scripted_lm_reflects_on_each_stage_s_feedback(tmp_path: Pat
 def test_a_gepa_run_resumes_with_a_larger_budget_and_refuses_other_changes(tmp_path: Path) -> None:
     from robotool.optimize.run import OptimizeError
 
-    lm, engine = _task_lm(arm_code=STAND_STILL)
+    lm, _ = _task_lm(arm_code=STAND_STILL)
     reflection = ReflectionEngine("GEPA-PROPOSED: move the gripper to the milk before closing it.")
     data = Splits(train=[builtin(ARM)], val=[builtin(ARM)], test=[])
     said: list[str] = []
