@@ -14,12 +14,14 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import logging
-from collections.abc import Iterator, Sequence
+import sys
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
 
 import dspy
+from dspy.utils.exceptions import AdapterParseError
 from pydantic import BaseModel, Field
 
 from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compiled
@@ -105,7 +107,10 @@ def _compile(
     log: Path,
     reflection_lm: dspy.LM | None,
     say: Say,
+    notes: list[str],
 ) -> tuple[Proposer, list[DemoSource]]:
+    """The compiled program and where its demonstrations came from; what the optimiser could not do is added to
+    ``notes`` (and said)."""
     b = settings.budget
     name = settings.optimizer
     if name == "planner-demos":
@@ -146,7 +151,8 @@ def _compile(
         )
         return optimizer.compile(program, trainset=data.train), []
     if name == "mipro":
-        mipro = dspy.MIPROv2(
+        mipro = _MIPRO(
+            notes.append,
             metric=metric,
             prompt_model=reflection_lm,
             auto=b.auto,
@@ -159,9 +165,12 @@ def _compile(
             metric_threshold=1.0,
         )
         trials = {} if b.auto else {"num_trials": b.trials}
-        return mipro.compile(
+        compiled = mipro.compile(
             program, trainset=data.train, valset=valset, minibatch=False, data_aware_proposer=False, **trials
-        ), []
+        )
+        for note in notes:
+            say(note)
+        return compiled, []
     simba = dspy.SIMBA(
         metric=metric,
         bsize=min(len(data.train), 8),
@@ -172,6 +181,26 @@ def _compile(
         num_threads=settings.threads,
     )
     return simba.compile(program, trainset=data.train, seed=settings.seed), []
+
+
+class _MIPRO(dspy.MIPROv2):
+    """MIPROv2 that survives a proposer reply it cannot read: the stages then keep their own instructions as the
+    only candidates (the search still chooses among the demonstrations), and ``note`` is told why."""
+
+    def __init__(self, note: Callable[[str], None], **options: Any):
+        super().__init__(**options)
+        self._note = note
+
+    def _propose_instructions(self, program: Any, *args: Any, **kwargs: Any) -> dict[int, list[str]]:
+        try:
+            return super()._propose_instructions(program, *args, **kwargs)
+        except (AdapterParseError, ValueError) as e:
+            reason = " ".join(str(e).split())[:200]
+            self._note(
+                f"mipro: the proposer's reply could not be read ({type(e).__name__}: {reason}); the stages keep "
+                "their instructions and only demonstrations were searched"
+            )
+            return {i: [predictor.signature.instructions] for i, predictor in enumerate(program.predictors())}
 
 
 def optimize(
@@ -203,8 +232,8 @@ def optimize(
         before = _measure(program, data, metric, settings, lm, "before", say)
         program.repair_frozen = True
         say(f"the optimiser's own log lines and progress bars go to {log / NOISE_LOG}")
-        with noise_to(log / NOISE_LOG):
-            compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, say)
+        with noise_to(log / NOISE_LOG, say) as loud:
+            compiled, sources = _compile(settings, program, data, metric, log, reflection_lm or lm, loud, notes)
         compiled.repair_frozen = program.repair_frozen = False
         after = _measure(compiled, data, metric, settings, lm, "after", say)
     if settings.optimizer in DEMO_OPTIMIZERS and not any(p.demos for _, p in compiled.named_predictors()):
@@ -243,19 +272,26 @@ NOISE_LOG = "dspy.log"
 
 
 @contextlib.contextmanager
-def noise_to(path: Path) -> Iterator[None]:
-    """Send what the optimisers write to stderr (DSPy's INFO lines and tracebacks, progress bars, Optuna's trial
-    lines) to ``path`` instead of the console, inside this block."""
+def noise_to(path: Path, say: Say) -> Iterator[Say]:
+    """Send what the optimisers write to stdout and stderr (DSPy's INFO lines and tracebacks, progress bars,
+    Optuna's trial lines) to ``path`` instead of the console, inside this block; yields ``say`` writing to the
+    console still."""
     try:
         f = path.open("a", encoding="utf-8")
     except OSError as e:
         raise OptimizeError(f"cannot write {path}: {e.strerror or e}") from None
+    console = sys.stdout
+
+    def loud(line: str) -> None:
+        with contextlib.redirect_stdout(console):
+            say(line)
+
     optuna = logging.getLogger("optuna")
     handlers = optuna.handlers[:]
     optuna.handlers = [logging.StreamHandler(f)]
     try:
-        with f, contextlib.redirect_stderr(f):
-            yield
+        with f, contextlib.redirect_stderr(f), contextlib.redirect_stdout(f):
+            yield loud
     finally:
         optuna.handlers = handlers
 

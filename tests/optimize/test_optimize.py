@@ -195,9 +195,32 @@ def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: 
     assert stored["robotool"]["optimizer"] == "mipro" and set(stored) >= {"analyze", "plan", "calculate", "code"}
     # the metric never runs repair rounds: the Repair stage is frozen, stored as it was
     assert stored["repair"]["signature"]["instructions"] == Repair.instructions and not stored["repair"]["demos"]
-    err = capfd.readouterr().err  # DSPy's trial lines and progress bars went to the log file, not the console
-    assert "Trial" not in err and "Average Metric" not in err
+    shown = capfd.readouterr()  # DSPy's trial lines and progress bars went to the log file, not the console
+    assert "Trial" not in shown.err + shown.out and "Average Metric" not in shown.err + shown.out
     assert "Trial" in (tmp_path / "log" / "dspy.log").read_text()
+
+
+class _ProseProposer:
+    """TEST FIXTURE: an optimiser's model that answers in prose, never in the fields asked for."""
+
+    def complete(self, request):
+        from fixtures.optimize_lm import _response
+
+        return _response(request, "I think the instruction should be clearer. Sorry, I cannot format this.")
+
+
+def test_mipro_survives_a_proposer_reply_it_cannot_read_with_a_note(tmp_path: Path) -> None:
+    lm, _ = _task_lm()
+    data = Splits(train=[builtin(ARM), builtin(QUADRUPED)], val=[builtin(ARM)], test=[])
+    said: list[str] = []
+    with dspy.context(adapter=CHAT):
+        outcome = optimize(_settings("mipro", trials=2, candidates=2, demos=1), out=tmp_path / "p.json",
+                           log=tmp_path / "log", lm=lm, reflection_lm=engine_lm(_ProseProposer()), data=data,
+                           say=said.append)
+    assert any("mipro: the proposer's reply could not be read" in line for line in said)
+    assert any("stages keep their instructions" in note for note in outcome.info.notes)
+    program = RoboTool.from_compiled(tmp_path / "p.json")
+    assert program.code.signature.instructions == Proposer().code.signature.instructions
 
 
 def test_simba_on_two_training_examples(tmp_path: Path) -> None:
