@@ -468,7 +468,26 @@ def _salvaged(
             return salvage(text), None, "the reply did not follow the answer format; it was read as plain text"
         except ValueError:
             pass
+    if _value_error(error) is not None:
+        problem = "; ".join(_every_value_problem(text, signature, adapter)) or problem
     return None, problem, None
+
+
+def _every_value_problem(text: str, signature: type[dspy.Signature], adapter: dspy.Adapter) -> list[str]:
+    """What is wrong with each output field's value in ``text`` (``adapter``'s format), every field read on its
+    own, so that a reply asked for again is told all its problems, not only the first field's."""
+    reading = _reasoning_free(adapter)
+    problems = []
+    for name in signature.output_fields:
+        single = signature
+        for other in [n for n in signature.output_fields if n != name]:
+            single = single.delete(other)
+        try:
+            reading.parse(single, text)
+        except AdapterParseError as e:
+            if _value_error(e) is not None or "Failed to parse field" in str(e):
+                problems.append(parse_problem(e, single, adapter))
+    return problems
 
 
 def parse_problem(error: AdapterParseError, signature: type[dspy.Signature], adapter: dspy.Adapter) -> str:

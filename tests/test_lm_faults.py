@@ -141,6 +141,21 @@ def test_every_problem_of_a_reply_is_named_when_asking_again() -> None:
     assert "unknown object(s) ['spoon']" in problem and "step 3 has no numbers" in problem and "'coords'" in problem
 
 
+def test_problems_in_several_fields_are_all_named_when_asking_again() -> None:
+    bad = chat_reply(
+        object_roles="the milk is the target",
+        abstract_plan="Teleport.",
+        steps=[{"skill": "teleport", "objects": ["milk"], "intent": "cheat"}],
+    )
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), planner=[Rule(reply=bad, times=1)])
+    with StandinServer(Script(rules=rules)) as server:
+        solution = _solve(server)
+        asked_again = [r for r in server.requests if STAGE_MARKERS["planner"] in r["messages"][0]["content"]][-1]
+    problem = asked_again["messages"][-1]["content"]
+    assert solution.success
+    assert "field object_roles" in problem and "unknown skill 'teleport'" in problem
+
+
 def test_a_concept_kind_that_names_nothing_is_asked_again() -> None:
     script = arm_script([GRASP_DIRECTLY])
     friction = script["analyzer"][0].replace('"workspace_excess"', '"friction"')
