@@ -77,3 +77,11 @@ def test_a_rejected_placeholder_key_says_which_variable_to_set(monkeypatch, caps
         code = main(["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"])
     err = capsys.readouterr().err
     assert code == 2 and "set OPENAI_API_KEY, or name the variable that holds it with --api-key-env" in err
+
+
+def test_a_rejected_key_from_the_providers_variable_is_named(monkeypatch, capsys) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "sk-wrong")
+    with StandinServer(Script(rules=[Rule(status=401)])) as server:
+        code = main(["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"])
+    err = capsys.readouterr().err
+    assert code == 2 and "check the API key in OPENAI_API_KEY" in err
