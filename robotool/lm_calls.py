@@ -335,10 +335,10 @@ def _ask(
     if lm is None:  # DSPy says what is missing
         return predictor(signature=signature, config=config, **kwargs), None
     fault: LMError | None = None
-    for transport_try in range(lm.num_retries + 1):
+    for transport_try in range(int(getattr(lm, "num_retries", 0) or 0) + 1):
         if fault is not None:
             time.sleep(_retry_delay(fault, transport_try - 1))
-        single = lm.copy(num_retries=0)
+        single = lm.copy(num_retries=0) if isinstance(lm, dspy.BaseLM) else lm
         fault = None
         try:
             outputs = predictor(signature=signature, config=config, lm=single, **kwargs)
