@@ -165,6 +165,8 @@ def _compile(
             metric_threshold=1.0,
         )
         trials = {} if b.auto else {"num_trials": b.trials}
+        if not b.auto:  # DSPy's log numbers the default program's evaluation as trial 1 of the trials asked for
+            say(f"mipro: the default program is evaluated, then {b.trials} trial(s) of proposed prompts")
         compiled = mipro.compile(
             program, trainset=data.train, valset=valset, minibatch=False, data_aware_proposer=False, **trials
         )

@@ -218,6 +218,7 @@ def test_mipro_survives_a_proposer_reply_it_cannot_read_with_a_note(tmp_path: Pa
                            log=tmp_path / "log", lm=lm, reflection_lm=engine_lm(_ProseProposer()), data=data,
                            say=said.append)
     assert any("mipro: the proposer's reply could not be read" in line for line in said)
+    assert "mipro: the default program is evaluated, then 2 trial(s) of proposed prompts" in said
     assert any("stages keep their instructions" in note for note in outcome.info.notes)
     program = RoboTool.from_compiled(tmp_path / "p.json")
     assert program.code.signature.instructions == Proposer().code.signature.instructions
