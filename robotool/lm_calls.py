@@ -5,10 +5,14 @@ reads the same reply in the other answer format (JSON where field markers were a
 reverse) and then as plain text where the stage knows how (the Coder takes the program out of a chat
 answer). If that does not help, or the outputs fail the stage's own check (the Coder's program must
 pass the sandbox's validation), it asks again (at most ``format_retries`` times), showing the model
-its rejected reply and exactly what was wrong. Every request is recorded as an :class:`~robotool.solution.LMCall` with
-its tokens, wall time and whether DSPy's cache answered it, and optionally written to a JSONL log.
-Failures that no reply can cure (see :func:`robotool.lm.unavailable`) raise
-:class:`~robotool.errors.LMUnavailableError`.
+its rejected reply and every problem found in it (a reply cut off at the token limit is told so). Replies
+are read without the model's ``<think>`` reasoning. Transport faults (server errors, rate limits, timeouts,
+dropped connections, a 200 that is not a chat completion) are retried here, one request each, so that every
+request is recorded as an :class:`~robotool.solution.LMCall` with its tokens, wall time and whether DSPy's
+cache answered it, and optionally written to a JSONL log. Failures that no reply can cure (see
+:func:`robotool.lm.unavailable`), and transport faults on every try, raise
+:class:`~robotool.errors.LMUnavailableError`. :func:`reporting_waits` lets a console show signs of life
+while a reply is awaited.
 """
 
 from __future__ import annotations
