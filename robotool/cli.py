@@ -25,6 +25,7 @@ from robotool.cliargs import (
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
     REPAIR_HELP,
+    TIMEOUT_HELP,
     Parser,
     count,
     make_console,
@@ -50,6 +51,8 @@ from robotool.task_model import Task
 from robotool.version import version
 
 if TYPE_CHECKING:
+    from rich.status import Status
+
     from robotool.lm_program import RoboTool
     from robotool.rollout import Rollout
     from robotool.sim.recorder import StateRecorder, Track
@@ -168,13 +171,16 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     else:
         import dspy
 
+        from robotool.lm_calls import reporting_waits
+
         assert program is not None
+        doing = f"solving {task.name} with {program.method_name}: {args.candidates} candidate(s) x " + (
+            f"{args.worlds} world(s) on {lm.model}"
+        )
         with (
-            console.status(
-                f"solving {task.name} with {program.method_name}: {args.candidates} candidate(s) x "
-                f"{args.worlds} world(s) on {lm.model}"
-            ),
+            console.status(doing) as status,
             dspy.context(lm=lm),
+            reporting_waits(_wait_shower(console, status, doing)),
         ):
             solution = program(task=task).solution
     print_solution(solution, console)
@@ -187,6 +193,24 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     if args.video:
         _solve_videos(args, task, solution, console)
     return 0 if solution.success else 1
+
+
+WAIT_LINE_EVERY = 30
+"""Seconds between the lines that tell a console that is not a terminal a reply is still awaited."""
+
+
+def _wait_shower(console: Console, status: Status, doing: str) -> Callable[[str, int | None, float], None]:
+    """Shows, while a reply is awaited, the stage and the seconds so far: in the status line on a terminal, else
+    a line every :data:`WAIT_LINE_EVERY` seconds."""
+
+    def show(stage: str, candidate: int | None, seconds: float) -> None:
+        whose = f"the {stage}'s reply" + (f" for candidate {candidate}" if candidate is not None else "")
+        if console.is_terminal:
+            status.update(f"{doing}: waiting {seconds:.0f} s for {whose}")
+        elif int(seconds) % WAIT_LINE_EVERY == 0:
+            console.print(f"waiting {seconds:.0f} s for {whose}", markup=False, highlight=False, style="dim")
+
+    return show
 
 
 def _lm_program(args: argparse.Namespace) -> RoboTool | None:
@@ -388,7 +412,7 @@ def build_parser() -> argparse.ArgumentParser:
         "over several)",
     )
     p.add_argument("--max-tokens", type=positive_int, help="token limit of each LM reply")
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
     p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
     p.add_argument(
         "--format-retries",

@@ -18,6 +18,7 @@ from rich.console import Console
 from rich.text import Text
 
 from robotool.errors import RobotoolWarning
+from robotool.lm import DEFAULT_TIMEOUT
 from robotool.safe_text import one_line
 
 EXIT_USAGE = 2
@@ -26,6 +27,7 @@ DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 ADAPTERS = ["chat", "json"]
+TIMEOUT_HELP = f"how long to wait for each LM reply (default: {DEFAULT_TIMEOUT:g})"
 ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
 LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
 REPAIR_HELP = (

@@ -58,6 +58,9 @@ class CompiledInfo(BaseModel):
     settings: dict[str, Any] = Field(default_factory=dict)
     validation: Validation | None = None
     demonstrations: list[DemoSource] = Field(default_factory=list)
+    train: list[str] = Field(default_factory=list, description="the task instances it was trained on")
+    val: list[str] = Field(default_factory=list, description="the task instances it was validated on")
+    notes: list[str] = Field(default_factory=list, description="what the optimiser did not do, and why")
 
 
 def save_compiled(program: dspy.Module, path: Path, info: CompiledInfo) -> None:
@@ -114,6 +117,8 @@ def version_note(path: Path, info: CompiledInfo | None) -> str | None:
     if info is None:
         return f"{path} has no robotool record (a plain DSPy state file): its origin is unknown"
     if info.robotool_version != version():
-        return (f"{path} was compiled with robotool {info.robotool_version}; this is {version()}: "
-                "its prompts may not match this version's stages")
+        return (
+            f"{path} was compiled with robotool {info.robotool_version}; this is {version()}: "
+            "its prompts may not match this version's stages"
+        )
     return None

@@ -38,9 +38,11 @@ def _shape_words(obj: SceneObject) -> str:
     if obj.shape == "cloth":
         return "flexible cloth strip (it cannot carry load across a gap)"
     if obj.shape == "button":
-        return (f"button housing; its face on the -x side counts as pressed after {number_text(PRESS_TRAVEL)} m of "
-                "travel, "
-                f"against a spring of {number_text(obj.button_stiffness)} N/m")
+        return (
+            f"button housing; its face on the -x side counts as pressed after {number_text(PRESS_TRAVEL)} m of "
+            "travel, "
+            f"against a spring of {number_text(obj.button_stiffness)} N/m"
+        )
     return "box"
 
 
@@ -62,8 +64,10 @@ def _object_line(obj: SceneObject, robot: RobotType) -> str:
     if obj.soft:
         parts.append("soft (a safe landing surface)")
     if obj.fragile is not None:
-        parts.append(f"fragile (breaks if it falls more than {number_text(obj.fragile.max_drop)} m onto a surface "
-                     "that is not soft)")
+        parts.append(
+            f"fragile (breaks if it falls more than {number_text(obj.fragile.max_drop)} m onto a surface "
+            "that is not soft)"
+        )
     if obj.friction is not None:
         parts.append(f"friction {number_text(obj.friction)}")
     line = "; ".join(parts) + "."
@@ -81,12 +85,16 @@ def _goal_sentence(task: Task) -> str:
     if goal.pressed is not None:
         return f"{goal.pressed} is pressed at some moment."
     if goal.lifted is not None:
-        return (f"The bottom of {goal.lifted.object} is at least {number_text(goal.lifted.height)} m above where it "
-                "started, at the end.")
+        return (
+            f"The bottom of {goal.lifted.object} is at least {number_text(goal.lifted.height)} m above where it "
+            "started, at the end."
+        )
     assert goal.lowered is not None
     extra = ", unbroken" if task.object(goal.lowered.object).fragile is not None else ""
-    return (f"The bottom of {goal.lowered.object} is at most {number_text(goal.lowered.height)} m above the ground "
-            f"at the end{extra}.")
+    return (
+        f"The bottom of {goal.lowered.object} is at most {number_text(goal.lowered.height)} m above the ground "
+        f"at the end{extra}."
+    )
 
 
 def describe(task: Task) -> str:

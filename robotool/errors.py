@@ -13,7 +13,9 @@ class RobotoolWarning(UserWarning):
     """Base class of robotool's warnings: one line that says what is missing and how to get it."""
 
 
-LMFailureKind = Literal["no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted"]
+LMFailureKind = Literal[
+    "no_key", "authentication", "unknown_model", "unreachable", "quota", "retries_exhausted", "not_a_reply"
+]
 
 
 class LMUnavailableError(RobotoolError):

@@ -34,7 +34,12 @@ class RunReport(BaseModel):
 
 
 def run(
-    task: Task | str | Path, code: str, *, worlds: int = 1, seed: int = 0, backend: str | None = None,
+    task: Task | str | Path,
+    code: str,
+    *,
+    worlds: int = 1,
+    seed: int = 0,
+    backend: str | None = None,
     recorder: StateRecorder | None = None,
 ) -> RunReport:
     """Check ``code`` strictly in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.
@@ -50,7 +55,13 @@ def run(
     program = check_user_program(code, task.embodiment)
     rollouts = run_codes(task, [program], worlds=worlds, seed=seed, backend=backend, recorder=recorder)[0]
     successes = sum(r.success for r in rollouts)
-    return RunReport(task=task.name, worlds=worlds, seed=seed, backend=backend or default_backend(),
-                     success=successes == worlds, success_rate=successes / worlds, code=program,
-                     rollouts=rollouts)
-
+    return RunReport(
+        task=task.name,
+        worlds=worlds,
+        seed=seed,
+        backend=backend or default_backend(),
+        success=successes == worlds,
+        success_rate=successes / worlds,
+        code=program,
+        rollouts=rollouts,
+    )

@@ -166,9 +166,7 @@ def footprint_grid(parts: list[Part], spacing: float = 0.01, max_per_axis: int =
     return np.column_stack([gx.ravel(), gy.ravel()])
 
 
-def surface_height(
-    xy: np.ndarray, solids: list[list[Part]], below: np.ndarray | None = None
-) -> np.ndarray:
+def surface_height(xy: np.ndarray, solids: list[list[Part]], below: np.ndarray | None = None) -> np.ndarray:
     """Height of the highest surface under each point: the ground or the top of a solid.
 
     With ``below`` (one z per point), only solids whose top is at most that high count, so the

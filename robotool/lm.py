@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 MODEL_ENV = "ROBOTOOL_LM"
 API_BASE_ENV = "ROBOTOOL_API_BASE"
 PLACEHOLDER_KEY = "unused"  # local OpenAI-compatible servers accept any key
+DEFAULT_TIMEOUT = 180.0
+"""Seconds to wait for each LM reply when no timeout is given."""
 DEFAULT_FORMAT_RETRIES = 2
 """Repairs after a reply that does not parse: each shows the model its reply and what was wrong."""
 
@@ -52,7 +54,12 @@ def make_lm(
     num_retries: int = 3,
     timeout: float | None = None,
 ) -> dspy.LM | None:
-    """A ``dspy.LM`` from explicit settings and the environment, or None when no model is set."""
+    """A ``dspy.LM`` from explicit settings and the environment, or None when no model is set.
+
+    The API key is read from the variable ``api_key_env`` names; without it, DSPy reads the provider's usual
+    variable (``OPENAI_API_KEY`` for ``openai/...``), and with an ``api_base`` that variable is used when it is
+    set, else a placeholder (local servers accept any key). ``timeout`` defaults to :data:`DEFAULT_TIMEOUT`.
+    """
     model = configured_model(model)
     if model is None:
         return None
@@ -70,11 +77,11 @@ def make_lm(
             )
         kwargs["api_key"] = key
     elif api_base:
-        kwargs["api_key"] = PLACEHOLDER_KEY
-    if timeout is not None:
-        if timeout <= 0:
-            raise LMConfigError(f"the timeout must be positive, got {timeout} s")
-        kwargs["timeout"] = timeout
+        kwargs["api_key"] = os.environ.get(provider_key_variable(model)) or PLACEHOLDER_KEY
+    timeout = DEFAULT_TIMEOUT if timeout is None else timeout
+    if timeout <= 0:
+        raise LMConfigError(f"the timeout must be positive, got {timeout} s")
+    kwargs["timeout"] = timeout
     if temperature is not None and temperature < 0:
         raise LMConfigError(f"temperature must be at least 0, got {temperature}")
     if max_tokens is not None and max_tokens < 1:
@@ -87,6 +94,11 @@ def make_lm(
         )
     except (ValueError, TypeError) as e:
         raise LMConfigError(f"cannot use model {model!r}: {e}") from None
+
+
+def provider_key_variable(model: str) -> str:
+    """The environment variable that holds the API key of ``model``'s provider by convention (``OPENAI_API_KEY``)."""
+    return re.sub(r"\W", "_", model.split("/", 1)[0]).upper() + "_API_KEY"
 
 
 _KEY_VARIABLE = re.compile(r"\b([A-Z][A-Z0-9_]*_API_KEY)\b")
@@ -112,7 +124,12 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
         )
     if isinstance(error, dx.LMAuthError):
         if lm.kwargs.get("api_key") == PLACEHOLDER_KEY:
-            fix = "it needs an API key: name the variable that holds it with --api-key-env"
+            fix = (
+                f"it needs an API key: set {provider_key_variable(model)}, or name the variable that holds it with "
+                "--api-key-env"
+            )
+        elif (variable := provider_key_variable(model)) and lm.kwargs.get("api_key") == os.environ.get(variable):
+            fix = f"check the API key in {variable}, or name another variable with --api-key-env"
         else:
             fix = "check the API key (in the variable --api-key-env names, or the provider's usual one)"
         return LMUnavailableError("authentication", f"{where} rejected the credentials for {model}: {fix}")
@@ -125,6 +142,12 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
     ):
         fix = "check --lm (or ROBOTOOL_LM)" + (" and that --api-base ends in /v1" if api_base else "")
         return LMUnavailableError("unknown_model", f"{where} does not know the model {model!r}: {fix}")
+    if isinstance(error, dx.LMTransportError) and _connection_dropped(error):
+        return LMUnavailableError(
+            "retries_exhausted",
+            f"{where} dropped the connection without answering on {tries}: check the server and any proxy in front "
+            "of it",
+        )
     if isinstance(error, dx.LMTransportError) and _connection_failed(error):
         target = f"the language-model server at {api_base}" if api_base else f"the provider of {model}"
         fix = (
@@ -151,14 +174,33 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
     return None
 
 
+def _causes(error: BaseException) -> list[BaseException]:
+    """``error`` and the errors it was raised from, outermost first."""
+    seen: list[BaseException] = []
+    current: BaseException | None = error
+    while current is not None and all(current is not e for e in seen):
+        seen.append(current)
+        current = current.__cause__ or current.__context__
+    return seen
+
+
+def _connection_dropped(error: BaseException) -> bool:
+    """Whether a transport error is the server closing or resetting an open connection (not a slow answer)."""
+    for cause in _causes(error):
+        names = {klass.__name__ for klass in type(cause).__mro__}
+        if any("Timeout" in name for name in names) or isinstance(cause, TimeoutError):
+            return False
+        if names & {"ReadError", "RemoteProtocolError", "ConnectionResetError", "BrokenPipeError"}:
+            return True
+        if re.search(r"closed (the )?connection|connection (was )?(reset|closed|aborted)", str(cause), re.IGNORECASE):
+            return True
+    return False
+
+
 def _connection_failed(error: BaseException) -> bool:
     """Whether a transport error, or one it was raised from, is a failure to connect (not a slow answer)."""
-    seen: set[int] = set()
-    current: BaseException | None = error
-    while current is not None and id(current) not in seen:
-        seen.add(id(current))
-        names = {klass.__name__ for klass in type(current).__mro__}
-        if "ConnectError" in names or (isinstance(current, OSError) and not isinstance(current, TimeoutError)):
+    for cause in _causes(error):
+        names = {klass.__name__ for klass in type(cause).__mro__}
+        if "ConnectError" in names or (isinstance(cause, OSError) and not isinstance(cause, TimeoutError)):
             return True
-        current = current.__cause__ or current.__context__
     return False

@@ -5,16 +5,23 @@ reads the same reply in the other answer format (JSON where field markers were a
 reverse) and then as plain text where the stage knows how (the Coder takes the program out of a chat
 answer). If that does not help, or the outputs fail the stage's own check (the Coder's program must
 pass the sandbox's validation), it asks again (at most ``format_retries`` times), showing the model
-its rejected reply and exactly what was wrong. Every request is recorded as an :class:`~robotool.solution.LMCall` with
-its tokens, wall time and whether DSPy's cache answered it, and optionally written to a JSONL log.
-Failures that no reply can cure (see :func:`robotool.lm.unavailable`) raise
-:class:`~robotool.errors.LMUnavailableError`.
+its rejected reply and every problem found in it (a reply cut off at the token limit is told so). Replies
+are read without the model's ``<think>`` reasoning. Transport faults (server errors, rate limits, timeouts,
+dropped connections, a 200 that is not a chat completion) are retried here, one request each, so that every
+request is recorded as an :class:`~robotool.solution.LMCall` with its tokens, wall time and whether DSPy's
+cache answered it, and optionally written to a JSONL log. Failures that no reply can cure (see
+:func:`robotool.lm.unavailable`), and transport faults on every try, raise
+:class:`~robotool.errors.LMUnavailableError`. :func:`reporting_waits` lets a console show signs of life
+while a reply is awaited.
 """
 
 from __future__ import annotations
 
 import contextvars
+import copy
+import functools
 import json
+import math
 import re
 import threading
 import time
@@ -27,11 +34,14 @@ from typing import Any, TypeVar
 
 import dspy
 from dspy.utils.callback import BaseCallback
-from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError
+from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError, LMProviderError, is_retryable_lm_error
 from pydantic import ValidationError
 
+from robotool.errors import LMUnavailableError
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
+from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
+from robotool.signatures.models import NoteSink
 from robotool.solution import LMCall
 
 T = TypeVar("T")
@@ -192,8 +202,67 @@ def _attempt_context(settings: CallSettings) -> Iterator[_Recorder]:
     with dspy.track_usage() as tracker:
         recorder = _Recorder(tracker)
         callbacks = [*dspy.settings.get("callbacks", []), recorder]
-        with dspy.context(callbacks=callbacks, adapter=settings.adapter):
+        with dspy.context(callbacks=callbacks, adapter=_reasoning_free(settings.adapter)):
             yield recorder
+
+
+def _reasoning_free(adapter: dspy.Adapter) -> dspy.Adapter:
+    """A copy of ``adapter`` that parses replies without the model's reasoning (``<think>...</think>``), so that
+    a draft inside the reasoning is never read as an answer."""
+    reading = copy.copy(adapter)
+    reading.__class__ = _reasoning_free_class(type(adapter))
+    return reading
+
+
+@functools.cache
+def _reasoning_free_class(kind: type[dspy.Adapter]) -> type[dspy.Adapter]:
+    def parse(self: dspy.Adapter, signature: type[dspy.Signature], completion: str) -> dict[str, Any]:
+        return kind.parse(self, signature, without_reasoning(completion))
+
+    return type(kind.__name__, (kind,), {"parse": parse, "__module__": kind.__module__})
+
+
+WaitReport = Callable[[str, int | None, float], None]
+"""Told, while a request waits for its reply, the stage, the candidate (None: shared) and the seconds so far."""
+
+_WAIT_REPORT: contextvars.ContextVar[tuple[WaitReport, float] | None] = contextvars.ContextVar(
+    "robotool_wait_report", default=None
+)
+
+
+@contextmanager
+def reporting_waits(report: WaitReport, every: float = 1.0) -> Iterator[None]:
+    """Inside this block, every ``every`` seconds that a stage's request waits for its reply, ``report`` is told
+    the stage, the candidate and the seconds elapsed (from another thread), so a console can show signs of life."""
+    token = _WAIT_REPORT.set((report, every))
+    try:
+        yield
+    finally:
+        _WAIT_REPORT.reset(token)
+
+
+@contextmanager
+def _waiting(stage: str, candidate: int | None) -> Iterator[None]:
+    """Report the wait for one request (see :func:`reporting_waits`)."""
+    hook = _WAIT_REPORT.get()
+    if hook is None:
+        yield
+        return
+    report, every = hook
+    done = threading.Event()
+    started = time.perf_counter()
+
+    def tick() -> None:
+        while not done.wait(every):
+            report(stage, candidate, time.perf_counter() - started)
+
+    ticker = threading.Thread(target=tick, name=f"robotool-wait-{stage}", daemon=True)
+    ticker.start()
+    try:
+        yield
+    finally:
+        done.set()
+        ticker.join()
 
 
 def call_stage(
@@ -223,22 +292,15 @@ def call_stage(
         if rejected is not None:
             signature = _with_feedback(signature)
             kwargs |= {"rejected_reply": rejected[0], "reply_problem": rejected[1]}
-        outputs: dspy.Prediction | None = None
-        failure: str | None = None
         with _attempt_context(settings) as recorder, validation_notes() as notes:
             try:
-                outputs = predictor(signature=signature, config=config or {}, **kwargs)
-            except AdapterParseError as e:
-                reply = recorder.requests[-1].reply if recorder.requests else None
-                outputs, failure, salvage_note = _salvaged(e, reply, signature, settings.adapter, salvage)
-                if salvage_note is not None:
-                    notes.notes.append(salvage_note)
-            except LMError as e:
-                mapped = unavailable(e, predictor.lm or dspy.settings.lm)
-                if mapped is not None:
-                    settings.cancelled.set()
-                    raise mapped from None
-                failure = f"the LM request failed: {_one_line((e.message or str(e)).splitlines()[0])}"
+                with _waiting(stage, candidate):
+                    outputs, failure = _ask(
+                        predictor, signature, kwargs, config or {}, settings, recorder, salvage, notes
+                    )
+            except LMUnavailableError:
+                _record(recorder.requests, stage, candidate, attempt, None, settings.log)
+                raise
             if outputs is not None and check is not None and (failure := check(outputs)) is not None:
                 outputs = None
         calls += _record(recorder.requests, stage, candidate, attempt, failure, settings.log)
@@ -253,6 +315,118 @@ def call_stage(
         rejected = (reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]", problem)
     tried = f"{len({c.attempt for c in calls})} attempt(s)"
     raise StageFailed(f"{problem} ({tried})" if calls else problem, calls)
+
+
+def _ask(
+    predictor: dspy.Predict,
+    signature: type[dspy.Signature],
+    kwargs: dict[str, Any],
+    config: dict[str, Any],
+    settings: CallSettings,
+    recorder: _Recorder,
+    salvage: Salvage | None,
+    notes: NoteSink,
+) -> tuple[dspy.Prediction | None, str | None]:
+    """One reply to the stage's request: (outputs, None) or (None, what was wrong with the reply).
+
+    Transport faults are retried here, each retry its own request, up to the LM's ``num_retries`` (DSPy's own
+    retries are turned off, so that every request is counted): a server error, a rate limit, a timeout, a dropped
+    connection, and a 200 whose body is not a chat completion (a gateway's HTML page, garbage, no choices).
+    When they are used up, or the failure is one no request can cure, raises
+    :class:`~robotool.errors.LMUnavailableError`. A reply cut off at the token limit is what was wrong with it.
+    """
+    lm = predictor.lm or dspy.settings.lm
+    if lm is None:  # DSPy says what is missing
+        return predictor(signature=signature, config=config, **kwargs), None
+    fault: LMError | None = None
+    for transport_try in range(int(getattr(lm, "num_retries", 0) or 0) + 1):
+        if fault is not None:
+            time.sleep(_retry_delay(fault, transport_try - 1))
+        single = lm.copy(num_retries=0) if isinstance(lm, dspy.BaseLM) else lm
+        fault = None
+        try:
+            outputs = predictor(signature=signature, config=config, lm=single, **kwargs)
+            fault = _not_a_completion(single)
+            if fault is None:
+                cut = _cut_off(single)
+                return (None, cut) if cut else (outputs, None)
+        except AdapterParseError as e:
+            fault = _not_a_completion(single)
+            if fault is None:
+                cut = _cut_off(single)
+                if cut:
+                    return None, cut
+                reply = recorder.requests[-1].reply if recorder.requests else None
+                outputs, failure, salvage_note = _salvaged(e, reply, signature, settings.adapter, salvage)
+                if salvage_note is not None:
+                    notes.notes.append(salvage_note)
+                return outputs, failure
+        except LMError as e:
+            mapped = unavailable(e, lm)
+            if mapped is not None and (mapped.kind not in _TRANSIENT or not is_retryable_lm_error(e)):
+                settings.cancelled.set()
+                raise mapped from None
+            if mapped is None and not _is_gateway_page(e):
+                return None, f"the LM request failed: {_one_line((e.message or str(e)).splitlines()[0])}"
+            fault = e
+        if recorder.requests and fault is not None:
+            recorder.requests[-1].error = _one_line(fault.message or str(fault))
+    assert fault is not None
+    settings.cancelled.set()
+    raise (unavailable(fault, lm) or _not_a_reply(fault, lm)) from None
+
+
+_TRANSIENT = frozenset({"retries_exhausted", "unreachable"})
+"""Kinds of :func:`~robotool.lm.unavailable` errors that a later request may not meet."""
+
+
+class _NotACompletion(LMError):
+    """A 200 reply that is not a chat completion (no choices)."""
+
+
+def _not_a_completion(lm: dspy.LM) -> _NotACompletion | None:
+    """The fault of the last reply ``lm`` got, when it was no chat completion at all (an empty choice list)."""
+    response = lm.history[-1].get("response") if lm.history else None
+    body = getattr(response, "provider_data", None)
+    if isinstance(body, dict) and "choices" in body and not body["choices"]:
+        return _NotACompletion("the reply (HTTP 200) held no choices: it is not a chat completion")
+    return None
+
+
+def _is_gateway_page(error: LMError) -> bool:
+    """Whether ``error`` is a 200 reply whose body is not a chat completion (an HTML page, garbage)."""
+    return isinstance(error, LMProviderError) and "is not JSON" in str(error)
+
+
+def _not_a_reply(fault: LMError, lm: dspy.LM) -> LMUnavailableError:
+    api_base = lm.kwargs.get("api_base")
+    where = f"the server at {api_base}" if api_base else f"the provider of {lm.model}"
+    tries = f"all {lm.num_retries + 1} tries" if lm.num_retries else "the only try"
+    detail = re.sub(r"^\[[^\]]*\]\s*", "", _one_line(fault.message or str(fault), 160))
+    return LMUnavailableError(
+        "not_a_reply",
+        f"{where} answered with something that is not a chat completion on {tries} ({detail}): check --api-base "
+        "and any proxy or gateway in front of the server",
+    )
+
+
+def _retry_delay(fault: LMError, attempt: int) -> float:
+    """Seconds before retrying after ``fault``: the server's Retry-After, else 1, 2, 4 ... up to 60."""
+    hint = getattr(fault, "retry_after", None)
+    if isinstance(hint, int | float) and math.isfinite(hint) and hint >= 0:
+        return float(hint)
+    return float(min(2**attempt, 60))
+
+
+def _cut_off(lm: dspy.LM) -> str | None:
+    """What was wrong with the last reply ``lm`` got when it was cut off at the token limit, else None."""
+    response = lm.history[-1].get("response") if lm.history else None
+    if getattr(response, "finish_reason", None) != "length":
+        return None
+    usage = getattr(response, "usage", None)
+    tokens = getattr(usage, "output_tokens", None) or lm.kwargs.get("max_tokens")
+    at = f" at {tokens} tokens" if tokens else ""
+    return f"your reply was cut off{at} (the token limit); give the whole answer, more briefly (or raise --max-tokens)"
 
 
 def _with_feedback(signature: type[dspy.Signature]) -> type[dspy.Signature]:
@@ -279,7 +453,7 @@ def _salvaged(
 ) -> tuple[dspy.Prediction | None, str | None, str | None]:
     """From a ``reply`` the adapter rejected: (outputs, None, a note on how they were read), or
     (None, what was wrong with it, None). The adapter's error may hold only part of the reply."""
-    text = reply if reply is not None else error.lm_response or ""
+    text = without_reasoning(reply if reply is not None else error.lm_response or "")
     if not text.strip():
         return None, "the reply was empty", None
     problem = parse_problem(error, signature, adapter)
@@ -298,7 +472,26 @@ def _salvaged(
             return salvage(text), None, "the reply did not follow the answer format; it was read as plain text"
         except ValueError:
             pass
+    if _value_error(error) is not None:
+        problem = "; ".join(_every_value_problem(text, signature, adapter)) or problem
     return None, problem, None
+
+
+def _every_value_problem(text: str, signature: type[dspy.Signature], adapter: dspy.Adapter) -> list[str]:
+    """What is wrong with each output field's value in ``text`` (``adapter``'s format), every field read on its
+    own, so that a reply asked for again is told all its problems, not only the first field's."""
+    reading = _reasoning_free(adapter)
+    problems = []
+    for name in signature.output_fields:
+        single = signature
+        for other in [n for n in signature.output_fields if n != name]:
+            single = single.delete(other)
+        try:
+            reading.parse(single, text)
+        except AdapterParseError as e:
+            if _value_error(e) is not None or "Failed to parse field" in str(e):
+                problems.append(parse_problem(e, single, adapter))
+    return problems
 
 
 def parse_problem(error: AdapterParseError, signature: type[dspy.Signature], adapter: dspy.Adapter) -> str:

@@ -41,7 +41,7 @@ from robotool.lm import DEFAULT_FORMAT_RETRIES
 from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
 from robotool.methods import STAGES_BY_METHOD
 from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
-from robotool.sandbox import extract_program
+from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
 from robotool.task_model import Task
@@ -93,6 +93,8 @@ class Proposer(dspy.Module):
         self.log_prompts = log_prompts
         self.compiled: CompiledInfo | None = None
         self.compiled_notes: list[str] = []
+        self.repair_frozen = False
+        """While set, the Repair stage is not among :meth:`named_parameters` (optimisers leave it as it is)."""
 
     @classmethod
     def method(cls, name: str, **options: Any) -> Self:
@@ -124,6 +126,10 @@ class Proposer(dspy.Module):
         self.compiled = info
         self.compiled_notes = unused + ([note] if (note := version_note(path, info)) else [])
         return self
+
+    def named_parameters(self) -> list[tuple[str, Any]]:
+        """DSPy's parameters of the program, without the Repair stage while :attr:`repair_frozen` is set."""
+        return [(name, p) for name, p in super().named_parameters() if not (self.repair_frozen and name == "repair")]
 
     @property
     def method_name(self) -> str:
@@ -354,6 +360,12 @@ class RoboTool(Proposer):
 
 
 def _program_reply(text: str) -> dspy.Prediction:
-    """The Coder's output from a plain chat answer (prose and a code block); raises
-    :class:`~robotool.sandbox.ProgramRejected` (a ValueError) when it holds no program."""
-    return dspy.Prediction(code=extract_program(text))
+    """The Coder's output from a plain chat answer (prose and code blocks): the answer itself, which the stage's
+    check extracts the program from (noting which block it chose, or why the code does not parse); raises
+    :class:`~robotool.sandbox.ProgramRejected` (a ValueError) when it holds no program at all."""
+    try:
+        extract(text)
+    except ProgramRejected as e:
+        if e.construct == "text":  # no program: the reply's format is what was wrong
+            raise
+    return dspy.Prediction(code=text)

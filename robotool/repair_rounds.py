@@ -201,4 +201,3 @@ def propose_repair(
         attempt.changed.append("code")
     candidate.notes.append(f"repair of candidate {source.index}")
     return candidate, attempt
-

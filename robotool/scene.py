@@ -64,8 +64,10 @@ class SceneObject(StrictModel):
             if getattr(self, key) is not None and self.shape != "button":
                 raise ValueError(f"'{key}' applies to buttons only, not to a {self.shape}")
         if self.shape == "button" and not PRESS_TRAVEL < self.button_travel <= self.size[0] / 2:
-            raise ValueError(f"button travel {self.button_travel} m must exceed the {PRESS_TRAVEL} m that counts "
-                             f"as pressed and be at most half the button's length ({self.size[0] / 2} m)")
+            raise ValueError(
+                f"button travel {self.button_travel} m must exceed the {PRESS_TRAVEL} m that counts "
+                f"as pressed and be at most half the button's length ({self.size[0] / 2} m)"
+            )
         if self.shape == "hook" and self.thickness >= min(self.size[0], self.size[1]):
             raise ValueError(
                 f"hook thickness {self.thickness} m must be smaller than its length and head "

@@ -3,7 +3,8 @@
 It speaks the real protocol (``POST /v1/chat/completions``) on 127.0.0.1, so the whole LM path
 (DSPy, the HTTP client, retries, parsing) runs without a provider. Replies come from a *script*:
 an ordered list of rules, each matching a substring of the last user message and giving the reply
-text, or an HTTP status to fail with, or a delay. It is a development and test tool; the replies it
+text (with its ``finish_reason``), or an HTTP status to fail with, a raw body that is not a chat
+completion (a gateway's HTML page), a dropped connection, or a delay. It is a development and test tool; the replies it
 serves are whatever script it is given.
 
 Run it: ``python -m robotool.standin SCRIPT.json --port 8000 [--log requests.jsonl]``, then point
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import socket
 import threading
 import time
 from collections.abc import Sequence
@@ -35,6 +37,13 @@ class Rule(BaseModel):
     delay: float = Field(0.0, ge=0, description="seconds to wait before answering")
     times: int | None = Field(None, description="use this rule at most this many times, then skip it")
     error_code: str | None = Field(None, description="the error body's code, e.g. 'insufficient_quota'")
+    body: str | None = Field(
+        None, description="send this text as the whole response body instead (a gateway's HTML page, garbage)"
+    )
+    content_type: str = Field("text/html", description="the Content-Type of a raw ``body``")
+    choices: int = Field(1, ge=0, description="how many choices a reply has (0: an empty choice list)")
+    finish_reason: str = Field("stop", description="why the reply ended, e.g. 'length' when cut off at max_tokens")
+    drop: bool = Field(False, description="close the connection without answering")
 
 
 class Script(BaseModel):
@@ -52,6 +61,8 @@ class StandinServer:
         self.script = script
         self.log = log
         self.requests: list[dict[str, Any]] = []
+        self.authorizations: list[str | None] = []
+        """The Authorization header of each request, in the order of :attr:`requests`."""
         self._uses = [0] * len(script.rules)
         self._lock = threading.Lock()
         handler = _handler_for(self)
@@ -72,13 +83,14 @@ class StandinServer:
         self._server.shutdown()
         self._server.server_close()
 
-    def pick(self, body: dict[str, Any]) -> Rule | None:
+    def pick(self, body: dict[str, Any], authorization: str | None = None) -> Rule | None:
         """The first rule that matches the request's last user message and has uses left."""
         messages = body.get("messages") or []
         last_user = next((m for m in reversed(messages) if m.get("role") == "user"), {})
         text = _text(last_user.get("content", ""))
         with self._lock:
             self.requests.append(body)
+            self.authorizations.append(authorization)
             for i, rule in enumerate(self.script.rules):
                 if rule.match in text and (rule.times is None or self._uses[i] < rule.times):
                     self._uses[i] += 1
@@ -105,10 +117,10 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
         def log_message(self, format: str, *args: Any) -> None:
             return
 
-        def _send(self, status: int, payload: dict[str, Any]) -> None:
-            data = json.dumps(payload).encode()
+        def _send(self, status: int, payload: dict[str, Any] | str, content_type: str = "application/json") -> None:
+            data = (payload if isinstance(payload, str) else json.dumps(payload)).encode()
             self.send_response(status)
-            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Type", content_type)
             self.send_header("Content-Length", str(len(data)))
             if status == 429:
                 self.send_header("Retry-After", "0")
@@ -126,11 +138,21 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
             except json.JSONDecodeError:
                 self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
                 return
-            rule = server.pick(body)
+            rule = server.pick(body, self.headers.get("Authorization"))
             time.sleep(server.script.delay + (rule.delay if rule else 0.0))
             if rule is None:
                 server.record(body, 500, None)
                 self._send(500, {"error": {"message": "no scripted reply matches", "type": "server_error"}})
+                return
+            if rule.drop:
+                server.record(body, 0, None)
+                self.close_connection = True
+                with contextlib.suppress(OSError):
+                    self.connection.shutdown(socket.SHUT_RDWR)
+                return
+            if rule.body is not None:
+                server.record(body, rule.status, rule.body)
+                self._send(rule.status, rule.body, rule.content_type)
                 return
             server.record(body, rule.status, rule.reply if rule.status == 200 else None)
             if rule.status != 200:
@@ -147,7 +169,12 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
                     "created": int(time.time()),
                     "model": body.get("model", "standin"),
                     "choices": [
-                        {"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": rule.reply}}
+                        {
+                            "index": i,
+                            "finish_reason": rule.finish_reason,
+                            "message": {"role": "assistant", "content": rule.reply},
+                        }
+                        for i in range(rule.choices)
                     ],
                     "usage": {"prompt_tokens": prompt, "completion_tokens": words, "total_tokens": prompt + words},
                 },

@@ -135,12 +135,14 @@ def _check_semantics(task: Task) -> list[Problem]:
     seen: dict[str, int] = {}
     for i, obj in enumerate(task.objects):
         if obj.name in seen:
-            problems.append(Problem(path=f"objects[{i}].name",
-                                    message=f"duplicate name {obj.name!r} (also objects[{seen[obj.name]}])"))
+            problems.append(
+                Problem(
+                    path=f"objects[{i}].name", message=f"duplicate name {obj.name!r} (also objects[{seen[obj.name]}])"
+                )
+            )
         seen.setdefault(obj.name, i)
         if obj.name == "robot":
-            problems.append(Problem(path=f"objects[{i}].name",
-                                    message="'robot' is reserved for the robot itself"))
+            problems.append(Problem(path=f"objects[{i}].name", message="'robot' is reserved for the robot itself"))
 
     robot = task.robot
     limits_ok = True
@@ -161,8 +163,9 @@ def _check_semantics(task: Task) -> list[Problem]:
         message = f"{robot_type.article} {robot.type} cannot have a '{kind}' goal (use one of: {allowed})"
         problems.append(Problem(path=f"goal.{kind}", message=message))
     elif target not in seen:
-        problems.append(Problem(path=f"goal.{kind}",
-                                message=f"no object named {target!r} (objects: {', '.join(seen)})"))
+        problems.append(
+            Problem(path=f"goal.{kind}", message=f"no object named {target!r} (objects: {', '.join(seen)})")
+        )
     else:
         obj = task.objects[seen[target]]
         if kind == "pressed" and obj.shape != "button":
@@ -182,28 +185,43 @@ def _check_geometry(task: Task) -> list[Problem]:
     problems: list[Problem] = []
     fixed = [i for i, o in enumerate(task.objects) if not o.movable]
     for a_pos, i in enumerate(fixed):
-        for j in fixed[a_pos + 1:]:
+        for j in fixed[a_pos + 1 :]:
             a, b = task.objects[i], task.objects[j]
             depth = geometry.solids_overlap(parts[a.name], parts[b.name])
             if depth > OVERLAP_TOLERANCE:
-                problems.append(Problem(path=_object_path(task, j),
-                                        message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m"))
+                problems.append(
+                    Problem(
+                        path=_object_path(task, j),
+                        message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m",
+                    )
+                )
     for i, obj in enumerate(task.objects):
         if obj.graspable_point is not None:
             off = geometry.distance_to_parts(parts[obj.name], obj.graspable_point)
             if off > GRASP_POINT_TOLERANCE:
-                problems.append(Problem(
-                    path=f"{_object_path(task, i)}.graspable_point",
-                    message=f"{list(obj.graspable_point)} lies {off:.3f} m outside {obj.name!r}; a graspable point "
-                            "is in world coordinates (metres) and must lie within or on its object"))
+                problems.append(
+                    Problem(
+                        path=f"{_object_path(task, i)}.graspable_point",
+                        message=f"{list(obj.graspable_point)} lies {off:.3f} m outside {obj.name!r}; a graspable point "
+                        "is in world coordinates (metres) and must lie within or on its object",
+                    )
+                )
         others = {n: p for n, p in parts.items() if n != obj.name}
         contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
         if contact.penetration > RESTING_TOLERANCE:
-            problems.append(Problem(path=f"{_object_path(task, i)}.center",
-                                    message=f"sunk {contact.penetration:.3f} m into {contact.into}"))
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, i)}.center",
+                    message=f"sunk {contact.penetration:.3f} m into {contact.into}",
+                )
+            )
         elif contact.gap > RESTING_TOLERANCE:
-            problems.append(Problem(path=f"{_object_path(task, i)}.center",
-                                    message=f"floats {contact.gap:.3f} m above the surface below it"))
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, i)}.center",
+                    message=f"floats {contact.gap:.3f} m above the surface below it",
+                )
+            )
     problems += robots.get(task.robot.type).check_start(task)
     return problems
 

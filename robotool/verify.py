@@ -164,8 +164,14 @@ def failure_reason(rollouts: Sequence[Rollout]) -> CandidateFailure | None:
     if not failed:
         return None
     k, first = failed[0]
-    return CandidateFailure(stage="simulation", kind="worlds_failed", reason=world_failure(first) or "",
-                            failed_worlds=len(failed), worlds=len(rollouts), world=k)
+    return CandidateFailure(
+        stage="simulation",
+        kind="worlds_failed",
+        reason=world_failure(first) or "",
+        failed_worlds=len(failed),
+        worlds=len(rollouts),
+        world=k,
+    )
 
 
 MAX_TOLD_EVENTS = 4  # events a one-line failure reason tells, besides what failed
@@ -193,8 +199,11 @@ def world_failure(rollout: Rollout) -> str | None:
 
 def _call_events(rollout: Rollout) -> list[Event]:
     """Events read from the calls' outcomes, for rollouts recorded without events (older results)."""
-    return [Event(kind=c.outcome, call=k, time=c.ended, measured=c.measured, detail=c.reason)
-            for k, c in enumerate(rollout.calls) if c.outcome in ("stalled", "timeout", "refused")]
+    return [
+        Event(kind=c.outcome, call=k, time=c.ended, measured=c.measured, detail=c.reason)
+        for k, c in enumerate(rollout.calls)
+        if c.outcome in ("stalled", "timeout", "refused")
+    ]
 
 
 def telling_events(events: Sequence[Event]) -> list[Event]:
@@ -208,5 +217,5 @@ def telling_events(events: Sequence[Event]) -> list[Event]:
             chosen[key] = k
     picked = sorted(chosen.values())
     if len(picked) > MAX_TOLD_EVENTS:  # keep the last one (closest to the failure) and the earliest others
-        picked = [*picked[:MAX_TOLD_EVENTS - 1], picked[-1]]
+        picked = [*picked[: MAX_TOLD_EVENTS - 1], picked[-1]]
     return [events[k] for k in picked]

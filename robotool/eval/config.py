@@ -103,6 +103,7 @@ class EvalConfig(BaseModel):
     programs: list[Path] | None = Field(
         None, description="compiled programs (robotool optimize), each a method named after its file"
     )
+    allow_train: bool = Field(False, description="evaluate a compiled program on its own training instances")
     runs: int = Field(1, ge=1, description="runs per task instance and method")
     settings: Settings = Field(default_factory=Settings)
     api_base: str | None = None

@@ -23,6 +23,7 @@ from robotool.cliargs import (
     EXIT_USAGE,
     LOG_PROMPTS_HELP,
     REPAIR_HELP,
+    TIMEOUT_HELP,
     Parser,
     cluster_address,
     count,
@@ -98,6 +99,11 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         help="compiled programs (robotool optimize), each evaluated as a method named after its file; "
         "with --program and no --methods only the programs run",
     )
+    p.add_argument(
+        "--allow-train",
+        action="store_true",
+        help="evaluate a --program on instances it was trained on (refused by default; warned about)",
+    )
     p.add_argument("--runs", type=positive_int, default=1, help="runs per task and method (the paper: 10)")
     p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
@@ -109,7 +115,7 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         "candidate, 0.7 to 1.0 spread over several)",
     )
     p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
@@ -172,6 +178,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         seeds=args.seeds,
         methods=args.methods,
         programs=args.programs,
+        allow_train=args.allow_train,
         runs=args.runs,
         settings=settings,
         api_base=args.api_base,

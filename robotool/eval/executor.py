@@ -33,6 +33,7 @@ from typing import Protocol, Self, TypeVar
 J = TypeVar("J")
 R = TypeVar("R")
 
+
 class WorkerLost(RuntimeError):
     """A job's worker was lost on every attempt (killed, out of memory, its machine gone); the message says how."""
 
@@ -146,7 +147,6 @@ class LocalExecutor:
         self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
     ) -> None:
         self.close()
-
 
 
 def cores() -> int:

@@ -42,8 +42,7 @@ class TaskInstance(BaseModel):
 def builtin(name_or_path: str) -> TaskInstance:
     """A built-in task by name, or a task file by path (TaskFileError when neither)."""
     task = tasks.load(name_or_path)
-    return TaskInstance(name=task.name, task=task, needs_tool=needs_tool(task),
-                        tools=BUILTIN_TOOLS.get(name_or_path))
+    return TaskInstance(name=task.name, task=task, needs_tool=needs_tool(task), tools=BUILTIN_TOOLS.get(name_or_path))
 
 
 def builtin_names() -> list[str]:
@@ -63,8 +62,14 @@ def generated(family: str, seed: int) -> TaskInstance | None:
     instance = tasks.generate(family, seed)  # type: ignore[attr-defined]
     if not getattr(instance, "solvable", True):
         return None
-    return TaskInstance(name=family, seed=seed, family=family, task=instance.task,
-                        needs_tool=bool(instance.needs_tool), tools=frozenset(instance.tools))
+    return TaskInstance(
+        name=family,
+        seed=seed,
+        family=family,
+        task=instance.task,
+        needs_tool=bool(instance.needs_tool),
+        tools=frozenset(instance.tools),
+    )
 
 
 def parse_seeds(text: str) -> tuple[int, ...]:

@@ -36,8 +36,9 @@ def _predicted_concepts(stages: str, solution: Solution) -> list[KeyConcept] | N
     return (solution.stages.key_concepts or []) if _has_analyzer(stages) else None
 
 
-def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float,
-          stages: str | None = None) -> RunRecord:
+def judge(
+    instance: TaskInstance, key: RunKey, world_seed: int, solution: Solution, wall_s: float, stages: str | None = None
+) -> RunRecord:
     """Classify the chosen candidate's worlds and grade the key concepts of a finished run.
 
     ``stages``: the method whose stages ran (default: the run's method; a compiled program's differs)."""
@@ -78,8 +79,9 @@ def judge(instance: TaskInstance, key: RunKey, world_seed: int, solution: Soluti
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)
 
 
-def crashed(instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float,
-            stages: str | None = None) -> RunRecord:
+def crashed(
+    instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float, stages: str | None = None
+) -> RunRecord:
     """The record of a run whose method raised: nothing ran, class ``invalid`` (``stages`` as for :func:`judge`)."""
     text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
     update: dict[str, object] = {"error": text}

@@ -98,7 +98,9 @@ def _cell(values: Sequence[float]) -> Cell:
 
 
 def _matrix(
-    records: Sequence[RunRecord], methods: Sequence[str], column: Callable[[RunRecord], str | None],
+    records: Sequence[RunRecord],
+    methods: Sequence[str],
+    column: Callable[[RunRecord], str | None],
     value: Callable[[RunRecord], float | None],
 ) -> list[MethodRow]:
     """Rows of per-column means; records whose column or value is None are left out."""
@@ -147,10 +149,13 @@ def _discrimination(method: str, records: Sequence[RunRecord]) -> Discrimination
 
 def _cost(method: str, records: Sequence[RunRecord]) -> Cost:
     return Cost(
-        method=method, runs=len(records),
+        method=method,
+        runs=len(records),
         prompt_tokens=mean(sum(u.prompt_tokens for u in r.usage.values()) for r in records),
         completion_tokens=mean(sum(u.completion_tokens for u in r.usage.values()) for r in records),
-        wall_s=mean(r.wall_s for r in records), total_wall_s=sum(r.wall_s for r in records))
+        wall_s=mean(r.wall_s for r in records),
+        total_wall_s=sum(r.wall_s for r in records),
+    )
 
 
 def _repair(method: str, records: Sequence[RunRecord]) -> RepairComparison | None:
@@ -158,8 +163,9 @@ def _repair(method: str, records: Sequence[RunRecord]) -> RepairComparison | Non
     if not budgets:
         return None
     fields = [f for f in RepairComparison.model_fields if f not in ("method", "runs")]
-    return RepairComparison(method=method, runs=len(budgets),
-                            **{f: mean(float(getattr(b, f)) for b in budgets) for f in fields})
+    return RepairComparison(
+        method=method, runs=len(budgets), **{f: mean(float(getattr(b, f)) for b in budgets) for f in fields}
+    )
 
 
 def summarize(records: Sequence[RunRecord], methods: Sequence[str]) -> Summary:

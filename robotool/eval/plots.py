@@ -10,8 +10,13 @@ import numpy as np
 from robotool.eval.metrics import OUTCOMES, Summary
 from robotool.eval.solvers import method_label
 
-COLORS = {"success": "#4c9a2a", "tool_use": "#d1495b", "logical": "#edae49", "numerical": "#00798c",
-          "invalid": "#9e9e9e"}
+COLORS = {
+    "success": "#4c9a2a",
+    "tool_use": "#d1495b",
+    "logical": "#edae49",
+    "numerical": "#00798c",
+    "invalid": "#9e9e9e",
+}
 
 
 def write_plots(summary: Summary, folder: Path) -> list[str]:
@@ -38,8 +43,7 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
         for row in summary.success:
             by_method.setdefault(row.method, {}).update({c: v.value or 0.0 for c, v in row.cells.items()})
         for row in summary.generated:
-            by_method.setdefault(row.method, {}).update(
-                {f"{c} (gen.)": v.value or 0.0 for c, v in row.cells.items()})
+            by_method.setdefault(row.method, {}).update({f"{c} (gen.)": v.value or 0.0 for c, v in row.cells.items()})
         columns = list(dict.fromkeys(c for values in by_method.values() for c in values))
         fig, ax = plt.subplots(figsize=(max(6.0, 0.9 * len(columns) + 2), 4))
         width = 0.8 / len(by_method)
@@ -65,8 +69,9 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
     if summary.discrimination:
         fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(summary.discrimination) + 2), 4))
         x = np.arange(len(summary.discrimination))
-        for offset, (name, attr) in zip((-0.2, 0.2), (("tool needed", "needed"), ("no tool needed", "not_needed")),
-                                        strict=True):
+        for offset, (name, attr) in zip(
+            (-0.2, 0.2), (("tool needed", "needed"), ("no tool needed", "not_needed")), strict=True
+        ):
             ax.bar(x + offset, [getattr(d, attr).value or 0.0 for d in summary.discrimination], 0.4, label=name)
         ax.set_xticks(x, [method_label(d.method) for d in summary.discrimination], rotation=25, fontsize=8)
         ax.set(ylabel="tool-use rate", title="Discriminative tool use")
@@ -75,10 +80,20 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
     if summary.repair:
         fig, ax = plt.subplots(figsize=(6, 4))
         for row in summary.repair:
-            line = ax.plot([row.sampled_calls, row.plain_calls], [row.sampled_success, row.plain_success], "o-",
-                           label=f"{method_label(row.method)}: plain best-of-K -> K'")[0]
-            ax.plot([row.repair_calls], [row.repair_success], "*", markersize=12, color=line.get_color(),
-                    label=f"{method_label(row.method)}: K + repair")
+            line = ax.plot(
+                [row.sampled_calls, row.plain_calls],
+                [row.sampled_success, row.plain_success],
+                "o-",
+                label=f"{method_label(row.method)}: plain best-of-K -> K'",
+            )[0]
+            ax.plot(
+                [row.repair_calls],
+                [row.repair_success],
+                "*",
+                markersize=12,
+                color=line.get_color(),
+                label=f"{method_label(row.method)}: K + repair",
+            )
         ax.set(xlabel="LM calls per run", ylabel="success rate", title="Repair against plain sampling")
         save(fig, "repair.png")
     return written

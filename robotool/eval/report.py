@@ -41,8 +41,10 @@ def _preamble(results: Results) -> list[str]:
         )
     lines += [f"- {one_line(line)}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {one_line(note)}" for note in results.notes]
-    if not any(r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
-               for r in results.records):
+    if not any(
+        r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
+        for r in results.records
+    ):
         lines.append(
             "- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an LM; none ran"
         )

@@ -73,9 +73,7 @@ class Methods(NamedTuple):
     stages: dict[str, str]
 
 
-def _methods(
-    config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str
-) -> Methods:
+def _methods(config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str) -> Methods:
     """Solvers to run and methods skipped; a method asked for by name that cannot run is an error."""
     names = config.methods or ([] if config.programs else list(METHODS))
     unknown = [m for m in names if m not in METHODS]
@@ -112,15 +110,41 @@ def _programs(
         if name in METHODS or name in stages:
             raise EvalError(f"--program {path}: its name {name!r} is already a method's; rename the file")
         if lm is None:
-            raise EvalError(
-                f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM"
-            )
+            raise EvalError(f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM")
         try:
             solvers[name] = compiled_solver(path, lm, settings)
             stages[name] = program_stages(path)
         except CompiledProgramError as e:
             raise EvalError(str(e)) from None
     return stages
+
+
+def held_out_warnings(config: EvalConfig, instances: list[TaskInstance]) -> list[str]:
+    """Warnings about compiled programs evaluated on instances they were validated on (or, with
+    ``allow_train``, trained on); raises :class:`EvalError` for training instances without ``allow_train``."""
+    from robotool.compiled import read_compiled
+
+    warnings: list[str] = []
+    labels = [i.label for i in instances]
+    for path in config.programs or []:
+        _, info = read_compiled(path)
+        if info is None:
+            continue
+        trained = [label for label in labels if label in info.train]
+        validated = [label for label in labels if label in info.val]
+        if trained and not config.allow_train:
+            raise EvalError(
+                f"--program {path} was trained on {', '.join(trained)}: its score there is not held out; leave "
+                "them out of --tasks/--seeds, or pass --allow-train"
+            )
+        if trained:
+            warnings.append(f"{path.stem} was trained on {', '.join(trained)}: those scores are not held out")
+        if validated:
+            warnings.append(
+                f"{path.stem} was validated on {', '.join(validated)} while it was optimised: those scores are not "
+                "held out"
+            )
+    return warnings
 
 
 def uses_lm(method: str) -> bool:
@@ -219,6 +243,7 @@ def evaluate(
     executor = executor or LocalExecutor(config.workers)
     backend = executor.backend(config.settings.backend)
     chosen, skipped, stages = _methods(config, lm, solvers, backend)
+    notes = [*notes, *held_out_warnings(config, instances)]
     _check_folder(config)
     journal = Journal(config.out_dir)
     plan = _plan(config, instances, list(chosen), backend)

@@ -52,10 +52,12 @@ def success_table(summary: Summary) -> TextTable:
     if table.rows:
         for method in PAPER_SUCCESS:
             published = paper_success(method)
-            average = PAPER_SUCCESS_AVERAGE[method] if len(columns) == len(PAPER_TASKS) else mean(
-                published[c] for c in columns)
-            table.rows.append([f"paper: {method_label(method)}", *(_num(published[c]) for c in columns),
-                               _num(average)])
+            average = (
+                PAPER_SUCCESS_AVERAGE[method]
+                if len(columns) == len(PAPER_TASKS)
+                else mean(published[c] for c in columns)
+            )
+            table.rows.append([f"paper: {method_label(method)}", *(_num(published[c]) for c in columns), _num(average)])
         table.reference = len(PAPER_SUCCESS)
     return table
 
@@ -80,8 +82,12 @@ def _matrix_table(title: str, columns: Sequence[str], rows: Sequence[MethodRow],
 def generated_table(summary: Summary) -> TextTable:
     """Success on generated instances: families as columns."""
     columns = list(dict.fromkeys(c for row in summary.generated for c in row.cells))
-    return _matrix_table("Success rate on generated instances", columns, summary.generated,
-                         _runs_note(summary.generated) + " A family's cell pools its seeds' runs.")
+    return _matrix_table(
+        "Success rate on generated instances",
+        columns,
+        summary.generated,
+        _runs_note(summary.generated) + " A family's cell pools its seeds' runs.",
+    )
 
 
 def concepts_table(summary: Summary) -> TextTable:
@@ -89,10 +95,15 @@ def concepts_table(summary: Summary) -> TextTable:
     tasks = list(dict.fromkeys(c for row in summary.concepts for c in row.cells))
     published = paper_concept_accuracy()
     reference = any(t in published for t in tasks)
-    table = TextTable(title="Key-concept accuracy (paper Table 2)",
-                      columns=["task", *(method_label(r.method) for r in summary.concepts),
-                               *(["paper: RoboTool"] if reference else [])],
-                      note=_runs_note(summary.concepts) + " Matching rule: robotool/eval/grading.py.")
+    table = TextTable(
+        title="Key-concept accuracy (paper Table 2)",
+        columns=[
+            "task",
+            *(method_label(r.method) for r in summary.concepts),
+            *(["paper: RoboTool"] if reference else []),
+        ],
+        note=_runs_note(summary.concepts) + " Matching rule: robotool/eval/grading.py.",
+    )
     for task in tasks:
         cells = [_num(r.cells[task].value if task in r.cells else None) for r in summary.concepts]
         table.rows.append([task, *cells, *([_num(published.get(task))] if reference else [])])
@@ -101,8 +112,11 @@ def concepts_table(summary: Summary) -> TextTable:
 
 def errors_table(summary: Summary) -> TextTable:
     """Error breakdown: each method's share of outcomes."""
-    table = TextTable(title="Outcomes and error breakdown (share of runs)", columns=["method", *OUTCOMES, "runs"],
-                      note="Classes from rollout traces; rules in robotool/eval/failure_classes.py.")
+    table = TextTable(
+        title="Outcomes and error breakdown (share of runs)",
+        columns=["method", *OUTCOMES, "runs"],
+        note="Classes from rollout traces; rules in robotool/eval/failure_classes.py.",
+    )
     for b in summary.errors:
         table.rows.append([method_label(b.method), *(_num(b.shares[o]) for o in OUTCOMES), str(b.runs)])
     return table
@@ -114,9 +128,11 @@ def _rate(cell: Cell) -> str:
 
 def discrimination_table(summary: Summary) -> TextTable:
     """Discriminative tool use: tool-use rate where a tool is needed and where none is."""
-    table = TextTable(title="Discriminative tool use (share of worlds using a tool)",
-                      columns=["method", "tool needed", "no tool needed"],
-                      note="Ideal: 1.00 where a tool is needed, 0.00 where none is. n: runs.")
+    table = TextTable(
+        title="Discriminative tool use (share of worlds using a tool)",
+        columns=["method", "tool needed", "no tool needed"],
+        note="Ideal: 1.00 where a tool is needed, 0.00 where none is. n: runs.",
+    )
     for d in summary.discrimination:
         table.rows.append([method_label(d.method), _rate(d.needed), _rate(d.not_needed)])
     return table
@@ -124,31 +140,56 @@ def discrimination_table(summary: Summary) -> TextTable:
 
 def cost_table(summary: Summary) -> TextTable:
     """LM tokens and wall time per method."""
-    table = TextTable(title="Cost per run", columns=["method", "runs", "prompt tokens", "completion tokens",
-                                                     "wall s / run", "wall s total"])
+    table = TextTable(
+        title="Cost per run",
+        columns=["method", "runs", "prompt tokens", "completion tokens", "wall s / run", "wall s total"],
+    )
     for c in summary.cost:
-        table.rows.append([method_label(c.method), str(c.runs), f"{c.prompt_tokens:.0f}", f"{c.completion_tokens:.0f}",
-                           f"{c.wall_s:.1f}", f"{c.total_wall_s:.1f}"])
+        table.rows.append(
+            [
+                method_label(c.method),
+                str(c.runs),
+                f"{c.prompt_tokens:.0f}",
+                f"{c.completion_tokens:.0f}",
+                f"{c.wall_s:.1f}",
+                f"{c.total_wall_s:.1f}",
+            ]
+        )
     return table
 
 
 def repair_table(summary: Summary) -> TextTable:
     """Success against LM calls spent: best-of-K, K plus repair rounds, and plain best-of-K' at equal calls."""
-    table = TextTable(title="Repair against plain sampling at equal LM calls (mean success @ mean LM calls)",
-                      columns=["method", "runs", "best-of-K", "K + repair", "plain best-of-K'"],
-                      note="best-of-K: the run's sampled candidates before any repair; plain best-of-K': a second "
-                           "solve sampling K' candidates without repair, K' chosen to spend the LM calls the run "
-                           "with repair spent.")
+    table = TextTable(
+        title="Repair against plain sampling at equal LM calls (mean success @ mean LM calls)",
+        columns=["method", "runs", "best-of-K", "K + repair", "plain best-of-K'"],
+        note="best-of-K: the run's sampled candidates before any repair; plain best-of-K': a second "
+        "solve sampling K' candidates without repair, K' chosen to spend the LM calls the run "
+        "with repair spent.",
+    )
     for c in summary.repair:
-        table.rows.append([method_label(c.method), str(c.runs),
-                           f"{c.sampled_success:.2f} @ {c.sampled_calls:.1f} (K={c.sampled:.1f})",
-                           f"{c.repair_success:.2f} @ {c.repair_calls:.1f}",
-                           f"{c.plain_success:.2f} @ {c.plain_calls:.1f} (K'={c.plain:.1f})"])
+        table.rows.append(
+            [
+                method_label(c.method),
+                str(c.runs),
+                f"{c.sampled_success:.2f} @ {c.sampled_calls:.1f} (K={c.sampled:.1f})",
+                f"{c.repair_success:.2f} @ {c.repair_calls:.1f}",
+                f"{c.plain_success:.2f} @ {c.plain_calls:.1f} (K'={c.plain:.1f})",
+            ]
+        )
     return table
 
 
 def all_tables(summary: Summary) -> list[TextTable]:
     """Every table with at least one measured row, in report order."""
-    tables = [success_table(summary), other_tasks_table(summary), generated_table(summary), concepts_table(summary),
-              errors_table(summary), discrimination_table(summary), cost_table(summary), repair_table(summary)]
+    tables = [
+        success_table(summary),
+        other_tasks_table(summary),
+        generated_table(summary),
+        concepts_table(summary),
+        errors_table(summary),
+        discrimination_table(summary),
+        cost_table(summary),
+        repair_table(summary),
+    ]
     return [t for t in tables if len(t.rows) > t.reference]

@@ -36,8 +36,9 @@ class DatasetError(ValueError):
     """The examples cannot be built as asked; the message says why."""
 
 
-def example(task: Task, *, family: str | None = None, seed: int | None = None,
-            tools: frozenset[str] | None = None) -> dspy.Example:
+def example(
+    task: Task, *, family: str | None = None, seed: int | None = None, tools: frozenset[str] | None = None
+) -> dspy.Example:
     """One example: ``task`` as the input, its ground truth as labels."""
     return dspy.Example(
         task=task,

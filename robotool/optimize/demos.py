@@ -57,12 +57,23 @@ def stage_demos(program: Proposer, example: dspy.Example, solution: Solution) ->
     steps = (stages.steps or []) if program.plan is not None else []
     parameters = (stages.parameters or []) if program.calculate is not None else []
     demos = {
-        "analyze": dspy.Example(description=description, analysis=stages.analysis,
-                                key_concepts=stages.key_concepts or []),
-        "plan": dspy.Example(description=description, key_concepts=concepts, object_roles=stages.object_roles,
-                             abstract_plan=stages.abstract_plan, steps=stages.steps or []),
-        "calculate": dspy.Example(description=description, key_concepts=concepts, steps=steps,
-                                  calculation=stages.calculation, parameters=stages.parameters or []),
+        "analyze": dspy.Example(
+            description=description, analysis=stages.analysis, key_concepts=stages.key_concepts or []
+        ),
+        "plan": dspy.Example(
+            description=description,
+            key_concepts=concepts,
+            object_roles=stages.object_roles,
+            abstract_plan=stages.abstract_plan,
+            steps=stages.steps or [],
+        ),
+        "calculate": dspy.Example(
+            description=description,
+            key_concepts=concepts,
+            steps=steps,
+            calculation=stages.calculation,
+            parameters=stages.parameters or [],
+        ),
         "code": dspy.Example(description=description, steps=steps, parameters=parameters, code=solution.code),
     }
     return {
@@ -103,8 +114,15 @@ def planner_demonstrations(
             continue
         for name, demo in stage_demos(program, example, solution).items():
             demos[name].append(demo)
-        kept.append(DemoSource(task=example.name, family=example.family, seed=example.seed, code=solution.code,
-                               success_rate=solution.success_rate))
+        kept.append(
+            DemoSource(
+                task=example.name,
+                family=example.family,
+                seed=example.seed,
+                code=solution.code,
+                success_rate=solution.success_rate,
+            )
+        )
         say(f"{example.name}: verified in {worlds} world(s); kept as demonstration {len(kept)} of every stage")
     for name, predictor in program.named_predictors():
         predictor.demos = demos[name]

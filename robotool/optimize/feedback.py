@@ -56,8 +56,9 @@ def concept_findings(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept
     if not truth:
         return []
     if not predicted:
-        return [StageFinding("analyzer", f"no key concepts were given; the deciding quantity is {_truth(t)}")
-                for t in truth]
+        return [
+            StageFinding("analyzer", f"no key concepts were given; the deciding quantity is {_truth(t)}") for t in truth
+        ]
     findings = []
     for t in truth:
         if any(matches(t, p) for p in predicted):
@@ -69,17 +70,25 @@ def concept_findings(truth: Sequence[KeyConcept], predicted: Sequence[KeyConcept
         p = min(same_kind, key=lambda c: abs(c.value - t.value))
         tolerance = max(RELATIVE_TOLERANCE * abs(t.value), ABSOLUTE_TOLERANCE.get(t.unit, 0.0))
         if abs(p.value - t.value) > tolerance:
-            findings.append(StageFinding("analyzer", f"wrong value for {t.kind} ('{p.name}'): you gave "
-                                    f"{_number(p.value, p.unit)}, the scene's geometry gives {_truth(t)}"))
+            findings.append(
+                StageFinding(
+                    "analyzer",
+                    f"wrong value for {t.kind} ('{p.name}'): you gave "
+                    f"{_number(p.value, p.unit)}, the scene's geometry gives {_truth(t)}",
+                )
+            )
         if p.satisfied != t.satisfied:
-            findings.append(StageFinding("analyzer", f"misjudged the limit for {t.kind} ('{p.name}'): you said "
-                                    f"{_verdict(p)}, but {_truth(t)}"))
+            findings.append(
+                StageFinding(
+                    "analyzer",
+                    f"misjudged the limit for {t.kind} ('{p.name}'): you said {_verdict(p)}, but {_truth(t)}",
+                )
+            )
     return findings
 
 
 def _truth(t: KeyConcept) -> str:
-    return (f"{t.name} = {_number(t.value, t.unit)} against {t.limit_name} "
-            f"{_number(t.limit, t.unit)}, {_verdict(t)}")
+    return f"{t.name} = {_number(t.value, t.unit)} against {t.limit_name} {_number(t.limit, t.unit)}, {_verdict(t)}"
 
 
 def _call(call: SkillCall, index: int) -> str:
@@ -109,11 +118,17 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
     if kind == "tool_use":
         if facts.needs_tool:
             needed = sorted(facts.needed or facts.tools)
-            return StageFinding("planner", f"{where}: the task needs a tool but the program used none of "
-                           f"{', '.join(needed) or 'the movable objects'}")
+            return StageFinding(
+                "planner",
+                f"{where}: the task needs a tool but the program used none of "
+                f"{', '.join(needed) or 'the movable objects'}",
+            )
         extra = sorted(used - (facts.needed or frozenset()))
-        return StageFinding("planner", f"{where}: a tool was used where none was needed ({', '.join(extra)}); "
-                       "the direct way is within the robot's limits")
+        return StageFinding(
+            "planner",
+            f"{where}: a tool was used where none was needed ({', '.join(extra)}); "
+            "the direct way is within the robot's limits",
+        )
     for k, call in enumerate(rollout.calls):
         if call.outcome == "refused":
             values = _measured(call)
@@ -124,8 +139,11 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
             return StageFinding(stage, f"{where}: {evidence}{placed}")
         if call.outcome in ("stalled", "timeout") or call.measured.get("outside_workspace", 0.0) > 0.0:
             values = _measured(call)
-            return StageFinding("calculator", f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
-                           + (f" (measured: {values})" if values else ""))
+            return StageFinding(
+                "calculator",
+                f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
+                + (f" (measured: {values})" if values else ""),
+            )
         hint = robot.numerical_hint(call) if kind == "numerical" and call.outcome == "done" else None
         if hint is not None:
             return StageFinding("calculator", f"{where}: {_call(call, k)} {hint}")
@@ -134,8 +152,10 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
         missing = sorted((facts.needed or frozenset()) - used)
         what = f"the needed tool(s) {', '.join(missing)} were never used" if missing else "no motion was made"
         return StageFinding("planner", f"{where}: a step is missing: {what}")
-    return StageFinding("calculator", f"{where}: every step ran but the goal was missed by distance; unmet: "
-                   f"{', '.join(unmet) or 'the goal'}")
+    return StageFinding(
+        "calculator",
+        f"{where}: every step ran but the goal was missed by distance; unmet: {', '.join(unmet) or 'the goal'}",
+    )
 
 
 def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> list[StageFinding]:
@@ -153,8 +173,9 @@ def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> li
     return [f for r in candidate.rollouts if (f := world_finding(r, facts)) is not None]
 
 
-def findings(task: Task, solution: Solution, facts: TaskFacts, truth: Sequence[KeyConcept],
-             analyzed: bool) -> list[StageFinding]:
+def findings(
+    task: Task, solution: Solution, facts: TaskFacts, truth: Sequence[KeyConcept], analyzed: bool
+) -> list[StageFinding]:
     """Every finding of a verified proposal: the Analyzer's concepts (when it ran), then the chosen candidate's."""
     found = concept_findings(truth, solution.stages.key_concepts) if analyzed else []
     chosen = solution.candidates[solution.best] if solution.best is not None else None
@@ -173,8 +194,10 @@ DUTY: dict[Stage, str] = {
 
 def stage_feedback(stage: Stage, score: float, worlds: int, found: Sequence[StageFinding]) -> str:
     """The feedback for one stage: the outcome, then the evidence about its output, then the rest in brief."""
-    outcome = (f"The best program reached the goal in {round(score * worlds)} of {worlds} perturbed simulated "
-               f"world(s) (score {score:.2f}).")
+    outcome = (
+        f"The best program reached the goal in {round(score * worlds)} of {worlds} perturbed simulated "
+        f"world(s) (score {score:.2f})."
+    )
     mine = [f.text for f in found if f.stage == stage]
     others = [f for f in found if f.stage != stage]
     lines = [outcome]
@@ -187,6 +210,7 @@ def stage_feedback(stage: Stage, score: float, worlds: int, found: Sequence[Stag
         lines.append(f"The {NAMES[stage]}'s output worked; keep what made it work.")
     if others:
         blamed = sorted({NAMES[f.stage] for f in others})
-        lines.append(f"Other failures point at the {', '.join(blamed)}: " + "; ".join(
-            dict.fromkeys(f.text for f in others[:3])))
+        lines.append(
+            f"Other failures point at the {', '.join(blamed)}: " + "; ".join(dict.fromkeys(f.text for f in others[:3]))
+        )
     return "\n".join(lines)

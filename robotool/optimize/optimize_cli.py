@@ -23,6 +23,7 @@ from robotool.cliargs import (
     DEFAULT_WORLDS,
     EXIT_INTERRUPTED,
     EXIT_USAGE,
+    TIMEOUT_HELP,
     Parser,
     count,
     make_console,
@@ -55,14 +56,27 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
         "and RoboTool.load() use.",
     )
     p.add_argument("--version", action="version", version=f"robotool {version()}")
-    p.add_argument("--optimizer", required=True, choices=OPTIMIZERS,
-                   help="gepa (reflective prompt evolution), mipro (MIPROv2), bootstrap (BootstrapFewShot), simba, "
-                   "or planner-demos (no LM: verified search-planner solutions as demonstrations)")
+    p.add_argument(
+        "--optimizer",
+        required=True,
+        choices=OPTIMIZERS,
+        help="gepa (reflective prompt evolution), mipro (MIPROv2), bootstrap (BootstrapFewShot), simba, "
+        "or planner-demos (no LM: verified search-planner solutions as demonstrations)",
+    )
     p.add_argument("--out", type=output_file, required=True, metavar="PROGRAM.json", help="the compiled program")
-    p.add_argument("--log", type=output_folder, metavar="DIR",
-                   help="resumable log folder (default: the --out file's name with -log)")
-    p.add_argument("--families", nargs="+", metavar="FAMILY", help="task families to draw examples from "
-                   "(default: all); the paper's six built-in tasks are never training examples")
+    p.add_argument(
+        "--log",
+        type=output_folder,
+        metavar="DIR",
+        help="resumable log folder (default: the --out file's name with -log)",
+    )
+    p.add_argument(
+        "--families",
+        nargs="+",
+        metavar="FAMILY",
+        help="task families to draw examples from "
+        "(default: all); the paper's six built-in tasks are never training examples",
+    )
     p.add_argument("--train", type=positive_int, default=6, help="training examples")
     p.add_argument("--val", type=count, default=4, help="validation examples (scored before and after)")
     p.add_argument("--method", choices=list(STAGES_BY_METHOD), default="robotool", help="which stages the program has")
@@ -73,7 +87,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     p.add_argument("--reflection-api-base", help="base URL for the reflection model (default: --api-base)")
     p.add_argument("--temperature", type=temperature, help="sampling temperature of the stages' calls")
     p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help="how long to wait for each LM reply")
+    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per verification")
     p.add_argument("--seed", type=seed, default=0, help="seed of the perturbed worlds and the optimiser")
@@ -83,8 +97,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     budget.add_argument("--auto", choices=["light", "medium", "heavy"], help="gepa, mipro: DSPy's budget preset")
     budget.add_argument("--max-metric-calls", type=positive_int, help="gepa: metric calls (default: 60)")
     budget.add_argument("--trials", type=positive_int, default=6, help="mipro: trials")
-    budget.add_argument("--candidates", type=positive_int, default=3,
-                        help="mipro, simba: instruction candidates")
+    budget.add_argument("--candidates", type=positive_int, default=3, help="mipro, simba: instruction candidates")
     budget.add_argument("--steps", type=positive_int, default=4, help="simba: steps")
     budget.add_argument("--demos", type=count, default=2, help="demonstrations per stage")
     return p
@@ -97,11 +110,27 @@ def settings_from(args: argparse.Namespace) -> OptimizeSettings:
     if args.auto and args.max_metric_calls:
         raise OptimizeError("--auto and --max-metric-calls are two budgets; give one")
     return OptimizeSettings(
-        optimizer=args.optimizer, families=families, train=args.train, val=args.val, method=args.method,
-        worlds=args.worlds, seed=args.seed, backend=args.backend, threads=args.threads, lm=args.lm,
-        reflection_lm=args.reflection_lm, temperature=args.temperature, adapter=args.adapter,
-        budget=OptimizerBudget(auto=args.auto, max_metric_calls=args.max_metric_calls, trials=args.trials,
-                      candidates=args.candidates, steps=args.steps, demos=args.demos),
+        optimizer=args.optimizer,
+        families=families,
+        train=args.train,
+        val=args.val,
+        method=args.method,
+        worlds=args.worlds,
+        seed=args.seed,
+        backend=args.backend,
+        threads=args.threads,
+        lm=args.lm,
+        reflection_lm=args.reflection_lm,
+        temperature=args.temperature,
+        adapter=args.adapter,
+        budget=OptimizerBudget(
+            auto=args.auto,
+            max_metric_calls=args.max_metric_calls,
+            trials=args.trials,
+            candidates=args.candidates,
+            steps=args.steps,
+            demos=args.demos,
+        ),
     )
 
 
@@ -117,8 +146,12 @@ def print_outcome(outcome: OptimizeResult, console: Console) -> None:
     if v is not None and v.note:
         console.print(f"validation {v.note}", style="yellow", markup=False, highlight=False)
     if outcome.info.demonstrations:
-        console.print(f"{len(outcome.info.demonstrations)} verified demonstration(s) per stage from: "
-                      + ", ".join(d.task for d in outcome.info.demonstrations), markup=False, highlight=False)
+        console.print(
+            f"{len(outcome.info.demonstrations)} verified demonstration(s) per stage from: "
+            + ", ".join(d.task for d in outcome.info.demonstrations),
+            markup=False,
+            highlight=False,
+        )
     console.print(f"wrote {outcome.out}", markup=False, highlight=False)
 
 
@@ -134,15 +167,35 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
     log = Path(args.log or args.out.with_name(f"{args.out.stem}-log"))
     try:
         settings = settings_from(args)
-        lm = make_lm(args.lm, api_base=args.api_base, api_key_env=args.api_key_env, temperature=args.temperature,
-                     cache=not args.no_cache, timeout=args.timeout)
-        reflection = make_lm(args.reflection_lm, api_base=args.reflection_api_base or args.api_base,
-                             api_key_env=args.api_key_env, cache=not args.no_cache,
-                             timeout=args.timeout) if args.reflection_lm else None
+        lm = make_lm(
+            args.lm,
+            api_base=args.api_base,
+            api_key_env=args.api_key_env,
+            temperature=args.temperature,
+            cache=not args.no_cache,
+            timeout=args.timeout,
+        )
+        reflection = (
+            make_lm(
+                args.reflection_lm,
+                api_base=args.reflection_api_base or args.api_base,
+                api_key_env=args.api_key_env,
+                cache=not args.no_cache,
+                timeout=args.timeout,
+            )
+            if args.reflection_lm
+            else None
+        )
         if lm is not None:
             settings = settings.model_copy(update={"lm": lm.model})
-        outcome = optimize(settings, out=args.out, log=log, lm=lm, reflection_lm=reflection,
-                           say=lambda line: console.print(line, markup=False, highlight=False))
+        outcome = optimize(
+            settings,
+            out=args.out,
+            log=log,
+            lm=lm,
+            reflection_lm=reflection,
+            say=lambda line: console.print(line, markup=False, highlight=False),
+        )
     except LMUnavailableError as e:
         print_error(errors, str(e))
         return EXIT_LM_UNAVAILABLE

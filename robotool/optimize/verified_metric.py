@@ -23,8 +23,12 @@ from robotool.optimize.feedback import STAGES, Stage, findings, stage_feedback
 from robotool.solution import Proposal, Solution
 from robotool.verify import select
 
-PREDICTOR_STAGES: dict[str, Stage] = {"analyze": "analyzer", "plan": "planner", "calculate": "calculator",
-                                      "code": "coder"}
+PREDICTOR_STAGES: dict[str, Stage] = {
+    "analyze": "analyzer",
+    "plan": "planner",
+    "calculate": "calculator",
+    "code": "coder",
+}
 """Predictor name (as ``named_predictors()`` gives it) -> the stage it is."""
 KEEP = 512
 """Verdicts kept for GEPA's per-predictor feedback calls on the same prediction."""
@@ -33,8 +37,9 @@ KEEP = 512
 class Metric:
     """Verifies a :class:`~robotool.lm_program.Proposer`'s prediction; see the module docstring."""
 
-    def __init__(self, *, worlds: int = 3, seed: int = 0, backend: str | None = None,
-                 batcher: RolloutBatcher | None = None):
+    def __init__(
+        self, *, worlds: int = 3, seed: int = 0, backend: str | None = None, batcher: RolloutBatcher | None = None
+    ):
         if worlds < 1:
             raise ValueError("worlds must be at least 1")
         self.worlds, self.seed, self.backend = worlds, seed, backend
@@ -42,8 +47,14 @@ class Metric:
         self._verdicts: OrderedDict[int, tuple[Proposal, Solution]] = OrderedDict()
         self._lock = threading.Lock()
 
-    def __call__(self, gold: dspy.Example, pred: dspy.Prediction, trace: Any = None, pred_name: str | None = None,
-                 pred_trace: Any = None) -> float | dspy.Prediction:
+    def __call__(
+        self,
+        gold: dspy.Example,
+        pred: dspy.Prediction,
+        trace: Any = None,
+        pred_name: str | None = None,
+        pred_trace: Any = None,
+    ) -> float | dspy.Prediction:
         solution = self.verdict(gold, pred)
         if pred_name is None:
             return solution.success_rate
@@ -53,14 +64,17 @@ class Metric:
         """The proposal in ``pred`` verified in simulation (once per proposal)."""
         proposal = pred.get("proposal")
         if not isinstance(proposal, Proposal):
-            raise TypeError("the metric verifies what a robotool.lm_program.Proposer proposed; compile a Proposer "
-                            "(RoboTool verifies its own candidates)")
+            raise TypeError(
+                "the metric verifies what a robotool.lm_program.Proposer proposed; compile a Proposer "
+                "(RoboTool verifies its own candidates)"
+            )
         with self._lock:
             kept = self._verdicts.get(id(proposal))
             if kept is not None and kept[0] is proposal:
                 return kept[1]
-        solution = select(gold.task, proposal, worlds=self.worlds, seed=self.seed, backend=self.backend,
-                          runner=self.batcher)
+        solution = select(
+            gold.task, proposal, worlds=self.worlds, seed=self.seed, backend=self.backend, runner=self.batcher
+        )
         with self._lock:
             self._verdicts[id(proposal)] = (proposal, solution)
             while len(self._verdicts) > KEEP:
@@ -69,8 +83,9 @@ class Metric:
 
     def feedback(self, gold: dspy.Example, solution: Solution, pred_name: str) -> str:
         """The feedback for the predictor named ``pred_name`` (a stage's, or the whole program's)."""
-        facts = TaskFacts.of(gold.task, needs_tool=gold.needs_tool,
-                             needed=frozenset(gold.tools) if gold.tools is not None else None)
+        facts = TaskFacts.of(
+            gold.task, needs_tool=gold.needs_tool, needed=frozenset(gold.tools) if gold.tools is not None else None
+        )
         analyzed = any(call.stage == "analyzer" for call in solution.lm_calls)
         found = findings(gold.task, solution, facts, gold.key_concepts, analyzed)
         stage = PREDICTOR_STAGES.get(pred_name.rsplit(".", 1)[-1])

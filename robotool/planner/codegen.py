@@ -67,10 +67,13 @@ class Point:
         refs = {r for r, _ in self.axes}
         offset = [round(o, 4) for _, o in self.axes]
         if len(refs) == 1 and (ref := next(iter(refs))) is not None and ref.skill in ("get_center", "get_position"):
-            return StepParameters(step=step, object=obj, relative_to=ref.obj, offset=offset,
-                                  explanation=explanation)
-        return StepParameters(step=step, object=obj, target=[round(float(v), 4) for v in self.estimate()],
-                              explanation=f"{explanation}; computed when the step runs as {self.code()}")
+            return StepParameters(step=step, object=obj, relative_to=ref.obj, offset=offset, explanation=explanation)
+        return StepParameters(
+            step=step,
+            object=obj,
+            target=[round(float(v), 4) for v in self.estimate()],
+            explanation=f"{explanation}; computed when the step runs as {self.code()}",
+        )
 
 
 def _axis_code(ref: Ref | None, offset: float, k: int) -> str:
@@ -132,8 +135,16 @@ class Program:
         self.lines.append(f"{ref.var} = {skill}({obj!r})")
         return ref
 
-    def motion(self, skill: str, *, point: Point | None = None, obj: str | None = None,
-               objects: Sequence[str] = (), intent: str, explanation: str = "") -> None:
+    def motion(
+        self,
+        skill: str,
+        *,
+        point: Point | None = None,
+        obj: str | None = None,
+        objects: Sequence[str] = (),
+        intent: str,
+        explanation: str = "",
+    ) -> None:
         """Call a motion skill; record its plan step and, for a position, its parameters."""
         self.lines.append(_call(skill, obj, point))
         names = list(dict.fromkeys([*([obj] if obj else []), *objects]))
@@ -149,9 +160,16 @@ class Program:
             raise ValueError(f"motion {motion} ({move.skill}) has no target to shift")
         point = move.point.shifted(delta)
         moved = replace(move, point=point)
-        copy = replace(self, lines=list(self.lines), motions=list(self.motions), sentences=[*self.sentences, why],
-                       parameters=[point.parameters(p.step, move.obj, f"{move.explanation}; {why}")
-                                   if p.step == move.step else p for p in self.parameters])
+        copy = replace(
+            self,
+            lines=list(self.lines),
+            motions=list(self.motions),
+            sentences=[*self.sentences, why],
+            parameters=[
+                point.parameters(p.step, move.obj, f"{move.explanation}; {why}") if p.step == move.step else p
+                for p in self.parameters
+            ],
+        )
         copy.lines[move.line] = _call(move.skill, move.obj, point)
         copy.motions[motion] = moved
         return copy

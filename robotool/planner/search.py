@@ -48,8 +48,17 @@ def order(programs: Iterable[Program]) -> list[Program]:
     return sorted(unique, key=lambda p: (p.doubt is not None, p.late, *p.cost))
 
 
-def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], StageOutputs], *, worlds: int, seed: int,
-           backend: str | None, budget: Budget, start: int = 0) -> tuple[list[Tried], int]:
+def search(
+    task: Task,
+    tiers: list[list[Program]],
+    stages: Callable[[Program], StageOutputs],
+    *,
+    worlds: int,
+    seed: int,
+    backend: str | None,
+    budget: Budget,
+    start: int = 0,
+) -> tuple[list[Tried], int]:
     """Verify programs in rounds, tier by tier (a round never mixes tiers; each tier already ordered).
 
     Candidates are numbered from ``start``. Returns what was tried and how many rounds ran."""
@@ -61,8 +70,11 @@ def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], S
         if rounds and time.perf_counter() - started > budget.seconds:
             break
         tier = queue[len(tried)][0]
-        batch = [Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p)))
-                 for k, (t, p) in enumerate(queue[len(tried):len(tried) + budget.beam]) if t == tier]
+        batch = [
+            Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p)))
+            for k, (t, p) in enumerate(queue[len(tried) : len(tried) + budget.beam])
+            if t == tier
+        ]
         runnable = []
         for item in batch:
             item.candidate.code, rejection, _ = prepare_code(item.program.code, task)
@@ -70,8 +82,13 @@ def search(task: Task, tiers: list[list[Program]], stages: Callable[[Program], S
                 item.candidate.failure = CandidateFailure(stage="search", kind="rejected", reason=rejection)
             else:
                 runnable.append(item)
-        results = run_codes(task, [t.candidate.code for t in runnable], worlds=worlds, seed=seed,  # type: ignore[misc]
-                            backend=backend)
+        results = run_codes(
+            task,
+            [t.candidate.code for t in runnable],
+            worlds=worlds,
+            seed=seed,  # type: ignore[misc]
+            backend=backend,
+        )
         for item, rollouts in zip(runnable, results, strict=True):
             item.candidate.rollouts = rollouts
             item.candidate.failure = failure_reason(rollouts)

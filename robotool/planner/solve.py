@@ -27,13 +27,16 @@ from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs
 from robotool.task_model import Task
 
 KEEP_CALLS = 4  # failed candidates (best first) that keep their rollouts' skill-call traces
-CALCULATION = ("Numbers come from the task file's geometry (object boxes, surfaces under vertical rays, graspable "
-               "points, button faces) and the robot's limits; positions of objects that may have moved are queried "
-               "when each step runs and the offsets are added to them.")
+CALCULATION = (
+    "Numbers come from the task file's geometry (object boxes, surfaces under vertical rays, graspable "
+    "points, button faces) and the robot's limits; positions of objects that may have moved are queried "
+    "when each step runs and the offsets are added to them."
+)
 
 
-def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True,
-          repair: bool = True) -> Solution:
+def solve(
+    task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True, repair: bool = True
+) -> Solution:
     """Find the shortest program that the simulator shows reaching the goal, without a language model.
 
     With ``repair``, when no program succeeds in every world, the best failures are re-parameterised from
@@ -56,17 +59,34 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
     programs = [p for tier in tiers for p in tier]
     generated_at = time.perf_counter()
     with scene_context(task, robots.get(task.embodiment)):
-        tried, rounds = search(task, tiers, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                               backend=backend, budget=budget)
+        tried, rounds = search(
+            task,
+            tiers,
+            lambda p: stages_of(task, p, concepts),
+            worlds=worlds,
+            seed=seed,
+            backend=backend,
+            budget=budget,
+        )
         repairs = []
         if repair and not any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in tried):
-            repairs = repair_round(task, tried, lambda p: stages_of(task, p, concepts), worlds=worlds, seed=seed,
-                                   backend=backend, beam=budget.beam)
+            repairs = repair_round(
+                task,
+                tried,
+                lambda p: stages_of(task, p, concepts),
+                worlds=worlds,
+                seed=seed,
+                backend=backend,
+                beam=budget.beam,
+            )
     verified_at = time.perf_counter()
     solution = _solution(task, tried, concepts, tools)
     solution.repairs = repairs
-    solution.timings = {"generate": generated_at - started, "verify": verified_at - generated_at,
-                        "total": time.perf_counter() - started}
+    solution.timings = {
+        "generate": generated_at - started,
+        "verify": verified_at - generated_at,
+        "total": time.perf_counter() - started,
+    }
     solution.notes = [
         "Produced by the LM-free search planner (robotool.planner): generate-and-test over geometric skill "
         "macros checked in the batched simulator; no language model was used.",
@@ -77,8 +97,10 @@ def solve(task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = N
         solution.notes.append("tools=False: only the goal object (and what it rests on) and the robot were used.")
     if repairs:
         attempts = repairs[0].attempts
-        solution.notes.append(f"{len(attempts)} failed program(s) re-parameterised from measured evidence and verified "
-                              f"again; {sum(a.success_rate == 1.0 for a in attempts)} succeeded in every world.")
+        solution.notes.append(
+            f"{len(attempts)} failed program(s) re-parameterised from measured evidence and verified "
+            f"again; {sum(a.success_rate == 1.0 for a in attempts)} succeeded in every world."
+        )
     if not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
     return solution
@@ -92,13 +114,23 @@ def robot_planner(task: Task) -> SearchMacros:
     """The task's robot's macros and budget (:class:`NoPlannerError` when it has none)."""
     make = robots.get(task.embodiment).planner
     if make is None:
-        raise NoPlannerError(f"the search planner has no macros for the {task.embodiment} robot; solve its tasks "
-                             "with a language model (robotool solve --lm ...) or run your own program (robotool run)")
+        raise NoPlannerError(
+            f"the search planner has no macros for the {task.embodiment} robot; solve its tasks "
+            "with a language model (robotool solve --lm ...) or run your own program (robotool run)"
+        )
     return make()
 
 
-def repair_round(task: Task, tried: list[Tried], stages: Callable[[Program], StageOutputs], *, worlds: int,
-                 seed: int, backend: str | None, beam: int) -> list[RepairRound]:
+def repair_round(
+    task: Task,
+    tried: list[Tried],
+    stages: Callable[[Program], StageOutputs],
+    *,
+    worlds: int,
+    seed: int,
+    backend: str | None,
+    beam: int,
+) -> list[RepairRound]:
     """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``
     variants in one batch (appended to ``tried``); the round as the solution records it (none when no failure
     gave evidence to act on)."""
@@ -112,18 +144,34 @@ def repair_round(task: Task, tried: list[Tried], stages: Callable[[Program], Sta
                 variants.append((variant, source))
     if not variants:
         return []
-    new, _ = search(task, [[v for v, _ in variants]], stages, worlds=worlds, seed=seed, backend=backend,
-                    budget=Budget(beam=len(variants), rounds=1, seconds=float("inf")), start=len(tried))
+    new, _ = search(
+        task,
+        [[v for v, _ in variants]],
+        stages,
+        worlds=worlds,
+        seed=seed,
+        backend=backend,
+        budget=Budget(beam=len(variants), rounds=1, seconds=float("inf")),
+        start=len(tried),
+    )
     record = RepairRound(round=1)
     for made, (variant, source) in zip(new, variants, strict=True):
         made.candidate.repaired_from = source.candidate.index
         made.candidate.notes.append(f"re-parameterised from candidate {source.candidate.index}")
         trace = failure_trace(source.candidate)
         assert trace is not None  # a source has a failed world
-        record.attempts.append(RepairAttempt(
-            source=source.candidate.index, candidate=made.candidate.index, shown=trace, scope="parameters",
-            diagnosis=variant.sentences[-1], changed=["parameters", "code"],
-            success_rate=made.candidate.success_rate, failure=made.candidate.failure))
+        record.attempts.append(
+            RepairAttempt(
+                source=source.candidate.index,
+                candidate=made.candidate.index,
+                shown=trace,
+                scope="parameters",
+                diagnosis=variant.sentences[-1],
+                changed=["parameters", "code"],
+                success_rate=made.candidate.success_rate,
+                failure=made.candidate.failure,
+            )
+        )
     tried += new
     return [record]
 
@@ -143,8 +191,9 @@ def stages_of(task: Task, prog: Program, concepts: list[KeyConcept]) -> StageOut
     return StageOutputs(
         analysis=analysis(concepts),
         key_concepts=concepts,
-        object_roles=[ObjectRole(name=o.name, properties=properties(o), role=_role(task, prog, o))
-                      for o in task.objects],
+        object_roles=[
+            ObjectRole(name=o.name, properties=properties(o), role=_role(task, prog, o)) for o in task.objects
+        ],
         abstract_plan=prog.abstract_plan,
         steps=prog.steps,
         calculation=CALCULATION,
@@ -156,8 +205,11 @@ def analysis(concepts: list[KeyConcept]) -> str:
     """The key concepts in words."""
     if not concepts:
         return "No limit is at stake: the goal is within the robot's reach."
-    lines = [f"{c.name}: {c.value:g} {c.unit} against {c.limit_name} {c.limit:g} {c.unit} "
-             f"({'within the limit' if c.satisfied else 'violated: a tool is needed'})" for c in concepts]
+    lines = [
+        f"{c.name}: {c.value:g} {c.unit} against {c.limit_name} {c.limit:g} {c.unit} "
+        f"({'within the limit' if c.satisfied else 'violated: a tool is needed'})"
+        for c in concepts
+    ]
     return "; ".join(lines) + "."
 
 

@@ -76,7 +76,9 @@ class Painter:
             mujoco.mj_kinematics(model, self.data)
             corners.append(geom_corners(model, self.data, shown))
         self.camera = fit_camera(
-            np.concatenate(corners), robots.get(self.scene.task.embodiment).view, width / height,
+            np.concatenate(corners),
+            robots.get(self.scene.task.embodiment).view,
+            width / height,
             float(model.vis.global_.fovy),
         )
         self.set_state(states[0])

@@ -212,8 +212,9 @@ def _load() -> None:
             try:
                 loaded = point.load()
             except Exception as e:
-                raise RobotPluginError(f"cannot load robot plug-in {point.value!r} (entry point {point.name!r}): "
-                                       f"{type(e).__name__}: {e}") from None
+                raise RobotPluginError(
+                    f"cannot load robot plug-in {point.value!r} (entry point {point.name!r}): {type(e).__name__}: {e}"
+                ) from None
             _register_loaded(loaded, f"entry point {point.name!r}")
     for module_name in (m.strip() for m in os.environ.get(MODULES_VARIABLE, "").split(",")):
         if module_name and module_name not in _LOADED:
@@ -222,8 +223,9 @@ def _load() -> None:
                 module = importlib.import_module(module_name)
             except Exception as e:
                 _LOADED.discard(module_name)
-                raise RobotPluginError(f"cannot load robot module {module_name!r} (from {MODULES_VARIABLE}): "
-                                       f"{type(e).__name__}: {e}") from None
+                raise RobotPluginError(
+                    f"cannot load robot module {module_name!r} (from {MODULES_VARIABLE}): {type(e).__name__}: {e}"
+                ) from None
             _register_loaded(module, f"module {module_name!r}")
 
 

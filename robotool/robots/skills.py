@@ -73,9 +73,7 @@ def check_arguments(spec: SkillSpec, args: tuple[object, ...], scene: SceneBox |
     """
     name = spec.name
     if len(args) != len(spec.params):
-        raise SkillArgumentError(
-            f"{spec.signature} takes {len(spec.params)} argument(s), got {len(args)}"
-        )
+        raise SkillArgumentError(f"{spec.signature} takes {len(spec.params)} argument(s), got {len(args)}")
     out: list[object] = []
     for (param, kind), value in zip(spec.params, args, strict=True):
         if kind == "name":

@@ -18,17 +18,20 @@ _IMPORTS = {"np": "import numpy as np", "math": "import math"}
 
 @dataclass(frozen=True)
 class Extraction:
-    """A program taken from an LM answer, and how many non-blank lines of the answer were left out."""
+    """A program taken from an LM answer, how many non-blank lines of the answer were left out, and which
+    of several code blocks was chosen (None when there was one or none)."""
 
     code: str
     dropped_lines: int
+    chosen: str | None = None
 
     @property
     def note(self) -> str | None:
-        """A sentence for the user when text was left out (prose, other blocks, lines that do not parse)."""
-        if not self.dropped_lines:
-            return None
-        return f"{self.dropped_lines} non-blank line(s) of the reply outside the program were left out"
+        """A sentence for the user when text was left out (reasoning, prose, other blocks)."""
+        parts = [self.chosen] if self.chosen else []
+        if self.dropped_lines:
+            parts.append(f"{self.dropped_lines} non-blank line(s) of the reply outside the program were left out")
+        return "; ".join(parts) or None
 
 
 def extract_program(text: str) -> str:
@@ -39,20 +42,33 @@ def extract_program(text: str) -> str:
 def extract(text: str) -> Extraction:
     """The Python program in an LM answer, with a count of the answer's lines left out of it.
 
-    Takes the Python (or untagged) Markdown code blocks, joined in order, when there are any (an
-    unclosed last block runs to the end); otherwise the longest run of lines that parses as Python,
-    dropping prose before and after. Normalizes Windows and old Mac line endings, a BOM, non-breaking
-    spaces and tab indentation (a tab is four spaces), and adds ``import numpy as np`` /
-    ``import math`` at the top when the program uses ``np.`` / ``math.`` without importing them.
-    Raises :class:`ProgramRejected` when no program is found.
+    Extraction chooses a block, never cuts one. Reasoning (``<think>...</think>``) is never code. Of
+    several Python (or untagged) Markdown code blocks, the one a line just before it marks as final
+    ("Final program:") is taken, else the last one that is more than names (an unclosed last block runs to
+    the end); blocks are never joined, and :attr:`Extraction.chosen` says which was taken. Without a block,
+    the program is the reply with prose before and after it left out; when a line that looks like code
+    would be left out too, the program does not parse as a whole and its syntax error is raised.
+    Normalizes Windows and old Mac line endings, a BOM, non-breaking spaces and tab indentation (a tab is
+    four spaces), and adds ``import numpy as np`` / ``import math`` at the top when the program uses
+    ``np.`` / ``math.`` without importing them. Raises :class:`ProgramRejected` when no program is found or
+    it does not parse.
     """
     if len(text) > MAX_PROGRAM_CHARS:
         raise ProgramRejected(None, "text", f"answer is longer than {MAX_PROGRAM_CHARS} characters")
     check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
     text = "\n".join(_expand_indent_tabs(line) for line in text.split("\n"))
-    blocks, fence_lines = _fenced_blocks(text)
-    code = ("\n\n".join(blocks) if blocks else _longest_parsing_run(text)).strip("\n")
+    text = without_reasoning(text)
+    blocks = _fenced_blocks(text)
+    chosen = None
+    if blocks:
+        index, why = _choose_block(blocks)
+        code = blocks[index].code.strip("\n")
+        if len(blocks) > 1:
+            chosen = f"the reply held {len(blocks)} code blocks; block {index + 1} ({why}) was used, not joined"
+        fence_lines = blocks[index].fence_lines
+    else:
+        code, fence_lines = _unfenced_program(text).strip("\n"), 0
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)
@@ -60,7 +76,18 @@ def extract(text: str) -> Extraction:
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose or names)")
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]
     dropped = _non_blank(text) - _non_blank(code) - fence_lines
-    return Extraction(code="\n".join([*missing, code]) + "\n", dropped_lines=max(dropped, 0))
+    return Extraction(code="\n".join([*missing, code]) + "\n", dropped_lines=max(dropped, 0), chosen=chosen)
+
+
+_REASONING = re.compile(r"<(think|thinking|reasoning)>.*?(?:</\1>|\Z)", re.DOTALL | re.IGNORECASE)
+_REASONING_END = re.compile(r"^.*?</(?:think|thinking|reasoning)>", re.DOTALL | re.IGNORECASE)
+
+
+def without_reasoning(text: str) -> str:
+    """``text`` without the model's reasoning: ``<think>...</think>`` spans (an unclosed one runs to the end),
+    and everything before a closing tag whose opening tag the server left out."""
+    text = _REASONING.sub("", text)
+    return _REASONING_END.sub("", text, count=1)
 
 
 def _non_blank(text: str) -> int:
@@ -68,13 +95,20 @@ def _non_blank(text: str) -> int:
     return sum(1 for line in text.split("\n") if line.strip())
 
 
-def _fenced_blocks(text: str) -> tuple[list[str], int]:
-    """Contents of the Python or untagged fenced blocks, in order, and how many fence lines enclose them
-    (one pass over the fences)."""
-    blocks: list[str] = []
-    fence_lines = 0
+@dataclass(frozen=True)
+class _Block:
+    code: str
+    fence_lines: int
+    label: str
+    """The last non-blank line of text before the block's opening fence."""
+
+
+def _fenced_blocks(text: str) -> list[_Block]:
+    """The Python or untagged fenced blocks, in order (one pass over the fences)."""
+    blocks: list[_Block] = []
     fences = list(_FENCE.finditer(text))
     i = 0
+    previous_end = 0
     while i < len(fences):
         opening = fences[i]
         j = i + 1
@@ -82,14 +116,66 @@ def _fenced_blocks(text: str) -> tuple[list[str], int]:
             j += 1
         end = fences[j].start() if j < len(fences) else len(text)
         if opening.group(2).lower() in _PYTHON_TAGS:
-            blocks.append(text[opening.end() + 1 : end].strip("\n"))
-            fence_lines += 1 + (j < len(fences))
+            before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
+            label = before[-1].strip() if before else ""
+            blocks.append(_Block(text[opening.end() + 1 : end].strip("\n"), 1 + (j < len(fences)), label))
+        previous_end = fences[j].end() if j < len(fences) else len(text)
         i = j + 1
-    return blocks, fence_lines
+    return blocks
 
 
-def _longest_parsing_run(text: str) -> str:
-    """The longest run of whole lines that parses and acts, preferring the earliest; "" if none is found.
+_FINAL = re.compile(r"\b(final|corrected|fixed|revised|complete)\b", re.IGNORECASE)
+
+
+def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
+    """The index of the block to run and why: the last one marked final, else the last that is more than
+    names (an output listing is not a program), else the last."""
+    marked = [k for k, block in enumerate(blocks) if _FINAL.search(block.label)]
+    if marked:
+        return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
+    for k in range(len(blocks) - 1, -1, -1):
+        try:
+            tree = _quiet_parse(blocks[k].code)
+        except (SyntaxError, ValueError, RecursionError, MemoryError):
+            return k, "the last"
+        if _has_action(tree):
+            return k, "the last" if k == len(blocks) - 1 else "the last that is a program"
+    return len(blocks) - 1, "the last"
+
+
+_CODE_LINE = re.compile(
+    r"""^\s*(?:
+        [A-Za-z_][\w.]*(?:\s*,\s*[A-Za-z_]\w*)*\s*(?:\(|\[|[-+*/%]?=(?!=))   # a call, subscript or assignment
+      | (?:for|while|if|elif|else|def|class|try|except|finally|with)\b.*:\s*(?:\#.*)?$  # a compound statement
+      | (?:import|from)\s+[\w.]+(?:\s+import\b.*)?\s*$                       # an import
+      | (?:print|exec)\s+["'\w(]                                             # a Python 2 statement
+      | (?:return|pass|break|continue|raise)\b
+    )""",
+    re.VERBOSE,
+)
+
+
+def _unfenced_program(text: str) -> str:
+    """The program of a reply without code blocks: the longest run of lines that parses and acts, when every
+    line left out is prose; raises :class:`ProgramRejected` with the syntax error of the whole code when a line
+    that looks like code would be left out (the program would be cut)."""
+    lines = text.split("\n")
+    start, end = _longest_parsing_run(text)
+    code_like = [k for k, line in enumerate(lines) if (k < start or k >= end) and _CODE_LINE.match(line)]
+    if not code_like:
+        return "\n".join(lines[start:end])
+    first, last = (
+        min([*code_like, *([start] if end > start else [])]),
+        max([*code_like, *([end - 1] if end > start else [])]),
+    )
+    whole = "\n".join(lines[first : last + 1])
+    parse_program(whole)  # raises the syntax error that stops the code from parsing as a whole
+    return whole
+
+
+def _longest_parsing_run(text: str) -> tuple[int, int]:
+    """The longest run of whole lines that parses and acts, preferring the earliest, as (first line, end line);
+    an empty span if none is found.
 
     Each line may start a run; one that cannot start a program on its own (prose such as "Here is
     the code:") is ruled out by compiling that line alone. From a start, a syntax error at line k
@@ -128,7 +214,7 @@ def _longest_parsing_run(text: str) -> str:
                 next_start = end
             break
         start = next_start
-    return text[offsets[best[0]] : offsets[best[1]] - 1] if best[1] > best[0] else ""
+    return best
 
 
 SEARCH_EFFORT = 4

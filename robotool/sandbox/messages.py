@@ -129,8 +129,12 @@ def max_world_bytes(limits: SandboxLimits) -> int:
 
 def encode_start(code: str, skills: Sequence[SkillSpec], limits: SandboxLimits, *, python_checks: bool) -> bytes:
     """The start message: the program, the robot's skills (the worker defines exactly these), the limits."""
-    start = {"code": code, "skills": [s.model_dump(mode="json") for s in skills], "limits": limits.model_dump(),
-             "python_checks": python_checks}
+    start = {
+        "code": code,
+        "skills": [s.model_dump(mode="json") for s in skills],
+        "limits": limits.model_dump(),
+        "python_checks": python_checks,
+    }
     return json.dumps(start).encode()
 
 

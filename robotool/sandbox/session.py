@@ -200,9 +200,7 @@ def _rejection(code: str, embodiment: str) -> str | None:
     return None
 
 
-def start_sessions(
-    codes: Sequence[str], embodiment: str, limits: SandboxLimits | None = None
-) -> list[SandboxSession]:
+def start_sessions(codes: Sequence[str], embodiment: str, limits: SandboxLimits | None = None) -> list[SandboxSession]:
     """One session per program, their workers spawned in one batch (a rejected program's is released).
 
     The batch shares one output budget (``limits.max_batch_output_chars``) and its memory: each program

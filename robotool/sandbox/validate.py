@@ -392,6 +392,7 @@ _REDUCTIONS = frozenset({"sum", "mean", "std", "var", "prod", "cumsum"})
 """Array methods and numpy functions whose second or third positional parameter is ``dtype`` (which must be
 checked by name)."""
 
+
 def _unpacks(call: ast.Call) -> bool:
     """``f(*args)`` or ``f(**kwargs)``: which parameter gets which value is known only at run time.
 

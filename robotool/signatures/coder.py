@@ -12,8 +12,9 @@ class Code(dspy.Signature):
 
     Call the skills as plain functions, exactly as listed in the description. Query positions with the
     query skills right before a motion that depends on them, since objects move. Only `import numpy
-    as np` and `import math` are available; no other imports, no file or network access, no function
-    or class definitions. Follow the plan steps and their parameters when they are given.
+    as np` and `import math` are available; no other imports, no file or network access. Helper functions
+    (def) are allowed; classes, try/except, with statements and generators are not. Follow the plan steps
+    and their parameters when they are given.
     """
 
     description: str = dspy.InputField(desc="the scene with its numbers, the robot's limits and skills, the task")

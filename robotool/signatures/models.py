@@ -7,9 +7,15 @@ where a reply's meaning is clear and strict where it matters:
   numbers that are not finite are rejected;
 - a 2-D ``[x, y]`` target or offset for a robot whose motions ignore z (``RobotType.planar``) gets z = 0; for
   the others it is rejected, since its height matters;
+- object names match case-, space- and separator-insensitively when exactly one scene object fits
+  (``"Yoga Roller"`` is ``yoga_roller``), with a note;
 - names that a plan step or an object role mentions only for information (``"gap"``, ``"floor"``) and that are
   not objects of the scene are ignored with a note;
-- a key concept's missing ``limit_name`` is left empty and a missing ``satisfied`` is read from ``value <= limit``;
+- a key concept's kind is read by meaning (``"gap"`` is ``gap_width``) with a note, and one that names no known
+  kind is rejected; a missing ``limit_name`` is left empty and a missing ``satisfied`` is read from
+  ``value <= limit``;
+- known synonyms of a step parameter's fields (``"position"`` for ``"target"``) are read as the field with a
+  note; a step with no numbers (no target and no offset) is rejected, naming the fields that were not read;
 - skills that do not exist, and unknown objects in the parameters a skill acts on, are rejected.
 
 The scene is made known to the validators with :func:`scene_context` around the stage calls; the notes
@@ -103,20 +109,40 @@ def _note(text: str) -> None:
         notes.append(text)
 
 
+def _squashed(name: str) -> str:
+    return re.sub(r"[\s_\-.]+", "", name.lower())
+
+
+def _scene_name(name: str, scene: _Scene) -> str:
+    """The scene object ``name`` means: itself, or the one object whose name is the same once case, spaces and
+    separators are ignored (with a note); else ``name`` unchanged."""
+    if name in scene.objects:
+        return name
+    fits = [o for o in scene.objects if _squashed(o) == _squashed(name)]
+    if len(fits) == 1:
+        _note(f"object {name!r} read as {fits[0]!r}")
+        return fits[0]
+    return name
+
+
 def _check_objects(names: list[str]) -> list[str]:
+    """``names`` as scene objects (see :func:`_scene_name`); raises ValueError naming every unknown one."""
     scene = _SCENE.get()
-    if scene is not None:
-        unknown = [n for n in names if n not in scene.objects]
-        if unknown:
-            raise ValueError(f"unknown object(s) {unknown}; the scene has {sorted(scene.objects)}")
+    if scene is None:
+        return names
+    names = [_scene_name(n, scene) for n in names]
+    unknown = [n for n in names if n not in scene.objects]
+    if unknown:
+        raise ValueError(f"unknown object(s) {unknown}; the scene has {sorted(scene.objects)}")
     return names
 
 
 def _informational(names: list[str], where: str) -> list[str]:
-    """Names of scene objects among ``names``; the others are dropped with a note."""
+    """Names of scene objects among ``names`` (see :func:`_scene_name`); the others are dropped with a note."""
     scene = _SCENE.get()
     if scene is None:
         return names
+    names = [_scene_name(n, scene) for n in names]
     unknown = [n for n in names if n not in scene.objects]
     if unknown:
         _note(f"{where} names {', '.join(map(repr, unknown))}, not object(s) of the scene; ignored")
@@ -219,13 +245,30 @@ class AnalyzedConcept(KeyConcept):
 _KINDS: frozenset[str] = frozenset(get_args(ConceptKind))
 
 
+_KIND_WORDS: dict[str, frozenset[str]] = {
+    "workspace_excess": frozenset({"workspace", "reach", "reachability", "reachable", "arm_reach"}),
+    "climb_height": frozenset({"climb", "climbing", "step_up", "stepup", "step"}),
+    "drop_height": frozenset({"drop", "step_down", "stepdown", "descent", "descend"}),
+    "gap_width": frozenset({"gap", "gaps", "width", "span", "crossing"}),
+    "mass": frozenset({"mass", "weight", "payload", "heavy"}),
+    "fall_height": frozenset({"fall", "falling"}),
+    "lift_height": frozenset({"lift", "lifting"}),
+}
+"""Words that name each kind by meaning; a kind written otherwise is read as the one kind its words name."""
+
+
 def _concept_kind(text: str) -> str:
-    """``"Gap width"`` -> ``gap_width``; a kind that is not known becomes ``other``."""
+    """``"Gap width"`` -> ``gap_width``, ``"gap"`` -> ``gap_width`` (with a note); raises ValueError for a kind
+    whose words name no known kind, or several."""
     kind = re.sub(r"[\s\-]+", "_", text.strip().lower())
-    if kind not in _KINDS:
-        _note(f"key concept kind {text!r} is not a known kind; read as 'other'")
-        return "other"
-    return kind
+    if kind in _KINDS:
+        return kind
+    words = set(kind.split("_")) | {kind}
+    meant = [known for known, synonyms in _KIND_WORDS.items() if words & synonyms]
+    if len(meant) == 1:
+        _note(f"key concept kind {text!r} read as {meant[0]!r}")
+        return meant[0]
+    raise ValueError(f"kind {text!r} is not one of {', '.join(sorted(_KINDS))} (use 'other' if none fits)")
 
 
 class ObjectRole(BaseModel):
@@ -238,8 +281,8 @@ class ObjectRole(BaseModel):
     @field_validator("name")
     @classmethod
     def _known(cls, name: str) -> str:
-        _informational([name], "an object role")
-        return name
+        known = _informational([name], "an object role")
+        return known[0] if known else name
 
 
 class PlanStep(BaseModel):
@@ -299,9 +342,47 @@ class StepParameters(BaseModel):
             raise ValueError(f"must be three numbers [x, y, z] in metres, got {value}")
         return value
 
-    @model_validator(mode="after")
-    def _names(self) -> StepParameters:
-        _check_objects([n for n in (self.object, self.relative_to) if n is not None])
+    @model_validator(mode="wrap")
+    @classmethod
+    def _numbers_and_names(cls, data: Any, handler: Any) -> StepParameters:
+        """Known synonyms of the fields are read as the fields (with a note); a step must carry numbers and name
+        scene objects (see :func:`_check_objects`)."""
+        ignored: list[str] = []
+        if isinstance(data, dict):
+            data = {re.sub(r"[\s\-]+", "_", str(k).strip().lower()): v for k, v in data.items()}
+            for synonym in [k for k in data if k in _PARAMETER_SYNONYMS]:
+                field_name = _PARAMETER_SYNONYMS[synonym]
+                if data.get(field_name) is not None:
+                    raise ValueError(f"both {field_name!r} and {synonym!r} are given; give only {field_name!r}")
+                data[field_name] = data.pop(synonym)
+                _note(f"step parameter {synonym!r} read as {field_name!r}")
+            ignored = sorted(k for k in data if k not in cls.model_fields)
+        self = handler(data)
+        if self.target is None and self.offset is None:
+            unread = f"; the field(s) {', '.join(map(repr, ignored))} are not parameters" if ignored else ""
+            raise ValueError(
+                f"step {self.step} has no numbers: target and offset are both empty{unread}; give target "
+                "[x, y, z], or relative_to and offset"
+            )
+        if ignored:
+            _note(f"step {self.step}: field(s) {', '.join(map(repr, ignored))} are not parameters; ignored")
+        if self.object is not None:
+            self.object = _check_objects([self.object])[0]
+        if self.relative_to is not None:
+            self.relative_to = _check_objects([self.relative_to])[0]
         if self.relative_to is not None and self.offset is None:
             raise ValueError("relative_to needs an offset")
         return self
+
+
+_PARAMETER_SYNONYMS: dict[str, str] = {
+    **dict.fromkeys(
+        ("position", "target_position", "goal", "goal_position", "coordinates", "point", "location", "xyz"), "target"
+    ),
+    **dict.fromkeys(("delta", "displacement", "relative_offset"), "offset"),
+    **dict.fromkeys(("reference", "reference_object", "relative_object", "relative", "anchor"), "relative_to"),
+    **dict.fromkeys(("object_name", "obj", "target_object", "item"), "object"),
+    **dict.fromkeys(("step_number", "step_index", "step_id"), "step"),
+    **dict.fromkeys(("reason", "reasoning", "rationale", "derivation"), "explanation"),
+}
+"""Field names real models write for the step parameters' fields."""

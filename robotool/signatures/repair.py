@@ -113,7 +113,8 @@ class Repair(dspy.Signature):
     missed. Find the cause in the numbers, then give the revised plan steps and parameters and the
     complete new program. When the scope is 'parameters', keep the plan steps and change only the
     numbers. Call the skills as plain functions as in the description; only `import numpy as np` and
-    `import math` are available; no function or class definitions.
+    `import math` are available. Helper functions (def) are allowed; classes, try/except, with statements
+    and generators are not.
     """
 
     description: str = dspy.InputField(desc="the scene with its numbers, the robot's limits and skills, the task")

@@ -46,6 +46,7 @@ BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
 
+
 def is_sheet(obj: SceneObject) -> bool:
     """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper): it cannot push
     or lift anything with its edge. (Cloth is built as hinged links that drape; see :mod:`robotool.sim.cloth`.)"""
@@ -58,16 +59,18 @@ def _quat(rot: np.ndarray) -> np.ndarray:
     return q
 
 
-def _add_part(body: mujoco.MjsBody, part: geometry.Part, frame_pos: np.ndarray, frame_rot: np.ndarray,
-              name: str, **attrs: object) -> mujoco.MjsGeom:
+def _add_part(
+    body: mujoco.MjsBody, part: geometry.Part, frame_pos: np.ndarray, frame_rot: np.ndarray, name: str, **attrs: object
+) -> mujoco.MjsGeom:
     """Add one convex part, given in the world, to a body whose frame is (frame_pos, frame_rot)."""
     pos = frame_rot.T @ (part.center - frame_pos)
     quat = _quat(frame_rot.T @ part.rot)
     if part.kind == "box":
         geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=part.half, pos=pos, quat=quat)
     else:
-        geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[part.half[0], part.half[2], 0],
-                             pos=pos, quat=quat)
+        geom = body.add_geom(
+            name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[part.half[0], part.half[2], 0], pos=pos, quat=quat
+        )
     for key, value in attrs.items():
         setattr(geom, key, value)
     return geom
@@ -104,15 +107,30 @@ def _add_button(body: mujoco.MjsBody, obj: SceneObject, friction: list[float]) -
     depth = min(BUTTON_FACE_DEPTH, 0.2 * sx)
     travel = obj.button_travel
     housing_x0 = -sx / 2 + depth + travel
-    body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[(sx / 2 - housing_x0) / 2, sy / 2, sz / 2],
-                  pos=[(housing_x0 + sx / 2) / 2, 0, 0], friction=friction)
+    body.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[(sx / 2 - housing_x0) / 2, sy / 2, sz / 2],
+        pos=[(housing_x0 + sx / 2) / 2, 0, 0],
+        friction=friction,
+    )
     face = body.add_body(name=f"{obj.name}__face", pos=[-sx / 2 + depth / 2, 0, 0])
-    face.add_joint(name=f"{obj.name}__travel", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                   stiffness=obj.button_stiffness, damping=BUTTON_DAMPING, frictionloss=BUTTON_GUIDE_FRICTION,
-                   range=[0, travel],
-                   limited=mujoco.mjtLimited.mjLIMITED_TRUE)
-    face.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[depth / 2, 0.4 * sy, 0.4 * sz], mass=0.02,
-                  friction=friction, rgba=[0.8, 0.1, 0.1, 1])
+    face.add_joint(
+        name=f"{obj.name}__travel",
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[1, 0, 0],
+        stiffness=obj.button_stiffness,
+        damping=BUTTON_DAMPING,
+        frictionloss=BUTTON_GUIDE_FRICTION,
+        range=[0, travel],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+    )
+    face.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[depth / 2, 0.4 * sy, 0.4 * sz],
+        mass=0.02,
+        friction=friction,
+        rgba=[0.8, 0.1, 0.1, 1],
+    )
 
 
 def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
@@ -120,22 +138,38 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
     spec = mujoco.MjSpec()
     spec.option.timestep = TIMESTEP
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[5, 5, 0.1],
-                            friction=[GROUND_FRICTION, 0.005, 0.0001], contype=DEFAULT_BIT | GROUND_BIT,
-                            conaffinity=DEFAULT_BIT | GROUND_BIT)
+    spec.worldbody.add_geom(
+        name="ground",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[5, 5, 0.1],
+        friction=[GROUND_FRICTION, 0.005, 0.0001],
+        contype=DEFAULT_BIT | GROUND_BIT,
+        conaffinity=DEFAULT_BIT | GROUND_BIT,
+    )
     for obj in task.objects:
         if obj.shape == "cloth":
             add_cloth(spec, obj)
         else:
             _add_object(spec, obj)
         if obj.shape == "button":
-            spec.add_sensor(name=f"{obj.name}__travel", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
-                            objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"{obj.name}__travel")
+            spec.add_sensor(
+                name=f"{obj.name}__travel",
+                type=mujoco.mjtSensor.mjSENS_JOINTPOS,
+                objtype=mujoco.mjtObj.mjOBJ_JOINT,
+                objname=f"{obj.name}__travel",
+            )
     magnets = [o.name for o in task.objects if o.magnetic]
     for a, b in combinations(magnets, 2):
-        spec.add_equality(name=f"magnet__{a}__{b}", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1=a, name2=b, active=False, solref=WELD_SOLREF,
-                          solimp=WELD_SOLIMP)
+        spec.add_equality(
+            name=f"magnet__{a}__{b}",
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=a,
+            name2=b,
+            active=False,
+            solref=WELD_SOLREF,
+            solimp=WELD_SOLIMP,
+        )
     _add_sheet_pairs(spec, task)
     embodiment.add_to_spec(spec, task)
     return spec
@@ -166,14 +200,26 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
         centre, rot = np.asarray(sheet.center, dtype=float), geometry.rotation_matrix(sheet.rpy)
         for obj in (o for o in task.objects if o.movable and not is_sheet(o) and o.shape != "cloth"):
             mu = max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
-            carrier = _add_part(body, part, centre, rot, name=sheet_carrier_name(sheet.name, obj.name),
-                                contype=0, conaffinity=0, mass=0.0, rgba=[0, 0, 0, 0])
+            carrier = _add_part(
+                body,
+                part,
+                centre,
+                rot,
+                name=sheet_carrier_name(sheet.name, obj.name),
+                contype=0,
+                conaffinity=0,
+                mass=0.0,
+                rgba=[0, 0, 0, 0],
+            )
             drop = 0.0 if rests_on_sheet(obj, sheet) else SHEET_CARRIER_DROP
             carrier.pos = np.asarray(carrier.pos) + np.array([0.0, 0.0, SHEET_CARRIER_LIFT - drop])
             for k in range(len(geometry.object_parts(obj))):
-                spec.add_pair(geomname1=sheet_carrier_name(sheet.name, obj.name),
-                              geomname2=object_geom_name(obj.name, k), condim=3,
-                              friction=[mu, mu, 0.005, 0.0001, 0.0001])
+                spec.add_pair(
+                    geomname1=sheet_carrier_name(sheet.name, obj.name),
+                    geomname2=object_geom_name(obj.name, k),
+                    condim=3,
+                    friction=[mu, mu, 0.005, 0.0001, 0.0001],
+                )
 
 
 def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:
@@ -211,6 +257,15 @@ def build(task: Task) -> Scene:
         grasp_local[i] = rot.T @ (np.asarray(obj.grasp_point) - np.asarray(obj.center))
     nconmax = max(32, 8 * model.ngeom)
     njmax = 4 * nconmax + 6 * model.neq + 2 * model.njnt
-    return Scene(task=task, model=model, object_names=names,
-                 object_body=object_body, body_object=body_object, robot_body=robot_body,
-                 grasp_local=grasp_local, control_substeps=embodiment.control_substeps, nconmax=nconmax, njmax=njmax)
+    return Scene(
+        task=task,
+        model=model,
+        object_names=names,
+        object_body=object_body,
+        body_object=body_object,
+        robot_body=robot_body,
+        grasp_local=grasp_local,
+        control_substeps=embodiment.control_substeps,
+        nconmax=nconmax,
+        njmax=njmax,
+    )

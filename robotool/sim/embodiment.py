@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
+
 @dataclass(frozen=True)
 class SkillEnd:
     """A motion skill that finished in one world: how, why, the values behind it and what happened.
@@ -109,9 +110,7 @@ def size_now(scene: Scene, state: BatchState, world: int, index: int) -> list[fl
     """``get_size`` of a task object in one world: its size along x, y, z as it is turned now (see
     :func:`robotool.geometry.axis_aligned_size`); a cloth, which drapes, keeps its laid-out size."""
     obj = scene.task.objects[index]
-    turned = (
-        geometry.rotation_matrix(obj.rpy) if obj.shape == "cloth" else state.xmat(scene.object_body[index])[world]
-    )
+    turned = geometry.rotation_matrix(obj.rpy) if obj.shape == "cloth" else state.xmat(scene.object_body[index])[world]
     return [float(v) for v in geometry.axis_aligned_size(obj.size, turned)]
 
 

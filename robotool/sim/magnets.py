@@ -18,8 +18,11 @@ class Magnets:
 
     def __init__(self, scene: Scene):
         model = scene.model
-        self.pairs = [(eq, model.eq_obj1id[eq], model.eq_obj2id[eq]) for eq in range(model.neq)
-                      if model.equality(eq).name.startswith("magnet__")]
+        self.pairs = [
+            (eq, model.eq_obj1id[eq], model.eq_obj2id[eq])
+            for eq in range(model.neq)
+            if model.equality(eq).name.startswith("magnet__")
+        ]
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
         """Attach every magnet pair that touches in an ``active`` world and is not attached yet."""

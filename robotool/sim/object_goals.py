@@ -88,9 +88,13 @@ class FallTracker:
         struck = active & hard.any(axis=1) & (fall > self.max_drop) & ~self.broken
         for w in np.flatnonzero(struck):
             self.broken[w] = True
-            self.breaks[w] = Event(kind="broke", time=float(state.time[w]), object=self.name,
-                                   measured={"fall": float(fall[w]), "max_drop": self.max_drop},
-                                   detail=self._names(self.scene.body_object[self.others[hard[w]]]))
+            self.breaks[w] = Event(
+                kind="broke",
+                time=float(state.time[w]),
+                object=self.name,
+                measured={"fall": float(fall[w]), "max_drop": self.max_drop},
+                detail=self._names(self.scene.body_object[self.others[hard[w]]]),
+            )
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
         resting = active & touch.any(axis=1) & (speed < RESTING_SPEED)
         self.rest_height = np.where(resting, height, self.rest_height)

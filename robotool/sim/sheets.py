@@ -73,8 +73,9 @@ class Sheets:
             resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
             came = active & over & resting & ~self.over[:, k]  # came over the sheet during this tick
             slid = came & (first | (step[:, s] >= step[:, i]))  # ... because the sheet moved (or it was there)
-            self.slid_under[:, k] = np.where(active, (self.slid_under[:, k] | slid) & over & resting,
-                                             self.slid_under[:, k])
+            self.slid_under[:, k] = np.where(
+                active, (self.slid_under[:, k] | slid) & over & resting, self.slid_under[:, k]
+            )
             self.over[:, k] = np.where(active, over & resting, self.over[:, k])
             arrive = active & over & resting & ~self.on[:, k] & ~self.slid_under[:, k] & moved[:, i] & ~moved[:, s]
             leave = active & self.on[:, k] & ~(over & resting)

@@ -29,6 +29,7 @@ from robotool.lm_program import Proposer, RoboTool
 from robotool.optimize import Metric, OptimizeSettings, RolloutBatcher, optimize
 from robotool.optimize.data import DatasetError, Splits, builtin, check_training, splits
 from robotool.optimize.feedback import concept_findings
+from robotool.signatures import Repair
 from robotool.solution import Candidate, CandidateFailure, Proposal
 from robotool.standin import Rule, Script, StandinServer
 from robotool.verify import run_codes, select
@@ -160,7 +161,29 @@ def test_bootstrap_fewshot_on_two_training_examples(tmp_path: Path) -> None:
     assert any(GRASP_DIRECTLY.strip() in d for d in demos) and any(CLIMB_DIRECTLY.strip() in d for d in demos)
 
 
-def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: Path) -> None:
+def test_bootstrap_sees_no_repair_stage_and_says_when_it_kept_no_demonstration(tmp_path: Path, monkeypatch) -> None:
+    lm, _ = _task_lm(arm_code=STAND_STILL)  # the arm task fails in every world: nothing to keep
+    seen: list[list[str]] = []
+    original = dspy.BootstrapFewShot.compile
+
+    def compile_watched(self, student, **kwargs):
+        seen.append([name for name, _ in student.named_predictors()])
+        return original(self, student, **kwargs)
+
+    monkeypatch.setattr(dspy.BootstrapFewShot, "compile", compile_watched)
+    said: list[str] = []
+    data = Splits(train=[builtin(ARM)], val=[], test=[])
+    with dspy.context(adapter=CHAT):
+        outcome = optimize(_settings("bootstrap", demos=2), out=tmp_path / "p.json", log=tmp_path / "log", lm=lm,
+                           data=data, say=said.append)
+    assert seen == [["analyze", "plan", "calculate", "code"]]  # the metric never runs repair rounds
+    assert any("bootstrap kept no demonstration" in line for line in said)
+    assert any("kept no demonstration" in note for note in outcome.info.notes)
+    program = RoboTool.from_compiled(tmp_path / "p.json")  # the file still holds every stage, Repair as it was
+    assert program.repair.signature.instructions == Repair.instructions and program.compiled.train == [ARM]
+
+
+def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: Path, capfd) -> None:
     lm, engine = _task_lm()
     reflection = ReflectionEngine("Always query positions right before every motion (MIPRO-PROPOSED).")
     data = Splits(train=[builtin(ARM), builtin(QUADRUPED)], val=[builtin(ARM)], test=[])
@@ -170,6 +193,35 @@ def test_mipro_on_two_training_examples_sets_the_proposed_instruction(tmp_path: 
     assert any("MIPRO-PROPOSED" in s for s in engine.systems)
     stored = json.loads((tmp_path / "p.json").read_text())
     assert stored["robotool"]["optimizer"] == "mipro" and set(stored) >= {"analyze", "plan", "calculate", "code"}
+    # the metric never runs repair rounds: the Repair stage is frozen, stored as it was
+    assert stored["repair"]["signature"]["instructions"] == Repair.instructions and not stored["repair"]["demos"]
+    shown = capfd.readouterr()  # DSPy's trial lines and progress bars went to the log file, not the console
+    assert "Trial" not in shown.err + shown.out and "Average Metric" not in shown.err + shown.out
+    assert "Trial" in (tmp_path / "log" / "dspy.log").read_text()
+
+
+class _ProseProposer:
+    """TEST FIXTURE: an optimiser's model that answers in prose, never in the fields asked for."""
+
+    def complete(self, request):
+        from fixtures.optimize_lm import _response
+
+        return _response(request, "I think the instruction should be clearer. Sorry, I cannot format this.")
+
+
+def test_mipro_survives_a_proposer_reply_it_cannot_read_with_a_note(tmp_path: Path) -> None:
+    lm, _ = _task_lm()
+    data = Splits(train=[builtin(ARM), builtin(QUADRUPED)], val=[builtin(ARM)], test=[])
+    said: list[str] = []
+    with dspy.context(adapter=CHAT):
+        outcome = optimize(_settings("mipro", trials=2, candidates=2, demos=1), out=tmp_path / "p.json",
+                           log=tmp_path / "log", lm=lm, reflection_lm=engine_lm(_ProseProposer()), data=data,
+                           say=said.append)
+    assert any("mipro: the proposer's reply could not be read" in line for line in said)
+    assert "mipro: the default program is evaluated, then 2 trial(s) of proposed prompts" in said
+    assert any("stages keep their instructions" in note for note in outcome.info.notes)
+    program = RoboTool.from_compiled(tmp_path / "p.json")
+    assert program.code.signature.instructions == Proposer().code.signature.instructions
 
 
 def test_simba_on_two_training_examples(tmp_path: Path) -> None:
@@ -215,10 +267,32 @@ def test_gepa_with_a_scripted_lm_reflects_on_each_stage_s_feedback(tmp_path: Pat
     assert "Nothing points at the Analyzer's output" in shown and "point at the Planner" in shown
 
 
+def test_a_gepa_run_resumes_with_a_larger_budget_and_refuses_other_changes(tmp_path: Path) -> None:
+    from robotool.optimize.run import OptimizeError
+
+    lm, _ = _task_lm(arm_code=STAND_STILL)
+    reflection = ReflectionEngine("GEPA-PROPOSED: move the gripper to the milk before closing it.")
+    data = Splits(train=[builtin(ARM)], val=[builtin(ARM)], test=[])
+    said: list[str] = []
+
+    def run(**budget: int) -> None:
+        optimize(_settings("gepa", **budget), out=tmp_path / "p.json", log=tmp_path / "log", lm=lm,
+                 reflection_lm=engine_lm(reflection), data=data, say=said.append)
+
+    with dspy.context(adapter=CHAT):
+        run(max_metric_calls=4)
+        first = len(reflection.shown)
+        run(max_metric_calls=8)
+        with pytest.raises(OptimizeError, match="holds a run with other settings"):
+            run(max_metric_calls=6)  # a smaller budget is another run
+    assert any("resuming the GEPA run" in line and "4 -> 8 metric calls" in line for line in said)
+    assert len(reflection.shown) > first  # the extended run reflected further
+
+
 # -- offline compilation and compiled programs everywhere -------------------------------------------
 
 
-def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path) -> None:
+def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from robotool.cli import main as robotool_main
     from robotool.eval import main as eval_main
     from robotool.optimize.optimize_cli import main as optimize_main
@@ -250,6 +324,22 @@ def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path) -> None:
     results = json.loads((tmp_path / "eval" / "results.json").read_text())
     assert [r["key"]["method"] for r in results["records"]] == ["p"] and results["records"][0]["success_rate"] == 1.0
     assert any("get_graspable_point('hammer')" in p for p in coder_prompts)  # the demonstration reached the model
+
+    # the file records its training instance; eval refuses to score the program on it without --allow-train
+    assert stored["robotool"]["train"] == [f"{sources[0]['family']}#{sources[0]['seed']}"]
+    assert stored["robotool"]["val"] == [] and any("Repair stage is left" in n for n in stored["robotool"]["notes"])
+    on_train = ["--program", str(out), "--families", sources[0]["family"], "--seeds", str(sources[0]["seed"]),
+                "--lm", "openai/standin", "--no-cache", "--worlds", "1", "--no-pictures"]
+    with StandinServer(Script(rules=_standin_rules(GRASP_DIRECTLY))) as server:
+        refused = eval_main([*on_train, "--api-base", server.base_url, "--out", str(tmp_path / "train")])
+        assert refused == 2 and not server.requests
+        allowed = eval_main([*on_train, "--api-base", server.base_url, "--out", str(tmp_path / "train"),
+                             "--allow-train"])
+    err = capsys.readouterr().err
+    assert "was trained on milk_reaching#" in err and "--allow-train" in err
+    assert allowed in (0, 1)
+    report = (tmp_path / "train" / "report.md").read_text()
+    assert "p was trained on milk_reaching#" in report and "not held out" in report
 
 
 def test_a_compiled_program_that_lacks_a_stage_is_refused_clearly(tmp_path: Path) -> None:

@@ -21,12 +21,52 @@ def test_fenced_block_inside_prose(tag: str) -> None:
     assert extract_program(answer) == PROGRAM
 
 
-def test_several_python_blocks_are_joined_and_other_languages_skipped() -> None:
+def test_of_several_python_blocks_the_last_is_taken_never_joined_and_other_languages_skipped() -> None:
     answer = (
-        'Step 1:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{"milk": 1}\n```\n'
-        "Step 2:\n~~~py\nclose_gripper()\n~~~\n"
+        'Draft:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{"milk": 1}\n```\n'
+        "Better:\n~~~py\nclose_gripper()\n~~~\n"
     )
-    assert extract_program(answer) == "open_gripper()\n\nclose_gripper()\n"
+    extraction = extract(answer)
+    assert extraction.code == "close_gripper()\n"
+    assert "2 code blocks; block 2 (the last) was used, not joined" in extraction.note
+
+
+def test_the_block_marked_final_is_taken_even_before_a_later_one() -> None:
+    answer = (
+        "Final program:\n```python\nopen_gripper()\nclose_gripper()\n```\n"
+        "For comparison, the naive version:\n```python\nclose_gripper()\n```\n"
+    )
+    extraction = extract(answer)
+    assert extraction.code == "open_gripper()\nclose_gripper()\n"
+    assert "block 1 (marked 'Final program:')" in extraction.note
+
+
+def test_an_output_listing_after_the_program_is_not_taken_for_it() -> None:
+    extraction = extract(f"```python\n{PROGRAM}```\nOutput:\n```\nDone\n```\n")
+    assert extraction.code == PROGRAM and "the last that is a program" in extraction.note
+
+
+def test_a_draft_inside_reasoning_is_never_code() -> None:
+    answer = (
+        "<think>\nFirst idea:\n```python\nclose_gripper()\n```\nNo, that grasps nothing.\n</think>\n\n"
+        f"Final program:\n```python\n{PROGRAM}```"
+    )
+    extraction = extract(answer)
+    assert extraction.code == PROGRAM and extraction.chosen is None
+    with pytest.raises(ProgramRejected, match="no Python program found"):
+        extract("<think>\n```python\nclose_gripper()\n```\n")  # reasoning cut off: no answer yet
+    assert extract_program(f"The open tag was stripped by the server.\n</think>\n{PROGRAM}") == PROGRAM
+
+
+def test_unfenced_python_2_is_rejected_with_its_syntax_error_never_cut_to_the_lines_that_parse() -> None:
+    answer = (
+        'push_to_position("box", [1, 0, 0])\nwalk_to_position([1, 0, 0])\nprint "climbing"\n'
+        "for i in xrange(2):\n    climb_to_position([1, 0, 0.2])\n"
+    )
+    with pytest.raises(ProgramRejected, match="line 3: syntax error: Missing parentheses"):
+        extract(answer)
+    with pytest.raises(ProgramRejected, match="line 1: syntax error"):
+        extract('print "hello"\nopen_gripper()\n')
 
 
 def test_unclosed_fence_runs_to_the_end() -> None:
@@ -123,6 +163,8 @@ def test_extraction_counts_the_lines_it_left_out() -> None:
     assert extract(PROGRAM).dropped_lines == 0 and extract(PROGRAM).note is None
     fenced = extract(f"Sure! Here is the program:\n```python\n{PROGRAM}```\nIt grasps the milk.\n")
     assert fenced.code == PROGRAM and fenced.dropped_lines == 2
-    truncated = extract(f"{PROGRAM}move_to_position([0.3, 0,\n")
-    assert truncated.code == PROGRAM and truncated.dropped_lines == 1
-    assert "1 non-blank line(s)" in truncated.note
+    prose = extract(f"Here it is:\n{PROGRAM}That is all.\n")
+    assert prose.code == PROGRAM and prose.dropped_lines == 2
+    assert "2 non-blank line(s)" in prose.note
+    with pytest.raises(ProgramRejected, match="line 5: syntax error"):  # a cut-off last line is not dropped
+        extract(f"{PROGRAM}move_to_position([0.3, 0,\n")

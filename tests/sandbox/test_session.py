@@ -129,8 +129,9 @@ def test_array_methods_that_numpy_implements_in_python_work_in_the_worker() -> N
         "print(a.mean(), a.std(), a.clip(0, 2).tolist(), a.round(0).tolist(), a.sum(axis=0), a.max(), a.prod())\n"
     )
     (world,) = drive([SandboxSession(code, "arm", FAST)])
-    assert world.ended == ProgramEnded(error=None, output="2.1666666666666665 1.0274023338281628 [1.0, 2.0, 2.0] "
-                                       "[1.0, 2.0, 4.0] 6.5 3.5 7.0\n")
+    assert world.ended == ProgramEnded(
+        error=None, output="2.1666666666666665 1.0274023338281628 [1.0, 2.0, 2.0] [1.0, 2.0, 4.0] 6.5 3.5 7.0\n"
+    )
 
 
 def test_named_unicode_escapes_compile_in_the_worker() -> None:

@@ -6,7 +6,8 @@ import pytest
 from pydantic import ValidationError
 
 from robotool import robots, tasks
-from robotool.signatures import AnalyzedConcept, PlanStep, StepParameters, scene_context, validation_notes
+from robotool.sandbox import ProgramRejected, validate
+from robotool.signatures import AnalyzedConcept, Code, PlanStep, Repair, StepParameters, scene_context, validation_notes
 from robotool.signatures.models import parse_quantity
 
 QUADRUPED = tasks.load("sofa_climbing_low_sofa")
@@ -93,3 +94,69 @@ def test_plain_numbers_in_the_unit_the_concept_names_become_si() -> None:
         {"name": "gap", "kind": "gap_width", "value": 40, "limit": 10, "unit": "cm", "satisfied": False}
     )
     assert (concept.value, concept.limit, concept.unit) == (0.4, 0.1, "m")
+
+
+@pytest.mark.parametrize("signature", [Code, Repair], ids=["coder", "repair"])
+def test_the_program_prompts_and_the_sandbox_agree_on_what_a_program_may_contain(signature) -> None:
+    """What the Coder and Repair prompts allow the sandbox accepts, and what they forbid it refuses."""
+    instructions = " ".join(signature.instructions.split())
+    allowed = {"Helper functions (def) are allowed": "def reach(name):\n    move_to_position(get_center(name))\n"}
+    forbidden = {
+        "classes": ("class Plan:\n    pass\n", "class definitions"),
+        "try/except": ("try:\n    open_gripper()\nexcept Exception:\n    pass\n", "try/except"),
+        "with statements": ("with x:\n    pass\n", "with statements"),
+        "generators": ("def steps():\n    yield 1\n", "yield"),
+    }
+    for phrase, program in allowed.items():
+        assert phrase in instructions
+        validate(program + "reach('milk')\n", "arm")
+    for phrase, (program, refusal) in forbidden.items():
+        assert phrase in instructions.split("are allowed;")[1]
+        with pytest.raises(ProgramRejected, match=refusal):
+            validate(program, "arm")
+
+
+def test_object_names_match_case_space_and_separator_insensitively_when_one_object_fits() -> None:
+    traversing = tasks.load("sofa_traversing")  # sofa_1, sofa_2, strip_of_cloth, surfboard
+    with scene_context(traversing, robots.get(traversing.embodiment)), validation_notes() as sink:
+        step = PlanStep(skill="push_to_position", objects=["Surfboard", "Sofa 1", "sofa-2", "Strip of Cloth", "Sofa"])
+        parameters = StepParameters(step=1, object="Surfboard", relative_to="SOFA_2", offset=[0.0, 0.0, 0.0])
+    assert step.objects == ["surfboard", "sofa_1", "sofa_2", "strip_of_cloth"]  # "Sofa" fits two objects: not guessed
+    assert parameters.object == "surfboard" and parameters.relative_to == "sofa_2"
+    assert "object 'Surfboard' read as 'surfboard'" in sink.notes
+    assert any("'Sofa', not object(s) of the scene" in note for note in sink.notes)
+
+
+@pytest.mark.parametrize(
+    ("written", "kind"),
+    [
+        ("gap", "gap_width"),
+        ("Gap", "gap_width"),
+        ("gap width", "gap_width"),
+        ("reach", "workspace_excess"),
+        ("weight", "mass"),
+        ("step-up", "climb_height"),
+        ("drop", "drop_height"),
+        ("other", "other"),
+    ],
+)
+def test_concept_kinds_are_read_by_meaning(written: str, kind: str) -> None:
+    concept = {"name": "x", "kind": written, "value": 0.1, "limit": 0.2, "satisfied": True}
+    assert AnalyzedConcept.model_validate(concept).kind == kind
+
+
+@pytest.mark.parametrize("written", ["friction", "height", "gap or climb"])
+def test_a_concept_kind_that_names_no_kind_or_several_is_asked_for_again(written: str) -> None:
+    concept = {"name": "x", "kind": written, "value": 0.1, "limit": 0.2, "satisfied": True}
+    with pytest.raises(ValidationError, match=f"kind {written!r} is not one of"):
+        AnalyzedConcept.model_validate(concept)
+
+
+def test_step_parameter_synonyms_are_read_and_a_step_without_numbers_is_rejected() -> None:
+    with scene_context(ARM, robots.get(ARM.embodiment)), validation_notes() as sink:
+        read = StepParameters.model_validate({"step": 2, "object": "milk", "position": [0.3, 0.0, 0.1]})
+        with pytest.raises(ValidationError, match="both 'target' and 'position'"):
+            StepParameters.model_validate({"step": 2, "target": [0.3, 0.0, 0.1], "position": [0.3, 0.0, 0.2]})
+        with pytest.raises(ValidationError, match="step 2 has no numbers"):
+            StepParameters.model_validate({"step": 2, "object": "milk", "target": None, "offset": None})
+    assert read.target == [0.3, 0.0, 0.1] and "step parameter 'position' read as 'target'" in sink.notes

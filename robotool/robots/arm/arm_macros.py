@@ -72,8 +72,12 @@ def pick_and_lift(
     g = pick(prog, tool, role)
     t = prog.query("get_center", target.name, target.center)
     carry = arm.carry_height([tool], tool)
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[tool.name],
-                intent=f"lift {tool.name} above everything")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g).with_axis(2, None, carry),
+        objects=[tool.name],
+        intent=f"lift {tool.name} above everything",
+    )
     return t, carry, tool.grasp_point[2] + SLIDE
 
 
@@ -82,10 +86,19 @@ def pick(prog: Program, obj: SceneObject, role: str) -> Ref:
     prog.use(obj.name, role)
     g = prog.query("get_graspable_point", obj.name, obj.grasp_point)
     prog.motion("open_gripper", intent="open the gripper")
-    prog.motion("move_to_position", point=Point.at(g, (0, 0, CLEAR)), objects=[obj.name],
-                intent=f"move above {obj.name}'s graspable point", explanation=f"{CLEAR} m above it")
-    prog.motion("move_to_position", point=Point.at(g), objects=[obj.name],
-                intent=f"lower the gripper onto {obj.name}'s graspable point")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g, (0, 0, CLEAR)),
+        objects=[obj.name],
+        intent=f"move above {obj.name}'s graspable point",
+        explanation=f"{CLEAR} m above it",
+    )
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g),
+        objects=[obj.name],
+        intent=f"lower the gripper onto {obj.name}'s graspable point",
+    )
     prog.motion("close_gripper", objects=[obj.name], intent=f"grasp {obj.name}")
     return g
 
@@ -93,8 +106,12 @@ def pick(prog: Program, obj: SceneObject, role: str) -> Ref:
 def release(prog: Program, at: Point, obj: str) -> None:
     """Open the gripper and move up clear of what it held."""
     prog.motion("open_gripper", objects=[obj], intent=f"release {obj}")
-    prog.motion("move_to_position", point=at.shifted((0, 0, CLEAR)), intent=f"move up away from {obj}",
-                explanation=f"{CLEAR} m above where {obj} was released")
+    prog.motion(
+        "move_to_position",
+        point=at.shifted((0, 0, CLEAR)),
+        intent=f"move up away from {obj}",
+        explanation=f"{CLEAR} m above where {obj} was released",
+    )
 
 
 def finish(prog: Program, arm: Arm, target: SceneObject) -> None:
@@ -106,8 +123,13 @@ def finish(prog: Program, arm: Arm, target: SceneObject) -> None:
         return
     rise = 0.05 if goal.kind == "grasped" else goal.lifted.height + 0.03  # type: ignore[union-attr]
     top = min(target.grasp_point[2] + rise, arm.hi[2])
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, top), objects=[target.name],
-                intent=f"lift {target.name}", explanation=f"{rise:.2f} m above where it was grasped")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g).with_axis(2, None, top),
+        objects=[target.name],
+        intent=f"lift {target.name}",
+        explanation=f"{rise:.2f} m above where it was grasped",
+    )
 
 
 def place_lower(prog: Program, arm: Arm, target: SceneObject, g: Ref) -> None:
@@ -117,8 +139,12 @@ def place_lower(prog: Program, arm: Arm, target: SceneObject, g: Ref) -> None:
     carry = arm.carry_height([target], target)
     lift = target.grasp_point[2] - target.bottom + 0.005
     dx, dy = spot - box.center
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[target.name],
-                intent=f"lift {target.name} clear of everything")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g).with_axis(2, None, carry),
+        objects=[target.name],
+        intent=f"lift {target.name} clear of everything",
+    )
     over = Point.at(g, (dx, dy, 0)).with_axis(2, None, carry)
     prog.motion("move_to_position", point=over, objects=[target.name], intent="carry it over a free spot on the table")
     down = over.with_axis(2, None, lift)
@@ -168,18 +194,27 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
     g_pre = box.center + pre
     if not (arm.inside(g_pre) and arm.inside(g_pre + pull * pull_by)):
         return False
-    t, carry, low = pick_and_lift(prog, arm, hook, target,
-                                  f"tool: a hook whose head reaches behind {target.name} to pull it in")
+    t, carry, low = pick_and_lift(
+        prog, arm, hook, target, f"tool: a hook whose head reaches behind {target.name} to pull it in"
+    )
     above = Point.at(t, (*pre, 0)).with_axis(2, None, carry)
-    prog.motion("move_to_position", point=above, objects=[hook.name, target.name],
-                intent=f"carry {hook.name}'s head over the far side of {target.name}",
-                explanation=f"head's inner face {GAP} m beyond {target.name}, {target.name} {s:.3f} m along the head")
+    prog.motion(
+        "move_to_position",
+        point=above,
+        objects=[hook.name, target.name],
+        intent=f"carry {hook.name}'s head over the far side of {target.name}",
+        explanation=f"head's inner face {GAP} m beyond {target.name}, {target.name} {s:.3f} m along the head",
+    )
     down = above.with_axis(2, None, low)
     prog.motion("move_to_position", point=down, objects=[hook.name], intent=f"lower {hook.name}'s head to the table")
     end = down.shifted((*(pull * pull_by), 0))
-    prog.motion("move_to_position", point=end, objects=[hook.name, target.name],
-                intent=f"pull {target.name} into the workspace with {hook.name}",
-                explanation=f"{pull_by:.3f} m, until its graspable point is {INSIDE} m inside the workspace")
+    prog.motion(
+        "move_to_position",
+        point=end,
+        objects=[hook.name, target.name],
+        intent=f"pull {target.name} into the workspace with {hook.name}",
+        explanation=f"{pull_by:.3f} m, until its graspable point is {INSIDE} m inside the workspace",
+    )
     release(prog, end, hook.name)
     prog.say(f"Grasp {hook.name}, reach its head behind {target.name} and pull {target.name} into the workspace.")
     return True
@@ -204,25 +239,45 @@ def tool_push(prog: Program, arm: Arm, tool: SceneObject, target: SceneObject, d
         return False
     back = -d * (t_along + GAP + face)
     options = sorted(np.linspace(q_lo, q_hi, 9), key=lambda q: abs(q - (box.center - g0[:2]) @ side))
-    q = next((q for q in options if arm.inside(box.center + back - side * q)
-              and arm.inside(box.center + back - side * q + d * (dist + GAP))), None)
+    q = next(
+        (
+            q
+            for q in options
+            if arm.inside(box.center + back - side * q) and arm.inside(box.center + back - side * q + d * (dist + GAP))
+        ),
+        None,
+    )
     if q is None:
         return False
     t, carry, low = pick_and_lift(prog, arm, tool, target, f"tool: a rigid object to push {target.name} with")
     above = Point.at(t, (*(back - side * q), 0)).with_axis(2, None, carry)
-    prog.motion("move_to_position", point=above, objects=[tool.name],
-                intent=f"carry {tool.name} behind {target.name}", explanation=f"its face {GAP} m behind {target.name}")
+    prog.motion(
+        "move_to_position",
+        point=above,
+        objects=[tool.name],
+        intent=f"carry {tool.name} behind {target.name}",
+        explanation=f"its face {GAP} m behind {target.name}",
+    )
     down = above.with_axis(2, None, low)
     prog.motion("move_to_position", point=down, objects=[tool.name], intent=f"lower {tool.name} to the table")
     end = down.shifted((*(d * (dist + GAP)), 0))
-    prog.motion("move_to_position", point=end, objects=[tool.name, target.name],
-                intent=f"push {target.name} with {tool.name}",
-                explanation=f"{dist:.3f} m to [{dest[0]:.3f}, {dest[1]:.3f}]")
-    prog.motion("move_to_position", point=end.with_axis(2, None, carry), objects=[tool.name],
-                intent=f"lift {tool.name} off")
+    prog.motion(
+        "move_to_position",
+        point=end,
+        objects=[tool.name, target.name],
+        intent=f"push {target.name} with {tool.name}",
+        explanation=f"{dist:.3f} m to [{dest[0]:.3f}, {dest[1]:.3f}]",
+    )
+    prog.motion(
+        "move_to_position", point=end.with_axis(2, None, carry), objects=[tool.name], intent=f"lift {tool.name} off"
+    )
     stow = down.shifted((*(-d * STOW), 0))
-    prog.motion("move_to_position", point=stow.with_axis(2, None, carry), objects=[tool.name],
-                intent=f"carry {tool.name} back out of the way")
+    prog.motion(
+        "move_to_position",
+        point=stow.with_axis(2, None, carry),
+        objects=[tool.name],
+        intent=f"carry {tool.name} back out of the way",
+    )
     prog.motion("move_to_position", point=stow, objects=[tool.name], intent=f"set {tool.name} down")
     release(prog, stow, tool.name)
     prog.say(f"Push {target.name} with {tool.name} to [{dest[0]:.2f}, {dest[1]:.2f}].")
@@ -237,9 +292,13 @@ def drag_support(prog: Program, arm: Arm, support: SceneObject, target: SceneObj
         return False
     g = pick(prog, support, f"tool: a support that carries {target.name} when dragged")
     end = Point.at(g, (*shift, 0.001))
-    prog.motion("move_to_position", point=end, objects=[support.name, target.name],
-                intent=f"drag {support.name} with {target.name} on it into the workspace",
-                explanation=f"by [{shift[0]:.3f}, {shift[1]:.3f}] m so {target.name} is {INSIDE} m inside")
+    prog.motion(
+        "move_to_position",
+        point=end,
+        objects=[support.name, target.name],
+        intent=f"drag {support.name} with {target.name} on it into the workspace",
+        explanation=f"by [{shift[0]:.3f}, {shift[1]:.3f}] m so {target.name} is {INSIDE} m inside",
+    )
     release(prog, end, support.name)
     prog.say(f"Drag {support.name} with {target.name} on it into the workspace.")
     return True
@@ -260,14 +319,20 @@ def press_direct(prog: Program, arm: Arm, button: SceneObject, drop: float) -> b
     z = max(face[2] - drop, arm.lo[2]) - button.center[2]
     start = Point.at(b, (*(rel[:2] - n * 0.1), z))
     prog.motion("move_to_position", point=start, objects=[button.name], intent=f"move in front of {button.name}'s face")
-    prog.motion("move_to_position", point=start.shifted((*(n * (0.1 + PRESS)), 0)), objects=[button.name],
-                intent=f"press {button.name}", explanation=f"{PRESS} m past its face")
+    prog.motion(
+        "move_to_position",
+        point=start.shifted((*(n * (0.1 + PRESS)), 0)),
+        objects=[button.name],
+        intent=f"press {button.name}",
+        explanation=f"{PRESS} m past its face",
+    )
     prog.say(f"Press {button.name} with the gripper.")
     return True
 
 
-def press_with(prog: Program, arm: Arm, button: SceneObject, holder: SceneObject, held: list[SceneObject],
-               g: Ref) -> bool:
+def press_with(
+    prog: Program, arm: Arm, button: SceneObject, holder: SceneObject, held: list[SceneObject], g: Ref
+) -> bool:
     """Press the button with the tip of what the gripper holds (``holder`` at the gripper, ``held`` all of it)."""
     face, n = press_face(button)
     tip = tip_reach(holder, held, n)
@@ -281,16 +346,33 @@ def press_with(prog: Program, arm: Arm, button: SceneObject, holder: SceneObject
     carry = max(arm.carry_height(held, holder), z)
     names = [o.name for o in held]
     approach = Point.at(b, (*(press_xy - np.asarray(button.center[:2]) - n * (PRESS + 0.08)), 0))
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=names,
-                intent="lift what the gripper holds above everything")
-    prog.motion("move_to_position", point=approach.with_axis(2, None, carry), objects=names,
-                intent=f"carry it in front of {button.name}")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g).with_axis(2, None, carry),
+        objects=names,
+        intent="lift what the gripper holds above everything",
+    )
+    prog.motion(
+        "move_to_position",
+        point=approach.with_axis(2, None, carry),
+        objects=names,
+        intent=f"carry it in front of {button.name}",
+    )
     low = approach.with_axis(2, b, z - button.center[2])
-    prog.motion("move_to_position", point=low, objects=names,
-                intent=f"lower its tip to the height of {button.name}'s face",
-                explanation=f"tip {tip:.3f} m from the gripper, face at [{rel[0]:.3f}, {rel[1]:.3f}] from the centre")
-    prog.motion("move_to_position", point=low.shifted((*(n * (PRESS + 0.08)), 0)), objects=[*names, button.name],
-                intent=f"press {button.name} with the tip", explanation=f"tip {PRESS} m past the face")
+    prog.motion(
+        "move_to_position",
+        point=low,
+        objects=names,
+        intent=f"lower its tip to the height of {button.name}'s face",
+        explanation=f"tip {tip:.3f} m from the gripper, face at [{rel[0]:.3f}, {rel[1]:.3f}] from the centre",
+    )
+    prog.motion(
+        "move_to_position",
+        point=low.shifted((*(n * (PRESS + 0.08)), 0)),
+        objects=[*names, button.name],
+        intent=f"press {button.name} with the tip",
+        explanation=f"tip {PRESS} m past the face",
+    )
     prog.say(f"Press {button.name} with the far end of {', '.join(names)} held in the gripper.")
     return True
 
@@ -322,22 +404,42 @@ def chain(prog: Program, arm: Arm, holder: SceneObject, links: list[SceneObject]
     g = pick(prog, holder, "tool part: the magnetic object the gripper holds; the chain grows from it")
     low = g0[2] + SLIDE
     carry = arm.carry_height(held, holder)
-    prog.motion("move_to_position", point=Point.at(g).with_axis(2, None, carry), objects=[holder.name],
-                intent=f"lift {holder.name}")
+    prog.motion(
+        "move_to_position",
+        point=Point.at(g).with_axis(2, None, carry),
+        objects=[holder.name],
+        intent=f"lift {holder.name}",
+    )
     for link, half, tip in plans:
         prog.use(link.name, "tool part: a magnetic object that sticks to the chain's end")
         c = prog.query("get_center", link.name, link.center)
         before = Point.at(c, (*(-n * (half + tip + 0.05)), 0)).with_axis(2, None, carry)
-        prog.motion("move_to_position", point=before, objects=[holder.name, link.name],
-                    intent=f"carry the chain behind {link.name}")
-        prog.motion("move_to_position", point=before.with_axis(2, None, low), objects=[holder.name],
-                    intent="lower the chain to the table")
+        prog.motion(
+            "move_to_position",
+            point=before,
+            objects=[holder.name, link.name],
+            intent=f"carry the chain behind {link.name}",
+        )
+        prog.motion(
+            "move_to_position",
+            point=before.with_axis(2, None, low),
+            objects=[holder.name],
+            intent="lower the chain to the table",
+        )
         touch = before.with_axis(2, None, low).shifted((*(n * (0.05 + ATTACH)), 0))
-        prog.motion("move_to_position", point=touch, objects=[holder.name, link.name],
-                    intent=f"touch {link.name} with the chain's end so it sticks",
-                    explanation=f"chain end {tip:.3f} m from the gripper, {ATTACH} m into {link.name}'s near face")
-        prog.motion("move_to_position", point=touch.with_axis(2, None, carry), objects=[holder.name, link.name],
-                    intent="lift the chain")
+        prog.motion(
+            "move_to_position",
+            point=touch,
+            objects=[holder.name, link.name],
+            intent=f"touch {link.name} with the chain's end so it sticks",
+            explanation=f"chain end {tip:.3f} m from the gripper, {ATTACH} m into {link.name}'s near face",
+        )
+        prog.motion(
+            "move_to_position",
+            point=touch.with_axis(2, None, carry),
+            objects=[holder.name, link.name],
+            intent="lift the chain",
+        )
     names = ", ".join(o.name for o in held)
     prog.say(f"Chain the magnetic objects {names} into a stick by touching them end to end.")
     return g
@@ -429,8 +531,9 @@ def _press_programs(arm: Arm, button: SceneObject, tools: bool) -> Iterator[Prog
         g = pick(prog, tool, f"tool: a rigid object to press {button.name} with")
         if press_with(prog, arm, button, tool, [tool], g):
             yield prog
-    magnets = sorted((o for o in arm.task.objects if o.magnetic and o.movable),
-                     key=lambda o: float(np.asarray(o.center[:2]) @ n))
+    magnets = sorted(
+        (o for o in arm.task.objects if o.magnetic and o.movable), key=lambda o: float(np.asarray(o.center[:2]) @ n)
+    )
     for holder in (m for m in magnets if arm.graspable(m)):
         rest = [m for m in magnets if m is not holder]
         for count in range(1, len(rest) + 1):

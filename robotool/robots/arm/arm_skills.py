@@ -14,12 +14,8 @@ class ArmLimits(BaseModel):
 
     workspace_min: tuple[float, float, float] = (-0.30, -0.45, 0.0)
     workspace_max: tuple[float, float, float] = (0.45, 0.45, 0.50)
-    grasp_radius: float = Field(
-        0.02, gt=0, description="how close the gripper must be to a graspable point, m"
-    )
-    gripper_opening: float = Field(
-        0.06, gt=0, le=0.2, description="distance between the open fingers' inner faces, m"
-    )
+    grasp_radius: float = Field(0.02, gt=0, description="how close the gripper must be to a graspable point, m")
+    gripper_opening: float = Field(0.06, gt=0, le=0.2, description="distance between the open fingers' inner faces, m")
 
 
 ARM_SKILLS: tuple[SkillSpec, ...] = (

@@ -38,7 +38,9 @@ def _check_start(task: Task, parts: dict[str, list[geometry.Part]]) -> Problem |
     stand = float(geometry.surface_height(footprint, solids).max())
     under_centre = float(geometry.surface_height(np.array([[x, y]]), solids)[0])
     if stand - under_centre > limits.max_step_up:
-        return Problem(path="robot.position",
-                       message=f"the robot at [{x}, {y}] is not over a surface: its centre hangs over "
-                               f"a {stand - under_centre:.2f} m drop at the edge of what it would stand on")
+        return Problem(
+            path="robot.position",
+            message=f"the robot at [{x}, {y}] is not over a surface: its centre hangs over "
+            f"a {stand - under_centre:.2f} m drop at the edge of what it would stand on",
+        )
     return None

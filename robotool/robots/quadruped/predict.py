@@ -269,8 +269,10 @@ def _push_pose(
     feet = foot_offsets(limits)
     swept = [sweep_points(behind, end, half) for _, end, behind in tries]
     paths = [
-        foot_paths(behind + feet, (end - behind) / np.linalg.norm(end - behind), float(np.linalg.norm(end - behind)))
-        .reshape(-1, 2) for _, end, behind in tries
+        foot_paths(
+            behind + feet, (end - behind) / np.linalg.norm(end - behind), float(np.linalg.norm(end - behind))
+        ).reshape(-1, 2)
+        for _, end, behind in tries
     ]
     read = swept + paths
     z = np.split(heights(np.concatenate(read)), np.cumsum([len(p) for p in read])[:-1])
@@ -300,8 +302,9 @@ def push_route(
     lo = np.array([b.lo for b in blocks]).reshape(-1, 2)
     hi = np.array([b.hi for b in blocks]).reshape(-1, 2)
     lanes = [
-        sorted({float(box.center[a]), float(goal[a]), *(lo[:, a] - box.half[a] - LANE),
-                *(hi[:, a] + box.half[a] + LANE)})
+        sorted(
+            {float(box.center[a]), float(goal[a]), *(lo[:, a] - box.half[a] - LANE), *(hi[:, a] + box.half[a] + LANE)}
+        )
         for a in (0, 1)
     ]
 

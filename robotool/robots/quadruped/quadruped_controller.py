@@ -601,10 +601,16 @@ class QuadrupedController:
             return loaded, via
         touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, nobject, nobject)
         centres = state.xpos[worlds][:, self.scene.object_body]  # (k, nobject, 3)
-        below = np.stack([  # [k, a, b]: b's centre lies below a's underside, along a's own up axis
-            np.einsum("kj,kbj->kb", state.xmat(self.scene.object_body[a])[worlds, :, 2], centres - centres[:, a, None])
-            < self.corners[a][:, 2].min()
-            for a in range(nobject)], axis=1)
+        below = np.stack(
+            [  # [k, a, b]: b's centre lies below a's underside, along a's own up axis
+                np.einsum(
+                    "kj,kbj->kb", state.xmat(self.scene.object_body[a])[worlds, :, 2], centres - centres[:, a, None]
+                )
+                < self.corners[a][:, 2].min()
+                for a in range(nobject)
+            ],
+            axis=1,
+        )
         rests_on = touching & below  # [k, a, b]: a rests on b (a board lying on it, or leaning on it from the floor)
         load = under_feet[worlds]
         for _ in range(nobject):  # along chains of objects resting on one another

@@ -12,9 +12,7 @@ class QuadrupedLimits(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    body_size: tuple[float, float, float] = Field(
-        (0.65, 0.30, 0.30), description="body bounding box x, y, z in metres"
-    )
+    body_size: tuple[float, float, float] = Field((0.65, 0.30, 0.30), description="body bounding box x, y, z in metres")
     mass: float = Field(12.0, gt=0, description="body mass in kg")
     max_step_up: float = Field(0.12, gt=0, description="highest step it can climb, m")
     max_gap: float = Field(0.10, gt=0, description="widest gap it can cross, m")

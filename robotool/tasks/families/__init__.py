@@ -28,8 +28,15 @@ __all__ = ["Instance", "families", "generate", "write_instance"]
 
 _BUILDERS: dict[str, Callable[[np.random.Generator], Draft]] = {
     module.__name__.rsplit(".", 1)[1]: module.build
-    for module in (milk_reaching, can_grasping, button_pressing, sofa_traversing, sofa_climbing, cube_lifting,
-                   vase_lowering)
+    for module in (
+        milk_reaching,
+        can_grasping,
+        button_pressing,
+        sofa_traversing,
+        sofa_climbing,
+        cube_lifting,
+        vase_lowering,
+    )
 }
 
 
@@ -49,10 +56,12 @@ def generate(family: str, seed: int) -> Instance:
 
 def write_instance(instance: Instance, path: str | Path) -> Path:
     """Write the instance's task file (YAML), its ground truth in a comment header; returns the path."""
-    truth = (f"# generated: family {instance.family}, seed {instance.seed}\n"
-             f"# needs_tool: {str(instance.needs_tool).lower()}, solvable: {str(instance.solvable).lower()}, "
-             f"tool: {', '.join(instance.tools) or 'none'}, decoys: {', '.join(instance.decoys) or 'none'}\n"
-             f"# {instance.description}\n")
+    truth = (
+        f"# generated: family {instance.family}, seed {instance.seed}\n"
+        f"# needs_tool: {str(instance.needs_tool).lower()}, solvable: {str(instance.solvable).lower()}, "
+        f"tool: {', '.join(instance.tools) or 'none'}, decoys: {', '.join(instance.decoys) or 'none'}\n"
+        f"# {instance.description}\n"
+    )
     path = Path(path)
     path.write_text(truth + instance.task.to_yaml(), encoding="utf-8")
     return path

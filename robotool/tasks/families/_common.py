@@ -68,17 +68,20 @@ def uniform(rng: np.random.Generator, low: float, high: float, digits: int = 4) 
     return round(float(rng.uniform(low, high)), digits) + 0.0
 
 
-def thing(name: str, shape: str, center: tuple[float, float, float] | list[float], size: tuple[float, ...],
-          **fields: Any) -> SceneObject:
+def thing(
+    name: str, shape: str, center: tuple[float, float, float] | list[float], size: tuple[float, ...], **fields: Any
+) -> SceneObject:
     """A scene object with rounded numbers."""
     if "graspable_point" in fields:
         fields["graspable_point"] = tuple(r4(v) for v in fields["graspable_point"])
-    return SceneObject(name=name, shape=shape, center=tuple(r4(v) for v in center),
-                       size=tuple(r4(v) for v in size), **fields)
+    return SceneObject(
+        name=name, shape=shape, center=tuple(r4(v) for v in center), size=tuple(r4(v) for v in size), **fields
+    )
 
 
-def on_top(name: str, shape: str, xy: tuple[float, float], size: tuple[float, ...], base: float = 0.0,
-           **fields: Any) -> SceneObject:
+def on_top(
+    name: str, shape: str, xy: tuple[float, float], size: tuple[float, ...], base: float = 0.0, **fields: Any
+) -> SceneObject:
     """An upright object with its bottom at height ``base`` (the ground by default)."""
     return thing(name, shape, (xy[0], xy[1], base + size[2] / 2), size, **fields)
 
@@ -142,8 +145,9 @@ def _orient(obj: SceneObject, matrix: np.ndarray) -> tuple[tuple[float, ...], st
     """
     rot = matrix @ geometry.rotation_matrix(obj.rpy)
     axes = _SYMMETRIC_AXES.get(obj.shape, "xyz")
-    flips = [np.diag([-1.0 if (k in chosen) else 1.0 for k in "xyz"])
-             for n in range(4) for chosen in product(axes, repeat=n)]
+    flips = [
+        np.diag([-1.0 if (k in chosen) else 1.0 for k in "xyz"]) for n in range(4) for chosen in product(axes, repeat=n)
+    ]
     det = round(float(np.linalg.det(matrix)))
     candidates = [_rpy(rot @ f) for f in flips if round(float(np.linalg.det(f))) == det]
     rpy = min(candidates, key=lambda a: (sum(abs(v) for v in a), a))
@@ -196,8 +200,9 @@ def _meets(a: Rect, b: Rect) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
-def free_spot(rng: np.random.Generator, size_xy: tuple[float, float], region: Rect, avoid: list[Rect],
-              margin: float) -> tuple[float, float] | None:
+def free_spot(
+    rng: np.random.Generator, size_xy: tuple[float, float], region: Rect, avoid: list[Rect], margin: float
+) -> tuple[float, float] | None:
     """A centre in ``region`` whose rectangle keeps ``margin`` from every rectangle in ``avoid``."""
     hx, hy = size_xy[0] / 2, size_xy[1] / 2
     for _ in range(60):
@@ -208,8 +213,9 @@ def free_spot(rng: np.random.Generator, size_xy: tuple[float, float], region: Re
     return None
 
 
-def spot_for(rng: np.random.Generator, size_xy: tuple[float, float], region: Rect, avoid: list[Rect],
-             margin: float) -> tuple[float, float]:
+def spot_for(
+    rng: np.random.Generator, size_xy: tuple[float, float], region: Rect, avoid: list[Rect], margin: float
+) -> tuple[float, float]:
     """Like :func:`free_spot` for an object the scene cannot do without."""
     spot = free_spot(rng, size_xy, region, avoid, margin)
     if spot is None:
@@ -242,8 +248,17 @@ FLOOR_CLUTTER = (
 )
 
 
-def scatter(rng: np.random.Generator, objects: list[SceneObject], count: int, kinds: tuple[Clutter, ...],
-            region: Rect, keep_out: list[Rect], movable: bool, margin: float, base: float = 0.0) -> list[SceneObject]:
+def scatter(
+    rng: np.random.Generator,
+    objects: list[SceneObject],
+    count: int,
+    kinds: tuple[Clutter, ...],
+    region: Rect,
+    keep_out: list[Rect],
+    movable: bool,
+    margin: float,
+    base: float = 0.0,
+) -> list[SceneObject]:
     """Up to ``count`` distractors in ``region``, clear of the objects and of ``keep_out`` by ``margin``.
 
     Fixed distractors cannot be pushed into use; movable ones stay light clutter.
@@ -257,8 +272,9 @@ def scatter(rng: np.random.Generator, objects: list[SceneObject], count: int, ki
             continue
         index = sum(o.name.startswith(kind.name) for o in placed) + 1
         mass = {"mass": kind.mass} if movable else {}
-        obj = on_top(f"{kind.name}_{index}", kind.shape, spot, kind.size, base, movable=movable,
-                     notes=kind.notes, **mass)
+        obj = on_top(
+            f"{kind.name}_{index}", kind.shape, spot, kind.size, base, movable=movable, notes=kind.notes, **mass
+        )
         placed.append(obj)
         avoid.append(footprint(obj))
     return placed
@@ -287,9 +303,11 @@ def finish(family: str, seed: int, draft: Draft) -> Instance:
     """Validate the draft as a task file and attach its ground truth."""
     name = f"{family}_{seed}"
     data = {
-        "format": 1, "name": name,
+        "format": 1,
+        "name": name,
         "category": "no_tool" if draft.variant == "no_tool" else draft.category,
-        "instruction": draft.instruction, "robot": draft.robot,
+        "instruction": draft.instruction,
+        "robot": draft.robot,
         "objects": [o.model_dump(mode="json", exclude_defaults=True) for o in draft.objects],
         "goal": draft.goal,
     }
@@ -298,7 +316,13 @@ def finish(family: str, seed: int, draft: Draft) -> Instance:
     if needs != (draft.variant != "no_tool"):
         raise AssertionError(f"{name}: built as {draft.variant!r} but the geometry says needs_tool={needs}")
     return Instance(
-        family=family, seed=seed, task=task, needs_tool=needs, solvable=draft.variant != "unsolvable",
-        tools=draft.tools, decoys=draft.decoys, mirrored=bool(draft.layout.mirror),
+        family=family,
+        seed=seed,
+        task=task,
+        needs_tool=needs,
+        solvable=draft.variant != "unsolvable",
+        tools=draft.tools,
+        decoys=draft.decoys,
+        mirrored=bool(draft.layout.mirror),
         description=f"{draft.varied}; {draft.layout.words()}.",
     )

@@ -47,39 +47,92 @@ def build(rng: np.random.Generator) -> Draft:
     else:
         low = 0.66 if variant == "unsolvable" else 0.64
         can_xy = (uniform(rng, low, low + 0.10), uniform(rng, sy + 0.045, py - PAPER[1] / 2 - 0.03))
-    paper = on_top("strip_of_paper", "box", (px, py), PAPER, mass=0.05, friction=1.0,
-                   graspable_point=(px - PAPER[0] / 2, py, PAPER[2]), notes="a thin sheet of paper lying flat")
+    paper = on_top(
+        "strip_of_paper",
+        "box",
+        (px, py),
+        PAPER,
+        mass=0.05,
+        friction=1.0,
+        graspable_point=(px - PAPER[0] / 2, py, PAPER[2]),
+        notes="a thin sheet of paper lying flat",
+    )
     scene = [paper]
     decoys: list[str] = []
     if variant == "unsolvable":
         length = uniform(rng, 0.12, 0.18)
-        scene.append(on_top("chopstick", "box", (0.30 + length / 2, sy), (length, 0.02, 0.02), mass=0.02,
-                            graspable_point=(0.34, sy, 0.02), notes="a short thin chopstick lying along x"))
+        scene.append(
+            on_top(
+                "chopstick",
+                "box",
+                (0.30 + length / 2, sy),
+                (length, 0.02, 0.02),
+                mass=0.02,
+                graspable_point=(0.34, sy, 0.02),
+                notes="a short thin chopstick lying along x",
+            )
+        )
         decoys.append("chopstick")
     else:
-        scene.append(on_top("stick", "box", (sx, sy), (0.5, 0.02, 0.02), mass=0.1,
-                            graspable_point=(sx - 0.2, sy, 0.02), notes="a thin straight stick lying along x"))
+        scene.append(
+            on_top(
+                "stick",
+                "box",
+                (sx, sy),
+                (0.5, 0.02, 0.02),
+                mass=0.1,
+                graspable_point=(sx - 0.2, sy, 0.02),
+                notes="a thin straight stick lying along x",
+            )
+        )
         if rng.random() < 0.4:
             length = uniform(rng, 0.12, 0.18)
-            scene.append(on_top("chopstick", "box", (-0.2 + length / 2, -0.32), (length, 0.02, 0.02),
-                                mass=0.02, graspable_point=(-0.16, -0.32, 0.02),
-                                notes="a short thin chopstick lying along x"))
+            scene.append(
+                on_top(
+                    "chopstick",
+                    "box",
+                    (-0.2 + length / 2, -0.32),
+                    (length, 0.02, 0.02),
+                    mass=0.02,
+                    graspable_point=(-0.16, -0.32, 0.02),
+                    notes="a short thin chopstick lying along x",
+                )
+            )
             decoys.append("chopstick")
-    can = on_top("can", "cylinder", can_xy, CAN, PAPER[2] if on_paper else 0.0, mass=0.2,
-                 notes="a soda can standing upright")
+    can = on_top(
+        "can", "cylinder", can_xy, CAN, PAPER[2] if on_paper else 0.0, mass=0.2, notes="a soda can standing upright"
+    )
     scene.append(can)
     drag = (-0.30, py - PAPER[1] / 2, px + PAPER[0] / 2, py + PAPER[1] / 2)  # where the paper is dragged
     push = (sx - 0.25, sy - 0.03, 0.94, py)  # where the stick pushes the can
     base = (-0.15, -0.15, 0.15, 0.15)
-    scene += scatter(rng, scene, int(rng.integers(0, 3)), ARM_CLUTTER, (-0.28, -0.44, 0.42, 0.44),
-                     [drag, push, base], movable=True, margin=0.04)
-    tools = {"no_tool": [], "unsolvable": [],
-             "tool": ["strip_of_paper"] if on_paper else ["stick", "strip_of_paper"]}[variant]
-    where = ("inside the workspace" if variant == "no_tool"
-             else f"{can_xy[0] - 0.45:.2f} m beyond the workspace{' on the paper' if on_paper else ''}")
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 3)),
+        ARM_CLUTTER,
+        (-0.28, -0.44, 0.42, 0.44),
+        [drag, push, base],
+        movable=True,
+        margin=0.04,
+    )
+    tools = {"no_tool": [], "unsolvable": [], "tool": ["strip_of_paper"] if on_paper else ["stick", "strip_of_paper"]}[
+        variant
+    ]
+    where = (
+        "inside the workspace"
+        if variant == "no_tool"
+        else f"{can_xy[0] - 0.45:.2f} m beyond the workspace{' on the paper' if on_paper else ''}"
+    )
     return Draft(
-        variant=variant, category="sequential_tool_use", instruction="Grasp the can.", robot={"type": "arm"},
-        objects=[layout.place(o) for o in scene], goal={"grasped": "can"}, tools=tools, decoys=decoys,
-        layout=layout, varied=f"can at x = {can_xy[0]:.2f} m ({where}); "
-                              f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        variant=variant,
+        category="sequential_tool_use",
+        instruction="Grasp the can.",
+        robot={"type": "arm"},
+        objects=[layout.place(o) for o in scene],
+        goal={"grasped": "can"},
+        tools=tools,
+        decoys=decoys,
+        layout=layout,
+        varied=f"can at x = {can_xy[0]:.2f} m ({where}); {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

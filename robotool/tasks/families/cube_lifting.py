@@ -54,8 +54,10 @@ def build(rng: np.random.Generator) -> Draft:
     base = template("cube_lifting")
     roller, board, cube, chair = (base.object(n) for n in ("yoga_roller", "surfboard", "cube", "chair"))
     heavy_chair = variant == "unsolvable" and rng.random() < 0.5
-    cube_mass = {"tool": uniform(rng, 1.5, 5.0, 1) if light else uniform(rng, 6.0, 11.0, 1),
-                 "unsolvable": 10.0 if heavy_chair else uniform(rng, 25.0, 30.0, 1)}[variant]
+    cube_mass = {
+        "tool": uniform(rng, 1.5, 5.0, 1) if light else uniform(rng, 6.0, 11.0, 1),
+        "unsolvable": 10.0 if heavy_chair else uniform(rng, 25.0, 30.0, 1),
+    }[variant]
     end = footprint(board)[0]  # the board's raised -x end
     edge = uniform(rng, end + 0.05, end + 0.2)  # the chair's +x edge, under the board
     under, _ = geometry.object_interval(geometry.object_parts(board), np.array([[edge, board.center[1]]]))
@@ -63,33 +65,63 @@ def build(rng: np.random.Generator) -> Draft:
     # Notes without directions: the layout may mirror or turn the scene.
     scene = [
         roller.model_copy(update={"notes": "a yoga roller lying on its side, fixed to the floor"}),
-        board.model_copy(update={"size": (board.size[0], board_width(layout, board.size[1]), board.size[2]),
-                                 "notes": "a long board lying across the yoga roller; one end rests on the ground "
-                                          "under the cube and the other end is raised"}),
-        cube.model_copy(update={"mass": cube_mass,
-                                "notes": f"a {'heavy ' if cube_mass > 5 else ''}cube on the lowered end of the board"}),
-        on_top("chair", "box", (edge - chair.size[0] / 2, chair.center[1]), (*chair.size[:2], r4(under[0])),
-               mass=chair_mass,
-               notes=f"a {'heavy oak' if heavy_chair else 'small'} chair under the board's raised end"),
+        board.model_copy(
+            update={
+                "size": (board.size[0], board_width(layout, board.size[1]), board.size[2]),
+                "notes": "a long board lying across the yoga roller; one end rests on the ground "
+                "under the cube and the other end is raised",
+            }
+        ),
+        cube.model_copy(
+            update={
+                "mass": cube_mass,
+                "notes": f"a {'heavy ' if cube_mass > 5 else ''}cube on the lowered end of the board",
+            }
+        ),
+        on_top(
+            "chair",
+            "box",
+            (edge - chair.size[0] / 2, chair.center[1]),
+            (*chair.size[:2], r4(under[0])),
+            mass=chair_mass,
+            notes=f"a {'heavy oak' if heavy_chair else 'small'} chair under the board's raised end",
+        ),
     ]
     side = 1 if rng.random() < 0.5 else -1
     start = (uniform(rng, end, footprint(board)[2]), side * uniform(rng, 0.9, 1.4))
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     decoys = ["chair"] if heavy_chair else ["surfboard"] if variant == "unsolvable" else []
-    spot = free_spot(rng, (0.4, 0.4), grow(hull([footprint(o) for o in scene]), 1.0),
-                     [footprint(o) for o in scene] + [body], 0.3)
+    spot = free_spot(
+        rng, (0.4, 0.4), grow(hull([footprint(o) for o in scene]), 1.0), [footprint(o) for o in scene] + [body], 0.3
+    )
     if variant == "tool" and spot is not None and rng.random() < 0.4:
-        scene.append(on_top("toolbox", "box", spot, (0.4, 0.4, 0.25), mass=uniform(rng, 8.0, 12.0, 1),
-                            notes="a heavy metal toolbox"))
+        scene.append(
+            on_top(
+                "toolbox", "box", spot, (0.4, 0.4, 0.25), mass=uniform(rng, 8.0, 12.0, 1), notes="a heavy metal toolbox"
+            )
+        )
         decoys.append("toolbox")
     area = hull([footprint(o) for o in scene] + [body])
-    scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
-                     movable=False, margin=0.1)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 4)),
+        FLOOR_CLUTTER,
+        grow(area, 2.0),
+        [grow(area, 0.5)],
+        movable=False,
+        margin=0.1,
+    )
     return Draft(
-        variant=variant, category=base.category, instruction=base.instruction,
+        variant=variant,
+        category=base.category,
+        instruction=base.instruction,
         robot={"type": "quadruped", "position": list(layout.point(start))},
-        objects=[layout.place(o) for o in scene], goal=base.goal.model_dump(exclude_none=True),
-        tools=[] if variant == "unsolvable" else ["surfboard"], decoys=decoys, layout=layout,
+        objects=[layout.place(o) for o in scene],
+        goal=base.goal.model_dump(exclude_none=True),
+        tools=[] if variant == "unsolvable" else ["surfboard"],
+        decoys=decoys,
+        layout=layout,
         varied=f"cube of {cube_mass:g} kg, chair of {chair_mass:g} kg at the board's raised end; "
-               f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

@@ -53,22 +53,37 @@ def out_of_reach_x(objects: list[SceneObject]) -> float:
 
 def carton(xy: tuple[float, float]) -> SceneObject:
     """The milk carton standing at ``xy``."""
-    return on_top("milk", "box", xy, MILK, mass=0.25, graspable_point=(*xy, MILK_GRASP_HEIGHT),
-                  notes="a carton of milk")
+    return on_top(
+        "milk", "box", xy, MILK, mass=0.25, graspable_point=(*xy, MILK_GRASP_HEIGHT), notes="a carton of milk"
+    )
 
 
 def hook(name: str, length: float, xy: tuple[float, float], notes: str) -> SceneObject:
     """A flat L-shaped hook whose handle's -x end is at ``xy`` (handle centre line y)."""
     x0, y = xy
-    return on_top(name, "hook", (x0 + length / 2, y - 0.01 + HOOK_HEAD / 2), (length, HOOK_HEAD, 0.03),
-                  mass=0.4, graspable_point=(x0 + HOOK_GRIP, y, 0.03), notes=notes)
+    return on_top(
+        name,
+        "hook",
+        (x0 + length / 2, y - 0.01 + HOOK_HEAD / 2),
+        (length, HOOK_HEAD, 0.03),
+        mass=0.4,
+        graspable_point=(x0 + HOOK_GRIP, y, 0.03),
+        notes=notes,
+    )
 
 
 def stick(name: str, length: float, xy: tuple[float, float], notes: str) -> SceneObject:
     """A straight stick along x whose -x end is at ``xy``, held 0.1 m from that end."""
     x0, y = xy
-    return on_top(name, "box", (x0 + length / 2, y), (length, 0.02, 0.03), mass=0.15,
-                  graspable_point=(x0 + HOOK_GRIP, y, 0.03), notes=notes)
+    return on_top(
+        name,
+        "box",
+        (x0 + length / 2, y),
+        (length, 0.02, 0.03),
+        mass=0.15,
+        graspable_point=(x0 + HOOK_GRIP, y, 0.03),
+        notes=notes,
+    )
 
 
 def build(rng: np.random.Generator) -> Draft:
@@ -90,22 +105,43 @@ def build(rng: np.random.Generator) -> Draft:
     else:
         tools.append(hook("hammer", length, handle, hook_notes))
     if variant == "unsolvable" or rng.random() < 0.5:
-        tools.append(stick("stick", uniform(rng, 0.30, 0.40), (-0.25, uniform(rng, 0.34, 0.40)),
-                           "a thin straight stick"))
+        tools.append(
+            stick("stick", uniform(rng, 0.30, 0.40), (-0.25, uniform(rng, 0.34, 0.40)), "a thin straight stick")
+        )
         decoys.append("stick")
     milk = carton(milk_xy)
     scene = [
         milk,
-        on_top("stuffed_toy", "box", (uniform(rng, 0.43, 0.47), uniform(rng, -0.07, -0.03)), (0.08, 0.05, 0.05),
-               mass=0.1, notes="a small soft toy"),
-        on_top("lock", "box", (uniform(rng, 0.33, 0.37), uniform(rng, 0.03, 0.07)), (0.04, 0.03, 0.02),
-               mass=0.05, notes="a small padlock"),
+        on_top(
+            "stuffed_toy",
+            "box",
+            (uniform(rng, 0.43, 0.47), uniform(rng, -0.07, -0.03)),
+            (0.08, 0.05, 0.05),
+            mass=0.1,
+            notes="a small soft toy",
+        ),
+        on_top(
+            "lock",
+            "box",
+            (uniform(rng, 0.33, 0.37), uniform(rng, 0.03, 0.07)),
+            (0.04, 0.03, 0.02),
+            mass=0.05,
+            notes="a small padlock",
+        ),
         *tools,
     ]
     sweep = (-0.25, handle[1] - 0.05, 0.80, max(milk_xy[1] + 0.08, handle[1] + HOOK_HEAD + 0.05))
     base = (-0.15, -0.15, 0.15, 0.15)
-    scene += scatter(rng, scene, int(rng.integers(0, 3)), ARM_CLUTTER, (-0.28, -0.44, 0.42, 0.44),
-                     [sweep, base, footprint(milk)], movable=True, margin=0.04)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 3)),
+        ARM_CLUTTER,
+        (-0.28, -0.44, 0.42, 0.44),
+        [sweep, base, footprint(milk)],
+        movable=True,
+        margin=0.04,
+    )
     if variant == "unsolvable":  # as far beyond the reach of everything else as a far carton is beyond 0.54 m
         milk_xy = (round(milk_xy[0] - FAR_MILK_X[0] + out_of_reach_x(scene[1:]), 4), milk_xy[1])
         scene[0] = carton(milk_xy)
@@ -113,8 +149,14 @@ def build(rng: np.random.Generator) -> Draft:
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
     tools = {"no_tool": [], "tool": ["hammer"], "unsolvable": []}[variant]
     return Draft(
-        variant=variant, category="tool_selection", instruction="Grasp the milk carton.", robot={"type": "arm"},
-        objects=[layout.place(o) for o in scene], goal={"grasped": "milk"}, tools=tools, decoys=decoys,
-        layout=layout, varied=f"milk at x = {milk_xy[0]:.2f} m ({where}); "
-                              f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        variant=variant,
+        category="tool_selection",
+        instruction="Grasp the milk carton.",
+        robot={"type": "arm"},
+        objects=[layout.place(o) for o in scene],
+        goal={"grasped": "milk"},
+        tools=tools,
+        decoys=decoys,
+        layout=layout,
+        varied=f"milk at x = {milk_xy[0]:.2f} m ({where}); {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

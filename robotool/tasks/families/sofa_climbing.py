@@ -53,22 +53,40 @@ def build(rng: np.random.Generator) -> Draft:
     variant = draw_variant(rng)
     layout = draw_layout(rng, arm=False)
     one_step = variant == "tool" and rng.random() < 0.3
-    height = (uniform(rng, 0.06, 0.12) if variant == "no_tool" else uniform(rng, 0.16, 0.24) if one_step
-              else uniform(rng, 0.28, 0.36))
+    height = (
+        uniform(rng, 0.06, 0.12)
+        if variant == "no_tool"
+        else uniform(rng, 0.16, 0.24)
+        if one_step
+        else uniform(rng, 0.28, 0.36)
+    )
     box_1_xy = (uniform(rng, 0.8, 1.6), uniform(rng, -0.8, 0.8))
     scene = [
-        on_top("sofa", "box", (3.0, 0.2), (0.9, 1.5, height), movable=False,
-               notes="a sofa" if height > LOW else "a low sofa"),
-        on_top("box_2", "box", (2.35 - CLEARANCE, uniform(rng, -0.25, 0.65)), (*BOX, HIGH),
-               mass=uniform(rng, 3.5, 4.8, 1), notes="a cardboard box standing against the sofa"),
+        on_top(
+            "sofa",
+            "box",
+            (3.0, 0.2),
+            (0.9, 1.5, height),
+            movable=False,
+            notes="a sofa" if height > LOW else "a low sofa",
+        ),
+        on_top(
+            "box_2",
+            "box",
+            (2.35 - CLEARANCE, uniform(rng, -0.25, 0.65)),
+            (*BOX, HIGH),
+            mass=uniform(rng, 3.5, 4.8, 1),
+            notes="a cardboard box standing against the sofa",
+        ),
     ]
     decoys: list[str] = []
     if variant == "unsolvable":
         scene.append(decoy(rng, "box_1", box_1_xy))
         decoys.append("box_1")
     else:
-        scene.append(on_top("box_1", "box", box_1_xy, (*BOX, LOW), mass=uniform(rng, 2.0, 4.0, 1),
-                            notes="a cardboard box"))
+        scene.append(
+            on_top("box_1", "box", box_1_xy, (*BOX, LOW), mass=uniform(rng, 2.0, 4.0, 1), notes="a cardboard box")
+        )
         spot = free_spot(rng, BOX, (0.6, -1.4, 1.8, 1.4), [footprint(o) for o in scene], 0.3)
         if variant == "tool" and spot is not None and rng.random() < 0.4:
             scene.append(decoy(rng, "box_3", spot))
@@ -76,12 +94,26 @@ def build(rng: np.random.Generator) -> Draft:
     start = (0.0, uniform(rng, -0.4, 0.4))
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     area = hull([footprint(o) for o in scene] + [body])
-    scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
-                     movable=False, margin=0.1)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 4)),
+        FLOOR_CLUTTER,
+        grow(area, 2.0),
+        [grow(area, 0.5)],
+        movable=False,
+        margin=0.1,
+    )
     tools = {"no_tool": [], "unsolvable": [], "tool": ["box_1"] if one_step else ["box_1", "box_2"]}[variant]
     return Draft(
-        variant=variant, category="sequential_tool_use", instruction="You want to stand on top of the sofa.",
+        variant=variant,
+        category="sequential_tool_use",
+        instruction="You want to stand on top of the sofa.",
         robot={"type": "quadruped", "position": list(layout.point(start))},
-        objects=[layout.place(o) for o in scene], goal={"robot_on": "sofa"}, tools=tools, decoys=decoys,
-        layout=layout, varied=f"sofa {height:.2f} m high; {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        objects=[layout.place(o) for o in scene],
+        goal={"robot_on": "sofa"},
+        tools=tools,
+        decoys=decoys,
+        layout=layout,
+        varied=f"sofa {height:.2f} m high; {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )

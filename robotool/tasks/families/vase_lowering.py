@@ -59,49 +59,97 @@ def build(rng: np.random.Generator) -> Draft:
     variant = draw_variant(rng)
     layout = draw_layout(rng, arm=False)
     cushioned = variant == "unsolvable" or (variant == "tool" and rng.random() < 0.7)
-    height = (uniform(rng, 0.08, 0.12) if variant == "no_tool" else uniform(rng, 0.31, 0.36) if cushioned
-              else uniform(rng, 0.16, 0.24))
+    height = (
+        uniform(rng, 0.08, 0.12)
+        if variant == "no_tool"
+        else uniform(rng, 0.31, 0.36)
+        if cushioned
+        else uniform(rng, 0.16, 0.24)
+    )
     steps_y = uniform(rng, -0.25, 0.65)
     first_step = uniform(rng, 0.28, 0.32) if variant == "unsolvable" else 0.12
     scene = [
         on_top("sofa", "box", (3.0, 0.2), (0.9, 1.5, height), movable=False, notes="a sofa"),
-        on_top("box_1", "box", (1.95 - 2 * CLEARANCE, steps_y), (*STEP, first_step), movable=False,
-               notes="a box fixed in place"),
-        on_top("box_2", "box", (2.35 - CLEARANCE, steps_y), (*STEP, 0.24), movable=False,
-               notes="a box fixed in place against the sofa"),
-        on_top("glass_vase", "box", (uniform(rng, 2.8, 3.2), uniform(rng, 0.6, 0.85)), (0.3, 0.1, 0.1), height,
-               mass=0.5, fragile={"max_drop": MAX_DROP}, notes="a glass vase lying on the sofa"),
+        on_top(
+            "box_1",
+            "box",
+            (1.95 - 2 * CLEARANCE, steps_y),
+            (*STEP, first_step),
+            movable=False,
+            notes="a box fixed in place",
+        ),
+        on_top(
+            "box_2",
+            "box",
+            (2.35 - CLEARANCE, steps_y),
+            (*STEP, 0.24),
+            movable=False,
+            notes="a box fixed in place against the sofa",
+        ),
+        on_top(
+            "glass_vase",
+            "box",
+            (uniform(rng, 2.8, 3.2), uniform(rng, 0.6, 0.85)),
+            (0.3, 0.1, 0.1),
+            height,
+            mass=0.5,
+            fragile={"max_drop": MAX_DROP},
+            notes="a glass vase lying on the sofa",
+        ),
     ]
     start = (0.0, uniform(rng, -0.4, 0.4))
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     floor = (0.5, -1.0, 1.5, 1.2)
     spot = spot_for(rng, CUSHION[:2], floor, [footprint(o) for o in scene] + [body], 0.2)
-    scene.append(on_top("soft_cushion", "box", spot, CUSHION, mass=1.0, soft=True,
-                        notes="a soft cushion"))
+    scene.append(on_top("soft_cushion", "box", spot, CUSHION, mass=1.0, soft=True, notes="a soft cushion"))
     decoys = ["box_1"] if variant == "unsolvable" else []
     spot = free_spot(rng, CUSHION[:2], floor, [footprint(o) for o in scene] + [body], 0.2)
     if variant == "tool" and cushioned and spot is not None and rng.random() < 0.4:
-        scene.append(on_top("sand_cushion", "box", spot, CUSHION, mass=uniform(rng, 7.0, 9.0, 1), soft=True,
-                            notes="a floor cushion filled with sand"))
+        scene.append(
+            on_top(
+                "sand_cushion",
+                "box",
+                spot,
+                CUSHION,
+                mass=uniform(rng, 7.0, 9.0, 1),
+                soft=True,
+                notes="a floor cushion filled with sand",
+            )
+        )
         decoys.append("sand_cushion")
     area = hull([footprint(o) for o in scene] + [body])
-    scene += scatter(rng, scene, int(rng.integers(0, 4)), FLOOR_CLUTTER, grow(area, 2.0), [grow(area, 0.5)],
-                     movable=False, margin=0.1)
+    scene += scatter(
+        rng,
+        scene,
+        int(rng.integers(0, 4)),
+        FLOOR_CLUTTER,
+        grow(area, 2.0),
+        [grow(area, 0.5)],
+        movable=False,
+        margin=0.1,
+    )
     goal_height = 0.20 if height > MAX_DROP else 0.05
     blocked = variant == "tool" and not room_to_land(layout, scene[0], scene[2], scene[3])
     if blocked:
         variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
-    tools = {"no_tool": [], "unsolvable": [],
-             "tool": ["soft_cushion", "box_1", "box_2"] if cushioned else ["box_1", "box_2"]}[variant]
+    tools = {
+        "no_tool": [],
+        "unsolvable": [],
+        "tool": ["soft_cushion", "box_1", "box_2"] if cushioned else ["box_1", "box_2"],
+    }[variant]
     return Draft(
-        variant=variant, category="sequential_tool_use",
+        variant=variant,
+        category="sequential_tool_use",
         instruction="Put the glass vase down on the ground without breaking it.",
         robot={"type": "quadruped", "position": list(layout.point(start))},
         objects=[layout.place(o) for o in scene],
-        goal={"lowered": {"object": "glass_vase", "height": goal_height}}, tools=tools, decoys=decoys,
-        layout=layout, varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
-                              + ("the vase lies where the steps lead onto the sofa; " if blocked else "")
-                              + f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
+        goal={"lowered": {"object": "glass_vase", "height": goal_height}},
+        tools=tools,
+        decoys=decoys,
+        layout=layout,
+        varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
+        + ("the vase lies where the steps lead onto the sofa; " if blocked else "")
+        + f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
 
 
