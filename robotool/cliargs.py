@@ -16,6 +16,8 @@ from typing import NoReturn
 from rich.console import Console
 from rich.text import Text
 
+from robotool.safe_text import console_plain
+
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
 DEFAULT_WORLDS = 3
@@ -161,8 +163,9 @@ def make_console(*, stderr: bool = False) -> Console:
 
 
 def print_error(errors: Console, message: str) -> None:
-    """``error: message``, the message printed exactly (square brackets and all, never read as markup)."""
-    errors.print(Text.assemble(("error:", "bold red"), " ", message), highlight=False, soft_wrap=True)
+    """``error: message``, the message printed exactly (square brackets and all, never read as markup), its control
+    characters escaped (it can quote a program)."""
+    errors.print(Text.assemble(("error:", "bold red"), " ", console_plain(message)), highlight=False, soft_wrap=True)
 
 
 def warn_if_warp_on_cpu(backend: str | None, errors: Console) -> None:
