@@ -41,7 +41,7 @@ from robotool.eval.solvers import (
 )
 from robotool.eval.tables import all_tables
 from robotool.eval.work import NotAttempted, RunJob, RunWork
-from robotool.safe_text import json_text
+from robotool.safe_text import console_plain, json_text
 from robotool.version import version
 
 if TYPE_CHECKING:
@@ -224,7 +224,7 @@ def evaluate(
     journal = Journal(config.out_dir)
     plan = _plan(config, instances, list(chosen), backend)
     for line in skipped_lines(skipped):
-        console.print(line, style="yellow", highlight=False, markup=False)
+        console.print(console_plain(line), style="yellow", highlight=False, markup=False)  # may quote an LM error
     _say_reuse(config, plan, journal, console)
     pending = [RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal]
     _run(executor, RunWork(chosen, stages), pending, journal, len(plan), backend, console)
