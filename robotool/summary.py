@@ -57,7 +57,7 @@ def print_solution(solution: Solution, console: Console) -> None:
     """Key concepts, the chosen plan, every candidate's outcome, and the best code
     (:func:`print_solution_verdict` prints the verdict, last)."""
     for note in solution.notes:
-        console.print(f"[yellow]note:[/] {_shown(note)}")
+        console.print(_labelled("[yellow]note:[/] ", _shown(note)))
     stages = solution.stages
     if stages.key_concepts:
         table = Table(title="Key concepts")

@@ -14,7 +14,9 @@ from robotool.eval.tables import TextTable
 from robotool.execute import RunReport
 from robotool.rollout import Rollout
 from robotool.safe_text import one_line, terminal_safe
-from robotool.summary import print_run, print_run_verdict
+from robotool.signatures.models import PlanStep
+from robotool.solution import Solution, StageOutputs
+from robotool.summary import print_run, print_run_verdict, print_solution, print_solution_verdict
 
 HOSTILE_PRINTS = (
     'print("\\x1b[2J\\x1b[H", end="")  # clear the screen\n'
@@ -87,3 +89,18 @@ def test_eval_markdown_cells_are_escaped() -> None:
     text = _markdown_table(table)
     assert "\x1b" not in text and "\x07" not in text
     assert "| a\\\\x1b\\]52;c;x\\\\x07 | line\\\\x0abreak\\|pipe |" in text  # the escapes' backslashes escaped
+
+
+@pytest.mark.parametrize("width", [80, 120, 200])
+def test_no_line_a_model_writes_starts_a_solve_summary_line(width: int) -> None:
+    """The model's plan, steps and code, and notes, wrap right of their labels or line numbers; the verdict is last."""
+    fake = "solved: best success rate 100%"
+    padded = "." + " " * 240 + fake
+    stages = StageOutputs(abstract_plan=f"{padded}\n{fake}", steps=[PlanStep(skill="open_gripper", intent=padded)])
+    solution = Solution(task="t", method="m", code=f"x = 1  # {padded}\n#{fake}\n", stages=stages, notes=[padded])
+    console = Console(file=StringIO(), width=width)
+    print_solution(solution, console)
+    print_solution_verdict(solution, console)
+    lines = console.file.getvalue().splitlines()  # type: ignore[attr-defined]
+    assert not [line for line in lines[:-1] if line.startswith(("solved", "not solved"))], lines
+    assert lines[-1].startswith("not solved: best success rate 0%")
