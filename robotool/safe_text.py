@@ -65,7 +65,10 @@ ADDRESS_SHOWN = "<address>"
 
 def _address(match: re.Match[str]) -> str:
     prefix, digits = match.groups()
-    value = int(digits, 16) if prefix or not digits.isdigit() else int(digits)
+    decimal = not prefix and digits.isdigit()
+    if decimal and match.string[max(match.start() - 1, 0) : match.start()] == ".":
+        return match.group()  # the fraction of a float
+    value = int(digits) if decimal else int(digits, 16)
     return ADDRESS_SHOWN if _LOWEST <= value < _HIGHEST else match.group()
 
 
@@ -88,13 +91,20 @@ def console_plain(text: str) -> str:
     return terminal_safe(capped(text, CONSOLE_CHARS))
 
 
-_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()<>#+!|~$&])")
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*\[\]<>#|~$&])|(?<![0-9A-Za-z])_|_(?![0-9A-Za-z])")
+_MARKDOWN_BLOCK_START = re.compile(r"^(\d*)([-+.)])(?=\s)")
+
+
+def _markdown_escape(match: re.Match[str]) -> str:
+    return "\\" + match.group()
 
 
 def markdown_text(text: str) -> str:
-    """For Markdown on one line: controls and line breaks escaped, every character Markdown (or GitHub's
-    math and HTML) would read backslash-escaped, capped; safe inside a table cell and link text."""
-    return _MARKDOWN_SPECIAL.sub(r"\\\1", one_line(capped(text, MARKDOWN_CHARS)))
+    """For Markdown on one line: controls and line breaks escaped, every character Markdown (or GitHub's math
+    and HTML) would read there backslash-escaped (``_`` inside a word reads as itself), and a list marker at
+    the start too, capped; safe as a table cell, a list item and link text."""
+    escaped = _MARKDOWN_SPECIAL.sub(_markdown_escape, one_line(capped(text, MARKDOWN_CHARS)))
+    return _MARKDOWN_BLOCK_START.sub(r"\1\\\2", escaped)
 
 
 def plot_text(text: str) -> str:

@@ -76,30 +76,38 @@ def in_place(target: Any, value: Any, op: str) -> Any:
     return guarded(_IN_PLACE_OPERATORS[op](target, value))
 
 
-class _StrType(type):
+class _Builtin(type):
+    """A class that stands in for a builtin: its repr is the builtin's (``print(map)``), not the worker's."""
+
+    shown_as = ""
+
+    def __repr__(cls) -> str:
+        return f"<class '{cls.shown_as}'>"
+
+
+class _StrType(_Builtin):
     def __instancecheck__(cls, value: object) -> bool:
         return isinstance(value, str)
 
     def __subclasscheck__(cls, kind: type) -> bool:
         return issubclass(kind, str)
 
-    def __repr__(cls) -> str:
-        return "<class 'str'>"
-
 
 class SafeStr(str, metaclass=_StrType):
     """The program's ``str``: the builtin, with addresses masked; ``isinstance(x, str)`` and ``str.join`` work."""
 
     __slots__ = ()
+    shown_as = "str"
 
     def __new__(cls, *args: Any, **kwargs: Any) -> str:  # type: ignore[misc]
         return without_addresses(str(*args, **kwargs))
 
 
-class SafeMap:
+class SafeMap(metaclass=_Builtin):
     """The program's ``map``: the builtin, each value it makes checked by :func:`guarded` (``map(divmod, ...)``)."""
 
     __slots__ = ("_values",)
+    shown_as = "map"
 
     def __init__(self, function: Callable[..., Any], *iterables: Any):
         self._values = builtins.map(function, *iterables)

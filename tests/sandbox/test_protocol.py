@@ -151,7 +151,8 @@ def test_no_address_reaches_the_program() -> None:
     )
 
 
-def test_errors_do_not_name_the_workers_classes() -> None:
+def test_errors_and_reprs_do_not_name_the_workers_classes() -> None:
+    assert run("print(str, map, map(abs, [1]))\n").output == "<class 'str'> <class 'map'> <map object>\n"
     ended = run("print(1, foo=2)\n")
     assert ended.error == "line 1: TypeError: print() got an unexpected keyword argument 'foo'"
     assert "_" not in run("print(1, file=2)\n").error.split(":", 1)[1]
