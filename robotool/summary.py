@@ -19,11 +19,6 @@ from robotool.solution import Solution
 from robotool.verify import world_failure
 
 
-def _shown(text: str) -> str:
-    """Text from a program, an LM or a task file, for a markup string (see :func:`console_markup`)."""
-    return console_markup(text)
-
-
 def _labelled(label: str, markup: str) -> RenderableType:
     """``label`` then ``markup`` (text from a program or an LM, escaped): its lines, wrapped ones included,
     stay in a column right of the label, so none can pose as one of the report's own (its verdict)."""
@@ -57,7 +52,7 @@ def print_solution(solution: Solution, console: Console) -> None:
     """Key concepts, the chosen plan, every candidate's outcome, and the best code
     (:func:`print_solution_verdict` prints the verdict, last)."""
     for note in solution.notes:
-        console.print(_labelled("[yellow]note:[/] ", _shown(note)))
+        console.print(_labelled("[yellow]note:[/] ", console_markup(note)))
     stages = solution.stages
     if stages.key_concepts:
         table = Table(title="Key concepts")
@@ -65,17 +60,17 @@ def print_solution(solution: Solution, console: Console) -> None:
             table.add_column(column)
         for c in stages.key_concepts:
             table.add_row(
-                _shown(c.name),
-                _shown(f"{c.value:g} {c.unit}"),
-                _shown(f"{c.limit:g} ({c.limit_name})"),
+                console_markup(c.name),
+                console_markup(f"{c.value:g} {c.unit}"),
+                console_markup(f"{c.limit:g} ({c.limit_name})"),
                 "yes" if c.satisfied else "[red]no[/]",
             )
         console.print(table)
     if stages.abstract_plan:
-        console.print(_labelled("[bold]Plan:[/] ", _shown(stages.abstract_plan)))
+        console.print(_labelled("[bold]Plan:[/] ", console_markup(stages.abstract_plan)))
     for i, step in enumerate(stages.steps or [], start=1):
         objects = f" [{', '.join(step.objects)}]" if step.objects else ""
-        console.print(_labelled(f"  {i}. ", _shown(f"{step.skill}{objects}: {step.intent}")))
+        console.print(_labelled(f"  {i}. ", console_markup(f"{step.skill}{objects}: {step.intent}")))
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
@@ -86,7 +81,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            _shown("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
+            console_markup("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
         )
     console.print(table)
     print_repairs(solution, console)
@@ -136,9 +131,9 @@ def print_repairs(solution: Solution, console: Console) -> None:
             changed = ", ".join(attempt.changed) or "nothing"
             table.add_row(
                 f"{attempt.source} -> {attempt.candidate}",
-                _shown("; ".join(evidence) + f"; scope {attempt.scope}"),
-                _shown(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
-                _shown(result),
+                console_markup("; ".join(evidence) + f"; scope {attempt.scope}"),
+                console_markup(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
+                console_markup(result),
             )
         console.print(table)
 
@@ -165,16 +160,16 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
         table.add_row(
             str(i),
-            _shown(f"{call.skill}({_format_args(call.args)})"),
+            console_markup(f"{call.skill}({_format_args(call.args)})"),
             outcome,
             f"{call.ended - call.started:.2f}",
-            _shown(details),
+            console_markup(details),
         )
     console.print(table)
     conditions = ", ".join(
-        f"{_shown(name)} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
+        f"{console_markup(name)} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
     )
-    touched = _shown(", ".join(rollout.touched)) or "nothing"
+    touched = console_markup(", ".join(rollout.touched)) or "nothing"
     console.print(f"  goal: {conditions or 'no conditions'}; touched: {touched}")
     if rollout.error:
         console.print(_framed("[red]error[/]", rollout.error))
@@ -185,7 +180,7 @@ def print_trace(rollout: Rollout, console: Console) -> None:
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
     """A run's summary over worlds, then the traces of the first world and of failed worlds
     (:func:`print_run_verdict` prints the verdict, last)."""
-    title = f"{_shown(report.task)}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend"
+    title = f"{console_markup(report.task)}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend"
     table = Table(title=title)
     for column in ("world", "success", "sim time (s)", "calls", "touched", "why it failed"):
         table.add_column(column, overflow="fold")
@@ -196,7 +191,7 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
             f"{r.sim_time:.2f}",
             str(len(r.calls)),
             str(len(r.touched)),
-            _shown(world_failure(r) or ""),
+            console_markup(world_failure(r) or ""),
         )
     console.print(table)
     shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
