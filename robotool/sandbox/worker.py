@@ -46,7 +46,16 @@ from robotool.sandbox.allowlist import (
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import MAX_ARGUMENT_CHARS, WorkerMessage
-from robotool.sandbox.values import ADDRESS, ADDRESS_SHOWN, HELPERS, SafeMap, SafeStr, check_dtype, rewrite
+from robotool.sandbox.values import (
+    ADDRESS,
+    ADDRESS_SHOWN,
+    HELPERS,
+    SafeMap,
+    SafeStr,
+    check_dtype,
+    rewrite,
+    without_addresses,
+)
 
 PROGRAM_FILENAME = "<program>"
 MAX_ERROR_CHARS = 500
@@ -277,7 +286,7 @@ class _Program:
     def print(self, *args: object, sep: object = None, end: object = None, flush: object = False) -> None:
         """The builtin's behaviour, into the output buffer (``flush`` is accepted and ignored)."""
         text = (" " if sep is None else str(sep)).join(map(str, args)) + ("\n" if end is None else str(end))
-        text = ADDRESS.sub(ADDRESS_SHOWN, text)
+        text = without_addresses(text)
         self.printed += len(text)
         if self.printed > self.limits.max_output_chars:
             limit = self.limits.max_output_chars
