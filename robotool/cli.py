@@ -45,6 +45,7 @@ from robotool.errors import RobotoolError
 from robotool.internal_error import report_internal_error
 from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
 from robotool.methods import STAGES_BY_METHOD
+from robotool.safe_text import json_text
 from robotool.sandbox.validate import ProgramRejected
 from robotool.task_file import TaskFileError
 from robotool.task_model import Task
@@ -138,7 +139,7 @@ def cmd_describe(args: argparse.Namespace, console: Console) -> int:
 def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary."""
     from robotool.lm import HOW_TO_CONFIGURE, make_lm
-    from robotool.summary import print_solution
+    from robotool.summary import print_solution, print_solution_verdict
 
     task = tasks.load(args.task)
     _check_video_args(args, folder=True)
@@ -188,10 +189,11 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
         _write(args.out, lambda: args.out.write_text(solution.code, encoding="utf-8"))
         console.print(f"wrote the best program to {args.out}", markup=False, highlight=False)
     if args.json:
-        _write(args.json, lambda: args.json.write_text(solution.model_dump_json(indent=2), encoding="utf-8"))
+        _write(args.json, lambda: args.json.write_text(json_text(solution, indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     if args.video:
         _solve_videos(args, task, solution, console)
+    print_solution_verdict(solution, console)
     return 0 if solution.success else 1
 
 
@@ -243,7 +245,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
 def cmd_run(args: argparse.Namespace, console: Console) -> int:
     """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
     from robotool.execute import run
-    from robotool.summary import print_run
+    from robotool.summary import print_run, print_run_verdict
 
     task = tasks.load(args.task)
     try:
@@ -260,7 +262,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         raise UsageError(f"{args.program}: {e}") from None
     print_run(report, console)
     if args.json:
-        _write(args.json, lambda: args.json.write_text(report.model_dump_json(indent=2), encoding="utf-8"))
+        _write(args.json, lambda: args.json.write_text(json_text(report, indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
     if args.plan:
         from robotool.render.top_view import write_plan
@@ -274,6 +276,7 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
 
         assert recorder is not None
         _write_videos(task, report.rollouts, recorder.tracks, video_paths(args.video, args.video_worlds), console)
+    print_run_verdict(report, console)
     return 0 if report.success else 1
 
 

@@ -19,7 +19,7 @@ from rich.text import Text
 
 from robotool.errors import RobotoolWarning
 from robotool.lm import DEFAULT_TIMEOUT
-from robotool.safe_text import one_line
+from robotool.safe_text import console_plain, one_line
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
@@ -181,8 +181,9 @@ def warnings_in_one_line() -> None:
 
 
 def print_error(errors: Console, message: str) -> None:
-    """``error: message``, the message printed exactly (square brackets and all, never read as markup)."""
-    errors.print(Text.assemble(("error:", "bold red"), " ", message), highlight=False, soft_wrap=True)
+    """``error: message``, the message printed exactly (square brackets and all, never read as markup), its control
+    characters escaped (it can quote a program)."""
+    errors.print(Text.assemble(("error:", "bold red"), " ", console_plain(message)), highlight=False, soft_wrap=True)
 
 
 def warn_if_warp_on_cpu(backend: str | None, errors: Console) -> None:

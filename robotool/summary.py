@@ -2,28 +2,39 @@
 
 from __future__ import annotations
 
-from rich.console import Console
+from rich import box
+from rich.console import Console, RenderableType
 from rich.markup import escape
+from rich.padding import Padding
+from rich.panel import Panel
 from rich.syntax import Syntax
 from rich.table import Table
+from rich.text import Text
 
 from robotool.execute import RunReport
 from robotool.rollout import Rollout, notable_distances
-from robotool.safe_text import terminal_safe
+from robotool.safe_text import console_markup, console_plain, mask_addresses, terminal_safe
 from robotool.sandbox import layers_in_use
 from robotool.solution import Solution
 from robotool.verify import world_failure
 
 
-def _shown(text: str) -> str:
-    """Text from a program, an LM or a task file: control characters escaped, then markup."""
-    return escape(terminal_safe(text))
+def _labelled(label: str, markup: str) -> RenderableType:
+    """``label`` then ``markup`` (text from a program or an LM, escaped): its lines, wrapped ones included,
+    stay in a column right of the label, so none can pose as one of the report's own (its verdict)."""
+    grid = Table.grid()
+    grid.add_column(no_wrap=True)
+    grid.add_column(overflow="fold")
+    grid.add_row(label, markup)
+    return grid
 
 
-def _continued(text: str, indent: int) -> str:
-    """``text`` with its later lines indented by ``indent`` spaces, under its first: a line that a program or
-    an LM wrote cannot pose as one of the report's own (such as its verdict)."""
-    return text.replace("\n", "\n" + " " * indent)
+def _framed(title: str, text: str) -> RenderableType:
+    """What a program printed or raised, in a frame: every line, wrapped ones included, starts with its
+    border, so none can pose as one of the report's own (its verdict)."""
+    shown = Text(console_plain(mask_addresses(text)), overflow="fold")
+    panel = Panel(shown, title=title, title_align="left", box=box.SQUARE, expand=False, border_style="dim")
+    return Padding(panel, (0, 0, 0, 2))
 
 
 def print_sandbox_layers(console: Console) -> None:
@@ -38,9 +49,10 @@ def print_sandbox_layers(console: Console) -> None:
 
 
 def print_solution(solution: Solution, console: Console) -> None:
-    """Key concepts, the chosen plan, every candidate's outcome, and the best code."""
+    """Key concepts, the chosen plan, every candidate's outcome, and the best code
+    (:func:`print_solution_verdict` prints the verdict, last)."""
     for note in solution.notes:
-        console.print(f"[yellow]note:[/] {_shown(note)}")
+        console.print(_labelled("[yellow]note:[/] ", console_markup(note)))
     stages = solution.stages
     if stages.key_concepts:
         table = Table(title="Key concepts")
@@ -48,17 +60,17 @@ def print_solution(solution: Solution, console: Console) -> None:
             table.add_column(column)
         for c in stages.key_concepts:
             table.add_row(
-                _shown(c.name),
-                _shown(f"{c.value:g} {c.unit}"),
-                _shown(f"{c.limit:g} ({c.limit_name})"),
+                console_markup(c.name),
+                console_markup(f"{c.value:g} {c.unit}"),
+                console_markup(f"{c.limit:g} ({c.limit_name})"),
                 "yes" if c.satisfied else "[red]no[/]",
             )
         console.print(table)
     if stages.abstract_plan:
-        console.print(f"[bold]Plan:[/] {_continued(_shown(stages.abstract_plan), len('Plan: '))}")
+        console.print(_labelled("[bold]Plan:[/] ", console_markup(stages.abstract_plan)))
     for i, step in enumerate(stages.steps or [], start=1):
         objects = f" [{', '.join(step.objects)}]" if step.objects else ""
-        console.print(_continued(_shown(f"  {i}. {step.skill}{objects}: {step.intent}"), 5))
+        console.print(_labelled(f"  {i}. ", console_markup(f"{step.skill}{objects}: {step.intent}")))
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
@@ -69,15 +81,23 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{c.success_rate:.0%}" if ran else "-",
             f"{c.objects_touched:.1f}" if ran else "-",
             f"{c.skill_calls:.1f}" if ran else "-",
-            _shown("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
+            console_markup("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
         )
     console.print(table)
     print_repairs(solution, console)
     if solution.code:
-        safe_code = terminal_safe(solution.code)
-        code = Syntax(safe_code, "python").highlight(safe_code)  # Text: no padding on copied lines
-        code.rstrip()
-        console.print(code, soft_wrap=True)
+        # numbered lines: a long line of the model's code wraps right of the numbers, never at column 0
+        console.print(Syntax(terminal_safe(solution.code), "python", line_numbers=True, word_wrap=True))
+    if solution.cached_replies:
+        console.print(
+            f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
+            "DSPy's cache, not the model (--no-cache asks the model again)"
+        )
+    print_sandbox_layers(console)
+
+
+def print_solution_verdict(solution: Solution, console: Console) -> None:
+    """The last line of ``solve``: solved or not (as the exit status says), the success rate and the cost."""
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
     calls = f" in {len(solution.lm_calls)} LM call(s)" if solution.lm_calls else ""
@@ -85,12 +105,6 @@ def print_solution(solution: Solution, console: Console) -> None:
         f"{verdict}: best success rate {solution.success_rate:.0%}; "
         f"{tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s"
     )
-    if solution.cached_replies:
-        console.print(
-            f"[yellow]note:[/] {solution.cached_replies} of {len(solution.lm_calls)} LM replies came from "
-            "DSPy's cache, not the model (--no-cache asks the model again)"
-        )
-    print_sandbox_layers(console)
 
 
 def print_repairs(solution: Solution, console: Console) -> None:
@@ -117,9 +131,9 @@ def print_repairs(solution: Solution, console: Console) -> None:
             changed = ", ".join(attempt.changed) or "nothing"
             table.add_row(
                 f"{attempt.source} -> {attempt.candidate}",
-                _shown("; ".join(evidence) + f"; scope {attempt.scope}"),
-                _shown(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
-                _shown(result),
+                console_markup("; ".join(evidence) + f"; scope {attempt.scope}"),
+                console_markup(changed + (f"; {attempt.diagnosis}" if attempt.diagnosis else "")),
+                console_markup(result),
             )
         console.print(table)
 
@@ -146,28 +160,27 @@ def print_trace(rollout: Rollout, console: Console) -> None:
         details = " ".join(part for part in (call.reason or "", f"({measured})" if measured else "") if part)
         table.add_row(
             str(i),
-            _shown(f"{call.skill}({_format_args(call.args)})"),
+            console_markup(f"{call.skill}({_format_args(call.args)})"),
             outcome,
             f"{call.ended - call.started:.2f}",
-            _shown(details),
+            console_markup(details),
         )
     console.print(table)
     conditions = ", ".join(
-        f"{_shown(name)} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
+        f"{console_markup(name)} {'[green]yes[/]' if ok else '[red]no[/]'}" for name, ok in rollout.conditions.items()
     )
-    touched = _shown(", ".join(rollout.touched)) or "nothing"
+    touched = console_markup(", ".join(rollout.touched)) or "nothing"
     console.print(f"  goal: {conditions or 'no conditions'}; touched: {touched}")
     if rollout.error:
-        console.print(f"  [red]error:[/] {_continued(_shown(rollout.error), len('  error: '))}")
+        console.print(_framed("[red]error[/]", rollout.error))
     if rollout.output:
-        label = "  printed: "
-        printed = _continued(terminal_safe(rollout.output.strip()[:500]), len(label))
-        console.print(label + printed, markup=False, highlight=False)
+        console.print(_framed("printed by the program", rollout.output.strip()[:500]))
 
 
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
-    """A run's summary over worlds, then the traces of the first world and of failed worlds."""
-    title = f"{_shown(report.task)}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend"
+    """A run's summary over worlds, then the traces of the first world and of failed worlds
+    (:func:`print_run_verdict` prints the verdict, last)."""
+    title = f"{console_markup(report.task)}: {report.worlds} world(s), seed {report.seed}, {report.backend} backend"
     table = Table(title=title)
     for column in ("world", "success", "sim time (s)", "calls", "touched", "why it failed"):
         table.add_column(column, overflow="fold")
@@ -178,12 +191,16 @@ def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:
             f"{r.sim_time:.2f}",
             str(len(r.calls)),
             str(len(r.touched)),
-            _shown(world_failure(r) or ""),
+            console_markup(world_failure(r) or ""),
         )
     console.print(table)
     shown = [report.rollouts[0], *[r for r in report.rollouts[1:] if not r.success]][:traces]
     for rollout in shown:
         print_trace(rollout, console)
+    print_sandbox_layers(console)
+
+
+def print_run_verdict(report: RunReport, console: Console) -> None:
+    """The last line of ``run``: whether every world succeeded (as the exit status says) and the success rate."""
     verdict = "[green]every world succeeded[/]" if report.success else "[red]some worlds failed[/]"
     console.print(f"{verdict}: success rate {report.success_rate:.0%}")
-    print_sandbox_layers(console)

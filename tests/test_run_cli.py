@@ -100,7 +100,7 @@ def test_bad_program_ends_with_one_line_reason(
     if status == 2:
         assert len(err.strip().splitlines()) == 1 and err.startswith(reason.format(path=path)) and not out
     else:
-        assert any(line.startswith(f"  error: {reason}") for line in out.splitlines())
+        assert any(line.startswith(f"  │ {reason}") for line in out.splitlines())  # framed, under "error"
 
 
 def test_runaway_program_through_the_real_entry_point(tmp_path: Path) -> None:

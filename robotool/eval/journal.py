@@ -15,6 +15,7 @@ from pathlib import Path
 
 from robotool.eval.config import EvalError
 from robotool.eval.records import RunRecord
+from robotool.safe_text import json_text
 
 JOURNAL = "journal.jsonl"
 
@@ -57,7 +58,7 @@ class Journal:
 
     def append(self, record: RunRecord) -> bool:
         """Record a finished run durably; False (and nothing written) when its key is already there."""
-        line = (record.model_dump_json() + "\n").encode()
+        line = (json_text(record) + "\n").encode()
         with self._lock:
             if record.key.id in self.records:
                 return False

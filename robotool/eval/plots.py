@@ -9,6 +9,7 @@ import numpy as np
 
 from robotool.eval.metrics import OUTCOMES, Summary
 from robotool.eval.solvers import method_label
+from robotool.safe_text import plot_text
 
 COLORS = {
     "success": "#4c9a2a",
@@ -50,7 +51,7 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
         x = np.arange(len(columns))
         for i, (method, values) in enumerate(by_method.items()):
             ax.bar(x + i * width, [values.get(c, 0.0) for c in columns], width, label=method_label(method))
-        ax.set_xticks(x + 0.4 - width / 2, columns, rotation=35, ha="right", fontsize=8)
+        ax.set_xticks(x + 0.4 - width / 2, [plot_text(c) for c in columns], rotation=35, ha="right", fontsize=8)
         ax.set(ylabel="success rate", title="Success by method and task")
         save(fig, "success.png")
 

@@ -11,17 +11,17 @@ from rich.table import Table
 from robotool.eval.records import Picture, Results
 from robotool.eval.tables import TextTable
 from robotool.methods import STAGES_BY_METHOD
-from robotool.safe_text import one_line
+from robotool.safe_text import markdown_text, one_line
 
 
 def _markdown_table(table: TextTable) -> str:
     def line(cells: Sequence[str]) -> str:
-        return "| " + " | ".join(one_line(c).replace("|", "\\|") for c in cells) + " |"
+        return "| " + " | ".join(markdown_text(c) for c in cells) + " |"
 
-    lines = [f"## {one_line(table.title)}", "", line(table.columns), line(["---"] * len(table.columns))]
+    lines = [f"## {markdown_text(table.title)}", "", line(table.columns), line(["---"] * len(table.columns))]
     lines += [line(row) for row in table.rows]
     if table.note:
-        lines += ["", one_line(table.note)]
+        lines += ["", markdown_text(table.note)]
     return "\n".join(lines)
 
 
@@ -39,8 +39,8 @@ def _preamble(results: Results) -> list[str]:
         lines.append(
             f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks the model again)"
         )
-    lines += [f"- {one_line(line)}" for line in skipped_lines(results.skipped)]
-    lines += [f"- note: {one_line(note)}" for note in results.notes]
+    lines += [f"- {markdown_text(line)}" for line in skipped_lines(results.skipped)]
+    lines += [f"- note: {markdown_text(note)}" for note in results.notes]
     if not any(
         r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
         for r in results.records
@@ -83,10 +83,9 @@ def _pictures_section(pictures: Sequence[Picture]) -> list[str]:
     for picture in pictures:
         by_task.setdefault(picture.task, []).append(picture)
     for task, shown in by_task.items():
-        lines += ["", f"### {task}", ""]
+        lines += ["", f"### {markdown_text(task)}", ""]
         for picture in shown:
-            alt = " ".join(picture.caption.split()).replace("[", "(").replace("]", ")")
-            lines += [f"![{alt}]({picture.file})", ""]
+            lines += [f"![{markdown_text(picture.caption)}]({picture.file})", ""]
     return lines
 
 

@@ -41,6 +41,7 @@ from robotool.eval.solvers import (
 )
 from robotool.eval.tables import all_tables
 from robotool.eval.work import NotAttempted, RunJob, RunWork
+from robotool.safe_text import console_plain, json_text
 from robotool.version import version
 
 if TYPE_CHECKING:
@@ -176,7 +177,7 @@ def _check_folder(config: EvalConfig) -> None:
                 "reuse its matching runs and add these, or choose another --out"
             )
     try:
-        write_atomic(path, request.model_dump_json(indent=2))
+        write_atomic(path, json_text(request, indent=2))
     except OSError as e:
         raise EvalError(f"cannot write into the output folder {folder}: {e.strerror or e}") from None
 
@@ -248,7 +249,7 @@ def evaluate(
     journal = Journal(config.out_dir)
     plan = _plan(config, instances, list(chosen), backend)
     for line in skipped_lines(skipped):
-        console.print(line, style="yellow", highlight=False, markup=False)
+        console.print(console_plain(line), style="yellow", highlight=False, markup=False)  # may quote an LM error
     _say_reuse(config, plan, journal, console)
     pending = [RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal]
     _run(executor, RunWork(chosen, stages), pending, journal, len(plan), backend, console)
@@ -326,7 +327,7 @@ def _with_pictures(results: Results, instances: list[TaskInstance], backend: str
 def _write(results: Results, console: Console) -> None:
     """results.json, the plots, report.md; then the tables on the console."""
     folder = results.config.out_dir
-    write_atomic(folder / "results.json", results.model_dump_json(indent=1))
+    write_atomic(folder / "results.json", json_text(results, indent=1))
     summary = summarize(results.records, [*METHODS, *(p.stem for p in results.config.programs or [])])
     tables = all_tables(summary)
     plots = write_plots(summary, folder)

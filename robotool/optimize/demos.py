@@ -20,6 +20,7 @@ from pydantic import BaseModel
 from robotool.compiled import DemoSource
 from robotool.describe import describe
 from robotool.lm_program import Proposer
+from robotool.safe_text import json_text
 from robotool.solution import Solution
 
 Say = Callable[[str], None]
@@ -44,7 +45,7 @@ def _solved(example: dspy.Example, *, worlds: int, seed: int, backend: str | Non
     solution = solve(example.task, worlds=worlds, seed=seed, backend=backend)
     if path is not None:
         record = SolvedInstance(task=example.name, family=example.family, seed=example.seed, solution=solution)
-        path.write_text(record.model_dump_json(), encoding="utf-8")
+        path.write_text(json_text(record), encoding="utf-8")
     return solution
 
 

@@ -42,6 +42,7 @@ from robotool.internal_error import report_internal_error
 from robotool.methods import STAGES_BY_METHOD
 from robotool.optimize.data import DatasetError, check_families
 from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeResult, OptimizeSettings, optimize
+from robotool.safe_text import console_plain
 from robotool.version import version
 
 EXIT_LM_UNAVAILABLE = 3
@@ -144,7 +145,7 @@ def print_outcome(outcome: OptimizeResult, console: Console) -> None:
     table.add_row(str(v.examples if v else 0), *shown)
     console.print(table)
     if v is not None and v.note:
-        console.print(f"validation {v.note}", style="yellow", markup=False, highlight=False)
+        console.print(console_plain(f"validation {v.note}"), style="yellow", markup=False, highlight=False)
     if outcome.info.demonstrations:
         console.print(
             f"{len(outcome.info.demonstrations)} verified demonstration(s) per stage from: "

@@ -29,6 +29,7 @@ from robotool.lm_program import Proposer
 from robotool.optimize.data import Splits, check_training, splits
 from robotool.optimize.demos import Say, planner_demonstrations
 from robotool.optimize.verified_metric import Metric
+from robotool.safe_text import json_text
 
 Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
 OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")
@@ -265,7 +266,7 @@ def optimize(
         notes=notes,
     )
     save_compiled(compiled, out, info)
-    (log / "validation.json").write_text(validation.model_dump_json(indent=1), encoding="utf-8")
+    (log / "validation.json").write_text(json_text(validation, indent=1), encoding="utf-8")
     return OptimizeResult(info=info, out=out, train=[e.name for e in data.train], val=[e.name for e in data.val])
 
 
@@ -320,7 +321,7 @@ def _claim(log: Path, settings: OptimizeSettings, say: Say) -> None:
             raise OptimizeError(f"{log} holds a run with other settings ({changed}); choose another --log")
     try:
         log.mkdir(parents=True, exist_ok=True)
-        path.write_text(settings.model_dump_json(indent=1), encoding="utf-8")
+        path.write_text(json_text(settings, indent=1), encoding="utf-8")
     except OSError as e:
         raise OptimizeError(f"cannot write the log folder {log}: {e.strerror or e}") from None
 

@@ -10,6 +10,8 @@ import numpy as np
 from matplotlib import font_manager
 from PIL import Image, ImageDraw, ImageFont
 
+from robotool.safe_text import picture_text
+
 RGB = tuple[int, int, int]
 TEXT = (20, 20, 20)
 BOX = (255, 255, 255, 215)
@@ -63,7 +65,8 @@ def draw_labels(
     step = size + 2 * PAD + 2
     for label in sorted(labels, key=lambda lb: lb.anchor[1]):
         x, y = label.anchor
-        left, top, right, bottom = draw.textbbox((0, 0), label.text, font=face)
+        text = picture_text(label.text)
+        left, top, right, bottom = draw.textbbox((0, 0), text, font=face)
         width, height = right - left + 2 * PAD + size, bottom - top + 2 * PAD
         box = (0.0, 0.0, 0.0, 0.0)
         for k in (1, 2, 3, 4, -1, -2, -3, 5, 6, -4, 7, 8):
@@ -80,7 +83,7 @@ def draw_labels(
         draw.rectangle(box, fill=BOX, outline=(90, 90, 90, 200))
         swatch = (box[0] + PAD, box[1] + PAD + 1, box[0] + PAD + size - 4, box[3] - PAD - 1)
         draw.rectangle(swatch, fill=(*label.colour, 255), outline=(60, 60, 60, 255))
-        draw.text((box[0] + PAD + size - left, box[1] + PAD - top), label.text, font=face, fill=TEXT)
+        draw.text((box[0] + PAD + size - left, box[1] + PAD - top), text, font=face, fill=TEXT)
 
 
 def draw_caption(
@@ -99,7 +102,7 @@ def draw_caption(
     for i, line in enumerate(lines):
         draw.text(
             (2 * PAD, y0 + PAD + 1 + i * line_height),
-            _fit(draw, line.text, face, image.width - 4 * PAD),
+            _fit(draw, picture_text(line.text), face, image.width - 4 * PAD),
             font=face,
             fill=line.colour,
         )

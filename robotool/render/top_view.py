@@ -23,6 +23,7 @@ from robotool import geometry, robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
+from robotool.safe_text import capped, plot_text
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.recorder import Track
 from robotool.task_model import Task
@@ -80,10 +81,6 @@ def _position_at(times: np.ndarray, xy: np.ndarray, t: float) -> np.ndarray:
     return np.array([np.interp(t, times, xy[:, 0]), np.interp(t, times, xy[:, 1])])
 
 
-def _short(text: str) -> str:
-    return text if len(text) <= REASON_CHARS else text[: REASON_CHARS - 1] + "…"
-
-
 def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, track: Track | None = None) -> Figure:
     """The plan of ``rollout`` in ``task`` as a matplotlib figure (``scene`` and ``track`` add the real path)."""
     fig = Figure(figsize=(8, 5.5), dpi=110)
@@ -114,7 +111,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
             at[1] -= gap[1]
         placed.append(at)
         ax.annotate(
-            f"{obj.name}{' (goal)' if goal else ''}\ntop {obj.top:.2f} m",
+            f"{plot_text(obj.name)}{' (goal)' if goal else ''}\ntop {obj.top:.2f} m",
             at,
             fontsize=7,
             ha="center",
@@ -130,7 +127,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     _draw_calls(ax, task, rollout, start, centres, path_times, path_xy)
     verdict = "goal reached" if rollout.success else "goal not reached"
     ax.set_title(
-        f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}",
+        plot_text(f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}"),
         fontsize=9,
         color=tuple(GOAL_RGBA[:3]) if rollout.success else REFUSED,
     )
@@ -214,11 +211,11 @@ def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, co
     ax.annotate("", xy=target, xytext=origin, arrowprops={"arrowstyle": "->", **style})
     ax.update_datalim([origin, target])  # arrows are annotations: make room for them
     mid = (origin + target) / 2
-    ax.annotate(f"{step}. {call.skill}", mid, fontsize=6.5, color=style["color"], ha="center", va="bottom")
+    ax.annotate(plot_text(f"{step}. {call.skill}"), mid, fontsize=6.5, color=style["color"], ha="center", va="bottom")
     if failed:  # the cross marks where it ended
         ax.plot(*origin, marker="x", color=REFUSED, markersize=9, mew=2)
         ax.annotate(
-            _short(f"{call.outcome}: {call.reason or ''}"),
+            plot_text(capped(f"{call.outcome}: {call.reason or ''}", REASON_CHARS)),
             origin,
             xytext=(4, -10),
             textcoords="offset points",

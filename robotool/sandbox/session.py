@@ -13,6 +13,7 @@ from pydantic import ValidationError
 from robotool import robots
 from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
 from robotool.robots.skills import SkillArgumentError
+from robotool.safe_text import mask_addresses
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import (
     GO,
@@ -182,7 +183,9 @@ class SandboxSession:
         return f"the worker exited without finishing the program (status {code})"
 
     def _end(self, error: str | None) -> ProgramEnded:
-        self._ended = ProgramEnded(error=error, output="".join(self._output))
+        # masked here, where they enter the host: an address a program found stays out of every sink
+        output = mask_addresses("".join(self._output))
+        self._ended = ProgramEnded(error=None if error is None else mask_addresses(error), output=output)
         if self._worker is not None:
             self._worker.zygote.release(self._worker.pid)
             self._worker.conn.close()

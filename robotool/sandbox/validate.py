@@ -397,8 +397,8 @@ def _unpacks(call: ast.Call) -> bool:
     """``f(*args)`` or ``f(**kwargs)``: which parameter gets which value is known only at run time.
 
     Refused for methods on values (numpy's array methods run unwrapped, so the validator's checks of their
-    ``dtype`` by name and position are all that stands between them and object arrays); numpy functions
-    are checked again in the worker.
+    ``dtype`` by name and position are what keeps an object loop from running; the worker refuses an object
+    array only once a method returns one); numpy functions are checked again in the worker.
     """
     return any(isinstance(a, ast.Starred) for a in call.args) or any(k.arg is None for k in call.keywords)
 

@@ -3,13 +3,16 @@
 Runs in a child forked from the zygote (:mod:`robotool.sandbox.zygote`), never in the host. The
 program's globals hold only the allowlisted builtins, a restricted ``__import__`` that hands out
 namespaces of the allowlisted numpy/math functions (wrapped so that no object or structured array
-comes out of them), and one stub per skill that checks the arguments, sends the call to the host
-and blocks for the answer. Everything the worker says goes to the host through its socket as a
+comes out of them), a ``str`` and a ``map`` that keep addresses and object arrays out
+(:mod:`robotool.sandbox.values`, which also rewrites the program so that no operator or method hands
+it one), and one stub per skill that checks the arguments, sends the call to the host and blocks for
+the answer. Everything the worker says goes to the host through its socket as a
 :class:`WorkerMessage`; its stdin, stdout and stderr are ``/dev/null``.
 """
 
 from __future__ import annotations
 
+import ast
 import builtins
 import inspect
 import json
@@ -43,13 +46,22 @@ from robotool.sandbox.allowlist import (
 from robotool.sandbox.jail import SOCKET_FD, WorkerJail
 from robotool.sandbox.limits import SandboxLimits
 from robotool.sandbox.messages import MAX_ARGUMENT_CHARS, WorkerMessage
+from robotool.sandbox.values import (
+    ADDRESS,
+    ADDRESS_SHOWN,
+    HELPERS,
+    SafeMap,
+    SafeStr,
+    check_dtype,
+    rewrite,
+    without_addresses,
+)
 
 PROGRAM_FILENAME = "<program>"
 MAX_ERROR_CHARS = 500
 UNDESCRIBABLE = "the error could not be described"
 """What a program's error reads as when describing it fails too."""
 
-_ADDRESS = re.compile(r"0x[0-9a-fA-F]{4,}")
 _HOST_DIRECTORIES = sorted(
     {
         d
@@ -79,14 +91,14 @@ class _NumpyFunction:
         if any(kwargs.get(k) is not None for k in LOOP_TYPE_KEYWORDS):
             raise TypeError(f"{self._name}: signature= is not allowed in programs; use dtype= with a numeric type")
         if "dtype" in kwargs:
-            _check_dtype(np.dtype(kwargs["dtype"]))
+            check_dtype(np.dtype(kwargs["dtype"]))
         if self._dtype_position is not None and len(args) > self._dtype_position:
-            _check_dtype(np.dtype(args[self._dtype_position]))
+            check_dtype(np.dtype(args[self._dtype_position]))
         for array in _arrays_in((*args, *kwargs.values())):
-            _check_dtype(array.dtype)
+            check_dtype(array.dtype)
         result = self._function(*args, **kwargs)
         for array in _arrays_in(result if isinstance(result, tuple) else (result,)):
-            _check_dtype(array.dtype)
+            check_dtype(array.dtype)
         return result
 
     def __repr__(self) -> str:
@@ -107,11 +119,6 @@ def _arrays_in(values: tuple[Any, ...]) -> list[np.ndarray[Any, Any]]:
         items = value if isinstance(value, list | tuple) else (value,)
         found += [item for item in items if isinstance(item, np.ndarray)]
     return found
-
-
-def _check_dtype(dtype: np.dtype[Any]) -> None:
-    if dtype.hasobject or dtype.kind == "V":
-        raise TypeError(f"arrays of dtype {dtype.str!r} are not allowed in programs; use numbers")
 
 
 _MODULES: dict[str, SimpleNamespace] = {
@@ -212,8 +219,13 @@ class _Print:
     def __init__(self, program: _Program):
         self._program = program
 
-    def __call__(self, *args: object, sep: object = None, end: object = None, flush: object = False) -> None:
-        self._program.print(*args, sep=sep, end=end)
+    def __call__(self, *args: object, **kwargs: object) -> None:
+        unknown = sorted(set(map(str, kwargs)) - {"sep", "end", "file", "flush"})
+        if unknown:
+            raise TypeError(f"print() got an unexpected keyword argument {_safe_str(unknown[0])!r}")
+        if kwargs.get("file") is not None:
+            raise TypeError("print() in a program writes to its output only: leave out file=")
+        self._program.print(*args, sep=kwargs.get("sep"), end=kwargs.get("end"))
 
     def __repr__(self) -> str:
         return "<built-in function print>"
@@ -242,7 +254,10 @@ class _Program:
         self.namespace = {"__builtins__": self.builtins() if python_checks else every_builtin}
         self.namespace.update({spec.name: _Skill(self, spec) for spec in self.skills})
         try:
-            return compile(code, PROGRAM_FILENAME, "exec")
+            if not python_checks:
+                return compile(code, PROGRAM_FILENAME, "exec")
+            self.namespace.update(HELPERS)
+            return compile(rewrite(ast.parse(code, PROGRAM_FILENAME)), PROGRAM_FILENAME, "exec")
         except (SyntaxError, ValueError, RecursionError, MemoryError) as e:
             return e
 
@@ -263,12 +278,15 @@ class _Program:
     def builtins(self) -> dict[str, Any]:
         table = {name: getattr(builtins, name) for name in BUILTINS}
         table["print"] = _Print(self)
+        table["str"] = SafeStr
+        table["map"] = SafeMap
         table["__import__"] = _import
         return table
 
     def print(self, *args: object, sep: object = None, end: object = None, flush: object = False) -> None:
         """The builtin's behaviour, into the output buffer (``flush`` is accepted and ignored)."""
         text = (" " if sep is None else str(sep)).join(map(str, args)) + ("\n" if end is None else str(end))
+        text = without_addresses(text)
         self.printed += len(text)
         if self.printed > self.limits.max_output_chars:
             limit = self.limits.max_output_chars
@@ -336,6 +354,11 @@ def _describe(error: BaseException) -> str:
     return f"{where}{_public_name(type(error))}: {_safe_str(error)}"[:MAX_ERROR_CHARS]
 
 
+_PUBLIC_NAMES = {"_Print.__call__()": "print()", "_Print": "print", "_Skill": "skill", "_NumpyFunction": "function"}
+_PRIVATE_NAME = re.compile("|".join(re.escape(name) for name in _PUBLIC_NAMES))
+"""The worker's own classes as errors would name them, and the public names shown instead."""
+
+
 def _public_name(kind: type) -> str:
     return next((k.__name__ for k in kind.__mro__ if not k.__name__.startswith("_")), "Error")
 
@@ -346,7 +369,7 @@ def _safe_str(value: object) -> str:
         text = str(value)[: MAX_ERROR_CHARS * 4]
         for directory in _HOST_DIRECTORIES:
             text = text.replace(directory, "...")
-        return _encodable(_ADDRESS.sub("0x...", text))
+        return _encodable(_PRIVATE_NAME.sub(lambda m: _PUBLIC_NAMES[m.group()], ADDRESS.sub(ADDRESS_SHOWN, text)))
     except BaseException:  # a hostile __str__, a huge integer, no memory left
         return UNDESCRIBABLE
 

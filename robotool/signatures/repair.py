@@ -8,6 +8,7 @@ import dspy
 from pydantic import BaseModel, Field
 
 from robotool.rollout import Event, SkillCall
+from robotool.safe_text import model_text
 from robotool.signatures.models import PlanStep, StepParameters
 
 RepairScope = Literal["plan", "parameters"]
@@ -67,7 +68,7 @@ class ShownTrace(dspy.Type):
         for call in t.calls:
             line = f"  {call.number}. {call.skill}({', '.join(_shown(a) for a in call.args)}) -> {call.outcome}"
             if call.reason:
-                line += f": {call.reason}"
+                line += f": {model_text(call.reason)}"
             if call.measured:
                 line += "; measured " + ", ".join(f"{k} = {_shown(v)}" for k, v in call.measured.items())
             if call.result is not None:
@@ -81,7 +82,7 @@ class ShownTrace(dspy.Type):
             lines += [f"  - {event.describe(shown)}" for event in t.events]
         lines.append(f"The program made {t.calls_made} skill call(s) in that world in all.")
         if t.error:
-            lines.append(f"The world ended with an error: {t.error}")
+            lines.append(f"The world ended with an error: {model_text(t.error)}")
         lines.append(f"Goal sub-conditions missed: {', '.join(t.conditions_missed) or 'none'}.")
         lines.append(f"Goal sub-conditions met: {', '.join(t.conditions_met) or 'none'}.")
         scope = (
@@ -101,7 +102,7 @@ def _shown(value: Any) -> str:
         return f"{round(float(value), 3):g}"
     if isinstance(value, list | tuple):
         return "[" + ", ".join(_shown(v) for v in value) + "]"
-    return repr(value)
+    return model_text(repr(value))
 
 
 class Repair(dspy.Signature):

@@ -11,9 +11,12 @@ from rich.console import Console
 from robotool.cli import main
 from robotool.eval.report import _markdown_table
 from robotool.eval.tables import TextTable
+from robotool.execute import RunReport
 from robotool.rollout import Rollout
 from robotool.safe_text import one_line, terminal_safe
-from robotool.summary import print_trace
+from robotool.signatures.models import PlanStep
+from robotool.solution import Solution, StageOutputs
+from robotool.summary import print_run, print_run_verdict, print_solution, print_solution_verdict
 
 HOSTILE_PRINTS = (
     'print("\\x1b[2J\\x1b[H", end="")  # clear the screen\n'
@@ -54,20 +57,50 @@ def test_run_report_shows_program_bytes_escaped(
     assert "sandbox: " in out and "seccomp filter" in out
 
 
-def test_no_line_a_program_prints_or_raises_starts_a_report_line() -> None:
-    """A program's error (``assert False, "\\n..."``) and its output keep their line breaks, but their later
-    lines are indented under their label, so they cannot pose as the report's verdict."""
-    fake = "\nall worlds succeeded: success rate 100%\n"
-    rollout = Rollout(world=0, seed=0, success=False, error=f"line 2: AssertionError: {fake}", output=f"x{fake}y")
-    console = Console(file=StringIO(), width=200)
-    print_trace(rollout, console)
+@pytest.mark.parametrize("width", [80, 120, 200])
+def test_no_line_a_program_prints_or_raises_starts_a_report_line(width: int) -> None:
+    """A program's error (``assert False, "\\n..."``) and its output keep their line breaks, but every line of
+    them, wrapped lines included, starts with the frame's border, so none can pose as the report's verdict;
+    the verdict is the last line."""
+    fake = "every world succeeded: success rate 100%"
+    padded = "." + " " * 240 + fake  # the console wraps it: the fake verdict would start a line
+    rollout = Rollout(
+        world=0,
+        seed=0,
+        success=False,
+        error=f"line 2: AssertionError: {padded}\n{fake}",
+        output=f"x\n{fake}\n{padded}\ny",
+    )
+    report = RunReport(
+        task="t", worlds=1, seed=0, backend="mujoco", success=False, success_rate=0.0, code="", rollouts=[rollout]
+    )
+    console = Console(file=StringIO(), width=width)
+    print_run(report, console)
+    print_run_verdict(report, console)
     lines = console.file.getvalue().splitlines()  # type: ignore[attr-defined]
-    faked = [line for line in lines if "all worlds succeeded" in line]
-    assert len(faked) == 2 and all(line.startswith("         ") for line in faked), lines  # under its label
+    faked = [line for line in lines if fake in line]
+    assert len(faked) >= 4 and all(line.lstrip().startswith("│") for line in faked), lines  # framed or in a cell
+    assert not [line for line in lines[:-1] if line.startswith(("every world", "some worlds"))], lines
+    assert lines[-1] == "some worlds failed: success rate 0%"
 
 
 def test_eval_markdown_cells_are_escaped() -> None:
     table = TextTable(title="T\x1b[2J", columns=["method", "note"], rows=[["a\x1b]52;c;x\x07", "line\nbreak|pipe"]])
     text = _markdown_table(table)
     assert "\x1b" not in text and "\x07" not in text
-    assert "| a\\x1b]52;c;x\\x07 | line\\x0abreak\\|pipe |" in text
+    assert "| a\\\\x1b\\]52;c;x\\\\x07 | line\\\\x0abreak\\|pipe |" in text  # the escapes' backslashes escaped
+
+
+@pytest.mark.parametrize("width", [80, 120, 200])
+def test_no_line_a_model_writes_starts_a_solve_summary_line(width: int) -> None:
+    """The model's plan, steps and code, and notes, wrap right of their labels or line numbers; the verdict is last."""
+    fake = "solved: best success rate 100%"
+    padded = "." + " " * 240 + fake
+    stages = StageOutputs(abstract_plan=f"{padded}\n{fake}", steps=[PlanStep(skill="open_gripper", intent=padded)])
+    solution = Solution(task="t", method="m", code=f"x = 1  # {padded}\n#{fake}\n", stages=stages, notes=[padded])
+    console = Console(file=StringIO(), width=width)
+    print_solution(solution, console)
+    print_solution_verdict(solution, console)
+    lines = console.file.getvalue().splitlines()  # type: ignore[attr-defined]
+    assert not [line for line in lines[:-1] if line.startswith(("solved", "not solved"))], lines
+    assert lines[-1].startswith("not solved: best success rate 0%")
