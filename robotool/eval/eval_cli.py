@@ -40,12 +40,12 @@ from robotool.cliargs import (
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
-from robotool.eval.executor import cores
 from robotool.eval.executor_choice import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
 from robotool.internal_error import report_internal_error
 from robotool.lm import LMConfigError
+from robotool.processes import cores
 from robotool.task_file import TaskFileError
 from robotool.version import version
 

@@ -19,8 +19,6 @@ once in this process.
 from __future__ import annotations
 
 import contextvars
-import multiprocessing
-import os
 import pickle
 import threading
 import warnings
@@ -29,6 +27,8 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor, 
 from concurrent.futures.process import BrokenProcessPool
 from types import TracebackType
 from typing import Protocol, Self, TypeVar
+
+from robotool.processes import process_pool
 
 J = TypeVar("J")
 R = TypeVar("R")
@@ -149,11 +149,6 @@ class LocalExecutor:
         self.close()
 
 
-def cores() -> int:
-    """The CPU cores this process may use."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
 def _simulation_lanes(work: Callable[..., object], wanted: int, backend: str) -> int:
     """How many simulation-only jobs run at once: ``wanted`` on the ``mujoco`` backend when ``work`` can be sent
     to another process, else 1."""
@@ -171,11 +166,7 @@ def _simulation_pool(processes: int) -> ProcessPoolExecutor:
     from robotool.sandbox.zygote import zygote
 
     zygote().layers()  # the sandbox's layers, learnt (and a missing one warned of) once, here
-    return ProcessPoolExecutor(
-        max_workers=processes,
-        mp_context=multiprocessing.get_context("forkserver"),  # this process has threads: no plain fork
-        initializer=_quiet_sandbox_warnings,
-    )
+    return process_pool(processes, initializer=_quiet_sandbox_warnings)
 
 
 def _quiet_sandbox_warnings() -> None:

@@ -10,17 +10,21 @@ whose program never ran is drawn at its start. Files go to ``pictures/`` in the 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from concurrent.futures.process import BrokenProcessPool
+from itertools import repeat
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from robotool.eval.failure_classes import FailureClass
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import Picture, RunRecord, WorldResult
+from robotool.processes import process_pool
 from robotool.render.overlay import CaptionLine
 from robotool.render.video import RED, end_lines
 from robotool.verify import world_failure
 
 if TYPE_CHECKING:
+    from robotool.render.painter import Painter
     from robotool.sim.compiled_scene import Scene
 
 FOLDER = "pictures"
@@ -44,21 +48,46 @@ def representatives(records: Sequence[RunRecord]) -> dict[FailureClass, tuple[Ru
 
 
 def write_pictures(
-    instances: Sequence[TaskInstance], records: Sequence[RunRecord], folder: Path, backend: str | None
+    instances: Sequence[TaskInstance],
+    records: Sequence[RunRecord],
+    folder: Path,
+    backend: str | None,
+    processes: int = 1,
 ) -> list[Picture]:
-    """Draw every instance's scene and its representative failures into ``folder/pictures``."""
+    """Draw every instance's scene and its representative failures into ``folder/pictures``, the instances
+    shared out over ``processes`` processes (each drawing and simulating on its own core)."""
+    work = [
+        (instance, [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed])
+        for instance in instances
+    ]
+    parts: list[list[Picture]] | None = None
+    if processes > 1 and len(work) > 1:
+        try:
+            with process_pool(min(processes, len(work))) as pool:
+                parts = list(pool.map(_instance_pictures, *zip(*work, strict=True), repeat(folder), repeat(backend)))
+        except BrokenProcessPool:  # a drawing process died (out of memory?): draw them here
+            parts = None
+    if parts is None:
+        parts = [_instance_pictures(instance, mine, folder, backend) for instance, mine in work]
+    return [picture for part in parts for picture in part]
+
+
+def _instance_pictures(
+    instance: TaskInstance, records: Sequence[RunRecord], folder: Path, backend: str | None
+) -> list[Picture]:
+    """One instance's scene and representative failures, drawn with one painter (one OpenGL context)."""
+    from robotool.render.painter import Painter
     from robotool.render.still import render_scene, render_state
     from robotool.sim import build
 
-    pictures: list[Picture] = []
-    for instance in instances:
-        label = instance.label
-        scene = build(instance.task)
+    label = instance.label
+    scene = build(instance.task)
+    painter = Painter(scene, *SIZE)
+    try:
         file = f"{FOLDER}/{_slug(label)}.png"
-        render_scene(scene, folder / file, width=SIZE[0], height=SIZE[1])
-        pictures.append(Picture(kind="scene", task=label, file=file, caption=f"{label}: the scene at the start"))
-        mine = [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed]
-        for cls, (record, world) in representatives(mine).items():
+        render_scene(scene, folder / file, painter=painter)
+        pictures = [Picture(kind="scene", task=label, file=file, caption=f"{label}: the scene at the start")]
+        for cls, (record, world) in representatives(records).items():
             file = f"{FOLDER}/{_slug(label)}-{cls}.png"
             heading = f"{record.key.method} run {record.key.run}" + (f", world {world.world}" if world else "")
             why = (
@@ -71,9 +100,9 @@ def write_pictures(
             lines = [CaptionLine(text, RED)]
             reproduced = None
             if world is None or record.code is None:
-                render_state(scene, scene.model.qpos0, folder / file, caption=lines, width=SIZE[0], height=SIZE[1])
+                render_state(scene, scene.model.qpos0, folder / file, caption=lines, painter=painter)
             else:
-                reproduced = _replay(instance, record, world, scene, folder / file, lines, backend)
+                reproduced = _replay(instance, record, world, scene, folder / file, lines, backend, painter)
             pictures.append(
                 Picture(
                     kind="failure",
@@ -86,6 +115,8 @@ def write_pictures(
                     reproduced=reproduced,
                 )
             )
+    finally:
+        painter.close()
     return pictures
 
 
@@ -97,6 +128,7 @@ def _replay(
     path: Path,
     lines: list[CaptionLine],
     backend: str | None,
+    painter: Painter,
 ) -> bool:
     """Simulate the world again and draw its end state, captioned with ``lines`` and how it ended.
 
@@ -122,7 +154,6 @@ def _replay(
         path,
         caption=[*lines, *extra],
         mocap_pos=track.mocap_pos[-1],
-        width=SIZE[0],
-        height=SIZE[1],
+        painter=painter,
     )
     return reproduced

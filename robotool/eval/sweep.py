@@ -41,6 +41,7 @@ from robotool.eval.solvers import (
 )
 from robotool.eval.tables import all_tables
 from robotool.eval.work import NotAttempted, RunJob, RunWork
+from robotool.processes import cores
 from robotool.safe_text import console_plain, json_text
 from robotool.version import version
 
@@ -259,7 +260,8 @@ def evaluate(
         notes=notes,
         records=[journal.records[k.id] for _, k in plan],
     )
-    results = _with_pictures(results, instances, backend)
+    drawers = executor.processes if isinstance(executor, LocalExecutor) else cores()
+    results = _with_pictures(results, instances, backend, drawers)
     results.wall_s = time.perf_counter() - started
     _write(results, console)
     return results
@@ -309,16 +311,16 @@ def _run(
         raise RunsNotAttempted(len(pending) - len(recorded), total, unavailable[0])
 
 
-def _with_pictures(results: Results, instances: list[TaskInstance], backend: str) -> Results:
-    """The results with the report's pictures drawn, failed worlds simulated again on ``backend`` (the one
-    the runs used), or a note saying why there are none."""
+def _with_pictures(results: Results, instances: list[TaskInstance], backend: str, processes: int) -> Results:
+    """The results with the report's pictures drawn here in ``processes`` processes, failed worlds simulated
+    again on ``backend`` (the one the runs used), or a note saying why there are none."""
     if not results.config.pictures:
         return results
     from robotool.errors import RobotoolError
     from robotool.eval.pictures import write_pictures
 
     try:
-        pictures = write_pictures(instances, results.records, results.config.out_dir, backend)
+        pictures = write_pictures(instances, results.records, results.config.out_dir, backend, processes)
     except RobotoolError as e:
         return results.model_copy(update={"notes": [*results.notes, f"no pictures: {e}"]})
     return results.model_copy(update={"pictures": pictures})

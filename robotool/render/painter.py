@@ -49,7 +49,8 @@ class Painter:
     """Pictures of one scene at ``width`` x ``height`` pixels from one camera.
 
     The camera keeps in view every geom in each of ``frame_qpos`` (states (T, nq) to be shown; default the
-    start state), so a whole rollout can be shown from one viewpoint; ``shadows`` applies when a scene is given.
+    start state), so a whole rollout can be shown from one viewpoint; :meth:`frame` fits it to other states
+    (one painter, and one OpenGL context, for many pictures). ``shadows`` applies when a scene is given.
     Call :meth:`close` when done.
     """
 
@@ -68,6 +69,12 @@ class Painter:
         self.data = mujoco.MjData(model)
         self.width, self.height = width, height
         self._renderer = _renderer(model, width, height)
+        self.frame(frame_qpos)
+
+    def frame(self, frame_qpos: np.ndarray | None = None) -> None:
+        """Fit the camera to keep every geom in view in each state of ``frame_qpos`` (default: the start state),
+        and show the first of them."""
+        model = self.drawing.model
         states = np.atleast_2d(frame_qpos) if frame_qpos is not None else self.scene.model.qpos0[None, :]
         corners = []
         shown = visible_geoms(model)
@@ -78,7 +85,7 @@ class Painter:
         self.camera = fit_camera(
             np.concatenate(corners),
             robots.get(self.scene.task.embodiment).view,
-            width / height,
+            self.width / self.height,
             float(model.vis.global_.fovy),
         )
         self.set_state(states[0])

@@ -372,3 +372,26 @@ def test_evaluation_picture_replays_a_later_candidates_world_from_its_recorded_s
     )
     failure = results.pictures[1]
     assert failure.world == 1 and failure.reproduced is True
+
+
+def test_evaluation_pictures_drawn_in_two_processes_are_those_drawn_in_one(tmp_path: Path) -> None:
+    from rich.console import Console
+
+    from robotool.eval import EvalConfig, Settings, evaluate
+    from robotool.eval.instances import select
+    from robotool.eval.pictures import write_pictures
+
+    names = ["milk_reaching", "sofa_traversing"]
+    config = EvalConfig(
+        out=tmp_path / "out", settings=Settings(worlds=1, backend="mujoco"), tasks=names, methods=["no_tool"],
+        pictures=False,
+    )
+    results = evaluate(config, console=Console(quiet=True))
+    instances, _ = select(names, None, None)
+    one, two = (
+        write_pictures(instances, results.records, tmp_path / str(n), "mujoco", processes=n) for n in (1, 2)
+    )
+    assert [p.model_dump() for p in one] == [p.model_dump() for p in two]
+    assert [p.kind for p in two].count("failure") >= 2 and all(p.reproduced is not False for p in two)
+    for picture in two:
+        assert (tmp_path / "2" / picture.file).is_file()
