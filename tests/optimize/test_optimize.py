@@ -339,7 +339,7 @@ def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path, capsys: py
     assert "was trained on milk_reaching#" in err and "--allow-train" in err
     assert allowed in (0, 1)
     report = (tmp_path / "train" / "report.md").read_text()
-    assert "p was trained on milk_reaching#" in report and "not held out" in report
+    assert "p was trained on milk_reaching\\#" in report and "not held out" in report  # Markdown-escaped
 
 
 def test_a_compiled_program_that_lacks_a_stage_is_refused_clearly(tmp_path: Path) -> None:
