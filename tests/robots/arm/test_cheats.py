@@ -63,6 +63,8 @@ CASES = [
     ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
     ("arm_degenerate_calls", "milk_reaching"),
     ("arm_sliver_grasp_chain", "button_pressing:196"),
+    ("arm_sliver_grasp_chain", "button_pressing"),  # a 4 mm pinch held the chain 19 mm further out: pressed
+    ("arm_sliver_grasp_milk", "milk_reaching"),  # a 4 mm pinch at the workspace edge held the carton
     ("arm_topple_cube_stack", "button_pressing:196"),  # the toppled column lands against the face, unpressed
     ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
 ]
@@ -75,6 +77,29 @@ def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, 
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert rollout.error is None, rollout.error  # it ran to its end: the world said no
         assert world_failure(rollout), rollout
+
+
+SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
+
+
+def test_a_sliver_grasp_holds_nothing_on_the_built_in_task(run_texts: Any) -> None:
+    """On the built-in button task (which a held three-cube chain solves), the sliver-held two-cube chain pressed the
+    button in every world; now the close is refused for the grip it measured, in every world."""
+    for rollout in run_texts(_task("button_pressing"), [SLIVER_CHAIN] * 3, seed=11):
+        assert not rollout.success
+        (failed,) = [e for e in rollout.events if e.kind == "grasp_failed"]
+        assert failed.cause == "weak_grip" and failed.object == "magnetic_cube1" and failed.measured["depth"] < 0.006
+        assert "grip 4 mm deep on magnetic_cube1 across the pads, a pinch at its edge" in world_failure(rollout)
+
+
+def test_the_same_two_cube_chain_held_at_the_centre_falls_short(run_texts: Any) -> None:
+    """The control for the sliver cheat: the same program holding the first cube by a full grip (its centre) reaches
+    no further than that grip allows, and the button stays unpressed: only the sliver reached it."""
+    centred = SLIVER_CHAIN.replace("ca[0] - e / 2 - 0.004", "ca[0]")
+    assert centred != SLIVER_CHAIN
+    for rollout in run_texts(_task("button_pressing"), [centred] * 3, seed=11):
+        assert not rollout.success and not any(e.kind == "grasp_failed" for e in rollout.events), rollout.events
+        assert rollout.conditions == {"button_pressed": False}
 
 
 def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None:
@@ -140,3 +165,19 @@ def test_a_stick_turned_across_the_fingers_is_held(run_texts: Any) -> None:
     the face-press rule looks at what lies beside the fingers, not at the object's whole extent."""
     rollouts = run_texts(_tray_task((0.3, 0.02, 0.03), yaw=45.0, backstop=False), [GRASP_TRAY] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_sliver_grasp_of_the_milk_at_the_workspace_edge_holds_nothing(run_texts: Any) -> None:
+    """The milk pulled only until its near face is 4 mm inside the workspace and pinched there: it was held and
+    lifted in three worlds of five (perturbation seed 1); now every world says why nothing is held (the pinch, or the carton turned by the
+    pull so the fingers met its face)."""
+    cheat = (CHEATS / "arm_sliver_grasp_milk.py").read_text()
+    causes = []
+    for rollout in run_texts(_task("milk_reaching"), [cheat] * 5, seed=1):
+        assert not rollout.success and rollout.error is None
+        (failed,) = [e for e in rollout.events if e.kind == "grasp_failed"]
+        assert failed.object == "milk" and failed.cause in ("weak_grip", "not_between"), failed
+        causes.append(failed.cause)
+        if failed.cause == "weak_grip":
+            assert "a pinch at its edge" in world_failure(rollout)
+    assert causes.count("weak_grip") >= 3, causes
