@@ -169,8 +169,8 @@ def test_a_stick_turned_across_the_fingers_is_held(run_texts: Any) -> None:
 
 def test_a_sliver_grasp_of_the_milk_at_the_workspace_edge_holds_nothing(run_texts: Any) -> None:
     """The milk pulled only until its near face is 4 mm inside the workspace and pinched there: it was held and
-    lifted in three worlds of five (perturbation seed 1); now every world says why nothing is held (the pinch, or the carton turned by the
-    pull so the fingers met its face)."""
+    lifted in three worlds of five (perturbation seed 1); now every world says why nothing is held (the pinch,
+    or the carton turned by the pull so the fingers met its face)."""
     cheat = (CHEATS / "arm_sliver_grasp_milk.py").read_text()
     causes = []
     for rollout in run_texts(_task("milk_reaching"), [cheat] * 5, seed=1):
