@@ -489,10 +489,11 @@ class ArmController:
             if x1 - x0 > best[0]:
                 best = (x1 - x0, EDGE_SHARE * min(pad, hi[k, 0] - lo[k, 0]), (x0 + x1) / 2, (z0 + z1) / 2)
         depth, edge, x, z = best
-        if self.sheet[i]:  # a pinched fold of a sheet: what the pads cover of it is theirs
-            depth, edge = pad, 0.0
+        width = max(grip.gap, 0.0)
+        if self.sheet[i]:  # a fold of a sheet gathered between the pads fills them
+            depth, edge, width = pad, 0.0, pad
         centre = np.array([x, (grip.left + grip.right) / 2, z]) - c
-        return _Hold(depth=float(depth), edge_need=float(edge), width=max(grip.gap, 0.0), centre=centre)
+        return _Hold(depth=float(depth), edge_need=float(edge), width=float(width), centre=centre)
 
     def _weak(self, state: BatchState, w: int, i: int, hold: _Hold) -> dict[str, float]:
         """The measures of a grip on object ``i`` that cannot hold it and what is joined to it (empty if it can)."""

@@ -60,6 +60,7 @@ CASES = [
     ("arm_slide_paper_under_can_then_nudge", "can_grasping"),  # the nudged can rode the paper (sheet rule)
     ("arm_slide_paper_slowly_under_can", "can_grasping"),  # the same, the paper slid 1 mm per call
     ("arm_lay_paper_over_can", "can_grasping"),  # the same, the paper lifted over the can and laid down
+    ("arm_slide_paper_half_under_can_then_nudge", "can_grasping"),  # slid short of its centre, nudged over it
     ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
     ("arm_degenerate_calls", "milk_reaching"),
     ("arm_sliver_grasp_chain", "button_pressing:196"),
@@ -181,3 +182,16 @@ def test_a_sliver_grasp_of_the_milk_at_the_workspace_edge_holds_nothing(run_text
         if failed.cause == "weak_grip":
             assert "a pinch at its edge" in world_failure(rollout)
     assert causes.count("weak_grip") >= 3, causes
+
+
+def test_a_can_the_paper_slid_half_under_does_not_ride_it_after_a_nudge(run_texts: Any) -> None:
+    """The paper slid under the can's +y half, stopping 2 mm short of its centre, then the can nudged 12 mm onto it
+    with the stick: its centre came over the still paper, so it rode in and was grasped in three worlds of five.
+    The sheet got under part of its base, not the other way round, so it does not rest on the paper: the drag
+    leaves it where it was, out of reach, in every world."""
+    cheat = (CHEATS / "arm_slide_paper_half_under_can_then_nudge.py").read_text()
+    for rollout in run_texts(_task("can_grasping"), [cheat] * 5, seed=0):
+        assert not rollout.success and rollout.error is None
+        last = rollout.calls[-1]
+        assert last.skill == "move_to_position" and last.measured.get("outside_workspace", 0.0) > 0.15, last
+        assert "clamped" in world_failure(rollout) and "can" in world_failure(rollout)
