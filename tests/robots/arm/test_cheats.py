@@ -195,3 +195,23 @@ def test_a_can_the_paper_slid_half_under_does_not_ride_it_after_a_nudge(run_text
         last = rollout.calls[-1]
         assert last.skill == "move_to_position" and last.measured.get("outside_workspace", 0.0) > 0.15, last
         assert "clamped" in world_failure(rollout) and "can" in world_failure(rollout)
+
+
+LOOSE_CHAIN = (FIXTURES / "programs" / "button_pressing_loose_chain.py").read_text()
+
+
+def test_two_cubes_pushed_loose_by_the_closed_fingers_press_the_built_in_button(run_texts: Any) -> None:
+    """Honest tool use, not a cheat: two magnetic cubes lined up and joined, shoved unheld into the button by the
+    closed fingers, reach 0.45 + 0.008 + 0.06 m, past the built-in face (0.50 m) by more than its 1 cm press."""
+    rollouts = run_texts(_task("button_pressing"), [LOOSE_CHAIN] * 3, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+@pytest.mark.parametrize("seed", [4, 10, 31, 196])
+def test_two_cubes_pushed_loose_do_not_press_a_button_labelled_unsolvable(run_texts: Any, seed: int) -> None:
+    """On instances the family labels unsolvable (faces 0.53-0.555 m, two magnetic cubes) the same program pushes
+    the pair to the workspace edge and the button stays unpressed; the reason tells where the pair was left."""
+    for rollout in run_texts(_task(f"button_pressing:{seed}"), [LOOSE_CHAIN] * 2, seed=11):
+        assert not rollout.success and rollout.error is None and rollout.conditions == {"button_pressed": False}
+        reason = world_failure(rollout)
+        assert reason.startswith("goal not reached: button_pressed") and "magnetic_cube" in reason, reason
