@@ -439,14 +439,15 @@ class QuadrupedController:
             z, objects = self._heights(w, xy, floor + RAY_HEIGHT)
             return np.where(objects == index, floor, z)
 
-        problem = ""
+        problem = ""  # the first drop found: under the pose nearest straight-on, where the robot would push from
         for staging in (STAGING, 0.0):
             for start, end in poses:
                 behind = start - (end - start) / np.linalg.norm(end - start) * staging
                 found = sweep_problem(heights, behind, end, self.limits, floor)
                 if found is None:
                     return (start, end, staging), ""
-                problem = f": {found}" if "drop" in found else problem
+                if "drop" in found and not problem:
+                    problem = f": pushing from [{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}], {found}"
         return None, problem
 
     # -- running moves -----------------------------------------------------------------------------
