@@ -447,7 +447,8 @@ class QuadrupedController:
                 if found is None:
                     return (start, end, staging), ""
                 if "drop" in found and not problem:
-                    problem = f": pushing from [{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}], {found}"
+                    where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
+                    problem = f": pushing from {where}, {found}"
         return None, problem
 
     # -- running moves -----------------------------------------------------------------------------
