@@ -49,35 +49,47 @@ def _task(name: str) -> Task:
     return tasks.load(layout) if layout.is_file() else tasks.load(name)
 
 
-CASES = [
-    ("arm_creep_past_workspace", "milk_reaching"),
-    ("arm_huge_targets", "milk_reaching"),
-    ("arm_release_at_speed", "button_pressing"),
-    ("arm_ram_one_cube", "button_pressing"),
-    ("arm_paper_under_can", "can_grasping"),
-    ("arm_topple_milk_with_stick", "milk_reaching_unsolvable"),
-    ("arm_press_drag_block", "arm_block_beyond_reach"),  # friction from above dragged a flat block in (creep)
-    ("arm_slide_paper_under_can_then_nudge", "can_grasping"),  # the nudged can rode the paper (sheet rule)
-    ("arm_slide_paper_slowly_under_can", "can_grasping"),  # the same, the paper slid 1 mm per call
-    ("arm_lay_paper_over_can", "can_grasping"),  # the same, the paper lifted over the can and laid down
-    ("arm_slide_paper_half_under_can_then_nudge", "can_grasping"),  # slid short of its centre, nudged over it
-    ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
-    ("arm_degenerate_calls", "milk_reaching"),
-    ("arm_sliver_grasp_chain", "button_pressing:196"),
-    ("arm_sliver_grasp_chain", "button_pressing"),  # a 4 mm pinch held the chain 19 mm further out: pressed
-    ("arm_sliver_grasp_milk", "milk_reaching"),  # a 4 mm pinch at the workspace edge held the carton
-    ("arm_topple_cube_stack", "button_pressing:196"),  # the toppled column lands against the face, unpressed
-    ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
+CASES = [  # (program, task, what its failure reason must say)
+    ("arm_creep_past_workspace", "milk_reaching", "clamped"),
+    ("arm_huge_targets", "milk_reaching", "clamped 4.0"),
+    ("arm_release_at_speed", "button_pressing", "goal not reached: button_pressed"),
+    ("arm_ram_one_cube", "button_pressing", "clamped"),
+    # the paper cheats: the can is left where it stood, over 0.2 m beyond reach, when the arm reaches for it
+    ("arm_paper_under_can", "can_grasping", "clamped 0.2"),
+    ("arm_topple_milk_with_stick", "milk_reaching_unsolvable", "clamped"),
+    ("arm_press_drag_block", "arm_block_beyond_reach", "clamped"),  # friction from above dragged a flat block in
+    ("arm_slide_paper_under_can_then_nudge", "can_grasping", "clamped 0.2"),  # the nudged can rode the paper
+    ("arm_slide_paper_slowly_under_can", "can_grasping", "clamped 0.2"),  # the same, the paper slid 1 mm per call
+    ("arm_lay_paper_over_can", "can_grasping", "clamped 0.2"),  # the same, the paper lifted over the can, laid down
+    ("arm_slide_paper_half_under_can_then_nudge", "can_grasping", "clamped 0.2"),  # slid short of its centre
+    ("arm_chopstick_nudge_over_paper", "can_grasping:74", "clamped 0.2"),
+    ("arm_degenerate_calls", "milk_reaching", "clamped"),
+    ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
+    ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
+    ("arm_sliver_grasp_milk", "milk_reaching", "held nothing"),  # a 4 mm pinch at the workspace edge held the carton
+    ("arm_topple_cube_stack", "button_pressing:196", "goal not reached: button_pressed"),  # lands unpressed
+    ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
 ]
 
 
-@pytest.mark.parametrize(("program", "task"), CASES)
-def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, task: str) -> None:
+PAPER_SLIDES = {  # they once moved the gripper to 1 mm above the paper, below its reach: the slides stalled short
+    "arm_paper_under_can",
+    "arm_slide_paper_under_can_then_nudge",
+    "arm_slide_paper_slowly_under_can",
+    "arm_lay_paper_over_can",
+    "arm_slide_paper_half_under_can_then_nudge",
+}
+
+
+@pytest.mark.parametrize(("program", "task", "reason"), CASES)
+def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, task: str, reason: str) -> None:
     rollouts: list[Rollout] = run_texts(_task(task), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     for rollout in rollouts:
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert rollout.error is None, rollout.error  # it ran to its end: the world said no
-        assert world_failure(rollout), rollout
+        assert reason in world_failure(rollout), world_failure(rollout)
+        if program in PAPER_SLIDES:  # the paper went where the cheat meant it to: no slide stopped short of it
+            assert not any(c.outcome == "stalled" for c in rollout.calls), [c for c in rollout.calls]
 
 
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
