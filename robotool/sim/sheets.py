@@ -86,9 +86,9 @@ class Sheets:
             resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
             before = np.where(first, 0.0, self.share[:, k])
             gained = resting & (share > before + GAINED)  # more of its base came over the sheet this tick ...
-            # ... because the sheet moved under it (clearly more than it did), or it stood over the sheet at the start
+            # ... because the sheet moved under it (at least as far as it did), or it stood over the sheet at the start
             # without resting on it
-            sheet_moved = moved[:, s] & (step[:, s] > 2 * step[:, i])
+            sheet_moved = moved[:, s] & (step[:, s] >= step[:, i])
             slid = gained & ~self.on[:, k] & np.where(first, centre_over, sheet_moved)
             off = ~resting | (share == 0.0)
             self.slid_under[:, k] = np.where(active, (self.slid_under[:, k] | slid) & ~off, self.slid_under[:, k])
