@@ -501,7 +501,7 @@ class ArmController:
         bodies = np.asarray(self.scene.object_body)[carried]
         mass = self.sim.body_mass[w, bodies]
         model = self.scene.model
-        com = [state.xpos[w, b] + state.xmat(int(b))[w] @ model.body_ipos[b] for b in bodies]
+        com = [state.xpos[w, b] + _rotation(state.xquat[w, b]) @ model.body_ipos[b] for b in bodies]
         centre = np.average(np.array(com), axis=0, weights=mass) if mass.sum() > 0 else state.xpos[w, bodies[0]]
         weight = float(mass.sum()) * GRAVITY
         lever = centre[:2] - (state.xpos[w, self.gripper] + hold.centre)[:2]
@@ -632,12 +632,15 @@ def _geom_pose(scene: Scene, state: BatchState, w: int, geom: int) -> tuple[np.n
     """World rotation (3, 3) and centre (3,) of a geom in world ``w``, from its body's pose in the state."""
     model = scene.model
     body = model.geom_bodyid[geom]
-    body_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
-    geom_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
-    rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
-    return rot, state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    body_rot = _rotation(state.xquat[w, body])
+    return body_rot @ _rotation(model.geom_quat[geom]), state.xpos[w, body] + body_rot @ model.geom_pos[geom]
+
+
+def _rotation(quat: np.ndarray) -> np.ndarray:
+    """The rotation matrix (3, 3) of a unit quaternion (w, x, y, z)."""
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, np.asarray(quat, dtype=float))
+    return rot.reshape(3, 3)
 
 
 def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.ndarray) -> bool:
