@@ -12,9 +12,13 @@ millimetre per call) and the can then nudged a few millimetres so that it seemed
 footprint), a short chopstick nudging a can the paper was slid under, degenerate calls at the workspace edge, a
 two-cube chain held by a sliver of its first cube and a two-cube stack toppled toward a button beyond their reach,
 and a tray twice as wide as the opening held by pressing the open fingers on its face (friction kept them from
-closing, both touched it, and it was held; now what lies beside the fingers must lie between them). A task named
-``family:seed`` is a generated instance the family calls unsolvable. The honest references on the same tasks
-succeed in tests/robots/arm/test_skills.py.
+closing, both touched it, and it was held; now what lies beside the fingers must lie between them), a cube or the
+milk held by the last 4 mm of its edge (any overlap was a grasp; now a pinch of less than half the pads' width holds
+nothing), and the paper slid under half the can, 2 mm short of its centre, before a nudge (now a sheet that got under
+any share of an object's base marks it slid under). Each case names what its failure reason must say. A task named
+``family:seed`` is a generated instance the family calls unsolvable. Two magnetic cubes shoved loose by the closed
+fingers are honest tool use: they press the built-in button and no unsolvable one. The honest references on the
+same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
