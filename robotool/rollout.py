@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, Field
 
 Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 EventKind = Literal[
     "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
 ]
-GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between"]
+GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between", "weak_grip"]
 
 DISTANCES: frozenset[str] = frozenset({"gap", "step", "drop", "distance", "remaining", "outside_workspace"})
 """Keys of :attr:`SkillCall.measured` whose values are distances in metres: a gap, step or drop at a refusal,
@@ -99,6 +100,8 @@ class Event(BaseModel):
                 f"{obj} is {m.get('width', 0.0):.3f} m across the fingers, wider than their "
                 f"{m.get('opening', 0.0):.3f} m opening"
             )
+        if self.cause == "weak_grip":
+            return self._weak_grip()
         if self.cause == "on_top":
             return f"the fingers rested on top of {obj} instead of closing on its sides"
         if self.cause == "one_finger":
@@ -115,6 +118,27 @@ class Event(BaseModel):
         return (
             f"the fingers closed on nothing; the nearest graspable point ({obj}'s) is "
             f"{m.get('nearest', 0.0):.3f} m from the gripper centre"
+        )
+
+    def _weak_grip(self) -> str:
+        """What the fingers' grip on ``object`` measured and what its load needed (arm controller's ``_Hold``)."""
+        m, obj = self.measured, self.object
+        joined = int(m.get("joined", 0))
+        load = f"{m.get('weight', 0.0):.2f} N" + (f" ({obj} and {joined} joined to it)" if joined else "")
+        lever = f"{load} whose centre lies {m.get('lever', 0.0):.3f} m from the pads"
+        if m.get("weight", 0.0) > m.get("most_weight", np.inf):
+            return f"{obj} with what is joined to it weighs {load}, more than the grip's {m['most_weight']:.0f} N"
+        if m.get("width", 0.0) < m.get("need_width", 0.0):
+            return (
+                f"grip {1000 * m['width']:.0f} mm wide on {obj} across the fingers; needs "
+                f"{1000 * m['need_width']:.0f} mm for the {lever}"
+            )
+        depth, need = 1000 * m.get("depth", 0.0), 1000 * m.get("need_depth", 0.0)
+        if m.get("need_depth", 0.0) > m.get("edge_depth", 0.0) + 1e-9:
+            return f"grip {depth:.0f} mm deep on {obj} across the pads; needs {need:.0f} mm for the {lever}"
+        return (
+            f"grip {depth:.0f} mm deep on {obj} across the pads, a pinch at its edge; needs {need:.0f} mm, half "
+            f"of what the pads could cover, to hold the {lever}"
         )
 
 

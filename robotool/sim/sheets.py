@@ -2,14 +2,17 @@
 
 A sheet is too limp to push or lift anything with its edge: driven edge-first into a standing object
 it buckles or slips under without moving it. An object rests on a sheet only once it got there itself
-(pushed or put onto the sheet while the sheet lay still) or stood on it from the start; from then on the
-sheet's carrier geom for that object is in place (:func:`robotool.sim.build.make_spec`), so the object
-rides on the sheet by friction, until it leaves the sheet's footprint, is lifted off, or the sheet
-itself is lifted off the table (held up by an edge, it droops and carries nothing); otherwise the
-carrier lies far below. A sheet slid (or laid) under a standing object got there, not the object: the
-object came over the sheet while the sheet moved more than it did, and until it leaves the sheet's
-footprint again no nudge makes it rest on the sheet. :meth:`Sheets.update` applies this rule after every
-control tick, per world.
+(pushed or put onto the sheet while the sheet lay still) or stood on it from the start, and only while its
+own support is on the sheet: at least :data:`SUPPORT_SHARE` of its base over the sheet and its centre of mass
+over it (an object half on the sheet is held back by the table as much as the sheet pulls it). From then on
+the sheet's carrier geom for that object is in place (:func:`robotool.sim.build.make_spec`), so the object
+rides on the sheet by friction, until its support leaves the sheet (less than :data:`LEAVE_SHARE` of its base
+over it, or its centre off it), it is lifted off, or the sheet itself is lifted off the table (held up by an
+edge, it droops and carries nothing); otherwise the carrier lies far below. A sheet slid (or laid) under a
+standing object got there, not the object: once the sheet moving more than the object brought more of the
+object's base over it (any share, not only its centre), no nudge makes the object rest on the sheet until its
+base has left the sheet entirely, whatever order the slides and nudges came in. :meth:`Sheets.update` applies
+this rule after every control tick, per world.
 """
 
 from __future__ import annotations
@@ -17,12 +20,18 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from robotool import geometry
+from robotool.scene import SceneObject
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import SHEET_CARRIER_DROP, is_sheet, rests_on_sheet, sheet_carrier_name
 from robotool.sim.compiled_scene import Scene
 
 MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it
+SUPPORT_SHARE = 0.9  # of an object's base over a sheet, with its centre, for it to come to rest on the sheet
+LEAVE_SHARE = 0.5  # an object resting on a sheet leaves it when less of its base than this is over it
+BASE_SAMPLES = 9  # points along each side of an object's base (a grid; a disc for an upright cylinder)
+GAINED = 1e-3  # of an object's base: more than this came over the sheet during a tick
 
 
 class Sheets:
@@ -48,8 +57,9 @@ class Sheets:
             g: model.geom_pos[g] + (0.0 if o else SHEET_CARRIER_DROP) * np.array([0.0, 0.0, 1.0])
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
+        self.base = {i: base_points(task.objects[i]) for _, i, _ in self.links}
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
-        self.over = self.on.copy()  # (nworld, nlink): the object was over its sheet, resting, at the last tick
+        self.share = np.zeros(self.on.shape)  # (nworld, nlink): share of the object's base over its sheet
         self.slid_under = np.zeros_like(self.on)  # the sheet got under the object, not the other way round
         self.previous: np.ndarray | None = None
 
@@ -67,20 +77,43 @@ class Sheets:
         for k, (s, i, geom) in enumerate(self.links):
             rot = state.xmat(bodies[s])  # (nworld, 3, 3)
             local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
-            over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
+            centre_over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
+            base = xpos[:, i, None, :] + np.einsum("wij,pj->wpi", state.xmat(bodies[i]), self.base[i])
+            base_local = np.einsum("wji,wpj->wpi", rot, base - xpos[:, s, None, :])
+            share = np.all(np.abs(base_local[:, :, :2]) <= self.half[s], axis=2).mean(axis=1)
             top = xpos[:, s, 2] + self.thickness[s] / 2
             flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
             resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
-            came = active & over & resting & ~self.over[:, k]  # came over the sheet during this tick
-            slid = came & (first | (step[:, s] >= step[:, i]))  # ... because the sheet moved (or it was there)
-            self.slid_under[:, k] = np.where(
-                active, (self.slid_under[:, k] | slid) & over & resting, self.slid_under[:, k]
-            )
-            self.over[:, k] = np.where(active, over & resting, self.over[:, k])
-            arrive = active & over & resting & ~self.on[:, k] & ~self.slid_under[:, k] & moved[:, i] & ~moved[:, s]
-            leave = active & self.on[:, k] & ~(over & resting)
+            before = np.where(first, 0.0, self.share[:, k])
+            gained = resting & (share > before + GAINED)  # more of its base came over the sheet this tick ...
+            # ... because the sheet moved under it (at least as far as it did), or it stood over the sheet at the start
+            # without resting on it
+            sheet_moved = moved[:, s] & (step[:, s] >= step[:, i])
+            slid = gained & ~self.on[:, k] & np.where(first, centre_over, sheet_moved)
+            off = ~resting | (share == 0.0)
+            self.slid_under[:, k] = np.where(active, (self.slid_under[:, k] | slid) & ~off, self.slid_under[:, k])
+            self.share[:, k] = np.where(active, np.where(resting, share, 0.0), self.share[:, k])
+            supported = resting & centre_over & (share >= SUPPORT_SHARE)
+            arrive = active & supported & ~self.on[:, k] & ~self.slid_under[:, k] & moved[:, i] & ~moved[:, s]
+            leave = active & self.on[:, k] & ~(resting & centre_over & (share >= LEAVE_SHARE))
             for worlds, on in ((np.flatnonzero(arrive), True), (np.flatnonzero(leave), False)):
                 if worlds.size:
                     self.on[worlds, k] = on
                     drop = 0.0 if on else SHEET_CARRIER_DROP
                     sim.set_geom_pos(worlds, geom, self.placed[geom] - np.array([0.0, 0.0, drop]))
+
+
+def base_points(obj: SceneObject) -> np.ndarray:
+    """Points spread over an object's base in its body frame (n, 3): a disc for an upright cylinder, else a grid
+    over the bounds of its parts' lowest corners."""
+    rot = geometry.rotation_matrix(obj.rpy)
+    corners = (np.vstack([p.corners() for p in geometry.object_parts(obj)]) - np.asarray(obj.center)) @ rot
+    bottom = corners[:, 2].min()
+    low = corners[corners[:, 2] < bottom + 1e-6]
+    (x0, y0), (x1, y1) = low[:, :2].min(axis=0), low[:, :2].max(axis=0)
+    gx, gy = np.meshgrid(np.linspace(x0, x1, BASE_SAMPLES), np.linspace(y0, y1, BASE_SAMPLES))
+    grid = np.column_stack([gx.ravel(), gy.ravel()])
+    if obj.shape == "cylinder" and obj.axis == "z":
+        radius = max(x1 - x0, y1 - y0) / 2
+        grid = grid[np.hypot(*(grid - [(x0 + x1) / 2, (y0 + y1) / 2]).T) <= radius + 1e-9]
+    return np.column_stack([grid, np.full(len(grid), bottom)])

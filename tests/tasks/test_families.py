@@ -13,7 +13,7 @@ from robotool import tasks
 from robotool.concepts import key_concepts, needs_tool
 from robotool.geometry import object_parts
 from robotool.task_file import load_task, parse_task
-from robotool.tasks.families import sofa_traversing, vase_lowering
+from robotool.tasks.families import button_pressing, sofa_traversing, vase_lowering
 from robotool.tasks.families._common import RigidPlacement, thing
 
 SEEDS = range(50)
@@ -171,3 +171,20 @@ def test_a_vase_where_the_steps_lead_onto_a_sofa_level_with_them_can_be_pushed_a
 def test_vase_scenes_without_room_to_land_are_unsolvable() -> None:
     blocked = [i for i in (_instance("vase_lowering", seed) for seed in range(100)) if "lead onto" in i.description]
     assert blocked and all(not i.solvable and not i.tools and {"box_1", "box_2"} <= set(i.decoys) for i in blocked)
+
+
+def test_unsolvable_buttons_lie_beyond_two_cubes_held_or_pushed_loose() -> None:
+    """Two joined cubes shoved loose by the closed fingers reach 2.3 cm further than two held at the centre of the
+    first (tests/robots/arm/test_cheats.py runs that program: it presses the built-in button). The family counts it
+    as honest tool use, so an unsolvable face lies beyond it: its 1 cm press needs 1.5 cm more than they reach."""
+    from robotool.robots.arm.arm_controller import FINGER_HALF
+
+    assert FINGER_HALF[0] == button_pressing.FINGER_REACH
+    assert button_pressing.push_reach(2) > button_pressing.chain_reach(2)
+    for seed in range(200):
+        instance = tasks.generate("button_pressing", seed)
+        if instance.solvable:
+            continue
+        button = next(o for o in instance.task.objects if o.name == "button")
+        face = button.center[0] - button.size[0] / 2
+        assert face + button_pressing.PRESS > button_pressing.push_reach(2) + 0.015, (seed, face)

@@ -13,6 +13,14 @@ when both fingertips press on it: they gather a fold of it); it is then attached
 rigidly by the weld ``robot_grasp__<object>`` (one per movable object) at the current pose, as
 grasp-assisted simulators do, and released by ``open_gripper``. Otherwise the call reports what the
 fingers met and why nothing is held, as a typed ``grasp_failed`` event with the measured values.
+
+The weld stands for a friction grip, so it holds only what that grip can (:class:`_Hold`): the pads must
+cover at least half of what they could of the object across their width (a pinch of its last millimetres
+at an edge is no grip), and the squeeze of :data:`GRIP_FORCE` per pad must carry the load, the weight of
+the held object and of everything joined to it, and its torque about the pads (the weight's lever along
+the pads against the grip's depth across them, its lever along the closing axis against the width between
+them). A grip that cannot is refused at ``close_gripper``; one that stops holding when more is joined to
+it (a magnetic chain grown from it) lets go at once and the skill reports it.
 Each motion skill also reports objects it pushed further out of the workspace (``pushed_out``).
 """
 
@@ -62,6 +70,14 @@ PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 # with friction ten times stiffer than the normal force (impratio) bring the creep under 0.5%
 # (tests/robots/arm/test_cheats.py).
 FRICTION_CONE, IMPRATIO = mujoco.mjtCone.mjCONE_ELLIPTIC, 10.0
+# The grip a grasp weld stands for (module docstring): each pad squeezes with GRIP_FORCE and holds by friction
+# GRIP_FRICTION times that; a frictional couple across the depth the pads engage resists a torque about them.
+# GRIP_FORCE is the continuous squeeze of a parallel gripper of this size (a Franka hand's is 70 N); the largest
+# load an honest tool puts on it, the hammer held by its handle end with its head 0.17 m away, needs 0.71 N m
+# across the pads' 16 mm, 45 N. EDGE_SHARE of what the pads could cover of an object across their width is the
+# least that is a grip rather than a pinch at its edge.
+GRIP_FORCE, GRIP_FRICTION, EDGE_SHARE = 60.0, 1.0, 0.5  # N, -, -
+GRAVITY = 9.81  # m/s^2
 
 _IDLE, _MOVE, _FINGERS = 0, 1, 2
 _AXES = "xyz"
@@ -162,6 +178,23 @@ class ArmEmbodiment:
 
 
 @dataclass(frozen=True)
+class _Hold:
+    """How the pads engage a held object: depth across the pads (world x) and the least that is a grip there,
+    width between them (world y), and the engaged patch's centre relative to the gripper centre."""
+
+    depth: float
+    edge_need: float
+    width: float
+    centre: np.ndarray
+
+    def need(self, weight: float, lever: np.ndarray) -> tuple[float, float]:
+        """The depth across the pads and the width between them that hold ``weight`` (N) whose centre lies
+        ``lever`` (x, y) from the patch: the weight's torque over the grip's friction couple."""
+        grip = GRIP_FRICTION * GRIP_FORCE
+        return max(self.edge_need, weight * abs(float(lever[0])) / grip), weight * abs(float(lever[1])) / grip
+
+
+@dataclass(frozen=True)
 class _Grip:
     """Where the fingers are in one world: the inner faces across the closing axis (world y), their x and z spans."""
 
@@ -207,6 +240,11 @@ class ArmController:
         sim.ctrl[:, self.xyz_act] = HOME
         self.finger_open = finger_open(limits)
         sim.ctrl[:, self.finger_act] = self.finger_open
+        self.hold_depth = np.zeros(n)  # the held object's _Hold, per world (valid while its grasp weld is on)
+        self.hold_edge = np.zeros(n)
+        self.hold_width = np.zeros(n)
+        self.hold_centre = np.zeros((n, 3))
+        self.let_go: list[list[Event]] = [[] for _ in range(n)]  # grips that gave way, told at the next skill end
 
     def _graspable(self, i: int) -> bool:
         obj = self.scene.task.objects[i]
@@ -251,6 +289,7 @@ class ArmController:
         """Finish skills that reached their end, then write the servo references for the next interval (in
         ``worlds``, every world when None)."""
         mask = world_mask(self.sim.nworld, worlds)
+        self._check_holds(state, mask)
         ends = self._tick_moves(state, mask) + self._tick_fingers(state, mask)
         if ends:
             ends = self._with_pushed_out(state, ends)
@@ -326,7 +365,8 @@ class ArmController:
             before = np.linalg.norm(self.start_points[w] - np.clip(self.start_points[w], lo, hi), axis=1)
             after = np.linalg.norm(points[w] - np.clip(points[w], lo, hi), axis=1)
             pushed = np.linalg.norm(points[w] - self.start_points[w], axis=1)
-            events = list(end.events)
+            events = list(end.events) + self.let_go[w]
+            self.let_go[w] = []
             for i in np.flatnonzero(self.movable & (after - before > PUSHED_OUT) & ~carried):
                 centre = state.xpos[w, self.scene.object_body[i]]
                 events.append(
@@ -346,9 +386,13 @@ class ArmController:
 
     def _carried(self, state: BatchState, w: int) -> np.ndarray:
         """Objects the gripper carries in world ``w``: held, or joined to what it carries by an active weld."""
+        return self._joined(state, w, self.gripper)
+
+    def _joined(self, state: BatchState, w: int, start: int) -> np.ndarray:
+        """Objects joined to body ``start`` in world ``w`` by a chain of active welds (its own object too)."""
         model, owner = self.scene.model, self.scene.body_object
         carried = np.zeros(len(self.scene.object_names), dtype=bool)
-        reach = {self.gripper}
+        reach = {start}
         grown = True
         while grown:
             grown = False
@@ -401,6 +445,13 @@ class ArmController:
         for i in both:
             cause, measured = self._fit(state, w, i, grip)
             if cause is None:
+                hold = self._hold(state, w, i, grip)
+                weak = self._weak(state, w, i, hold)
+                if weak:
+                    failures.append(("weak_grip", i, weak))
+                    continue
+                self.hold_depth[w], self.hold_edge[w], self.hold_width[w] = hold.depth, hold.edge_need, hold.width
+                self.hold_centre[w] = hold.centre
                 self.sim.set_weld(np.array([w]), int(self.grasp_eq[i]), True)
                 return SkillEnd(
                     w,
@@ -421,6 +472,72 @@ class ArmController:
             kind="grasp_failed", object=names[i] if i >= 0 else None, limit="grasp", cause=cause, measured=measured
         )
         return SkillEnd(w, "done", event.describe([]), measured, events=(event,))
+
+    def _hold(self, state: BatchState, w: int, i: int, grip: _Grip) -> _Hold:
+        """How the closed fingers engage object ``i``: across the pads, the longest x overlap of one of its parts
+        (beside the fingers) with the pads, and the least that is a grip there (EDGE_SHARE of what the pads could
+        cover of that part); the width between the fingers; the patch's centre from the gripper centre."""
+        c = state.xpos[w, self.gripper]
+        lo, hi = _geom_extents(self.scene, state, w, self.object_geoms[i])
+        pad = 2 * FINGER_HALF[0]
+        best = (0.0, 0.0, float(c[0]), float(c[2]))
+        for k, g in enumerate(self.object_geoms[i]):
+            if self.sheet[i] or _y_span_in_slab(self.scene, state, w, int(g), grip.x, grip.z) is None:
+                continue
+            x0, x1 = max(lo[k, 0], grip.x[0]), min(hi[k, 0], grip.x[1])
+            z0, z1 = max(lo[k, 2], grip.z[0]), min(hi[k, 2], grip.z[1])
+            if x1 - x0 > best[0]:
+                best = (x1 - x0, EDGE_SHARE * min(pad, hi[k, 0] - lo[k, 0]), (x0 + x1) / 2, (z0 + z1) / 2)
+        depth, edge, x, z = best
+        width = max(grip.gap, 0.0)
+        if self.sheet[i]:  # a fold of a sheet gathered between the pads fills them
+            depth, edge, width = pad, 0.0, pad
+        centre = np.array([x, (grip.left + grip.right) / 2, z]) - c
+        return _Hold(depth=float(depth), edge_need=float(edge), width=float(width), centre=centre)
+
+    def _weak(self, state: BatchState, w: int, i: int, hold: _Hold) -> dict[str, float]:
+        """The measures of a grip on object ``i`` that cannot hold it and what is joined to it (empty if it can)."""
+        carried = self._joined(state, w, int(self.scene.object_body[i]))
+        bodies = np.asarray(self.scene.object_body)[carried]
+        mass = self.sim.body_mass[w, bodies]
+        model = self.scene.model
+        com = [state.xpos[w, b] + _rotation(state.xquat[w, b]) @ model.body_ipos[b] for b in bodies]
+        centre = np.average(np.array(com), axis=0, weights=mass) if mass.sum() > 0 else state.xpos[w, bodies[0]]
+        weight = float(mass.sum()) * GRAVITY
+        lever = centre[:2] - (state.xpos[w, self.gripper] + hold.centre)[:2]
+        need_depth, need_width = hold.need(weight, lever)
+        most = 2 * GRIP_FRICTION * GRIP_FORCE
+        if hold.depth >= need_depth - 1e-9 and hold.width >= need_width - 1e-9 and weight <= most:
+            return {}
+        return {
+            "depth": hold.depth,
+            "need_depth": need_depth,
+            "edge_depth": hold.edge_need,
+            "width": hold.width,
+            "need_width": need_width,
+            "weight": weight,
+            "most_weight": most,
+            "lever": float(np.linalg.norm(lever)),
+            "joined": float(carried.sum() - 1),
+        }
+
+    def _check_holds(self, state: BatchState, mask: np.ndarray) -> None:
+        """Let go of a held object whose grip can no longer carry its load (more was joined to it)."""
+        eqs = self.grasp_eq[self.grasp_eq >= 0]
+        if not eqs.size:
+            return
+        objects = np.flatnonzero(self.grasp_eq >= 0)
+        active = state.eq_active[:, eqs]
+        for w in np.flatnonzero(mask & active.any(axis=1)):
+            i = int(objects[np.argmax(active[w])])
+            hold = _Hold(self.hold_depth[w], self.hold_edge[w], self.hold_width[w], self.hold_centre[w])
+            weak = self._weak(state, w, i, hold)
+            if weak:
+                self.sim.set_weld(np.array([w]), int(self.grasp_eq[i]), False)
+                name = self.scene.object_names[i]
+                self.let_go[w].append(
+                    Event(kind="grasp_failed", object=name, limit="grasp", cause="weak_grip", measured=weak)
+                )
 
     def _resting_under(self, state: BatchState, w: int, grip: _Grip) -> list[set[int]]:
         """For each finger, the graspable objects its tip rests on (under its footprint, just below it).
@@ -515,12 +632,15 @@ def _geom_pose(scene: Scene, state: BatchState, w: int, geom: int) -> tuple[np.n
     """World rotation (3, 3) and centre (3,) of a geom in world ``w``, from its body's pose in the state."""
     model = scene.model
     body = model.geom_bodyid[geom]
-    body_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(body_rot, state.xquat[w, body])
-    geom_rot = np.zeros(9)
-    mujoco.mju_quat2Mat(geom_rot, model.geom_quat[geom])
-    rot = body_rot.reshape(3, 3) @ geom_rot.reshape(3, 3)
-    return rot, state.xpos[w, body] + body_rot.reshape(3, 3) @ model.geom_pos[geom]
+    body_rot = _rotation(state.xquat[w, body])
+    return body_rot @ _rotation(model.geom_quat[geom]), state.xpos[w, body] + body_rot @ model.geom_pos[geom]
+
+
+def _rotation(quat: np.ndarray) -> np.ndarray:
+    """The rotation matrix (3, 3) of a unit quaternion (w, x, y, z)."""
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, np.asarray(quat, dtype=float))
+    return rot.reshape(3, 3)
 
 
 def _over_geom(scene: Scene, state: BatchState, w: int, geom: int, points: np.ndarray) -> bool:

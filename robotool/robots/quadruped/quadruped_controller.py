@@ -50,7 +50,16 @@ from robotool.robots.quadruped.push import (
     sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported, tilt, unsupported_feet
+from robotool.robots.quadruped.support import (
+    centre_of_mass,
+    feet,
+    feet_touching,
+    pass_weight,
+    resting_on,
+    supported,
+    tilt,
+    unsupported_feet,
+)
 from robotool.robots.quadruped.terrain import (
     FOOT_NAMES,
     FOOT_RADIUS,
@@ -430,14 +439,16 @@ class QuadrupedController:
             z, objects = self._heights(w, xy, floor + RAY_HEIGHT)
             return np.where(objects == index, floor, z)
 
-        problem = ""
+        problem = ""  # the first drop found: under the pose nearest straight-on, where the robot would push from
         for staging in (STAGING, 0.0):
             for start, end in poses:
                 behind = start - (end - start) / np.linalg.norm(end - start) * staging
                 found = sweep_problem(heights, behind, end, self.limits, floor)
                 if found is None:
                     return (start, end, staging), ""
-                problem = f": {found}" if "drop" in found else problem
+                if "drop" in found and not problem:
+                    where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
+                    problem = f": pushing from {where}, {found}"
         return None, problem
 
     # -- running moves -----------------------------------------------------------------------------
@@ -599,28 +610,8 @@ class QuadrupedController:
         worlds = np.flatnonzero(mask & under_feet.any(axis=1))
         if worlds.size == 0:
             return loaded, via
-        touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, nobject, nobject)
-        centres = state.xpos[worlds][:, self.scene.object_body]  # (k, nobject, 3)
-        below = np.stack(
-            [  # [k, a, b]: b's centre lies below a's underside, along a's own up axis
-                np.einsum(
-                    "kj,kbj->kb", state.xmat(self.scene.object_body[a])[worlds, :, 2], centres - centres[:, a, None]
-                )
-                < self.corners[a][:, 2].min()
-                for a in range(nobject)
-            ],
-            axis=1,
-        )
-        rests_on = touching & below  # [k, a, b]: a rests on b (a board lying on it, or leaning on it from the floor)
-        load = under_feet[worlds]
-        for _ in range(nobject):  # along chains of objects resting on one another
-            passing = rests_on & (load & carrier)[:, :, None]
-            more = load | passing.any(axis=1)
-            via[worlds] = np.where(more & ~load, np.argmax(passing, axis=1), via[worlds])
-            if np.array_equal(more, load):
-                break
-            load = more
-        loaded[worlds] = load
+        rests = resting_on(state, self.scene, self.corners, worlds)
+        loaded[worlds], via[worlds] = pass_weight(rests, under_feet[worlds], carrier)
         return loaded, via
 
     def _rams(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray) -> None:

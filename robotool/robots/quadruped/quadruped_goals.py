@@ -5,16 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.robots.quadruped.body import BodyIds
-from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, supported
+from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, pass_weight, resting_on, supported
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.sim.object_goals import local_corners
 
 
 class RobotOnGoal:
     """``robot_on: obj``: the robot's weight rests on ``obj``.
 
-    Its centre of mass lies over the support of the feet that touch ``obj`` (at least three of them), and every foot
-    touches something (none hangs over a gap).
+    Its centre of mass lies over the support of the feet whose weight reaches ``obj`` (at least three of them), and
+    every foot touches something (none hangs over a gap). A foot's weight reaches ``obj`` when it touches ``obj``, or
+    when it stands over ``obj``'s footprint on a movable object (not fragile) that rests on ``obj``, directly or
+    through others (a board lying on a sofa), as the judge traces weight elsewhere (:func:`pass_weight`).
     """
 
     def __init__(self, scene: Scene):
@@ -24,12 +27,34 @@ class RobotOnGoal:
         self.ids = BodyIds.of(scene.model)
         self.target = scene.body_object == self.index
         self.not_robot = ~scene.robot_body
+        self.corners = local_corners(scene)
+        objects = scene.task.objects
+        self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)
+        self.member = scene.body_object[None, :] == np.arange(len(objects))[:, None]  # (nobject, nbody)
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        on_target = feet_touching(state, self.ids, self.target)
-        weight = supported(centre_of_mass(state, self.ids), feet(state, self.ids), on_target)
+        foot_xyz = feet(state, self.ids)
+        on_target = feet_touching(state, self.ids, self.target) | self._through_carriers(state, foot_xyz)
+        weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = feet_touching(state, self.ids, self.not_robot).all(axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
+
+    def _through_carriers(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:
+        """(nworld, 4) whether each foot stands over the target's footprint on carriers that pass its weight to it."""
+        out = np.zeros(foot_xyz.shape[:2], dtype=bool)
+        under = (state.touching[:, self.ids.feet].astype(float) @ self.member.T.astype(float) > 0) & self.carrier
+        worlds = np.flatnonzero(under.any(axis=(1, 2)))
+        if worlds.size == 0:
+            return out
+        rests = resting_on(state, self.scene, self.corners, worlds)
+        for f in range(under.shape[1]):
+            loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
+            out[worlds, f] = loaded[:, self.index]
+        body = self.scene.object_body[self.index]
+        rel = np.einsum("wji,wfj->wfi", state.xmat(body), foot_xyz - state.xpos[:, body, None, :])
+        lo, hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
+        over = np.all((rel[:, :, :2] >= lo[:2]) & (rel[:, :, :2] <= hi[:2]), axis=2)
+        return out & over

@@ -11,6 +11,7 @@ import numpy as np
 from robotool.robots.quadruped.body import BodyIds
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS
 from robotool.sim.backend import BatchState
+from robotool.sim.compiled_scene import Scene
 
 CYCLE = (0, 2, 3, 1)  # the feet counter-clockwise around the footprint (rear-right, front-right, front-left, ...)
 FOOT_GROUPS = {  # how a set of feet without support is named, from the most specific
@@ -79,3 +80,38 @@ def unsupported_feet(touching: np.ndarray) -> str:
         if free == set(group):
             return f"the {name} feet"
     return "the " + ", ".join(FOOT_NAMES[i] for i in sorted(free)) + (" feet" if len(free) > 1 else " foot")
+
+
+def resting_on(state: BatchState, scene: Scene, corners: list[np.ndarray], worlds: np.ndarray) -> np.ndarray:
+    """[k, a, b]: object ``a`` rests on object ``b`` in world ``worlds[k]``: they touch, and ``b``'s centre lies
+    below ``a``'s underside along ``a``'s own up axis (a board lying flat on ``b``, or leaning on it from the floor).
+    ``corners``: each object's corners in its body frame (:func:`robotool.sim.object_goals.local_corners`)."""
+    owner, nobject = scene.body_object, len(scene.object_names)
+    member = (owner[None, :] == np.arange(nobject)[:, None]).astype(float)  # (nobject, nbody)
+    touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, nobject, nobject)
+    centres = state.xpos[worlds][:, scene.object_body]  # (k, nobject, 3)
+    below = np.stack(
+        [
+            np.einsum("kj,kbj->kb", state.xmat(scene.object_body[a])[worlds, :, 2], centres - centres[:, a, None])
+            < corners[a][:, 2].min()
+            for a in range(nobject)
+        ],
+        axis=1,
+    )
+    return touching & below
+
+
+def pass_weight(rests: np.ndarray, load: np.ndarray, carrier: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where a weight put on the objects ``load`` (k, nobject) goes: a ``carrier`` object (nobject,) that carries it
+    passes it on to each object it rests on (``rests``, :func:`resting_on`), along chains of them; any other object
+    keeps it. Returns the objects that carry it (k, nobject) and, for each one reached, the object that passed it on.
+    """
+    via = np.zeros(load.shape, dtype=int)
+    for _ in range(load.shape[1]):
+        passing = rests & (load & carrier)[:, :, None]
+        more = load | passing.any(axis=1)
+        via = np.where(more & ~load, np.argmax(passing, axis=1), via)
+        if np.array_equal(more, load):
+            break
+        load = more
+    return load, via

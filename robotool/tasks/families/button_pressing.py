@@ -9,7 +9,9 @@ Randomizations:
       (0.45 + 0.015 + 0.03 (n - 1) m for n cubes, minus 2 cm); the button's y;
     - the number (3-4) and places of the magnetic cubes, clear of the line in front of the button;
     - decoys: plain wooden cubes that do not stick; unsolvable scenes have only two magnetic cubes and a
-      face beyond what two cubes (or any held object pushing them) can reach, and no other movable object;
+      face beyond what two cubes can reach, held (:func:`chain_reach`) or pushed loose by the closed fingers
+      (:func:`push_reach`, honest tool use: the joined pair is a stick pushed rather than held), and no other
+      movable object;
     - 0-2 fixed table-top distractors; the layout mirrored in y.
 Success conditions:
     - the button is pressed at some moment.
@@ -38,6 +40,15 @@ BUTTON = (0.24, 0.10, 0.08)
 def chain_reach(cubes: int) -> float:
     """Farthest x the front of a held chain of magnetic cubes reaches."""
     return 0.45 + CUBE / 2 + CUBE * (cubes - 1)
+
+
+FINGER_REACH = 0.008  # m the closed fingers reach past the gripper centre along x (the arm's FINGER_HALF[0])
+PRESS = 0.01  # m a face must be pushed in to count as pressed
+
+
+def push_reach(cubes: int) -> float:
+    """Farthest x the front of a row of joined magnetic cubes reaches when the closed fingers push it loose."""
+    return 0.45 + FINGER_REACH + CUBE * cubes
 
 
 def cubes(

@@ -12,9 +12,13 @@ millimetre per call) and the can then nudged a few millimetres so that it seemed
 footprint), a short chopstick nudging a can the paper was slid under, degenerate calls at the workspace edge, a
 two-cube chain held by a sliver of its first cube and a two-cube stack toppled toward a button beyond their reach,
 and a tray twice as wide as the opening held by pressing the open fingers on its face (friction kept them from
-closing, both touched it, and it was held; now what lies beside the fingers must lie between them). A task named
-``family:seed`` is a generated instance the family calls unsolvable. The honest references on the same tasks
-succeed in tests/robots/arm/test_skills.py.
+closing, both touched it, and it was held; now what lies beside the fingers must lie between them), a cube or the
+milk held by the last 4 mm of its edge (any overlap was a grasp; now a pinch of less than half the pads' width holds
+nothing), and the paper slid under half the can, 2 mm short of its centre, before a nudge (now a sheet that got under
+any share of an object's base marks it slid under). Each case names what its failure reason must say. A task named
+``family:seed`` is a generated instance the family calls unsolvable. Two magnetic cubes shoved loose by the closed
+fingers are honest tool use: they press the built-in button and no unsolvable one. The honest references on the
+same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
@@ -49,32 +53,70 @@ def _task(name: str) -> Task:
     return tasks.load(layout) if layout.is_file() else tasks.load(name)
 
 
-CASES = [
-    ("arm_creep_past_workspace", "milk_reaching"),
-    ("arm_huge_targets", "milk_reaching"),
-    ("arm_release_at_speed", "button_pressing"),
-    ("arm_ram_one_cube", "button_pressing"),
-    ("arm_paper_under_can", "can_grasping"),
-    ("arm_topple_milk_with_stick", "milk_reaching_unsolvable"),
-    ("arm_press_drag_block", "arm_block_beyond_reach"),  # friction from above dragged a flat block in (creep)
-    ("arm_slide_paper_under_can_then_nudge", "can_grasping"),  # the nudged can rode the paper (sheet rule)
-    ("arm_slide_paper_slowly_under_can", "can_grasping"),  # the same, the paper slid 1 mm per call
-    ("arm_lay_paper_over_can", "can_grasping"),  # the same, the paper lifted over the can and laid down
-    ("arm_chopstick_nudge_over_paper", "can_grasping:74"),
-    ("arm_degenerate_calls", "milk_reaching"),
-    ("arm_sliver_grasp_chain", "button_pressing:196"),
-    ("arm_topple_cube_stack", "button_pressing:196"),  # the toppled column lands against the face, unpressed
-    ("arm_press_fingers_on_face", "arm_tray_too_wide"),  # friction jammed the open fingers on its face: held
+CASES = [  # (program, task, what its failure reason must say)
+    ("arm_creep_past_workspace", "milk_reaching", "clamped"),
+    ("arm_huge_targets", "milk_reaching", "clamped 4.0"),
+    ("arm_release_at_speed", "button_pressing", "goal not reached: button_pressed"),
+    ("arm_ram_one_cube", "button_pressing", "clamped"),
+    # the paper cheats: the can is left where it stood, over 0.2 m beyond reach, when the arm reaches for it
+    ("arm_paper_under_can", "can_grasping", "clamped 0.2"),
+    ("arm_topple_milk_with_stick", "milk_reaching_unsolvable", "clamped"),
+    ("arm_press_drag_block", "arm_block_beyond_reach", "clamped"),  # friction from above dragged a flat block in
+    ("arm_slide_paper_under_can_then_nudge", "can_grasping", "clamped 0.2"),  # the nudged can rode the paper
+    ("arm_slide_paper_slowly_under_can", "can_grasping", "clamped 0.2"),  # the same, the paper slid 1 mm per call
+    ("arm_lay_paper_over_can", "can_grasping", "clamped 0.2"),  # the same, the paper lifted over the can, laid down
+    ("arm_slide_paper_half_under_can_then_nudge", "can_grasping", "clamped 0.2"),  # slid short of its centre
+    ("arm_chopstick_nudge_over_paper", "can_grasping:74", "clamped 0.2"),
+    ("arm_degenerate_calls", "milk_reaching", "clamped"),
+    ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
+    ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
+    ("arm_sliver_grasp_milk", "milk_reaching", "held nothing"),  # a 4 mm pinch at the workspace edge held the carton
+    ("arm_topple_cube_stack", "button_pressing:196", "goal not reached: button_pressed"),  # lands unpressed
+    ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
 ]
 
 
-@pytest.mark.parametrize(("program", "task"), CASES)
-def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, task: str) -> None:
+PAPER_SLIDES = {  # they once moved the gripper to 1 mm above the paper, below its reach: the slides stalled short
+    "arm_paper_under_can",
+    "arm_slide_paper_under_can_then_nudge",
+    "arm_slide_paper_slowly_under_can",
+    "arm_lay_paper_over_can",
+    "arm_slide_paper_half_under_can_then_nudge",
+}
+
+
+@pytest.mark.parametrize(("program", "task", "reason"), CASES)
+def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, task: str, reason: str) -> None:
     rollouts: list[Rollout] = run_texts(_task(task), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     for rollout in rollouts:
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert rollout.error is None, rollout.error  # it ran to its end: the world said no
-        assert world_failure(rollout), rollout
+        assert reason in world_failure(rollout), world_failure(rollout)
+        if program in PAPER_SLIDES:  # the paper went where the cheat meant it to: no slide stopped short of it
+            assert not any(c.outcome == "stalled" for c in rollout.calls), [c for c in rollout.calls]
+
+
+SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
+
+
+def test_a_sliver_grasp_holds_nothing_on_the_built_in_task(run_texts: Any) -> None:
+    """On the built-in button task (which a held three-cube chain solves), the sliver-held two-cube chain pressed the
+    button in every world; now the close is refused for the grip it measured, in every world."""
+    for rollout in run_texts(_task("button_pressing"), [SLIVER_CHAIN] * 3, seed=11):
+        assert not rollout.success
+        (failed,) = [e for e in rollout.events if e.kind == "grasp_failed"]
+        assert failed.cause == "weak_grip" and failed.object == "magnetic_cube1" and failed.measured["depth"] < 0.006
+        assert "grip 4 mm deep on magnetic_cube1 across the pads, a pinch at its edge" in world_failure(rollout)
+
+
+def test_the_same_two_cube_chain_held_at_the_centre_falls_short(run_texts: Any) -> None:
+    """The control for the sliver cheat: the same program holding the first cube by a full grip (its centre) reaches
+    no further than that grip allows, and the button stays unpressed: only the sliver reached it."""
+    centred = SLIVER_CHAIN.replace("ca[0] - e / 2 - 0.004", "ca[0]")
+    assert centred != SLIVER_CHAIN
+    for rollout in run_texts(_task("button_pressing"), [centred] * 3, seed=11):
+        assert not rollout.success and not any(e.kind == "grasp_failed" for e in rollout.events), rollout.events
+        assert rollout.conditions == {"button_pressed": False}
 
 
 def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None:
@@ -140,3 +182,52 @@ def test_a_stick_turned_across_the_fingers_is_held(run_texts: Any) -> None:
     the face-press rule looks at what lies beside the fingers, not at the object's whole extent."""
     rollouts = run_texts(_tray_task((0.3, 0.02, 0.03), yaw=45.0, backstop=False), [GRASP_TRAY] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_sliver_grasp_of_the_milk_at_the_workspace_edge_holds_nothing(run_texts: Any) -> None:
+    """The milk pulled only until its near face is 4 mm inside the workspace and pinched there: it was held and
+    lifted in three worlds of five (perturbation seed 1); now every world says why nothing is held (the pinch,
+    or the carton turned by the pull so the fingers met its face)."""
+    cheat = (CHEATS / "arm_sliver_grasp_milk.py").read_text()
+    causes = []
+    for rollout in run_texts(_task("milk_reaching"), [cheat] * 5, seed=1):
+        assert not rollout.success and rollout.error is None
+        (failed,) = [e for e in rollout.events if e.kind == "grasp_failed"]
+        assert failed.object == "milk" and failed.cause in ("weak_grip", "not_between"), failed
+        causes.append(failed.cause)
+        if failed.cause == "weak_grip":
+            assert "a pinch at its edge" in world_failure(rollout)
+    assert causes.count("weak_grip") >= 3, causes
+
+
+def test_a_can_the_paper_slid_half_under_does_not_ride_it_after_a_nudge(run_texts: Any) -> None:
+    """The paper slid under the can's +y half, stopping 2 mm short of its centre, then the can nudged 12 mm onto it
+    with the stick: its centre came over the still paper, so it rode in and was grasped in three worlds of five.
+    The sheet got under part of its base, not the other way round, so it does not rest on the paper: the drag
+    leaves it where it was, out of reach, in every world."""
+    cheat = (CHEATS / "arm_slide_paper_half_under_can_then_nudge.py").read_text()
+    for rollout in run_texts(_task("can_grasping"), [cheat] * 5, seed=0):
+        assert not rollout.success and rollout.error is None
+        last = rollout.calls[-1]
+        assert last.skill == "move_to_position" and last.measured.get("outside_workspace", 0.0) > 0.15, last
+        assert "clamped" in world_failure(rollout) and "can" in world_failure(rollout)
+
+
+LOOSE_CHAIN = (FIXTURES / "programs" / "button_pressing_loose_chain.py").read_text()
+
+
+def test_two_cubes_pushed_loose_by_the_closed_fingers_press_the_built_in_button(run_texts: Any) -> None:
+    """Honest tool use, not a cheat: two magnetic cubes lined up and joined, shoved unheld into the button by the
+    closed fingers, reach 0.45 + 0.008 + 0.06 m, past the built-in face (0.50 m) by more than its 1 cm press."""
+    rollouts = run_texts(_task("button_pressing"), [LOOSE_CHAIN] * 3, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+@pytest.mark.parametrize("seed", [4, 10, 31, 196])
+def test_two_cubes_pushed_loose_do_not_press_a_button_labelled_unsolvable(run_texts: Any, seed: int) -> None:
+    """On instances the family labels unsolvable (faces 0.53-0.555 m, two magnetic cubes) the same program pushes
+    the pair to the workspace edge and the button stays unpressed; the reason tells where the pair was left."""
+    for rollout in run_texts(_task(f"button_pressing:{seed}"), [LOOSE_CHAIN] * 2, seed=11):
+        assert not rollout.success and rollout.error is None and rollout.conditions == {"button_pressed": False}
+        reason = world_failure(rollout)
+        assert reason.startswith("goal not reached: button_pressed") and "magnetic_cube" in reason, reason

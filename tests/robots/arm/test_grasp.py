@@ -229,3 +229,68 @@ def test_button_fields_are_checked() -> None:
         bad = {**data, "objects": [o | {field: value} if o["name"] == obj else o for o in data["objects"]]}
         with pytest.raises(ValueError, match=words):
             parse_task(bad)
+
+
+@pytest.mark.parametrize(("depth", "held"), [(0.004, False), (0.007, False), (0.010, True), (0.016, True)])
+def test_a_grip_holds_only_as_deep_as_it_engages_the_object(sim_scene: Any, depth: float, held: bool) -> None:
+    """Closed ``depth`` into a cube's -x side (the pads are 16 mm wide): a pinch of its last few millimetres, less
+    than half of what the pads could cover, holds nothing and says what it measured; deeper, the cube is held."""
+    offset = -(0.015 + 0.008 - depth)  # gripper centre from the cube's centre: the pads' +x edge ``depth`` into it
+    (r,) = sim.run_programs(sim_scene("button_pressing"), [_grasp_at((offset, 0.0, 0.0), "magnetic_cube1")], seed=2)
+    (event,) = _grasp_events(r)
+    assert (event.kind == "grasped") == held, event
+    if not held:
+        assert event.cause == "weak_grip" and event.object == "magnetic_cube1"
+        assert f"grip {1000 * event.measured['depth']:.0f} mm deep on magnetic_cube1" in world_failure(r)
+        assert "a pinch at its edge; needs 8 mm" in world_failure(r)
+        assert abs(event.measured["depth"] - depth) < 0.002
+
+
+HEAVY_JOIN = {
+    "format": 1,
+    "name": "arm_heavy_join",
+    "category": "tool_manufacturing",
+    "instruction": "Grasp the cube.",
+    "robot": {"type": "arm"},
+    "objects": [
+        {
+            "name": "cube",
+            "shape": "box",
+            "center": [0.2, 0.0, 0.015],
+            "size": [0.03, 0.03, 0.03],
+            "mass": 0.05,
+            "magnetic": True,
+        },
+        {
+            "name": "anvil",
+            "shape": "box",
+            "center": [0.3, 0.0, 0.03],
+            "size": [0.1, 0.1, 0.06],
+            "mass": 3.0,
+            "magnetic": True,
+        },
+    ],
+    "goal": {"grasped": "cube"},
+}
+
+
+def test_a_grip_lets_go_when_more_is_joined_to_it_than_it_can_carry() -> None:
+    """A cube held by a full grip is touched to a 3 kg magnetic block, which joins it: the grip's friction couple
+    (GRIP_FORCE across the 16 mm pads) cannot carry the block's torque about the pads, so the gripper lets go and
+    the move says so with what it measured; the same grip carries the cube alone."""
+
+    def join(robot: Any) -> None:
+        p = robot.get_graspable_point("cube")
+        robot.open_gripper()
+        robot.move_to_position([p[0], p[1], p[2] + CLEAR])
+        robot.move_to_position(p)
+        robot.close_gripper()
+        robot.move_to_position([p[0], p[1], p[2] + 0.004])
+        robot.move_to_position([p[0] + 0.052, p[1], p[2] + 0.004])
+        robot.move_to_position([p[0] + 0.052, p[1], p[2] + 0.05])
+
+    (r,) = sim.run_programs(parse_task(HEAVY_JOIN), [join], perturb=False)
+    assert [e.kind for e in _grasp_events(r)] == ["grasped", "grasp_failed"], r.events
+    slip = _grasp_events(r)[1]
+    assert slip.cause == "weak_grip" and slip.measured["joined"] == 1 and slip.measured["weight"] > 29
+    assert not r.success and "needs" in world_failure(r) and "cube and 1 joined to it" in world_failure(r)

@@ -361,3 +361,40 @@ def test_a_vase_where_the_steps_lead_onto_a_lower_sofa_is_out_of_reach(program: 
     for rollout in rollouts:
         assert not rollout.success
         assert any(r in (failure_reason(rollout) or "") for r in reasons), failure_reason(rollout)
+
+
+BOARD_ON_SOFA = (PROGRAMS / "sofa_traversing_board_on_sofa.py").read_text()
+
+
+def test_weight_passed_down_through_a_board_lying_on_the_target_counts(run_texts: Any) -> None:
+    """The board pushed 0.25 m onto sofa_2 and the robot stopped at sofa_2's centre with its rear feet on the board
+    where it lies on sofa_2: its weight reaches sofa_2 through the board, so it stands on sofa_2 (it failed
+    ``robot_weight_on_sofa_2`` when only feet touching sofa_2 counted)."""
+    rollouts = run_texts(_scene("sofa_traversing"), [BOARD_ON_SOFA] * 3, seed=0)
+    assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+
+
+@pytest.mark.parametrize("stop", [0.95, 1.2])
+def test_feet_on_the_board_over_the_gap_do_not_stand_on_the_sofa_it_rests_on(run_texts: Any, stop: float) -> None:
+    """The same board, the robot stopped over the gap (x = 0.95) or with its centre just past sofa_2's edge
+    (x = 1.2, the rear feet on the board over the gap): a foot on the board passes its weight to sofa_2 only where
+    it stands over sofa_2, so these fail ``robot_weight_on_sofa_2``."""
+    program = BOARD_ON_SOFA.replace("walk_to_position([sofa_2[0],", f"walk_to_position([{stop},")
+    assert program != BOARD_ON_SOFA
+    for rollout in run_texts(_scene("sofa_traversing"), [program] * 2, seed=11):
+        assert not rollout.success and not rollout.conditions["robot_weight_on_sofa_2"], rollout.conditions
+
+
+def test_a_push_refused_for_a_drop_names_the_place_under_the_straight_on_push() -> None:
+    """The vase pushed 0.3 m past the sofa's +y edge from behind it (the robot on the sofa at x = 3.0): the push is
+    refused for the drop its feet would stand over. The reason named the last lateral try's drop, at [2.33, 0.95]
+    over the step, far from the robot; now it names the straight-on push and a drop under its feet there."""
+    reference = (PROGRAMS / "vase_lowering.py").read_text()
+    code = reference.replace("edge_y + vase_size[1] / 2 + 0.01", "edge_y + vase_size[1] / 2 + 0.3")
+    assert code != reference
+    (rollout,) = sim.run_sessions(_scene("vase_lowering"), start_sessions([code], "quadruped"), perturb=False)
+    push = [c for c in rollout.calls if c.skill == "push_to_position"][-1]  # the cushion is pushed first
+    assert push.args[0] == "glass_vase" and push.outcome == "refused", push
+    assert "pushing from [3.00, 0." in push.reason, push.reason
+    x, y = (float(v) for v in push.reason.rsplit(" at [", 1)[1].rstrip("]").split(", "))
+    assert abs(x - 3.0) < 0.35 and abs(y - 0.95) < 0.05 and "a drop of 0.34 m" in push.reason, push.reason
