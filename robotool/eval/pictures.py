@@ -27,7 +27,7 @@ FOLDER = "pictures"
 SIZE = (640, 360)  # px
 
 
-def _slug(text: str) -> str:
+def slug(text: str) -> str:
     return "".join(c if c.isalnum() or c == "_" else "-" for c in text)  # family#3 -> family-3
 
 
@@ -54,12 +54,12 @@ def write_pictures(
     for instance in instances:
         label = instance.label
         scene = build(instance.task)
-        file = f"{FOLDER}/{_slug(label)}.png"
+        file = f"{FOLDER}/{slug(label)}.png"
         render_scene(scene, folder / file, width=SIZE[0], height=SIZE[1])
         pictures.append(Picture(kind="scene", task=label, file=file, caption=f"{label}: the scene at the start"))
         mine = [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed]
         for cls, (record, world) in representatives(mine).items():
-            file = f"{FOLDER}/{_slug(label)}-{cls}.png"
+            file = f"{FOLDER}/{slug(label)}-{cls}.png"
             heading = f"{record.key.method} run {record.key.run}" + (f", world {world.world}" if world else "")
             why = (
                 (world.failure if world else None)
