@@ -152,6 +152,7 @@ def test_solve_writes_a_page_with_every_candidate_and_the_repair(
     assert "candidate 1 (chosen), repaired from candidate 0" in text
     assert "walk_to_position([2.0, 0.0, 0.0])" in text  # the failed candidate's program, in its drill-down
     assert "round 1" in text and "diagnosis: &lt;script&gt;alert(1)&lt;/script&gt;" in text
+    assert "<td>ground truth</td>" in text and "(missed)" not in text  # no Analyzer ran: nothing was graded
 
 
 # -- in the browser ------------------------------------------------------------------------------------------

@@ -330,7 +330,7 @@ def _with_videos(results: Results, instances: list[TaskInstance], backend: str) 
     if not results.config.videos:
         return results
     from robotool.errors import RobotoolError
-    from robotool.eval.videos import write_run_videos
+    from robotool.eval.recordings import write_run_videos
 
     try:
         videos = write_run_videos(instances, results.records, results.config.out_dir, results.config.videos, backend)
