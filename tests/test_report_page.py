@@ -167,11 +167,14 @@ def _browser_or_skip() -> tuple[str, str]:
 
 
 @pytest.fixture(scope="module")
-def browser(evaluation: tuple[Path, Results]) -> Iterator[object]:
-    """Headless Chromium on the evaluation's report.html, logging the console (module-scoped: shared)."""
+def browser(request: pytest.FixtureRequest) -> Iterator[object]:
+    """Headless Chromium on the evaluation's report.html, logging the console (module-scoped: shared); skipped,
+    before the evaluation runs, where Chromium or Selenium is missing."""
     chromium, driver_path = _browser_or_skip()
     webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (pip install selenium)")
     from selenium.webdriver.chrome.service import Service
+
+    evaluation: tuple[Path, Results] = request.getfixturevalue("evaluation")
 
     options = webdriver.ChromeOptions()
     for argument in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1200,900"):
