@@ -78,6 +78,23 @@ def test_the_evaluation_folder_holds_a_small_self_contained_page(evaluation: tup
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in text
 
 
+def test_videos_film_the_first_n_failed_worlds_of_each_method_that_ran_a_program() -> None:
+    from robotool.eval.recordings import failed_worlds
+    from robotool.eval.records import RunKey, RunRecord, WorldResult
+
+    def record(method: str, run: int, failed: list[int], code: str | None = "x = 1") -> RunRecord:
+        worlds = [WorldResult(world=w, seed=100 + w, success=w not in failed) for w in range(3)]
+        key = RunKey(task="t", method=method, run=run)
+        return RunRecord(
+            key=key, embodiment="arm", needs_tool=False, world_seed=0, success_rate=0, worlds=worlds, code=code
+        )
+
+    records = [record("a", 0, [], None), record("a", 1, [1, 2]), record("b", 0, [0]), record("a", 2, [0])]
+    chosen = [(r.key.method, r.key.run, world, seed) for r, world, seed in failed_worlds(records, 2)]
+    assert chosen == [("a", 1, 1, 101), ("a", 1, 2, 102), ("b", 0, 0, 100)]
+    assert failed_worlds(records, 0) == []
+
+
 def test_the_pages_escaper_makes_controls_visible_caps_the_length_and_links_videos(tmp_path: Path) -> None:
     """Every value on the page goes through the html sink's escaper, not only through autoescape."""
     from robotool.execute import RunReport
