@@ -69,9 +69,9 @@ def test_the_evaluation_folder_holds_a_small_self_contained_page(evaluation: tup
     assert page.stat().st_size < 2_000_000
     assert "http://" not in text and "https://" not in text  # nothing to fetch from a network
     [video] = results.videos
-    assert video.world == 0 and (folder / video.file).stat().st_size > 1000
-    for media in [*results.pictures, video]:
-        assert f'src="{media.file}"' in text
+    assert video.world == 0 and (folder / video.file).stat().st_size > 1000 and video.plan is not None
+    for file in [*(p.file for p in results.pictures), video.file, video.plan]:
+        assert f'src="{file}"' in text and (folder / file).is_file()
     for plot in ("success.png", "errors.png", "discrimination.png"):
         assert f'src="{plot}"' in text and (folder / plot).is_file()
     assert "<script" not in text and "<img src=x" not in text and "<b onmouseover" not in text

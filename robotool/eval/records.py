@@ -142,6 +142,7 @@ class Video(BaseModel):
     run: str = Field(description="the key of the run the world belongs to (task/method/run@inputs)")
     world: int
     file: str = Field(description="path relative to the results folder")
+    plan: str | None = Field(None, description="its plan view from above (PNG), path relative to the results folder")
 
 
 class Results(BaseModel):

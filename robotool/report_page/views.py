@@ -46,6 +46,7 @@ class WorldView(BaseModel):
     events: list[str] = Field(default_factory=list)
     output: str = ""
     video: Media | None = None
+    plan: Media | None = Field(None, description="the world from above, when it was filmed")
 
 
 class CandidateView(BaseModel):
@@ -110,7 +111,9 @@ def _call(number: int, call: SkillCall) -> CallView:
     )
 
 
-def world_view(rollout: Rollout, failure_class: str | None = None, video: Media | None = None) -> WorldView:
+def world_view(
+    rollout: Rollout, failure_class: str | None = None, video: Media | None = None, plan: Media | None = None
+) -> WorldView:
     """A world's view from its full trace."""
     return WorldView(
         world=rollout.world,
@@ -122,6 +125,7 @@ def world_view(rollout: Rollout, failure_class: str | None = None, video: Media 
         events=[e.describe(rollout.calls) for e in rollout.events],
         output=rollout.output,
         video=video,
+        plan=plan,
     )
 
 
@@ -146,7 +150,9 @@ def record_view(record: RunRecord, pictures: Sequence[Picture], videos: Sequence
     key = record.key
     task = key.task if key.seed is None else f"{key.task}#{key.seed}"
     classes = {w.world: w.failure_class for w in record.worlds}
-    filmed = {v.world: Media(src=v.file, caption=f"world {v.world}") for v in videos if v.run == key.id}
+    mine = [v for v in videos if v.run == key.id]
+    filmed = {v.world: Media(src=v.file, caption=f"world {v.world}, simulated again") for v in mine}
+    plans = {v.world: Media(src=v.plan, caption=f"world {v.world} from above") for v in mine if v.plan}
     scene = next((p for p in pictures if p.kind == "scene" and p.task == task), None)
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in record.usage.values())
     return RunView(
@@ -159,7 +165,7 @@ def record_view(record: RunRecord, pictures: Sequence[Picture], videos: Sequence
         concepts=record.concepts,
         stages=record.stages,
         code=record.code,
-        worlds=[world_view(r, classes.get(r.world), filmed.get(r.world)) for r in record.rollouts],
+        worlds=[world_view(r, classes.get(r.world), filmed.get(r.world), plans.get(r.world)) for r in record.rollouts],
         candidates=[
             CandidateView(index=i, chosen=i == record.best, failure=failure)
             for i, failure in enumerate(record.candidate_failures)
