@@ -17,6 +17,7 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup, escape
 
 from robotool.eval.records import Results
+from robotool.eval.report import preamble
 from robotool.eval.tables import TextTable
 from robotool.execute import RunReport
 from robotool.report_page.views import Media, PageView, record_view, rollouts_view, solution_view
@@ -64,8 +65,6 @@ def render(page: PageView) -> str:
 
 def evaluation_page(results: Results, tables: Sequence[TextTable], plots: Sequence[str]) -> str:
     """``report.html`` of an evaluation folder: media linked by their paths in the folder."""
-    from robotool.eval.report import preamble
-
     page = PageView(
         title="robotool evaluation",
         preamble=[line.removeprefix("- ") for line in preamble(results, escape=str)],
