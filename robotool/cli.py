@@ -191,8 +191,11 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     if args.json:
         _write(args.json, lambda: args.json.write_text(json_text(solution, indent=2), encoding="utf-8"))
         console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
-    if args.video:
-        _solve_videos(args, task, solution, console)
+    videos = _solve_videos(args, task, solution, console) if args.video else {}
+    if args.html:
+        from robotool.report_page import solution_page
+
+        _write_page(args.html, lambda: solution_page(args.html, task, solution, videos), console)
     print_solution_verdict(solution, console)
     return 0 if solution.success else 1
 
@@ -271,11 +274,17 @@ def cmd_run(args: argparse.Namespace, console: Console) -> int:
         assert recorder is not None
         write_plan(args.plan, task, report.rollouts[0], scene=build(task), track=recorder.tracks[0])
         console.print(f"wrote the plan of world 0 to {args.plan}", markup=False, highlight=False)
+    videos: dict[int, Path] = {}
     if args.video:
         from robotool.render.run_videos import video_paths
 
         assert recorder is not None
-        _write_videos(task, report.rollouts, recorder.tracks, video_paths(args.video, args.video_worlds), console)
+        videos = video_paths(args.video, args.video_worlds)
+        _write_videos(task, report.rollouts, recorder.tracks, videos, console)
+    if args.html:
+        from robotool.report_page import run_page
+
+        _write_page(args.html, lambda: run_page(args.html, task, report, videos), console)
     print_run_verdict(report, console)
     return 0 if report.success else 1
 
@@ -352,21 +361,30 @@ def _write_videos(
         console.print(line, markup=False, highlight=False, soft_wrap=True)
 
 
-def _solve_videos(args: argparse.Namespace, task: Task, solution: Solution, console: Console) -> None:
+def _write_page(path: Path, page: Callable[[], str], console: Console) -> None:
+    """Write ``report.html``-style page ``page()`` to ``path`` (--html)."""
+    with console.status(f"writing {path}"):
+        _write(path, lambda: path.write_text(page(), encoding="utf-8"))
+    console.print(f"wrote {path}: open it in a browser", markup=False, highlight=False)
+
+
+def _solve_videos(args: argparse.Namespace, task: Task, solution: Solution, console: Console) -> dict[int, Path]:
     """Run the best program again in the chosen worlds, recorded, and write their videos to the folder.
 
-    World ``k`` is the chosen candidate's ``k``-th world, perturbed from the seed its rollout recorded."""
+    World ``k`` is the chosen candidate's ``k``-th world, perturbed from the seed its rollout recorded.
+    Returns each world's video (none when no program was found)."""
     from robotool.render.run_videos import rerun_recorded
 
     ran = solution.candidates[solution.best].rollouts if solution.best is not None else []
     if solution.code is None or len(ran) <= max(args.video_worlds):
         console.print("no program was found, so there is no video", style="yellow", markup=False, highlight=False)
-        return
+        return {}
     with console.status(f"recording the best program in world(s) {args.video_worlds}"):
         world_seeds = {w: ran[w].seed for w in args.video_worlds}
         rollouts, tracks = rerun_recorded(task, solution.code, world_seeds, backend=args.backend)
     paths = {w: args.video / f"{task.name}-world{w}.mp4" for w in args.video_worlds}
     _write_videos(task, rollouts, tracks, paths, console)
+    return paths
 
 
 def _add_video_options(p: argparse.ArgumentParser, *, folder: bool, help_text: str) -> None:
@@ -379,6 +397,7 @@ def _add_video_options(p: argparse.ArgumentParser, *, folder: bool, help_text: s
     p.add_argument("--video-worlds", type=_video_worlds, metavar="K[,K...]", help="the worlds to film (default: 0)")
 
 
+HTML_HELP = "write a page to open in a browser: the program, its worlds' skill-call traces, the scene and any videos"
 _TASK_HELP = "a built-in task name (see robotool tasks) or a YAML/JSON task file"
 
 
@@ -445,6 +464,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=output_file, help="write the best program here")
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     _add_video_options(p, folder=True, help_text="write an MP4 of the best program in each chosen world to this folder")
+    p.add_argument("--html", type=output_file, metavar="FILE.html", help=HTML_HELP)
     p.set_defaults(func=cmd_solve)
 
     p = sub.add_parser("run", help="run a skill program file against a task and report what happened")
@@ -466,6 +486,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     _add_video_options(p, folder=False, help_text="write the rollout as MP4 (several worlds: OUT-world<k>.mp4)")
+    p.add_argument("--html", type=output_file, metavar="FILE.html", help=HTML_HELP)
     p.add_argument(
         "--plan",
         type=output_file,

@@ -19,6 +19,7 @@ Memory addresses a program saw are masked too (:func:`mask_addresses`), hex and 
 
 from __future__ import annotations
 
+import html
 import json
 import re
 from collections.abc import Callable
@@ -127,6 +128,12 @@ def model_text(text: str) -> str:
     return _PROMPT_MARKERS.sub(lambda m: " ".join(m.group()), one_line(capped(text, MODEL_CHARS)))
 
 
+def html_text(text: str) -> str:
+    """For an HTML page (text or an attribute value): controls escaped (newlines and tabs kept, inside ``<pre>``
+    they lay out code), ``& < > " '`` as entities, capped."""
+    return html.escape(terminal_safe(capped(text, HTML_CHARS)), quote=True)
+
+
 def json_string(text: str) -> str:
     """One string as JSON: every non-ASCII and control character as a ``\\u`` escape."""
     return json.dumps(text, ensure_ascii=True)
@@ -142,6 +149,7 @@ MARKDOWN_CHARS = 300
 PLOT_CHARS = 120
 PICTURE_CHARS = 300
 MODEL_CHARS = 1000
+HTML_CHARS = 4000
 
 
 @dataclass(frozen=True)
@@ -160,6 +168,7 @@ SINKS: dict[str, Sink] = {
     "plot": Sink("matplotlib text: the plan view's labels and title, the report's plots", plot_text, one_line=True),
     "picture": Sink("captions and labels drawn on pictures and video frames", picture_text, one_line=True),
     "model": Sink("text shown to a language model: the repair trace", model_text, one_line=True),
+    "html": Sink("report.html: tables, stages, code, traces, captions", html_text, one_line=False),
     "json": Sink("JSON files and lines: reports, results, journals, prompt logs", json_string, one_line=True),
 }
 """Every kind of sink by name; tests/test_output_safety.py runs a hostile string through each."""

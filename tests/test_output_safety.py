@@ -8,9 +8,11 @@ here); and the hits found by attacking the host through what a program prints, r
 from __future__ import annotations
 
 import ast
+import html
 import json
 import re
 import time
+from html.parser import HTMLParser
 from io import StringIO
 from pathlib import Path
 
@@ -81,6 +83,24 @@ def _model(escaped: str) -> None:
     assert "[[" not in escaped and "]]" not in escaped
 
 
+class _Tags(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.tags: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        self.tags.append(tag)
+
+
+def _html(escaped: str) -> None:
+    """As an element's text and as a quoted attribute value, no tag and no way out of the quotes: the page shows
+    the text itself."""
+    parser = _Tags()
+    parser.feed(f'<p title="{escaped}">{escaped}</p>')
+    assert parser.tags == ["p"]
+    assert "<b>&amp; *a*" in html.unescape(escaped)
+
+
 def _json(escaped: str) -> None:
     assert escaped.isascii() and json.loads(escaped) == HOSTILE
 
@@ -93,6 +113,7 @@ INERT = {
     "picture": _picture,
     "model": _model,
     "json": _json,
+    "html": _html,
 }
 """What makes each sink's syntax inert, checked on the escaped text."""
 
@@ -122,6 +143,7 @@ WRITES = {
     "json": re.compile(r"\.model_dump_json\(|ensure_ascii=False"),
     "markdown": re.compile(r"!\[|\"##+ |f\"##+ "),
     "model": re.compile(r"\(dspy\.Type\)"),
+    "html": re.compile(r"\bjinja2\b"),
 }
 """How a module writes to each kind of sink."""
 
@@ -132,6 +154,7 @@ ESCAPERS = {
     "json": {"json_text", "json_string"},
     "markdown": {"markdown_text"},
     "model": {"model_text"},
+    "html": {"html_text"},
 }
 
 HOST_TEXT_ONLY = {

@@ -112,6 +112,7 @@ class EvalConfig(BaseModel):
     out: Path | None = None
     resume: bool = Field(False, description="reuse a folder whose settings.json holds a different request")
     pictures: bool = Field(True, description="draw each task's scene and representative failures for the report")
+    videos: int = Field(0, ge=0, description="film the first N failed worlds of each task and method for report.html")
     cache: bool = Field(True, description="reuse DSPy's cached LM replies")
     timeout: float | None = Field(None, gt=0, description="seconds to wait for each LM reply")
     log_prompts: Path | None = Field(None, description="JSONL file that receives every LM request and reply")

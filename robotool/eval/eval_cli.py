@@ -157,6 +157,13 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         action="store_true",
         help="leave out the report's pictures (each task's scene and one failed world per failure class)",
     )
+    p.add_argument(
+        "--videos",
+        type=count,
+        default=0,
+        metavar="N",
+        help="film the first N failed worlds of each task and method (MP4s under videos/, shown in report.html)",
+    )
     return p
 
 
@@ -187,6 +194,7 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
         out=args.out,
         resume=args.resume,
         pictures=not args.no_pictures,
+        videos=args.videos,
         cache=not args.no_cache,
         timeout=args.timeout,
         log_prompts=args.log_prompts,

@@ -65,6 +65,8 @@ def judge(
         "stages": solution.stages,
         "candidate_failures": [str(c.failure) if c.failure else None for c in solution.candidates],
         "rollouts": rollouts,
+        "best": solution.best,
+        "repairs": solution.repairs,
         "usage": solution.usage,
         "lm_calls": len(solution.lm_calls),
         "cached_replies": solution.cached_replies,

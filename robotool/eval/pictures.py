@@ -31,7 +31,7 @@ FOLDER = "pictures"
 SIZE = (640, 360)  # px
 
 
-def _slug(text: str) -> str:
+def slug(text: str) -> str:
     return "".join(c if c.isalnum() or c == "_" else "-" for c in text)  # family#3 -> family-3
 
 
@@ -84,11 +84,11 @@ def _instance_pictures(
     scene = build(instance.task)
     painter = Painter(scene, *SIZE)
     try:
-        file = f"{FOLDER}/{_slug(label)}.png"
+        file = f"{FOLDER}/{slug(label)}.png"
         render_scene(scene, folder / file, painter=painter)
         pictures = [Picture(kind="scene", task=label, file=file, caption=f"{label}: the scene at the start")]
         for cls, (record, world) in representatives(records).items():
-            file = f"{FOLDER}/{_slug(label)}-{cls}.png"
+            file = f"{FOLDER}/{slug(label)}-{cls}.png"
             heading = f"{record.key.method} run {record.key.run}" + (f", world {world.world}" if world else "")
             why = (
                 (world.failure if world else None)

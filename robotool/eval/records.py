@@ -13,7 +13,7 @@ from robotool.eval.config import EvalConfig, Settings
 from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.rollout import Rollout
-from robotool.solution import StageOutputs, TokenUsage
+from robotool.solution import RepairRound, StageOutputs, TokenUsage
 from robotool.task_model import Task
 
 
@@ -98,6 +98,8 @@ class RunRecord(BaseModel):
     code: str | None = None
     stages: StageOutputs = Field(default_factory=StageOutputs)
     candidate_failures: list[str | None] = Field(default_factory=list)
+    best: int | None = Field(None, description="the index of the chosen candidate (None: none ran)")
+    repairs: list[RepairRound] = Field(default_factory=list, description="repair rounds, in order")
     rollouts: list[Rollout] = Field(default_factory=list, description="the chosen candidate's full traces")
     usage: dict[str, TokenUsage] = Field(default_factory=dict, description="LM tokens by stage")
     lm_calls: int = Field(0, description="LM requests the run made, failed ones included")
@@ -134,6 +136,15 @@ class Picture(BaseModel):
     )
 
 
+class Video(BaseModel):
+    """One video in the results folder: a failed world of a run, simulated again from its program and seed."""
+
+    run: str = Field(description="the key of the run the world belongs to (task/method/run@inputs)")
+    world: int
+    file: str = Field(description="path relative to the results folder")
+    plan: str | None = Field(None, description="its plan view from above (PNG), path relative to the results folder")
+
+
 class Results(BaseModel):
     """``results.json``: the configuration, the methods left out and why, and every run's record."""
 
@@ -143,3 +154,4 @@ class Results(BaseModel):
     records: list[RunRecord] = Field(default_factory=list)
     wall_s: float = Field(0.0, description="wall time of the command that wrote this file")
     pictures: list[Picture] = Field(default_factory=list, description="the report's pictures (files in the folder)")
+    videos: list[Video] = Field(default_factory=list, description="videos of failed worlds (files in the folder)")

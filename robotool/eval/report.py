@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from rich.console import Console
 from rich.markup import escape
@@ -25,8 +25,8 @@ def _markdown_table(table: TextTable) -> str:
     return "\n".join(lines)
 
 
-def _preamble(results: Results) -> list[str]:
-    """What ran, with which settings, and what did not run and why."""
+def preamble(results: Results, escape: Callable[[str], str] = markdown_text) -> list[str]:
+    """What ran, with which settings, and what did not run and why (``escape``: for the sink the lines go to)."""
     s = results.config.settings
     lines = [
         f"- LM: {s.lm or 'none'}; candidates per run: {s.candidates}; worlds per candidate: {s.worlds}; "
@@ -39,8 +39,8 @@ def _preamble(results: Results) -> list[str]:
         lines.append(
             f"- {cached} of {calls} LM replies came from DSPy's cache, not the model (--no-cache asks the model again)"
         )
-    lines += [f"- {markdown_text(line)}" for line in skipped_lines(results.skipped)]
-    lines += [f"- note: {markdown_text(note)}" for note in results.notes]
+    lines += [f"- {escape(line)}" for line in skipped_lines(results.skipped)]
+    lines += [f"- note: {escape(note)}" for note in results.notes]
     if not any(
         r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
         for r in results.records
@@ -61,7 +61,7 @@ def skipped_lines(skipped: Mapping[str, str]) -> list[str]:
 
 def markdown(results: Results, tables: Sequence[TextTable], plots: Sequence[str]) -> str:
     """The whole ``report.md``."""
-    parts = ["# robotool evaluation", "", *_preamble(results), ""]
+    parts = ["# robotool evaluation", "", *preamble(results), ""]
     parts += [_markdown_table(t) + "\n" for t in tables]
     parts += [f"![{name}]({name})" for name in plots]
     parts += _pictures_section(results.pictures)
@@ -91,7 +91,7 @@ def _pictures_section(pictures: Sequence[Picture]) -> list[str]:
 
 def print_tables(results: Results, tables: Sequence[TextTable], console: Console) -> None:
     """The preamble and every table, reference rows dimmed."""
-    for line in _preamble(results):
+    for line in preamble(results):
         console.print(line, markup=False, highlight=False)
     for t in tables:
         table = Table(title=one_line(t.title), caption=one_line(t.note) or None)

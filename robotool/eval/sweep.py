@@ -262,6 +262,7 @@ def evaluate(
     )
     drawers = executor.processes if isinstance(executor, LocalExecutor) else cores()
     results = _with_pictures(results, instances, backend, drawers)
+    results = _with_videos(results, instances, backend)
     results.wall_s = time.perf_counter() - started
     _write(results, console)
     return results
@@ -326,13 +327,32 @@ def _with_pictures(results: Results, instances: list[TaskInstance], backend: str
     return results.model_copy(update={"pictures": pictures})
 
 
+def _with_videos(results: Results, instances: list[TaskInstance], backend: str) -> Results:
+    """The results with the videos ``--videos N`` asked for, or a note saying why there are none."""
+    if not results.config.videos:
+        return results
+    from robotool.errors import RobotoolError
+    from robotool.eval.recordings import write_run_videos
+
+    try:
+        videos = write_run_videos(instances, results.records, results.config.out_dir, results.config.videos, backend)
+    except (RobotoolError, ImportError) as e:
+        return results.model_copy(update={"notes": [*results.notes, f"no videos: {e}"]})
+    return results.model_copy(update={"videos": videos})
+
+
 def _write(results: Results, console: Console) -> None:
-    """results.json, the plots, report.md; then the tables on the console."""
+    """results.json, the plots, report.md and report.html; then the tables on the console."""
+    from robotool.report_page import evaluation_page  # it reads the evaluator's records: imported once they are
+
     folder = results.config.out_dir
     write_atomic(folder / "results.json", json_text(results, indent=1))
     summary = summarize(results.records, [*METHODS, *(p.stem for p in results.config.programs or [])])
     tables = all_tables(summary)
     plots = write_plots(summary, folder)
     write_atomic(folder / "report.md", markdown(results, tables, plots))
+    write_atomic(folder / "report.html", evaluation_page(results, tables, plots))
     print_tables(results, tables, console)
-    console.print(f"wrote {folder}/results.json, report.md and {len(plots)} plot(s)", highlight=False, markup=False)
+    console.print(
+        f"wrote {folder}/results.json, report.md, report.html and {len(plots)} plot(s)", highlight=False, markup=False
+    )

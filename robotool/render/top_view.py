@@ -3,9 +3,11 @@
 Objects are drawn as their footprints with their names and top heights, the goal's object in green. Each
 motion skill becomes an arrow: skills that move the robot (one position argument) from where the robot was
 to the target, skills that move an object (an object name and a position) from the object to the target.
-Arrows of skills that ended ``done`` are solid; refused, stalled or timed-out ones are red and dashed, with
-the reason written at their target. With a recorded track the robot's actual path is drawn too, and failed
-moves start where the robot really was.
+Arrows of skills that ended ``done`` are solid; refused, stalled or timed-out ones are red and dashed, a cross
+where the robot stopped and the reason written there. Objects that moved are drawn again, dashed, where they
+ended, and the robot where it ended. With a recorded track the robot's actual path is drawn too, failed moves
+start where the robot really was, and the end poses are the simulated ones (else: the targets of the skills
+that ended ``done``). Labels never overlap: each is moved, by as little as it takes, off the ones placed before.
 """
 
 from __future__ import annotations
@@ -89,9 +91,6 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     colours = object_colours(task)
     centres: dict[str, np.ndarray] = {}
     outlines = [_footprint(task, i) for i in range(len(task.objects))]
-    every = np.concatenate([o for parts in outlines for o in parts])
-    gap = (every.max(axis=0) - every.min(axis=0)) * (0.14, 0.07)  # how far apart two labels must be
-    placed: list[np.ndarray] = []
     for i, obj in enumerate(task.objects):
         goal = obj.name == task.goal.object
         for outline in outlines[i]:
@@ -106,13 +105,11 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
                 )
             )
         centres[obj.name] = np.asarray(obj.center[:2], dtype=float)
-        at = centres[obj.name].copy()
-        while any((np.abs(at - p) < gap).all() for p in placed):
-            at[1] -= gap[1]
-        placed.append(at)
         ax.annotate(
             f"{plot_text(obj.name)}{' (goal)' if goal else ''}\ntop {obj.top:.2f} m",
-            at,
+            centres[obj.name],
+            xytext=(0, 0),
+            textcoords="offset points",
             fontsize=7,
             ha="center",
             va="center",
@@ -124,7 +121,16 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     _draw_robot_box(ax, task, start)
     if path_xy is not None:
         ax.plot(path_xy[:, 0], path_xy[:, 1], color=ROBOT, linewidth=1.2, alpha=0.8, label="robot path (simulated)")
-    _draw_calls(ax, task, rollout, start, centres, path_times, path_xy)
+    starts = dict(centres)
+    robot_end = _draw_calls(ax, task, rollout, start, centres, path_times, path_xy)
+    if scene is not None and track is not None:
+        ends = _simulated_ends(scene, track)
+        robot_end = path_xy[-1] if path_xy is not None else robot_end
+    else:
+        ends = {name: (at, np.eye(2)) for name, at in centres.items()}
+    _draw_ends(ax, task, outlines, starts, ends, colours)
+    if np.linalg.norm(robot_end - start) >= MIN_ARROW:
+        _draw_robot_box(ax, task, robot_end, end=True)
     verdict = "goal reached" if rollout.success else "goal not reached"
     ax.set_title(
         plot_text(f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}"),
@@ -140,7 +146,85 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
+    _declutter(fig, ax)
     return fig
+
+
+def _simulated_ends(scene: Scene, track: Track) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each object's xy at the end of the track, and its turn in the plane since the start (2x2)."""
+    model = scene.model
+    data = mujoco.MjData(model)
+    _, qpos, _ = track.arrays()
+    frames = []
+    for q in (model.qpos0, qpos[-1]):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        frames.append((data.xpos.copy(), data.xmat.reshape(-1, 3, 3).copy()))
+    (_, start_rot), (end_pos, end_rot) = frames
+    ends = {}
+    for i, name in enumerate(scene.object_names):
+        body = int(scene.object_body[i])
+        ends[name] = (end_pos[body, :2], (end_rot[body] @ start_rot[body].T)[:2, :2])
+    return ends
+
+
+def _draw_ends(
+    ax: Axes,
+    task: Task,
+    outlines: list[list[np.ndarray]],
+    starts: dict[str, np.ndarray],
+    ends: dict[str, tuple[np.ndarray, np.ndarray]],
+    colours: list[tuple[float, ...]],
+) -> None:
+    """Objects that moved, dashed, where they ended."""
+    for i, obj in enumerate(task.objects):
+        if obj.name not in ends:
+            continue
+        at, turn = ends[obj.name]
+        start = starts[obj.name]
+        if np.linalg.norm(at - start) < MIN_ARROW and np.allclose(turn, np.eye(2), atol=0.02):
+            continue
+        for outline in outlines[i]:
+            moved = (outline - start) @ turn.T + at
+            ax.add_patch(
+                Polygon(moved, closed=True, fill=False, edgecolor=colours[i][:3], linestyle="--", linewidth=1.4)
+            )
+            ax.update_datalim(moved)
+        ax.annotate(
+            f"{plot_text(obj.name)} (end)",
+            at,
+            xytext=(0, 0),
+            textcoords="offset points",
+            fontsize=7,
+            ha="center",
+            va="center",
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.6, "linewidth": 0},
+        )
+
+
+LABEL_STEP = 6.0  # points: how far apart the places tried for a label are
+LABEL_RINGS = 40
+
+
+def _declutter(fig: Figure, ax: Axes) -> None:
+    """Move each label (an annotation with text, placed in offset points) off the labels placed before it: to the
+    nearest free place on rings of growing radius around where it was asked for."""
+    renderer = fig.canvas.get_renderer()
+    placed = []
+    directions = [(0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (-1, 1), (1, -1), (-1, -1)]
+    for label in [t for t in ax.texts if t.get_text()]:
+        x0, y0 = label.xyann
+        tries = [(0.0, 0.0)] + [
+            (2 * LABEL_STEP * ring * dx, LABEL_STEP * ring * dy)
+            for ring in range(1, LABEL_RINGS)
+            for dx, dy in directions
+        ]
+        for dx, dy in tries:
+            label.xyann = (x0 + dx, y0 + dy)
+            box = label.get_window_extent(renderer).padded(1.5)
+            if not any(box.overlaps(other) for other in placed):
+                break
+        placed.append(box)
 
 
 def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
@@ -149,23 +233,20 @@ def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
     return np.asarray(robots.get(task.embodiment).start_xy(task), dtype=float)
 
 
-def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray) -> None:
+def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray, *, end: bool = False) -> None:
+    """The robot where it started (filled), or where it ended (``end``: dashed)."""
     size = robots.get(task.embodiment).footprint(task)
+    label = "robot end" if end else "robot start"
     if size is None:  # a robot drawn as a marker (a gripper)
-        ax.plot(*at, marker="s", color=ROBOT, markersize=8, label="robot start")
+        ax.plot(*at, marker="s", color=ROBOT, markersize=8, label=label, fillstyle="none" if end else "full")
         return
-    ax.add_patch(
-        Rectangle(
-            (at[0] - size[0] / 2, at[1] - size[1] / 2),
-            size[0],
-            size[1],
-            facecolor=ROBOT,
-            alpha=0.5,
-            edgecolor="black",
-            linewidth=0.8,
-            label="robot start",
-        )
-    )
+    corner = (at[0] - size[0] / 2, at[1] - size[1] / 2)
+    if end:
+        box = Rectangle(corner, size[0], size[1], fill=False, edgecolor=ROBOT, linestyle="--", linewidth=1.4)
+    else:
+        box = Rectangle(corner, size[0], size[1], facecolor=ROBOT, alpha=0.5, edgecolor="black", linewidth=0.8)
+    box.set_label(label)
+    ax.add_patch(box)
 
 
 def _draw_calls(
@@ -176,8 +257,9 @@ def _draw_calls(
     centres: dict[str, np.ndarray],
     path_times: np.ndarray | None,
     path_xy: np.ndarray | None,
-) -> None:
-    """An arrow per motion skill call, from the robot (or the pushed object) to the call's target."""
+) -> np.ndarray:
+    """An arrow per motion skill call, from the robot (or the pushed object) to the call's target; ``centres``
+    follow the objects moved by calls that ended ``done``. Returns where the robot ended (as the calls say)."""
     params = {s.name: [kind for _, kind in s.params] for s in robots.get(task.embodiment).skills if s.kind == "motion"}
     robot_at = start.copy()
     step = 0
@@ -203,6 +285,7 @@ def _draw_calls(
             robot_at = target if call.outcome == "done" else robot_at
             if path_xy is not None:
                 robot_at = _position_at(path_times, path_xy, call.ended)
+    return robot_at
 
 
 def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, colour: Colour, step: int) -> None:
@@ -211,7 +294,16 @@ def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, co
     ax.annotate("", xy=target, xytext=origin, arrowprops={"arrowstyle": "->", **style})
     ax.update_datalim([origin, target])  # arrows are annotations: make room for them
     mid = (origin + target) / 2
-    ax.annotate(plot_text(f"{step}. {call.skill}"), mid, fontsize=6.5, color=style["color"], ha="center", va="bottom")
+    ax.annotate(
+        plot_text(f"{step}. {call.skill}"),
+        mid,
+        xytext=(0, 0),
+        textcoords="offset points",
+        fontsize=6.5,
+        color=style["color"],
+        ha="center",
+        va="bottom",
+    )
     if failed:  # the cross marks where it ended
         ax.plot(*origin, marker="x", color=REFUSED, markersize=9, mew=2)
         ax.annotate(

@@ -395,3 +395,22 @@ def test_evaluation_pictures_drawn_in_two_processes_are_those_drawn_in_one(tmp_p
     assert [p.kind for p in two].count("failure") >= 2 and all(p.reproduced is not False for p in two)
     for picture in two:
         assert (tmp_path / "2" / picture.file).is_file()
+
+
+def test_plan_labels_never_overlap_and_moved_things_are_drawn_where_they_ended() -> None:
+    """On sofa_traversing the push's and the walk's labels were drawn over each other."""
+    import itertools
+
+    task = tasks.load("sofa_traversing")
+    push = SkillCall(skill="push_to_position", args=["surfboard", [0.85, 0.0, 0.38]], outcome="done", ended=3)
+    walk = SkillCall(skill="walk_to_position", args=[[1.775, 0.0, 0.17]], outcome="done", started=3, ended=8)
+    fig = plan_figure(task, Rollout(world=0, seed=0, success=True, calls=[push, walk], sim_time=8.0))
+    ax = fig.axes[0]
+    renderer = fig.canvas.get_renderer()
+    labels = [t for t in ax.texts if t.get_text()]
+    assert {"1. push_to_position", "2. walk_to_position", "surfboard (end)"} <= {t.get_text() for t in labels}
+    for a, b in itertools.combinations(labels, 2):
+        assert not a.get_window_extent(renderer).overlaps(b.get_window_extent(renderer)), (a.get_text(), b.get_text())
+    board = next(t for t in labels if t.get_text() == "surfboard (end)")
+    assert tuple(board.xy) == (0.85, 0.0)
+    assert "robot end" in ax.get_legend_handles_labels()[1]
