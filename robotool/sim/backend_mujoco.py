@@ -12,10 +12,15 @@ world diverged. The constraints' inverse weights stay those of the nominal model
 from __future__ import annotations
 
 import copy
+import ctypes
+import functools
 import logging
 import os
+import sys
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -188,27 +193,82 @@ class MujocoSim:
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
+        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit.
+
+        A ray equal to the one before it in its world (a path read past its end repeats its last point) takes the
+        earlier one's answer: ``mj_ray`` of the same ray on the same state gives the same answer."""
         nworld, nray = pnt.shape[:2]
         dist = np.full((nworld, nray), np.inf)
         geom = np.full((nworld, nray), -1, dtype=int)
-        hit = np.zeros(1, dtype=np.int32)
+        if not nray:
+            return dist, geom
         groups = geom_groups(skip_group)
         pnt, vec = np.ascontiguousarray(pnt, dtype=np.float64), np.ascontiguousarray(vec, dtype=np.float64)
-        ray = mujoco.mj_ray
-        for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])) if nray else ():
-            m, d = self.models[w], self.datas[w]
-            found = [
-                (r, x, int(hit[0]))
-                for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
-                if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0
-            ]
-            if found:
-                rows, x, g = zip(*found, strict=True)
-                dist[w, list(rows)], geom[w, list(rows)] = x, g
+        fresh = np.ones((nworld, nray), dtype=bool)
+        fresh[:, 1:] = np.any((pnt[:, 1:] != pnt[:, :-1]) | (vec[:, 1:] != vec[:, :-1]), axis=2)
+        source = np.maximum.accumulate(np.where(fresh, np.arange(nray), 0), axis=1)  # the ray each one repeats
+        cast = _ray_caster()
+        x, hit = np.full((nworld, nray), -1.0), np.full((nworld, nray), -1, dtype=np.int32)
+        for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])):
+            rows = np.flatnonzero(fresh[w]).tolist()
+            x[w, rows] = cast(self.models[w], self.datas[w], pnt[w], vec[w], rows, groups, exclude_body, hit[w])
+        x, hit = np.take_along_axis(x, source, axis=1), np.take_along_axis(hit, source, axis=1)
+        found = x >= 0
+        dist[found], geom[found] = x[found], hit[found]
         return dist, geom
 
     def close(self) -> None:
         """Stop the worker threads."""
         if self._pool is not None:
             self._pool.shutdown()
+
+
+RayCaster = Callable[
+    [mujoco.MjModel, mujoco.MjData, np.ndarray, np.ndarray, list[int], np.ndarray, int, np.ndarray], list[float]
+]
+
+
+@functools.cache
+def _ray_caster() -> RayCaster:
+    """``cast(m, d, pnt, vec, rows, groups, exclude_body, hit)``: ``mj_ray`` of the rays ``rows`` of ``pnt`` and
+    ``vec`` (n, 3, contiguous float64), each one's hit geom written to ``hit`` (n,) int32, the distances returned.
+
+    It calls the MuJoCo library's own ``mj_ray`` through ctypes (the same function on the same state: the same
+    answers) at a third of the binding's cost per call, the rays' hot loop; the binding where the library file is
+    not where a Linux wheel puts it."""
+    library = Path(mujoco.__file__).parent / f"libmujoco.so.{mujoco.__version__}"
+    if not (sys.platform.startswith("linux") and library.is_file()):
+
+        def cast_binding(
+            m: mujoco.MjModel,
+            d: mujoco.MjData,
+            pnt: np.ndarray,
+            vec: np.ndarray,
+            rows: list[int],
+            groups: np.ndarray,
+            exclude_body: int,
+            hit: np.ndarray,
+        ) -> list[float]:
+            return [mujoco.mj_ray(m, d, pnt[r], vec[r], groups, 1, exclude_body, hit[r : r + 1]) for r in rows]
+
+        return cast_binding
+    ray = ctypes.CDLL(str(library)).mj_ray
+    address = ctypes.c_void_p
+    ray.argtypes = [address, address, address, address, address, ctypes.c_bool, ctypes.c_int, address, address]
+    ray.restype = ctypes.c_double
+
+    def cast_c(
+        m: mujoco.MjModel,
+        d: mujoco.MjData,
+        pnt: np.ndarray,
+        vec: np.ndarray,
+        rows: list[int],
+        groups: np.ndarray,
+        exclude_body: int,
+        hit: np.ndarray,
+    ) -> list[float]:
+        ma, da, g = m._address, d._address, groups.ctypes.data
+        p, v, h = pnt.ctypes.data, vec.ctypes.data, hit.ctypes.data
+        return [ray(ma, da, p + 24 * r, v + 24 * r, g, True, exclude_body, h + 4 * r, None) for r in rows]
+
+    return cast_c
