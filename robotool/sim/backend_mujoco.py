@@ -207,12 +207,14 @@ class MujocoSim:
         fresh = np.ones((nworld, nray), dtype=bool)
         fresh[:, 1:] = np.any((pnt[:, 1:] != pnt[:, :-1]) | (vec[:, 1:] != vec[:, :-1]), axis=2)
         source = np.maximum.accumulate(np.where(fresh, np.arange(nray), 0), axis=1)  # the ray each one repeats
-        cast = _ray_caster()
-        x, hit = np.full((nworld, nray), -1.0), np.full((nworld, nray), -1, dtype=np.int32)
-        for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])):
-            rows = np.flatnonzero(fresh[w]).tolist()
-            x[w, rows] = cast(self.models[w], self.datas[w], pnt[w], vec[w], rows, groups, exclude_body, hit[w])
-        x, hit = np.take_along_axis(x, source, axis=1), np.take_along_axis(hit, source, axis=1)
+        worlds, rows = np.nonzero(fresh & ~np.isnan(pnt[:, :1, 0]))  # the rays to cast (a world without: NaN)
+        flat = worlds * nray + rows
+        x, hit = np.full(nworld * nray, -1.0), np.full(nworld * nray, -1, dtype=np.int32)
+        x[flat] = _ray_caster()(
+            self.models, self.datas, worlds, flat, pnt.reshape(-1, 3), vec.reshape(-1, 3), groups, exclude_body, hit
+        )
+        flat = (np.arange(nworld)[:, None] * nray + source).ravel()  # each ray's answer, repeated ones included
+        x, hit = x[flat].reshape(nworld, nray), hit[flat].reshape(nworld, nray)
         found = x >= 0
         dist[found], geom[found] = x[found], hit[found]
         return dist, geom
@@ -224,14 +226,26 @@ class MujocoSim:
 
 
 RayCaster = Callable[
-    [mujoco.MjModel, mujoco.MjData, np.ndarray, np.ndarray, list[int], np.ndarray, int, np.ndarray], list[float]
+    [
+        list[mujoco.MjModel],
+        list[mujoco.MjData],
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        int,
+        np.ndarray,
+    ],
+    list[float],
 ]
 
 
 @functools.cache
 def _ray_caster() -> RayCaster:
-    """``cast(m, d, pnt, vec, rows, groups, exclude_body, hit)``: ``mj_ray`` of the rays ``rows`` of ``pnt`` and
-    ``vec`` (n, 3, contiguous float64), each one's hit geom written to ``hit`` (n,) int32, the distances returned.
+    """``cast(models, datas, worlds, rows, pnt, vec, groups, exclude_body, hit)``: ``mj_ray`` in world ``worlds[i]``
+    of ray ``rows[i]`` of ``pnt`` and ``vec`` (n, 3, contiguous float64) for each i, its hit geom written to ``hit``
+    (n,) int32 at the same row, the distances returned.
 
     It calls the MuJoCo library's own ``mj_ray`` through ctypes (the same function on the same state: the same
     answers) at a third of the binding's cost per call, the rays' hot loop; the binding where the library file is
@@ -240,16 +254,20 @@ def _ray_caster() -> RayCaster:
     if not (sys.platform.startswith("linux") and library.is_file()):
 
         def cast_binding(
-            m: mujoco.MjModel,
-            d: mujoco.MjData,
+            models: list[mujoco.MjModel],
+            datas: list[mujoco.MjData],
+            worlds: np.ndarray,
+            rows: np.ndarray,
             pnt: np.ndarray,
             vec: np.ndarray,
-            rows: list[int],
             groups: np.ndarray,
             exclude_body: int,
             hit: np.ndarray,
         ) -> list[float]:
-            return [mujoco.mj_ray(m, d, pnt[r], vec[r], groups, 1, exclude_body, hit[r : r + 1]) for r in rows]
+            return [
+                mujoco.mj_ray(models[w], datas[w], pnt[r], vec[r], groups, 1, exclude_body, hit[r : r + 1])
+                for w, r in zip(worlds.tolist(), rows.tolist(), strict=True)
+            ]
 
         return cast_binding
     ray = ctypes.CDLL(str(library)).mj_ray
@@ -258,17 +276,30 @@ def _ray_caster() -> RayCaster:
     ray.restype = ctypes.c_double
 
     def cast_c(
-        m: mujoco.MjModel,
-        d: mujoco.MjData,
+        models: list[mujoco.MjModel],
+        datas: list[mujoco.MjData],
+        worlds: np.ndarray,
+        rows: np.ndarray,
         pnt: np.ndarray,
         vec: np.ndarray,
-        rows: list[int],
         groups: np.ndarray,
         exclude_body: int,
         hit: np.ndarray,
     ) -> list[float]:
-        ma, da, g = m._address, d._address, groups.ctypes.data
-        p, v, h = pnt.ctypes.data, vec.ctypes.data, hit.ctypes.data
-        return [ray(ma, da, p + 24 * r, v + 24 * r, g, True, exclude_body, h + 4 * r, None) for r in rows]
+        used = np.unique(worlds)
+        ma, da = np.zeros(len(models), dtype=np.uint64), np.zeros(len(models), dtype=np.uint64)
+        ma[used], da[used] = [models[w]._address for w in used], [datas[w]._address for w in used]
+        g = groups.ctypes.data
+        return [
+            ray(m, d, p, v, g, True, exclude_body, h, None)
+            for m, d, p, v, h in zip(
+                ma[worlds].tolist(),
+                da[worlds].tolist(),
+                (pnt.ctypes.data + 24 * rows).tolist(),
+                (vec.ctypes.data + 24 * rows).tolist(),
+                (hit.ctypes.data + 4 * rows).tolist(),
+                strict=True,
+            )
+        ]
 
     return cast_c

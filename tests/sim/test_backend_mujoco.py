@@ -1,15 +1,17 @@
-"""The C MuJoCo backend's perturbed worlds: subtree masses follow a perturbed mass, and a spinning object keeps its
-energy."""
+"""The C MuJoCo backend: subtree masses follow a perturbed mass, a spinning object keeps its energy, and the batched
+rays answer as mj_ray."""
 
 from __future__ import annotations
 
 import copy
+import sys
 from typing import Any
 
 import mujoco
 import numpy as np
 import pytest
 
+from robotool.sim import backend_mujoco
 from robotool.sim.backend import Perturbation
 from robotool.sim.backend_mujoco import MujocoSim, subtree_masses
 
@@ -80,10 +82,15 @@ def test_a_spinning_vase_on_the_floor_gains_no_energy(sim_scene: Any) -> None:
         sim.close()
 
 
-def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any) -> None:
-    """The batched rays (the library's mj_ray through ctypes, a repeated ray answered once) give exactly what the
-    binding's mj_ray gives ray by ray: hits on objects and on the floor, misses, the robot skipped, a body left out,
-    and worlds without rays (NaN)."""
+@pytest.mark.parametrize("platform", [sys.platform, "elsewhere"])
+def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(
+    sim_scene: Any, platform: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The batched rays (the library's mj_ray through ctypes, or the binding where the library is not found; a
+    repeated ray answered once) give exactly what the binding's mj_ray gives ray by ray: hits on objects and on the
+    floor, misses, the robot skipped, a body left out, and worlds without rays (NaN)."""
+    monkeypatch.setattr(sys, "platform", platform)
+    backend_mujoco._ray_caster.cache_clear()
     scene = sim_scene("sofa_climbing")
     sim, nworld = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 0), njmax=scene.njmax, nconmax=scene.nconmax), 3
     try:
@@ -109,3 +116,4 @@ def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any) -> None:
             assert {-1, 0} < set(geom[:2].ravel().tolist())  # misses, the floor and objects were all met
     finally:
         sim.close()
+        backend_mujoco._ray_caster.cache_clear()
