@@ -12,10 +12,15 @@ world diverged. The constraints' inverse weights stay those of the nominal model
 from __future__ import annotations
 
 import copy
+import ctypes
+import functools
 import logging
 import os
+import sys
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -188,27 +193,113 @@ class MujocoSim:
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit."""
+        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit.
+
+        A ray equal to the one before it in its world (a path read past its end repeats its last point) takes the
+        earlier one's answer: ``mj_ray`` of the same ray on the same state gives the same answer."""
         nworld, nray = pnt.shape[:2]
         dist = np.full((nworld, nray), np.inf)
         geom = np.full((nworld, nray), -1, dtype=int)
-        hit = np.zeros(1, dtype=np.int32)
+        if not nray:
+            return dist, geom
         groups = geom_groups(skip_group)
         pnt, vec = np.ascontiguousarray(pnt, dtype=np.float64), np.ascontiguousarray(vec, dtype=np.float64)
-        ray = mujoco.mj_ray
-        for w in np.flatnonzero(~np.isnan(pnt[:, 0, 0])) if nray else ():
-            m, d = self.models[w], self.datas[w]
-            found = [
-                (r, x, int(hit[0]))
-                for r, (p, v) in enumerate(zip(pnt[w], vec[w], strict=True))
-                if (x := ray(m, d, p, v, groups, 1, exclude_body, hit)) >= 0
-            ]
-            if found:
-                rows, x, g = zip(*found, strict=True)
-                dist[w, list(rows)], geom[w, list(rows)] = x, g
+        fresh = np.ones((nworld, nray), dtype=bool)
+        fresh[:, 1:] = np.any((pnt[:, 1:] != pnt[:, :-1]) | (vec[:, 1:] != vec[:, :-1]), axis=2)
+        source = np.maximum.accumulate(np.where(fresh, np.arange(nray), 0), axis=1)  # the ray each one repeats
+        worlds, rows = np.nonzero(fresh & ~np.isnan(pnt[:, :1, 0]))  # the rays to cast (a world without: NaN)
+        flat = worlds * nray + rows
+        x, hit = np.full(nworld * nray, -1.0), np.full(nworld * nray, -1, dtype=np.int32)
+        x[flat] = _ray_caster()(
+            self.models, self.datas, worlds, flat, pnt.reshape(-1, 3), vec.reshape(-1, 3), groups, exclude_body, hit
+        )
+        flat = (np.arange(nworld)[:, None] * nray + source).ravel()  # each ray's answer, repeated ones included
+        x, hit = x[flat].reshape(nworld, nray), hit[flat].reshape(nworld, nray)
+        found = x >= 0
+        dist[found], geom[found] = x[found], hit[found]
         return dist, geom
 
     def close(self) -> None:
         """Stop the worker threads."""
         if self._pool is not None:
             self._pool.shutdown()
+
+
+RayCaster = Callable[
+    [
+        list[mujoco.MjModel],
+        list[mujoco.MjData],
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        np.ndarray,
+        int,
+        np.ndarray,
+    ],
+    list[float],
+]
+
+
+@functools.cache
+def _ray_caster() -> RayCaster:
+    """``cast(models, datas, worlds, rows, pnt, vec, groups, exclude_body, hit)``: ``mj_ray`` in world ``worlds[i]``
+    of ray ``rows[i]`` of ``pnt`` and ``vec`` (n, 3, contiguous float64) for each i, its hit geom written to ``hit``
+    (n,) int32 at the same row, the distances returned.
+
+    It calls the MuJoCo library's own ``mj_ray`` through ctypes (the same function on the same state: the same
+    answers) at a third of the binding's cost per call, the rays' hot loop; the binding where the library file is
+    not where a Linux wheel puts it."""
+    library = Path(mujoco.__file__).parent / f"libmujoco.so.{mujoco.__version__}"
+    if not (sys.platform.startswith("linux") and library.is_file()):
+
+        def cast_binding(
+            models: list[mujoco.MjModel],
+            datas: list[mujoco.MjData],
+            worlds: np.ndarray,
+            rows: np.ndarray,
+            pnt: np.ndarray,
+            vec: np.ndarray,
+            groups: np.ndarray,
+            exclude_body: int,
+            hit: np.ndarray,
+        ) -> list[float]:
+            return [
+                mujoco.mj_ray(models[w], datas[w], pnt[r], vec[r], groups, 1, exclude_body, hit[r : r + 1])
+                for w, r in zip(worlds.tolist(), rows.tolist(), strict=True)
+            ]
+
+        return cast_binding
+    ray = ctypes.CDLL(str(library)).mj_ray
+    address = ctypes.c_void_p
+    ray.argtypes = [address, address, address, address, address, ctypes.c_bool, ctypes.c_int, address, address]
+    ray.restype = ctypes.c_double
+
+    def cast_c(
+        models: list[mujoco.MjModel],
+        datas: list[mujoco.MjData],
+        worlds: np.ndarray,
+        rows: np.ndarray,
+        pnt: np.ndarray,
+        vec: np.ndarray,
+        groups: np.ndarray,
+        exclude_body: int,
+        hit: np.ndarray,
+    ) -> list[float]:
+        used = np.unique(worlds)
+        ma, da = np.zeros(len(models), dtype=np.uint64), np.zeros(len(models), dtype=np.uint64)
+        ma[used], da[used] = [models[w]._address for w in used], [datas[w]._address for w in used]
+        g = groups.ctypes.data
+        return [
+            ray(m, d, p, v, g, True, exclude_body, h, None)
+            for m, d, p, v, h in zip(
+                ma[worlds].tolist(),
+                da[worlds].tolist(),
+                (pnt.ctypes.data + 24 * rows).tolist(),
+                (vec.ctypes.data + 24 * rows).tolist(),
+                (hit.ctypes.data + 4 * rows).tolist(),
+                strict=True,
+            )
+        ]
+
+    return cast_c

@@ -1,15 +1,17 @@
-"""The C MuJoCo backend's perturbed worlds: subtree masses follow a perturbed mass, and a spinning object keeps its
-energy."""
+"""The C MuJoCo backend: subtree masses follow a perturbed mass, a spinning object keeps its energy, and the batched
+rays answer as mj_ray."""
 
 from __future__ import annotations
 
 import copy
+import sys
 from typing import Any
 
 import mujoco
 import numpy as np
 import pytest
 
+from robotool.sim import backend_mujoco
 from robotool.sim.backend import Perturbation
 from robotool.sim.backend_mujoco import MujocoSim, subtree_masses
 
@@ -78,3 +80,40 @@ def test_a_spinning_vase_on_the_floor_gains_no_energy(sim_scene: Any) -> None:
         assert np.all(most <= start * 1.05), most / start
     finally:
         sim.close()
+
+
+@pytest.mark.parametrize("platform", [sys.platform, "elsewhere"])
+def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(
+    sim_scene: Any, platform: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The batched rays (the library's mj_ray through ctypes, or the binding where the library is not found; a
+    repeated ray answered once) give exactly what the binding's mj_ray gives ray by ray: hits on objects and on the
+    floor, misses, the robot skipped, a body left out, and worlds without rays (NaN)."""
+    monkeypatch.setattr(sys, "platform", platform)
+    backend_mujoco._ray_caster.cache_clear()
+    scene = sim_scene("sofa_climbing")
+    sim, nworld = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 0), njmax=scene.njmax, nconmax=scene.nconmax), 3
+    try:
+        rng = np.random.default_rng(0)
+        xy = rng.uniform(-1.0, 4.0, (nworld, 40, 2))
+        xy[:, 20:30] = xy[:, 19:20]  # a path read past its end: the same ray again
+        pnt = np.concatenate([xy, np.full((nworld, 40, 1), 0.8)], axis=2)
+        pnt[:, 35:, 2] = -1.0  # under the floor, pointing down: nothing is hit
+        pnt[2] = np.nan  # no rays in this world
+        vec = np.tile([0.0, 0.0, -1.0], (nworld, 40, 1))
+        box = scene.object_body[scene.object_index("box_1")]
+        for exclude, skip in ((-1, -1), (box, 2)):  # group 2: the robot's geoms
+            dist, geom = sim.rays(pnt, vec, exclude_body=exclude, skip_group=skip)
+            groups = np.ones(6, dtype=np.uint8)
+            if skip >= 0:
+                groups[skip] = 0
+            hit = np.zeros(1, dtype=np.int32)
+            for w in range(2):
+                for r in range(40):
+                    x = mujoco.mj_ray(sim.models[w], sim.datas[w], pnt[w, r], vec[w, r], groups, 1, exclude, hit)
+                    assert (dist[w, r], geom[w, r]) == ((x, hit[0]) if x >= 0 else (np.inf, -1))
+            assert np.isinf(dist[2]).all() and (geom[2] == -1).all()
+            assert {-1, 0} < set(geom[:2].ravel().tolist())  # misses, the floor and objects were all met
+    finally:
+        sim.close()
+        backend_mujoco._ray_caster.cache_clear()

@@ -29,7 +29,7 @@ reads the task's category or name: limits come from ``task.robot.limits`` and th
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import Any
 
@@ -205,6 +205,7 @@ class QuadrupedController:
         self.pressed = np.zeros((nworld, len(self.scene.object_names)), dtype=bool)
         self.reach = limits.max_step_down + LEG_SLACK
         self.state: BatchState = sim.state()
+        self._memo: tuple[BatchState | None, dict[Any, np.ndarray]] = (None, {})  # see _of_state
         # how far each object travelled while a push of another object rammed it, from push to push until the robot
         # pushes it itself, and where each object was at the last tick
         self.carried = np.zeros((nworld, len(self.scene.object_names)))
@@ -1021,11 +1022,25 @@ class QuadrupedController:
         return self.state.qpos[w, self.ids.qpos[:2]].copy()
 
     def _centers(self, state: BatchState) -> np.ndarray:
-        """Object centres (nworld, nobject, 3): body origins; a cloth's is the mean of its links."""
-        out = state.xpos[:, self.scene.object_body].copy()
-        for i in np.flatnonzero(self.cloth):
-            out[:, i] = state.xpos[:, self.scene.body_object == i].mean(axis=1)
-        return out
+        """Object centres (nworld, nobject, 3), read-only: body origins; a cloth's is the mean of its links."""
+
+        def compute() -> np.ndarray:
+            out = state.xpos[:, self.scene.object_body].copy()
+            for i in np.flatnonzero(self.cloth):
+                out[:, i] = state.xpos[:, self.scene.body_object == i].mean(axis=1)
+            return out
+
+        return self._of_state(state, "centres", compute)
+
+    def _of_state(self, state: BatchState, key: Any, compute: Callable[[], np.ndarray]) -> np.ndarray:
+        """``compute()`` once per state (a tick and the skill starts that follow read the same one), read-only."""
+        if self._memo[0] is not state:
+            self._memo = (state, {})
+        found = self._memo[1].get(key)
+        if found is None:
+            found = self._memo[1][key] = compute()
+            found.flags.writeable = False
+        return found
 
     def _bounds3(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned bounds of an object in world ``w``."""
@@ -1033,7 +1048,8 @@ class QuadrupedController:
             center = self._centers(self.state)[w, index]
             half = np.asarray(self.scene.task.objects[index].size) / 2
             return center - half, center + half
-        corners = world_corners(self.state, self.scene.object_body[index], self.corners[index])[w]
+        state, body = self.state, self.scene.object_body[index]
+        corners = self._of_state(state, ("corners", index), lambda: world_corners(state, body, self.corners[index]))[w]
         return corners.min(axis=0), corners.max(axis=0)
 
     def _bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
