@@ -121,7 +121,7 @@ class Event(BaseModel):
         )
 
     def _weak_grip(self) -> str:
-        """What the fingers' grip on ``object`` measured and what its load needed (arm controller's ``_Hold``)."""
+        """What the fingers' grip on ``object`` measured and what its load needed."""
         m, obj = self.measured, self.object
         joined = int(m.get("joined", 0))
         load = f"{m.get('weight', 0.0):.2f} N" + (f" ({obj} and {joined} joined to it)" if joined else "")
