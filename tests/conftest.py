@@ -47,3 +47,17 @@ def run_texts():
     """Run program texts through the sandbox in the lockstep runner, one world each:
     ``run_texts(scene_or_task, codes, seed=3, backend="warp")`` (keywords go to ``sim.run_sessions``)."""
     return _run_texts
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--record-budgets",
+        action="store_true",
+        help="write the test files' measured times (doubled) to tests/time_budgets.json instead of checking them",
+    )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    from time_budget import TimeBudget
+
+    config.pluginmanager.register(TimeBudget(config), "time_budget")

@@ -46,6 +46,7 @@ class Snippet:
     language: str  # "bash" or "python"
     text: str
     background: bool = False
+    block: int = 0  # the first line of its block
 
     @property
     def id(self) -> str:
@@ -98,9 +99,9 @@ def snippets() -> list[Snippet]:
             if language == "bash":
                 for start, command in _commands(body, line):
                     background = command.split("#")[0].rstrip().endswith("&")
-                    found.append(Snippet(name, start, "bash", command, background))
+                    found.append(Snippet(name, start, "bash", command, background, line))
             elif language == "python" and body not in programs.values():
-                found.append(Snippet(name, line, "python", body))
+                found.append(Snippet(name, line, "python", body, block=line))
     return found
 
 
@@ -175,7 +176,19 @@ def _command_line(snippet: Snippet) -> str:
     return command
 
 
-@pytest.mark.parametrize("snippet", snippets(), ids=lambda s: s.id)
+def _params() -> list[object]:
+    """One test per snippet; a block that starts a background server keeps its commands on one worker, in order."""
+    found = snippets()
+    serving = {(s.document, s.block) for s in found if s.background}
+    return [
+        pytest.param(s, id=s.id, marks=[pytest.mark.xdist_group(f"{s.document}:{s.block}")])
+        if (s.document, s.block) in serving
+        else pytest.param(s, id=s.id)
+        for s in found
+    ]
+
+
+@pytest.mark.parametrize("snippet", _params())
 def test_readme_snippet_runs_as_written(snippet: Snippet, scratch: Scratch) -> None:
     if (why := skip_reason(snippet)) is not None:
         pytest.skip(why)

@@ -1,10 +1,11 @@
 """Per-file time budgets for the test suite: a run in which a test file took longer than its budget fails.
 
 The budgets live in ``tests/time_budgets.json`` (file -> seconds, the sum of its tests' setup, call and
-teardown times); a file that is not listed gets :data:`DEFAULT_BUDGET_S`. They are set at about twice what the
-file takes on a 2-core machine running the suite on two workers, so noise passes and a test that became ten times
-slower does not. ``pytest --record-budgets`` writes the measured times of the files that ran (rounded up, doubled)
-into the file instead of checking them. Works with pytest-xdist: the controller adds up the workers' reports.
+teardown times); a file that is not listed gets :data:`DEFAULT_BUDGET_S`. They are set at twice what the file
+takes on a 2-core machine running the suite on two workers, plus :data:`SLACK_S` (a first Warp kernel compile
+may land in any file), so noise passes and a test that became several times slower does not. ``pytest
+--record-budgets`` writes the measured times of the files that ran that way into the file instead of checking
+them. Works with pytest-xdist: the controller adds up the workers' reports.
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ from pathlib import Path
 import pytest
 
 BUDGETS = Path(__file__).resolve().parent / "time_budgets.json"
-DEFAULT_BUDGET_S = 20.0
+DEFAULT_BUDGET_S = 30.0
 MARGIN = 2.0
+SLACK_S = 30.0
 
 
 class TimeBudget:
@@ -47,7 +49,7 @@ class TimeBudget:
             return
         if self.config.getoption("record_budgets"):
             recorded = {**self.budgets}
-            recorded.update({f: float(math.ceil(MARGIN * s + 1)) for f, s in self.spent.items()})
+            recorded.update({f: float(math.ceil(MARGIN * s + SLACK_S)) for f, s in self.spent.items()})
             BUDGETS.write_text(json.dumps(dict(sorted(recorded.items())), indent=1) + "\n")
             return
         over = self.over_budget()

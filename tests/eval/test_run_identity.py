@@ -164,6 +164,7 @@ def test_cli_refuses_a_folder_with_other_settings_in_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(eval_solvers, "planner_solver", lambda tools, settings: standin_solution)
+    monkeypatch.setenv("COLUMNS", "400")  # the folder's name stays on one line, however long the temp path
     out = str(tmp_path / "out")
     assert main(["--tasks", "sofa_traversing", "--methods", "search", "--worlds", "1", "--out", out]) == 0
     capsys.readouterr()
