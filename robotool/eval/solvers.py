@@ -163,14 +163,23 @@ def equal_budget(solution: Solution, plain: Callable[[int], Solution]) -> EqualB
     )
 
 
+@dataclass(frozen=True)
+class PlannerSolver:
+    """The LM-free search planner, with every object (``tools``) or the target only; a plain value, so that it
+    can be sent to another process."""
+
+    tools: bool
+    settings: SolverSettings
+
+    def __call__(self, task: Task, *, seed: int, run: int) -> Solution:
+        planner = importlib.import_module("robotool.planner")
+        s = self.settings
+        return planner.solve(task, worlds=s.worlds, seed=seed, backend=s.backend, tools=self.tools)
+
+
 def planner_solver(tools: bool, settings: SolverSettings) -> Solver:
     """The LM-free search planner, with every object (``tools``) or the target only."""
-
-    def solve(task: Task, *, seed: int, run: int) -> Solution:
-        planner = importlib.import_module("robotool.planner")
-        return planner.solve(task, worlds=settings.worlds, seed=seed, backend=settings.backend, tools=tools)
-
-    return solve
+    return PlannerSolver(tools, settings)
 
 
 def planner_missing() -> str | None:

@@ -71,3 +71,16 @@ def test_a_job_whose_process_died_runs_again_here() -> None:
     jobs = [(k, os.getpid()) for k in range(3)]
     outcomes = _run(_dies_in_a_pool_process, jobs, exclusive=True)
     assert sorted(outcomes) == jobs and {o[1] for o in outcomes.values()} == {os.getpid()}
+
+
+def test_the_evaluators_lm_free_work_can_go_to_another_process() -> None:
+    # The main job's runs reach the process pool only if the work pickles (a closure once kept them on one core).
+    import pickle
+
+    from robotool.eval.solvers import SolverSettings, planner_solver
+    from robotool.eval.work import RunWork
+
+    work = RunWork(
+        {"search": planner_solver(True, SolverSettings()), "no_tool": planner_solver(False, SolverSettings())}
+    )
+    assert pickle.loads(pickle.dumps(work)) == work
