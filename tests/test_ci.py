@@ -27,8 +27,11 @@ def test_ci_runs_the_readme_quick_start_as_written() -> None:
     assert len(lines) == 2 and lines[0] == 'pip install -e ".[dev]" && python -m robotool.eval'
     assert lines[1].split("&&")[0].strip().startswith("ruff check"), "lint first, then the tests"
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
-    assert "python3 .ci/quick_start.py" in ci and 'bash -o pipefail -c "$line"' in ci
+    assert "python3 .ci/quick_start.py" in ci and 'bash -o pipefail -c "${quick_start[0]}"' in ci
     assert "^Traceback" in ci and "results/*/results.json" in ci
+    assert f'test_command="{lines[1]}"' in ci  # the README's test command, checked against it when CI runs
+    ran = [line.strip() for line in ci.splitlines() if line.strip() and not line.lstrip().startswith("#")][-2:]
+    assert " && ".join(ran) == lines[1]
 
 
 def test_the_dev_extra_installs_the_tools_ci_runs() -> None:
