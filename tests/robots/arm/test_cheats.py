@@ -119,6 +119,17 @@ def test_the_same_two_cube_chain_held_at_the_centre_falls_short(run_texts: Any) 
         assert rollout.conditions == {"button_pressed": False}
 
 
+def test_a_grip_just_past_the_half_pad_rule_holds_but_reaches_no_further_than_honest_physics(run_texts: Any) -> None:
+    """An optimiser's next try after the sliver: grip the first cube 8.5 mm deep, just past the half-pad rule (8 mm).
+    The grip holds, as it should, and the chain still falls short of the built-in button: the rule's threshold
+    leaves no reach a held three-cube chain does not have."""
+    edge = SLIVER_CHAIN.replace("ca[0] - e / 2 - 0.004", "ca[0] - e / 2 + 0.0005")
+    assert edge != SLIVER_CHAIN
+    for rollout in run_texts(_task("button_pressing"), [edge] * 3, seed=11):
+        assert not rollout.success and not any(e.kind == "grasp_failed" for e in rollout.events), rollout.events
+        assert rollout.conditions == {"button_pressed": False}
+
+
 def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None:
     """The control for the tipping cheat: the same program grasps a carton that stands close enough (0.61 m, where
     the family used to put unsolvable ones), so its failure above is the carton's distance, not the program."""
