@@ -484,3 +484,28 @@ def test_the_hosts_name_clocks_and_ipc_are_out_of_reach() -> None:
     assert ended.error is None, ended.error
     lines = ended.output.splitlines()
     assert len(lines) == 14 and all(line.endswith(" denied 1") for line in lines), ended.output
+
+
+def test_signals_new_sessions_forks_init_and_the_terminal_are_out_of_reach() -> None:
+    """With the Python checks off: signals to the parent, the process group and init, a new session, a fork,
+    init's /proc entry and the controlling terminal are all refused by the OS layers (errno 1, EPERM)."""
+    code = (
+        "import ctypes, os\n"
+        "libc = ctypes.CDLL(None, use_errno=True)\n"
+        "out = []\n"
+        "for name, call in [('parent', lambda: libc.kill(libc.getppid(), 0)), ('group', lambda: libc.kill(0, 0)),\n"
+        "                   ('init', lambda: libc.kill(1, 15)), ('setsid', libc.setsid), ('fork', libc.fork)]:\n"
+        "    out.append((name, call(), ctypes.get_errno()))\n"
+        "for path, flags in [('/proc/1/cmdline', os.O_RDONLY), ('/dev/tty', os.O_WRONLY)]:\n"
+        "    try:\n"
+        "        os.open(path, flags)\n"
+        "        out.append((path, 'opened'))\n"
+        "    except OSError as e:\n"
+        "        out.append((path, e.errno))\n"
+        "print(out)\n"
+    )
+    ended = run_unchecked(code)
+    assert ended.output == (
+        "[('parent', -1, 1), ('group', -1, 1), ('init', -1, 1), ('setsid', -1, 1), ('fork', -1, 1), "
+        "('/proc/1/cmdline', 1), ('/dev/tty', 1)]\n"
+    ), ended.output
