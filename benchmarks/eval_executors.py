@@ -22,7 +22,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from robotool.cliargs import DEFAULT_WORLDS, cluster_address, positive_int
+from robotool.cli.options import DEFAULT_WORLDS, cluster_address, positive_int
 from robotool.eval import EvalConfig, Results, Settings, evaluate
 from robotool.eval.config import DEFAULT_WORKERS
 from robotool.eval.executor import Executor, LocalExecutor

@@ -24,9 +24,9 @@ os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
 import dspy
 
 from robotool import tasks
-from robotool.lm import make_lm
-from robotool.lm_program import RoboTool
-from robotool.standin import Rule, Script, StandinServer
+from robotool.program.lm import make_lm
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 
 MAX_CANDIDATES = 8
 

@@ -31,7 +31,7 @@ from robotool.planner import solve
 from robotool.rollout import Rollout
 from robotool.sim import build
 from robotool.solution import Candidate, Proposal
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import run_codes
 
 

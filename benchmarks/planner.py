@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from robotool import tasks
 from robotool.planner import solve
 from robotool.solution import Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.tasks.families import families, generate
 
 

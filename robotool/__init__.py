@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 # gl_backend first: MuJoCo picks its OpenGL back end when it is imported (no display: EGL, where installed).
 from robotool import gl_backend, tasks  # noqa: F401
-from robotool.concepts import KeyConcept, key_concepts, needs_tool
-from robotool.describe import describe
 from robotool.robots import arm, quadruped, registry
-from robotool.task_file import Problem, TaskFileError, load_task
-from robotool.task_model import Task
+from robotool.task.concepts import KeyConcept, key_concepts, needs_tool
+from robotool.task.describe import describe
+from robotool.task.task_file import Problem, TaskFileError, load_task
+from robotool.task.task_model import Task
 
 # The built-in robots; plug-ins register on the registry's first lookup.
 registry.register(arm.ROBOT)
@@ -23,11 +23,11 @@ registry.register(quadruped.ROBOT)
 
 if TYPE_CHECKING:
     from robotool.execute import RunReport, run
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
     from robotool.solution import Solution
 
 _LAZY = {
-    "RoboTool": "robotool.lm_program",
+    "RoboTool": "robotool.program.lm_program",
     "RunReport": "robotool.execute",
     "Solution": "robotool.solution",
     "run": "robotool.execute",

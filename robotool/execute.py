@@ -16,7 +16,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox.strict import check_user_program
 from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import run_codes
 
 
@@ -47,7 +47,7 @@ def run(
     A ``recorder`` keeps the states of the worlds it names (for videos).
 
     Raises :class:`~robotool.sandbox.ProgramRejected` for a program the sandbox refuses and
-    :class:`~robotool.task_file.TaskFileError` for a bad task.
+    :class:`~robotool.task.task_file.TaskFileError` for a bad task.
     """
     if worlds < 1:
         raise ValueError(f"worlds must be at least 1, got {worlds}")

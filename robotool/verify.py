@@ -18,7 +18,7 @@ from robotool.sim import run_sessions
 from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
 from robotool.solution import Candidate, CandidateFailure, Proposal, Solution, rank, usage_by_stage
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 
 class PreparedCode(NamedTuple):

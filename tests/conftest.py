@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any  # noqa: E402
 if TYPE_CHECKING:
     from robotool.rollout import Rollout
     from robotool.sim import Scene
-    from robotool.task_model import Task
+    from robotool.task.task_model import Task
 
 
 def _run_texts(task: "Task | Scene", codes: Sequence[str], **kwargs: Any) -> "list[Rollout]":

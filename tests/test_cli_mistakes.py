@@ -13,9 +13,9 @@ import pytest
 from fixtures.reference import program_path
 from rich.console import Console
 
-from robotool import cli
-from robotool.cliargs import CAPTURED_WIDTH, warn_if_warp_on_cpu
-from robotool.eval import main as eval_main
+from robotool.cli import dispatch as cli
+from robotool.cli.eval_command import main as eval_main
+from robotool.cli.options import CAPTURED_WIDTH, warn_if_warp_on_cpu
 from robotool.sandbox import ProgramRejected
 from robotool.sandbox.strict import check_user_program
 from robotool.sim.backend import default_backend

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from robotool import tasks
-from robotool.concepts import key_concepts, needs_tool
-from robotool.task_file import parse_task
+from robotool.task.concepts import key_concepts, needs_tool
+from robotool.task.task_file import parse_task
 
 
 def _concept(name: str, kind: str):

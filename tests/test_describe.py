@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from robotool import tasks
-from robotool.describe import describe
-from robotool.task_file import parse_task
+from robotool.task.describe import describe
+from robotool.task.task_file import parse_task
 
 
 @pytest.mark.parametrize("name", tasks.names())

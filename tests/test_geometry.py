@@ -9,8 +9,8 @@ from typing import Literal
 import numpy as np
 import pytest
 
-from robotool import geometry
-from robotool.geometry import Part
+from robotool.task import geometry
+from robotool.task.geometry import Part
 
 
 @dataclass(frozen=True)

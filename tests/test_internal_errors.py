@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from robotool.internal_error import EXIT_INTERNAL_ERROR, TRACEBACK_PREFIX
+from robotool.cli.internal_error import EXIT_INTERNAL_ERROR, TRACEBACK_PREFIX
 
 
 class InjectedFault(Exception):
@@ -22,11 +22,11 @@ def _boom(*_args: object, **_kwargs: object) -> None:
 
 def _entry_points(tmp_path: Path) -> dict[str, tuple[str, Callable[[], int]]]:
     from robotool.cli import main as cli_main
-    from robotool.eval.eval_cli import main as eval_main
-    from robotool.optimize.optimize_cli import main as optimize_main
+    from robotool.cli.eval_command import main as eval_main
+    from robotool.cli.optimize_command import main as optimize_main
 
     return {
-        "robotool tasks": ("robotool.cli.cmd_tasks", lambda: cli_main(["tasks"])),
+        "robotool tasks": ("robotool.cli.dispatch.cmd_tasks", lambda: cli_main(["tasks"])),
         "robotool eval": (
             "robotool.eval.sweep.evaluate",
             lambda: cli_main(["eval", "--tasks", "milk_reaching_near", "--out", str(tmp_path / "eval")]),
@@ -36,7 +36,7 @@ def _entry_points(tmp_path: Path) -> dict[str, tuple[str, Callable[[], int]]]:
             lambda: eval_main(["--tasks", "milk_reaching_near", "--out", str(tmp_path / "eval")]),
         ),
         "python -m robotool.optimize": (
-            "robotool.optimize.optimize_cli.optimize",
+            "robotool.cli.optimize_command.optimize",
             lambda: optimize_main(["--optimizer", "planner-demos", "--out", str(tmp_path / "p.json")]),
         ),
     }

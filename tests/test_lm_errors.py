@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from dspy.utils import exceptions as dx
 
-from robotool.lm import make_lm, unavailable
+from robotool.program.lm import make_lm, unavailable
 
 API_BASE = "http://127.0.0.1:9/v1"
 

@@ -13,9 +13,9 @@ from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script, chat
 from robotool import tasks
 from robotool.cli import main
 from robotool.errors import LMUnavailableError
-from robotool.lm import make_lm
-from robotool.lm_program import RoboTool
-from robotool.standin import Rule, Script, StandinServer
+from robotool.program.lm import make_lm
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 
 TASK = "milk_reaching_near"
 GATEWAY_PAGE = "<html><head><title>502 Bad Gateway</title></head><body><h1>502 Bad Gateway</h1></body></html>"
@@ -98,7 +98,7 @@ def test_cli_gateway_page_is_one_line_and_exit_2(capsys) -> None:
 
 
 def test_eval_never_records_a_run_that_met_a_gateway_page(tmp_path: Path, capsys) -> None:
-    from robotool.eval import main as eval_main
+    from robotool.cli.eval_command import main as eval_main
 
     rules = stage_rules(arm_script([GRASP_DIRECTLY]), analyzer=[Rule(body=GATEWAY_PAGE)])
     with StandinServer(Script(rules=rules)) as server:

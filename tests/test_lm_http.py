@@ -13,9 +13,9 @@ from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script, stag
 from robotool import tasks
 from robotool.cli import main
 from robotool.errors import LMUnavailableError
-from robotool.lm import LMConfigError, make_lm
-from robotool.lm_program import RoboTool
-from robotool.standin import Rule, Script, StandinServer
+from robotool.program.lm import LMConfigError, make_lm
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 
 TASK = "milk_reaching_near"
 
@@ -259,7 +259,7 @@ def test_cli_logs_prompts_and_the_standin_logs_requests(tmp_path: Path, capsys) 
 
 
 def test_eval_flags_reach_every_lm_call(tmp_path: Path, capsys) -> None:
-    from robotool.eval import main as eval_main
+    from robotool.cli.eval_command import main as eval_main
 
     script = arm_script([GRASP_DIRECTLY])  # replies with field markers although JSON is asked for
     json_prompts = {
@@ -307,7 +307,7 @@ def test_eval_flags_reach_every_lm_call(tmp_path: Path, capsys) -> None:
 
 
 def test_eval_says_how_many_replies_came_from_the_cache(tmp_path: Path, capsys) -> None:
-    from robotool.eval import main as eval_main
+    from robotool.cli.eval_command import main as eval_main
 
     dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=True)
     try:
@@ -345,7 +345,7 @@ def test_unwritable_prompt_log_is_refused_before_any_request(tmp_path: Path, cap
     log = str(tmp_path / "file" / "prompts.jsonl")
     with pytest.raises(SystemExit) as solve_exit:
         main(["solve", TASK, "--lm", "openai/standin", "--log-prompts", log])
-    from robotool.eval import main as eval_main
+    from robotool.cli.eval_command import main as eval_main
 
     with pytest.raises(SystemExit) as eval_exit:
         eval_main(["--methods", "robotool", "--lm", "openai/standin", "--log-prompts", log])
@@ -357,7 +357,7 @@ def test_unwritable_prompt_log_is_refused_before_any_request(tmp_path: Path, cap
 
 
 def test_eval_with_a_rejected_key_records_nothing_and_says_why_in_one_line(tmp_path: Path, capsys) -> None:
-    from robotool.eval import main as eval_main
+    from robotool.cli.eval_command import main as eval_main
 
     with StandinServer(Script(rules=[Rule(status=401)])) as server:
         code = eval_main(

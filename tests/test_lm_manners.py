@@ -7,23 +7,26 @@ import dspy
 import pytest
 from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, stage_rules
 
-from robotool import cli, tasks
+from robotool import tasks
+from robotool.cli import dispatch as cli
 from robotool.cli import main
-from robotool.lm import DEFAULT_TIMEOUT, PLACEHOLDER_KEY, make_lm
-from robotool.lm_calls import reporting_waits
-from robotool.lm_program import RoboTool
-from robotool.standin import Rule, Script, StandinServer
+from robotool.program.lm import DEFAULT_TIMEOUT, PLACEHOLDER_KEY, make_lm
+from robotool.program.lm_calls import reporting_waits
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 
 TASK = "milk_reaching_near"
 
 
-@pytest.mark.parametrize("module", ["robotool.cli", "robotool.eval.eval_cli", "robotool.optimize.optimize_cli"])
+@pytest.mark.parametrize(
+    "module", ["robotool.cli.dispatch", "robotool.cli.eval_command", "robotool.cli.optimize_command"]
+)
 def test_timeout_has_a_stated_default(module: str, capsys) -> None:
     import importlib
 
     entry = importlib.import_module(module).main
     with pytest.raises(SystemExit):
-        entry(["solve", "--help"] if module == "robotool.cli" else ["--help"])
+        entry(["solve", "--help"] if module == "robotool.cli.dispatch" else ["--help"])
     assert f"(default: {DEFAULT_TIMEOUT:g})" in " ".join(capsys.readouterr().out.split())
     assert make_lm("openai/x", api_base="http://127.0.0.1:9/v1").kwargs["timeout"] == DEFAULT_TIMEOUT
 

@@ -1,12 +1,16 @@
-"""The package's names and layers: unique module and public class names, no import cycles, a planner apart from sim.
+"""The package's names and layers: unique module and public class names, no import cycles, the packages' layer
+table, and an LM-free core that never loads DSPy.
 
 Read from the source with :mod:`ast` (nothing is imported): every ``import`` counts, including those inside
-functions and under ``TYPE_CHECKING``, because a cycle hidden in a function is still a cycle in the design.
+functions and under ``TYPE_CHECKING``, because a cycle hidden in a function is still a cycle in the design. One
+test imports the planner in a child interpreter, to see that DSPy stays unloaded at run time too.
 """
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -23,6 +27,8 @@ PLUG_INS = "robotool.robots."
 
 SHARED_MODULE_NAMES: dict[str, str] = {
     "planner": "signatures/planner.py is the paper's Planner stage; the planner package is the LM-free search planner",
+    "task": "task/ is the model of one task (file, goal, scene, geometry, key concepts); tasks/ is the catalogue of "
+    "built-in task files and procedural families, the way robots/ is the catalogue of robots",
 }
 """Module or package names (singular and plural alike) two places may still share, each with why; a name that
 no longer collides must leave."""
@@ -36,9 +42,120 @@ SHARED_NAMES: dict[str, str] = {
 KNOWN_CYCLES: list[frozenset[str]] = []
 """Import cycles still to be removed; one that is gone must leave."""
 
+BASE_MODULES = frozenset({"errors", "safe_text", "version", "processes", "gl_backend", "rollout", "program_session"})
+"""Top-level modules every layer may use: typed errors, text escaping, the version, process pools, the OpenGL
+choice, a run's records and the runner <-> program protocol. They import nothing of robotool but each other."""
 
-PLANNER_INTO_SIMULATOR: set[tuple[str, str]] = set()
-"""Planner modules that still import a simulator module; one that no longer does must leave."""
+ROBOT_CONTRACT = frozenset({"registry", "skills", "limits_table"})
+"""The modules of ``robotool/robots/`` that every robot shares (the contract); each other folder there is a robot."""
+
+DSPY_FREE_RECORDS = frozenset({"models", "traces"})
+"""The modules of ``robotool/signatures/`` that hold the stages' pydantic records and import no DSPy."""
+
+LAYERS: dict[str, frozenset[str]] = {
+    "base": frozenset(),
+    "task": frozenset({"robots"}),
+    "robots": frozenset({"base", "task", "sim", "planner"}),
+    "tasks": frozenset({"task"}),
+    "records": frozenset({"base", "task"}),
+    "signatures": frozenset({"base", "records"}),
+    "solution": frozenset({"base", "records"}),
+    "sandbox": frozenset({"base", "robots"}),
+    "sim": frozenset({"base", "robots", "task"}),
+    "verify": frozenset({"base", "sandbox", "sim", "solution", "task", "tasks"}),
+    "planner": frozenset({"base", "records", "robots", "solution", "task", "verify"}),
+    "robot": frozenset({"base", "robots", "task", "sim", "planner"}),
+    "program": frozenset({"base", "records", "signatures", "robots", "sandbox", "solution", "task", "verify"}),
+    "render": frozenset({"base", "robots", "sandbox", "sim", "task", "verify"}),
+    "report_page": frozenset({"base", "eval", "render", "solution", "task", "verify"}),
+    "eval": frozenset(
+        {"base", "planner", "program", "render", "report_page", "robots", "sandbox", "sim", "solution", "task"}
+        | {"tasks", "verify"}
+    ),
+    "optimize": frozenset(
+        {"base", "eval", "planner", "program", "robots", "sandbox", "solution", "task", "tasks", "verify"}
+    ),
+    "cli": frozenset(
+        {"base", "eval", "optimize", "planner", "program", "render", "report_page", "robots", "sandbox", "sim"}
+        | {"solution", "task", "tasks", "verify"}
+    ),
+}
+"""Layer -> the layers its modules may import (see :func:`layer` for which modules make up each). Read as: the task
+model knows robots only through their contract; the records of the LM stages are DSPy-free; the sandbox, the
+simulator and the LM-free planner never import the LM path (``signatures``, ``program``), the evaluator, the optimiser
+or the command line; a robot (``robots/<name>/``) plugs into the contract, the simulator and the planner; the
+contract names simulator and planner types only for its typed hooks. ``eval`` and ``report_page`` use each other:
+the report page draws the evaluator's records and the evaluator writes the page. The package's ``__init__`` and every
+``__main__`` are entry points and may import anything. docs/architecture.md shows this table; keep them in step."""
+
+LM_FREE_LAYERS = frozenset(
+    {"base", "task", "robots", "tasks", "records", "solution", "sandbox", "sim", "verify", "planner", "robot"}
+)
+"""Layers that must never load DSPy, however deep the import."""
+
+
+def layer(module: str) -> str:
+    """The layer a module belongs to (the table's key): its top-level package, with the exceptions named above."""
+    parts = module.split(".")
+    if module == "robotool" or parts[-1] == "__main__":
+        return "entry"
+    if len(parts) == 2 and parts[1] in BASE_MODULES:
+        return "base"
+    if len(parts) == 2 and parts[1] == "execute":
+        return "verify"
+    if parts[1] == "robots":
+        return "robots" if len(parts) == 2 or parts[2] in ROBOT_CONTRACT else "robot"
+    if parts[1] == "signatures" and len(parts) > 2 and parts[2] in DSPY_FREE_RECORDS:
+        return "records"
+    return parts[1]
+
+
+def layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    """Every import that crosses layers against the table, and every module whose layer the table lacks."""
+    found = []
+    for module, imports in sorted(graph.items()):
+        own = layer(module)
+        if own == "entry":
+            continue
+        if own not in LAYERS:
+            found.append(f"{module}: layer {own!r} is not in LAYERS (add it, with what it may import)")
+            continue
+        for imported in sorted(imports):
+            other = layer(imported)
+            if other != own and other not in LAYERS[own]:
+                found.append(f"{module} ({own}) imports {imported} ({other})")
+    return found
+
+
+def _imports_dspy(path: Path) -> bool:
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import) and any(a.name.partition(".")[0] == "dspy" for a in node.names):
+            return True
+        if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").partition(".")[0] == "dspy":
+            return True
+    return False
+
+
+def dspy_chains(graph: dict[str, set[str]], modules: dict[str, Path], starts: list[str]) -> list[str]:
+    """For each start module that reaches a module importing DSPy, the chain of imports that gets there."""
+    importers = {module for module, path in modules.items() if _imports_dspy(path)}
+    chains = []
+    for start in starts:
+        parent: dict[str, str] = {}
+        seen, stack = {start}, [start]
+        while stack:
+            node = stack.pop()
+            if node in importers:
+                chain = [node]
+                while chain[-1] in parent:
+                    chain.append(parent[chain[-1]])
+                chains.append(" <- ".join(["dspy", *chain]))
+                break
+            for child in sorted(graph[node] - seen):
+                seen.add(child)
+                parent[child] = node
+                stack.append(child)
+    return chains
 
 
 def _modules(root: Path = PACKAGE) -> dict[str, Path]:
@@ -236,14 +353,50 @@ def test_public_types_are_classes_and_aliases_not_constants_or_type_variables() 
     assert _public_types(tree) == ["A", "Choice", "Colour"]
 
 
-def test_the_planner_does_not_reach_into_the_simulator() -> None:
-    graph = import_graph()
-    reaching = {
-        (module, imported)
-        for module, imports in graph.items()
-        if module.startswith("robotool.planner")
-        for imported in imports
-        if imported == "robotool.sim" or imported.startswith("robotool.sim.")
+def test_every_import_keeps_to_the_layer_table() -> None:
+    assert layer_violations(import_graph()) == []
+
+
+def test_the_layer_table_names_a_violation_and_an_unknown_layer() -> None:
+    graph = {
+        "robotool.planner.search": {"robotool.sim.lockstep", "robotool.task.scene"},
+        "robotool.sim.build": {"robotool.program.lm"},
+        "robotool.robots.arm.controller": {"robotool.sim.backend", "robotool.robots.registry"},
+        "robotool.newthing": set(),
+        "robotool.eval.__main__": {"robotool.cli.eval_command"},
     }
-    assert reaching - PLANNER_INTO_SIMULATOR == set(), "the planner imports simulator internals"
-    assert PLANNER_INTO_SIMULATOR - reaching == set(), "no longer imported: remove it from PLANNER_INTO_SIMULATOR"
+    assert layer_violations(graph) == [
+        "robotool.newthing: layer 'newthing' is not in LAYERS (add it, with what it may import)",
+        "robotool.planner.search (planner) imports robotool.sim.lockstep (sim)",
+        "robotool.sim.build (sim) imports robotool.program.lm (program)",
+    ]
+    assert layer("robotool.signatures.models") == "records" != layer("robotool.signatures.repair")
+    assert layer("robotool.robots.registry") == "robots" != layer("robotool.robots.quadruped.terrain") == "robot"
+
+
+def test_every_layer_in_the_table_may_only_import_layers_in_the_table() -> None:
+    assert {name for allowed in LAYERS.values() for name in allowed} - set(LAYERS) == set()
+
+
+def test_the_lm_free_layers_never_reach_dspy() -> None:
+    modules = _modules()
+    starts = [m for m in modules if layer(m) in LM_FREE_LAYERS]
+    assert dspy_chains(import_graph(), modules, starts) == []
+
+
+def test_the_dspy_chain_finder_names_the_chain(tmp_path: Path) -> None:
+    root = _write(
+        tmp_path,
+        {"__init__.py": "", "a.py": "from pkg import b\n", "b.py": "def f():\n    import dspy\n", "c.py": ""},
+    )
+    modules = _modules(root)
+    assert dspy_chains(import_graph(root), modules, ["pkg.a", "pkg.c"]) == ["dspy <- pkg.b <- pkg.a"]
+
+
+def test_importing_the_planner_does_not_load_dspy() -> None:
+    code = (
+        "import sys; import robotool.planner, robotool.planner.search, robotool.signatures.traces; "
+        "assert 'dspy' not in sys.modules, sorted(m for m in sys.modules if m.startswith('robotool'))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr

@@ -26,12 +26,13 @@ from rich.console import Console
 
 import robotool
 from robotool.cli import main
-from robotool.cliargs import print_error
+from robotool.cli.options import print_error
 from robotool.eval.records import Picture
 from robotool.eval.report import _pictures_section
 from robotool.render.overlay import CaptionLine, draw_caption
 from robotool.safe_text import CUT, SINKS, markdown_text, mask_addresses, one_line
-from robotool.signatures.repair import FailureTrace, ShownTrace, TracedCall
+from robotool.signatures.repair import ShownTrace
+from robotool.signatures.traces import FailureTrace, TracedCall
 
 HOSTILE = (
     "$\\undefinedcommand{x}^{^{^{$ \x1bc\x9b2J\x9d52;c;eA==\x07\x1b(0\x0e\x0f\x1b[31m\r\n"
@@ -158,9 +159,9 @@ ESCAPERS = {
 }
 
 HOST_TEXT_ONLY = {
-    ("robotool/cli.py", "console"): "built-in task YAML, scene descriptions and paths the user typed; program and "
-    "model text goes through robotool.summary",
-    ("robotool/eval/eval_cli.py", "console"): "fixed messages",
+    ("robotool/cli/dispatch.py", "console"): "built-in task YAML, scene descriptions and paths the user typed; "
+    "program and model text goes through robotool.cli.summary",
+    ("robotool/cli/eval_command.py", "console"): "fixed messages",
     ("robotool/sandbox/worker.py", "json"): "the worker's messages to the host over its socket, not a file",
     ("robotool/sandbox/zygote.py", "json"): "the zygote's control messages, not a file",
     ("robotool/optimize/batching.py", "json"): "a cache key, never written",

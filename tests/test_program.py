@@ -17,8 +17,8 @@ from fixtures.scripted_lm import (
 )
 
 from robotool import tasks
-from robotool.lm_program import RoboTool
-from robotool.methods import STAGES_BY_METHOD
+from robotool.program.lm_program import RoboTool
+from robotool.program.methods import STAGES_BY_METHOD
 
 CASES = {
     "milk_reaching_near": arm_script([GRASP_DIRECTLY]),
@@ -218,7 +218,7 @@ def test_code_the_sandbox_rejects_is_asked_for_again_with_the_reason() -> None:
 
 def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
     from robotool import verify
-    from robotool.lm_program import Proposer
+    from robotool.program.lm_program import Proposer
 
     assert [n for n, _ in Proposer().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]
     assert [n for n, _ in RoboTool().named_predictors()] == ["analyze", "plan", "calculate", "code", "repair"]

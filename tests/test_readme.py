@@ -228,7 +228,7 @@ def test_the_readme_names_the_program_its_commands_run() -> None:
 
 
 def test_the_readme_lists_the_optimisable_predictors_as_they_are() -> None:
-    from robotool.lm_program import Proposer
+    from robotool.program.lm_program import Proposer
 
     readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     said = r"while an optimiser runs, its `named_predictors\(\)` are exactly (.*?): the Repair stage"

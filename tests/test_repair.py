@@ -15,15 +15,14 @@ from rich.console import Console
 
 from robotool import tasks
 from robotool.cli import main
+from robotool.cli.summary import print_repairs
 from robotool.eval import EvalConfig, Settings, evaluate
 from robotool.eval.records import inputs_digest
-from robotool.lm_program import RoboTool
-from robotool.repair_rounds import failure_trace
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.signatures.repair import ShownTrace
-from robotool.solution import Candidate
-from robotool.standin import Rule, Script, StandinServer
-from robotool.summary import print_repairs
+from robotool.signatures.traces import failure_trace
 
 TASK = "sofa_traversing"
 PUSH_AND_WALK = program("sofa_traversing")
@@ -150,31 +149,31 @@ def test_trace_is_built_from_typed_records_and_scopes_the_repair() -> None:
     walk = SkillCall(skill="walk_to_position", args=[[1.0, 0.0, 0.0]], outcome="done")
     refused = walk.model_copy(update={"outcome": "refused", "reason": "some words", "measured": {"gap": 0.21}})
     after = SkillCall(skill="get_position", args=["sofa_2"], outcome="done")
-    numerical = failure_trace(Candidate(index=0, rollouts=[world([walk, refused, after], {"on": False})]))
+    numerical = failure_trace([world([walk, refused, after], {"on": False})])
     assert numerical is not None and numerical.scope == "parameters"
     assert [c.number for c in numerical.calls] == [1, 2] and numerical.calls_made == 3
     assert numerical.conditions_missed == ["on"] and numerical.calls[-1].measured == {"gap": 0.21}
     fixed = refused.model_copy(update={"measured": {}, "reason": "it is fixed in place"})
-    plan = failure_trace(Candidate(index=0, rollouts=[world([fixed], {"on": False})]))
+    plan = failure_trace([world([fixed], {"on": False})])
     assert plan is not None and plan.scope == "plan"
     clamped = walk.model_copy(update={"measured": {"outside_workspace": 0.044, "remaining": 0.0}})
-    missed = failure_trace(Candidate(index=0, rollouts=[world([walk, clamped], {"held": False})]))
+    missed = failure_trace([world([walk, clamped], {"held": False})])
     assert missed is not None and missed.scope == "parameters" and len(missed.calls) == 2
-    aimless = failure_trace(Candidate(index=0, rollouts=[world([walk], {"held": False})]))
+    aimless = failure_trace([world([walk], {"held": False})])
     assert aimless is not None and aimless.scope == "plan"
-    crashed = failure_trace(Candidate(index=0, rollouts=[world([walk], {"on": True}, error="NameError: x")]))
+    crashed = failure_trace([world([walk], {"on": True}, error="NameError: x")])
     assert crashed is not None and crashed.scope == "plan" and crashed.error == "NameError: x"
     grasp = SkillCall(skill="close_gripper", args=[], outcome="done")
     too_wide = {"width": 0.08, "opening": 0.06}
     empty = Event(kind="grasp_failed", call=1, object="can", cause="too_wide", measured=too_wide)
     late = Event(kind="clamped", call=2, limit="workspace", measured={"outside_workspace": 0.05})
     with_events = world([walk, grasp, clamped], {"held": False}).model_copy(update={"events": [empty, late]})
-    traced = failure_trace(Candidate(index=0, rollouts=[with_events]))
+    traced = failure_trace([with_events])
     assert traced is not None and traced.events == [empty, late]
     shown = ShownTrace(trace=traced).format()
     assert "  - call 2 close_gripper: held nothing: can is 0.080 m across the fingers, wider than their" in shown
     solved = Rollout(world=0, seed=0, success=True, conditions={"on": True})
-    assert failure_trace(Candidate(index=0, rollouts=[solved])) is None
+    assert failure_trace([solved]) is None
 
 
 def test_negative_budgets_are_refused() -> None:

@@ -18,9 +18,9 @@ from fixtures.reference import program
 from robotool import tasks
 from robotool.cli import main
 from robotool.eval.records import Results
-from robotool.signatures.repair import FailureTrace
+from robotool.signatures.traces import FailureTrace
 from robotool.solution import Candidate, CandidateFailure, RepairAttempt, RepairRound, Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 pytestmark = pytest.mark.xdist_group("html")
 

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from robotool import tasks
-from robotool.task_file import TaskFileError, load_task, parse_task
+from robotool.task.task_file import TaskFileError, load_task, parse_task
 
 
 def _base(name: str = "sofa_traversing") -> dict:

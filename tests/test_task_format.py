@@ -12,15 +12,15 @@ from pydantic import BaseModel
 
 from robotool import tasks
 from robotool.cli import main
-from robotool.describe import describe
 from robotool.execute import run
 from robotool.planner import solve
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.scene import Fragile, SceneObject
-from robotool.task_file import TaskFileError, load_task, parse_task
-from robotool.task_goal import Goal, LiftGoal
-from robotool.task_model import Robot, Task
+from robotool.task.describe import describe
+from robotool.task.scene import Fragile, SceneObject
+from robotool.task.task_file import TaskFileError, load_task, parse_task
+from robotool.task.task_goal import Goal, LiftGoal
+from robotool.task.task_model import Robot, Task
 
 DOCS = Path(__file__).parent.parent / "docs"
 FORMAT_PAGE = DOCS / "task-format.md"

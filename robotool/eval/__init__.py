@@ -9,11 +9,11 @@ command line names), :mod:`~robotool.eval.journal` (durable records),
 :mod:`~robotool.eval.judge` (a solution -> its record), :mod:`~robotool.eval.failure_classes` (failure classes),
 :mod:`~robotool.eval.grading` (key-concept accuracy), :mod:`~robotool.eval.metrics`,
 :mod:`~robotool.eval.tables`, :mod:`~robotool.eval.report`, :mod:`~robotool.eval.plots`,
-:mod:`~robotool.eval.reference` (the paper's numbers), :mod:`~robotool.eval.eval_cli`.
+:mod:`~robotool.eval.reference` (the paper's numbers). The command line is
+:mod:`~robotool.cli.eval_command`.
 """
 
 from robotool.eval.config import TIME_BUDGET_S, EvalConfig, EvalError, RunsNotAttempted, Settings
-from robotool.eval.eval_cli import main
 from robotool.eval.failure_classes import FailureClass, TaskFacts, classify, tools_used
 from robotool.eval.grading import ConceptGrade, grade
 from robotool.eval.records import Results, RunKey, RunRecord
@@ -37,6 +37,5 @@ __all__ = [
     "classify",
     "evaluate",
     "grade",
-    "main",
     "tools_used",
 ]

@@ -2,7 +2,7 @@
 
 import sys
 
-from robotool.eval.eval_cli import main
+from robotool.cli.eval_command import main
 
 if __name__ == "__main__":  # not when a pool process imports this module
     sys.exit(main())

@@ -36,7 +36,7 @@ from pydantic import BaseModel, ConfigDict
 
 from robotool import robots
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 FailureClass = Literal["tool_use", "logical", "numerical", "invalid"]
 FAILURE_CLASSES: tuple[FailureClass, ...] = ("tool_use", "logical", "numerical", "invalid")

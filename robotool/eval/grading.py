@@ -1,6 +1,6 @@
 """Key-concept accuracy (the paper's Table 2), graded against the ground truth from geometry.
 
-Matching rule. A ground-truth concept (:func:`robotool.concepts.key_concepts`) is *recovered* when
+Matching rule. A ground-truth concept (:func:`robotool.task.concepts.key_concepts`) is *recovered* when
 some predicted concept has
 
 - the same ``kind`` (workspace_excess, climb_height, drop_height, gap_width, mass, fall_height),
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 from pydantic import BaseModel, Field
 
-from robotool.concepts import KeyConcept
+from robotool.task.concepts import KeyConcept
 
 RELATIVE_TOLERANCE = 0.10
 ABSOLUTE_TOLERANCE: dict[str, float] = {"m": 0.02, "kg": 0.5}

@@ -12,10 +12,10 @@ from collections.abc import Sequence
 from pydantic import BaseModel, ConfigDict
 
 from robotool import tasks
-from robotool.concepts import needs_tool
 from robotool.eval.config import EvalError
 from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
-from robotool.task_model import Task
+from robotool.task.concepts import needs_tool
+from robotool.task.task_model import Task
 
 DEFAULT_SEEDS: tuple[int, ...] = (0, 1, 2)
 """Seeds per family in the default run, sized so that it fits :data:`~robotool.eval.config.TIME_BUDGET_S`."""

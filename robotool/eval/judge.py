@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from robotool.concepts import KeyConcept, key_concepts
 from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import RunKey, RunRecord, WorldResult
-from robotool.methods import STAGES_BY_METHOD
+from robotool.program.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
+from robotool.task.concepts import KeyConcept, key_concepts
 from robotool.verify import world_failure
 
 

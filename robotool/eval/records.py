@@ -14,7 +14,7 @@ from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.rollout import Rollout
 from robotool.solution import RepairRound, StageOutputs, TokenUsage
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 
 class RunKey(BaseModel):

@@ -10,7 +10,7 @@ from rich.table import Table
 
 from robotool.eval.records import Picture, Results
 from robotool.eval.tables import TextTable
-from robotool.methods import STAGES_BY_METHOD
+from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import markdown_text, one_line
 
 

@@ -1,6 +1,6 @@
 """The methods the evaluator compares, and how each one solves a task.
 
-LM methods are the RoboTool program and the paper's ablations (:data:`robotool.methods.STAGES_BY_METHOD`):
+LM methods are the RoboTool program and the paper's ablations (:data:`robotool.program.methods.STAGES_BY_METHOD`):
 each run gets its own ``rollout_id`` so that, at a temperature above 0, runs are fresh samples rather
 than cached replies. LM-free methods come from the search planner (``robotool.planner.solve``):
 ``search`` with every object, ``no_tool`` restricted to the target object (the floor).
@@ -18,14 +18,14 @@ from typing import TYPE_CHECKING, Literal, Protocol
 from pydantic import BaseModel
 
 from robotool.eval.records import EqualBudget
-from robotool.methods import STAGES_BY_METHOD
+from robotool.program.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 if TYPE_CHECKING:
     import dspy
 
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
 
 
 class Solver(Protocol):
@@ -88,7 +88,7 @@ class SolverSettings(BaseModel):
 
 def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
     """The RoboTool program or an ablation, sampling from ``lm``."""
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
 
     return _sampling_solver(lambda **options: RoboTool.method(method, **options), lm, settings)
 
@@ -96,10 +96,10 @@ def lm_solver(method: str, lm: dspy.LM, settings: SolverSettings) -> Solver:
 def compiled_solver(path: Path, lm: dspy.LM, settings: SolverSettings) -> Solver:
     """A compiled program file (``robotool optimize``) as a method, sampling from ``lm``.
 
-    The file is read and checked now (:class:`~robotool.compiled.CompiledProgramError` when it cannot be
+    The file is read and checked now (:class:`~robotool.program.compiled.CompiledProgramError` when it cannot be
     used) and loaded afresh for each run.
     """
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
 
     RoboTool.from_compiled(path)
     return _sampling_solver(lambda **options: RoboTool.from_compiled(path, **options), lm, settings)
@@ -136,7 +136,7 @@ def _sampling_solver(make: Callable[..., RoboTool], lm: dspy.LM, settings: Solve
 
 def program_stages(path: Path) -> str:
     """The method (stages) a compiled program file was made for."""
-    from robotool.compiled import read_compiled
+    from robotool.program.compiled import read_compiled
 
     _, info = read_compiled(path)
     return info.method if info else "robotool"

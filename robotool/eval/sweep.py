@@ -55,7 +55,7 @@ def _lm(config: EvalConfig, lm: dspy.LM | None) -> dspy.LM | None:
     """The LM given, or the one the configuration names (None without either)."""
     if lm is not None:
         return lm
-    from robotool.lm import make_lm
+    from robotool.program.lm import make_lm
 
     return make_lm(
         config.settings.lm,
@@ -104,7 +104,7 @@ def _programs(
     config: EvalConfig, lm: dspy.LM | None, settings: SolverSettings, solvers: dict[str, Solver]
 ) -> dict[str, str]:
     """Add a solver per compiled program (a method named after its file); returns each one's stages."""
-    from robotool.compiled import CompiledProgramError
+    from robotool.program.compiled import CompiledProgramError
 
     stages: dict[str, str] = {}
     for path in config.programs or []:
@@ -124,7 +124,7 @@ def _programs(
 def held_out_warnings(config: EvalConfig, instances: list[TaskInstance]) -> list[str]:
     """Warnings about compiled programs evaluated on instances they were validated on (or, with
     ``allow_train``, trained on); raises :class:`EvalError` for training instances without ``allow_train``."""
-    from robotool.compiled import read_compiled
+    from robotool.program.compiled import read_compiled
 
     warnings: list[str] = []
     labels = [i.label for i in instances]

@@ -4,7 +4,7 @@ Modules, one job each: :mod:`~robotool.optimize.data` (examples and disjoint spl
 :mod:`~robotool.optimize.verified_metric` (verification and the score), :mod:`~robotool.optimize.feedback` (what
 each stage is told), :mod:`~robotool.optimize.batching` (concurrent verifications merged into one batch),
 :mod:`~robotool.optimize.demos` (offline demonstrations from the search planner),
-:mod:`~robotool.optimize.run` (one optimisation run), :mod:`~robotool.optimize.optimize_cli` (the command line).
+:mod:`~robotool.optimize.run` (one optimisation run), :mod:`~robotool.cli.optimize_command` (the command line).
 """
 
 from robotool.optimize.batching import RolloutBatcher

@@ -2,7 +2,7 @@
 
 import sys
 
-from robotool.optimize.optimize_cli import main
+from robotool.cli.optimize_command import main
 
 if __name__ == "__main__":  # not when a pool process imports this module
     sys.exit(main())

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from robotool.rollout import Rollout
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import run_worlds
 
 DEFAULT_WINDOW = 0.05

@@ -1,7 +1,7 @@
 """Training, validation and test examples for prompt optimisation, from task families and built-in tasks.
 
 An example's input is the task; its labels are the ground truth an optimiser's metric grades with: the
-key concepts (:func:`robotool.concepts.key_concepts`), whether a tool is needed, the tools a reference
+key concepts (:func:`robotool.task.concepts.key_concepts`), whether a tool is needed, the tools a reference
 solution uses, and the family. Generated instances come from disjoint seed ranges per split
 (:data:`SEED_RANGES`), so no instance is in two splits; unsolvable instances are left out (success on them
 measures nothing). The paper's six tasks are never training examples: :func:`splits` puts them in the
@@ -17,9 +17,9 @@ from typing import Literal
 import dspy
 
 from robotool import tasks
-from robotool.concepts import key_concepts, needs_tool
 from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
-from robotool.task_model import Task
+from robotool.task.concepts import key_concepts, needs_tool
+from robotool.task.task_model import Task
 
 Split = Literal["train", "val", "test"]
 SEED_RANGES: dict[Split, range] = {

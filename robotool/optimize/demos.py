@@ -17,11 +17,11 @@ from pathlib import Path
 import dspy
 from pydantic import BaseModel
 
-from robotool.compiled import DemoSource
-from robotool.describe import describe
-from robotool.lm_program import Proposer
+from robotool.program.compiled import DemoSource
+from robotool.program.lm_program import Proposer
 from robotool.safe_text import json_text
 from robotool.solution import Solution
+from robotool.task.describe import describe
 
 Say = Callable[[str], None]
 

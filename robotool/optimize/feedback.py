@@ -1,7 +1,7 @@
 """Feedback for each stage from typed evidence: ground-truth key concepts, candidates and rollout traces.
 
 Nothing here reads reason text back: the Analyzer is graded concept by concept against
-:func:`robotool.concepts.key_concepts` (kind, value, verdict); each failed world is attributed to the
+:func:`robotool.task.concepts.key_concepts` (kind, value, verdict); each failed world is attributed to the
 stage whose output it points at, from its :class:`~robotool.rollout.SkillCall` outcomes, measured values
 and the tools it used (:func:`robotool.eval.failure_classes.classify`); programs the sandbox refuses are checked
 again for their line. Texts the simulator or sandbox wrote (a refusal's reason) are quoted, never parsed.
@@ -23,13 +23,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 from robotool import robots
-from robotool.concepts import KeyConcept
 from robotool.eval.failure_classes import TaskFacts, classify, tools_used
 from robotool.eval.grading import ABSOLUTE_TOLERANCE, RELATIVE_TOLERANCE, matches
 from robotool.rollout import Rollout, SkillCall
 from robotool.sandbox import ProgramRejected, validate
 from robotool.solution import Candidate, Solution
-from robotool.task_model import Task
+from robotool.task.concepts import KeyConcept
+from robotool.task.task_model import Task
 
 Stage = Literal["analyzer", "planner", "calculator", "coder"]
 STAGES: tuple[Stage, ...] = ("analyzer", "planner", "calculator", "coder")

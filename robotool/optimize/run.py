@@ -1,7 +1,7 @@
 """One optimisation run: examples -> validation before -> an optimiser compiles the proposing program ->
 validation after -> a compiled program file.
 
-The student is a :class:`~robotool.lm_program.Proposer` (the four stages, one candidate per task): optimisers
+The student is a :class:`~robotool.program.lm_program.Proposer` (the four stages, one candidate per task): optimisers
 see exactly its predictors, and the :class:`~robotool.optimize.verified_metric.Metric` verifies what it proposes in
 simulation. The log folder holds ``settings.json`` (what the run was asked to do), the optimiser's own
 checkpoints (GEPA resumes from them; MIPROv2 writes its trials there), the planner's solved instances
@@ -24,11 +24,11 @@ import dspy
 from dspy.utils.exceptions import AdapterParseError
 from pydantic import BaseModel, Field
 
-from robotool.compiled import CompiledInfo, DemoSource, Validation, save_compiled
-from robotool.lm_program import Proposer
 from robotool.optimize.data import Splits, check_training, splits
 from robotool.optimize.demos import Say, planner_demonstrations
 from robotool.optimize.verified_metric import Metric
+from robotool.program.compiled import CompiledInfo, DemoSource, Validation, save_compiled
+from robotool.program.lm_program import Proposer
 from robotool.safe_text import json_text
 
 Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]

@@ -35,7 +35,7 @@ KEEP = 512
 
 
 class Metric:
-    """Verifies a :class:`~robotool.lm_program.Proposer`'s prediction; see the module docstring."""
+    """Verifies a :class:`~robotool.program.lm_program.Proposer`'s prediction; see the module docstring."""
 
     def __init__(
         self, *, worlds: int = 3, seed: int = 0, backend: str | None = None, batcher: RolloutBatcher | None = None
@@ -65,7 +65,7 @@ class Metric:
         proposal = pred.get("proposal")
         if not isinstance(proposal, Proposal):
             raise TypeError(
-                "the metric verifies what a robotool.lm_program.Proposer proposed; compile a Proposer "
+                "the metric verifies what a robotool.program.lm_program.Proposer proposed; compile a Proposer "
                 "(RoboTool verifies its own candidates)"
             )
         with self._lock:

@@ -1,6 +1,6 @@
 """The scene as the planner reasons about it: object boxes, surfaces, and hypothetical placements.
 
-Everything here reads only the task file (objects) through :mod:`robotool.geometry`. A :class:`Layout` can
+Everything here reads only the task file (objects) through :mod:`robotool.task.geometry`. A :class:`Layout` can
 move objects to hypothetical x-y placements, so a robot's macros can check a placement (does it overlap
 something?) and predict its motions on it before anything is simulated.
 """
@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from robotool import geometry
-from robotool.scene import SceneObject
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 CONTACT = 0.02  # m: boxes closer than this touch
 

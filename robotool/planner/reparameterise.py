@@ -19,7 +19,7 @@ from robotool import robots
 from robotool.planner.codegen import Program
 from robotool.rollout import SkillCall, notable_distances
 from robotool.solution import Candidate
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 MARGIN = 0.03  # m added to a measured distance when a target is moved by it
 MOVERS = 2  # object-moving motions before the failure that are re-parameterised (latest first), then the failing one

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from robotool.planner.codegen import Program
 from robotool.solution import Candidate, CandidateFailure, StageOutputs
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 

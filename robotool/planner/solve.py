@@ -1,6 +1,6 @@
 """``solve``: the LM-free planner end to end, returning the same :class:`Solution` as the RoboTool program.
 
-Key concepts come from :func:`robotool.concepts.key_concepts`; candidate programs from the
+Key concepts come from :func:`robotool.task.concepts.key_concepts`; candidate programs from the
 embodiment's macros; verification from :mod:`robotool.planner.search`. When a key concept is
 violated, programs that use no object besides the goal's own are skipped (the geometry already says
 they cannot work); with ``tools=False`` only those are tried (the evaluator's no-tool floor).
@@ -14,17 +14,17 @@ from collections.abc import Callable
 import numpy as np
 
 from robotool import robots
-from robotool.concepts import KeyConcept, key_concepts, surface_under
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
 from robotool.planner.search import Budget, Tried, order, search
-from robotool.repair_rounds import failure_trace
 from robotool.robots.registry import SearchMacros
-from robotool.scene import SceneObject
 from robotool.signatures.models import ObjectRole, scene_context
+from robotool.signatures.traces import failure_trace
 from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs, rank
-from robotool.task_model import Task
+from robotool.task.concepts import KeyConcept, key_concepts, surface_under
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 KEEP_CALLS = 4  # failed candidates (best first) that keep their rollouts' skill-call traces
 CALCULATION = (
@@ -158,7 +158,7 @@ def repair_round(
     for made, (variant, source) in zip(new, variants, strict=True):
         made.candidate.repaired_from = source.candidate.index
         made.candidate.notes.append(f"re-parameterised from candidate {source.candidate.index}")
-        trace = failure_trace(source.candidate)
+        trace = failure_trace(source.candidate.rollouts)
         assert trace is not None  # a source has a failed world
         record.attempts.append(
             RepairAttempt(

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool import geometry, robots
+from robotool import robots
 from robotool.sim.build import embodiment_for, make_spec
 from robotool.sim.compiled_scene import Scene
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.task_model import Task
 
 ROBOT_RGBA = (0.93, 0.45, 0.10, 1.0)
 FIXED_RGBA = (0.62, 0.55, 0.48, 1.0)  # furniture and other fixed objects

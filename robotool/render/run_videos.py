@@ -10,7 +10,7 @@ from robotool.rollout import Rollout
 from robotool.sandbox.strict import check_user_program
 from robotool.sim.build import build
 from robotool.sim.recorder import StateRecorder, Track
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import run_worlds
 
 

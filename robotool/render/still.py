@@ -10,7 +10,7 @@ from robotool.render.overlay import CaptionLine
 from robotool.render.painter import Painter, RenderError
 from robotool.sim.build import build
 from robotool.sim.compiled_scene import Scene
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 STILL_SIZE = (960, 540)  # px, width x height
 

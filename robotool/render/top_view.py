@@ -21,14 +21,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon, Rectangle
 
-from robotool import geometry, robots
+from robotool import robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
 from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
 from robotool.safe_text import capped, plot_text
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.recorder import Track
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.task_model import Task
 
 Colour = str | tuple[float, ...]
 REFUSED = "#d62728"

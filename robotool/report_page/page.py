@@ -23,7 +23,7 @@ from robotool.execute import RunReport
 from robotool.report_page.views import Media, PageView, record_view, rollouts_view, solution_view
 from robotool.safe_text import html_text
 from robotool.solution import Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 
 def _finalize(value: object) -> Markup:
@@ -106,8 +106,8 @@ def _videos(page: Path, videos: Mapping[int, Path]) -> dict[int, Media]:
 def solution_page(page: Path, task: Task, solution: Solution, videos: Mapping[int, Path]) -> str:
     """The page of one solve, to be written at ``page``: the stages, every candidate, the chosen one's worlds
     (``videos``: world -> its MP4, linked relative to the page) and the repairs; the scene embedded."""
-    from robotool.concepts import key_concepts
     from robotool.eval.grading import grade
+    from robotool.task.concepts import key_concepts
 
     concepts = grade(key_concepts(task), solution.stages.key_concepts)
     scene, notes = _scene(task)

@@ -33,14 +33,14 @@ from robotool.robots import limits_table
 from robotool.robots.skills import SceneBox, SkillArgumentError, SkillSpec, check_arguments
 
 if TYPE_CHECKING:
-    from robotool.key_concept import KeyConcept
     from robotool.planner.codegen import Program
     from robotool.rollout import EventKind, SkillCall
-    from robotool.scene import SceneObject
     from robotool.sim.compiled_scene import Scene
     from robotool.sim.embodiment import Embodiment, GoalTracker
-    from robotool.task_model import Task
-    from robotool.task_problem import Problem
+    from robotool.task.key_concept import KeyConcept
+    from robotool.task.scene import SceneObject
+    from robotool.task.task_model import Task
+    from robotool.task.task_problem import Problem
 
 ENTRY_POINT_GROUP = "robotool.robots"
 MODULES_VARIABLE = "ROBOTOOL_ROBOTS"

@@ -35,8 +35,8 @@ from typing import Annotated, Any, Protocol, get_args
 
 from pydantic import BaseModel, BeforeValidator, Field, field_validator, model_validator
 
-from robotool.key_concept import ConceptKind, KeyConcept
-from robotool.task_model import Task
+from robotool.task.key_concept import ConceptKind, KeyConcept
+from robotool.task.task_model import Task
 
 __all__ = [
     "AnalyzedConcept",

@@ -2,58 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 import dspy
-from pydantic import BaseModel, Field
 
-from robotool.rollout import Event, SkillCall
+from robotool.rollout import SkillCall
 from robotool.safe_text import model_text
 from robotool.signatures.models import PlanStep, StepParameters
-
-RepairScope = Literal["plan", "parameters"]
-"""What a repair may change: the plan steps and their numbers, or only the numbers (a numerical failure)."""
-
-
-class TracedCall(BaseModel):
-    """One skill call of a failed world, as the simulator recorded it."""
-
-    number: int = Field(description="its position in the world's calls, from 1")
-    skill: str
-    args: list[Any] = Field(default_factory=list)
-    outcome: str = Field(description="done, refused, stalled, timeout or error")
-    reason: str | None = Field(None, description="why it did not end as asked, in the simulator's words")
-    measured: dict[str, float] = Field(
-        default_factory=dict, description="values the simulator measured, e.g. {'gap': 0.15} (m, kg)"
-    )
-    result: Any = Field(None, description="what a query returned")
-
-
-class FailureTrace(BaseModel):
-    """What happened when a candidate program ran: its first failed world up to the first failure, and the
-    goal's sub-conditions."""
-
-    worlds: int = Field(description="perturbed worlds the program ran in")
-    failed_worlds: int = Field(description="worlds in which the goal was not reached")
-    world: int = Field(description="the failed world shown")
-    calls: list[TracedCall] = Field(
-        default_factory=list, description="its skill calls up to and including the first that did not end 'done'"
-    )
-    calls_made: int = Field(0, description="skill calls the program made in that world in all")
-    events: list[Event] = Field(
-        default_factory=list,
-        description="what happened during the calls shown: clamps, grasps that held nothing and why, objects "
-        "pushed out of reach, stalls, refusals, falls",
-    )
-    error: str | None = Field(None, description="an error that ended the world (program or simulator), if any")
-    conditions_missed: list[str] = Field(default_factory=list, description="goal sub-conditions not met at the end")
-    conditions_met: list[str] = Field(default_factory=list, description="goal sub-conditions met at the end")
-    scope: RepairScope = Field(
-        "plan",
-        description="'parameters' when the calls ran as planned and the failure was in numbers "
-        "(a refusal or stall with measured values; a goal missed after every call was done, with some "
-        "sub-condition met or a clamp or missed grasp measured)",
-    )
+from robotool.signatures.traces import FailureTrace
 
 
 class ShownTrace(dspy.Type):

@@ -1,10 +1,10 @@
 """Task -> ``mujoco.MjModel`` through ``mujoco.MjSpec``, and the id tables the simulator needs.
 
 Every task object becomes a body named after it whose frame is the object's centre and rotation;
-its geoms are :func:`robotool.geometry.object_parts`. Fixed objects are static bodies (welded to the
+its geoms are :func:`robotool.task.geometry.object_parts`. Fixed objects are static bodies (welded to the
 world); movable ones have a free joint, their mass and friction. A button is a fixed housing with a
 face on its -x side, on a slide joint with the button's spring (``stiffness``, N/m, over ``travel``, m;
-defaults in :mod:`robotool.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
+defaults in :mod:`robotool.task.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
 after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
 A sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper) collides with the ground and the
@@ -21,12 +21,13 @@ from itertools import combinations
 import mujoco
 import numpy as np
 
-from robotool import geometry, robots
-from robotool.scene import SceneObject
+from robotool import robots
 from robotool.sim.cloth import add_cloth
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import Embodiment
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 TIMESTEP = 0.002  # s, physics step
 GROUND_FRICTION = 0.5

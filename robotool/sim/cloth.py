@@ -14,8 +14,8 @@ import math
 import mujoco
 import numpy as np
 
-from robotool import geometry
-from robotool.scene import SceneObject
+from robotool.task import geometry
+from robotool.task.scene import SceneObject
 
 LINK_LENGTH = 0.1  # m
 HINGE_DAMPING = 0.002  # N m s/rad

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
 
-from robotool import geometry
+from robotool.task import geometry
 
 if TYPE_CHECKING:
     import mujoco
@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from robotool.rollout import Event
     from robotool.sim.backend import BatchedSim, BatchState
     from robotool.sim.compiled_scene import Scene
-    from robotool.task_model import Task
+    from robotool.task.task_model import Task
 
 EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
@@ -108,7 +108,7 @@ def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:
 
 def size_now(scene: Scene, state: BatchState, world: int, index: int) -> list[float]:
     """``get_size`` of a task object in one world: its size along x, y, z as it is turned now (see
-    :func:`robotool.geometry.axis_aligned_size`); a cloth, which drapes, keeps its laid-out size."""
+    :func:`robotool.task.geometry.axis_aligned_size`); a cloth, which drapes, keeps its laid-out size."""
     obj = scene.task.objects[index]
     turned = geometry.rotation_matrix(obj.rpy) if obj.shape == "cloth" else state.xmat(scene.object_body[index])[world]
     return [float(v) for v in geometry.axis_aligned_size(obj.size, turned)]

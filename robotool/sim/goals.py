@@ -13,11 +13,11 @@ from collections.abc import Callable
 import numpy as np
 
 from robotool import robots
-from robotool.scene import PRESS_TRAVEL
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import GoalTracker
 from robotool.sim.object_goals import LiftedGoal, LoweredGoal
+from robotool.task.scene import PRESS_TRAVEL
 
 
 class PressedGoal:

@@ -22,7 +22,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool import geometry, robots
+from robotool import robots
 from robotool.program_session import (
     ProgramEnded,
     ProgramSession,
@@ -50,7 +50,8 @@ from robotool.sim.goals import goal_tracker
 from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.task_model import Task
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry
 from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.task import geometry
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 

@@ -20,11 +20,11 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from robotool import geometry
-from robotool.scene import SceneObject
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import SHEET_CARRIER_DROP, is_sheet, rests_on_sheet, sheet_carrier_name
 from robotool.sim.compiled_scene import Scene
+from robotool.task import geometry
+from robotool.task.scene import SceneObject
 
 MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it

@@ -5,8 +5,8 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from robotool.task_file import Problem, TaskFileError, load_task
-from robotool.task_model import Task
+from robotool.task.task_file import Problem, TaskFileError, load_task
+from robotool.task.task_model import Task
 
 _DATA = resources.files("robotool.tasks").joinpath("data")
 

@@ -7,11 +7,11 @@ from typing import Any
 import pytest
 
 from robotool import tasks
-from robotool.concepts import KeyConcept, key_concepts, needs_tool
 from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade, matches
 from robotool.eval.reference import BUILTIN_TOOLS
 from robotool.rollout import Event, Rollout, SkillCall
+from robotool.task.concepts import KeyConcept, key_concepts, needs_tool
 
 
 def call(skill: str, *args: Any, outcome: str = "done", reason: str | None = None, **measured: float) -> SkillCall:

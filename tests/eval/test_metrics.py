@@ -129,10 +129,10 @@ def test_journal_refuses_a_corrupt_middle_line(tmp_path: Path) -> None:
 
 def test_only_an_analyzer_is_graded_on_key_concepts() -> None:
     """The search planner copies the ground-truth concepts; grading it would always give 1.0."""
-    from robotool.concepts import key_concepts
     from robotool.eval.instances import builtin
     from robotool.eval.judge import judge
     from robotool.solution import Solution, StageOutputs
+    from robotool.task.concepts import key_concepts
 
     instance = builtin("sofa_traversing")
     truth = key_concepts(instance.task)

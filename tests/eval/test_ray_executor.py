@@ -22,10 +22,10 @@ from robotool.errors import LMUnavailableError
 from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import planner_missing
-from robotool.lm import make_lm
+from robotool.program.lm import make_lm
+from robotool.program.standin import Script, StandinServer
 from robotool.solution import Solution
-from robotool.standin import Script, StandinServer
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 TESTS = Path(__file__).parents[1]
 REPO = TESTS.parent

@@ -17,7 +17,7 @@ from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, eva
 from robotool.eval import solvers as eval_solvers
 from robotool.eval.journal import JOURNAL
 from robotool.solution import Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 
 class Counting:

@@ -21,7 +21,7 @@ from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import METHODS, planner_missing
 from robotool.solution import Solution
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 TESTS = Path(__file__).parents[1]
 

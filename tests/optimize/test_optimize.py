@@ -21,17 +21,17 @@ from fixtures.scripted_lm import (
 )
 
 from robotool import tasks
-from robotool.compiled import CompiledProgramError
-from robotool.concepts import KeyConcept
 from robotool.eval.reference import PAPER_TASKS
-from robotool.lm import make_lm
-from robotool.lm_program import Proposer, RoboTool
 from robotool.optimize import Metric, OptimizeSettings, RolloutBatcher, optimize
 from robotool.optimize.data import DatasetError, Splits, builtin, check_training, splits
 from robotool.optimize.feedback import concept_findings
+from robotool.program.compiled import CompiledProgramError
+from robotool.program.lm import make_lm
+from robotool.program.lm_program import Proposer, RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 from robotool.signatures import Repair
 from robotool.solution import Candidate, CandidateFailure, Proposal
-from robotool.standin import Rule, Script, StandinServer
+from robotool.task.concepts import KeyConcept
 from robotool.verify import run_codes, select
 
 ARM, QUADRUPED = "milk_reaching_near", "sofa_climbing_low_sofa"
@@ -294,8 +294,8 @@ def test_a_gepa_run_resumes_with_a_larger_budget_and_refuses_other_changes(tmp_p
 
 def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from robotool.cli import main as robotool_main
-    from robotool.eval import main as eval_main
-    from robotool.optimize.optimize_cli import main as optimize_main
+    from robotool.cli.eval_command import main as eval_main
+    from robotool.cli.optimize_command import main as optimize_main
 
     out = tmp_path / "p.json"
     assert optimize_main(["--optimizer", "planner-demos", "--families", "milk_reaching", "--train", "1",
@@ -343,7 +343,7 @@ def test_planner_demos_offline_then_run_eval_and_load(tmp_path: Path, capsys: py
 
 
 def test_a_compiled_program_that_lacks_a_stage_is_refused_clearly(tmp_path: Path) -> None:
-    from robotool.compiled import CompiledInfo, save_compiled
+    from robotool.program.compiled import CompiledInfo, save_compiled
 
     path = tmp_path / "coder.json"
     save_compiled(Proposer.method("coder"), path, CompiledInfo(optimizer="bootstrap", method="coder",
@@ -357,7 +357,7 @@ def test_a_compiled_program_that_lacks_a_stage_is_refused_clearly(tmp_path: Path
 def test_solve_with_a_compiled_program_over_http(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     from robotool.cli import main as robotool_main
-    from robotool.compiled import CompiledInfo, save_compiled
+    from robotool.program.compiled import CompiledInfo, save_compiled
 
     program = Proposer()
     program.code.signature = program.code.signature.with_instructions("COMPILED-CODER-INSTRUCTION")

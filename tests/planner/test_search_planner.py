@@ -13,8 +13,8 @@ from robotool.planner import solve
 from robotool.planner.codegen import Point, Program
 from robotool.signatures.models import PlanStep, StepParameters
 from robotool.solution import Solution
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 
 PLANNER = REPO / "robotool" / "planner"
 

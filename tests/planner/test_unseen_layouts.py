@@ -15,8 +15,8 @@ from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import push_route, walk_violation
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 LAYOUTS = FIXTURES / "layouts"

@@ -28,7 +28,7 @@ from robotool.render.top_view import plan_figure, write_plan
 from robotool.render.video import MARK_S, VIDEO_SIZE, caption_at, end_lines, frame_times, render_video
 from robotool.rollout import Event, Rollout, SkillCall
 from robotool.sim.recorder import StateRecorder
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 SMALL = (240, 136)  # px
 VIDEO = (160, 96)  # px, even

@@ -20,7 +20,7 @@ from robotool import robots
 from robotool.cli import main
 from robotool.planner.solve import NoPlannerError, solve
 from robotool.robots import limits_table, registry
-from robotool.task_file import TaskFileError, load_task, parse_task
+from robotool.task.task_file import TaskFileError, load_task, parse_task
 
 PLUGIN = "fixtures.point_robot"
 """The point robot's module, as a user names it in ROBOTOOL_ROBOTS (tests/ is on the path)."""

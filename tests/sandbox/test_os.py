@@ -422,7 +422,7 @@ def test_a_machine_without_seccomp_is_told_loudly(monkeypatch: pytest.MonkeyPatc
 
     from rich.console import Console
 
-    from robotool import summary
+    from robotool.cli import summary
     from robotool.sandbox import SandboxWarning, jail
 
     monkeypatch.setattr(jail, "_syscall_filter", lambda: (None, "pyseccomp/libseccomp unavailable: test"))

@@ -8,9 +8,9 @@ from fixtures.reply_corpus import CASES, CONCEPT, Case
 from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script
 
 from robotool import tasks
-from robotool.lm import make_lm
-from robotool.lm_program import RoboTool
-from robotool.standin import Rule, Script, StandinServer
+from robotool.program.lm import make_lm
+from robotool.program.lm_program import RoboTool
+from robotool.program.standin import Rule, Script, StandinServer
 
 JSON_PROMPTS = {
     "analyzer": "`analysis`",

@@ -9,6 +9,7 @@ import pytest
 from rich.console import Console
 
 from robotool.cli import main
+from robotool.cli.summary import print_run, print_run_verdict, print_solution, print_solution_verdict
 from robotool.eval.report import _markdown_table
 from robotool.eval.tables import TextTable
 from robotool.execute import RunReport
@@ -16,7 +17,6 @@ from robotool.rollout import Rollout
 from robotool.safe_text import one_line, terminal_safe
 from robotool.signatures.models import PlanStep
 from robotool.solution import Solution, StageOutputs
-from robotool.summary import print_run, print_run_verdict, print_solution, print_solution_verdict
 
 HOSTILE_PRINTS = (
     'print("\\x1b[2J\\x1b[H", end="")  # clear the screen\n'

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from robotool import sim
-from robotool.task_file import parse_task
+from robotool.task.task_file import parse_task
 
 
 def _task(objects: list[dict], goal: dict | None = None):

@@ -7,8 +7,8 @@ from typing import Any
 import pytest
 
 from robotool import sim, tasks
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 
 
 def turned(name: str, obj: str, rpy: list[float]) -> Task:

@@ -10,9 +10,9 @@ import pytest
 import yaml
 
 from robotool import tasks
-from robotool.concepts import key_concepts, needs_tool
-from robotool.geometry import object_parts
-from robotool.task_file import load_task, parse_task
+from robotool.task.concepts import key_concepts, needs_tool
+from robotool.task.geometry import object_parts
+from robotool.task.task_file import load_task, parse_task
 from robotool.tasks.families import button_pressing, sofa_traversing, vase_lowering
 from robotool.tasks.families._common import RigidPlacement, thing
 

@@ -15,8 +15,8 @@ from robotool.robots.arm import arm_concepts, arm_description
 from robotool.robots.arm.arm_skills import ARM_SKILLS, ArmLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
 from robotool.rollout import SkillCall
-from robotool.task_model import Task
-from robotool.task_problem import Problem
+from robotool.task.task_model import Task
+from robotool.task.task_problem import Problem
 
 if TYPE_CHECKING:
     from robotool.sim.compiled_scene import Scene

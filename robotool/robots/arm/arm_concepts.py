@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.concepts import KeyConcept, press_point
 from robotool.robots.arm.arm_skills import ArmLimits
-from robotool.task_model import Task
+from robotool.task.concepts import KeyConcept, press_point
+from robotool.task.task_model import Task
 
 
 def key_concepts(task: Task) -> list[KeyConcept]:

@@ -39,7 +39,7 @@ from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF, is_sheet
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, size_now, world_mask
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 GRIPPER_BODY = "robot_gripper"
 GRASP_EQ_PREFIX = "robot_grasp__"

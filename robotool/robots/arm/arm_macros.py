@@ -9,13 +9,13 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from robotool import geometry
-from robotool.concepts import press_point
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
 from robotool.robots.arm.arm_skills import ArmLimits
-from robotool.scene import SceneObject
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.concepts import press_point
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 CLEAR = 0.08  # m above a grasp point to approach from
 SLIDE = 0.004  # m a held object is lifted off the table while it pushes things

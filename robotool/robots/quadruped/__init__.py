@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description, terrain
 from robotool.robots.quadruped.quadruped_skills import QUADRUPED_SKILLS, QuadrupedLimits
 from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 if TYPE_CHECKING:
     from robotool.sim.compiled_scene import Scene

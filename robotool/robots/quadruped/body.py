@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool import geometry
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.task_model import Task
 
 BODY = "robot"
 BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its faces push objects)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.task_model import Task
-from robotool.task_problem import Problem
+from robotool.task import geometry
+from robotool.task.task_model import Task
+from robotool.task.task_problem import Problem
 
 
 def check_robot(task: Task) -> list[Problem]:

@@ -1,6 +1,6 @@
 """The quadruped's walks and pushes predicted on the planner's layout, before anything is simulated.
 
-Everything here reads only the task file (objects, limits) through :mod:`robotool.geometry` and a
+Everything here reads only the task file (objects, limits) through :mod:`robotool.task.geometry` and a
 :class:`~robotool.planner.layout.Layout`, which can move objects to hypothetical x-y placements, so macros can
 predict a walk (:func:`walk_violation`) or a push (:func:`push_problem`) on a planned placement.
 """

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry
-from robotool.concepts import KeyConcept, load_bearing_solids, surface_under
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import exceeds, survey_walk
-from robotool.scene import SceneObject
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.concepts import KeyConcept, load_bearing_solids, surface_under
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 
 def start_surface(task: Task) -> tuple[str, float]:

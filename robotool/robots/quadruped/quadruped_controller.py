@@ -77,7 +77,7 @@ from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, error_end, size_now, world_mask
 from robotool.sim.object_goals import local_corners, world_corners
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 
 WALK_SPEED = 0.4  # m/s
 SCAN_AHEAD = 1.2  # m of a move read at a time (plus LOOKAHEAD)

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from robotool.describe import number_text, vector_text
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.task_model import Task
+from robotool.task.describe import number_text, vector_text
+from robotool.task.task_model import Task
 
 
 def robot_section(task: Task) -> list[str]:

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robotool.concepts import surface_under
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
@@ -23,8 +22,9 @@ from robotool.robots.quadruped.push import lateral_offsets, legs, sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import RISE, foot_offsets
-from robotool.scene import SceneObject
-from robotool.task_model import Task
+from robotool.task.concepts import surface_under
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 LEVEL = 0.04  # m: supports closer in height than this are the same surface
 APPROACH = 0.1  # m between the robot and a step when it lines up to climb it

@@ -2,7 +2,7 @@
 
 ``generate(family, seed)`` builds one :class:`Instance` deterministically from
 ``numpy.random.default_rng(seed)``: a valid task file plus whether it needs a tool (decided by the
-geometry, :func:`robotool.concepts.needs_tool`), whether it is solvable, which object(s) a solution uses,
+geometry, :func:`robotool.task.concepts.needs_tool`), whether it is solvable, which object(s) a solution uses,
 its decoys and a sentence on what was varied. Each family's module documents its randomizations.
 """
 

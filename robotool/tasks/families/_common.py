@@ -2,7 +2,7 @@
 
 A family builds its scene in a canonical frame (the built-in template's), then places it with a
 :class:`RigidPlacement` and finishes it with :func:`finish`, which validates the task and checks that the
-family's intended ``needs_tool`` is what the geometry says (:func:`robotool.concepts.needs_tool`).
+family's intended ``needs_tool`` is what the geometry says (:func:`robotool.task.concepts.needs_tool`).
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
-from robotool import geometry
-from robotool.concepts import needs_tool as geometry_needs_tool
-from robotool.scene import SceneObject
-from robotool.task_file import parse_task
-from robotool.task_model import Category, Task
+from robotool.task import geometry
+from robotool.task.concepts import needs_tool as geometry_needs_tool
+from robotool.task.scene import SceneObject
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Category, Task
 
 Variant = Literal["no_tool", "tool", "unsolvable"]
 CLEARANCE = 0.001  # m between objects that stand against each other, so that rounding never interpenetrates them
@@ -36,7 +36,7 @@ class Instance(BaseModel):
     family: str
     seed: int
     task: Task
-    needs_tool: bool  # equals robotool.concepts.needs_tool(task)
+    needs_tool: bool  # equals robotool.task.concepts.needs_tool(task)
     solvable: bool  # the scene holds what a solution needs within the robot's limits
     tools: list[str]  # the objects a solution uses; empty when none is needed
     decoys: list[str]  # objects that look useful but cannot serve

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.scene import SceneObject
+from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     ARM_CLUTTER,
     Draft,

@@ -17,7 +17,7 @@ Randomizations:
     - 0-3 fixed pieces of furniture away from the lever; the whole scene mirrored, turned by quarter turns
       and shifted on the floor.
     Every instance needs a tool: the quadruped has no skill that raises an object, so the ground truth
-    (:mod:`robotool.concepts`) marks any ``lifted`` goal as needing one, whatever the cube's mass.
+    (:mod:`robotool.task.concepts`) marks any ``lifted`` goal as needing one, whatever the cube's mass.
 Success conditions:
     - the cube's bottom is at least the goal height (0.10 m) above where it started, at the end.
 """
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry
+from robotool.task import geometry
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
     Draft,

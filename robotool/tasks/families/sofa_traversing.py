@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.scene import SceneObject
+from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
     Draft,

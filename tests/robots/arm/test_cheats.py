@@ -30,8 +30,8 @@ from fixtures.paths import FIXTURES
 
 from robotool import tasks
 from robotool.rollout import Rollout
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 from robotool.tasks.families import milk_reaching
 from robotool.tasks.families._common import footprint
 from robotool.verify import world_failure

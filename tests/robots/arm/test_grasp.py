@@ -11,7 +11,7 @@ from fixtures.reference import program
 
 from robotool import sim, tasks
 from robotool.eval.failure_classes import TaskFacts, classify, tools_used
-from robotool.task_file import parse_task
+from robotool.task.task_file import parse_task
 from robotool.verify import world_failure
 
 CLEAR = 0.08  # m above a grasp point to approach from

@@ -20,8 +20,8 @@ from fixtures.paths import FIXTURES
 from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 from robotool.tasks.families import generate
 
 CHEATS = FIXTURES / "cheats"

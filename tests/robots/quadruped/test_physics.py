@@ -17,7 +17,7 @@ from robotool.sim import lockstep as runner
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.backend_mujoco import MujocoSim
 from robotool.sim.build import embodiment_for
-from robotool.task_file import parse_task
+from robotool.task.task_file import parse_task
 
 GRAVITY = 9.81
 SETTLING_TICKS = 4  # control ticks at the start of a move while the legs take their stance

@@ -10,8 +10,8 @@ from robotool import tasks
 from robotool.planner.layout import Layout
 from robotool.robots.quadruped.predict import detour, push_staging, walk_violation
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 
 
 def _step_task(width: float) -> Task:

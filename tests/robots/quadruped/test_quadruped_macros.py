@@ -11,8 +11,8 @@ from robotool.planner.solve import robot_planner
 from robotool.robots.quadruped.predict import push_problem
 from robotool.robots.quadruped.quadruped_macros import _lined_up, _push_plans, candidates
 from robotool.robots.quadruped.terrain import foot_offsets
-from robotool.task_file import parse_task
-from robotool.task_model import Task
+from robotool.task.task_file import parse_task
+from robotool.task.task_model import Task
 from robotool.tasks.families import generate
 from robotool.verify import failure_reason, prepare_code, run_codes
 

@@ -12,7 +12,7 @@ from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.sim.backend import Perturbation
-from robotool.task_file import parse_task
+from robotool.task.task_file import parse_task
 from robotool.tasks.families import generate
 from robotool.verify import world_failure
 

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from robotool import geometry, tasks
+from robotool import tasks
 from robotool.robots.quadruped.push import (
     SIDE_MARGIN,
     Leg,
@@ -21,7 +21,8 @@ from robotool.robots.quadruped.push import (
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
-from robotool.scene import SceneObject
+from robotool.task import geometry
+from robotool.task.scene import SceneObject
 
 LIMITS = QuadrupedLimits()
 SPACING = 0.01

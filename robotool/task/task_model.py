@@ -8,8 +8,8 @@ import yaml
 from pydantic import BaseModel, Field, FiniteFloat, StringConstraints
 
 from robotool.robots.limits_table import limits_model
-from robotool.scene import Name, SceneObject, StrictModel
-from robotool.task_goal import Goal
+from robotool.task.scene import Name, SceneObject, StrictModel
+from robotool.task.task_goal import Goal
 
 Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
 

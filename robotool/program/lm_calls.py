@@ -10,7 +10,7 @@ are read without the model's ``<think>`` reasoning. Transport faults (server err
 dropped connections, a 200 that is not a chat completion) are retried here, one request each, so that every
 request is recorded as an :class:`~robotool.solution.LMCall` with its tokens, wall time and whether DSPy's
 cache answered it, and optionally written to a JSONL log. Failures that no reply can cure (see
-:func:`robotool.lm.unavailable`), and transport faults on every try, raise
+:func:`robotool.program.lm.unavailable`), and transport faults on every try, raise
 :class:`~robotool.errors.LMUnavailableError`. :func:`reporting_waits` lets a console show signs of life
 while a reply is awaited.
 """
@@ -38,7 +38,7 @@ from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError, LMProvi
 from pydantic import ValidationError
 
 from robotool.errors import LMUnavailableError
-from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
+from robotool.program.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
 from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
@@ -93,7 +93,7 @@ class PromptLog:
     """
 
     def __init__(self, path: Path):
-        """Raises :class:`~robotool.lm.LMConfigError` when the file cannot be written."""
+        """Raises :class:`~robotool.program.lm.LMConfigError` when the file cannot be written."""
         self.path = path
         with _LOG_LOCKS_GUARD:
             self._lock = _LOG_LOCKS.setdefault(path.resolve(), threading.Lock())
@@ -377,7 +377,7 @@ def _ask(
 
 
 _TRANSIENT = frozenset({"retries_exhausted", "unreachable"})
-"""Kinds of :func:`~robotool.lm.unavailable` errors that a later request may not meet."""
+"""Kinds of :func:`~robotool.program.lm.unavailable` errors that a later request may not meet."""
 
 
 class _NotACompletion(LMError):

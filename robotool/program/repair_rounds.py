@@ -20,59 +20,13 @@ from typing import Any
 import dspy
 
 from robotool import robots
-from robotool.lm_calls import CallSettings, Salvage, StageFailed, call_stage, run_concurrently
-from robotool.rollout import Rollout, notable_distances
-from robotool.signatures import FailureTrace, TracedCall, scene_context
+from robotool.program.lm_calls import CallSettings, Salvage, StageFailed, call_stage, run_concurrently
+from robotool.signatures.models import scene_context
 from robotool.signatures.repair import ShownTrace
+from robotool.signatures.traces import failure_trace
 from robotool.solution import Candidate, CandidateFailure, RepairAttempt, RepairRound, rank
-from robotool.task_model import Task
+from robotool.task.task_model import Task
 from robotool.verify import prepare_code
-
-
-def failure_trace(candidate: Candidate) -> FailureTrace | None:
-    """The trace of ``candidate``'s first failed world (None when it has no failed world)."""
-    failed = [r for r in candidate.rollouts if not r.success]
-    if not failed:
-        return None
-    world = failed[0]
-    calls = _calls_to_first_failure(world)
-    last = calls[-1] if calls else None
-    failing = last is not None and last.outcome != "done"
-    met = [name for name, ok in world.conditions.items() if ok]
-    measured_miss = failing and last is not None and bool(last.measured) and last.outcome in ("refused", "stalled")
-    missed_by = not failing and (bool(met) or any(notable_distances(call.measured) for call in world.calls))
-    numerical = world.error is None and bool(world.calls) and (measured_miss or missed_by)
-    return FailureTrace(
-        worlds=len(candidate.rollouts),
-        failed_worlds=len(failed),
-        world=world.world,
-        calls=calls,
-        calls_made=len(world.calls),
-        events=[e for e in world.events if e.call is None or e.call < len(calls)],
-        error=world.error,
-        conditions_missed=[name for name, ok in world.conditions.items() if not ok],
-        conditions_met=met,
-        scope="parameters" if numerical else "plan",
-    )
-
-
-def _calls_to_first_failure(world: Rollout) -> list[TracedCall]:
-    traced = []
-    for number, call in enumerate(world.calls, start=1):
-        traced.append(
-            TracedCall(
-                number=number,
-                skill=call.skill,
-                args=call.args,
-                outcome=call.outcome,
-                reason=call.reason,
-                measured=call.measured,
-                result=call.result,
-            )
-        )
-        if call.outcome != "done":
-            break
-    return traced
 
 
 @dataclass(frozen=True)
@@ -148,7 +102,7 @@ def propose_repair(
 
     ``salvage`` reads the program from a reply that did not follow the answer format.
     """
-    trace = failure_trace(source)
+    trace = failure_trace(source.rollouts)
     if trace is None:
         raise ValueError(f"candidate {source.index} has no failed world to repair")
     candidate = Candidate(index=index, stages=source.stages.model_copy(deep=True), repaired_from=source.index)

@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, StringConstraints, model_validator
 
-from robotool import geometry
+from robotool.task import geometry
 
 DEFAULT_DENSITY = 300.0  # kg/m^3, for movable objects without a mass
 PRESS_TRAVEL = 0.01  # m: a button counts as pressed after its face travelled this far

@@ -14,7 +14,8 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from robotool.cliargs import (
+from robotool.cli.internal_error import report_internal_error
+from robotool.cli.options import (
     ADAPTER_HELP,
     ADAPTERS,
     BACKEND_HELP,
@@ -43,10 +44,9 @@ from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNot
 from robotool.eval.executor_choice import EXECUTORS, make_executor
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds
 from robotool.eval.solvers import METHODS
-from robotool.internal_error import report_internal_error
-from robotool.lm import LMConfigError
 from robotool.processes import cores
-from robotool.task_file import TaskFileError
+from robotool.program.lm import LMConfigError
+from robotool.task.task_file import TaskFileError
 from robotool.version import version
 
 EXIT_NOT_ATTEMPTED = 3

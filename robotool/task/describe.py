@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry, robots
-from robotool.concepts import press_point
+from robotool import robots
 from robotool.robots.registry import RobotType
-from robotool.scene import PRESS_TRAVEL, SceneObject
-from robotool.task_model import Task
+from robotool.task import geometry
+from robotool.task.concepts import press_point
+from robotool.task.scene import PRESS_TRAVEL, SceneObject
+from robotool.task.task_model import Task
 
 
 def vector_text(values: tuple[float, ...] | list[float] | np.ndarray) -> str:

@@ -17,9 +17,10 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from robotool import geometry, robots
-from robotool.task_model import Task
-from robotool.task_problem import Problem
+from robotool import robots
+from robotool.task import geometry
+from robotool.task.task_model import Task
+from robotool.task.task_problem import Problem
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
 OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate

@@ -17,7 +17,8 @@ from rich.console import Console
 from rich.table import Table
 
 from robotool import tasks
-from robotool.cliargs import (
+from robotool.cli.internal_error import report_internal_error
+from robotool.cli.options import (
     ADAPTER_HELP,
     ADAPTERS,
     BACKEND_HELP,
@@ -39,22 +40,21 @@ from robotool.cliargs import (
     warn_if_warp_on_cpu,
     warnings_in_one_line,
 )
-from robotool.concepts import needs_tool
-from robotool.describe import describe
 from robotool.errors import RobotoolError
-from robotool.internal_error import report_internal_error
-from robotool.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
-from robotool.methods import STAGES_BY_METHOD
+from robotool.program.lm import DEFAULT_FORMAT_RETRIES, LMConfigError
+from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import json_text
 from robotool.sandbox.validate import ProgramRejected
-from robotool.task_file import TaskFileError
-from robotool.task_model import Task
+from robotool.task.concepts import needs_tool
+from robotool.task.describe import describe
+from robotool.task.task_file import TaskFileError
+from robotool.task.task_model import Task
 from robotool.version import version
 
 if TYPE_CHECKING:
     from rich.status import Status
 
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
     from robotool.rollout import Rollout
     from robotool.sim.recorder import StateRecorder, Track
     from robotool.solution import Solution
@@ -138,8 +138,8 @@ def cmd_describe(args: argparse.Namespace, console: Console) -> int:
 
 def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary."""
-    from robotool.lm import HOW_TO_CONFIGURE, make_lm
-    from robotool.summary import print_solution, print_solution_verdict
+    from robotool.cli.summary import print_solution, print_solution_verdict
+    from robotool.program.lm import HOW_TO_CONFIGURE, make_lm
 
     task = tasks.load(args.task)
     _check_video_args(args, folder=True)
@@ -172,7 +172,7 @@ def cmd_solve(args: argparse.Namespace, console: Console) -> int:
     else:
         import dspy
 
-        from robotool.lm_calls import reporting_waits
+        from robotool.program.lm_calls import reporting_waits
 
         assert program is not None
         doing = f"solving {task.name} with {program.method_name}: {args.candidates} candidate(s) x " + (
@@ -225,7 +225,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
         if args.program is not None:
             raise UsageError("--program is a compiled LM program; it does not go with --planner search")
         return None
-    from robotool.lm_program import RoboTool
+    from robotool.program.lm_program import RoboTool
 
     options = {
         "candidates": args.candidates,
@@ -247,8 +247,8 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
 
 def cmd_run(args: argparse.Namespace, console: Console) -> int:
     """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
+    from robotool.cli.summary import print_run, print_run_verdict
     from robotool.execute import run
-    from robotool.summary import print_run, print_run_verdict
 
     task = tasks.load(args.task)
     try:
@@ -514,11 +514,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["eval"]:
-        from robotool.eval import main as eval_main
+        from robotool.cli.eval_command import main as eval_main
 
         return eval_main(argv[1:], prog="robotool eval")
     if argv[:1] == ["optimize"]:
-        from robotool.optimize.optimize_cli import main as optimize_main
+        from robotool.cli.optimize_command import main as optimize_main
 
         return optimize_main(argv[1:], prog="robotool optimize")
     parser = build_parser()

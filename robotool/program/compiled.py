@@ -1,4 +1,4 @@
-"""Compiled programs: a :class:`~robotool.lm_program.Proposer`'s optimised prompts and demonstrations in one
+"""Compiled programs: a :class:`~robotool.program.lm_program.Proposer`'s optimised prompts and demonstrations in one
 JSON file, with a record of how they were made.
 
 The file is DSPy's own state file (``module.save``: each predictor's instructions and demonstrations)
@@ -54,7 +54,7 @@ class CompiledInfo(BaseModel):
 
     robotool_version: str = Field(default_factory=version)
     optimizer: str
-    method: str = Field(description="the stages the program has (robotool.methods.STAGES_BY_METHOD)")
+    method: str = Field(description="the stages the program has (robotool.program.methods.STAGES_BY_METHOD)")
     settings: dict[str, Any] = Field(default_factory=dict)
     validation: Validation | None = None
     demonstrations: list[DemoSource] = Field(default_factory=list)

@@ -8,7 +8,7 @@ predictors, so a state file compiled for one loads into the other.
 
 The Analyzer runs once; the Planner, Calculator and Coder run once per candidate, concurrently,
 each candidate with its own ``rollout_id``. Every stage call goes through
-:func:`robotool.lm_calls.call_stage`: replies are parsed leniently and, when they still do not
+:func:`robotool.program.lm_calls.call_stage`: replies are parsed leniently and, when they still do not
 parse, asked for again with the problem shown to the model. If the Analyzer gives no usable reply,
 the candidates run without key concepts and the solution says so. Every candidate's code is
 validated by the sandbox and run in ``worlds_per_candidate`` perturbed worlds, all candidates in
@@ -18,7 +18,7 @@ that does not parse. The candidates are ranked (see
 stages switched off: see :data:`STAGES_BY_METHOD`. Repeated runs that should sample afresh set
 ``rollout_base`` (candidate ``k`` uses rollout id ``rollout_base + k``). The Repair stage is a predictor of the
 :class:`Proposer` too; :class:`RoboTool` with ``repair_rounds`` shows failed candidates what the simulator
-measured and has them repaired (see :mod:`robotool.repair_rounds`).
+measured and has them repaired (see :mod:`robotool.program.repair_rounds`).
 
 Temperature: with ``temperature`` set, every LM call uses it; without, a single candidate uses the
 model's default and several candidates spread from 0.7 to 1.0 so that they differ.
@@ -34,17 +34,17 @@ from typing import Any, Literal, Self
 import dspy
 
 from robotool import robots
-from robotool.compiled import CompiledInfo, check_fits, read_compiled, version_note
-from robotool.describe import describe
 from robotool.errors import RobotoolError
-from robotool.lm import DEFAULT_FORMAT_RETRIES
-from robotool.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
-from robotool.methods import STAGES_BY_METHOD
-from robotool.repair_rounds import RepairBudget, propose_repair, repair_rounds
+from robotool.program.compiled import CompiledInfo, check_fits, read_compiled, version_note
+from robotool.program.lm import DEFAULT_FORMAT_RETRIES
+from robotool.program.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
+from robotool.program.methods import STAGES_BY_METHOD
+from robotool.program.repair_rounds import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
-from robotool.task_model import Task
+from robotool.task.describe import describe
+from robotool.task.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
 
 AdapterName = Literal["chat", "json"]
@@ -107,7 +107,7 @@ class Proposer(dspy.Module):
     def from_compiled(cls, path: Path, **options: Any) -> Self:
         """The program a compiled file was made for (its method's stages), with the file's prompts loaded.
 
-        Raises :class:`~robotool.compiled.CompiledProgramError` for a file that cannot be used.
+        Raises :class:`~robotool.program.compiled.CompiledProgramError` for a file that cannot be used.
         """
         _, info = read_compiled(Path(path))
         return cls.method(info.method if info else "robotool", **options).load(path)
@@ -115,7 +115,7 @@ class Proposer(dspy.Module):
     def load(self, path: str | Path, allow_pickle: bool = False, allow_unsafe_lm_state: bool = False) -> Self:
         """Load a compiled program (or a DSPy state file) whose stages are this program's.
 
-        Raises :class:`~robotool.compiled.CompiledProgramError` when the file cannot be read or lacks one of
+        Raises :class:`~robotool.program.compiled.CompiledProgramError` when the file cannot be read or lacks one of
         this program's stages; a file from another robotool version, or with stages this program does not
         have, loads with a note in every solution.
         """
@@ -191,7 +191,7 @@ class Proposer(dspy.Module):
         self, task: Task, source: Candidate, index: int, sampled: int, settings: CallSettings
     ) -> tuple[Candidate, RepairAttempt]:
         """The Repair stage's fix of the failed candidate ``source`` as candidate ``index``, sampled like the
-        proposed candidate ``sampled`` (see :func:`robotool.repair_rounds.propose_repair`); not simulated."""
+        proposed candidate ``sampled`` (see :func:`robotool.program.repair_rounds.propose_repair`); not simulated."""
         return propose_repair(
             self.repair,
             task,
@@ -310,8 +310,8 @@ class RoboTool(Proposer):
     ):
         """``proposer``: the :class:`Proposer`'s options (stages, candidates, sampling, answer format);
         ``repair_rounds``: rounds in which, while no candidate succeeds in every world, the best ``candidates``
-        failures are repaired from their simulator traces (see :mod:`robotool.repair_rounds`); ``repair_tokens``: no
-        repair round starts once repairs have used this many tokens."""
+        failures are repaired from their simulator traces (see :mod:`robotool.program.repair_rounds`);
+        ``repair_tokens``: no repair round starts once repairs have used this many tokens."""
         super().__init__(**proposer)
         if worlds_per_candidate < 1:
             raise ValueError("worlds_per_candidate must be at least 1")

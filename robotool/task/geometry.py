@@ -18,7 +18,7 @@ GROUND_Z = 0.0
 
 
 class Solid(Protocol):
-    """What :func:`object_parts` reads of an object (a :class:`~robotool.scene.SceneObject` is one)."""
+    """What :func:`object_parts` reads of an object (a :class:`~robotool.task.scene.SceneObject` is one)."""
 
     @property
     def shape(self) -> str: ...

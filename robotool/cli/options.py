@@ -18,7 +18,7 @@ from rich.console import Console
 from rich.text import Text
 
 from robotool.errors import RobotoolWarning
-from robotool.lm import DEFAULT_TIMEOUT
+from robotool.program.lm import DEFAULT_TIMEOUT
 from robotool.safe_text import console_plain, one_line
 
 EXIT_USAGE = 2

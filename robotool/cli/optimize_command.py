@@ -16,7 +16,8 @@ from rich.console import Console
 from rich.table import Table
 
 from robotool import tasks
-from robotool.cliargs import (
+from robotool.cli.internal_error import report_internal_error
+from robotool.cli.options import (
     ADAPTER_HELP,
     ADAPTERS,
     BACKEND_HELP,
@@ -38,10 +39,9 @@ from robotool.cliargs import (
     warnings_in_one_line,
 )
 from robotool.errors import LMUnavailableError, RobotoolError
-from robotool.internal_error import report_internal_error
-from robotool.methods import STAGES_BY_METHOD
 from robotool.optimize.data import DatasetError, check_families
 from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeResult, OptimizeSettings, optimize
+from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import console_plain
 from robotool.version import version
 
@@ -158,8 +158,8 @@ def print_outcome(outcome: OptimizeResult, console: Console) -> None:
 
 def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.optimize") -> int:
     """Run the optimiser; returns the exit status."""
-    from robotool.compiled import CompiledProgramError
-    from robotool.lm import LMConfigError, make_lm
+    from robotool.program.compiled import CompiledProgramError
+    from robotool.program.lm import LMConfigError, make_lm
 
     args = build_parser(prog).parse_args(argv)
     warnings_in_one_line()

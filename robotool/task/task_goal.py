@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from robotool.scene import Name, PositiveLength, StrictModel
+from robotool.task.scene import Name, PositiveLength, StrictModel
 
 GoalKind = Literal["robot_on", "grasped", "pressed", "lifted", "lowered"]
 

@@ -7,7 +7,7 @@ text (with its ``finish_reason``), or an HTTP status to fail with, a raw body th
 completion (a gateway's HTML page), a dropped connection, or a delay. It is a development and test tool; the replies it
 serves are whatever script it is given.
 
-Run it: ``python -m robotool.standin SCRIPT.json --port 8000 [--log requests.jsonl]``, then point
+Run it: ``python -m robotool.program.standin SCRIPT.json --port 8000 [--log requests.jsonl]``, then point
 robotool at ``--lm openai/standin --api-base http://127.0.0.1:8000/v1``. With a log file, each
 request is appended to it as one JSON line with the status and reply it got.
 """
@@ -185,7 +185,7 @@ def _handler_for(server: StandinServer) -> type[BaseHTTPRequestHandler]:
 
 def main(argv: Sequence[str] | None = None) -> None:
     """Serve a script until interrupted."""
-    parser = argparse.ArgumentParser(prog="python -m robotool.standin", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m robotool.program.standin", description=__doc__.split("\n")[0])
     parser.add_argument("script", type=Path, help="JSON file with {'rules': [...], 'delay': seconds}")
     parser.add_argument("--port", type=int, default=8000)
     parser.add_argument("--log", type=Path, metavar="FILE", help="append each request and its reply to this JSONL file")

@@ -3,17 +3,18 @@
 They are computed from the scene's geometry and the robot's limits alone (never from a task's name or category),
 by the robot's own rules (``RobotType.key_concepts``, in ``robotool/robots/<name>/<name>_concepts.py``), and
 grade the Analyzer stage. Here: the dispatch, and the scene geometry that several robots' rules share; the typed
-record is :class:`robotool.key_concept.KeyConcept`.
+record is :class:`robotool.task.key_concept.KeyConcept`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from robotool import geometry, robots
-from robotool.key_concept import KeyConcept
-from robotool.scene import SceneObject
-from robotool.task_model import Task
+from robotool import robots
+from robotool.task import geometry
+from robotool.task.key_concept import KeyConcept
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
 
 
 def key_concepts(task: Task) -> list[KeyConcept]:
