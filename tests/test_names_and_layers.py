@@ -33,10 +33,7 @@ SHARED_MODULE_NAMES: dict[str, str] = {
 """Module or package names (singular and plural alike) two places may still share, each with why; a name that
 no longer collides must leave."""
 
-SHARED_NAMES: dict[str, str] = {
-    "Outcome": "the quadruped controller's private alias for a motion's end, moved with the controller",
-    "Plan": "the quadruped controller's private alias for a motion plan generator, moved with the controller",
-}
+SHARED_NAMES: dict[str, str] = {}
 """Public names two modules may still share, each with why; a name that no longer collides must leave."""
 
 KNOWN_CYCLES: list[frozenset[str]] = []
@@ -56,7 +53,7 @@ LAYERS: dict[str, frozenset[str]] = {
     "base": frozenset(),
     "task": frozenset({"robots"}),
     "robots": frozenset({"base", "task", "sim", "planner"}),
-    "tasks": frozenset({"task"}),
+    "tasks": frozenset({"task", "robot"}),
     "records": frozenset({"base", "task"}),
     "signatures": frozenset({"base", "records"}),
     "solution": frozenset({"base", "records"}),

@@ -19,11 +19,11 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    Query skills are answered at once by :meth:`SkillController.query` from the current state.
    An exception inside the controller fails only the world it belongs to: ``start`` and ``query`` run per world;
    per-world work inside ``tick`` that cannot be undone (advancing a plan) ends that world's skill with outcome
-   ``error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner restores the
-   controller's per-world state (its numpy-array and list attributes, the controls and the welds) as it was
-   before the tick and ticks the worlds one by one, failing those that raise again. A controller therefore keeps
-   its per-world state in numpy arrays and lists indexed by world, and ``tick(state, worlds)`` touches only
-   ``worlds``.
+   ``error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner puts back the
+   controller's :meth:`SkillController.snapshot` taken before the tick (:meth:`SkillController.restore`), the
+   controls and the welds, and ticks the worlds one by one, failing those that raise again. A controller therefore
+   keeps all its per-world state in the dataclasses that :meth:`SkillController.world_states` returns (one per
+   component, arrays and lists indexed by world first), and ``tick(state, worlds)`` touches only ``worlds``.
 3. **Goals.** Goal sub-conditions are evaluated by :mod:`robotool.sim.goals` from the batched state;
    a robot's own goal kinds are trackers in its package (``RobotType.goal_trackers``).
 
@@ -33,7 +33,9 @@ All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import copy
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
@@ -71,9 +73,16 @@ class QueryError(ValueError):
     """A query skill cannot be answered (e.g. an unknown object); the program sees the message."""
 
 
-class SkillController(Protocol):
-    """Runs one embodiment's skills in every world of one batched simulator."""
+class SkillController(ABC):
+    """Runs one embodiment's skills in every world of one batched simulator.
 
+    The contract: :meth:`start`, :meth:`tick` and :meth:`query` run the skills; :meth:`world_states` names the
+    dataclasses that hold all the controller's per-world state (world index first), which :meth:`snapshot` copies
+    and :meth:`restore` puts back (the runner's undo of a batched tick that raised); :meth:`robot_conditions` is an
+    optional hook with a default (no conditions on the robot itself).
+    """
+
+    @abstractmethod
     def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:
         """Begin motion skill ``skill`` (arguments already checked by ``check_call``) in ``worlds``.
 
@@ -81,12 +90,68 @@ class SkillController(Protocol):
         are reported later by :meth:`tick`.
         """
 
+    @abstractmethod
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         """One control tick in ``worlds`` (all when None; the others are left untouched): report finished skills,
         then write controls for the next interval."""
 
+    @abstractmethod
     def query(self, state: BatchState, world: int, skill: str, args: tuple[Any, ...]) -> Any:
         """Answer a query skill in one world from the current state (raise :class:`QueryError`)."""
+
+    @abstractmethod
+    def world_states(self) -> tuple[Any, ...]:
+        """Every component's per-world state: one dataclass instance each (numpy arrays with the world index first,
+        lists indexed by world), the same instances for the controller's lifetime. Nothing else a tick changes may
+        live on the controller or its components."""
+
+    def snapshot(self) -> ControllerSnapshot:
+        """A copy of the per-world state (:meth:`world_states`), to :meth:`restore` later."""
+        return ControllerSnapshot(tuple(copy_state(s) for s in self.world_states()))
+
+    def restore(self, snapshot: ControllerSnapshot) -> None:
+        """Put the per-world state back as it was at ``snapshot`` (in place: components keep their references)."""
+        live = self.world_states()
+        if len(live) != len(snapshot.states):
+            raise ValueError(f"a snapshot of {len(snapshot.states)} states for a controller with {len(live)}")
+        for state, saved in zip(live, snapshot.states, strict=True):
+            copy_state(saved, into=state)
+
+    def robot_conditions(self) -> dict[str, list[bool]]:
+        """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``);
+        none by default (a robot that cannot fall)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class ControllerSnapshot:
+    """A controller's per-world state at one moment (opaque: only :meth:`SkillController.restore` reads it)."""
+
+    states: tuple[Any, ...]
+
+
+def copy_state(state: Any, into: Any = None) -> Any:
+    """A copy of the dataclass ``state`` whose arrays, lists and dicts (nested ones too) are copies; other values
+    (numbers, strings, frozen records, plan generators) are shared. With ``into`` (a dataclass of the same type),
+    the copied values are written into it instead, and it is returned."""
+    if not is_dataclass(state) or isinstance(state, type):
+        raise TypeError(f"per-world state must be a dataclass instance, not {type(state).__name__}")
+    out = copy.copy(state) if into is None else into
+    if type(out) is not type(state):
+        raise TypeError(f"cannot copy a {type(state).__name__} into a {type(out).__name__}")
+    for f in fields(state):
+        object.__setattr__(out, f.name, _copied(getattr(state, f.name)))
+    return out
+
+
+def _copied(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, list):
+        return [_copied(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _copied(v) for k, v in value.items()}
+    return value
 
 
 def describe_error(error: Exception) -> str:
@@ -112,13 +177,6 @@ def size_now(scene: Scene, state: BatchState, world: int, index: int) -> list[fl
     obj = scene.task.objects[index]
     turned = geometry.rotation_matrix(obj.rpy) if obj.shape == "cloth" else state.xmat(scene.object_body[index])[world]
     return [float(v) for v in geometry.axis_aligned_size(obj.size, turned)]
-
-
-def controller_conditions(controller: SkillController) -> dict[str, list[bool]]:
-    """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``), from the
-    controller's ``robot_conditions()`` method; none for a controller without one (a robot that cannot fall)."""
-    conditions = getattr(controller, "robot_conditions", None)
-    return {} if conditions is None else conditions()
 
 
 def goal_events(goal: GoalTracker, world: int) -> list[Event]:

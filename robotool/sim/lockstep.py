@@ -42,7 +42,6 @@ from robotool.sim.embodiment import (
     QueryError,
     SkillController,
     SkillEnd,
-    controller_conditions,
     describe_error,
     goal_events,
 )
@@ -345,7 +344,7 @@ class _Run:
         world.finished = True
         world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
         world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
-        for name, held in controller_conditions(self.controller).items():
+        for name, held in self.controller.robot_conditions().items():
             world.conditions[name] = held[i]
         seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in goal_events(self.goal, i)]
         world.events = sorted(world.events + seen, key=lambda e: e.time)
@@ -423,23 +422,18 @@ def scene_box(task: Task) -> SceneBox:
 
 
 class _TickUndo:
-    """What a control tick may change, saved before it: the controller's numpy-array and list attributes (its
-    per-world state), the controls, the mocap positions and the welds."""
+    """What a control tick may change, saved before it: the controller's per-world state (its snapshot), the
+    controls, the mocap positions and the welds."""
 
     def __init__(self, controller: SkillController, sim: BatchedSim, state: BatchState):
         self.controller, self.sim = controller, sim
-        self.attributes = {
-            name: value.copy() if isinstance(value, np.ndarray) else list(value)
-            for name, value in vars(controller).items()
-            if isinstance(value, np.ndarray | list)
-        }
+        self.snapshot = controller.snapshot()
         self.ctrl, self.mocap_pos = sim.ctrl.copy(), sim.mocap_pos.copy()
         self.eq_active = state.eq_active.copy()
 
     def restore(self) -> None:
         """Put everything back as it was before the tick."""
-        for name, value in self.attributes.items():
-            setattr(self.controller, name, value)
+        self.controller.restore(self.snapshot)
         self.sim.ctrl[...] = self.ctrl
         self.sim.mocap_pos[...] = self.mocap_pos
         changed = self.sim.state().eq_active != self.eq_active

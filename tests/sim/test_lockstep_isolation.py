@@ -12,6 +12,7 @@ from fixtures.reference import REFERENCE, program
 from robotool import robots, sandbox, sim, tasks, verify
 from robotool.cli import main
 from robotool.robots.arm.arm_controller import ArmController
+from robotool.robots.quadruped.move_runner import MoveRunner
 from robotool.robots.quadruped.quadruped_controller import QuadrupedController
 from robotool.robots.skills import MAX_DISTANCE_FROM_SCENE, SceneBox, SkillArgumentError
 from robotool.rollout import Rollout
@@ -148,14 +149,14 @@ def test_a_plan_that_raises_in_one_world_ends_that_skill_only(
 ) -> None:
     scene, code = sim_scene("sofa_traversing"), program(REFERENCE["sofa_traversing"])
     undisturbed = run_texts(scene, [code] * 2)
-    original = QuadrupedController._start_move
+    original = MoveRunner._start_move
 
-    def start_move(self: QuadrupedController, w: int, move: Any) -> None:
+    def start_move(self: MoveRunner, w: int, move: Any) -> None:
         if w == 1 and move.pushing >= 0:  # the push itself, started by the plan after the approach
             raise ZeroDivisionError("the push's plan broke")
         original(self, w, move)
 
-    monkeypatch.setattr(QuadrupedController, "_start_move", start_move)
+    monkeypatch.setattr(MoveRunner, "_start_move", start_move)
     fine, broken = run_texts(scene, [code] * 2)
     assert _same(fine, undisturbed[0]) and fine.success
     assert broken.error == "controller error in push_to_position: ZeroDivisionError: the push's plan broke"

@@ -177,9 +177,6 @@ def test_unsolvable_buttons_lie_beyond_two_cubes_held_or_pushed_loose() -> None:
     """Two joined cubes shoved loose by the closed fingers reach 2.3 cm further than two held at the centre of the
     first (tests/robots/arm/test_cheats.py runs that program: it presses the built-in button). The family counts it
     as honest tool use, so an unsolvable face lies beyond it: its 1 cm press needs 1.5 cm more than they reach."""
-    from robotool.robots.arm.arm_controller import FINGER_HALF
-
-    assert FINGER_HALF[0] == button_pressing.FINGER_REACH
     assert button_pressing.push_reach(2) > button_pressing.chain_reach(2)
     for seed in range(200):
         instance = tasks.generate("button_pressing", seed)

@@ -52,9 +52,9 @@ def _reach(limits: ArmLimits) -> list[tuple[float, float, float]]:
 
 
 def _start_xy(task: Task) -> tuple[float, float]:
-    from robotool.robots.arm.arm_controller import HOME
+    from robotool.robots.arm.arm_config import ARM
 
-    return HOME[0], HOME[1]
+    return ARM.home[0], ARM.home[1]
 
 
 def _numerical_hint(call: SkillCall) -> str | None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robotool.robots.arm.arm_controller import GRIPPER_BODY, graspable_points, held_objects
+from robotool.robots.arm.arm_body import GRIPPER_BODY, graspable_points, held_objects
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 

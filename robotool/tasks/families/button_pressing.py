@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.arm.arm_config import ARM
 from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     ARM_CLUTTER,
@@ -42,13 +43,12 @@ def chain_reach(cubes: int) -> float:
     return 0.45 + CUBE / 2 + CUBE * (cubes - 1)
 
 
-FINGER_REACH = 0.008  # m the closed fingers reach past the gripper centre along x (the arm's FINGER_HALF[0])
 PRESS = 0.01  # m a face must be pushed in to count as pressed
 
 
 def push_reach(cubes: int) -> float:
     """Farthest x the front of a row of joined magnetic cubes reaches when the closed fingers push it loose."""
-    return 0.45 + FINGER_REACH + CUBE * cubes
+    return 0.45 + ARM.finger_half[0] + CUBE * cubes  # the closed fingers reach half a pad past the centre
 
 
 def cubes(

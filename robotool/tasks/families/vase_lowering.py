@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     CLEARANCE,
@@ -48,7 +49,6 @@ from robotool.tasks.families._common import (
 MAX_DROP = 0.3
 CUSHION = (0.5, 0.5, 0.16)
 STEP = (0.4, 0.6)
-FOOT_INSET = 0.03  # m: the quadruped's feet's centres sit this far inside its body's outline
 SIDE_MARGIN = 0.01  # m its body keeps from what it must not touch
 SAME_LEVEL = 0.015  # m: a step top no higher than this above the sofa's does not meet the body
 PUSH_LEVEL = 0.04  # m: a robot on the step pushes what rests on a sofa top no farther than this from the step's
@@ -164,7 +164,7 @@ def room_to_land(layout: RigidPlacement, sofa: SceneObject, step: SceneObject, v
         return True
     size = np.asarray(template("vase_lowering").limits.body_size[:2])  # type: ignore[attr-defined]
     half = size / 2 if layout.turns % 2 == 0 else size[::-1] / 2
-    feet = half - FOOT_INSET
+    feet = half - QUADRUPED.foot_radius  # the feet's centres sit a foot's radius inside the body's outline
     s, t, v = footprint(sofa), footprint(step), footprint(vase)
     behind = half[0] + SIDE_MARGIN if step.top > sofa.top + SAME_LEVEL else feet[0]
     if float(s[0] + behind + half[0] + SIDE_MARGIN) <= v[0]:

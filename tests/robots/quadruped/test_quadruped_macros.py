@@ -9,7 +9,8 @@ from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
 from robotool.planner.solve import robot_planner
 from robotool.robots.quadruped.predict import push_problem
-from robotool.robots.quadruped.quadruped_macros import _lined_up, _push_plans, candidates
+from robotool.robots.quadruped.quadruped_macros import _push_plans, candidates
+from robotool.robots.quadruped.quadruped_routes import _lined_up
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task

@@ -1,0 +1,67 @@
+"""The arm controller's tunables and the gripper's dimensions, named and documented in one place (SI units).
+
+One frozen :class:`ArmConfig`; :data:`ARM` is the robot's instance, read by the controller (:mod:`.arm_controller`,
+:mod:`.arm_grasp`), the body (:mod:`.arm_body`) and the task families that size scenes to the gripper. The workspace
+and the opening come from the task (:class:`~robotool.robots.arm.arm_skills.ArmLimits`); the servos' and the
+contacts' physics from :mod:`.arm_body`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class ArmConfig:
+    """The arm's tunables (one instance per robot: :data:`ARM`)."""
+
+    home: tuple[float, float, float] = (0.1, 0.0, 0.3)
+    """m: the gripper centre at the start."""
+    speed: float = 0.25
+    """m/s: the straight-line reference speed of a move."""
+    reached: float = 0.005
+    """m: a move is done when the centre is this close to the target."""
+    stall_error: float = 0.01
+    """m: the centre this far behind the reference, ..."""
+    stall_speed: float = 0.02
+    """m/s: ... moving slower than this, ..."""
+    stall_time: float = 0.3
+    """s: ... for this long is a stall."""
+    time_margin: float = 2.0
+    """s a move may take beyond distance / speed."""
+    gripper_time: float = 0.3
+    """s to open or close the fingers."""
+    finger_half: tuple[float, float, float] = (0.008, 0.004, 0.023)
+    """m: half sizes of a finger (x, y across the closing axis, z)."""
+    finger_z: float = 0.007
+    """m: a finger's centre above the gripper centre (the tips reach 0.016 m below it)."""
+    grip_tolerance: float = 0.003
+    """m: geometry within this of a finger counts as next to it."""
+    on_top: float = 0.002
+    """m: fingertips less than this below an object's top rest on it."""
+    opening_give: float = 1e-4
+    """m the open fingers' stops may give before what is between them counts as too wide."""
+    side_slack: float = 0.001
+    """m: beside the fingers, an object they grip may reach this far into them (contact give)."""
+    clamp_tolerance: float = 1e-4
+    """m: a target this close to the workspace counts as inside (no clamp is reported)."""
+    on_sheet: float = 0.003
+    """m: a fingertip this close above a top face (or a sheet) it overlaps rests on it."""
+    pushed_out: float = 0.02
+    """m an object must be pushed further out of the workspace to be reported."""
+    grip_force: float = 60.0
+    """N each pad squeezes with: the continuous squeeze of a parallel gripper of this size (a Franka hand's is 70 N);
+    the largest load an honest tool puts on it, the hammer held by its handle end with its head 0.17 m away, needs
+    0.71 N m across the pads' 16 mm, 45 N."""
+    grip_friction: float = 1.0
+    """The pads hold by friction this many times the squeeze."""
+    edge_share: float = 0.5
+    """The least share of what the pads could cover of an object across their width that is a grip rather than a
+    pinch at its edge."""
+    slab_cylinder_sides: int = 32
+    """A cylinder counts as the prism of this many sides around it (0.5% wider at most) when finding what lies
+    between the fingers."""
+
+
+ARM = ArmConfig()
+"""The arm's tunables."""

@@ -1,0 +1,188 @@
+"""The quadruped's skill plans: each motion skill as a generator of straight moves (:data:`.move_runner.SkillPlan`).
+
+A walk is one move, or a few around an object that stands in its way (:func:`~robotool.robots.quadruped.push.route`);
+a push is the approach around the object and one push per axis (:mod:`robotool.robots.quadruped.push`), pushed on
+along the axis while the object's centre falls short (it turned on the way), and, while the object ends off the
+target (it turned or slid aside), pushed again from where it lies, round after round, as long as each brings it
+closer and a way round it is clear. Nothing here reads the task's category or name: limits come from
+``task.robot.limits`` and the terrain from the simulated geoms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool.robots.quadruped.move_runner import Move, SkillPlan, finding_measured
+from robotool.robots.quadruped.push import (
+    GAP,
+    MIN_LEG,
+    Leg,
+    lateral_offsets,
+    legs,
+    push_pose,
+    route,
+    routes,
+    sweep_problem,
+)
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.rays import Rays
+from robotool.robots.quadruped.referee import Referee
+from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.support import feet
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, Finding, check_walk
+
+
+class Plans:
+    """Makes the plans of ``walk_to_position`` and ``push_to_position`` in one world (no state of its own: a plan's
+    progress lives in its generator, which the move runner holds)."""
+
+    def __init__(self, senses: Senses, rays: Rays, referee: Referee, limits: QuadrupedLimits, config: QuadrupedConfig):
+        self.senses, self.rays, self.referee, self.limits, self.config = senses, rays, referee, limits, config
+        self.scene = senses.scene
+
+    @property
+    def half(self) -> np.ndarray:
+        """(2,) m: the body's half length and half width."""
+        return self.senses.facts.half
+
+    def walk(self, w: int, target: tuple[float, float, float]) -> SkillPlan:
+        """Straight to ``target`` when the feet's paths allow it; else along an L (one axis, then the other) that
+        does; else around the object whose side is too high to climb (refused, naming it, when there is no way
+        round); else straight, to be refused where the legs meet their limit."""
+        goal = np.array(target[:2], dtype=float)
+        here = self.senses.position(w)
+        found = self._check(w, here, [goal])
+        path = [goal]
+        if found is not None:
+            corners = [np.array([goal[0], here[1]]), np.array([here[0], goal[1]])]
+            arrived = self.config.arrived
+            ways = [[c, goal] for c in corners if min(np.linalg.norm(c - here), np.linalg.norm(goal - c)) > arrived]
+            obstacle = found[1] if found[0].kind == "step" else -1
+            if obstacle >= 0:
+                lo, hi = self.senses.bounds(w, obstacle)
+                if not np.all((goal >= lo) & (goal <= hi)):  # the goal is not on it: go around it
+                    ways.append(route(here, goal, lo - self.half - GAP, hi + self.half + GAP))
+            clear = next((way for way in ways if self._check(w, here, way) is None), None)
+            if clear is not None:
+                path = clear
+            elif obstacle >= 0 and not np.all((goal >= lo) & (goal <= hi)):
+                name = self.scene.object_names[obstacle]
+                return "refused", f"the way is blocked by {name}: {found[0].describe()}", finding_measured(found[0])
+        for waypoint in path:
+            outcome = yield Move(waypoint)
+            if outcome[0] != "done":
+                return outcome
+        return None
+
+    def push(self, w: int, name: str, target: tuple[float, float, float]) -> SkillPlan:
+        """Push object ``name`` so that its centre reaches ``target`` (x-y), within the push rules."""
+        try:
+            index = self.scene.object_index(name)
+        except KeyError as e:
+            return "refused", str(e.args[0]), {}
+        senses, config = self.senses, self.config
+        goal = np.array(target[:2], dtype=float)
+        miss, blocked = np.inf, False
+        for attempt in range(1 + config.corrections):
+            broken = self.referee.push_rules(w, index)
+            if broken is not None:
+                if attempt:  # what it moved changed (it fell off something, something landed on it): no correction
+                    break
+                return "refused", f"cannot push {name}: {broken[0]}", broken[1]
+            for leg in legs(senses.centers(senses.state)[w, index], goal):
+                lo, hi = senses.bounds(w, index)
+                pose, problem = self._clear_pose(w, index, leg, lo, hi)
+                if pose is None:
+                    if attempt:  # no way to correct the drift: the push stopped where it did
+                        break
+                    return "refused", f"cannot push {name}: no clear place to stand behind it{problem}", {}
+                start, end, behind = pose
+                robot = senses.position(w)
+                staging = start - (end - start) / np.linalg.norm(end - start) * behind
+                ways = routes(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2)
+                if attempt:  # a correction goes only a way round that the legs can walk, or not at all
+                    way = next((way for way in ways if self._check(w, robot, [*way, start]) is None), None)
+                    if way is None:
+                        break
+                else:
+                    way = ways[0]
+                for waypoint in [*way, start]:
+                    outcome = yield Move(waypoint)
+                    if outcome[0] != "done":
+                        return outcome
+                height = senses.centers(senses.state)[w, index, 2]
+                outcome = yield Move(end, pushing=index)
+                if outcome[0] not in ("done", "stalled"):
+                    return outcome
+                blocked |= outcome[0] == "stalled"
+                u = (end - start) / np.linalg.norm(end - start)
+                for _ in range(config.follow_throughs):  # it turned on the way: push on until its centre gets there
+                    centre = senses.centers(senses.state)[w, index]
+                    short = (leg.target - centre[leg.axis]) * u[leg.axis]
+                    if blocked or short < MIN_LEG or abs(centre[2] - height) > RISE:  # (not after it fell off)
+                        break
+                    outcome = yield Move(senses.position(w) + u * short, pushing=index)
+                    if outcome[0] not in ("done", "stalled"):
+                        return outcome
+                    blocked |= outcome[0] == "stalled"
+                back = (start - end) / np.linalg.norm(start - end) * GAP
+                outcome = yield Move(senses.position(w) + back)
+                if outcome[0] != "done":
+                    return outcome
+            previous, miss = miss, float(np.linalg.norm(senses.centers(senses.state)[w, index, :2] - goal))
+            if miss <= config.push_tolerance or blocked or miss > previous - config.correction_gain:
+                break
+        if miss > config.push_tolerance:
+            return "stalled", f"{name} stopped {miss:.2f} m from the target", {"distance": miss}
+        return None
+
+    def _clear_pose(
+        self, w: int, index: int, leg: Leg, lo: np.ndarray, hi: np.ndarray
+    ) -> tuple[tuple[np.ndarray, np.ndarray, float] | None, str]:
+        """The push start and end poses nearest straight-on whose sweep meets nothing above the floor and whose
+        feet stay over the floor (no drop, no gap), with how far behind the start the robot lines up; when there
+        is none, what was wrong under the feet.
+
+        Poses whose sweep is clear from the staging point (``staging`` behind the start, where the robot lines up)
+        come first, so that the robot can line up there; failing those, a clear sweep from the start will do.
+        """
+        centres = feet(self.senses.state, self.senses.facts.ids)[w]
+        floor = float(centres[:, 2].min() - FOOT_RADIUS)
+        width = hi[1 - leg.axis] - lo[1 - leg.axis]
+        offsets = lateral_offsets(width, 2 * self.half[1 - leg.axis])
+        poses = [push_pose(lo, hi, leg, self.half, float(o)) for o in offsets]
+
+        def heights(xy: np.ndarray) -> np.ndarray:
+            z, objects = self.rays.heights(w, xy, floor + self.config.ray_height)
+            return np.where(objects == index, floor, z)
+
+        problem = ""  # the first drop found: under the pose nearest straight-on, where the robot would push from
+        for staging in (self.config.staging, 0.0):
+            for start, end in poses:
+                behind = start - (end - start) / np.linalg.norm(end - start) * staging
+                found = sweep_problem(heights, behind, end, self.limits, floor)
+                if found is None:
+                    return (start, end, staging), ""
+                if "drop" in found and not problem:
+                    where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
+                    problem = f": pushing from {where}, {found}"
+        return None, problem
+
+    def _check(self, w: int, here: np.ndarray, path: list[np.ndarray]) -> tuple[Finding, int] | None:
+        """The first finding on a walk through ``path`` in world ``w`` and the object there (-1: none)."""
+        state, ids = self.senses.state, self.senses.facts.ids
+        top = float(feet(state, ids)[w, :, 2].min()) + self.config.ray_height
+
+        def heights(xy: np.ndarray) -> np.ndarray:
+            return self.rays.heights(w, xy, top)[0]
+
+        bottom = feet(state, ids)[w, :, 2] - FOOT_RADIUS
+        finding = check_walk(heights, here, path, self.limits, start_levels=bottom)
+        if finding is None:
+            return None
+        where = np.array(finding.where)
+        ahead = path[0] - here
+        probe = where + ahead / max(float(np.linalg.norm(ahead)), 1e-9) * FOOT_RADIUS
+        _, objects = self.rays.heights(w, probe[None], top)
+        return finding, int(objects[0])

@@ -1,0 +1,115 @@
+"""The quadruped controller's tunables, named and documented in one place (SI units: m, s, rad, kg).
+
+One frozen :class:`QuadrupedConfig` holds every tunable of the skill controller's components (plans, move runner,
+terrain following, referee, rays); :data:`QUADRUPED` is the robot's instance, passed to each component. The legs'
+limits come from the task (:class:`~robotool.robots.quadruped.quadruped_skills.QuadrupedLimits`); the body's
+physics (masses, servo gains) from :mod:`robotool.robots.quadruped.body`; the foot's size and the terrain sampling
+shared with the planner from :mod:`robotool.robots.quadruped.terrain`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, LOOKAHEAD, SPACING
+
+
+@dataclass(frozen=True)
+class QuadrupedConfig:
+    """The skill controller's tunables (one instance per robot: :data:`QUADRUPED`)."""
+
+    walk_speed: float = 0.4
+    """m/s the x-y setpoint moves at."""
+    scan_ahead: float = 1.2
+    """m of a move read at a time (plus ``terrain.LOOKAHEAD``)."""
+    back: float = 0.06
+    """m read behind each foot (the lift's window over an edge just passed)."""
+    lift_ahead: float = 0.10
+    """m ahead of a foot's centre where a higher surface starts the lift."""
+    hold_behind: float = 0.03
+    """m past a drop edge over which the lift holds the foot up before letting it down."""
+    clearance: float = 0.025
+    """m the lift carries a foot above the surface it steps onto."""
+    descent_speed: float = 0.15
+    """m/s at which the lift lets the body down past a drop."""
+    release: float = 0.02
+    """m: a lift setpoint this far below the body is off."""
+    press: float = 0.01
+    """m a leg's setpoint reaches below the surface under its foot."""
+    leg_speed: float = 0.25
+    """m/s at which a leg changes length."""
+    torso_clearance: float = 0.02
+    """m the legs keep the torso above what lies under it."""
+    max_hover: float = 0.2
+    """m of travel a foot may take to cross an edge (a step, or a stride over a gap, takes less)."""
+    torso_grid: tuple[tuple[float, float], ...] = tuple((x, y) for x in (-0.9, 0.0, 0.9) for y in (-0.8, 0.0, 0.8))
+    """Points under the torso where rays read what lies under it, in half sizes of the body (x, y)."""
+    tilt_gain: float = 2.0
+    """1/rad: tilt motor control per rad of pitch or roll while the lift carries the body."""
+    tilt_damping: float = 0.15
+    """s/rad: tilt motor control per rad/s of pitch or roll, likewise."""
+    stop_margin: float = 0.03
+    """m between a foot and a refused step's face."""
+    edge_margin: float = 0.01
+    """m between a foot's centre and a refused gap's or drop's edge."""
+    arrived: float = 0.015
+    """m from a move's stopping point that counts as there."""
+    settled_speed: float = 0.03
+    """m/s: a move ends only once the body is this still."""
+    settled_turn: float = 0.2
+    """rad/s of pitch and roll, likewise."""
+    leash: float = 0.06
+    """m the setpoint may run ahead of the body."""
+    stall_time: float = 3.0
+    """s without 1 cm of progress is a stall."""
+    staging: float = 0.15
+    """m behind the push pose from where the robot lines up straight along the push."""
+    push_tolerance: float = 0.06
+    """m: a push is done when the object's centre is this close to the target."""
+    follow_throughs: int = 2
+    """Pushes on along a leg whose object's centre fell short of the leg's target."""
+    corrections: int = 2
+    """Pushes again from where the object ended when it turned or slid off the line and missed the target."""
+    correction_gain: float = 0.02
+    """m a push round must bring the object closer to the target for another round to follow."""
+    shove: float = 0.03
+    """m a movable object may move after the torso touched it, unless it is being pushed."""
+    ray_height: float = 0.6
+    """m above the feet where downward rays start (things higher are overhead)."""
+    cloth_step: float = 1e-4
+    """m above the point where a ray met a cloth from where it is cast again."""
+    fall_tilt: float = float(np.radians(35.0))
+    """rad: a body tilted further has fallen."""
+    fall_ticks: int = 3
+    """Control ticks with the centre of mass outside the feet's support (lift off) that make a fall..."""
+    tipping: float = float(np.radians(5.0))
+    """rad: ... once the body tilts this much (a level body with a foot off the ground is not falling)."""
+    support_margin: float = -0.02
+    """m: the support polygon grown by this much before the centre of mass counts as outside."""
+
+    @property
+    def foot_radius(self) -> float:
+        """m: a foot's radius; the feet's centres sit this far inside the body's outline (``terrain.FOOT_RADIUS``,
+        shared with the planner's terrain checks)."""
+        return FOOT_RADIUS
+
+    @property
+    def local(self) -> np.ndarray:
+        """m: the per-tick samples along a foot's path, from its centre (behind, under, ahead)."""
+        return np.array([-FOOT_RADIUS, 0.0, FOOT_RADIUS, self.lift_ahead / 2, self.lift_ahead])
+
+    @property
+    def samples(self) -> int:
+        """Samples in one reading of a foot's path (``back`` + ``scan_ahead`` + ``terrain.LOOKAHEAD``)."""
+        return round((self.back + self.scan_ahead + LOOKAHEAD) / SPACING) + 1
+
+    @property
+    def behind(self) -> int:
+        """The sample under a foot at scan time."""
+        return round(self.back / SPACING)
+
+
+QUADRUPED = QuadrupedConfig()
+"""The quadruped's tunables."""

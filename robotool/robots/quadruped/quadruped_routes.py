@@ -1,0 +1,437 @@
+"""Quadruped routes onto a surface, for the macros (:mod:`.quadruped_macros`): directly, over a pushed bridge, up
+pushed steps; the quadruped's view of a task (:class:`Quadruped`) and the route record (:class:`Route`).
+
+Each route is predicted with :func:`robotool.robots.quadruped.predict.walk_violation` on the planned layout; a
+program whose walk is predicted to break a limit keeps that as its ``doubt`` and is tried late.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from robotool.planner.layout import Box, Layout
+from robotool.robots.quadruped.predict import detour, walk_violation
+from robotool.robots.quadruped.push import sweep_points
+from robotool.robots.quadruped.quadruped_concepts import start_surface
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.terrain import RISE, foot_offsets
+from robotool.task.scene import SceneObject
+from robotool.task.task_model import Task
+
+LEVEL = 0.04  # m: supports closer in height than this are the same surface
+APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
+INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
+OVERLAP = 0.15  # m a bridge rests on each side of a gap
+CLEARANCES = (0.5, 0.2)  # m a prop pushed out from under a board keeps from the board's side: far enough to be left
+# behind by the board's end when friction drags it sideways part of the way, else just clear
+SIDE = 0.25  # m the robot keeps from a board it walks beside
+FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
+MAX_STEPS = 3  # objects a staircase may use below the target
+Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
+PushStep = tuple[list[np.ndarray], np.ndarray, np.ndarray]  # walk to where a push lines up, its target, where it ends
+
+
+@dataclass
+class Route:
+    """Pushes that rearrange the scene, then waypoints the robot walks through (each on a named surface)."""
+
+    pushes: list[tuple[str, np.ndarray, str]] = field(default_factory=list)  # object, x-y centre, why
+    waypoints: list[tuple[np.ndarray, str]] = field(default_factory=list)  # x-y, surface ("ground" or object)
+    uses: list[tuple[str, str]] = field(default_factory=list)  # object, role
+    words: str = ""
+    late: int = 0  # less likely choices it makes (a step down onto the target: the body rides on a higher step)
+
+    def layout(self, base: Layout) -> Layout:
+        """``base`` with the route's pushes made."""
+        out = base
+        for name, xy, _ in self.pushes:
+            out = out.with_moved(name, xy)
+        return out
+
+
+class Quadruped:
+    """The quadruped's view of one task: its limits, body, start and the objects' boxes."""
+
+    def __init__(self, task: Task):
+        self.task = task
+        limits = task.limits
+        assert isinstance(limits, QuadrupedLimits)
+        self.limits = limits
+        self.half = np.asarray(limits.body_size[:2]) / 2
+        self.start = np.asarray(task.robot.position, dtype=float)
+        self.floor_name, self.floor = start_surface(task)
+        self.layout = Layout(task)
+        self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
+
+    def pushable(self, obj: SceneObject, level: float) -> bool:
+        """Whether the robot may push ``obj`` from a surface at height ``level``."""
+        return (
+            obj.movable
+            and obj.name not in self.placed
+            and obj.shape != "cloth"
+            and obj.effective_mass <= self.limits.max_push_mass
+            and abs(obj.bottom - level) < LEVEL
+        )
+
+    def after(self, layout: Layout, here: np.ndarray, placed: Iterable[str]) -> Quadruped:
+        """The same robot on the same floor once the scene is rearranged to ``layout`` and it stands at ``here``;
+        the ``placed`` objects are to stay where they are (no route pushes them)."""
+        out = copy.copy(self)
+        out.layout, out.start = layout, np.asarray(here, dtype=float)
+        out.placed = self.placed | frozenset(placed)
+        return out
+
+    def extent(self, u: np.ndarray) -> float:
+        """Half length of the body along direction ``u``."""
+        return float(np.abs(u) @ self.half)
+
+    def top_point(self, box: Box, toward: np.ndarray, frm: np.ndarray) -> np.ndarray:
+        """A point well on ``box``'s top for a robot arriving from ``frm``: its centre, or, for a long box,
+        the point along the arrival direction that leaves room for the body."""
+        room = np.maximum(box.half - self.half - INSET, 0.0)
+        along = np.clip(frm - box.center, -room, room)
+        return np.where(np.abs(toward) > 0.5, box.center, box.center + along)
+
+
+# --- routes onto a surface ----------------------------------------------------------------------------
+
+DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+FOOT = QUADRUPED.foot_radius  # m the feet sit inside the body's outline: they must be over what it stands on
+ENTRIES = 2  # predicted-fine approaches kept for a direct climb
+LANDING_STEP = 0.02  # m between the stops tried when a route's stop on its target is pulled back
+
+
+def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
+    """Ways onto ``name``'s top: walk there, bridge a gap with a pushed board, or climb pushed steps; each stops
+    short of what stands on the top (:func:`_landing`)."""
+    found = itertools.chain(_direct(quad, name), *((_bridges(quad, name), _staircases(quad, name)) if tools else ()))
+    for route in found:
+        yield _landing(quad, name, route)
+
+
+def _landing(quad: Quadruped, name: str, route: Route) -> Route:
+    """``route`` with its stop on ``name`` pulled back along the way it arrives, when the walk to the stop is predicted
+    to run into something standing on the top (an object lying ahead of the steps): to the farthest point with every
+    foot on the top, the body's outline (and its side margin) clear of what stands there, and the walk there
+    predicted fine; unchanged when the walk is fine, or when no point is."""
+    last, surface = route.waypoints[-1]
+    if surface != name:
+        return route
+    previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
+    layout = route.layout(quad.layout)
+    if walk_violation(layout, previous, [last], quad.limits) is None:
+        return route
+    top, length = layout.box(name).top, float(np.linalg.norm(last - previous))
+    for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
+        stop = previous + (last - previous) * s / length
+        feet = layout.heights(stop + foot_offsets(quad.limits))
+        body = layout.heights(sweep_points(stop, stop, quad.half))
+        if (
+            np.all(np.abs(feet - top) <= LEVEL / 2)
+            and body.max() <= top + RISE
+            and walk_violation(layout, previous, [stop], quad.limits) is None
+        ):
+            return replace(route, waypoints=[*route.waypoints[:-1], (stop, name)])
+    return route
+
+
+def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Walk onto ``name``: straight when that is predicted fine, else lined up along an axis with one of its
+    sides (reached around what stands in the way), the shortest predicted-fine approaches first."""
+    box = quad.layout.box(name)
+    words = f"Walk onto {name}."
+    straight = Route(waypoints=[(box.center, name)], words=words)
+    if walk_violation(quad.layout, quad.start, [box.center], quad.limits) is None:
+        yield straight
+        return
+    found = []
+    for d in DIRECTIONS:
+        entry = _entry(quad, box, d, quad.start)
+        if entry is None:
+            continue
+        approach, inside = entry
+        path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, inside]
+        if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
+            found.append((_length(quad.start, path), approach, inside, d))
+    found.sort(key=lambda f: f[0])
+    for _, approach, inside, _ in found[:ENTRIES]:
+        yield Route(waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words)
+    if not found:
+        yield straight
+
+
+def _length(start: np.ndarray, path: list[np.ndarray]) -> float:
+    points = [start, *path]
+    return sum(float(np.linalg.norm(b - a)) for a, b in itertools.pairwise(points))
+
+
+def _entry(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where to line up (outside ``box``, facing ``d``) and where to stop on its top, or None when the box is too
+    narrow across ``d`` for the feet."""
+    axis = int(np.argmax(np.abs(d)))
+    lat = 1 - axis
+    if box.half[lat] < quad.half[lat] - FOOT:
+        return None
+    inside = quad.top_point(box, d, frm)
+    approach = inside.copy()
+    approach[axis] = box.center[axis] - d[axis] * (box.half[axis] + quad.half[axis] + APPROACH)
+    return approach, inside
+
+
+def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Push a board that rests on the robot's surface across the gap on the axis-aligned way to ``name``,
+    keeping the board's own line across the gap when it can (one push leg), else the start's or the target's."""
+    target = quad.layout.box(name)
+    d = _axis_direction(target.center - quad.start)
+    axis, lat = int(np.argmax(np.abs(d))), 1 - int(np.argmax(np.abs(d)))
+    for obj in quad.task.objects:
+        if obj.name == name or not quad.pushable(obj, quad.floor) or obj.top - obj.bottom > quad.limits.max_step_up:
+            continue
+        board = quad.layout.box(obj.name)
+        length = 2 * float(board.half[axis])
+        lines = [board.center[lat], quad.start[lat], target.center[lat]]
+        for line in (v for k, v in enumerate(lines) if all(abs(v - w) > 0.02 for w in lines[:k])):
+            gap = _gap(quad, d, line, target)
+            if gap is None:
+                continue
+            near, far = gap
+            if length < (far - near) + 2 * OVERLAP - 0.05:
+                continue
+            for shift in (far + OVERLAP - length / 2, (near + far) / 2):
+                xy = np.zeros(2)
+                xy[axis] = quad.start[axis] + d[axis] * shift
+                xy[lat] = line
+                lined = quad.start.copy()
+                lined[lat] = line
+                inside = quad.top_point(target, d, lined)
+                inside[lat] = np.clip(line, target.lo[lat] + quad.half[lat], target.hi[lat] - quad.half[lat])
+                waypoints = [(lined, quad.floor_name)] if abs(line - quad.start[lat]) > 0.01 else []
+                yield Route(
+                    pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
+                    waypoints=[*waypoints, (inside, name)],
+                    uses=[(obj.name, "tool: a rigid board to bridge the gap")],
+                    words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.",
+                )
+
+
+def _gap(quad: Quadruped, d: np.ndarray, line: float, target: Box) -> tuple[float, float] | None:
+    """The first stretch too low to step in along ``d`` from the start to ``target`` on the line ``line`` across
+    (distances from the start along ``d``), ignoring movable objects."""
+    axis, lat = int(np.argmax(np.abs(d))), 1 - int(np.argmax(np.abs(d)))
+    length = float(abs(target.center[axis] - quad.start[axis]))
+    s = np.arange(0.0, length, 0.01)
+    points = np.zeros((len(s), 2))
+    points[:, axis] = quad.start[axis] + d[axis] * s
+    points[:, lat] = line
+    movable = [o.name for o in quad.task.objects if o.movable]
+    h = quad.layout.heights(points, exclude=movable)
+    low = np.flatnonzero(h < quad.floor - quad.limits.max_step_up)
+    if not low.size:
+        return None
+    end = low[0]
+    while end + 1 < len(s) and h[end + 1] < quad.floor - quad.limits.max_step_up:
+        end += 1
+    return float(s[low[0]]), float(s[end])
+
+
+def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
+    """Climb objects onto ``name`` (each rise within the limit, a step down onto it allowed), pushing those that
+    do not already stand against the next."""
+    target = quad.task.object(name)
+    rise = quad.limits.max_step_up + 0.005
+    steps = [
+        o
+        for o in quad.task.objects
+        if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < o.top < target.top + quad.limits.max_step_up
+    ]
+    for count in range(1, MAX_STEPS + 1):
+        for chain in itertools.permutations(steps, count):
+            tops = [quad.floor, *(o.top for o in chain), target.top]
+            if any(
+                b - a > rise or a - b > quad.limits.max_step_down or (abs(b - a) < 0.02 and k < count)
+                for k, (a, b) in enumerate(itertools.pairwise(tops))
+            ):  # the last link may be level with the target
+                continue
+            for route in _place_chain(quad, [*chain, target]):
+                route.late = int(tops[-1] < tops[-2])
+                yield route
+
+
+def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
+    """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
+    each placed against where the next link will stand, nearest the target first; placements that would overlap
+    something, or whose steps cannot carry the feet, are left out. A link placed against a link that is itself
+    pushed into place continues that link's climb in a straight line."""
+
+    def place(k: int, layout: Layout, combo: list[Placement]) -> Iterator[list[Placement]]:
+        if k < 0:
+            yield combo
+            return
+        obj, nxt = chain[k], chain[k + 1]
+        box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
+        if box.touches(nxt_box):
+            yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo])
+            return
+        if not quad.pushable(obj, quad.floor):
+            return
+        straight = [combo[0][0]] if combo and combo[0][1] is not None else list(DIRECTIONS)
+        for direction, xy in _sides(quad, layout, obj, nxt, straight):
+            if layout.collides(box.moved_to(xy)) is None:
+                yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo])
+
+    routes = [r for combo in place(len(chain) - 2, quad.layout, []) if (r := _chain_route(quad, chain, combo))]
+    yield from sorted(routes, key=lambda r: _pushed_distance(quad.layout, r))
+
+
+def _pushed_distance(layout: Layout, route: Route) -> float:
+    """How far a route's pushes move objects in all."""
+    total = 0.0
+    for name, xy, _ in route.pushes:
+        total += float(np.linalg.norm(xy - layout.box(name).center))
+        layout = layout.with_moved(name, xy)
+    return total
+
+
+def _sides(
+    quad: Quadruped, layout: Layout, obj: SceneObject, nxt: SceneObject, directions: list[np.ndarray]
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction): centred,
+    flush with either end, or flush with something else standing by the same face, as long as the feet can stand
+    across both."""
+    box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
+    others = [
+        layout.box(o.name) for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
+    ]
+    for direction in directions:
+        axis = int(np.argmax(np.abs(direction)))
+        lat = 1 - axis
+        slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
+        along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+        offsets = [0.0, slide, -slide]
+        for other in others:  # flush against something else that stands by the same face
+            if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
+                offsets += [
+                    float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
+                    float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
+                ]
+        reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
+        for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
+            xy = nxt_box.center.copy()
+            xy[axis] = along
+            xy[lat] += offset
+            yield direction, xy
+
+
+def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placement]) -> Route | None:
+    route = Route()
+    layout = quad.layout
+    for k in range(len(combo) - 1, -1, -1):  # placements nearest the target first
+        d, xy = combo[k]
+        obj = chain[k]
+        if xy is not None:
+            lined = _lined_up(layout.box(obj.name).center, xy, d)
+            if lined is not None:
+                route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
+            layout = layout.with_moved(obj.name, xy)
+            route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))
+    boxes = [layout.box(o.name) for o in chain]
+    here = quad.start
+    lines = []
+    for k, (d, _) in enumerate(combo):  # the line across each climb on which every foot is over both steps
+        lat = 1 - int(np.argmax(np.abs(d)))
+        foot = quad.half[lat] - FOOT
+        lo = max(boxes[k].lo[lat], boxes[k + 1].lo[lat]) + foot
+        hi = min(boxes[k].hi[lat], boxes[k + 1].hi[lat]) - foot
+        if hi < lo - 0.004:
+            return None
+        lo, hi = _clear_of_neighbours(quad, layout, chain, k, lat, lo, hi)
+        lines.append(float(np.clip(here[lat], lo + 0.02, hi - 0.02)) if hi - lo > 0.04 else (lo + hi) / 2)
+    d0, lat0 = combo[0][0], 1 - int(np.argmax(np.abs(combo[0][0])))
+    axis0 = 1 - lat0
+    approach = np.zeros(2)
+    approach[axis0] = boxes[0].center[axis0] - d0[axis0] * (boxes[0].half[axis0] + quad.half[axis0] + APPROACH)
+    approach[lat0] = lines[0]
+    route.waypoints.append((approach, quad.floor_name))
+    previous = approach
+    for k in range(len(chain)):
+        d = combo[min(k, len(combo) - 1)][0]
+        axis = int(np.argmax(np.abs(d)))
+        stance = np.zeros(2)
+        stance[axis] = boxes[k].center[axis]
+        stance[1 - axis] = lines[min(k, len(lines) - 1)]
+        if k:  # straight onto this step along the last climb, then over to this climb's line
+            prev_d = combo[k - 1][0]
+            prev_axis = int(np.argmax(np.abs(prev_d)))
+            onto = previous.copy()
+            onto[prev_axis] = boxes[k].center[prev_axis] if k < len(chain) - 1 else stance[prev_axis]
+            if k == len(chain) - 1:
+                onto = quad.top_point(boxes[k], prev_d, previous)
+                onto[1 - prev_axis] = previous[1 - prev_axis]
+            route.waypoints.append((onto, chain[k].name))
+            if k == len(chain) - 1:
+                break
+            if float(np.linalg.norm(stance - onto)) > 0.01:
+                route.waypoints.append((stance, chain[k].name))
+        else:
+            route.waypoints.append((stance, chain[k].name))
+        previous = stance
+        route.uses.append((chain[k].name, f"tool: a step up to {chain[k + 1].name}"))
+    names = ", ".join(o.name for o in chain[:-1])
+    route.words = (
+        f"Make a staircase of {names} against {chain[-1].name}"
+        + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
+        + f", then climb it onto {chain[-1].name}."
+    )
+    return route
+
+
+def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray | None:
+    """Where to push an object first so that its last push toward ``xy`` runs along ``d`` (into the face it is
+    to stand against) rather than sliding along that face: the push skill moves along the shorter axis first,
+    so when the move across ``d`` is the longer one the object is first lined up across ``d``; None when the
+    push already ends along ``d``, or when the object starts past ``xy`` along ``d`` (its last push would run away
+    from the face, and lined up it would stand where the next link does)."""
+    axis = int(np.argmax(np.abs(d)))
+    delta = np.asarray(xy) - center
+    if abs(delta[1 - axis]) < 0.02 or abs(delta[1 - axis]) <= abs(delta[axis]) or delta[axis] * d[axis] < 0:
+        return None
+    out = np.array(center, dtype=float)
+    out[1 - axis] = xy[1 - axis]
+    return out
+
+
+def _clear_of_neighbours(
+    quad: Quadruped, layout: Layout, chain: list[SceneObject], k: int, lat: int, lo: float, hi: float
+) -> tuple[float, float]:
+    """Narrow the climb line's range ``lo``-``hi`` (across the climb from link ``k`` onto link ``k + 1``) so that the
+    body's flanks keep clear of other objects standing beside the two steps; unchanged when no line is clear."""
+    axis = 1 - lat
+    a, b = layout.box(chain[k].name), layout.box(chain[k + 1].name)
+    span = (min(a.lo[axis], b.lo[axis]) - quad.half[axis], max(a.hi[axis], b.hi[axis]) + quad.half[axis])
+    names = {o.name for o in chain}
+    new_lo, new_hi = lo, hi
+    for obj in quad.task.objects:
+        if obj.name in names or obj.shape == "cloth" or obj.top < quad.floor + 0.03:
+            continue
+        other = layout.box(obj.name)
+        if other.hi[axis] <= span[0] or other.lo[axis] >= span[1]:
+            continue
+        middle = (lo + hi) / 2
+        if other.hi[lat] <= middle:
+            new_lo = max(new_lo, float(other.hi[lat]) + quad.half[lat] + 0.02)
+        elif other.lo[lat] >= middle:
+            new_hi = min(new_hi, float(other.lo[lat]) - quad.half[lat] - 0.02)
+    return (new_lo, new_hi) if new_hi >= new_lo else (lo, hi)
+
+
+def _axis_direction(v: np.ndarray) -> np.ndarray:
+    axis = int(np.argmax(np.abs(v)))
+    out = np.zeros(2)
+    out[axis] = np.sign(v[axis]) or 1.0
+    return out

@@ -1,0 +1,82 @@
+"""Downward rays for the quadruped controller: surface heights and the objects that carry them, in many worlds at
+once through the simulator's batched ray cast (:meth:`~robotool.sim.backend.BatchedSim.rays`); a cloth carries no
+load over a gap, so rays see through it to what carries it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool.robots.quadruped.body import ROBOT_GROUP
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.sensing import SceneFacts
+from robotool.sim.backend import BatchedSim
+
+
+class Rays:
+    """Casts downward rays in the worlds of one batched simulator (no state of its own)."""
+
+    def __init__(self, sim: BatchedSim, limits: QuadrupedLimits, facts: SceneFacts, config: QuadrupedConfig):
+        self.sim, self.limits, self.facts, self.config = sim, limits, facts, config
+
+    def heights(self, w: int, xy: np.ndarray, top: float, exclude: int = -1) -> tuple[np.ndarray, np.ndarray]:
+        """Surface heights and hit objects (-1: ground or nothing) under points ``xy`` in world ``w``."""
+        z, objects = self.cast(np.array([w]), xy[None], np.array([top]), exclude)
+        return z[0], objects[0]
+
+    def cast(
+        self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: surface heights
+        and the objects that carry them (-1: ground or nothing); the robot is never hit.
+
+        A cloth is limp: it carries no load over a gap, whichever way it lies. A ray that meets a cloth's link is
+        cast again from just above the point it met, that link left out, until it meets something solid, which is
+        the object returned; the height is the cloth's where that solid lies no deeper under it than a step the
+        legs climb (a cloth lying on a surface, or bunched up on it, is stepped onto), else the solid's (over a gap
+        the feet would sink to it)."""
+        model = self.sim.scene.model
+        start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
+        z, geom = self._cast_from(worlds, xy, start, exclude)
+        through = self._on_cloth(geom)
+        cloth_top = np.where(through, z, np.nan)
+        for _ in range(self.facts.cloth_crossings):
+            if not through.any():
+                break
+            link = model.geom_bodyid[geom[through][0]]
+            again = through & (model.geom_bodyid[np.maximum(geom, 0)] == link)
+            rows = np.flatnonzero(again.any(axis=1))
+            count = again[rows].sum(axis=1)
+            first = np.argsort(~again[rows], axis=1, kind="stable")[:, : count.max()]  # each row's rays to redo first
+            redo = np.where(np.arange(first.shape[1])[None, :] < count[:, None], first, first[:, :1])  # padded
+            z_again, geom_again = self._cast_from(
+                worlds[rows],
+                np.take_along_axis(xy[rows], redo[:, :, None], axis=1),
+                np.take_along_axis(z[rows], redo, axis=1) + self.config.cloth_step,
+                int(link),
+            )
+            z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
+            through = self._on_cloth(geom)
+        objects = np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
+        lying = cloth_top - z <= self.limits.max_step_up  # False where no cloth was met (NaN)
+        return np.where(lying, cloth_top, z), objects
+
+    def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
+        """Whether each ray's hit geom (-1: none) belongs to a cloth."""
+        objects = np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
+        return (objects >= 0) & self.facts.cloth[np.maximum(objects, 0)]
+
+    def _cast_from(
+        self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
+        ``exclude`` left out: surface heights (0 where nothing is hit) and the geoms hit (-1: none)."""
+        nworld, nray = self.sim.nworld, xy.shape[1]
+        pnt = np.full((nworld, nray, 3), np.nan)
+        pnt[worlds, :, :2] = xy
+        pnt[worlds, :, 2] = start
+        vec = np.zeros((nworld, nray, 3))
+        vec[..., 2] = -1.0
+        dist, geom = self.sim.rays(pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
+        dist, geom = dist[worlds], geom[worlds]
+        return np.where(np.isfinite(dist), start - dist, 0.0), geom

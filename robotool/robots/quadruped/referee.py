@@ -1,0 +1,326 @@
+"""The quadruped's referee: the judge rules that physics alone would let a program break, checked every tick in
+every world, and the push rules checked when a push starts.
+
+Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
+``fall_ticks`` ticks with the lift off and that tips, or that tilts past ``fall_tilt``, has fallen: its skill ends
+with outcome ``fell`` and a reason that says where and which feet lost support, :attr:`RefereeState.failures` marks
+its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object that
+the torso has touched, other than one being pushed, and that has moved more than ``shove`` since (what a foot's
+weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one
+once together they weigh more than the push limit. The move is stopped and refused, naming them, and the world
+fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so does
+standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables
+are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robotool.robots.quadruped.move_runner import MoveRunner
+from robotool.robots.quadruped.push import rule_violation
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.rays import Rays
+from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.support import (
+    centre_of_mass,
+    feet,
+    feet_touching,
+    pass_weight,
+    resting_on,
+    supported,
+    tilt,
+    unsupported_feet,
+)
+from robotool.robots.quadruped.terrain import RISE
+from robotool.sim.embodiment import SkillEnd
+
+FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
+SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
+CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
+
+
+@dataclass
+class RefereeState:
+    """Per world (index first): the rules broken so far and what the rules remember between ticks."""
+
+    failures: list[str | None]  # why the robot can no longer be trusted (it fell), else None
+    shoves: list[str | None]  # the first object the robot shoved, and how far
+    crushes: list[str | None]  # the first fragile object the robot stood on
+    outside: np.ndarray  # (nworld,) ticks the centre of mass has been outside the support
+    lost_support: np.ndarray  # (nworld,) object: where and how it last left its support
+    bumped: np.ndarray  # (nworld, nobject, 2) where each object's centre was when the torso first touched it (NaN:
+    # untouched, or pushed since)
+    pressed: np.ndarray  # (nworld, nobject) touched without a break, and without a walk, since a push of it (it may
+    # slide on after the push ended)
+    carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, from push to
+    # push until the robot pushes it itself
+    last_centres: np.ndarray  # (nworld, nobject, 2) where each object was at the last tick
+
+    @classmethod
+    def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
+        nobject = centres.shape[1]
+        return cls(
+            failures=[None] * nworld,
+            shoves=[None] * nworld,
+            crushes=[None] * nworld,
+            outside=np.zeros(nworld, dtype=int),
+            lost_support=np.full(nworld, None, dtype=object),
+            bumped=np.full((nworld, nobject, 2), np.nan),
+            pressed=np.zeros((nworld, nobject), dtype=bool),
+            carried=np.zeros((nworld, nobject)),
+            last_centres=centres,
+        )
+
+
+class Referee:
+    """Judges falls, shoves, rams, crushes and pushes (state: :class:`RefereeState`)."""
+
+    def __init__(self, senses: Senses, rays: Rays, limits: QuadrupedLimits, config: QuadrupedConfig):
+        self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
+        self.facts, self.scene = senses.facts, senses.scene
+        self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state)[:, :, :2])
+
+    def conditions(self) -> dict[str, list[bool]]:
+        """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
+        (what a shove moved, such as a vase pushed off its edge, may not count toward a goal) and, in a scene with a
+        fragile object, it stood on none (its weight would break it)."""
+        s = self.state
+        conditions = {
+            FALL_CONDITION: [f is None for f in s.failures],
+            SHOVE_CONDITION: [shove is None for shove in s.shoves],
+        }
+        if self.facts.fragile.any():
+            conditions[CRUSH_CONDITION] = [c is None for c in s.crushes]
+        return conditions
+
+    def push_started(self, w: int, index: int) -> None:
+        """A push of object ``index`` starts in world ``w``: it is no longer shoved or rammed."""
+        self.state.bumped[w, index] = np.nan
+        self.state.carried[w, index] = 0.0
+
+    def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
+        """Check the rules in the worlds in ``mask`` after a tick: end the skills of robots that fell, stop and
+        refuse the moves that shoved, rammed or crushed something."""
+        ends = self._falls(mask, moves)
+        centres = self.senses.centers(self.senses.state)[:, :, :2]
+        shift = centres - self.state.last_centres  # each object's travel since the last tick
+        self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
+        self._shoves(ends, mask, centres, shift, moves)
+        self._rams(ends, mask, centres, shift, moves)
+        if self.facts.fragile.any():
+            self._crushes(ends, mask, moves)
+        return ends
+
+    # -- push rules ----------------------------------------------------------------------------------
+
+    def push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
+        """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves."""
+        senses, names = self.senses, self.scene.object_names
+        centres = feet(senses.state, self.facts.ids)[w]
+        z, objects = self.rays.heights(w, centres[:, :2], float(centres[:, 2].max()) + 0.05)
+        on = objects[z >= z.max() - RISE]
+        on = on[on >= 0]
+        movable = next((names[o] for o in on if self.facts.movable[o]), None)
+        obj_lo, obj_hi = senses.bounds3(w, index)
+        centre_obj = (obj_lo + obj_hi) / 2
+        below, _ = self.rays.heights(w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
+        riders = self._riders(w, index)
+        mass = float(sum(senses.mass(w, o) for o in [index, *riders]))
+        return rule_violation(
+            movable=bool(self.facts.movable[index]),
+            mass=round(mass, 3),
+            riders=[names[o] for o in riders],
+            under_robot=bool(np.isin(index, on)),
+            robot_support_movable=movable,
+            object_support=float(below[0]),
+            robot_support=float(z.max()),
+            limits=self.limits,
+        )
+
+    def _riders(self, w: int, index: int) -> list[int]:
+        """Movable objects that ride on object ``index`` in world ``w``, recursively: higher than what carries them
+        and touching nothing else (but the robot)."""
+        state, owner = self.senses.state, self.scene.body_object
+        centres = self.senses.centers(state)[w]
+        carried = [index]
+        riders: list[int] = []
+        robot = self.scene.robot_body
+        while carried:
+            base = carried.pop()
+            touching = state.touching[w][owner == base].any(axis=0)
+            for other in np.unique(owner[touching & (owner >= 0)]):
+                if (
+                    other == index
+                    or other in riders
+                    or not self.facts.movable[other]
+                    or centres[other, 2] <= centres[base, 2]
+                ):
+                    continue
+                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other)
+                if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
+                    riders.append(int(other))
+                    carried.append(int(other))
+        return riders
+
+    # -- rules checked every tick ----------------------------------------------------------------------
+
+    def _falls(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
+        """Find the robots in ``mask`` that fell since the last tick: end their skills and mark their worlds failed."""
+        s, state, ids, config = self.state, self.senses.state, self.facts.ids, self.config
+        com = centre_of_mass(state, ids)
+        centres = feet(state, ids)
+        touching = feet_touching(state, ids, self.facts.not_robot)
+        held = supported(com, centres, touching, config.support_margin)
+        s.outside = np.where(mask, np.where(~held & np.isnan(moves.terrain.state.lift), s.outside + 1, 0), s.outside)
+        s.lost_support[held & mask] = None
+        for w in np.flatnonzero(mask & (s.outside == 1)):  # where it left its support, and which feet had none
+            x, y = com[w, :2]
+            s.lost_support[w] = f"fell at [{x:.2f}, {y:.2f}]: no support under {unsupported_feet(touching[w])}"
+        angle = tilt(state, ids)
+        fell = ((s.outside >= config.fall_ticks) & (angle > config.tipping)) | (angle > config.fall_tilt)
+        ends = []
+        for w in np.flatnonzero(fell & mask):
+            if s.failures[w] is not None or state.failed[w] is not None:
+                continue
+            x, y = com[w, :2]
+            reason = (
+                s.lost_support[w] or f"fell at [{x:.2f}, {y:.2f}]: tipped over ({np.degrees(angle[w]):.0f} degrees)"
+            )
+            s.failures[w] = reason
+            measured = {"x": round(float(x), 3), "y": round(float(y), 3), "tilt": round(float(np.degrees(angle[w])), 1)}
+            end = moves.fell(int(w), reason, measured)
+            if end is not None:
+                ends.append(end)
+        return ends
+
+    def _shoves(
+        self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
+    ) -> None:
+        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
+        torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
+        until the next walk), and that no foot stands on (a lever tips under the robot), is remembered where it is;
+        while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
+        they are split between steps onto it); once it lies more than ``shove`` from that place, it was shoved
+        (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
+        limit, and what it moved may slide or tip on after the robot stops). The world fails (:meth:`conditions`)
+        and a move in progress there is stopped and refused, naming the object."""
+        s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
+        touched = state.touching[:, facts.ids.body][:, scene.object_body] & facts.movable & ~facts.cloth
+        touched &= mask[:, None]
+        pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
+        pushed &= mask[:, None]
+        for w in np.flatnonzero(pushed.any(axis=1)):  # what the pushed object moves by touching it moves with it
+            pushed[w] |= state.touching[w, scene.object_body[m.pushing[w]]][scene.object_body]
+        walking = (m.moving & (m.pushing < 0))[:, None]
+        s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
+        stood_on = state.touching[:, facts.ids.feet][:, :, scene.object_body].any(axis=1)  # it carries a foot
+        excused = (s.pressed | stood_on) & mask[:, None]
+        s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
+        first = touched & ~s.pressed & ~stood_on & np.isnan(s.bumped[:, :, 0])
+        s.bumped[first] = centres[first]
+        moved = np.nan_to_num(np.linalg.norm(centres - s.bumped, axis=2), nan=0.0)
+        for w in np.flatnonzero(mask & (moved > self.config.shove).any(axis=1)):
+            if s.shoves[w] is not None or state.failed[w] is not None:
+                continue
+            index = int(np.argmax(moved[w]))
+            s.shoves[w] = reason = (
+                f"the robot ran into {scene.object_names[index]} and moved it {moved[w, index]:.2f} m "
+                "(a walk or a climb does not push things: push_to_position does, within the push rules)"
+            )
+            moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
+
+    def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
+        """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
+        centre above the object's centre, or a belly that touches one whose centre lies under the torso, rests the
+        robot's weight on it, which breaks it (a low vase read as a step is no footing); so does standing on a
+        movable object that rests on it (:meth:`_loaded`: a board lying on a vase). The world fails
+        (:meth:`conditions`) and a move in progress there is stopped and refused, naming the object."""
+        s, state, facts, names = self.state, self.senses.state, self.facts, self.scene.object_names
+        bodies = self.scene.object_body[facts.fragile]
+        centres = state.xpos[:, bodies]  # (nworld, nfragile, 3)
+        foot_z = feet(state, facts.ids)[:, :, 2]
+        by_foot = state.touching[:, facts.ids.feet][:, :, bodies] & (foot_z[:, :, None] > centres[:, None, :, 2])
+        torso = state.xpos[:, facts.ids.body]
+        under = np.all(np.abs(centres[:, :, :2] - torso[:, None, :2]) < facts.half, axis=2)
+        by_belly = state.touching[:, facts.ids.body][:, bodies] & under
+        stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
+        loaded, via = self._loaded(mask)
+        for w in np.flatnonzero((stood_on | loaded[:, facts.fragile]).any(axis=1)):
+            if s.crushes[w] is not None or state.failed[w] is not None:
+                continue
+            index = int(np.flatnonzero(facts.fragile)[np.argmax(stood_on[w] | loaded[w, facts.fragile])])
+            name = names[index]
+            what = name if stood_on[w].any() else f"{names[via[w, index]]}, which rests on {name}"
+            s.crushes[w] = reason = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
+            moves.refuse(int(w), reason, {}, ends)
+
+    def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
+        ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
+        on (touching it, that object's centre below its underside along its own up axis: under a board lying flat or
+        leaning on it from the floor); a fixed object passes it to the ground.
+        Also (nworld, nobject) the object that passed the weight on to each one."""
+        state, owner, facts = self.senses.state, self.scene.body_object, self.facts
+        nworld, nobject = self.senses.sim.nworld, len(self.scene.object_names)
+        loaded, via = np.zeros((nworld, nobject), dtype=bool), np.zeros((nworld, nobject), dtype=int)
+        member = (owner[None, :] == np.arange(nobject)[:, None]).astype(float)  # (nobject, nbody)
+        carrier = facts.movable & ~facts.fragile
+        under_feet = (state.touching[:, facts.ids.feet].any(axis=1).astype(float) @ member.T > 0) & carrier
+        worlds = np.flatnonzero(mask & under_feet.any(axis=1))
+        if worlds.size == 0:
+            return loaded, via
+        rests = resting_on(state, self.scene, facts.corners, worlds)
+        loaded[worlds], via[worlds] = pass_weight(rests, under_feet[worlds], carrier)
+        return loaded, via
+
+    def _rams(
+        self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
+    ) -> None:
+        """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
+        objects that the pushed object presses, directly or through others, and whose centres lie beyond its front
+        face (what rides on it is checked when the push starts; what it drags by friction is not rammed); the travel
+        of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed object and
+        the rammed objects that travelled more than ``shove`` weigh more than the push limit, the robot shoved them
+        (a light object used as a ram moves no more than the robot may push): the world fails (:meth:`conditions`)
+        and the push is stopped and refused, naming them."""
+        s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
+        step = np.linalg.norm(shift, axis=2)
+        for w in np.flatnonzero(mask & m.moving & (m.pushing >= 0)):
+            index = int(m.pushing[w])
+            lo, hi = senses.bounds(w, index)
+            front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
+            ahead = (centres[w] - centres[w, index]) @ m.u[w] > front  # centres beyond that face
+            rammed = self._pressed_by(w, index) & ahead
+            s.carried[w] += np.where(rammed, step[w], 0.0)
+            moved = np.flatnonzero(rammed & (s.carried[w] > self.config.shove))
+            mass = senses.mass(w, index) + sum(senses.mass(w, int(o)) for o in moved)
+            if mass <= self.limits.max_push_mass or s.shoves[w] is not None or senses.state.failed[w] is not None:
+                continue
+            s.shoves[w] = reason = (
+                f"pushing {names[index]} rammed "
+                f"{', '.join(names[o] for o in moved)}: {mass:.1f} kg in all, over the "
+                f"push limit of {self.limits.max_push_mass:.1f} kg (a push moves only what the robot may push)"
+            )
+            measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
+            moves.refuse(int(w), reason, measured, ends)
+
+    def _pressed_by(self, w: int, index: int) -> np.ndarray:
+        """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other
+        movable objects (itself left out)."""
+        owner = self.scene.body_object
+        touching = self.senses.state.touching[w]
+        group = np.zeros(len(self.scene.object_names), dtype=bool)
+        group[index] = True
+        frontier = [index]
+        while frontier:
+            near = touching[owner == frontier.pop()].any(axis=0) & (owner >= 0)
+            for other in np.unique(owner[near]):
+                if self.facts.movable[other] and not group[other]:
+                    group[other] = True
+                    frontier.append(int(other))
+        group[index] = False
+        return group

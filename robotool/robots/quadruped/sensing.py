@@ -1,0 +1,111 @@
+"""What the quadruped controller's components read from the batched state: the scene's fixed facts (which objects
+are movable, fragile or cloth, the robot's ids and size) and, from the current state, positions, object centres,
+bounds and masses (computed once per state)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from robotool.robots.quadruped.body import LEG_SLACK, XY_KP, BodyIds
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.sim.backend import BatchedSim, BatchState
+from robotool.sim.compiled_scene import Scene
+from robotool.sim.object_goals import local_corners, world_corners
+
+
+@dataclass(frozen=True)
+class SceneFacts:
+    """What does not change during a run: the robot's ids and size, and per object whether it is movable, fragile
+    or a cloth (no per-world state)."""
+
+    ids: BodyIds
+    half: np.ndarray  # (2,) m: the body's half length and half width
+    height: float  # m: the body's height
+    lead: float  # s: setpoint lead that cancels the x-y servos' lag at speed
+    reach: float  # m a leg reaches down (the step-down limit and the legs' slack)
+    corners: np.ndarray  # (nobject, 8, 3) each object's box corners in its own frame
+    geom_object: np.ndarray  # (ngeom,) the object of each geom (-1: none)
+    cloth: np.ndarray  # (nobject,) bool
+    cloth_crossings: int  # the most recasts one ray cast needs: one per cloth link for every layer of cloth
+    movable: np.ndarray  # (nobject,) bool
+    fragile: np.ndarray  # (nobject,) bool
+    not_robot: np.ndarray  # (nbody,) bool: bodies that are not the robot's
+
+    @classmethod
+    def of(cls, scene: Scene, limits: QuadrupedLimits) -> SceneFacts:
+        model = scene.model
+        ids = BodyIds.of(model)
+        geom_object = scene.body_object[model.geom_bodyid]
+        cloth = np.array([o.shape == "cloth" for o in scene.task.objects], dtype=bool)
+        return cls(
+            ids=ids,
+            half=np.array(limits.body_size[:2]) / 2,
+            height=limits.body_size[2],
+            lead=ids.xy_kv / XY_KP,
+            reach=limits.max_step_down + LEG_SLACK,
+            corners=local_corners(scene),
+            geom_object=geom_object,
+            cloth=cloth,
+            cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,
+            movable=np.array([o.movable for o in scene.task.objects]),
+            fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
+            not_robot=~scene.robot_body,
+        )
+
+
+class Senses:
+    """The current batched state (``state``, set at every start and tick) and what the components read from it."""
+
+    def __init__(self, sim: BatchedSim, facts: SceneFacts):
+        self.sim, self.facts = sim, facts
+        self.scene: Scene = sim.scene
+        self.state: BatchState = sim.state()
+        self._memo: tuple[BatchState | None, dict[Any, np.ndarray]] = (None, {})  # see of_state
+
+    def position(self, w: int) -> np.ndarray:
+        """The x-y of the body's slides (the servos' coordinates) in world ``w``."""
+        return self.state.qpos[w, self.facts.ids.qpos[:2]].copy()
+
+    def centers(self, state: BatchState) -> np.ndarray:
+        """Object centres (nworld, nobject, 3), read-only: body origins; a cloth's is the mean of its links."""
+
+        def compute() -> np.ndarray:
+            out = state.xpos[:, self.scene.object_body].copy()
+            for i in np.flatnonzero(self.facts.cloth):
+                out[:, i] = state.xpos[:, self.scene.body_object == i].mean(axis=1)
+            return out
+
+        return self.of_state(state, "centres", compute)
+
+    def of_state(self, state: BatchState, key: Any, compute: Callable[[], np.ndarray]) -> np.ndarray:
+        """``compute()`` once per state (a tick and the skill starts that follow read the same one), read-only."""
+        if self._memo[0] is not state:
+            self._memo = (state, {})
+        found = self._memo[1].get(key)
+        if found is None:
+            found = self._memo[1][key] = compute()
+            found.flags.writeable = False
+        return found
+
+    def bounds3(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """World axis-aligned bounds of an object in world ``w``."""
+        if self.facts.cloth[index]:
+            center = self.centers(self.state)[w, index]
+            half = np.asarray(self.scene.task.objects[index].size) / 2
+            return center - half, center + half
+        state, body, corners = self.state, self.scene.object_body[index], self.facts.corners
+        found = self.of_state(state, ("corners", index), lambda: world_corners(state, body, corners[index]))[w]
+        return found.min(axis=0), found.max(axis=0)
+
+    def bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """World axis-aligned x-y bounds of an object in world ``w``."""
+        lo, hi = self.bounds3(w, index)
+        return lo[:2], hi[:2]
+
+    def mass(self, w: int, index: int) -> float:
+        """World ``w``'s (perturbed) mass of object ``index``, all its bodies."""
+        return float(self.sim.body_mass[w, self.scene.body_object == index].sum())

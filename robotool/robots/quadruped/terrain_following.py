@@ -1,0 +1,282 @@
+"""Terrain following for the quadruped's moves: reading the feet's paths ahead, where a move must stop and why, and
+the legs and the lift that carry the body over what the feet cross.
+
+When a move starts, and again when the terrain under a foot changed or the stretch read runs out, downward rays
+read the path of each of the four feet from just behind it to :data:`~robotool.robots.quadruped.terrain.LOOKAHEAD`
+past the move's end (at most ``scan_ahead`` at a time), and :mod:`.terrain` checks every foot's path against the
+legs' limits: a finding moves the stopping point to just before it, and once the robot has stopped there the skill
+is refused with the measured value, the limit and where. A cloth is no footing over a gap: the rays see through it
+to what carries it. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell
+whether a foot is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher
+surface (a step up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot
+is clear. Otherwise the lift is off and the robot's weight rests on its feet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robotool.robots.quadruped.body import BELLY_HEIGHT, OFF
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.rays import Rays
+from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.terrain import (
+    FOOT_NAMES,
+    FOOT_RADIUS,
+    KINDS,
+    LOOKAHEAD,
+    RADIUS_SAMPLES,
+    RISE,
+    SPACING,
+    Finding,
+    limit_of,
+    scan_paths,
+)
+
+
+@dataclass
+class TerrainState:
+    """Per world (index first): the last reading of the feet's paths and what it says about the move in progress,
+    and the legs' and the lift's setpoints."""
+
+    rescan: np.ndarray  # (nworld,) bool: read the paths again at the next tick
+    scan_t0: np.ndarray  # (nworld,) m of travel at the last reading: sample k lies at scan_t0 - back + k * SPACING
+    heights: np.ndarray  # (nworld, 4, samples) m: the surface under each foot's path
+    level: np.ndarray  # (nworld, 4, samples) m: the level each foot accepted along its path
+    stop: np.ndarray  # (nworld,) m of travel along the move where the body must stop
+    findings: list[Finding | None]  # why it must stop there (None: the move's end)
+    halted: np.ndarray  # (nworld,) bool: the move was refused for want of footing
+    hover_from: np.ndarray  # (nworld, 4) m of travel where each foot began to cross an edge (NaN: not crossing)
+    lift: np.ndarray  # (nworld,) m: the lift's setpoint (NaN: off)
+    legs: np.ndarray  # (nworld, 4) m: the legs' setpoints (negative: reaching down)
+
+    @classmethod
+    def empty(cls, nworld: int, samples: int, press: float) -> TerrainState:
+        return cls(
+            rescan=np.zeros(nworld, dtype=bool),
+            scan_t0=np.zeros(nworld),
+            heights=np.full((nworld, 4, samples), np.nan),
+            level=np.full((nworld, 4, samples), np.nan),
+            stop=np.zeros(nworld),
+            findings=[None] * nworld,
+            halted=np.zeros(nworld, dtype=bool),
+            hover_from=np.full((nworld, 4), np.nan),
+            lift=np.full(nworld, np.nan),
+            legs=np.full((nworld, 4), -press),  # standing: each leg carries its share
+        )
+
+
+class TerrainFollowing:
+    """Reads the terrain along each move and sets the legs and the lift (state: :class:`TerrainState`)."""
+
+    def __init__(self, senses: Senses, rays: Rays, limits: QuadrupedLimits, config: QuadrupedConfig):
+        self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
+        self.samples, self.behind = config.samples, config.behind
+        self.state = TerrainState.empty(senses.sim.nworld, self.samples, config.press)
+
+    def start_move(self, w: int) -> None:
+        """A new move in world ``w``: read its paths at the next tick."""
+        s = self.state
+        s.stop[w] = 0.0
+        s.findings[w] = None
+        s.rescan[w] = True
+        s.level[w] = np.nan
+        s.hover_from[w] = np.nan
+        s.halted[w] = False
+
+    def indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
+        """Sample indices (k, 5) of the ``config.local`` offsets ahead of the feet in each world's last reading."""
+        t = travel - self.state.scan_t0[worlds] + self.config.back
+        return np.round((t[:, None] + self.config.local[None, :]) / SPACING).astype(int)
+
+    def gather(self, table: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """``table`` (k, 4, samples) at ``index`` (k, 5) for every foot -> (k, 4, 5) (NaN out of range)."""
+        ok = (index >= 0) & (index < self.samples)
+        out = np.take_along_axis(table, np.clip(index, 0, self.samples - 1)[:, None, :].repeat(4, axis=1), axis=2)
+        return np.where(ok[:, None, :], out, np.nan)
+
+    def local(
+        self, worlds: np.ndarray, centres: np.ndarray, u: np.ndarray, pushing: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Heights and objects (k, 4, 5) at the ``config.local`` offsets along each foot's path (direction ``u``
+        (k, 2)), and the highest surface under the torso (k,) (the object ``pushing`` (k,) left out)."""
+        k, local = len(worlds), self.config.local
+        facts = self.senses.facts
+        points = centres[:, :, None, :2] + local[None, None, :, None] * u[:, None, None, :]
+        grid = np.array(self.config.torso_grid)
+        torso = self.senses.state.qpos[worlds][:, None, facts.ids.qpos[:2]] + grid * facts.half
+        top = centres[:, :, 2].min(axis=1) + self.config.ray_height
+        z, objects = self.rays.cast(worlds, np.concatenate([points.reshape(k, -1, 2), torso], axis=1), top)
+        pushed = (objects == pushing[:, None]) & (objects >= 0)
+        under_torso = np.where(pushed, -np.inf, z)[:, 4 * len(local) :].max(axis=1)
+        return (z[:, : 4 * len(local)].reshape(k, 4, -1), objects[:, : 4 * len(local)].reshape(k, 4, -1), under_torso)
+
+    def scan(
+        self,
+        worlds: np.ndarray,
+        travel: np.ndarray,
+        centres: np.ndarray,
+        u: np.ndarray,
+        length: np.ndarray,
+        pushing: np.ndarray,
+    ) -> None:
+        """Read and check the feet's paths ahead in ``worlds`` (moves along ``u`` (k, 2) of ``length`` (k,), pushing
+        object ``pushing`` (k,)); set where each must stop and why."""
+        s, config, samples, behind = self.state, self.config, self.samples, self.behind
+        bottom = centres[:, :, 2] - FOOT_RADIUS
+        ahead = np.clip(length - travel, 0.0, config.scan_ahead) + LOOKAHEAD
+        sample = np.minimum(-config.back + np.arange(samples) * SPACING, ahead[:, None])  # (k, samples)
+        points = centres[:, :, None, :2] + sample[:, None, :, None] * u[:, None, None, :]
+        z, objects = self.rays.cast(worlds, points.reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height)
+        z, objects = z.reshape(points.shape[:3]), objects.reshape(points.shape[:3])
+        under = z[:, :, behind - RADIUS_SAMPLES : behind + RADIUS_SAMPLES + 1]
+        actual = np.minimum(bottom + RISE, np.nanmax(under, axis=2))
+        now = self.indices(worlds, travel)[:, 1]
+        before = self.gather(s.level[worlds], now[:, None])[:, :, 0]
+        over_gap = np.nan_to_num(before - actual, nan=0.0) > self.limits.max_step_up  # striding a gap: keep its level
+        start = np.where(over_gap, before, actual)
+        into_gap = np.zeros(over_gap.shape)
+        for k, f in zip(*np.nonzero(over_gap), strict=True):  # how far into it, from the last reading
+            w, i = worlds[k], int(now[k])
+            low = s.heights[w, f, : i + 1] < s.level[w, f, : i + 1] - self.limits.max_step_up
+            edge = np.flatnonzero(~low)
+            into_gap[k, f] = (i - (edge[-1] if edge.size else -1)) * SPACING
+        pushed = (objects == pushing[:, None, None]) & (objects >= 0)
+        z = np.where(pushed, start[:, :, None], z)
+        result = scan_paths(
+            z[:, :, behind:].reshape(-1, samples - behind), start.reshape(-1), self.limits, into_gap.reshape(-1)
+        )
+        level = np.concatenate(
+            [np.repeat(start[:, :, None], behind, axis=2), result.level.reshape(len(worlds), 4, -1)], axis=2
+        )
+        s.heights[worlds], s.level[worlds] = z, level
+        s.scan_t0[worlds] = travel
+        s.rescan[worlds] = False
+        index = result.index.reshape(len(worlds), 4) + behind
+        kind = result.kind.reshape(len(worlds), 4)
+        measured = result.measured.reshape(len(worlds), 4)
+        meets = travel[:, None] + np.take_along_axis(sample, np.minimum(index, samples - 1), axis=1)
+        past = np.where(kind >= 2, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
+        relevant = (kind > 0) & (meets - past <= length[:, None])
+        margin = np.where(kind >= 2, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
+        stop_at = np.where(relevant, meets - margin, np.inf).min(axis=1)
+        limit = np.where(length > travel + config.scan_ahead, travel + config.scan_ahead, length)
+        halted = s.halted[worlds]
+        s.stop[worlds] = np.where(halted, s.stop[worlds], np.minimum(limit, stop_at))
+        for k, w in enumerate(worlds):
+            hits = np.flatnonzero(relevant[k])
+            if halted[k]:  # refused already: the move ends where it stopped
+                continue
+            if not hits.size:
+                s.findings[w] = None
+                continue
+            foot = int(hits[np.argmin(meets[k, hits])])
+            where = points[k, foot, index[k, foot]]
+            kind_name = KINDS[int(kind[k, foot]) - 1]
+            s.findings[w] = Finding(
+                kind_name,
+                round(float(measured[k, foot]), 3),
+                limit_of(kind_name, self.limits),
+                (float(where[0]), float(where[1])),
+                FOOT_NAMES[foot],
+            )
+
+    def lift(
+        self,
+        worlds: np.ndarray,
+        q: np.ndarray,
+        travel: np.ndarray,
+        centres: np.ndarray,
+        local: np.ndarray,
+        under_torso: np.ndarray,
+        index: np.ndarray,
+    ) -> np.ndarray:
+        """Set the legs and the lift; return the worlds (k,) that must wait for a foot to clear an edge.
+
+        Each leg reaches down to the surface under its foot, a little further (``press``) so that it carries its
+        share, the body level over the highest one and its torso ``torso_clearance`` above what lies under it;
+        legs change length at ``leg_speed``. A foot crosses up while the level accepted from just behind it to
+        ``lift_ahead`` ahead stands higher than the surface under it (a step up ahead, a stridden gap under it):
+        the lift raises the body until that foot is ``clearance`` above that level. It crosses down from when the
+        surface under its centre drops below the level it stood at (it bears weight up to the edge) until
+        ``hold_behind`` past it: the lift holds the body. While the lift carries the body the legs keep their
+        length and the tilt motors hold it level; once no foot crosses, the lift lets the body down onto its legs
+        at ``descent_speed`` and switches off once they stand as they should and carry it (all in
+        :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`).
+        """
+        s, config, samples, sim = self.state, self.config, self.samples, self.senses.sim
+        ids, dt = self.senses.facts.ids, self.senses.scene.control_dt
+        hold_len = round(config.hold_behind / SPACING)
+        span = np.arange(-hold_len - RADIUS_SAMPLES, round(config.lift_ahead / SPACING) + 1)
+        window = index[:, 1, None] + span[None, :]  # around each foot's centre
+        values = np.take_along_axis(s.level[worlds], np.clip(window, 0, samples - 1)[:, None, :].repeat(4, axis=1), 2)
+        last = np.round((s.stop[worlds] - s.scan_t0[worlds] + config.back) / SPACING)  # the move's end (the foot's)
+        values = np.where(((window >= 0) & (window < samples) & (window <= last[:, None]))[:, None, :], values, np.nan)
+        values = np.where(np.isnan(values), -np.inf, values)
+        ahead = values[:, :, hold_len:].max(axis=2)
+        behind = values[:, :, : hold_len + RADIUS_SAMPLES + 1].max(axis=2)  # up to the foot's centre
+        under = local[:, :, :3].max(axis=2)
+        below = local[:, :, 1]  # under the foot's centre: it bears weight up to the edge
+        bottom = centres[:, :, 2] - FOOT_RADIUS
+        up = ahead - under > RISE
+        hold = ~up & (behind - below > RISE)
+        crossing = (up | hold).any(axis=1)
+        standing = self.gather(s.level[worlds], index[:, 1:2])[:, :, 0]  # the level accepted under each foot
+        footing = np.abs(below - standing) <= RISE  # a surface the foot could stand on lies under it
+        crossing &= ~self._no_footing(worlds, travel, up | hold, footing, centres)
+        up &= crossing[:, None]
+        clear = under_torso - BELLY_HEIGHT + config.torso_clearance  # the lowest the feet's level may be there
+        stance = np.clip(under - np.maximum(under.max(axis=1), clear)[:, None] - config.press, -self.reach, 0.0)
+        legs = s.legs[worlds]
+        step = np.clip(stance - legs, -config.leg_speed * dt, config.leg_speed * dt)
+        s.legs[worlds] = np.where(crossing[:, None], legs, legs + step)  # held while the lift carries the body
+        sim.ctrl[worlds[:, None], ids.leg_actuator] = s.legs[worlds]
+        need = np.where(up, ahead + config.clearance, np.where(hold, behind, -np.inf)) - bottom
+        wanted = np.where(crossing, np.maximum(q[:, 2] + need.max(axis=1), clear), np.nan)
+        previous = np.minimum(s.lift[worlds], q[:, 2]) - config.descent_speed * dt  # NaN: was off
+        target = np.where(np.isnan(wanted), previous, np.fmax(wanted, previous))
+        settled = np.all(np.abs(s.legs[worlds] - stance) < 1e-3, axis=1)  # the legs stand where they should
+        target = np.where(~crossing & settled & (target < q[:, 2] - config.release), np.nan, target)  # on its legs
+        s.lift[worlds] = target
+        sim.ctrl[worlds, ids.actuator[2]] = np.where(np.isnan(target), OFF, target)
+        angle, rate = q[:, 3:], self.senses.state.qvel[worlds][:, ids.qvel[3:]]
+        level = np.clip(-angle * config.tilt_gain - rate * config.tilt_damping, -1.0, 1.0) * ~np.isnan(target)[:, None]
+        sim.ctrl[worlds[:, None], ids.actuator[3:]] = level
+        return np.any(up & (bottom < ahead + config.clearance / 2), axis=1)
+
+    @property
+    def reach(self) -> float:
+        """m a leg reaches down."""
+        return self.senses.facts.reach
+
+    def _no_footing(
+        self, worlds: np.ndarray, travel: np.ndarray, crossing: np.ndarray, footing: np.ndarray, centres: np.ndarray
+    ) -> np.ndarray:
+        """Worlds (k,) where a foot has been carried further than any edge needs (``crossing``: (k, 4) the feet
+        crossing now) since it last passed over footing (``footing``: (k, 4) the surface under the foot's centre
+        is the level it stands at, such as the tread between two steps): it found no footing. The move stops
+        there, refused, and the lift lets go: what the feet stand on then carries the robot, or not."""
+        s = self.state
+        start = s.hover_from[worlds]
+        fresh = np.isnan(start) | footing
+        start = np.where(crossing & fresh, travel[:, None], np.where(crossing, start, np.nan))
+        s.hover_from[worlds] = start
+        carried = np.where(crossing, travel[:, None] - start, 0.0)
+        too_far = (carried > self.config.max_hover).any(axis=1) | s.halted[worlds]
+        for k in np.flatnonzero(too_far & ~s.halted[worlds]):
+            w, foot = int(worlds[k]), int(np.argmax(carried[k]))
+            where = centres[k, foot, :2]
+            s.findings[w] = Finding(
+                "gap",
+                round(float(carried[k, foot]), 3),
+                self.limits.max_gap,
+                (float(where[0]), float(where[1])),
+                FOOT_NAMES[foot],
+            )
+            s.stop[w] = float(travel[k])
+            s.hover_from[w] = np.nan
+            s.halted[w] = True
+        return too_far
