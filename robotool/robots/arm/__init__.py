@@ -2,8 +2,8 @@
 
 Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
 of this package: :mod:`.arm_skills` (limits and skills), :mod:`.arm_description`,
-:mod:`.arm_concepts`, :mod:`.arm_controller` (simulator model and skill
-controller), :mod:`.arm_goals` (``grasped``) and :mod:`.arm_macros` (planner).
+:mod:`.arm_concepts`, :mod:`.arm_body` (simulator model), :mod:`.arm_controller` and :mod:`.arm_grasp` (skill
+controller), :mod:`.arm_goals` (``grasped``), :mod:`.arm_macros` (planner) and :mod:`.arm_config` (the tunables).
 """
 
 from __future__ import annotations

@@ -62,6 +62,24 @@ class ArmConfig:
     """A cylinder counts as the prism of this many sides around it (0.5% wider at most) when finding what lies
     between the fingers."""
 
+    # the planner's macros (:mod:`.arm_macros`)
+    approach_height: float = 0.08
+    """m above a grasp point to approach from."""
+    slide_lift: float = 0.004
+    """m a held object is lifted off the table while it pushes things."""
+    tool_gap: float = 0.03
+    """m between a tool's face and an object before a push or pull."""
+    inside_margin: float = 0.06
+    """m inside the workspace where objects are brought."""
+    carry_clearance: float = 0.03
+    """m a carried object clears everything below it."""
+    press_depth: float = 0.03
+    """m a face is pushed in past where it starts."""
+    stow_back: float = 0.1
+    """m a tool is set down behind where it pushed from."""
+    attach_depth: float = 0.004
+    """m a magnetic chain is pushed into the next object to touch it."""
+
 
 ARM = ArmConfig()
 """The arm's tunables."""

@@ -11,20 +11,22 @@ import numpy as np
 
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
+from robotool.robots.arm.arm_config import ARM
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.task import geometry
 from robotool.task.concepts import press_point
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
 
-CLEAR = 0.08  # m above a grasp point to approach from
-SLIDE = 0.004  # m a held object is lifted off the table while it pushes things
-GAP = 0.03  # m between a tool's face and an object before a push or pull
-INSIDE = 0.06  # m inside the workspace where objects are brought
-CARRY = 0.03  # m a carried object clears everything below it
-PRESS = 0.03  # m a face is pushed in past where it starts
-STOW = 0.1  # m a tool is set down behind where it pushed from
-ATTACH = 0.004  # m a magnetic chain is pushed into the next object to touch it
+# the macros' tunables, documented in ArmConfig
+CLEAR = ARM.approach_height
+SLIDE = ARM.slide_lift
+GAP = ARM.tool_gap
+INSIDE = ARM.inside_margin
+CARRY = ARM.carry_clearance
+PRESS = ARM.press_depth
+STOW = ARM.stow_back
+ATTACH = ARM.attach_depth
 
 
 class Arm:

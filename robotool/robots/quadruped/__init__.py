@@ -3,12 +3,13 @@
 Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
 of this package: :mod:`.quadruped_skills` (limits and skills), :mod:`.checks`
 (task-file checks), :mod:`.quadruped_description`, :mod:`.quadruped_concepts`, the
-simulator's :mod:`.quadruped_controller` with its :mod:`.body`,
+simulator's :mod:`.quadruped_controller` (the composition of :mod:`.plans`, :mod:`.move_runner`,
+:mod:`.terrain_following`, :mod:`.referee`, :mod:`.rays` and :mod:`.sensing`) with its :mod:`.body`,
 :mod:`.push` and :mod:`.support`, the one terrain model of
 its legs (:mod:`.terrain`, read by the controller, the planner and the key concepts),
-:mod:`.quadruped_goals` (``robot_on``) and the planner's
-:mod:`.quadruped_macros` with their walk and push prediction
-(:mod:`.predict`).
+:mod:`.quadruped_goals` (``robot_on``), the planner's
+:mod:`.quadruped_macros` and :mod:`.quadruped_routes` with their walk and push prediction
+(:mod:`.predict`), and the tunables of all of them in :mod:`.quadruped_config`.
 """
 
 from __future__ import annotations

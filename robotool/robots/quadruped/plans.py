@@ -14,8 +14,6 @@ import numpy as np
 
 from robotool.robots.quadruped.move_runner import Move, SkillPlan, finding_measured
 from robotool.robots.quadruped.push import (
-    GAP,
-    MIN_LEG,
     Leg,
     lateral_offsets,
     legs,
@@ -62,7 +60,8 @@ class Plans:
             if obstacle >= 0:
                 lo, hi = self.senses.bounds(w, obstacle)
                 if not np.all((goal >= lo) & (goal <= hi)):  # the goal is not on it: go around it
-                    ways.append(route(here, goal, lo - self.half - GAP, hi + self.half + GAP))
+                    gap = self.config.push_gap
+                    ways.append(route(here, goal, lo - self.half - gap, hi + self.half + gap))
             clear = next((way for way in ways if self._check(w, here, way) is None), None)
             if clear is not None:
                 path = clear
@@ -100,7 +99,8 @@ class Plans:
                 start, end, behind = pose
                 robot = senses.position(w)
                 staging = start - (end - start) / np.linalg.norm(end - start) * behind
-                ways = routes(robot, staging, lo - self.half - GAP / 2, hi + self.half + GAP / 2)
+                gap = config.push_gap
+                ways = routes(robot, staging, lo - self.half - gap / 2, hi + self.half + gap / 2)
                 if attempt:  # a correction goes only a way round that the legs can walk, or not at all
                     way = next((way for way in ways if self._check(w, robot, [*way, start]) is None), None)
                     if way is None:
@@ -120,13 +120,13 @@ class Plans:
                 for _ in range(config.follow_throughs):  # it turned on the way: push on until its centre gets there
                     centre = senses.centers(senses.state)[w, index]
                     short = (leg.target - centre[leg.axis]) * u[leg.axis]
-                    if blocked or short < MIN_LEG or abs(centre[2] - height) > RISE:  # (not after it fell off)
+                    if blocked or short < config.min_leg or abs(centre[2] - height) > RISE:  # (not after it fell off)
                         break
                     outcome = yield Move(senses.position(w) + u * short, pushing=index)
                     if outcome[0] not in ("done", "stalled"):
                         return outcome
                     blocked |= outcome[0] == "stalled"
-                back = (start - end) / np.linalg.norm(start - end) * GAP
+                back = (start - end) / np.linalg.norm(start - end) * self.config.push_gap
                 outcome = yield Move(senses.position(w) + back)
                 if outcome[0] != "done":
                     return outcome

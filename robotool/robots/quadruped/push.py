@@ -15,16 +15,18 @@ from itertools import pairwise
 
 import numpy as np
 
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
 
-GAP = 0.03  # m between the robot's face and the object's face when it lines up to push
-MIN_OVERLAP = 0.08  # m of the object's face the robot's face must cover
-OFFSET_STEP = 0.02  # m between candidate lateral offsets
-SAME_SURFACE = 0.04  # m: supports closer in height than this are the same surface
-MIN_LEG = 0.02  # m: shorter pushes along an axis are skipped
-SIDE_MARGIN = 0.01  # m beyond the body's outline that must be clear of anything higher than its floor
-EXIT_MARGIN = 0.005  # m beyond the side of a box that a route starting inside it steps out to
+# the push geometry's tunables, documented in QuadrupedConfig
+GAP = QUADRUPED.push_gap
+MIN_OVERLAP = QUADRUPED.min_overlap
+OFFSET_STEP = QUADRUPED.offset_step
+SAME_SURFACE = QUADRUPED.same_surface
+MIN_LEG = QUADRUPED.min_leg
+SIDE_MARGIN = QUADRUPED.side_margin
+EXIT_MARGIN = QUADRUPED.exit_margin
 
 
 @dataclass(frozen=True)

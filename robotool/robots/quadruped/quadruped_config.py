@@ -89,6 +89,43 @@ class QuadrupedConfig:
     support_margin: float = -0.02
     """m: the support polygon grown by this much before the centre of mass counts as outside."""
 
+    # the push geometry (:mod:`.push`), shared by the push skill and the planner's predictions
+    push_gap: float = 0.03
+    """m between the robot's face and the object's face when it lines up to push."""
+    min_overlap: float = 0.08
+    """m of the object's face the robot's face must cover."""
+    offset_step: float = 0.02
+    """m between candidate lateral offsets of a push pose."""
+    same_surface: float = 0.04
+    """m: supports closer in height than this are the same surface (the push rules, the macros' routes)."""
+    min_leg: float = 0.02
+    """m: shorter pushes along an axis are skipped."""
+    side_margin: float = 0.01
+    """m beyond the body's outline that must be clear of anything higher than its floor."""
+    exit_margin: float = 0.005
+    """m beyond the side of a box that a route starting inside it steps out to."""
+
+    # the planner's macros (:mod:`.quadruped_routes`, :mod:`.quadruped_macros`)
+    climb_approach: float = 0.1
+    """m between the robot and a step when it lines up to climb it."""
+    edge_inset: float = 0.06
+    """m the robot keeps from the far edge of what it walks onto."""
+    bridge_overlap: float = 0.15
+    """m a bridge rests on each side of a gap."""
+    prop_clearances: tuple[float, ...] = (0.5, 0.2)
+    """m a prop pushed out from under a board keeps from the board's side: far enough to be left behind by the
+    board's end when friction drags it sideways part of the way, else just clear."""
+    board_side: float = 0.25
+    """m the robot keeps from a board it walks beside."""
+    fall_off: float = 0.01
+    """m an object pushed off an edge goes past it (beyond its own half size): the feet stay on."""
+    max_steps: int = 3
+    """Objects a staircase may use below the target."""
+    entries: int = 2
+    """Predicted-fine approaches kept for a direct climb."""
+    landing_step: float = 0.02
+    """m between the stops tried when a route's stop on its target is pulled back."""
+
     @property
     def foot_radius(self) -> float:
         """m: a foot's radius; the feet's centres sit this far inside the body's outline (``terrain.FOOT_RADIUS``,

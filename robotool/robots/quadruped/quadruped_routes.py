@@ -24,15 +24,15 @@ from robotool.robots.quadruped.terrain import RISE, foot_offsets
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
 
-LEVEL = 0.04  # m: supports closer in height than this are the same surface
-APPROACH = 0.1  # m between the robot and a step when it lines up to climb it
-INSET = 0.06  # m the robot keeps from the far edge of what it walks onto
-OVERLAP = 0.15  # m a bridge rests on each side of a gap
-CLEARANCES = (0.5, 0.2)  # m a prop pushed out from under a board keeps from the board's side: far enough to be left
-# behind by the board's end when friction drags it sideways part of the way, else just clear
-SIDE = 0.25  # m the robot keeps from a board it walks beside
-FALL_OFF = 0.01  # m an object pushed off an edge goes past it (beyond its own half size): the feet stay on
-MAX_STEPS = 3  # objects a staircase may use below the target
+# the macros' tunables, documented in QuadrupedConfig
+LEVEL = QUADRUPED.same_surface
+APPROACH = QUADRUPED.climb_approach
+INSET = QUADRUPED.edge_inset
+OVERLAP = QUADRUPED.bridge_overlap
+CLEARANCES = QUADRUPED.prop_clearances
+SIDE = QUADRUPED.board_side
+FALL_OFF = QUADRUPED.fall_off
+MAX_STEPS = QUADRUPED.max_steps
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
 PushStep = tuple[list[np.ndarray], np.ndarray, np.ndarray]  # walk to where a push lines up, its target, where it ends
 
@@ -103,8 +103,8 @@ class Quadruped:
 
 DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (0, -1)))
 FOOT = QUADRUPED.foot_radius  # m the feet sit inside the body's outline: they must be over what it stands on
-ENTRIES = 2  # predicted-fine approaches kept for a direct climb
-LANDING_STEP = 0.02  # m between the stops tried when a route's stop on its target is pulled back
+ENTRIES = QUADRUPED.entries
+LANDING_STEP = QUADRUPED.landing_step
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:

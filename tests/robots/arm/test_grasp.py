@@ -276,7 +276,7 @@ HEAVY_JOIN = {
 
 def test_a_grip_lets_go_when_more_is_joined_to_it_than_it_can_carry() -> None:
     """A cube held by a full grip is touched to a 3 kg magnetic block, which joins it: the grip's friction couple
-    (GRIP_FORCE across the 16 mm pads) cannot carry the block's torque about the pads, so the gripper lets go and
+    (grip_force across the 16 mm pads) cannot carry the block's torque about the pads, so the gripper lets go and
     the move says so with what it measured; the same grip carries the cube alone."""
 
     def join(robot: Any) -> None:

@@ -11,6 +11,7 @@ import pytest
 
 from robotool import sim, tasks
 from robotool.robots.quadruped.body import ROBOT_GROUP
+from robotool.robots.quadruped.quadruped_controller import QuadrupedController
 from robotool.robots.quadruped.support import feet
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim import lockstep as runner
@@ -57,7 +58,8 @@ def walk_and_measure(task: Any, moves: list[tuple[str, tuple[float, ...]]], meas
     assert isinstance(sim_, MujocoSim)
     controller = embodiment_for(scene.task).controller(sim_)
     sim_.step(round(runner.SETTLE_TIME / scene.model.opt.timestep), np.ones(1, dtype=bool))
-    ids = controller.ids
+    assert isinstance(controller, QuadrupedController)
+    ids = controller.senses.facts.ids
     out: dict[str, list] = {"load": [], "gap": [], "lift": []}
     mass = float(sim_.body_mass[0, scene.robot_body].sum())
     for k, (skill, args) in enumerate(moves):
@@ -70,7 +72,7 @@ def walk_and_measure(task: Any, moves: list[tuple[str, tuple[float, ...]]], meas
             state = sim_.state()
             ends = controller.tick(state)
             if k >= measure_from and tick >= SETTLING_TICKS:
-                carried = not np.isnan(controller.lift[0])
+                carried = not np.isnan(controller.terrain.state.lift[0])
                 out["lift"].append(carried)
                 if not carried:
                     out["load"].append(feet_load(sim_, 0, ids.feet) / (mass * GRAVITY))
@@ -126,12 +128,13 @@ def test_a_robot_whose_centre_of_mass_leaves_its_support_falls_and_may_not_move_
     assert isinstance(sim_, MujocoSim)
     controller = embodiment_for(scene.task).controller(sim_)
     data = sim_.datas[0]
-    data.qpos[controller.ids.qpos[0]] = 0.85  # sofa_1 ends at x = 0.75
+    assert isinstance(controller, QuadrupedController)
+    data.qpos[controller.senses.facts.ids.qpos[0]] = 0.85  # sofa_1 ends at x = 0.75
     mujoco.mj_forward(sim_.models[0], data)
     for _ in range(20):
         sim_.step(scene.control_substeps, np.ones(1, dtype=bool))
         controller.tick(sim_.state())
-    reason = controller.failures[0]
+    reason = controller.referee.state.failures[0]
     assert reason is not None and reason.startswith("fell at [0.") and "no support under the front feet" in reason
     (end,) = controller.start(sim_.state(), np.array([0]), "walk_to_position", ((0.0, 0.0, 0.0),))
     assert end.outcome == "refused" and "the robot has fallen" in (end.reason or "")
