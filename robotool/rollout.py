@@ -7,7 +7,8 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
+from robotool.vocabulary import SkillOutcome
+
 EventKind = Literal[
     "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
 ]
@@ -31,7 +32,7 @@ class SkillCall(BaseModel):
 
     skill: str
     args: list[Any]
-    outcome: Outcome
+    outcome: SkillOutcome
     reason: str | None = None
     measured: dict[str, float] = Field(
         default_factory=dict, description="values behind a refusal or clamp, e.g. {'gap': 0.40}"

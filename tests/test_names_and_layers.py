@@ -28,7 +28,6 @@ SHARED_MODULE_NAMES: dict[str, str] = {
 no longer collides must leave."""
 
 SHARED_NAMES: dict[str, str] = {
-    "Outcome": "the quadruped controller's private alias for a motion's end, moved with the controller",
     "Plan": "the quadruped controller's private alias for a motion plan generator, moved with the controller",
 }
 """Public names two modules may still share, each with why; a name that no longer collides must leave."""

@@ -7,7 +7,7 @@ from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_
 from robotool.eval.grading import grade
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import RunKey, RunRecord, WorldResult
-from robotool.methods import STAGES_BY_METHOD
+from robotool.methods import runs_analyzer
 from robotool.solution import Solution
 from robotool.verify import world_failure
 
@@ -26,14 +26,10 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
     )
 
 
-def _has_analyzer(stages: str) -> bool:
-    return bool(STAGES_BY_METHOD.get(stages, {}).get("analyzer"))
-
-
 def _predicted_concepts(stages: str, solution: Solution) -> list[KeyConcept] | None:
     """The Analyzer's concepts (none when it failed, which grades as wrong); None for methods without one
     (the search planner copies the ground truth)."""
-    return (solution.stages.key_concepts or []) if _has_analyzer(stages) else None
+    return (solution.stages.key_concepts or []) if runs_analyzer(stages) else None
 
 
 def judge(
@@ -87,6 +83,6 @@ def crashed(
     """The record of a run whose method raised: nothing ran, class ``invalid`` (``stages`` as for :func:`judge`)."""
     text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
     update: dict[str, object] = {"error": text}
-    if _has_analyzer(stages or key.method):  # the run's Analyzer produced nothing: graded as wrong
+    if runs_analyzer(stages or key.method):  # the run's Analyzer produced nothing: graded as wrong
         update["concepts"] = grade(key_concepts(instance.task), [])
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)

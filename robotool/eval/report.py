@@ -10,7 +10,7 @@ from rich.table import Table
 
 from robotool.eval.records import Picture, Results
 from robotool.eval.tables import TextTable
-from robotool.methods import STAGES_BY_METHOD
+from robotool.methods import runs_analyzer
 from robotool.safe_text import markdown_text, one_line
 
 
@@ -41,10 +41,7 @@ def preamble(results: Results, escape: Callable[[str], str] = markdown_text) -> 
         )
     lines += [f"- {escape(line)}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {escape(note)}" for note in results.notes]
-    if not any(
-        r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
-        for r in results.records
-    ):
+    if not any(r.concepts.correct is not None or runs_analyzer(r.key.method) for r in results.records):
         lines.append(
             "- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an LM; none ran"
         )

@@ -34,11 +34,12 @@ All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from robotool import geometry
+from robotool.vocabulary import SkillOutcome
 
 if TYPE_CHECKING:
     import mujoco
@@ -47,8 +48,6 @@ if TYPE_CHECKING:
     from robotool.sim.backend import BatchedSim, BatchState
     from robotool.sim.compiled_scene import Scene
     from robotool.task_model import Task
-
-EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
 
 @dataclass(frozen=True)
@@ -60,7 +59,7 @@ class SkillEnd:
     """
 
     world: int
-    outcome: EndOutcome  # "error": the controller raised while running the skill; the runner fails the world
+    outcome: SkillOutcome  # "internal_error": the controller raised while running the skill (a bug in robotool)
     reason: str | None = None
     measured: dict[str, float] = field(default_factory=dict)
     result: Any = None

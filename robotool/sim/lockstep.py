@@ -33,7 +33,7 @@ from robotool.program_session import (
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation
+from robotool.sim.backend import BatchedSim, BatchState, Perturbation
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.build import build, embodiment_for
 from robotool.sim.compiled_scene import Scene
@@ -51,6 +51,7 @@ from robotool.sim.magnets import Magnets
 from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
 from robotool.task_model import Task
+from robotool.vocabulary import BackendName
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read

@@ -63,13 +63,13 @@ from robotool.robots.quadruped.support import (
 from robotool.robots.quadruped.terrain import (
     FOOT_NAMES,
     FOOT_RADIUS,
-    KINDS,
     LOOKAHEAD,
     RADIUS_SAMPLES,
     RISE,
     SPACING,
     Finding,
     check_walk,
+    finding_kind,
     limit_of,
     scan_paths,
 )
@@ -78,6 +78,7 @@ from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, error_end, size_now, world_mask
 from robotool.sim.object_goals import local_corners, world_corners
 from robotool.task_model import Task
+from robotool.vocabulary import EDGE_KINDS, MoveEnd, TerrainKind
 
 WALK_SPEED = 0.4  # m/s
 SCAN_AHEAD = 1.2  # m of a move read at a time (plus LOOKAHEAD)
@@ -120,8 +121,6 @@ LOCAL = np.array([-FOOT_RADIUS, 0.0, FOOT_RADIUS, LIFT_AHEAD / 2, LIFT_AHEAD])  
 SAMPLES = round((BACK + SCAN_AHEAD + LOOKAHEAD) / SPACING) + 1
 BEHIND = round(BACK / SPACING)  # the sample under a foot at scan time
 
-Outcome = tuple[str, str | None, dict[str, float]]
-
 
 @dataclass
 class _Move:
@@ -131,7 +130,7 @@ class _Move:
     pushing: int = -1
 
 
-Plan = Generator[_Move, Outcome, Outcome | None]
+Plan = Generator[_Move, MoveEnd, MoveEnd | None]
 
 
 class QuadrupedEmbodiment:
@@ -447,7 +446,7 @@ class QuadrupedController:
                 found = sweep_problem(heights, behind, end, self.limits, floor)
                 if found is None:
                     return (start, end, staging), ""
-                if "drop" in found and not problem:
+                if found.kind == "drop" and not problem:
                     where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
                     problem = f": pushing from {where}, {found}"
         return None, problem
@@ -463,7 +462,7 @@ class QuadrupedController:
         self._start_move(w, move)
         return None
 
-    def _advance(self, w: int, outcome: Outcome) -> SkillEnd | None:
+    def _advance(self, w: int, outcome: MoveEnd) -> SkillEnd | None:
         """The current move ended with ``outcome``: start the plan's next move or end the skill (with outcome
         ``error`` when the plan raises: an advanced plan cannot be rolled back, so this world's error is its own)."""
         plan = self.plans[w]
@@ -498,12 +497,12 @@ class QuadrupedController:
             self.carried[w, move.pushing] = 0.0
         self.best[w], self.progress_time[w] = np.inf, float(self.state.time[w])
 
-    def _end(self, w: int, outcome: Outcome | None) -> SkillEnd:
+    def _end(self, w: int, outcome: MoveEnd | None) -> SkillEnd:
         self.plans[w] = None
         self.moving[w] = False
         self._hold(np.array([w]))
         kind, reason, measured = outcome or ("done", None, {})
-        return SkillEnd(world=int(w), outcome=kind, reason=reason, measured=measured)  # type: ignore[arg-type]
+        return SkillEnd(world=int(w), outcome=kind, reason=reason, measured=measured)
 
     def _hold(self, worlds: np.ndarray) -> None:
         """Stand still where the body is, lift motor off."""
@@ -727,9 +726,10 @@ class QuadrupedController:
         kind = result.kind.reshape(len(worlds), 4)
         measured = result.measured.reshape(len(worlds), 4)
         meets = travel[:, None] + np.take_along_axis(s, np.minimum(index, SAMPLES - 1), axis=1)
-        past = np.where(kind >= 2, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
-        relevant = (kind > 0) & (meets - past <= self.length[worlds][:, None])
-        margin = np.where(kind >= 2, FOOT_RADIUS + EDGE_MARGIN, STOP_MARGIN)  # centre before an edge, foot a face
+        edges = np.isin(kind, EDGE_KINDS)  # a gap or a drop
+        past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
+        relevant = (kind != TerrainKind.NONE) & (meets - past <= self.length[worlds][:, None])
+        margin = np.where(edges, FOOT_RADIUS + EDGE_MARGIN, STOP_MARGIN)  # centre before an edge, foot a face
         stop_at = np.where(relevant, meets - margin, np.inf).min(axis=1)
         limit = np.where(self.length[worlds] > travel + SCAN_AHEAD, travel + SCAN_AHEAD, self.length[worlds])
         halted = self.halted[worlds]
@@ -743,7 +743,7 @@ class QuadrupedController:
                 continue
             foot = int(hits[np.argmin(meets[k, hits])])
             where = points[k, foot, index[k, foot]]
-            kind_name = KINDS[int(kind[k, foot]) - 1]
+            kind_name = finding_kind(int(kind[k, foot]))
             self.findings[w] = Finding(
                 kind_name,
                 round(float(measured[k, foot]), 3),
@@ -879,7 +879,7 @@ class QuadrupedController:
             w = int(worlds[k])
             finding = self.findings[w]
             if stalled[k]:
-                outcome: Outcome = (
+                outcome: MoveEnd = (
                     "stalled",
                     f"blocked at [{q[k, 0]:.2f}, {q[k, 1]:.2f}], {remaining[k]:.2f} m short of the goal",
                     {"distance": round(float(remaining[k]), 3)},

@@ -1,0 +1,55 @@
+"""The package's vocabulary, each word once: stages, methods, backends, skill outcomes and terrain kinds.
+
+Words that cross module boundaries or reach saved results are ``Literal`` types (the type checker holds every
+use to them; their values are the strings results, CLI choices and reports have always spelt); each comes with
+the tuple of its values, in order, for choices and loops. Codes that live in numpy arrays are an ``IntEnum``.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+from typing import Literal, TypeGuard, get_args
+
+Stage = Literal["analyzer", "planner", "calculator", "coder"]
+"""An LM stage of the program (the paper's four)."""
+STAGES: tuple[Stage, ...] = get_args(Stage)
+
+
+def is_stage(name: str) -> TypeGuard[Stage]:
+    """Whether ``name`` (say, where a candidate failed) is an LM stage."""
+    return name in STAGES
+
+
+FailureStage = Literal[Stage, "repair", "search", "simulation"]
+"""Where a candidate failed: an LM stage, the repair stage, the search planner's code, or the simulated worlds."""
+
+MethodName = Literal["robotool", "no_analyzer", "no_calculator", "planner_coder", "coder"]
+"""The RoboTool program and the paper's ablations (their stages: :data:`robotool.methods.STAGES_BY_METHOD`)."""
+PlannerMethod = Literal["search", "no_tool"]
+"""The LM-free search planner, with every object (``search``) or the target alone (``no_tool``, the floor)."""
+
+PLANNER_METHODS: tuple[PlannerMethod, ...] = get_args(PlannerMethod)
+
+BackendName = Literal["mujoco", "warp"]
+"""A batched simulator backend: MuJoCo on the CPU, MuJoCo Warp on a GPU."""
+BACKENDS: tuple[BackendName, ...] = get_args(BackendName)
+
+SkillOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error", "internal_error"]
+"""How a skill call ended: ``error`` is the program's (bad arguments, a query that cannot be answered);
+``internal_error`` is robotool's (the robot's controller raised: a bug, not the program's failure)."""
+
+MoveEnd = tuple[SkillOutcome, str | None, dict[str, float]]
+"""A motion's end inside a controller: its outcome, the reason (None when done) and the values behind it."""
+
+
+class TerrainKind(IntEnum):
+    """What a foot's path meets, as coded in the quadruped's terrain scans (0: nothing)."""
+
+    NONE = 0
+    STEP = 1
+    GAP = 2
+    DROP = 3
+
+
+EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
+"""The terrain kinds whose edge a foot's centre passes (for ``np.isin`` over scan codes)."""
