@@ -1,7 +1,11 @@
-"""An unexpected exception in a command-line entry point: one line for the user, the traceback in a file.
+"""Bugs in robotool, kept apart from a program's failures: as records in results, and as a command's last words.
 
-A user mistake ends with exit status 2 and its own message; anything else that escapes a command is a bug
-in robotool. It is reported as such in one line that names the file holding the full traceback, and the
+A robot's controller or a solver that raises while a program runs is a bug in robotool, not the program's
+failure: the run records an :class:`InternalError` (where, the one-line reason and the traceback), the
+traceback is logged, and the evaluator leaves the run out of its success tables.
+
+A user mistake ends a command with exit status 2 and its own message; anything else that escapes a command is
+a bug in robotool. It is reported as such in one line that names the file holding the full traceback, and the
 command exits with :data:`EXIT_INTERNAL_ERROR` (``EX_SOFTWARE`` of BSD's sysexits).
 """
 
@@ -13,6 +17,7 @@ import tempfile
 import traceback
 from pathlib import Path
 
+from pydantic import BaseModel, Field
 from rich.console import Console
 from rich.text import Text
 
@@ -20,6 +25,27 @@ from robotool.safe_text import one_line
 
 EXIT_INTERNAL_ERROR = 70
 TRACEBACK_PREFIX = "robotool-internal-error"
+
+
+class InternalError(BaseModel):
+    """A bug in robotool met during a run (a controller or a solver raised): neither a success nor a failure."""
+
+    where: str = Field(description="what raised, e.g. 'the controller, in push_to_position, world 2'")
+    reason: str = Field(description="the exception's type and message, one line")
+    traceback: str = Field("", description="the full traceback ('' when none was caught, e.g. a lost worker)")
+
+    @classmethod
+    def of(cls, error: BaseException, where: str) -> InternalError:
+        """The record of ``error``, raised in ``where``, with its traceback."""
+        return cls(where=where, reason=describe(error), traceback="".join(traceback.format_exception(error)))
+
+    def __str__(self) -> str:
+        return f"internal error in {self.where}: {self.reason}"
+
+
+def describe(error: BaseException) -> str:
+    """An exception as one line: its type and message."""
+    return " ".join(f"{type(error).__name__}: {error}".split())[:400]
 
 
 def write_traceback(error: BaseException, prog: str, folder: Path | None = None) -> Path:

@@ -7,6 +7,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
+from robotool.internal_error import InternalError
 from robotool.vocabulary import SkillOutcome
 
 EventKind = Literal[
@@ -162,4 +163,7 @@ class Rollout(BaseModel):
     touched: list[str] = Field(default_factory=list, description="objects the robot moved or met")
     sim_time: float = 0.0
     error: str | None = Field(None, description="why the world failed outside the goal, if it did")
+    internal_error: InternalError | None = Field(
+        None, description="a bug in robotool ended the world (its controller raised): not the program's failure"
+    )
     output: str = Field("", description="what the program printed")

@@ -1,13 +1,13 @@
-"""The package's vocabulary, each word once: stages, methods, backends, skill outcomes and terrain kinds.
+"""The package's vocabulary, each word once: stages, methods, backends and skill outcomes.
 
-Words that cross module boundaries or reach saved results are ``Literal`` types (the type checker holds every
-use to them; their values are the strings results, CLI choices and reports have always spelt); each comes with
-the tuple of its values, in order, for choices and loops. Codes that live in numpy arrays are an ``IntEnum``.
+They are ``Literal`` types (the type checker holds every use to them; their values are the strings results,
+CLI choices and reports have always spelt), each with the tuple of its values, in order, for choices and loops.
+Method records live with the methods (:mod:`robotool.methods`); a robot's own words (terrain kinds, say) live in
+its package.
 """
 
 from __future__ import annotations
 
-from enum import IntEnum
 from typing import Literal, TypeGuard, get_args
 
 Stage = Literal["analyzer", "planner", "calculator", "coder"]
@@ -40,16 +40,3 @@ SkillOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error",
 
 MoveEnd = tuple[SkillOutcome, str | None, dict[str, float]]
 """A motion's end inside a controller: its outcome, the reason (None when done) and the values behind it."""
-
-
-class TerrainKind(IntEnum):
-    """What a foot's path meets, as coded in the quadruped's terrain scans (0: nothing)."""
-
-    NONE = 0
-    STEP = 1
-    GAP = 2
-    DROP = 3
-
-
-EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
-"""The terrain kinds whose edge a foot's centre passes (for ``np.isin`` over scan codes)."""

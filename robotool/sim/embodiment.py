@@ -17,9 +17,11 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    pushed to the backend before each step), ``sim.set_weld(worlds, eq, active)`` (attach at the current
    relative pose, or detach) and ``sim.rays(...)`` for support heights.
    Query skills are answered at once by :meth:`SkillController.query` from the current state.
-   An exception inside the controller fails only the world it belongs to: ``start`` and ``query`` run per world;
+   An exception inside the controller is a bug in robotool, not the program's failure: it ends only the world it
+   belongs to, as an internal error (logged with its traceback, recorded in the rollout's ``internal_error``);
+   ``start`` and ``query`` run per world;
    per-world work inside ``tick`` that cannot be undone (advancing a plan) ends that world's skill with outcome
-   ``error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner restores the
+   ``internal_error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner restores the
    controller's per-world state (its numpy-array and list attributes, the controls and the welds) as it was
    before the tick and ticks the worlds one by one, failing those that raise again. A controller therefore keeps
    its per-world state in numpy arrays and lists indexed by world, and ``tick(state, worlds)`` touches only
@@ -39,6 +41,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from robotool import geometry
+from robotool.internal_error import describe
 from robotool.vocabulary import SkillOutcome
 
 if TYPE_CHECKING:
@@ -64,6 +67,7 @@ class SkillEnd:
     measured: dict[str, float] = field(default_factory=dict)
     result: Any = None
     events: tuple[Event, ...] = ()
+    error: BaseException | None = field(default=None, compare=False)  # what the controller raised (internal_error)
 
 
 class QueryError(ValueError):
@@ -88,14 +92,10 @@ class SkillController(Protocol):
         """Answer a query skill in one world from the current state (raise :class:`QueryError`)."""
 
 
-def describe_error(error: Exception) -> str:
-    """An exception raised inside a controller as one line: its type and message."""
-    return " ".join(f"{type(error).__name__}: {error}".split())[:400]
-
-
 def error_end(world: int, error: Exception) -> SkillEnd:
-    """The end of a skill whose controller raised ``error`` in ``world`` (the runner fails that world only)."""
-    return SkillEnd(world=world, outcome="error", reason=describe_error(error))
+    """The end of a skill whose controller raised ``error`` in ``world``: an internal error, which ends that world
+    only (the runner logs the traceback and records it apart from the program's failures)."""
+    return SkillEnd(world=world, outcome="internal_error", reason=describe(error), error=error)
 
 
 def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:

@@ -61,6 +61,7 @@ from robotool.robots.quadruped.support import (
     unsupported_feet,
 )
 from robotool.robots.quadruped.terrain import (
+    EDGE_KINDS,
     FOOT_NAMES,
     FOOT_RADIUS,
     LOOKAHEAD,
@@ -68,6 +69,7 @@ from robotool.robots.quadruped.terrain import (
     RISE,
     SPACING,
     Finding,
+    TerrainKind,
     check_walk,
     finding_kind,
     limit_of,
@@ -78,7 +80,7 @@ from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import QueryError, SkillEnd, error_end, size_now, world_mask
 from robotool.sim.object_goals import local_corners, world_corners
 from robotool.task_model import Task
-from robotool.vocabulary import EDGE_KINDS, MoveEnd, TerrainKind
+from robotool.vocabulary import MoveEnd
 
 WALK_SPEED = 0.4  # m/s
 SCAN_AHEAD = 1.2  # m of a move read at a time (plus LOOKAHEAD)

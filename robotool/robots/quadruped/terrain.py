@@ -24,12 +24,25 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Any, Literal
 
 import numpy as np
 
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.vocabulary import TerrainKind
+
+
+class TerrainKind(IntEnum):
+    """What a foot's path meets, as :class:`PathScan` codes it (0: nothing)."""
+
+    NONE = 0
+    STEP = 1
+    GAP = 2
+    DROP = 3
+
+
+EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
+"""The kinds whose edge a foot's centre passes (a step is met face on); for ``np.isin`` over scan codes."""
 
 FindingKind = Literal["step", "gap", "drop"]
 KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # in :class:`TerrainKind` order (its codes 1, 2, 3)
@@ -71,7 +84,7 @@ class PathScan:
 
     level: np.ndarray  # (P, n) surface the foot stands at over each sample (a stridden gap keeps its near level)
     index: np.ndarray  # (P,) first sample of the first finding (n when none)
-    kind: np.ndarray  # (P,) a :class:`~robotool.vocabulary.TerrainKind` code (NONE: no finding)
+    kind: np.ndarray  # (P,) a :class:`TerrainKind` code (NONE: no finding)
     measured: np.ndarray  # (P,) the finding's measured value
     met: np.ndarray  # (P, n, 3) each kind's edge (KINDS order) met at each sample, within its limit or not (0: none)
 
