@@ -7,7 +7,9 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-Outcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
+from robotool.bugs import InternalError
+from robotool.vocabulary import SkillOutcome
+
 EventKind = Literal[
     "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
 ]
@@ -31,7 +33,7 @@ class SkillCall(BaseModel):
 
     skill: str
     args: list[Any]
-    outcome: Outcome
+    outcome: SkillOutcome
     reason: str | None = None
     measured: dict[str, float] = Field(
         default_factory=dict, description="values behind a refusal or clamp, e.g. {'gap': 0.40}"
@@ -161,4 +163,7 @@ class Rollout(BaseModel):
     touched: list[str] = Field(default_factory=list, description="objects the robot moved or met")
     sim_time: float = 0.0
     error: str | None = Field(None, description="why the world failed outside the goal, if it did")
+    internal_error: InternalError | None = Field(
+        None, description="a bug in robotool ended the world (its controller raised): not the program's failure"
+    )
     output: str = Field("", description="what the program printed")

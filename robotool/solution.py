@@ -9,8 +9,8 @@ from pydantic import BaseModel, Field, computed_field
 from robotool.rollout import Rollout
 from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
 from robotool.signatures.traces import FailureTrace, RepairScope
+from robotool.vocabulary import FailureStage
 
-FailureStage = Literal["analyzer", "planner", "calculator", "coder", "repair", "search", "simulation"]
 FailureKind = Literal["no_reply", "fault", "rejected", "worlds_failed"]
 
 

@@ -39,9 +39,12 @@ SHARED_NAMES: dict[str, str] = {}
 KNOWN_CYCLES: list[frozenset[str]] = []
 """Import cycles still to be removed; one that is gone must leave."""
 
-BASE_MODULES = frozenset({"errors", "safe_text", "version", "processes", "gl_backend", "rollout", "program_session"})
-"""Top-level modules every layer may use: typed errors, text escaping, the version, process pools, the OpenGL
-choice, a run's records and the runner <-> program protocol. They import nothing of robotool but each other."""
+BASE_MODULES = frozenset(
+    {"bugs", "errors", "safe_text", "version", "processes", "gl_backend", "rollout", "program_session", "vocabulary"}
+)
+"""Top-level modules every layer may use: typed errors, the records of robotool's own bugs, the vocabulary, text
+escaping, the version, process pools, the OpenGL choice, a run's records and the runner <-> program protocol.
+They import nothing of robotool but each other."""
 
 ROBOT_CONTRACT = frozenset({"registry", "skills", "limits_table"})
 """The modules of ``robotool/robots/`` that every robot shares (the contract); each other folder there is a robot."""

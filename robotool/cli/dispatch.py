@@ -50,6 +50,7 @@ from robotool.task.describe import describe
 from robotool.task.task_file import TaskFileError
 from robotool.task.task_model import Task
 from robotool.version import version
+from robotool.vocabulary import BACKENDS
 
 if TYPE_CHECKING:
     from rich.status import Status
@@ -459,7 +460,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
     p.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
+    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
     p.add_argument("--out", type=output_file, help="write the best program here")
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
@@ -483,7 +484,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"use {DEFAULT_WORLDS} to rank candidates)",
     )
     p.add_argument("--seed", type=seed, default=0, help="seed of the world perturbations")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
+    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
     p.add_argument("--json", type=output_file, help="write the full report here as JSON")
     _add_video_options(p, folder=False, help_text="write the rollout as MP4 (several worlds: OUT-world<k>.mp4)")
     p.add_argument("--html", type=output_file, metavar="FILE.html", help=HTML_HELP)

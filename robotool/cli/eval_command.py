@@ -48,6 +48,7 @@ from robotool.processes import cores
 from robotool.program.lm import LMConfigError
 from robotool.task.task_file import TaskFileError
 from robotool.version import version
+from robotool.vocabulary import BACKENDS
 
 EXIT_NOT_ATTEMPTED = 3
 """Some runs could not be attempted (the language model was unavailable); they were not recorded."""
@@ -121,7 +122,7 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
     p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
     p.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
+    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
     p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
     p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
     p.add_argument(

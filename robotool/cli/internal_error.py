@@ -1,8 +1,9 @@
 """An unexpected exception in a command-line entry point: one line for the user, the traceback in a file.
 
-A user mistake ends with exit status 2 and its own message; anything else that escapes a command is a bug
-in robotool. It is reported as such in one line that names the file holding the full traceback, and the
-command exits with :data:`EXIT_INTERNAL_ERROR` (``EX_SOFTWARE`` of BSD's sysexits).
+A user mistake ends a command with exit status 2 and its own message; anything else that escapes a command is
+a bug in robotool. It is reported as such in one line that names the file holding the full traceback, and the
+command exits with :data:`EXIT_INTERNAL_ERROR` (``EX_SOFTWARE`` of BSD's sysexits). A bug met while a
+program runs is recorded instead, as a :class:`robotool.bugs.InternalError`.
 """
 
 from __future__ import annotations

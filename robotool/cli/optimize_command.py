@@ -44,6 +44,7 @@ from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, Op
 from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import console_plain
 from robotool.version import version
+from robotool.vocabulary import BACKENDS
 
 EXIT_LM_UNAVAILABLE = 3
 
@@ -92,7 +93,7 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
     p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per verification")
     p.add_argument("--seed", type=seed, default=0, help="seed of the perturbed worlds and the optimiser")
-    p.add_argument("--backend", choices=["mujoco", "warp"], help=BACKEND_HELP)
+    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
     p.add_argument("--threads", type=positive_int, default=4, help="metric calls in flight at once")
     budget = p.add_argument_group("budget")
     budget.add_argument("--auto", choices=["light", "medium", "heavy"], help="gepa, mipro: DSPy's budget preset")

@@ -23,7 +23,8 @@ A failed world is classified by the first rule that applies:
    (a missing step); otherwise ``numerical`` (right objects, every step done, the goal missed by
    distance).
 
-A world that reached the goal has no class (None).
+A world that reached the goal has no class (None); nor has a world that a bug in robotool ended (its
+``internal_error``: a controller raised), which is neither a success nor a program's failure.
 """
 
 from __future__ import annotations
@@ -84,8 +85,9 @@ def _numerical_symptom(call: SkillCall, events: Sequence[Event], facts: TaskFact
 
 
 def classify(rollout: Rollout, facts: TaskFacts) -> FailureClass | None:
-    """The failure class of one world (None when it reached the goal); rules in the module docstring."""
-    if rollout.success:
+    """The failure class of one world (None when it reached the goal or an internal error ended it); rules in the
+    module docstring."""
+    if rollout.success or rollout.internal_error is not None:
         return None
     if rollout.error is not None or any(c.outcome == "error" for c in rollout.calls):
         return "invalid"

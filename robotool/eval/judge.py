@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from robotool.bugs import InternalError
 from robotool.eval.failure_classes import TaskFacts, classify, run_class, tools_used
 from robotool.eval.grading import grade
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import RunKey, RunRecord, WorldResult
-from robotool.program.methods import STAGES_BY_METHOD
+from robotool.program.methods import runs_analyzer
 from robotool.solution import Solution
 from robotool.task.concepts import KeyConcept, key_concepts
 from robotool.verify import world_failure
@@ -26,14 +27,10 @@ def _empty(instance: TaskInstance, key: RunKey, world_seed: int, wall_s: float) 
     )
 
 
-def _has_analyzer(stages: str) -> bool:
-    return bool(STAGES_BY_METHOD.get(stages, {}).get("analyzer"))
-
-
 def _predicted_concepts(stages: str, solution: Solution) -> list[KeyConcept] | None:
     """The Analyzer's concepts (none when it failed, which grades as wrong); None for methods without one
     (the search planner copies the ground truth)."""
-    return (solution.stages.key_concepts or []) if _has_analyzer(stages) else None
+    return (solution.stages.key_concepts or []) if runs_analyzer(stages) else None
 
 
 def judge(
@@ -52,6 +49,7 @@ def judge(
             success=r.success,
             failure_class=classify(r, facts),
             failure=world_failure(r),
+            internal_error=r.internal_error is not None,
             tools_used=sorted(tools_used(r, facts)),
             calls=len(r.calls),
             sim_time=r.sim_time,
@@ -72,6 +70,7 @@ def judge(
         "cached_replies": solution.cached_replies,
         "timings": solution.timings,
         "notes": solution.notes,
+        "internal_error": first_internal_error(solution),
     }
     if worlds:
         update |= {
@@ -81,12 +80,20 @@ def judge(
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)
 
 
+def first_internal_error(solution: Solution) -> InternalError | None:
+    """The first bug in robotool met by any candidate's worlds, the chosen candidate's first (None: none was)."""
+    chosen = [solution.candidates[solution.best]] if solution.best is not None else []
+    rollouts = (r for c in [*chosen, *solution.candidates] for r in c.rollouts)
+    return next((r.internal_error for r in rollouts if r.internal_error is not None), None)
+
+
 def crashed(
     instance: TaskInstance, key: RunKey, world_seed: int, error: Exception, wall_s: float, stages: str | None = None
 ) -> RunRecord:
-    """The record of a run whose method raised: nothing ran, class ``invalid`` (``stages`` as for :func:`judge`)."""
-    text = " ".join(f"{type(error).__name__}: {error}".split())[:500]
-    update: dict[str, object] = {"error": text}
-    if _has_analyzer(stages or key.method):  # the run's Analyzer produced nothing: graded as wrong
+    """The record of a run whose method raised (or whose worker was lost): nothing ran, and that is a bug in
+    robotool, not the method's failure: an internal error, with no class (``stages`` as for :func:`judge`)."""
+    found = InternalError.of(error, f"the {key.method} method")
+    update: dict[str, object] = {"error": found.reason, "internal_error": found, "failure_class": None}
+    if runs_analyzer(stages or key.method):  # the run's Analyzer produced nothing: graded as wrong
         update["concepts"] = grade(key_concepts(instance.task), [])
     return _empty(instance, key, world_seed, wall_s).model_copy(update=update)

@@ -5,7 +5,9 @@ Conventions. A run scores its chosen candidate's success rate over its perturbed
 the mean over the cell's runs (generated instances: over every seed's runs of that family). The
 error breakdown splits each run's weight of 1 evenly over its worlds, so a method's shares of
 success, tool-use, logical, numerical and invalid sum to 1 and its success share equals its mean
-success; a run that ran nothing counts 1 as invalid. The tool-use rate is the share of worlds whose
+success; a run that ran nothing counts 1 as invalid. A run with an internal error (a bug in robotool met in the
+run: a controller or the method raised) is neither a success nor a failure: it is left out of every number but
+the cost, and counted apart. The tool-use rate is the share of worlds whose
 program used a tool (see :mod:`robotool.eval.failure_classes`), separately where the instance needs a tool
 and where it does not.
 """
@@ -81,7 +83,8 @@ class RepairComparison(BaseModel):
 
 
 class Summary(BaseModel):
-    """Everything the tables and plots show."""
+    """Everything the tables and plots show. Runs with an internal error (a bug in robotool) are neither successes
+    nor failures: every table but the cost leaves them out, and ``internal_errors`` counts them by method."""
 
     methods: list[str]
     success: list[MethodRow] = Field(description="built-in tasks and task files as columns")
@@ -91,6 +94,9 @@ class Summary(BaseModel):
     discrimination: list[Discrimination]
     cost: list[Cost]
     repair: list[RepairComparison] = Field(default_factory=list, description="runs with repair rounds only")
+    internal_errors: dict[str, int] = Field(
+        default_factory=dict, description="method -> runs left out because a bug in robotool ended them"
+    )
 
 
 def _cell(values: Sequence[float]) -> Cell:
@@ -173,14 +179,18 @@ def summarize(records: Sequence[RunRecord], methods: Sequence[str]) -> Summary:
     by_method: dict[str, list[RunRecord]] = defaultdict(list)
     for r in records:
         by_method[r.key.method].append(r)
+    graded = [r for r in records if r.internal_error is None]
+    graded_by_method = {m: [r for r in rs if r.internal_error is None] for m, rs in by_method.items()}
     present = [m for m in methods if by_method[m]]
+    scored = [m for m in present if graded_by_method[m]]
     return Summary(
         methods=present,
-        success=_matrix(records, present, _builtin_column, lambda r: r.success_rate),
-        generated=_matrix(records, present, _family_column, lambda r: r.success_rate),
-        concepts=_matrix(records, present, _any_column, _concept_score),
-        errors=[_breakdown(m, by_method[m]) for m in present],
-        discrimination=[_discrimination(m, by_method[m]) for m in present],
+        success=_matrix(graded, scored, _builtin_column, lambda r: r.success_rate),
+        generated=_matrix(graded, scored, _family_column, lambda r: r.success_rate),
+        concepts=_matrix(graded, scored, _any_column, _concept_score),
+        errors=[_breakdown(m, graded_by_method[m]) for m in scored],
+        discrimination=[_discrimination(m, graded_by_method[m]) for m in scored],
         cost=[_cost(m, by_method[m]) for m in present],
-        repair=[row for m in present if (row := _repair(m, by_method[m])) is not None],
+        repair=[row for m in scored if (row := _repair(m, graded_by_method[m])) is not None],
+        internal_errors={m: n for m in present if (n := len(by_method[m]) - len(graded_by_method[m]))},
     )

@@ -9,6 +9,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from robotool.bugs import InternalError
 from robotool.eval.config import EvalConfig, Settings
 from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
@@ -60,6 +61,7 @@ class WorldResult(BaseModel):
     success: bool
     failure_class: FailureClass | None = None
     failure: str | None = Field(None, description="why it failed, in one line")
+    internal_error: bool = Field(False, description="a bug in robotool ended it: neither a success nor a failure")
     tools_used: list[str] = Field(default_factory=list)
     calls: int = 0
     sim_time: float = 0.0
@@ -108,6 +110,11 @@ class RunRecord(BaseModel):
     wall_s: float = Field(0.0, description="wall time of the whole run as the evaluator measured it")
     notes: list[str] = Field(default_factory=list)
     error: str | None = Field(None, description="the method raised instead of returning a solution")
+    internal_error: InternalError | None = Field(
+        None,
+        description="a bug in robotool met in the run (a controller or the method raised; the first one, with its "
+        "traceback): the run is neither a success nor a failure, and the success tables leave it out",
+    )
     equal_budget: EqualBudget | None = Field(None, description="with repair rounds: plain sampling at equal LM calls")
 
     @property

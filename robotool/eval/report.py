@@ -8,9 +8,9 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from robotool.eval.records import Picture, Results
+from robotool.eval.records import Picture, Results, RunRecord
 from robotool.eval.tables import TextTable
-from robotool.program.methods import STAGES_BY_METHOD
+from robotool.program.methods import runs_analyzer
 from robotool.safe_text import markdown_text, one_line
 
 
@@ -41,13 +41,32 @@ def preamble(results: Results, escape: Callable[[str], str] = markdown_text) -> 
         )
     lines += [f"- {escape(line)}" for line in skipped_lines(results.skipped)]
     lines += [f"- note: {escape(note)}" for note in results.notes]
-    if not any(
-        r.concepts.correct is not None or STAGES_BY_METHOD.get(r.key.method, {}).get("analyzer")
-        for r in results.records
-    ):
+    lines += [f"- {escape(line)}" for line in internal_error_lines(results.records)]
+    if not any(r.concepts.correct is not None or runs_analyzer(r.key.method) for r in results.records):
         lines.append(
             "- key-concept accuracy (Table 2) is graded only for methods with an Analyzer, which need an LM; none ran"
         )
+    return lines
+
+
+INTERNAL_ERRORS_SHOWN = 10
+"""Runs with an internal error that the report names one by one (the others are counted)."""
+
+
+def internal_error_lines(records: Sequence[RunRecord]) -> list[str]:
+    """The runs a bug in robotool ended, apart from the results: how many, then each one's reason and where its
+    traceback is (the record's place in ``results.json``)."""
+    broken = [(i, r.key.id, r.internal_error) for i, r in enumerate(records) if r.internal_error is not None]
+    if not broken:
+        return []
+    lines = [
+        f"internal errors: {len(broken)} run(s) ended by a bug in robotool, neither successes nor failures: left out "
+        "of the tables but the cost (their tracebacks were logged and are in results.json)"
+    ]
+    for i, run, error in broken[:INTERNAL_ERRORS_SHOWN]:
+        lines.append(f"run {run}: {error} (its traceback: records[{i}].internal_error in results.json)")
+    if len(broken) > INTERNAL_ERRORS_SHOWN:
+        lines.append(f"... and {len(broken) - INTERNAL_ERRORS_SHOWN} more run(s) with an internal error")
     return lines
 
 

@@ -21,6 +21,7 @@ from robotool.eval.records import EqualBudget
 from robotool.program.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
 from robotool.task.task_model import Task
+from robotool.vocabulary import PLANNER_METHODS, MethodName, PlannerMethod
 
 if TYPE_CHECKING:
     import dspy
@@ -50,7 +51,7 @@ class MethodInfo(BaseModel):
     uses_lm: bool
 
 
-_LABELS = {
+_LABELS: dict[MethodName | PlannerMethod, str] = {
     "robotool": "RoboTool",
     "no_analyzer": "RoboTool w/o Analyzer",
     "no_calculator": "RoboTool w/o Calculator",
@@ -62,7 +63,7 @@ _LABELS = {
 
 METHODS: dict[str, MethodInfo] = {
     name: MethodInfo(name=name, label=_LABELS[name], uses_lm=name in STAGES_BY_METHOD)
-    for name in (*STAGES_BY_METHOD, "search", "no_tool")
+    for name in (*STAGES_BY_METHOD, *PLANNER_METHODS)
 }
 """Every method, in table order: the LM program and its ablations, then the LM-free planner's two."""
 

@@ -14,6 +14,7 @@ journal is written here, as each run's record comes back, so the results folder 
 from __future__ import annotations
 
 import hashlib
+import logging
 import time
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, NamedTuple
@@ -44,6 +45,8 @@ from robotool.eval.work import NotAttempted, RunJob, RunWork
 from robotool.processes import cores
 from robotool.safe_text import console_plain, json_text
 from robotool.version import version
+
+logger = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     import dspy
@@ -290,7 +293,8 @@ def _run(
         if isinstance(outcome, NotAttempted):
             unavailable.append(outcome.error())
             return
-        if isinstance(outcome, WorkerLost):
+        if isinstance(outcome, WorkerLost):  # nothing of the run came back: an internal error, not a failure
+            logger.error("internal error in run %s: %s", job.key.id, outcome)
             ran = work.stages.get(job.key.method)
             outcome = crashed(job.instance, job.key, job.world_seed, outcome, 0.0, stages=ran)
         journal.append(outcome)

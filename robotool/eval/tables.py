@@ -45,10 +45,18 @@ def _runs_note(rows: Sequence[MethodRow]) -> str:
     return f"Each cell is a mean over {span} run(s)."
 
 
+def _left_out(summary: Summary, note: str) -> str:
+    """``note``, then how many runs an internal error took out of the table (none: ``note`` alone)."""
+    n = sum(summary.internal_errors.values())
+    excluded = f"{n} run(s) with an internal error (a bug in robotool, not a failure) left out." if n else ""
+    return " ".join(part for part in (note, excluded) if part)
+
+
 def success_table(summary: Summary) -> TextTable:
     """Table 1: the paper's tasks as columns, methods as rows, the average, the paper's rows for reference."""
     columns = [c for c in PAPER_TASKS if any(c in row.cells for row in summary.success)]
-    table = _matrix_table("Success rate (paper Table 1)", columns, summary.success, _runs_note(summary.success))
+    note = _left_out(summary, _runs_note(summary.success))
+    table = _matrix_table("Success rate (paper Table 1)", columns, summary.success, note)
     if table.rows:
         for method in PAPER_SUCCESS:
             published = paper_success(method)
@@ -65,7 +73,8 @@ def success_table(summary: Summary) -> TextTable:
 def other_tasks_table(summary: Summary) -> TextTable:
     """Success on the other built-in tasks and task files (discriminative variants, extra tasks)."""
     columns = [c for c in dict.fromkeys(c for row in summary.success for c in row.cells) if c not in PAPER_TASKS]
-    return _matrix_table("Success rate on other tasks", columns, summary.success, _runs_note(summary.success))
+    note = _left_out(summary, _runs_note(summary.success))
+    return _matrix_table("Success rate on other tasks", columns, summary.success, note)
 
 
 def _matrix_table(title: str, columns: Sequence[str], rows: Sequence[MethodRow], note: str) -> TextTable:
@@ -86,7 +95,7 @@ def generated_table(summary: Summary) -> TextTable:
         "Success rate on generated instances",
         columns,
         summary.generated,
-        _runs_note(summary.generated) + " A family's cell pools its seeds' runs.",
+        _left_out(summary, _runs_note(summary.generated) + " A family's cell pools its seeds' runs."),
     )
 
 
@@ -102,7 +111,7 @@ def concepts_table(summary: Summary) -> TextTable:
             *(method_label(r.method) for r in summary.concepts),
             *(["paper: RoboTool"] if reference else []),
         ],
-        note=_runs_note(summary.concepts) + " Matching rule: robotool/eval/grading.py.",
+        note=_left_out(summary, _runs_note(summary.concepts) + " Matching rule: robotool/eval/grading.py."),
     )
     for task in tasks:
         cells = [_num(r.cells[task].value if task in r.cells else None) for r in summary.concepts]
@@ -115,7 +124,7 @@ def errors_table(summary: Summary) -> TextTable:
     table = TextTable(
         title="Outcomes and error breakdown (share of runs)",
         columns=["method", *OUTCOMES, "runs"],
-        note="Classes from rollout traces; rules in robotool/eval/failure_classes.py.",
+        note=_left_out(summary, "Classes from rollout traces; rules in robotool/eval/failure_classes.py."),
     )
     for b in summary.errors:
         table.rows.append([method_label(b.method), *(_num(b.shares[o]) for o in OUTCOMES), str(b.runs)])
@@ -131,7 +140,7 @@ def discrimination_table(summary: Summary) -> TextTable:
     table = TextTable(
         title="Discriminative tool use (share of worlds using a tool)",
         columns=["method", "tool needed", "no tool needed"],
-        note="Ideal: 1.00 where a tool is needed, 0.00 where none is. n: runs.",
+        note=_left_out(summary, "Ideal: 1.00 where a tool is needed, 0.00 where none is. n: runs."),
     )
     for d in summary.discrimination:
         table.rows.append([method_label(d.method), _rate(d.needed), _rate(d.not_needed)])

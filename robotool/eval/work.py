@@ -9,6 +9,7 @@ language model was unavailable (not a result: the evaluator does not record it).
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -18,6 +19,8 @@ from robotool.eval.instances import TaskInstance
 from robotool.eval.judge import crashed, judge
 from robotool.eval.records import RunKey, RunRecord
 from robotool.eval.solvers import Compared, Solver
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -57,7 +60,8 @@ class RunWork:
             result = self.solvers[key.method](job.instance.task, seed=job.world_seed, run=key.run)
         except LMUnavailableError as e:  # nothing was attempted: not a result
             return NotAttempted(e.kind, str(e))
-        except Exception as e:  # a method that raises fails its run, not the evaluation
+        except Exception as e:  # a bug in robotool: an internal error of this run, not of the evaluation
+            logger.error("internal error in run %s: the %s method raised", key.id, key.method, exc_info=e)
             return crashed(job.instance, key, job.world_seed, e, time.perf_counter() - begun, stages=ran)
         solution = result.solution if isinstance(result, Compared) else result
         record = judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun, stages=ran)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 from robotool import robots
 from robotool.eval.failure_classes import TaskFacts, classify, tools_used
@@ -30,9 +29,7 @@ from robotool.sandbox import ProgramRejected, validate
 from robotool.solution import Candidate, Solution
 from robotool.task.concepts import KeyConcept
 from robotool.task.task_model import Task
-
-Stage = Literal["analyzer", "planner", "calculator", "coder"]
-STAGES: tuple[Stage, ...] = ("analyzer", "planner", "calculator", "coder")
+from robotool.vocabulary import Stage, is_stage
 
 
 @dataclass(frozen=True)
@@ -161,8 +158,8 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
 def candidate_findings(task: Task, candidate: Candidate, facts: TaskFacts) -> list[StageFinding]:
     """Evidence from one candidate: the stage that gave no usable reply, a refused program, failed worlds."""
     failure = candidate.failure
-    if failure is not None and failure.kind in ("no_reply", "fault") and failure.stage in STAGES:
-        stage: Stage = failure.stage  # type: ignore[assignment]
+    if failure is not None and failure.kind in ("no_reply", "fault") and is_stage(failure.stage):
+        stage = failure.stage
         if stage == "coder" and candidate.code is not None:
             try:
                 validate(candidate.code, task.embodiment)

@@ -19,9 +19,10 @@ import dspy
 
 from robotool.eval.failure_classes import TaskFacts
 from robotool.optimize.batching import RolloutBatcher
-from robotool.optimize.feedback import STAGES, Stage, findings, stage_feedback
+from robotool.optimize.feedback import findings, stage_feedback
 from robotool.solution import Proposal, Solution
 from robotool.verify import select
+from robotool.vocabulary import STAGES, Stage
 
 PREDICTOR_STAGES: dict[str, Stage] = {
     "analyze": "analyzer",

@@ -38,7 +38,7 @@ from robotool.errors import RobotoolError
 from robotool.program.compiled import CompiledInfo, check_fits, read_compiled, version_note
 from robotool.program.lm import DEFAULT_FORMAT_RETRIES
 from robotool.program.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
-from robotool.program.methods import STAGES_BY_METHOD
+from robotool.program.methods import STAGES_BY_METHOD, MethodStages, method_stages
 from robotool.program.repair_rounds import RepairBudget, propose_repair, repair_rounds
 from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
@@ -46,6 +46,7 @@ from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, Rep
 from robotool.task.describe import describe
 from robotool.task.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
+from robotool.vocabulary import MethodName
 
 AdapterName = Literal["chat", "json"]
 SPREAD = (0.7, 1.0)
@@ -99,9 +100,10 @@ class Proposer(dspy.Module):
     @classmethod
     def method(cls, name: str, **options: Any) -> Self:
         """The full program or an ablation by name (see :data:`STAGES_BY_METHOD`)."""
-        if name not in STAGES_BY_METHOD:
+        stages = method_stages(name)
+        if stages is None:
             raise ValueError(f"unknown method {name!r}; methods: {', '.join(STAGES_BY_METHOD)}")
-        return cls(**STAGES_BY_METHOD[name], **options)
+        return cls(analyzer=stages.analyzer, planner=stages.planner, calculator=stages.calculator, **options)
 
     @classmethod
     def from_compiled(cls, path: Path, **options: Any) -> Self:
@@ -132,12 +134,10 @@ class Proposer(dspy.Module):
         return [(name, p) for name, p in super().named_parameters() if not (self.repair_frozen and name == "repair")]
 
     @property
-    def method_name(self) -> str:
-        stages = {
-            "analyzer": self.analyze is not None,
-            "planner": self.plan is not None,
-            "calculator": self.calculate is not None,
-        }
+    def method_name(self) -> MethodName:
+        stages = MethodStages(
+            analyzer=self.analyze is not None, planner=self.plan is not None, calculator=self.calculate is not None
+        )
         return next(name for name, switches in STAGES_BY_METHOD.items() if switches == stages)
 
     def forward(self, task: Task) -> dspy.Prediction:

@@ -40,6 +40,7 @@ class WorldView(BaseModel):
     world: int
     seed: int
     success: bool
+    internal_error: bool = Field(False, description="a bug in robotool ended it: neither a success nor a failure")
     failure_class: str | None = None
     failure: str | None = None
     calls: list[CallView] = Field(default_factory=list)
@@ -66,9 +67,10 @@ class RunView(BaseModel):
 
     anchor: str = Field(description="the id of its <details> element")
     title: str
-    success_rate: float
+    success_rate: float | None = Field(description="None: an internal error left the run out of the results")
     failure_class: str | None = None
     error: str | None = None
+    internal_error: str | None = Field(None, description="the bug in robotool met in the run, in one line")
     scene: Media | None = None
     concepts: ConceptGrade = Field(default_factory=ConceptGrade)
     stages: StageOutputs = Field(default_factory=StageOutputs)
@@ -119,6 +121,7 @@ def world_view(
         world=rollout.world,
         seed=rollout.seed,
         success=rollout.success,
+        internal_error=rollout.internal_error is not None,
         failure_class=failure_class,
         failure=world_failure(rollout),
         calls=[_call(i + 1, c) for i, c in enumerate(rollout.calls)],
@@ -158,9 +161,10 @@ def record_view(record: RunRecord, pictures: Sequence[Picture], videos: Sequence
     return RunView(
         anchor=_anchor(key.id),
         title=f"{task} / {key.method} / run {key.run}",
-        success_rate=record.success_rate,
+        success_rate=None if record.internal_error else record.success_rate,
         failure_class=record.failure_class,
         error=record.error,
+        internal_error=str(record.internal_error) if record.internal_error else None,
         scene=Media(src=scene.file, caption=scene.caption) if scene else None,
         concepts=record.concepts,
         stages=record.stages,

@@ -21,6 +21,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import os
+import traceback
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from importlib import metadata
@@ -212,9 +213,7 @@ def _load() -> None:
             try:
                 loaded = point.load()
             except Exception as e:
-                raise RobotPluginError(
-                    f"cannot load robot plug-in {point.value!r} (entry point {point.name!r}): {type(e).__name__}: {e}"
-                ) from None
+                raise _load_error(f"robot plug-in {point.value!r} (entry point {point.name!r})", e) from e
             _register_loaded(loaded, f"entry point {point.name!r}")
     for module_name in (m.strip() for m in os.environ.get(MODULES_VARIABLE, "").split(",")):
         if module_name and module_name not in _LOADED:
@@ -223,10 +222,17 @@ def _load() -> None:
                 module = importlib.import_module(module_name)
             except Exception as e:
                 _LOADED.discard(module_name)
-                raise RobotPluginError(
-                    f"cannot load robot module {module_name!r} (from {MODULES_VARIABLE}): {type(e).__name__}: {e}"
-                ) from None
+                raise _load_error(f"robot module {module_name!r} (from {MODULES_VARIABLE})", e) from e
             _register_loaded(module, f"module {module_name!r}")
+
+
+def _load_error(plugin: str, error: Exception) -> RobotPluginError:
+    """The error for a plug-in whose import raised ``error``: it names the plug-in, the error and the line of the
+    plug-in's code that raised it (the cause stays chained, with its traceback)."""
+    frames = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith("<")]
+    own = [f for f in frames if not f.filename.startswith(os.path.dirname(importlib.__file__))]
+    where = f" (at {own[-1].filename}, line {own[-1].lineno})" if own else ""
+    return RobotPluginError(f"cannot load {plugin}: {type(error).__name__}: {error}{where}")
 
 
 def _register_loaded(loaded: object, source: str) -> None:

@@ -17,13 +17,14 @@ Modules, one job each:
 - :mod:`robotool.sim.lockstep` — ``run_sessions``: N program sessions in N worlds, one ``Rollout`` each.
 """
 
-from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation, default_backend
+from robotool.sim.backend import BatchedSim, BatchState, Perturbation, default_backend
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.build import build, embodiment_for
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import Embodiment, GoalTracker, QueryError, SkillController, SkillEnd
 from robotool.sim.goals import goal_tracker
 from robotool.sim.lockstep import run_programs, run_sessions, trusted_sessions
+from robotool.vocabulary import BackendName
 
 __all__ = [
     "BackendName",

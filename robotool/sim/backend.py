@@ -13,18 +13,17 @@ import functools
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import mujoco
 import numpy as np
 
+from robotool.vocabulary import BackendName
+
 if TYPE_CHECKING:
     from robotool.sim.compiled_scene import Scene
 
-BackendName = Literal["mujoco", "warp"]
 TOUCH_DISTANCE = 0.002  # m: bodies whose geoms are at most this far apart are touching
-
-BACKENDS: tuple[BackendName, ...] = ("mujoco", "warp")
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from robotool.sim.backend import BACKENDS, BackendName, BatchedSim, Perturbation
+from robotool.sim.backend import BatchedSim, Perturbation
 from robotool.sim.compiled_scene import Scene
+from robotool.vocabulary import BACKENDS, BackendName
 
 
 def make_sim(

@@ -17,9 +17,11 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    pushed to the backend before each step), ``sim.set_weld(worlds, eq, active)`` (attach at the current
    relative pose, or detach) and ``sim.rays(...)`` for support heights.
    Query skills are answered at once by :meth:`SkillController.query` from the current state.
-   An exception inside the controller fails only the world it belongs to: ``start`` and ``query`` run per world;
+   An exception inside the controller is a bug in robotool, not the program's failure: it ends only the world it
+   belongs to, as an internal error (logged with its traceback, recorded in the rollout's ``internal_error``);
+   ``start`` and ``query`` run per world;
    per-world work inside ``tick`` that cannot be undone (advancing a plan) ends that world's skill with outcome
-   ``error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner puts back the
+   ``internal_error`` (:func:`error_end`) instead of raising; and when ``tick`` raises anyway, the runner puts back the
    controller's :meth:`SkillController.snapshot` taken before the tick (:meth:`SkillController.restore`), the
    controls and the welds, and ticks the worlds one by one, failing those that raise again. A controller therefore
    keeps all its per-world state in the dataclasses that :meth:`SkillController.world_states` returns (one per
@@ -36,11 +38,13 @@ from __future__ import annotations
 import copy
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field, fields, is_dataclass
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from robotool.bugs import describe
 from robotool.task import geometry
+from robotool.vocabulary import SkillOutcome
 
 if TYPE_CHECKING:
     import mujoco
@@ -49,8 +53,6 @@ if TYPE_CHECKING:
     from robotool.sim.backend import BatchedSim, BatchState
     from robotool.sim.compiled_scene import Scene
     from robotool.task.task_model import Task
-
-EndOutcome = Literal["done", "stalled", "timeout", "refused", "fell", "error"]
 
 
 @dataclass(frozen=True)
@@ -62,11 +64,12 @@ class SkillEnd:
     """
 
     world: int
-    outcome: EndOutcome  # "error": the controller raised while running the skill; the runner fails the world
+    outcome: SkillOutcome  # "internal_error": the controller raised while running the skill (a bug in robotool)
     reason: str | None = None
     measured: dict[str, float] = field(default_factory=dict)
     result: Any = None
     events: tuple[Event, ...] = ()
+    error: BaseException | None = field(default=None, compare=False)  # what the controller raised (internal_error)
 
 
 class QueryError(ValueError):
@@ -154,14 +157,10 @@ def _copied(value: Any) -> Any:
     return value
 
 
-def describe_error(error: Exception) -> str:
-    """An exception raised inside a controller as one line: its type and message."""
-    return " ".join(f"{type(error).__name__}: {error}".split())[:400]
-
-
 def error_end(world: int, error: Exception) -> SkillEnd:
-    """The end of a skill whose controller raised ``error`` in ``world`` (the runner fails that world only)."""
-    return SkillEnd(world=world, outcome="error", reason=describe_error(error))
+    """The end of a skill whose controller raised ``error`` in ``world``: an internal error, which ends that world
+    only (the runner logs the traceback and records it apart from the program's failures)."""
+    return SkillEnd(world=world, outcome="internal_error", reason=describe(error), error=error)
 
 
 def world_mask(nworld: int, worlds: np.ndarray | None) -> np.ndarray:

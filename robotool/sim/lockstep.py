@@ -7,14 +7,16 @@ runner resumes every such world first and only then waits on each (so sandboxed 
 parallel). A program that errors or ends is finished for its world only; its world then runs on for
 ``SETTLE_AFTER`` simulated seconds with the robot holding still (what rocks or tips comes to rest, a
 falling object lands) before the goal is read. Skill arguments are checked on this side of the sandbox,
-positions against the scene's box (:func:`scene_box`); an exception inside the skill controller fails the
-world it happened in with the reason, never the batch: when the batched control tick raises, the controller's
-per-world state is put back as it was before the tick and the worlds are ticked one by one.
+positions against the scene's box (:func:`scene_box`). An exception inside the skill controller is a bug in
+robotool: it is logged with its traceback and ends the world it happened in as an internal error (the rollout's
+``internal_error``, kept apart from the program's failures), never the batch: when the batched control tick
+raises, the controller's per-world state is put back as it was before the tick and the worlds are ticked one by one.
 Each world yields a :class:`~robotool.rollout.Rollout`.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -23,6 +25,7 @@ import mujoco
 import numpy as np
 
 from robotool import robots
+from robotool.bugs import InternalError
 from robotool.program_session import (
     ProgramEnded,
     ProgramSession,
@@ -33,7 +36,7 @@ from robotool.program_session import (
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.sim.backend import BackendName, BatchedSim, BatchState, Perturbation
+from robotool.sim.backend import BatchedSim, BatchState, Perturbation
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.build import build, embodiment_for
 from robotool.sim.compiled_scene import Scene
@@ -42,7 +45,6 @@ from robotool.sim.embodiment import (
     QueryError,
     SkillController,
     SkillEnd,
-    describe_error,
     goal_events,
 )
 from robotool.sim.goals import goal_tracker
@@ -51,12 +53,15 @@ from robotool.sim.recorder import StateRecorder
 from robotool.sim.sheets import Sheets
 from robotool.task import geometry
 from robotool.task.task_model import Task
+from robotool.vocabulary import BackendName
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass
@@ -72,6 +77,7 @@ class _World:
     settle_until: float = np.inf  # simulated time when the ended world's goal is read
     finished: bool = False
     error: str | None = None
+    internal_error: InternalError | None = None
     output: str = ""
     conditions: dict[str, bool] = field(default_factory=dict)
     sim_time: float = 0.0
@@ -212,8 +218,8 @@ class _Run:
         for i in worlds:
             try:
                 ends += self.controller.tick(state, np.array([i]))
-            except Exception as e:  # a controller error in world i fails world i only
-                self._fail(i, state, describe_error(e))
+            except Exception as e:  # a controller error in world i ends world i only
+                self._internal_error(i, state, e)
         return ends
 
     # -- programs ------------------------------------------------------------------------------
@@ -234,8 +240,8 @@ class _Run:
             for i, request in starts.items():
                 try:
                     ends = self.controller.start(state, np.array([i]), request.name, self.worlds[i].pending_args)
-                except Exception as e:  # a controller bug fails this world only
-                    self._fail(i, state, describe_error(e))
+                except Exception as e:  # a controller bug ends this world only
+                    self._internal_error(i, state, e)
                     continue
                 again += self._finish_skills(state, ends)
             to_wait = again
@@ -268,8 +274,8 @@ class _Run:
             call.outcome, call.reason = "error", str(e)
             world.session.resume(SkillReply(error=str(e)))
             return True
-        except Exception as e:  # a controller bug fails this world only
-            self._fail(i, state, describe_error(e), request.name)
+        except Exception as e:  # a controller bug ends this world only
+            self._internal_error(i, state, e, request.name)
             return False
         world.session.resume(SkillReply(value=call.result))
         return True
@@ -281,8 +287,8 @@ class _Run:
             world = self.worlds[end.world]
             if world.ended or world.pending is None:
                 continue
-            if end.outcome == "error":  # the controller raised in this world while running the skill
-                self._fail(end.world, state, end.reason or "")
+            if end.outcome == "internal_error":  # the controller raised in this world while running the skill
+                self._internal_error(end.world, state, end.error or RuntimeError(end.reason))
                 continue
             call, world.pending = world.pending, None
             call.outcome, call.reason, call.measured, call.result = end.outcome, end.reason, end.measured, end.result
@@ -292,21 +298,25 @@ class _Run:
             resumed.append(end.world)
         return resumed
 
-    def _fail(self, i: int, state: BatchState, error: str, skill: str | None = None) -> None:
-        """An exception inside the controller (``error``, one line) fails world ``i``: its program ends and its goal
-        is read now; ``skill`` is the query it answered (a motion skill in progress is named by the world)."""
+    def _internal_error(self, i: int, state: BatchState, error: BaseException, skill: str | None = None) -> None:
+        """An exception inside the controller (a bug in robotool) ends world ``i`` as an internal error: the
+        traceback is logged and recorded, its program ends and its goal is read now; ``skill`` is the query it
+        answered (a motion skill in progress is named by the world)."""
         world = self.worlds[i]
         call = world.calls[-1] if skill is not None else world.pending
         where = f"in {call.skill}" if call is not None else "after the program ended"
-        reason = " ".join(f"controller error {where}: {error}".split())[:500]
-        if call is not None:
-            call.outcome, call.reason = "error", reason
+        found = InternalError.of(error, f"the {self.robot.name} controller, {where}, world {i}")
+        logger.error("%s", found, exc_info=error)
+        world.internal_error = world.internal_error or found
+        reason = " ".join(f"internal error: controller error {where}: {found.reason}".split())[:500]
         if world.ended:  # settling after its program: the goal is read now, with the error
             world.error = world.error or reason
             if not world.finished:
                 self._read_goal(i, state)
-            return
-        self._end(i, state, reason)
+        else:
+            self._end(i, state, reason)
+        if call is not None:  # after the end, which marks a pending call as the program's error
+            call.outcome, call.reason = "internal_error", reason
 
     def _end(self, i: int, state: BatchState, error: str | None, output: str = "", settle: bool = False) -> None:
         """The program of world ``i`` ended; with ``settle`` its world runs on before the goal is read."""
@@ -392,6 +402,7 @@ class _Run:
             touched=[names[k] for k in np.flatnonzero(self.touched[i])],
             sim_time=world.sim_time,
             error=world.error,
+            internal_error=world.internal_error,
             output=world.output,
         )
 

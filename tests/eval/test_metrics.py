@@ -158,3 +158,23 @@ def test_every_run_of_a_method_with_an_analyzer_is_graded() -> None:
     assert crashed(instance, coder, 0, RuntimeError("boom"), 0.1).concepts.correct is None
     records = [judge(instance, key, 0, no_concepts, 0.1)]
     assert summarize(records, ["robotool"]).concepts[0].cells["sofa_traversing"].value == 0.0
+
+
+def test_a_run_with_an_internal_error_is_left_out_of_every_table_but_the_cost() -> None:
+    """A bug in robotool (a controller or the method raised) is neither a success nor a failure: the tables leave
+    the run out of their means and say how many runs they left out; the cost still counts it."""
+    from robotool.bugs import InternalError
+
+    broken = record("milk_reaching", "robotool", 2, [("invalid", False)]).model_copy(
+        update={"internal_error": InternalError(where="the arm controller, in open_gripper, world 0", reason="E: x")}
+    )
+    summary = summarize([*RECORDS, broken], ["robotool", "coder"])
+    assert summary.internal_errors == {"robotool": 1}
+    assert summary.success == summarize(RECORDS, ["robotool", "coder"]).success  # the denominator leaves it out
+    assert summary.errors[0].runs == 4 and summary.cost[0].runs == 5
+    tables = {t.title: t for t in all_tables(summary)}
+    assert tables["Success rate (paper Table 1)"].rows[0] == ["RoboTool", "0.25", "0.25"]
+    for title in ("Success rate (paper Table 1)", "Outcomes and error breakdown (share of runs)"):
+        assert "1 run(s) with an internal error (a bug in robotool, not a failure) left out." in tables[title].note
+    only_broken = summarize([broken], ["robotool"])
+    assert only_broken.success == [] and only_broken.errors == [] and only_broken.internal_errors == {"robotool": 1}

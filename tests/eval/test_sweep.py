@@ -4,24 +4,32 @@ from __future__ import annotations
 
 import io
 import json
+import logging
 import os
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import dspy
+import numpy as np
 import pytest
+from fixtures.reference import REFERENCE, program
 from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, scripted_lm
 from fixtures.standin_solution import standin_solution
 from rich.console import Console
 
 from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
 from robotool.eval.journal import JOURNAL
+from robotool.eval.report import internal_error_lines
 from robotool.eval.solvers import METHODS, planner_missing
-from robotool.solution import Solution
+from robotool.robots.arm.arm_controller import ArmController
+from robotool.safe_text import markdown_text
+from robotool.solution import Candidate, Proposal, Solution
 from robotool.task.task_model import Task
+from robotool.verify import select
 
 TESTS = Path(__file__).parents[1]
 
@@ -151,13 +159,76 @@ def test_killed_evaluation_resumes_with_every_run_exactly_once(tmp_path: Path) -
     assert len({tuple(json.loads(line)["key"].values()) for line in lines}) == 8
 
 
-def test_exception_in_a_method_fails_only_that_run(tmp_path: Path) -> None:
+def test_exception_in_a_method_is_an_internal_error_of_that_run_only(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A method that raises is a bug in robotool: the run records an internal error with the traceback (logged
+    too), has no failure class, and the report lists it apart; the other method's run is scored as usual."""
+
     def broken(task: Task, *, seed: int, run: int) -> Solution:
         raise RuntimeError("planner bug")
 
-    results = evaluate(_config(tmp_path, tasks=["sofa_traversing"]), solvers={"search": broken, "no_tool": broken},
-                       console=_quiet())
-    assert all(r.failure_class == "invalid" and "planner bug" in (r.error or "") for r in results.records)
+    config = _config(tmp_path, tasks=["sofa_traversing"])
+    with caplog.at_level(logging.ERROR, logger="robotool.eval.work"):
+        results = evaluate(config, solvers={"search": broken, "no_tool": standin_solution}, console=_quiet())
+    (crashed,) = [r for r in results.records if r.key.method == "search"]
+    assert crashed.failure_class is None and crashed.internal_error is not None
+    assert crashed.internal_error.where == "the search method"
+    assert crashed.internal_error.reason == "RuntimeError: planner bug"
+    assert "Traceback" in crashed.internal_error.traceback and "in broken" in crashed.internal_error.traceback
+    assert any(r.exc_info is not None and "planner bug" in str(r.exc_info[1]) for r in caplog.records)
+    report = (config.out_dir / "report.md").read_text(encoding="utf-8")
+    assert "internal errors: 1 run(s) ended by a bug in robotool" in report
+    assert f"run {crashed.key.id}: internal error in the search method: RuntimeError: planner bug" in report
+    methods = [row[0] for row in _table(report, "Success rate (paper Table 1)")]
+    assert methods[0] == "No tool (floor)" and "Search planner (no LM)" not in methods
+
+
+def _table(report: str, title: str) -> list[list[str]]:
+    """The rows of a Markdown table of ``report.md``, by its title."""
+    lines = report.split(f"## {title}\n\n", 1)[1].split("\n\n", 1)[0].splitlines()[2:]
+    return [[cell.strip() for cell in line.strip("|").split("|")] for line in lines]
+
+
+def test_a_controller_bug_is_an_internal_error_the_tables_leave_out_and_the_report_lists(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A fault injected into the arm's controller (it raises in world 1 of the batch): the run's record holds the
+    internal error with its traceback, the success table leaves the run out and says so, the report lists it."""
+    original = ArmController.start
+
+    def breaks_in_world_1(self: ArmController, state: Any, worlds: np.ndarray, skill: str, args: Any) -> Any:
+        if 1 in np.asarray(worlds):  # TEST FIXTURE: a fault injected into the controller
+            raise FloatingPointError("overflow encountered in the servo reference")
+        return original(self, state, worlds, skill, args)
+
+    def reference(task: Task, *, seed: int, run: int) -> Solution:
+        """TEST FIXTURE standing in for a method: the task's reference program, verified in the run's worlds."""
+        candidate = Candidate(index=0, code=program(REFERENCE[task.name]))
+        return select(task, Proposal(task=task.name, method="reference", candidates=[candidate]), worlds=2, seed=seed)
+
+    monkeypatch.setattr(ArmController, "start", breaks_in_world_1)
+    config = EvalConfig(out=tmp_path / "out", settings=Settings(worlds=2), tasks=["milk_reaching_near"])
+    with caplog.at_level(logging.ERROR, logger="robotool.sim.lockstep"):
+        results = evaluate(config, solvers={"search": standin_solution, "no_tool": reference}, console=_quiet())
+    (broken,) = [r for r in results.records if r.key.method == "no_tool"]
+    assert broken.success_rate == 0.5 and [w.internal_error for w in broken.worlds] == [False, True]
+    assert broken.internal_error is not None and broken.internal_error.where.endswith("world 1")
+    assert "breaks_in_world_1" in broken.internal_error.traceback
+    assert any(r.exc_info is not None and isinstance(r.exc_info[1], FloatingPointError) for r in caplog.records)
+    report = (config.out_dir / "report.md").read_text(encoding="utf-8")
+    index = [r.key.method for r in results.records].index("no_tool")
+    listed = (
+        f"run {broken.key.id}: internal error in the arm controller, in open_gripper, world 1: FloatingPointError: "
+        f"overflow encountered in the servo reference (its traceback: records[{index}].internal_error in results.json)"
+    )
+    assert internal_error_lines(results.records)[1:] == [listed] and markdown_text(listed) in report
+    assert [row[0] for row in _table(report, "Success rate on other tasks")] == ["Search planner (no LM)"]
+    assert "1 run(s) with an internal error (a bug in robotool, not a failure) left out." in report
+    saved = json.loads((config.out_dir / "results.json").read_text(encoding="utf-8"))
+    assert "Traceback" in saved["records"][index]["internal_error"]["traceback"]
+    page = (config.out_dir / "report.html").read_text(encoding="utf-8")
+    assert "internal errors: 1 run(s)" in page and "a bug in robotool, not a failure; the run is left out" in page
 
 
 KILLABLE = """

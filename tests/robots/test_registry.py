@@ -169,3 +169,21 @@ def test_an_entry_point_registers_its_robot(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setattr(registry.metadata, "entry_points", lambda group: [point] if group == point.group else [])
     assert robots.names() == ("arm", "point", "quadruped")
     assert robots.get("point").skill_names == {"get_position", "move_to"}
+
+
+def test_a_plugin_whose_import_raises_names_itself_and_keeps_its_cause(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """TEST FIXTURE: a plug-in module with a bug at import time. The error names the plug-in and the line that
+    raised, and chains the plug-in's own exception (with its traceback) as its cause."""
+    (tmp_path / "broken_robot_plugin.py").write_text("ROBOT = None\nSCALE = 1 / 0\n", encoding="utf-8")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv(robots.MODULES_VARIABLE, "broken_robot_plugin")
+    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
+    with pytest.raises(robots.RobotPluginError) as caught:
+        robots.names()
+    message = str(caught.value)
+    assert message.startswith("cannot load robot module 'broken_robot_plugin' (from ROBOTOOL_ROBOTS): ")
+    assert "ZeroDivisionError: division by zero" in message
+    assert message.endswith(f"(at {tmp_path / 'broken_robot_plugin.py'}, line 2)")
+    assert isinstance(caught.value.__cause__, ZeroDivisionError) and caught.value.__cause__.__traceback__ is not None

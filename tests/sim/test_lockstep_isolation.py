@@ -1,7 +1,9 @@
-"""Bad skill arguments fail one call and a controller exception fails one world, never the batch."""
+"""Bad skill arguments fail one call and a controller exception ends one world as an internal error, never the
+batch."""
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +13,7 @@ from fixtures.reference import REFERENCE, program
 
 from robotool import robots, sandbox, sim, tasks, verify
 from robotool.cli import main
+from robotool.eval.failure_classes import TaskFacts, classify
 from robotool.robots.arm.arm_controller import ArmController
 from robotool.robots.quadruped.move_runner import MoveRunner
 from robotool.robots.quadruped.quadruped_controller import QuadrupedController
@@ -66,7 +69,11 @@ def test_huge_target_through_robotool_run_is_a_report_not_a_traceback(
     assert "Traceback" not in captured.out + captured.err and "outside the scene" in captured.out
 
 
-def test_a_controller_exception_fails_only_its_world(sim_scene: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_controller_exception_fails_only_its_world(
+    sim_scene: Any, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A controller that raises (a fault injected into the arm's start) is a bug in robotool: its world ends as an
+    internal error, kept apart from the program's failures, and the traceback is logged and recorded."""
     original = ArmController.start
 
     def breaks_in_world_1(self: ArmController, state: Any, worlds: np.ndarray, skill: str, args: Any) -> Any:
@@ -76,12 +83,24 @@ def test_a_controller_exception_fails_only_its_world(sim_scene: Any, monkeypatch
 
     monkeypatch.setattr(ArmController, "start", breaks_in_world_1)
     code = program(REFERENCE["milk_reaching_near"])
-    rollouts = sim.run_sessions(sim_scene("milk_reaching_near"), sandbox.start_sessions([code] * 3, "arm"))
+    with caplog.at_level(logging.ERROR, logger="robotool.sim.lockstep"):
+        rollouts = sim.run_sessions(sim_scene("milk_reaching_near"), sandbox.start_sessions([code] * 3, "arm"))
     assert rollouts[0].success and rollouts[2].success
+    assert rollouts[0].internal_error is None and rollouts[2].internal_error is None
     broken = rollouts[1]
     assert not broken.success and broken.error is not None
-    assert broken.error.startswith("controller error in ") and "FloatingPointError: overflow" in broken.error
-    assert broken.calls[-1].outcome == "error"
+    assert broken.error.startswith("internal error: controller error in ") and "FloatingPointError: overflow" in (
+        broken.error
+    )
+    assert broken.calls[-1].outcome == "internal_error"
+    found = broken.internal_error
+    assert found is not None and found.where.startswith("the arm controller, in ") and found.where.endswith("world 1")
+    assert found.reason == "FloatingPointError: overflow encountered in the servo reference"
+    assert "Traceback" in found.traceback and "breaks_in_world_1" in found.traceback
+    assert classify(broken, TaskFacts.of(sim_scene("milk_reaching_near").task, needs_tool=False)) is None
+    logged = [r for r in caplog.records if r.exc_info is not None]
+    assert len(logged) == 1 and "world 1" in logged[0].getMessage()
+    assert logged[0].exc_info is not None and isinstance(logged[0].exc_info[1], FloatingPointError)
 
 
 def _tick_raising_in(controller: type, world: int, after: float) -> Any:
@@ -118,8 +137,9 @@ def test_an_exception_in_the_batched_tick_fails_only_its_world(
     assert undisturbed[0].success and undisturbed[2].success
     broken = rollouts[1]
     skill = broken.calls[-1].skill
-    assert broken.error == f"controller error in {skill}: FloatingPointError: overflow in world 1"
-    assert not broken.success and broken.calls[-1].outcome == "error" and broken.calls[-1].reason == broken.error
+    assert broken.error == f"internal error: controller error in {skill}: FloatingPointError: overflow in world 1"
+    assert not broken.success and broken.calls[-1].outcome == "internal_error"
+    assert broken.calls[-1].reason == broken.error and broken.internal_error is not None
     assert broken.sim_time < undisturbed[1].sim_time
 
 
@@ -140,7 +160,10 @@ def test_an_exception_in_a_settling_world_fails_it_after_its_program(
     codes = [program(REFERENCE["milk_reaching_near"]), "p = get_center('milk')\n"]
     moving, querying = run_texts(sim_scene("milk_reaching_near"), codes)
     assert moving.success and moving.error is None
-    assert querying.error == "controller error after the program ended: FloatingPointError: overflow in world 1"
+    assert querying.error == (
+        "internal error: controller error after the program ended: FloatingPointError: overflow in world 1"
+    )
+    assert querying.internal_error is not None and "after the program ended" in querying.internal_error.where
     assert [c.outcome for c in querying.calls] == ["done"] and not querying.success
 
 
@@ -159,8 +182,11 @@ def test_a_plan_that_raises_in_one_world_ends_that_skill_only(
     monkeypatch.setattr(MoveRunner, "_start_move", start_move)
     fine, broken = run_texts(scene, [code] * 2)
     assert _same(fine, undisturbed[0]) and fine.success
-    assert broken.error == "controller error in push_to_position: ZeroDivisionError: the push's plan broke"
-    assert broken.calls[-1].outcome == "error"
+    assert broken.error == (
+        "internal error: controller error in push_to_position: ZeroDivisionError: the push's plan broke"
+    )
+    assert broken.calls[-1].outcome == "internal_error"
+    assert broken.internal_error is not None and "start_move" in broken.internal_error.traceback
 
 
 def test_a_world_whose_physics_blows_up_fails_alone(

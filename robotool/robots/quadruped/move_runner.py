@@ -20,8 +20,8 @@ from robotool.robots.quadruped.support import feet
 from robotool.robots.quadruped.terrain import RISE, Finding
 from robotool.robots.quadruped.terrain_following import TerrainFollowing
 from robotool.sim.embodiment import SkillEnd, error_end
+from robotool.vocabulary import MoveEnd
 
-MoveOutcome = tuple[str, str | None, dict[str, float]]
 """How a move or a skill ended: outcome (``done``, ``stalled``, ``refused``...), reason, measured values."""
 
 
@@ -33,7 +33,7 @@ class Move:
     pushing: int = -1
 
 
-SkillPlan = Generator[Move, MoveOutcome, MoveOutcome | None]
+SkillPlan = Generator[Move, MoveEnd, MoveEnd | None]
 """A motion skill's plan: yields moves, is sent each one's outcome, returns the skill's (None: done)."""
 
 
@@ -94,7 +94,7 @@ class MoveRunner:
         self._start_move(w, move)
         return None
 
-    def advance(self, w: int, outcome: MoveOutcome) -> SkillEnd | None:
+    def advance(self, w: int, outcome: MoveEnd) -> SkillEnd | None:
         """The current move ended with ``outcome``: start the plan's next move or end the skill (with outcome
         ``error`` when the plan raises: an advanced plan cannot be rolled back, so this world's error is its own)."""
         plan = self.state.plans[w]
@@ -141,12 +141,12 @@ class MoveRunner:
             self.on_push(w, move.pushing)
         s.best[w], s.progress_time[w] = np.inf, float(self.senses.state.time[w])
 
-    def _end(self, w: int, outcome: MoveOutcome | None) -> SkillEnd:
+    def _end(self, w: int, outcome: MoveEnd | None) -> SkillEnd:
         self.state.plans[w] = None
         self.state.moving[w] = False
         self.hold(np.array([w]))
         kind, reason, measured = outcome or ("done", None, {})
-        return SkillEnd(world=int(w), outcome=kind, reason=reason, measured=measured)  # type: ignore[arg-type]
+        return SkillEnd(world=int(w), outcome=kind, reason=reason, measured=measured)
 
     def hold(self, worlds: np.ndarray) -> None:
         """Stand still where the body is, lift motor off."""
@@ -219,7 +219,7 @@ class MoveRunner:
             w = int(worlds[k])
             finding = t.findings[w]
             if stalled[k]:
-                outcome: MoveOutcome = (
+                outcome: MoveEnd = (
                     "stalled",
                     f"blocked at [{q[k, 0]:.2f}, {q[k, 1]:.2f}], {remaining[k]:.2f} m short of the goal",
                     {"distance": round(float(remaining[k]), 3)},

@@ -164,7 +164,7 @@ class Plans:
                 found = sweep_problem(heights, behind, end, self.limits, floor)
                 if found is None:
                     return (start, end, staging), ""
-                if "drop" in found and not problem:
+                if found.kind == "drop" and not problem:
                     where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
                     problem = f": pushing from {where}, {found}"
         return None, problem

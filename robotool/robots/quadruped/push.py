@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import pairwise
+from typing import Literal
 
 import numpy as np
 
@@ -115,13 +116,24 @@ def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: 
     return np.column_stack([gx.ravel(), gy.ravel()])
 
 
+@dataclass(frozen=True)
+class SweepProblem:
+    """What is wrong with a push sweep: something in the body's way, or a drop under the feet; ``text`` says it."""
+
+    kind: Literal["blocked", "drop"]
+    text: str
+
+    def __str__(self) -> str:
+        return self.text
+
+
 def sweep_problem(
     heights: Callable[[np.ndarray], np.ndarray],
     behind: np.ndarray,
     end: np.ndarray,
     limits: QuadrupedLimits,
     floor: float,
-) -> str | None:
+) -> SweepProblem | None:
     """What is wrong with a push sweep from ``behind`` to ``end`` (robot centres) over a floor at ``floor``, or None.
 
     ``heights`` gives the surface under x-y points with the pushed object left out. The body's footprint must meet
@@ -129,13 +141,14 @@ def sweep_problem(
     """
     half = np.asarray(limits.body_size[:2]) / 2
     if np.any(heights(sweep_points(behind, end, half)) > floor + RISE):
-        return "something stands in its way"
+        return SweepProblem("blocked", "something stands in its way")
     u = (end - behind) / max(float(np.linalg.norm(end - behind)), 1e-9)
     points = foot_paths(behind + foot_offsets(limits), u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
     under = heights(points)
     if under.min() < floor - RISE:
         k = int(under.argmin())
-        return f"it would stand over a drop of {floor - under[k]:.2f} m at [{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
+        where = f"[{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
+        return SweepProblem("drop", f"it would stand over a drop of {floor - under[k]:.2f} m at {where}")
     return None
 
 

@@ -24,14 +24,28 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Any, Literal
 
 import numpy as np
 
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 
+
+class TerrainKind(IntEnum):
+    """What a foot's path meets, as :class:`PathScan` codes it (0: nothing)."""
+
+    NONE = 0
+    STEP = 1
+    GAP = 2
+    DROP = 3
+
+
+EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
+"""The kinds whose edge a foot's centre passes (a step is met face on); for ``np.isin`` over scan codes."""
+
 FindingKind = Literal["step", "gap", "drop"]
-KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # codes 1, 2, 3 in :class:`PathScan`
+KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # in :class:`TerrainKind` order (its codes 1, 2, 3)
 RISE = 0.015  # m: a change smaller than this is the same surface (noise, slopes between samples)
 TOLERANCE = 0.01  # m: measurement slack allowed over a limit (sampling and pose noise)
 SPACING = 0.01  # m between samples along a foot's path
@@ -70,9 +84,14 @@ class PathScan:
 
     level: np.ndarray  # (P, n) surface the foot stands at over each sample (a stridden gap keeps its near level)
     index: np.ndarray  # (P,) first sample of the first finding (n when none)
-    kind: np.ndarray  # (P,) 0 none, else 1 + the index in KINDS
+    kind: np.ndarray  # (P,) a :class:`TerrainKind` code (NONE: no finding)
     measured: np.ndarray  # (P,) the finding's measured value
     met: np.ndarray  # (P, n, 3) each kind's edge (KINDS order) met at each sample, within its limit or not (0: none)
+
+
+def finding_kind(code: int) -> FindingKind:
+    """The finding a :class:`PathScan` code (not :attr:`TerrainKind.NONE`) stands for."""
+    return KINDS[TerrainKind(code) - TerrainKind.STEP]
 
 
 def limit_of(kind: FindingKind, limits: QuadrupedLimits) -> float:
@@ -112,7 +131,7 @@ def scan_paths(
     current = np.asarray(start, dtype=float).copy()
     level = np.full((npath, n), np.nan)
     index = np.full(npath, n)
-    kind = np.zeros(npath, dtype=int)
+    kind = np.full(npath, TerrainKind.NONE, dtype=int)
     measured = np.zeros(npath)
     met = np.zeros((npath, n, len(KINDS)))
     skip = np.zeros(npath, dtype=int)
@@ -125,7 +144,7 @@ def scan_paths(
         busy[c : c + run + 1] = True
     k = 0
     while k < n:
-        live = kind == 0
+        live = kind == TerrainKind.NONE
         if not live.any():
             break
         if not busy[k]:  # flat for every path since the last change: each keeps its level (or strides on)
@@ -143,7 +162,7 @@ def scan_paths(
         free = live & ~striding
         rise = free & (h - current > RISE)
         too_high = free & exceeds("step", h - low, limits)  # a step, or a slope as steep as one
-        _found(too_high, k, 1, h - low, index, kind, measured)
+        _found(too_high, k, TerrainKind.STEP, h - low, index, kind, measured)
         climb = rise & ~too_high
         met[climb | too_high, k, 0] = (h - low)[climb | too_high]
         current[climb] = h[climb]
@@ -162,7 +181,7 @@ def scan_paths(
             wide = np.zeros(npath)
             wide[rows_dip] = width
             too_wide = gap & exceeds("gap", wide, limits)
-            _found(too_wide, k, 2, wide, index, kind, measured)
+            _found(too_wide, k, TerrainKind.GAP, wide, index, kind, measured)
             met[gap, k, 1] = wide[gap]
             stride = gap & ~too_wide
             skip[stride] = (
@@ -173,13 +192,13 @@ def scan_paths(
             )
             down = dip & ~gap
             too_deep = down & exceeds("drop", current - h, limits)
-            _found(too_deep, k, 3, current - h, index, kind, measured)
+            _found(too_deep, k, TerrainKind.DROP, current - h, index, kind, measured)
             met[down, k, 2] = (current - h)[down]
             step_down = down & ~too_deep
             current[step_down] = h[step_down]
         follow = free & ~rise & ~dip & ~too_high
         current[follow] = h[follow]
-        ok = kind == 0
+        ok = kind == TerrainKind.NONE
         level[ok, k] = current[ok]
         trail[:, k + run] = current
         k += 1
@@ -187,7 +206,13 @@ def scan_paths(
 
 
 def _found(
-    mask: np.ndarray, k: int, code: int, value: np.ndarray, index: np.ndarray, kind: np.ndarray, measured: np.ndarray
+    mask: np.ndarray,
+    k: int,
+    code: TerrainKind,
+    value: np.ndarray,
+    index: np.ndarray,
+    kind: np.ndarray,
+    measured: np.ndarray,
 ) -> None:
     index[mask] = k
     kind[mask] = code
@@ -209,12 +234,12 @@ def foot_paths(feet: np.ndarray, direction: np.ndarray, length: float, back: flo
 
 def first_finding(scan: PathScan, points: np.ndarray, limits: QuadrupedLimits) -> tuple[Finding, int] | None:
     """The earliest finding over the feet of one move (scan of 4 paths, their points (4, n, 2)) and its sample."""
-    hits = np.flatnonzero(scan.kind > 0)
+    hits = np.flatnonzero(scan.kind != TerrainKind.NONE)
     if not hits.size:
         return None
     foot = int(hits[np.argmin(scan.index[hits])])
     k = int(scan.index[foot])
-    kind = KINDS[int(scan.kind[foot]) - 1]
+    kind = finding_kind(int(scan.kind[foot]))
     where = points[foot, k]
     finding = Finding(
         kind,

@@ -24,14 +24,16 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.terrain import (
+    EDGE_KINDS,
     FOOT_NAMES,
     FOOT_RADIUS,
-    KINDS,
     LOOKAHEAD,
     RADIUS_SAMPLES,
     RISE,
     SPACING,
     Finding,
+    TerrainKind,
+    finding_kind,
     limit_of,
     scan_paths,
 )
@@ -159,9 +161,10 @@ class TerrainFollowing:
         kind = result.kind.reshape(len(worlds), 4)
         measured = result.measured.reshape(len(worlds), 4)
         meets = travel[:, None] + np.take_along_axis(sample, np.minimum(index, samples - 1), axis=1)
-        past = np.where(kind >= 2, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
-        relevant = (kind > 0) & (meets - past <= length[:, None])
-        margin = np.where(kind >= 2, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
+        edges = np.isin(kind, EDGE_KINDS)  # a gap or a drop
+        past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
+        relevant = (kind != TerrainKind.NONE) & (meets - past <= length[:, None])
+        margin = np.where(edges, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
         stop_at = np.where(relevant, meets - margin, np.inf).min(axis=1)
         limit = np.where(length > travel + config.scan_ahead, travel + config.scan_ahead, length)
         halted = s.halted[worlds]
@@ -175,7 +178,7 @@ class TerrainFollowing:
                 continue
             foot = int(hits[np.argmin(meets[k, hits])])
             where = points[k, foot, index[k, foot]]
-            kind_name = KINDS[int(kind[k, foot]) - 1]
+            kind_name = finding_kind(int(kind[k, foot]))
             s.findings[w] = Finding(
                 kind_name,
                 round(float(measured[k, foot]), 3),
