@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robotool.robots.quadruped.terrain import FOOT_RADIUS, LOOKAHEAD, SPACING
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, LOOKAHEAD, RISE, SPACING
 
 
 @dataclass(frozen=True)
@@ -131,6 +131,11 @@ class QuadrupedConfig:
         """m: a foot's radius; the feet's centres sit this far inside the body's outline (``terrain.FOOT_RADIUS``,
         shared with the planner's terrain checks)."""
         return FOOT_RADIUS
+
+    @property
+    def rise(self) -> float:
+        """m: heights closer than this are the same surface to the legs (``terrain.RISE``, shared with the planner)."""
+        return RISE
 
     @property
     def local(self) -> np.ndarray:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     ARM_CLUTTER,
@@ -35,7 +36,7 @@ from robotool.tasks.families._common import (
     uniform,
 )
 
-ARM_REACH_X = 0.45  # the workspace's +x edge
+ARM_REACH_X = ArmLimits().workspace_max[0]  # the workspace's +x edge
 HOOK_HEAD = 0.20  # length of the hammer's head along y
 HOOK_GRIP = 0.10  # graspable point: this far from the handle's -x end
 MILK = (0.044, 0.044, 0.16)

@@ -49,9 +49,10 @@ from robotool.tasks.families._common import (
 MAX_DROP = 0.3
 CUSHION = (0.5, 0.5, 0.16)
 STEP = (0.4, 0.6)
-SIDE_MARGIN = 0.01  # m its body keeps from what it must not touch
-SAME_LEVEL = 0.015  # m: a step top no higher than this above the sofa's does not meet the body
-PUSH_LEVEL = 0.04  # m: a robot on the step pushes what rests on a sofa top no farther than this from the step's
+SIDE_MARGIN = QUADRUPED.side_margin  # m its body keeps from what it must not touch
+SAME_LEVEL = QUADRUPED.rise  # m: a step top no higher than this above the sofa's does not meet the body
+PUSH_LEVEL = QUADRUPED.same_surface  # m: a robot on the step pushes what rests on a sofa top no farther than this
+# from the step's (the push rules' same surface)
 
 
 def build(rng: np.random.Generator) -> Draft:
