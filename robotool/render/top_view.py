@@ -23,7 +23,6 @@ from matplotlib.patches import Polygon, Rectangle
 
 from robotool import robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
-from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
 from robotool.safe_text import capped, plot_text
 from robotool.sim.compiled_scene import Scene
@@ -134,7 +133,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
         _draw_robot_box(ax, task, robot_end, end=True)
     verdict = "goal reached" if rollout.success else "goal not reached"
     ax.set_title(
-        plot_text(f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}"),
+        plot_text(f"{task.name}, world {rollout.world}: {task.goal.text()} - {verdict}"),
         fontsize=9,
         color=tuple(GOAL_RGBA[:3]) if rollout.success else REFUSED,
     )
