@@ -230,12 +230,12 @@ def _declutter(fig: Figure, ax: Axes) -> None:
 def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
     if path_xy is not None:
         return path_xy[0]
-    return np.asarray(robots.get(task.embodiment).start_xy(task), dtype=float)
+    return np.asarray(robots.get(task.embodiment).pictures.start_xy(task), dtype=float)
 
 
 def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray, *, end: bool = False) -> None:
     """The robot where it started (filled), or where it ended (``end``: dashed)."""
-    size = robots.get(task.embodiment).footprint(task)
+    size = robots.get(task.embodiment).pictures.footprint(task)
     label = "robot end" if end else "robot start"
     if size is None:  # a robot drawn as a marker (a gripper)
         ax.plot(*at, marker="s", color=ROBOT, markersize=8, label=label, fillstyle="none" if end else "full")

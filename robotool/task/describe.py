@@ -2,7 +2,7 @@
 
 This is the paper's F_Q and F_C: the instruction, every object with its numbers, the robot's
 limits and its skills with their exact meaning. The robot's section, and the object facts only its skills
-use, come from its package (``RobotType.describe``, ``RobotType.object_facts``); nothing here depends on which
+use, come from its package (``RobotType.description``); nothing here depends on which
 task this is.
 """
 
@@ -52,7 +52,7 @@ def _object_line(obj: SceneObject, robot: RobotType) -> str:
         parts.append(f"movable, mass {number_text(obj.effective_mass)} kg")
     else:
         parts.append("fixed in place")
-    parts += robot.object_facts(obj)
+    parts += robot.description.object_facts(obj)
     if obj.shape == "button":
         parts.append(f"face centre {vector_text(press_point(obj))}")
     if obj.magnetic:
@@ -83,11 +83,11 @@ def describe(task: Task) -> str:
         f"Task: {task.instruction}",
         f"Success: {task.goal.sentence(unbroken=_fragile_goal(task))}",
         "",
-        f"Scene (metres, world frame, z up; {robot.ground} is z = 0; sizes are along x, y, z, a turned object's "
-        "axes matched to the nearest of them):",
+        f"Scene (metres, world frame, z up; {robot.description.ground} is z = 0; sizes are along x, y, z, a turned "
+        "object's axes matched to the nearest of them):",
         *(_object_line(o, robot) for o in task.objects),
         "",
-        *robot.describe(task),
+        *robot.description.section(task),
         "",
         "Skills (Python functions the program calls; positions are [x, y, z] lists in metres):",
         *(f"- {s.signature} -> {s.returns}: {s.semantics}" for s in robot.skills),

@@ -49,10 +49,8 @@ SHORT_OF_PAD = "move_to([0.3, -0.2])\n"
 def point_robot(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """The point robot's module named in ROBOTOOL_ROBOTS; the registry restored afterwards."""
     monkeypatch.setenv(robots.MODULES_VARIABLE, PLUGIN)
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
-    yield
+    with robots.registered():
+        yield
 
 
 @pytest.fixture
@@ -126,20 +124,31 @@ def test_a_plugin_that_cannot_load_is_a_clear_error(
     monkeypatch: pytest.MonkeyPatch, task_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setenv(robots.MODULES_VARIABLE, "no_such_robot_module")
-    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
-    assert main(["describe", str(task_file)]) != 0
+    with robots.registered():
+        assert main(["describe", str(task_file)]) != 0
     err = capsys.readouterr().err
     assert "cannot load robot module 'no_such_robot_module' (from ROBOTOOL_ROBOTS): ModuleNotFoundError" in err
     assert "Traceback" not in err
 
 
-def test_a_taken_name_cannot_be_registered_again(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
+def test_a_taken_name_cannot_be_registered_again() -> None:
     arm = robots.get("arm")
-    robots.register(arm)  # the same record again: nothing happens
-    with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
-        robots.register(dataclasses.replace(arm))
+    with robots.registered():
+        robots.register(arm)  # the same record again: nothing happens
+        with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
+            robots.register(dataclasses.replace(arm))
+
+
+def test_a_scoped_registration_leaves_the_registry_as_it_was() -> None:
+    from fixtures.point_robot import ROBOT as POINT
+
+    before, limits = robots.names(), dict(limits_table.LIMITS_MODELS)
+    with robots.registered(POINT):
+        assert robots.get("point") is POINT and limits_table.limits_model("point") is POINT.limits
+    assert robots.names() == before == ("arm", "quadruped") and limits == limits_table.LIMITS_MODELS
+    with pytest.raises(robots.UnknownRobotError), robots.registered(POINT):
+        raise robots.UnknownRobotError("the block fails")
+    assert "point" not in robots.names()
 
 
 def test_no_module_outside_a_robot_package_names_a_robot() -> None:
@@ -162,10 +171,9 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
 def test_an_entry_point_registers_its_robot(monkeypatch: pytest.MonkeyPatch) -> None:
     """An installed package declares ``[project.entry-points."robotool.robots"] point = "<module>:ROBOT"``."""
     monkeypatch.delenv(robots.MODULES_VARIABLE, raising=False)
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(registry, "_LOADED", set())
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
     point = metadata.EntryPoint(name="point", value=f"{PLUGIN}:ROBOT", group=robots.ENTRY_POINT_GROUP)
     monkeypatch.setattr(registry.metadata, "entry_points", lambda group: [point] if group == point.group else [])
-    assert robots.names() == ("arm", "point", "quadruped")
-    assert robots.get("point").skill_names == {"get_position", "move_to"}
+    with robots.registered(reload_plugins=True):
+        assert robots.names() == ("arm", "point", "quadruped")
+        assert robots.get("point").skill_names == {"get_position", "move_to"}
+    assert robots.names() == ("arm", "quadruped")
