@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
 from pathlib import Path
@@ -29,8 +30,9 @@ def test_describe_prints_numbers(capsys) -> None:
 def test_broken_file_exits_2_without_traceback(tmp_path: Path) -> None:
     broken = tmp_path / "broken.yaml"
     broken.write_text("format: 1\nname: x\nobjects:\n  - {name: a, shape: sphere}\n")
-    result = subprocess.run([sys.executable, "-m", "robotool", "describe", str(broken)],
-                            capture_output=True, text=True, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "robotool", "describe", str(broken)], capture_output=True, text=True, check=False
+    )
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
     assert "objects[0](a).shape" in result.stderr
@@ -54,3 +56,45 @@ def test_eval_subcommand_hands_over_to_the_evaluator(capsys) -> None:
         main(["eval", "--runs", "0"])
     assert exit_info.value.code == 2
     assert "--runs" in capsys.readouterr().err
+
+
+def _options(parser: argparse.ArgumentParser, group: str) -> set[str]:
+    (found,) = [g for g in parser._action_groups if g.title == group]
+    return {option for action in found._group_actions for option in action.option_strings}
+
+
+def test_every_command_takes_the_same_lm_and_world_options() -> None:
+    from robotool.cli import eval_command, optimize_command
+    from robotool.cli.dispatch import build_parser
+
+    verbs = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    lm = {"--lm", "--api-base", "--api-key-env", "--temperature", "--adapter", "--timeout", "--no-cache"}
+    worlds = {"--worlds", "--backend", "--seed"}
+    standalone = {}
+    for name, module in (("eval", eval_command), ("optimize", optimize_command)):
+        standalone[name] = argparse.ArgumentParser()
+        module.add_arguments(standalone[name])
+    for parser in (verbs["solve"], verbs["eval"], verbs["optimize"], *standalone.values()):
+        assert lm <= _options(parser, "language model"), parser.prog
+        assert _options(parser, "worlds") == worlds, parser.prog
+    assert _options(verbs["run"], "worlds") == worlds
+    assert (
+        _options(verbs["solve"], "candidates") == _options(verbs["eval"], "candidates") == {"--candidates", "--repair"}
+    )
+    for name, parser in standalone.items():  # python -m robotool.<name> and robotool <name> are one parser
+        assert {o for a in parser._actions for o in a.option_strings} == {
+            o for a in verbs[name]._actions for o in a.option_strings
+        }
+
+
+def test_goal_text_comes_from_the_goal_model() -> None:
+    assert tasks.load("cube_lifting").goal.text() == "cube lifted to >= 0.1 m"
+    assert tasks.load("milk_reaching").goal.text() == "grasp milk"
+    assert tasks.load("sofa_traversing").goal.text() == "robot on sofa_2"
+    vase = tasks.load("vase_lowering").goal
+    assert vase.text() == "glass_vase lowered to <= 0.2 m"
+    assert (
+        vase.sentence(unbroken=True)
+        == "The bottom of glass_vase is at most 0.2 m above the ground at the end, unbroken."
+    )
+    assert tasks.load("milk_reaching").goal.sentence() == "The gripper holds milk at the end."

@@ -26,7 +26,7 @@ def _entry_points(tmp_path: Path) -> dict[str, tuple[str, Callable[[], int]]]:
     from robotool.cli.optimize_command import main as optimize_main
 
     return {
-        "robotool tasks": ("robotool.cli.dispatch.cmd_tasks", lambda: cli_main(["tasks"])),
+        "robotool tasks": ("robotool.cli.task_commands.cmd_tasks", lambda: cli_main(["tasks"])),
         "robotool eval": (
             "robotool.eval.sweep.evaluate",
             lambda: cli_main(["eval", "--tasks", "milk_reaching_near", "--out", str(tmp_path / "eval")]),

@@ -8,8 +8,7 @@ import pytest
 from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, stage_rules
 
 from robotool import tasks
-from robotool.cli import dispatch as cli
-from robotool.cli import main
+from robotool.cli import main, solve_command
 from robotool.program.lm import DEFAULT_TIMEOUT, PLACEHOLDER_KEY, make_lm
 from robotool.program.lm_calls import reporting_waits
 from robotool.program.lm_program import RoboTool
@@ -47,7 +46,7 @@ def test_the_wait_for_a_reply_is_reported_with_its_stage_and_seconds() -> None:
 
 
 def test_cli_tells_a_console_that_is_not_a_terminal_that_a_reply_is_awaited(monkeypatch, capsys) -> None:
-    monkeypatch.setattr(cli, "WAIT_LINE_EVERY", 1)
+    monkeypatch.setattr(solve_command, "WAIT_LINE_EVERY", 1)
     rules = stage_rules(
         arm_script([GRASP_DIRECTLY]), coder=[Rule(delay=2.5, reply=arm_script([GRASP_DIRECTLY])["coder"][0])]
     )

@@ -159,8 +159,11 @@ ESCAPERS = {
 }
 
 HOST_TEXT_ONLY = {
-    ("robotool/cli/dispatch.py", "console"): "built-in task YAML, scene descriptions and paths the user typed; "
-    "program and model text goes through robotool.cli.summary",
+    ("robotool/cli/task_commands.py", "console"): "built-in task YAML, scene descriptions and paths the user typed",
+    ("robotool/cli/solve_command.py", "console"): "paths the user typed and the model's name; program and model text "
+    "goes through robotool.cli.summary",
+    ("robotool/cli/run_command.py", "console"): "paths the user typed; program text goes through robotool.cli.summary",
+    ("robotool/cli/outputs.py", "console"): "paths the user typed and video facts the host measured",
     ("robotool/cli/eval_command.py", "console"): "fixed messages",
     ("robotool/sandbox/worker.py", "json"): "the worker's messages to the host over its socket, not a file",
     ("robotool/sandbox/zygote.py", "json"): "the zygote's control messages, not a file",

@@ -14,30 +14,22 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from rich.console import Console
+
+from robotool.cli.command import UsageError, run_line, set_command
 from robotool.cli.internal_error import report_internal_error
 from robotool.cli.options import (
-    ADAPTER_HELP,
-    ADAPTERS,
-    BACKEND_HELP,
-    DEFAULT_WORLDS,
     EXIT_INTERRUPTED,
     EXIT_USAGE,
-    LOG_PROMPTS_HELP,
-    REPAIR_HELP,
-    TIMEOUT_HELP,
     Parser,
+    add_candidate_options,
+    add_lm_options,
+    add_world_options,
     cluster_address,
     count,
-    make_console,
-    output_file,
     output_folder,
     positive_int,
     print_error,
-    seconds,
-    seed,
-    temperature,
-    warn_if_warp_on_cpu,
-    warnings_in_one_line,
 )
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
@@ -48,7 +40,6 @@ from robotool.processes import cores
 from robotool.program.lm import LMConfigError
 from robotool.task.task_file import TaskFileError
 from robotool.version import version
-from robotool.vocabulary import BACKENDS
 
 EXIT_NOT_ATTEMPTED = 3
 """Some runs could not be attempted (the language model was unavailable); they were not recorded."""
@@ -61,13 +52,14 @@ def _seeds(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
-def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentParser:
-    """The evaluator's arguments (``prog`` names the command in messages, e.g. ``robotool eval``)."""
-    p = Parser(
-        prog=prog,
-        description="Evaluate methods on tasks: success (paper Table 1), key-concept accuracy (Table 2), "
-        "error breakdown, discriminative tool use, cost. Resumable: rerun the same command.",
-    )
+DESCRIPTION = (
+    "Evaluate methods on tasks: success (paper Table 1), key-concept accuracy (Table 2), error breakdown, "
+    "discriminative tool use, cost. Resumable: rerun the same command."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The evaluator's arguments."""
     p.add_argument("--version", action="version", version=f"robotool {version()}")
     p.add_argument(
         "--tasks",
@@ -106,24 +98,13 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         help="evaluate a --program on instances it was trained on (refused by default; warned about)",
     )
     p.add_argument("--runs", type=positive_int, default=1, help="runs per task and method (the paper: 10)")
-    p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
-    p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
-    p.add_argument("--api-key-env", help="environment variable holding the API key")
-    p.add_argument(
-        "--temperature",
-        type=temperature,
-        help="sampling temperature of every LM call (above 0 for runs that differ; default: the model's for one "
-        "candidate, 0.7 to 1.0 spread over several)",
+    add_lm_options(
+        p,
+        temperature_help="sampling temperature of every LM call (above 0 for runs that differ; default: the "
+        "model's for one candidate, 0.7 to 1.0 spread over several)",
     )
-    p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
-    p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
-    p.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
-    p.add_argument("--candidates", type=positive_int, default=1, help="candidate programs per run, LM methods (K)")
-    p.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
-    p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per candidate (R)")
-    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
-    p.add_argument("--seed", type=seed, default=0, help="base seed of the perturbed worlds")
+    add_candidate_options(p)
+    add_world_options(p, seed_help="base seed of the perturbed worlds")
     p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
     p.add_argument(
         "--processes",
@@ -165,7 +146,6 @@ def build_parser(prog: str = "python -m robotool.eval") -> argparse.ArgumentPars
         metavar="N",
         help="film the first N failed worlds of each task and method (MP4s under videos/, shown in report.html)",
     )
-    return p
 
 
 def config_from(args: argparse.Namespace) -> EvalConfig:
@@ -202,18 +182,12 @@ def config_from(args: argparse.Namespace) -> EvalConfig:
     )
 
 
-def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval") -> int:
-    """Run the evaluator; returns the exit status."""
+def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int:
+    """Run the evaluation the arguments ask for; returns the exit status."""
     from robotool.eval.sweep import evaluate
 
-    parser = build_parser(prog)
-    args = parser.parse_args(argv)
-    warnings_in_one_line()
     if args.executor == "ray" and args.log_prompts is not None:  # the file would be written on the workers
-        parser.error("--log-prompts writes a file on this machine, so it needs --executor local")
-    errors = make_console(stderr=True)
-    console = make_console()
-    warn_if_warp_on_cpu(args.backend, errors)
+        raise UsageError("--log-prompts writes a file on this machine, so it needs --executor local")
     folder: Path | None = None  # where an internal error's traceback goes, once known
     try:
         config = config_from(args)
@@ -236,8 +210,25 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval
         )
         return EXIT_INTERRUPTED
     except Exception as e:  # anything else is a bug in robotool, not the user's mistake
-        return report_internal_error(errors, e, prog, folder)
+        return report_internal_error(errors, e, args.prog, folder)
     return 0
+
+
+def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``eval`` to the ``robotool`` verbs."""
+    p = verbs.add_parser(
+        "eval", help="the offline evaluator (same as python -m robotool.eval)", description=DESCRIPTION
+    )
+    add_arguments(p)
+    set_command(p, cmd_eval)
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.eval") -> int:
+    """Run the evaluator as ``prog``; returns the exit status."""
+    parser = Parser(prog=prog, description=DESCRIPTION)
+    add_arguments(parser)
+    set_command(parser, cmd_eval)
+    return run_line(parser, argv)
 
 
 if __name__ == "__main__":

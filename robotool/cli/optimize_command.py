@@ -16,27 +16,20 @@ from rich.console import Console
 from rich.table import Table
 
 from robotool import tasks
+from robotool.cli.command import run_line, set_command
 from robotool.cli.internal_error import report_internal_error
 from robotool.cli.options import (
-    ADAPTER_HELP,
-    ADAPTERS,
-    BACKEND_HELP,
-    DEFAULT_WORLDS,
     EXIT_INTERRUPTED,
     EXIT_USAGE,
-    TIMEOUT_HELP,
     Parser,
+    add_lm_options,
+    add_world_options,
     count,
-    make_console,
+    lm_from,
     output_file,
     output_folder,
     positive_int,
     print_error,
-    seconds,
-    seed,
-    temperature,
-    warn_if_warp_on_cpu,
-    warnings_in_one_line,
 )
 from robotool.errors import LMUnavailableError, RobotoolError
 from robotool.optimize.data import DatasetError, check_families
@@ -44,19 +37,18 @@ from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, Op
 from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import console_plain
 from robotool.version import version
-from robotool.vocabulary import BACKENDS
 
 EXIT_LM_UNAVAILABLE = 3
 
 
-def build_parser(prog: str = "python -m robotool.optimize") -> argparse.ArgumentParser:
-    """The optimiser's arguments (``prog`` names the command in messages)."""
-    p = Parser(
-        prog=prog,
-        description="Compile the RoboTool program: optimise its stages' prompts and demonstrations against "
-        "simulator-verified success on generated task instances, and write a program file that solve, eval "
-        "and RoboTool.load() use.",
-    )
+DESCRIPTION = (
+    "Compile the RoboTool program: optimise its stages' prompts and demonstrations against simulator-verified "
+    "success on generated task instances, and write a program file that solve, eval and RoboTool.load() use."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The optimiser's arguments."""
     p.add_argument("--version", action="version", version=f"robotool {version()}")
     p.add_argument(
         "--optimizer",
@@ -82,18 +74,12 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     p.add_argument("--train", type=positive_int, default=6, help="training examples")
     p.add_argument("--val", type=count, default=4, help="validation examples (scored before and after)")
     p.add_argument("--method", choices=list(STAGES_BY_METHOD), default="robotool", help="which stages the program has")
-    p.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
-    p.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
-    p.add_argument("--api-key-env", help="environment variable holding the API key")
-    p.add_argument("--reflection-lm", help="model that proposes instructions (gepa, mipro, simba; default: --lm)")
-    p.add_argument("--reflection-api-base", help="base URL for the reflection model (default: --api-base)")
-    p.add_argument("--temperature", type=temperature, help="sampling temperature of the stages' calls")
-    p.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
-    p.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
-    p.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
-    p.add_argument("--worlds", type=positive_int, default=DEFAULT_WORLDS, help="perturbed worlds per verification")
-    p.add_argument("--seed", type=seed, default=0, help="seed of the perturbed worlds and the optimiser")
-    p.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
+    lm = add_lm_options(p, temperature_help="sampling temperature of the stages' calls", log_prompts=False)
+    lm.add_argument("--reflection-lm", help="model that proposes instructions (gepa, mipro, simba; default: --lm)")
+    lm.add_argument("--reflection-api-base", help="base URL for the reflection model (default: --api-base)")
+    add_world_options(
+        p, worlds_help="perturbed worlds per verification", seed_help="seed of the perturbed worlds and the optimiser"
+    )
     p.add_argument("--threads", type=positive_int, default=4, help="metric calls in flight at once")
     budget = p.add_argument_group("budget")
     budget.add_argument("--auto", choices=["light", "medium", "heavy"], help="gepa, mipro: DSPy's budget preset")
@@ -102,7 +88,6 @@ def build_parser(prog: str = "python -m robotool.optimize") -> argparse.Argument
     budget.add_argument("--candidates", type=positive_int, default=3, help="mipro, simba: instruction candidates")
     budget.add_argument("--steps", type=positive_int, default=4, help="simba: steps")
     budget.add_argument("--demos", type=count, default=2, help="demonstrations per stage")
-    return p
 
 
 def settings_from(args: argparse.Namespace) -> OptimizeSettings:
@@ -157,26 +142,15 @@ def print_outcome(outcome: OptimizeResult, console: Console) -> None:
     console.print(f"wrote {outcome.out}", markup=False, highlight=False)
 
 
-def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.optimize") -> int:
-    """Run the optimiser; returns the exit status."""
+def cmd_optimize(args: argparse.Namespace, console: Console, errors: Console) -> int:
+    """Run the optimisation the arguments ask for; returns the exit status."""
     from robotool.program.compiled import CompiledProgramError
     from robotool.program.lm import LMConfigError, make_lm
 
-    args = build_parser(prog).parse_args(argv)
-    warnings_in_one_line()
-    console, errors = make_console(), make_console(stderr=True)
-    warn_if_warp_on_cpu(args.backend, errors)
     log = Path(args.log or args.out.with_name(f"{args.out.stem}-log"))
     try:
         settings = settings_from(args)
-        lm = make_lm(
-            args.lm,
-            api_base=args.api_base,
-            api_key_env=args.api_key_env,
-            temperature=args.temperature,
-            cache=not args.no_cache,
-            timeout=args.timeout,
-        )
+        lm = lm_from(args)
         reflection = (
             make_lm(
                 args.reflection_lm,
@@ -208,9 +182,28 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.opti
         errors.print("interrupted: run the same command to resume from the log folder", markup=False)
         return EXIT_INTERRUPTED
     except Exception as e:  # anything else is a bug in robotool, not the user's mistake
-        return report_internal_error(errors, e, prog, log)
+        return report_internal_error(errors, e, args.prog, log)
     print_outcome(outcome, console)
     return 0
+
+
+def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``optimize`` to the ``robotool`` verbs."""
+    p = verbs.add_parser(
+        "optimize",
+        help="compile the program's prompts (same as python -m robotool.optimize)",
+        description=DESCRIPTION,
+    )
+    add_arguments(p)
+    set_command(p, cmd_optimize)
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "python -m robotool.optimize") -> int:
+    """Run the optimiser as ``prog``; returns the exit status."""
+    parser = Parser(prog=prog, description=DESCRIPTION)
+    add_arguments(parser)
+    set_command(parser, cmd_optimize)
+    return run_line(parser, argv)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
-"""What every robotool command line shares: one-line argument errors, checked numbers and output paths,
-consoles that keep their width when piped, and error lines that print text exactly as it is.
+"""What every robotool command line shares: the option groups (language model, worlds, candidates) declared once,
+one-line argument errors, checked numbers and output paths, consoles that keep their width when piped, and error
+lines that print text exactly as it is.
 
 A user mistake ends as one line on stderr and exit status :data:`EXIT_USAGE`, never a traceback.
 """
@@ -12,7 +13,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from rich.console import Console
 from rich.text import Text
@@ -20,6 +21,10 @@ from rich.text import Text
 from robotool.errors import RobotoolWarning
 from robotool.program.lm import DEFAULT_TIMEOUT
 from robotool.safe_text import console_plain, one_line
+from robotool.vocabulary import BACKENDS
+
+if TYPE_CHECKING:
+    import dspy
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
@@ -30,6 +35,10 @@ ADAPTERS = ["chat", "json"]
 TIMEOUT_HELP = f"how long to wait for each LM reply (default: {DEFAULT_TIMEOUT:g})"
 ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
 LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
+TEMPERATURE_HELP = (
+    "sampling temperature of every LM call (default: the model's for one candidate, 0.7 to 1.0 spread over several)"
+)
+TASK_HELP = "a built-in task name (see robotool tasks) or a YAML/JSON task file"
 REPAIR_HELP = (
     "repair rounds (LM methods): while no candidate succeeds in every world, the best failures are shown what "
     "the simulator measured and rewritten by the model, then verified again"
@@ -155,6 +164,63 @@ def output_folder(text: str) -> Path:
     if not os.access(existing, os.W_OK):
         raise argparse.ArgumentTypeError(f"cannot write into {path}: permission denied on {existing}")
     return path
+
+
+def add_lm_options(
+    parser: argparse.ArgumentParser, *, temperature_help: str = TEMPERATURE_HELP, log_prompts: bool = True
+) -> argparse._ArgumentGroup:
+    """The language-model options every LM command takes; returns their group, for a command's own LM options.
+
+    ``log_prompts``: also ``--log-prompts FILE`` (commands that can write every request and reply)."""
+    group = parser.add_argument_group("language model")
+    group.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
+    group.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
+    group.add_argument("--api-key-env", help="environment variable holding the API key")
+    group.add_argument("--temperature", type=temperature, help=temperature_help)
+    group.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
+    group.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
+    group.add_argument("--no-cache", action="store_true", help="do not reuse cached LM replies")
+    if log_prompts:
+        group.add_argument("--log-prompts", type=output_file, metavar="FILE", help=LOG_PROMPTS_HELP)
+    return group
+
+
+def lm_from(args: argparse.Namespace, *, max_tokens: int | None = None) -> dspy.LM | None:
+    """The model the LM options name (None when none is configured), with a token limit per reply if given."""
+    from robotool.program.lm import make_lm
+
+    return make_lm(
+        args.lm,
+        api_base=args.api_base,
+        api_key_env=args.api_key_env,
+        temperature=args.temperature,
+        cache=not args.no_cache,
+        timeout=args.timeout,
+        max_tokens=max_tokens,
+    )
+
+
+def add_world_options(
+    parser: argparse.ArgumentParser,
+    *,
+    worlds: int = DEFAULT_WORLDS,
+    worlds_help: str = "perturbed worlds per candidate (R)",
+    seed_help: str = "seed of the world perturbations",
+) -> argparse._ArgumentGroup:
+    """The simulated worlds' options every command that runs programs takes: how many, which simulator, the seed."""
+    group = parser.add_argument_group("worlds")
+    group.add_argument("--worlds", type=positive_int, default=worlds, help=worlds_help)
+    group.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
+    group.add_argument("--seed", type=seed, default=0, help=seed_help)
+    return group
+
+
+def add_candidate_options(parser: argparse.ArgumentParser) -> argparse._ArgumentGroup:
+    """How many programs the LM path proposes (K) and how many repair rounds it may run."""
+    group = parser.add_argument_group("candidates")
+    group.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
+    group.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
+    return group
 
 
 def make_console(*, stderr: bool = False) -> Console:

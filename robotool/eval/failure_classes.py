@@ -17,7 +17,7 @@ A failed world is classified by the first rule that applies:
    needs no tool and the program used one that its reference solution does not use.
 3. The first abnormal call decides: ``refused`` (a limit was violated: a step out of order or a
    constraint ignored) or ``fell`` (it walked off its support) -> ``logical``; ``stalled``, ``timeout``,
-   or an event the robot counts as numerical (``RobotType.numerical_events``, e.g. a target ``clamped`` to a
+   or an event the robot counts as numerical (``RobotType.feedback.numerical_events``, e.g. a target ``clamped`` to a
    workspace or a grasp that held nothing, ``grasp_failed``) -> ``numerical``.
 4. No abnormal call: ``logical`` when the program made no motion call or left a needed tool unused
    (a missing step); otherwise ``numerical`` (right objects, every step done, the goal missed by
@@ -80,7 +80,7 @@ def tools_used(rollout: Rollout, facts: TaskFacts) -> set[str]:
 
 def _numerical_symptom(call: SkillCall, events: Sequence[Event], facts: TaskFacts) -> bool:
     """A stall, a timeout, or one of the robot's numerical events (a target clamped to a limit, a missed grasp)."""
-    numerical = robots.get(facts.robot).numerical_events
+    numerical = robots.get(facts.robot).feedback.numerical_events
     return call.outcome in ("stalled", "timeout") or any(e.kind in numerical for e in events)
 
 

@@ -130,7 +130,7 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
         if call.outcome == "refused":
             values = _measured(call)
             evidence = f"{_call(call, k)} was refused: {call.reason}" + (f" (measured: {values})" if values else "")
-            left_by_tool = bool(used) and any(m in call.measured for m in robot.placement_measures)
+            left_by_tool = bool(used) and any(m in call.measured for m in robot.feedback.placement_measures)
             stage: Stage = "calculator" if left_by_tool else "planner"
             placed = "; the tool was placed so that this is left" if stage == "calculator" else ""
             return StageFinding(stage, f"{where}: {evidence}{placed}")
@@ -141,7 +141,7 @@ def world_finding(rollout: Rollout, facts: TaskFacts) -> StageFinding | None:
                 f"{where}: {_call(call, k)} ended {call.outcome}: {call.reason}"
                 + (f" (measured: {values})" if values else ""),
             )
-        hint = robot.numerical_hint(call) if kind == "numerical" and call.outcome == "done" else None
+        hint = robot.feedback.numerical_hint(call) if kind == "numerical" and call.outcome == "done" else None
         if hint is not None:
             return StageFinding("calculator", f"{where}: {_call(call, k)} {hint}")
     unmet = [name for name, ok in rollout.conditions.items() if not ok]

@@ -2,7 +2,7 @@
 
 The points are the corners of every drawn geom's box (robot, tools, furniture, goal markers) over all the
 states to be shown, so the robot's whole path stays in the frame. The camera looks across the longer
-horizontal side of those bounds at an angle the robot chose (``RobotType.view``), and backs off until every
+horizontal side of those bounds at an angle the robot chose (``RobotType.pictures.view``), and backs off until every
 point is inside the picture with a margin.
 """
 

@@ -84,7 +84,7 @@ class Painter:
             corners.append(geom_corners(model, self.data, shown))
         self.camera = fit_camera(
             np.concatenate(corners),
-            robots.get(self.scene.task.embodiment).view,
+            robots.get(self.scene.task.embodiment).pictures.view,
             self.width / self.height,
             float(model.vis.global_.fovy),
         )

@@ -100,7 +100,7 @@ def _decorate(spec: mujoco.MjSpec, scene: Scene, marker_height: float | None, sh
         width=512,
         height=512,
     )
-    square = robots.get(scene.task.embodiment).view.floor_square  # m, for scale
+    square = robots.get(scene.task.embodiment).pictures.view.floor_square  # m, for scale
     floor = spec.add_material(name="floor", texrepeat=[1 / (2 * square)] * 2, texuniform=True)
     floor.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor"
     ground = spec.geom("ground")

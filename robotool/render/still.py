@@ -15,20 +15,9 @@ from robotool.task.task_model import Task
 STILL_SIZE = (960, 540)  # px, width x height
 
 
-def goal_text(task: Task) -> str:
-    """The goal in a few words, e.g. ``robot on sofa_2`` or ``vase lowered to <= 0.05 m``."""
-    goal = task.goal
-    if goal.lifted is not None:
-        return f"{goal.lifted.object} lifted to >= {goal.lifted.height:g} m"
-    if goal.lowered is not None:
-        return f"{goal.lowered.object} lowered to <= {goal.lowered.height:g} m"
-    words = {"robot_on": "robot on", "grasped": "grasp", "pressed": "press"}
-    return f"{words[goal.kind]} {goal.object}"
-
-
 def scene_title(task: Task) -> CaptionLine:
     """The title band of a task's pictures: its name, embodiment and goal."""
-    return CaptionLine(f"{task.name} ({task.embodiment}) - goal: {goal_text(task)}")
+    return CaptionLine(f"{task.name} ({task.embodiment}) - goal: {task.goal.text()}")
 
 
 def save_png(image_path: Path, painter: Painter, caption: list[CaptionLine] | None = None) -> Path:

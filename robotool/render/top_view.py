@@ -23,7 +23,6 @@ from matplotlib.patches import Polygon, Rectangle
 
 from robotool import robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
-from robotool.render.still import goal_text
 from robotool.rollout import Rollout, SkillCall
 from robotool.safe_text import capped, plot_text
 from robotool.sim.compiled_scene import Scene
@@ -134,7 +133,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
         _draw_robot_box(ax, task, robot_end, end=True)
     verdict = "goal reached" if rollout.success else "goal not reached"
     ax.set_title(
-        plot_text(f"{task.name}, world {rollout.world}: {goal_text(task)} - {verdict}"),
+        plot_text(f"{task.name}, world {rollout.world}: {task.goal.text()} - {verdict}"),
         fontsize=9,
         color=tuple(GOAL_RGBA[:3]) if rollout.success else REFUSED,
     )
@@ -231,12 +230,12 @@ def _declutter(fig: Figure, ax: Axes) -> None:
 def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
     if path_xy is not None:
         return path_xy[0]
-    return np.asarray(robots.get(task.embodiment).start_xy(task), dtype=float)
+    return np.asarray(robots.get(task.embodiment).pictures.start_xy(task), dtype=float)
 
 
 def _draw_robot_box(ax: Axes, task: Task, at: np.ndarray, *, end: bool = False) -> None:
     """The robot where it started (filled), or where it ended (``end``: dashed)."""
-    size = robots.get(task.embodiment).footprint(task)
+    size = robots.get(task.embodiment).pictures.footprint(task)
     label = "robot end" if end else "robot start"
     if size is None:  # a robot drawn as a marker (a gripper)
         ax.plot(*at, marker="s", color=ROBOT, markersize=8, label=label, fillstyle="none" if end else "full")

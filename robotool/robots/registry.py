@@ -2,9 +2,11 @@
 
 A :class:`RobotType` holds everything that differs between embodiments: the limits model, the skills (the
 sandbox, the describer, the argument checks and the signatures' validation all read this one list), the goal
-kinds the robot supports, its task-file checks, its description section, its ground-truth key concepts, its
-simulator embodiment (model building and skill controller) and goal trackers, its planner macros, its
-error-class rules and its picture settings. Nothing outside a robot's own package names a robot.
+kinds the robot supports, and its hooks grouped by who reads them: :class:`TaskRules` (task-file checks,
+ground-truth key concepts), :class:`DescriptionHooks`, :class:`SimHooks` (embodiment: model building and skill
+controller; goal trackers), its planner macros, :class:`FeedbackRules` (error classes) and :class:`PictureHooks`.
+Nothing outside a robot's own package names a robot. Every registered robot must pass the conformance suite
+(``tests/robots/test_conformance.py``); :func:`registered` registers robots for a block only (tests).
 
 The built-in robots are registered when :mod:`robotool` is imported (its ``__init__``, the one place that lists
 them). Robots from other packages are plug-ins, loaded on the first lookup:
@@ -23,9 +25,10 @@ import importlib
 import os
 import traceback
 from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import metadata
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pydantic import BaseModel
 
@@ -71,6 +74,12 @@ class PictureSettings:
     floor_square: float
 
 
+Reach = list[tuple[float, float, float]]
+"""Points (m) a robot can reach."""
+L = TypeVar("L", bound=BaseModel)
+"""A robot's limits model: the hooks that take limits take this robot's own."""
+
+
 def _no_problems(task: Task) -> list[Problem]:
     return []
 
@@ -83,58 +92,102 @@ def _no_hint(call: SkillCall) -> str | None:
     return None
 
 
+def _no_reach(limits: BaseModel) -> Reach:
+    return []
+
+
+def _origin(task: Task) -> tuple[float, float]:
+    return (0.0, 0.0)
+
+
+def _marker(task: Task) -> tuple[float, float] | None:
+    return None
+
+
 @dataclass(frozen=True)
-class RobotType:
-    """One embodiment, as the rest of robotool sees it.
+class TaskRules(Generic[L]):
+    """What a task file may say about the robot, and what follows from it."""
 
-    Hooks that need the simulator or the planner import them when called (they are heavy to import and import
-    the scene model themselves); the others are plain functions of the task.
-    """
-
-    name: str
-    """The task file's ``robot.type``."""
-    article: str
-    """'a' or 'an', for sentences such as "a point cannot have a 'grasped' goal"."""
-    limits: type[BaseModel]
-    """The limits model; a task's ``robot.limits`` overrides its defaults."""
-    skills: tuple[SkillSpec, ...]
-    """The skills, in the order the description lists them."""
-    goals: frozenset[str]
-    """The goal kinds (keys of the task file's ``goal``) this robot can be given."""
-    embodiment: Callable[[Any], Embodiment]
-    """The simulator embodiment for a task's limits: model building and the skill controller."""
-    goal_trackers: Callable[[], Mapping[str, Callable[[Scene], GoalTracker]]]
-    """Trackers of the goal kinds only this robot has (the object goals are :mod:`robotool.sim.goals`')."""
-    describe: Callable[[Task], list[str]]
-    """The description's robot section: what the robot is, where it starts, its limits in words."""
     key_concepts: Callable[[Task], list[KeyConcept]]
     """The ground-truth quantities that decide whether the task needs a tool."""
     check_robot: Callable[[Task], list[Problem]] = _no_problems
     """Task-file problems with the robot's own keys (a start position it needs or cannot have)."""
     check_start: Callable[[Task], list[Problem]] = _no_problems
     """Task-file problems with where the robot starts in the scene (run once the scene's geometry is valid)."""
-    ground: str = "the ground"
-    """What z = 0 is, in the description."""
-    object_facts: Callable[[SceneObject], list[str]] = _no_facts
-    """Facts about an object that only this robot's skills use (for a gripper: its graspable point)."""
     planar: bool = False
     """Whether the motion skills ignore z, so a 2-D target ``[x, y]`` from a model is read as ``[x, y, 0]``."""
-    reach: Callable[[Any], list[tuple[float, float, float]]] = lambda limits: []
+    reach: Callable[[L], Reach] = _no_reach
     """Points (m) the robot can reach beyond the scene's objects (a workspace's corners), for the box that
     position arguments are checked against."""
-    start_xy: Callable[[Task], tuple[float, float]] = lambda task: (0.0, 0.0)
-    """Where the robot starts in x-y (m), for plans drawn from above."""
-    footprint: Callable[[Task], tuple[float, float] | None] = lambda task: None
-    """The robot's x-y size (m) drawn at its start, or None for a marker."""
-    planner: Callable[[], SearchMacros] | None = None
-    """The robot's search-planner macros (None: the planner cannot solve its tasks)."""
+
+
+@dataclass(frozen=True)
+class DescriptionHooks:
+    """What the task's description (the text the LM stages read) says about the robot."""
+
+    section: Callable[[Task], list[str]]
+    """The description's robot section: what the robot is, where it starts, its limits in words."""
+    ground: str = "the ground"
+    """What z = 0 is."""
+    object_facts: Callable[[SceneObject], list[str]] = _no_facts
+    """Facts about an object that only this robot's skills use (for a gripper: its graspable point)."""
+
+
+@dataclass(frozen=True)
+class SimHooks(Generic[L]):
+    """The robot in the simulator. Both import the simulator when called (it is heavy to import)."""
+
+    embodiment: Callable[[L], Embodiment]
+    """The simulator embodiment for a task's limits: model building and the skill controller."""
+    goal_trackers: Callable[[], Mapping[str, Callable[[Scene], GoalTracker]]]
+    """Trackers of the goal kinds only this robot has (the object goals are :mod:`robotool.sim.goals`')."""
+
+
+@dataclass(frozen=True)
+class FeedbackRules:
+    """How the robot's failures are classed and explained (error classes, optimiser feedback)."""
+
     numerical_events: frozenset[EventKind] = frozenset()
     """Events that make a failed call a numerical error (a target clamped to the workspace, a grasp that missed)."""
     placement_measures: frozenset[str] = frozenset()
     """Measured values of a refusal that a badly placed tool leaves (a step, gap or drop), for feedback."""
     numerical_hint: Callable[[SkillCall], str | None] = _no_hint
     """For a call that ended ``done`` in a world classed numerical: what went wrong, if this call shows it."""
+
+
+@dataclass(frozen=True)
+class PictureHooks:
+    """How pictures show the robot's scenes and plans."""
+
     view: PictureSettings = PictureSettings(turn=-30.0, elevation=-30.0, floor_square=0.25)
+    start_xy: Callable[[Task], tuple[float, float]] = _origin
+    """Where the robot starts in x-y (m), for plans drawn from above."""
+    footprint: Callable[[Task], tuple[float, float] | None] = _marker
+    """The robot's x-y size (m) drawn at its start, or None for a marker."""
+
+
+@dataclass(frozen=True)
+class RobotType(Generic[L]):
+    """One embodiment, as the rest of robotool sees it: its limits and skills, and its hooks grouped by who reads
+    them (task rules, description, simulator, planner, feedback, pictures)."""
+
+    name: str
+    """The task file's ``robot.type``."""
+    article: str
+    """'a' or 'an', for sentences such as "a point cannot have a 'grasped' goal"."""
+    limits: type[L]
+    """The limits model; a task's ``robot.limits`` overrides its defaults."""
+    skills: tuple[SkillSpec, ...]
+    """The skills, in the order the description lists them."""
+    goals: frozenset[str]
+    """The goal kinds (keys of the task file's ``goal``) this robot can be given."""
+    rules: TaskRules[L]
+    description: DescriptionHooks
+    sim: SimHooks[L]
+    planner: Callable[[], SearchMacros] | None = None
+    """The robot's search-planner macros, imported when called (None: the planner cannot solve its tasks)."""
+    feedback: FeedbackRules = FeedbackRules()
+    pictures: PictureHooks = PictureHooks()
 
     def skill(self, name: str) -> SkillSpec | None:
         """The skill called ``name``, or None."""
@@ -163,11 +216,11 @@ class RobotPluginError(RobotoolError):
     """A robot plug-in that cannot be loaded; the message names it and why."""
 
 
-_ROBOTS: dict[str, RobotType] = {}
+_ROBOTS: dict[str, RobotType[Any]] = {}
 _LOADED: set[str] = set()  # sources already loaded: "entry points", and each module of the variable
 
 
-def register(robot: RobotType) -> None:
+def register(robot: RobotType[Any]) -> None:
     """Add a robot type; registering the same record again does nothing, another one under a taken name fails."""
     taken = _ROBOTS.get(robot.name)
     if taken is not None and taken is not robot:
@@ -176,7 +229,27 @@ def register(robot: RobotType) -> None:
     limits_table.add(robot.name, robot.limits)
 
 
-def get(name: str) -> RobotType:
+@contextmanager
+def registered(*robots: RobotType[Any], reload_plugins: bool = False) -> Iterator[None]:
+    """Register ``robots`` for the block only: afterwards the registry (with its limits table and the plug-ins it
+    has loaded) is as before. ``reload_plugins``: load the entry points and ``ROBOTOOL_ROBOTS`` again inside."""
+    saved = dict(_ROBOTS), set(_LOADED), dict(limits_table.LIMITS_MODELS)
+    if reload_plugins:
+        _LOADED.clear()
+    try:
+        for robot in robots:
+            register(robot)
+        yield
+    finally:
+        _ROBOTS.clear()
+        _ROBOTS.update(saved[0])
+        _LOADED.clear()
+        _LOADED.update(saved[1])
+        limits_table.LIMITS_MODELS.clear()
+        limits_table.LIMITS_MODELS.update(saved[2])
+
+
+def get(name: str) -> RobotType[Any]:
     """The robot type called ``name`` (:class:`UnknownRobotError` naming the registered ones otherwise)."""
     _load()
     robot = _ROBOTS.get(name)
@@ -191,7 +264,7 @@ def names() -> tuple[str, ...]:
     return tuple(sorted(_ROBOTS))
 
 
-def robots() -> tuple[RobotType, ...]:
+def robots() -> tuple[RobotType[Any], ...]:
     """Every registered robot type, by name."""
     _load()
     return tuple(_ROBOTS[n] for n in sorted(_ROBOTS))

@@ -5,7 +5,7 @@ where a reply's meaning is clear and strict where it matters:
 
 - numbers may carry a unit (``"0.4 m"``, ``"40 cm"``, ``"2 kg"``); lengths become metres, masses kilograms;
   numbers that are not finite are rejected;
-- a 2-D ``[x, y]`` target or offset for a robot whose motions ignore z (``RobotType.planar``) gets z = 0; for
+- a 2-D ``[x, y]`` target or offset for a robot whose motions ignore z (``RobotType.rules.planar``) gets z = 0; for
   the others it is rejected, since its height matters;
 - object names match case-, space- and separator-insensitively when exactly one scene object fits
   (``"Yoga Roller"`` is ``yoga_roller``), with a note;
@@ -61,12 +61,19 @@ _SCENE: contextvars.ContextVar[_Scene | None] = contextvars.ContextVar("robotool
 _NOTES: contextvars.ContextVar[list[str] | None] = contextvars.ContextVar("robotool_notes", default=None)
 
 
+class MotionFacts(Protocol):
+    """Whether a robot's motions ignore z (a 2-D target gets z = 0): its :class:`robotool.robots.TaskRules`."""
+
+    @property
+    def planar(self) -> bool: ...
+
+
 class RobotFacts(Protocol):
     """What validation needs of the task's robot (a :class:`robotool.robots.RobotType` has it)."""
 
     @property
-    def planar(self) -> bool:
-        """Whether its motions ignore z (a 2-D target gets z = 0)."""
+    def rules(self) -> MotionFacts:
+        """Its task rules (whether its motions ignore z)."""
 
     @property
     def skill_names(self) -> frozenset[str]:
@@ -77,7 +84,7 @@ class RobotFacts(Protocol):
 def scene_context(task: Task, robot: RobotFacts) -> Iterator[None]:
     """Validate stage outputs against ``task`` (its robot's skills, its object names) inside this block;
     ``robot`` is the task's robot type (``robotool.robots.get(task.embodiment)``)."""
-    scene = _Scene(robot.planar, robot.skill_names, frozenset(task.object_names) | {"robot"})
+    scene = _Scene(robot.rules.planar, robot.skill_names, frozenset(task.object_names) | {"robot"})
     token = _SCENE.set(scene)
     try:
         yield

@@ -232,7 +232,7 @@ def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:
 
 def embodiment_for(task: Task) -> Embodiment:
     """The simulator embodiment of ``task.robot.type`` (from the robot registry), with the task's limits."""
-    return robots.get(task.robot.type).embodiment(task.limits)
+    return robots.get(task.robot.type).sim.embodiment(task.limits)
 
 
 def build(task: Task) -> Scene:

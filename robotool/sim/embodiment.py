@@ -1,4 +1,4 @@
-"""The embodiment-controller interface that every robot implements (``RobotType.embodiment``).
+"""The embodiment-controller interface that every robot implements (``RobotType.sim.embodiment``).
 
 An embodiment takes part in three phases, and only talks to the simulator through the
 backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend internals):
@@ -27,7 +27,7 @@ backend-agnostic :class:`~robotool.sim.backend.BatchedSim` (never backend intern
    keeps all its per-world state in the dataclasses that :meth:`SkillController.world_states` returns (one per
    component, arrays and lists indexed by world first), and ``tick(state, worlds)`` touches only ``worlds``.
 3. **Goals.** Goal sub-conditions are evaluated by :mod:`robotool.sim.goals` from the batched state;
-   a robot's own goal kinds are trackers in its package (``RobotType.goal_trackers``).
+   a robot's own goal kinds are trackers in its package (``RobotType.sim.goal_trackers``).
 
 All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, times seconds.
 :func:`robotool.sim.build.embodiment_for` asks the robot registry for ``task.robot.type``'s embodiment.

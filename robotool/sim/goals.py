@@ -3,7 +3,7 @@
 A :class:`GoalTracker` is updated every control tick (so "at any time" goals such as ``pressed`` can
 remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. The object goals any
 robot may be given live here (``pressed``) and in :mod:`robotool.sim.object_goals` (``lifted``, ``lowered``); a
-robot's own goal kinds (``RobotType.goal_trackers``) are trackers in its package.
+robot's own goal kinds (``RobotType.sim.goal_trackers``) are trackers in its package.
 """
 
 from __future__ import annotations
@@ -49,5 +49,5 @@ OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
 def goal_tracker(scene: Scene) -> GoalTracker:
     """The tracker for the scene's goal kind: an object goal's, or one of the robot's own."""
     kind = scene.task.goal.kind
-    factory = OBJECT_GOALS.get(kind) or robots.get(scene.task.embodiment).goal_trackers()[kind]
+    factory = OBJECT_GOALS.get(kind) or robots.get(scene.task.embodiment).sim.goal_trackers()[kind]
     return factory(scene)

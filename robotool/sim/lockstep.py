@@ -424,7 +424,7 @@ def _robot_welds(scene: Scene) -> list[tuple[int, int]]:
 def scene_box(task: Task) -> SceneBox:
     """The box around the task's objects, the robot's start and what it can reach, for argument checks."""
     corners = [corner for obj in task.objects for part in geometry.object_parts(obj) for corner in part.aabb()]
-    corners += [np.array(point) for point in robots.get(task.robot.type).reach(task.limits)]
+    corners += [np.array(point) for point in robots.get(task.robot.type).rules.reach(task.limits)]
     if task.robot.position is not None:
         corners.append(np.array([*task.robot.position, 0.0]))
     points = np.array(corners, dtype=float).reshape(-1, 3)

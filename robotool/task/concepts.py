@@ -1,7 +1,7 @@
 """Ground-truth key concepts: the quantities that decide whether a task needs a tool.
 
 They are computed from the scene's geometry and the robot's limits alone (never from a task's name or category),
-by the robot's own rules (``RobotType.key_concepts``, in ``robotool/robots/<name>/<name>_concepts.py``), and
+by the robot's own rules (``RobotType.rules.key_concepts``, in ``robotool/robots/<name>/<name>_concepts.py``), and
 grade the Analyzer stage. Here: the dispatch, and the scene geometry that several robots' rules share; the typed
 record is :class:`robotool.task.key_concept.KeyConcept`.
 """
@@ -19,7 +19,7 @@ from robotool.task.task_model import Task
 
 def key_concepts(task: Task) -> list[KeyConcept]:
     """The key concepts of a task, computed from its geometry by its robot's rules."""
-    return robots.get(task.embodiment).key_concepts(task)
+    return robots.get(task.embodiment).rules.key_concepts(task)
 
 
 def needs_tool(task: Task) -> bool:

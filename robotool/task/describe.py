@@ -2,7 +2,7 @@
 
 This is the paper's F_Q and F_C: the instruction, every object with its numbers, the robot's
 limits and its skills with their exact meaning. The robot's section, and the object facts only its skills
-use, come from its package (``RobotType.describe``, ``RobotType.object_facts``); nothing here depends on which
+use, come from its package (``RobotType.description``); nothing here depends on which
 task this is.
 """
 
@@ -14,18 +14,13 @@ from robotool import robots
 from robotool.robots.registry import RobotType
 from robotool.task import geometry
 from robotool.task.concepts import press_point
-from robotool.task.scene import PRESS_TRAVEL, SceneObject
+from robotool.task.scene import PRESS_TRAVEL, SceneObject, number_text
 from robotool.task.task_model import Task
 
 
 def vector_text(values: tuple[float, ...] | list[float] | np.ndarray) -> str:
     """A vector in metres as the description writes it: ``[0.1, 0, 0.25]``."""
     return "[" + ", ".join(f"{float(v):.3f}".rstrip("0").rstrip(".") if v else "0" for v in values) + "]"
-
-
-def number_text(value: float) -> str:
-    """A number as the description writes it: at most three decimals, no trailing zeros."""
-    return f"{value:.3f}".rstrip("0").rstrip(".")
 
 
 def _shape_words(obj: SceneObject) -> str:
@@ -57,7 +52,7 @@ def _object_line(obj: SceneObject, robot: RobotType) -> str:
         parts.append(f"movable, mass {number_text(obj.effective_mass)} kg")
     else:
         parts.append("fixed in place")
-    parts += robot.object_facts(obj)
+    parts += robot.description.object_facts(obj)
     if obj.shape == "button":
         parts.append(f"face centre {vector_text(press_point(obj))}")
     if obj.magnetic:
@@ -77,25 +72,8 @@ def _object_line(obj: SceneObject, robot: RobotType) -> str:
     return line
 
 
-def _goal_sentence(task: Task) -> str:
-    goal = task.goal
-    if goal.robot_on is not None:
-        return f"The robot stands on top of {goal.robot_on} at the end."
-    if goal.grasped is not None:
-        return f"The gripper holds {goal.grasped} at the end."
-    if goal.pressed is not None:
-        return f"{goal.pressed} is pressed at some moment."
-    if goal.lifted is not None:
-        return (
-            f"The bottom of {goal.lifted.object} is at least {number_text(goal.lifted.height)} m above where it "
-            "started, at the end."
-        )
-    assert goal.lowered is not None
-    extra = ", unbroken" if task.object(goal.lowered.object).fragile is not None else ""
-    return (
-        f"The bottom of {goal.lowered.object} is at most {number_text(goal.lowered.height)} m above the ground "
-        f"at the end{extra}."
-    )
+def _fragile_goal(task: Task) -> bool:
+    return task.goal.lowered is not None and task.object(task.goal.lowered.object).fragile is not None
 
 
 def describe(task: Task) -> str:
@@ -103,13 +81,13 @@ def describe(task: Task) -> str:
     robot = robots.get(task.embodiment)
     lines = [
         f"Task: {task.instruction}",
-        f"Success: {_goal_sentence(task)}",
+        f"Success: {task.goal.sentence(unbroken=_fragile_goal(task))}",
         "",
-        f"Scene (metres, world frame, z up; {robot.ground} is z = 0; sizes are along x, y, z, a turned object's "
-        "axes matched to the nearest of them):",
+        f"Scene (metres, world frame, z up; {robot.description.ground} is z = 0; sizes are along x, y, z, a turned "
+        "object's axes matched to the nearest of them):",
         *(_object_line(o, robot) for o in task.objects),
         "",
-        *robot.describe(task),
+        *robot.description.section(task),
         "",
         "Skills (Python functions the program calls; positions are [x, y, z] lists in metres):",
         *(f"- {s.signature} -> {s.returns}: {s.semantics}" for s in robot.skills),

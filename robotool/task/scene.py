@@ -21,6 +21,12 @@ Size3 = tuple[PositiveLength, PositiveLength, PositiveLength]
 Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
 
 
+def number_text(value: float) -> str:
+    """A number (metres, kilograms) as robotool writes it for people and models: at most three decimals, no
+    trailing zeros."""
+    return f"{value:.3f}".rstrip("0").rstrip(".")
+
+
 class StrictModel(BaseModel):
     """A task-file model: unknown keys are errors."""
 

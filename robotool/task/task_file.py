@@ -155,7 +155,7 @@ def _check_semantics(task: Task) -> list[Problem]:
         for problem in _model_problems(e, robot.limits, model):
             problems.append(Problem(path=f"robot.limits.{problem.path}", message=problem.message))
     robot_type = robots.get(robot.type)
-    problems += robot_type.check_robot(task)
+    problems += robot_type.rules.check_robot(task)
 
     kind = task.goal.kind
     target = task.goal.object
@@ -223,7 +223,7 @@ def _check_geometry(task: Task) -> list[Problem]:
                     message=f"floats {contact.gap:.3f} m above the surface below it",
                 )
             )
-    problems += robots.get(task.robot.type).check_start(task)
+    problems += robots.get(task.robot.type).rules.check_start(task)
     return problems
 
 

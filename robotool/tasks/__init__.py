@@ -8,6 +8,23 @@ for a built-in name or for a path to a YAML/JSON task file. ``families()`` and
 from __future__ import annotations
 
 from robotool.tasks.builtin import load, names, source
-from robotool.tasks.families import Instance, families, generate, write_instance
+from robotool.tasks.families import (
+    Instance,
+    families,
+    generate,
+    register_family,
+    registered_families,
+    write_instance,
+)
 
-__all__ = ["Instance", "families", "generate", "load", "names", "source", "write_instance"]
+__all__ = [
+    "Instance",
+    "families",
+    "generate",
+    "load",
+    "names",
+    "register_family",
+    "registered_families",
+    "source",
+    "write_instance",
+]

@@ -18,8 +18,9 @@ import pytest
 from fixtures.standin_solution import standin_solution
 from rich.console import Console
 
+from robotool.cli.eval_command import main
 from robotool.errors import LMUnavailableError
-from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
+from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate
 from robotool.eval.journal import JOURNAL
 from robotool.eval.solvers import planner_missing
 from robotool.program.lm import make_lm

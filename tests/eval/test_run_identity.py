@@ -12,8 +12,9 @@ from fixtures.standin_solution import standin_solution
 from rich.console import Console
 
 from robotool import tasks
+from robotool.cli.eval_command import main
 from robotool.errors import LMUnavailableError
-from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate, main
+from robotool.eval import EvalConfig, EvalError, RunsNotAttempted, Settings, evaluate
 from robotool.eval import solvers as eval_solvers
 from robotool.eval.journal import JOURNAL
 from robotool.solution import Solution

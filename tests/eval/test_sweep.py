@@ -21,7 +21,8 @@ from fixtures.scripted_lm import GRASP_DIRECTLY, arm_script, scripted_lm
 from fixtures.standin_solution import standin_solution
 from rich.console import Console
 
-from robotool.eval import EvalConfig, EvalError, Settings, evaluate, main
+from robotool.cli.eval_command import main
+from robotool.eval import EvalConfig, EvalError, Settings, evaluate
 from robotool.eval.journal import JOURNAL
 from robotool.eval.report import internal_error_lines
 from robotool.eval.solvers import METHODS, planner_missing

@@ -49,10 +49,8 @@ SHORT_OF_PAD = "move_to([0.3, -0.2])\n"
 def point_robot(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """The point robot's module named in ROBOTOOL_ROBOTS; the registry restored afterwards."""
     monkeypatch.setenv(robots.MODULES_VARIABLE, PLUGIN)
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
-    yield
+    with robots.registered():
+        yield
 
 
 @pytest.fixture
@@ -93,8 +91,7 @@ def test_a_plugin_robot_is_described_and_checked_from_its_record(point_robot: No
     assert main(["describe", str(task_file)]) == 0
     assert robots.get(task.embodiment).skill_names == {"get_position", "move_to"}
     with pytest.raises(TaskFileError, match="a point robot needs a start"):
-        parse_task({**load_task(task_file).model_dump(mode="json", exclude_defaults=True),
-                    "robot": {"type": "point"}})
+        parse_task({**load_task(task_file).model_dump(mode="json", exclude_defaults=True), "robot": {"type": "point"}})
     with pytest.raises(TaskFileError, match="a point cannot have a 'grasped' goal"):
         parse_task({**task.model_dump(mode="json", exclude_defaults=True), "goal": {"grasped": "pad"}})
     with pytest.raises(NoPlannerError, match="no macros for the point robot"):
@@ -104,10 +101,19 @@ def test_a_plugin_robot_is_described_and_checked_from_its_record(point_robot: No
 def test_a_plugin_robot_works_in_a_fresh_process(task_file: Path, tmp_path: Path) -> None:
     program = tmp_path / "program.py"
     program.write_text(ONTO_PAD)
-    env = {**os.environ, robots.MODULES_VARIABLE: PLUGIN, "COLUMNS": "200",
-           "PYTHONPATH": os.pathsep.join([str(REPO), str(FIXTURES.parent)])}
-    done = subprocess.run([sys.executable, "-m", "robotool", "run", str(task_file), str(program), "--worlds", "1",
-                           "--backend", "mujoco"], env=env, capture_output=True, text=True, timeout=300)
+    env = {
+        **os.environ,
+        robots.MODULES_VARIABLE: PLUGIN,
+        "COLUMNS": "200",
+        "PYTHONPATH": os.pathsep.join([str(REPO), str(FIXTURES.parent)]),
+    }
+    done = subprocess.run(
+        [sys.executable, "-m", "robotool", "run", str(task_file), str(program), "--worlds", "1", "--backend", "mujoco"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "success rate 100%" in done.stdout
 
@@ -126,20 +132,31 @@ def test_a_plugin_that_cannot_load_is_a_clear_error(
     monkeypatch: pytest.MonkeyPatch, task_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setenv(robots.MODULES_VARIABLE, "no_such_robot_module")
-    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
-    assert main(["describe", str(task_file)]) != 0
+    with robots.registered():
+        assert main(["describe", str(task_file)]) != 0
     err = capsys.readouterr().err
     assert "cannot load robot module 'no_such_robot_module' (from ROBOTOOL_ROBOTS): ModuleNotFoundError" in err
     assert "Traceback" not in err
 
 
-def test_a_taken_name_cannot_be_registered_again(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
+def test_a_taken_name_cannot_be_registered_again() -> None:
     arm = robots.get("arm")
-    robots.register(arm)  # the same record again: nothing happens
-    with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
-        robots.register(dataclasses.replace(arm))
+    with robots.registered():
+        robots.register(arm)  # the same record again: nothing happens
+        with pytest.raises(robots.RobotPluginError, match="'arm' is already registered"):
+            robots.register(dataclasses.replace(arm))
+
+
+def test_a_scoped_registration_leaves_the_registry_as_it_was() -> None:
+    from fixtures.point_robot import ROBOT as POINT
+
+    before, limits = robots.names(), dict(limits_table.LIMITS_MODELS)
+    with robots.registered(POINT):
+        assert robots.get("point") is POINT and limits_table.limits_model("point") is POINT.limits
+    assert robots.names() == before == ("arm", "quadruped") and limits == limits_table.LIMITS_MODELS
+    with pytest.raises(robots.UnknownRobotError), robots.registered(POINT):
+        raise robots.UnknownRobotError("the block fails")
+    assert "point" not in robots.names()
 
 
 def test_no_module_outside_a_robot_package_names_a_robot() -> None:
@@ -151,7 +168,8 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
     found = [
         f"{path.relative_to(package)}:{number}: {line.strip()}"
         for path in sorted(package.rglob("*.py"))
-        if path not in allowed and not path.is_relative_to(package / "tasks")
+        if path not in allowed
+        and not path.is_relative_to(package / "tasks")
         and not any(path.is_relative_to(package / "robots" / name) for name in ("arm", "quadruped"))
         for number, line in enumerate(path.read_text().splitlines(), 1)
         if named.search(line)
@@ -162,13 +180,12 @@ def test_no_module_outside_a_robot_package_names_a_robot() -> None:
 def test_an_entry_point_registers_its_robot(monkeypatch: pytest.MonkeyPatch) -> None:
     """An installed package declares ``[project.entry-points."robotool.robots"] point = "<module>:ROBOT"``."""
     monkeypatch.delenv(robots.MODULES_VARIABLE, raising=False)
-    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))
-    monkeypatch.setattr(registry, "_LOADED", set())
-    monkeypatch.setattr(limits_table, "LIMITS_MODELS", dict(limits_table.LIMITS_MODELS))
     point = metadata.EntryPoint(name="point", value=f"{PLUGIN}:ROBOT", group=robots.ENTRY_POINT_GROUP)
     monkeypatch.setattr(registry.metadata, "entry_points", lambda group: [point] if group == point.group else [])
-    assert robots.names() == ("arm", "point", "quadruped")
-    assert robots.get("point").skill_names == {"get_position", "move_to"}
+    with robots.registered(reload_plugins=True):
+        assert robots.names() == ("arm", "point", "quadruped")
+        assert robots.get("point").skill_names == {"get_position", "move_to"}
+    assert robots.names() == ("arm", "quadruped")
 
 
 def test_a_plugin_whose_import_raises_names_itself_and_keeps_its_cause(
@@ -179,8 +196,7 @@ def test_a_plugin_whose_import_raises_names_itself_and_keeps_its_cause(
     (tmp_path / "broken_robot_plugin.py").write_text("ROBOT = None\nSCALE = 1 / 0\n", encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setenv(robots.MODULES_VARIABLE, "broken_robot_plugin")
-    monkeypatch.setattr(registry, "_LOADED", set(registry._LOADED))
-    with pytest.raises(robots.RobotPluginError) as caught:
+    with robots.registered(reload_plugins=True), pytest.raises(robots.RobotPluginError) as caught:
         robots.names()
     message = str(caught.value)
     assert message.startswith("cannot load robot module 'broken_robot_plugin' (from ROBOTOOL_ROBOTS): ")

@@ -185,3 +185,22 @@ def test_unsolvable_buttons_lie_beyond_two_cubes_held_or_pushed_loose() -> None:
         button = next(o for o in instance.task.objects if o.name == "button")
         face = button.center[0] - button.size[0] / 2
         assert face + button_pressing.PRESS > button_pressing.push_reach(2) + 0.015, (seed, face)
+
+
+def test_a_family_registers_like_a_robot_for_a_block_only() -> None:
+    """A family from outside the package (here the milk family's builder under another name) generates instances
+    named after it; the scoped registration leaves the families as they were; a taken name is refused."""
+    from robotool.tasks.families import milk_reaching
+
+    before = tasks.families()
+    with tasks.registered_families(milk_again=milk_reaching.build):
+        assert tasks.families() == sorted([*before, "milk_again"])
+        made = tasks.generate("milk_again", 3)
+        assert made.family == "milk_again" and made.task.name == "milk_again_3"
+        assert made.task == tasks.generate("milk_reaching", 3).task.model_copy(update={"name": "milk_again_3"})
+        tasks.register_family("milk_again", milk_reaching.build)  # the same builder again: nothing happens
+        with pytest.raises(ValueError, match="'milk_reaching' is already registered"):
+            tasks.register_family("milk_reaching", button_pressing.build)
+    assert tasks.families() == before
+    with pytest.raises(ValueError, match="unknown task family 'milk_again'"):
+        tasks.generate("milk_again", 3)

@@ -13,7 +13,16 @@ from typing import TYPE_CHECKING
 
 from robotool.robots.arm import arm_concepts, arm_description
 from robotool.robots.arm.arm_skills import ARM_SKILLS, ArmLimits
-from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
+from robotool.robots.registry import (
+    DescriptionHooks,
+    FeedbackRules,
+    PictureHooks,
+    PictureSettings,
+    RobotType,
+    SearchMacros,
+    SimHooks,
+    TaskRules,
+)
 from robotool.rollout import SkillCall
 from robotool.task.task_model import Task
 from robotool.task.task_problem import Problem
@@ -69,18 +78,16 @@ ROBOT = RobotType(
     limits=ArmLimits,
     skills=ARM_SKILLS,
     goals=frozenset({"grasped", "pressed", "lifted", "lowered"}),
-    embodiment=_embodiment,
-    goal_trackers=_goal_trackers,
-    describe=arm_description.robot_section,
-    key_concepts=arm_concepts.key_concepts,
-    check_robot=_check_robot,
-    ground="the table top",
-    object_facts=arm_description.object_facts,
-    reach=_reach,
-    start_xy=_start_xy,
+    rules=TaskRules(key_concepts=arm_concepts.key_concepts, check_robot=_check_robot, reach=_reach),
+    description=DescriptionHooks(
+        section=arm_description.robot_section, ground="the table top", object_facts=arm_description.object_facts
+    ),
+    sim=SimHooks(embodiment=_embodiment, goal_trackers=_goal_trackers),
     planner=_planner,
-    numerical_events=frozenset({"clamped", "grasp_failed"}),
-    numerical_hint=_numerical_hint,
-    # The gripper works on a table top: a higher view keeps it from hiding the objects it reaches for.
-    view=PictureSettings(turn=-35.0, elevation=-35.0, floor_square=0.1),
+    feedback=FeedbackRules(numerical_events=frozenset({"clamped", "grasp_failed"}), numerical_hint=_numerical_hint),
+    pictures=PictureHooks(
+        # The gripper works on a table top: a higher view keeps it from hiding the objects it reaches for.
+        view=PictureSettings(turn=-35.0, elevation=-35.0, floor_square=0.1),
+        start_xy=_start_xy,
+    ),
 )

@@ -19,7 +19,16 @@ from typing import TYPE_CHECKING
 
 from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description, terrain
 from robotool.robots.quadruped.quadruped_skills import QUADRUPED_SKILLS, QuadrupedLimits
-from robotool.robots.registry import PictureSettings, RobotType, SearchMacros
+from robotool.robots.registry import (
+    DescriptionHooks,
+    FeedbackRules,
+    PictureHooks,
+    PictureSettings,
+    RobotType,
+    SearchMacros,
+    SimHooks,
+    TaskRules,
+)
 from robotool.task.task_model import Task
 
 if TYPE_CHECKING:
@@ -62,17 +71,21 @@ ROBOT = RobotType(
     limits=QuadrupedLimits,
     skills=QUADRUPED_SKILLS,
     goals=frozenset({"robot_on", "lifted", "lowered"}),
-    embodiment=_embodiment,
-    goal_trackers=_goal_trackers,
-    describe=quadruped_description.robot_section,
-    key_concepts=quadruped_concepts.key_concepts,
-    check_robot=checks.check_robot,
-    check_start=checks.check_start,
-    planar=True,
-    start_xy=_start_xy,
-    footprint=_footprint,
+    rules=TaskRules(
+        key_concepts=quadruped_concepts.key_concepts,
+        check_robot=checks.check_robot,
+        check_start=checks.check_start,
+        planar=True,
+    ),
+    description=DescriptionHooks(section=quadruped_description.robot_section),
+    sim=SimHooks(embodiment=_embodiment, goal_trackers=_goal_trackers),
     planner=_planner,
-    placement_measures=frozenset(terrain.KINDS),  # a refused step, gap or drop measures its kind
-    # It walks along its scene: a three-quarter view from the side shows the heights it climbs.
-    view=PictureSettings(turn=-20.0, elevation=-28.0, floor_square=0.5),
+    # a refused step, gap or drop measures its kind
+    feedback=FeedbackRules(placement_measures=frozenset(terrain.KINDS)),
+    pictures=PictureHooks(
+        # It walks along its scene: a three-quarter view from the side shows the heights it climbs.
+        view=PictureSettings(turn=-20.0, elevation=-28.0, floor_square=0.5),
+        start_xy=_start_xy,
+        footprint=_footprint,
+    ),
 )

@@ -1,0 +1,98 @@
+"""``robotool run``: run a skill program file (parsed strictly, as written) against a task and report what
+happened."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+
+from robotool import tasks
+from robotool.cli.command import UsageError, set_command
+from robotool.cli.options import DEFAULT_WORLDS, TASK_HELP, add_world_options, output_file
+from robotool.cli.outputs import (
+    add_html_option,
+    add_video_options,
+    run_recorder,
+    write_file,
+    write_page,
+    write_world_videos,
+)
+from robotool.safe_text import json_text
+from robotool.sandbox.validate import ProgramRejected
+
+RUN_WORLDS = 1
+"""``run`` checks one program once by default; ask for more with ``--worlds``."""
+
+
+def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
+    """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
+    from robotool.cli.summary import print_run, print_run_verdict
+    from robotool.execute import run
+
+    task = tasks.load(args.task)
+    try:
+        code = args.program.read_text(encoding="utf-8-sig")  # as Python reads source: a BOM is allowed
+    except FileNotFoundError:
+        raise UsageError(f"program file not found: {args.program}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise UsageError(f"cannot read the program {args.program}: {getattr(e, 'strerror', None) or e}") from None
+    recorder = run_recorder(args)
+    try:
+        with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
+            report = run(task, code, worlds=args.worlds, seed=args.seed, backend=args.backend, recorder=recorder)
+    except ProgramRejected as e:
+        raise UsageError(f"{args.program}: {e}") from None
+    print_run(report, console)
+    if args.json:
+        write_file(args.json, lambda: args.json.write_text(json_text(report, indent=2), encoding="utf-8"))
+        console.print(f"wrote the report to {args.json}", markup=False, highlight=False)
+    if args.plan:
+        from robotool.render.top_view import write_plan
+        from robotool.sim import build
+
+        assert recorder is not None
+        write_plan(args.plan, task, report.rollouts[0], scene=build(task), track=recorder.tracks[0])
+        console.print(f"wrote the plan of world 0 to {args.plan}", markup=False, highlight=False)
+    videos: dict[int, Path] = {}
+    if args.video:
+        from robotool.render.run_videos import video_paths
+
+        assert recorder is not None
+        videos = video_paths(args.video, args.video_worlds)
+        write_world_videos(task, report.rollouts, recorder.tracks, videos, console)
+    if args.html:
+        from robotool.report_page import run_page
+
+        write_page(args.html, lambda: run_page(args.html, task, report, videos), console)
+    print_run_verdict(report, console)
+    return 0 if report.success else 1
+
+
+def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``run`` to the ``robotool`` verbs."""
+    p = verbs.add_parser("run", help="run a skill program file against a task and report what happened")
+    p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
+    p.add_argument(
+        "program",
+        metavar="PROGRAM.py",
+        type=Path,
+        help="the skill program, parsed strictly as Python (a syntax error stops it before it runs)",
+    )
+    add_world_options(
+        p,
+        worlds=RUN_WORLDS,
+        worlds_help=f"perturbed worlds to run it in (default: {RUN_WORLDS}, one quick check; solve and eval "
+        f"use {DEFAULT_WORLDS} to rank candidates)",
+    )
+    p.add_argument("--json", type=output_file, help="write the full report here as JSON")
+    add_video_options(p, folder=False, help_text="write the rollout as MP4 (several worlds: OUT-world<k>.mp4)")
+    add_html_option(p)
+    p.add_argument(
+        "--plan",
+        type=output_file,
+        metavar="PLAN.png",
+        help="draw world 0 from above: path, pushes, refusals (matplotlib, no OpenGL)",
+    )
+    set_command(p, cmd_run)
