@@ -12,7 +12,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from rich.console import Console
 from rich.text import Text
@@ -20,6 +20,7 @@ from rich.text import Text
 from robotool.errors import RobotoolWarning
 from robotool.lm import DEFAULT_TIMEOUT
 from robotool.safe_text import console_plain, one_line
+from robotool.vocabulary import BackendName
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it
@@ -60,9 +61,9 @@ class HelpFormatter(argparse.HelpFormatter):
 class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line on stderr with exit status 2."""
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"error: {message} (see {self.prog} --help)\n")
@@ -186,7 +187,7 @@ def print_error(errors: Console, message: str) -> None:
     errors.print(Text.assemble(("error:", "bold red"), " ", console_plain(message)), highlight=False, soft_wrap=True)
 
 
-def warn_if_warp_on_cpu(backend: str | None, errors: Console) -> None:
+def warn_if_warp_on_cpu(backend: BackendName | None, errors: Console) -> None:
     """Say once that ``--backend warp`` without a CUDA GPU runs on the CPU, much slower than mujoco."""
     if backend != "warp":
         return
