@@ -18,6 +18,7 @@ from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
 from robotool.task.task_model import Task
 from robotool.verify import run_codes
+from robotool.vocabulary import BackendName
 
 
 class RunReport(BaseModel):
@@ -26,7 +27,7 @@ class RunReport(BaseModel):
     task: str
     worlds: int
     seed: int
-    backend: str
+    backend: BackendName
     success: bool = Field(description="true when the goal was reached in every world")
     success_rate: float = Field(description="share of worlds in which the goal was reached")
     code: str
@@ -39,7 +40,7 @@ def run(
     *,
     worlds: int = 1,
     seed: int = 0,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     recorder: StateRecorder | None = None,
 ) -> RunReport:
     """Check ``code`` strictly in the sandbox and run it in ``worlds`` perturbed worlds of ``task``.

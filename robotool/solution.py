@@ -101,6 +101,7 @@ class Candidate(BaseModel):
     notes: list[str] = Field(default_factory=list, description="what was repaired or ignored in its replies")
     repaired_from: int | None = Field(None, description="the failed candidate a repair round made this one from")
 
+    # prop-decorator: mypy cannot type a decorator over @property; pydantic's documentation uses this ignore
     @computed_field  # type: ignore[prop-decorator]
     @property
     def usage(self) -> dict[str, TokenUsage]:

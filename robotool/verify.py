@@ -19,6 +19,7 @@ from robotool.sim.backend import default_backend
 from robotool.sim.recorder import StateRecorder
 from robotool.solution import Candidate, CandidateFailure, Proposal, Solution, rank, usage_by_stage
 from robotool.task.task_model import Task
+from robotool.vocabulary import BackendName
 
 
 class PreparedCode(NamedTuple):
@@ -47,7 +48,7 @@ def run_worlds(
     programs: Sequence[str],
     world_seeds: Sequence[int],
     *,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     recorder: StateRecorder | None = None,
 ) -> list[Rollout]:
     """Run ``programs[w]`` in world ``w`` perturbed from ``world_seeds[w]``, all worlds in one batch."""
@@ -63,7 +64,7 @@ def run_codes(
     *,
     worlds: int,
     seed: int = 0,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     recorder: StateRecorder | None = None,
 ) -> list[list[Rollout]]:
     """Run each (validated) program in ``worlds`` perturbed worlds, all in one batch.
@@ -82,7 +83,7 @@ class CodeRunner(Protocol):
     """Runs programs in perturbed worlds like :func:`run_codes` (which is one; a batching service is another)."""
 
     def __call__(
-        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: BackendName | None = None
     ) -> list[list[Rollout]]: ...
 
 
@@ -92,7 +93,7 @@ def verify(
     *,
     worlds: int,
     seed: int = 0,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     runner: CodeRunner | None = None,
 ) -> None:
     """Simulate every candidate that has valid code; record rollouts and a failure reason in place.
@@ -122,7 +123,7 @@ def select(
     *,
     worlds: int,
     seed: int = 0,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     runner: CodeRunner | None = None,
 ) -> Solution:
     """Verify a proposal's candidates (see :func:`verify`) and return the best as a :class:`Solution`.

@@ -13,7 +13,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from rich.console import Console
 from rich.text import Text
@@ -21,7 +21,7 @@ from rich.text import Text
 from robotool.errors import RobotoolWarning
 from robotool.program.lm import DEFAULT_TIMEOUT
 from robotool.safe_text import console_plain, one_line
-from robotool.vocabulary import BACKENDS
+from robotool.vocabulary import BACKENDS, BackendName
 
 if TYPE_CHECKING:
     import dspy
@@ -69,9 +69,9 @@ class HelpFormatter(argparse.HelpFormatter):
 class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line on stderr with exit status 2."""
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"error: {message} (see {self.prog} --help)\n")
@@ -252,7 +252,7 @@ def print_error(errors: Console, message: str) -> None:
     errors.print(Text.assemble(("error:", "bold red"), " ", console_plain(message)), highlight=False, soft_wrap=True)
 
 
-def warn_if_warp_on_cpu(backend: str | None, errors: Console) -> None:
+def warn_if_warp_on_cpu(backend: BackendName | None, errors: Console) -> None:
     """Say once that ``--backend warp`` without a CUDA GPU runs on the CPU, much slower than mujoco."""
     if backend != "warp":
         return

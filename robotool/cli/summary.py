@@ -74,14 +74,15 @@ def print_solution(solution: Solution, console: Console) -> None:
     table = Table(title=f"Candidates ({solution.method})")
     for column in ("#", "success", "objects", "calls", "outcome"):
         table.add_column(column, overflow="fold")
-    for c in solution.candidates:
-        ran = bool(c.rollouts)
+    for candidate in solution.candidates:
+        ran = bool(candidate.rollouts)
+        failure = str(candidate.failure) if candidate.failure else "solved in every world"
         table.add_row(
-            str(c.index) + (" *" if c.index == solution.best else ""),
-            f"{c.success_rate:.0%}" if ran else "-",
-            f"{c.objects_touched:.1f}" if ran else "-",
-            f"{c.skill_calls:.1f}" if ran else "-",
-            console_markup("; ".join([str(c.failure) if c.failure else "solved in every world", *c.notes])),
+            str(candidate.index) + (" *" if candidate.index == solution.best else ""),
+            f"{candidate.success_rate:.0%}" if ran else "-",
+            f"{candidate.objects_touched:.1f}" if ran else "-",
+            f"{candidate.skill_calls:.1f}" if ran else "-",
+            console_markup("; ".join([failure, *candidate.notes])),
         )
     console.print(table)
     print_repairs(solution, console)

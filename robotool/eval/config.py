@@ -17,6 +17,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from robotool.errors import LMUnavailableError, RobotoolError
+from robotool.vocabulary import BackendName
 
 TIME_BUDGET_S = 300.0
 """The default run (no LM: the LM-free methods on every built-in task and the default generated
@@ -55,7 +56,7 @@ class Settings(BaseModel):
     temperature: float | None = None
     candidates: int = Field(1, ge=1, description="candidate programs per run (LM methods)")
     worlds: int = Field(3, ge=1, description="perturbed worlds per candidate")
-    backend: str | None = None
+    backend: BackendName | None = None
     seed: int = Field(0, ge=0, description="base seed of the perturbed worlds")
     adapter: Literal["chat", "json"] | None = Field(None, description="answer format asked of the LM (None: chat)")
     repair: int = Field(0, ge=0, description="repair rounds after a verification with no full success (LM methods)")

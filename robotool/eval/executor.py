@@ -29,6 +29,7 @@ from types import TracebackType
 from typing import Protocol, Self, TypeVar
 
 from robotool.processes import process_pool
+from robotool.vocabulary import BackendName
 
 J = TypeVar("J")
 R = TypeVar("R")
@@ -41,7 +42,7 @@ class WorkerLost(RuntimeError):
 class Executor(Protocol):
     """Runs jobs somewhere and reports each outcome as it comes in."""
 
-    def backend(self, asked: str | None) -> str:
+    def backend(self, asked: BackendName | None) -> BackendName:
         """The simulator backend the jobs will use: ``asked``, or what the workers have (warp with a GPU)."""
         ...
 
@@ -53,7 +54,7 @@ class Executor(Protocol):
         *,
         skip: Callable[[J], bool],
         exclusive: Callable[[J], bool],
-        backend: str,
+        backend: BackendName,
     ) -> None:
         """Apply ``work`` to every job and call ``done`` with each outcome (from any thread).
 
@@ -84,7 +85,7 @@ class LocalExecutor:
         self.workers = workers
         self.processes = processes
 
-    def backend(self, asked: str | None) -> str:
+    def backend(self, asked: BackendName | None) -> BackendName:
         """``asked``, or this machine's default backend."""
         from robotool.sim.backend import default_backend
 
@@ -98,7 +99,7 @@ class LocalExecutor:
         *,
         skip: Callable[[J], bool],
         exclusive: Callable[[J], bool],
-        backend: str,
+        backend: BackendName,
     ) -> None:
         """See :meth:`Executor.run`; ``done`` is called from the thread that ran the job."""
         turn = threading.Lock()
@@ -149,7 +150,7 @@ class LocalExecutor:
         self.close()
 
 
-def _simulation_lanes(work: Callable[..., object], wanted: int, backend: str) -> int:
+def _simulation_lanes(work: Callable[..., object], wanted: int, backend: BackendName) -> int:
     """How many simulation-only jobs run at once: ``wanted`` on the ``mujoco`` backend when ``work`` can be sent
     to another process, else 1."""
     if backend != "mujoco" or wanted < 2:

@@ -59,7 +59,7 @@ def families() -> list[str] | None:
 
 def generated(family: str, seed: int) -> TaskInstance | None:
     """A generated instance, or None when it is unsolvable."""
-    instance = tasks.generate(family, seed)  # type: ignore[attr-defined]
+    instance = tasks.generate(family, seed)
     if not getattr(instance, "solvable", True):
         return None
     return TaskInstance(

@@ -22,6 +22,7 @@ from robotool.processes import process_pool
 from robotool.render.overlay import CaptionLine
 from robotool.render.video import RED, end_lines
 from robotool.verify import world_failure
+from robotool.vocabulary import BackendName
 
 if TYPE_CHECKING:
     from robotool.render.painter import Painter
@@ -51,7 +52,7 @@ def write_pictures(
     instances: Sequence[TaskInstance],
     records: Sequence[RunRecord],
     folder: Path,
-    backend: str | None,
+    backend: BackendName | None,
     processes: int = 1,
 ) -> list[Picture]:
     """Draw every instance's scene and its representative failures into ``folder/pictures``, the instances
@@ -73,7 +74,7 @@ def write_pictures(
 
 
 def _instance_pictures(
-    instance: TaskInstance, records: Sequence[RunRecord], folder: Path, backend: str | None
+    instance: TaskInstance, records: Sequence[RunRecord], folder: Path, backend: BackendName | None
 ) -> list[Picture]:
     """One instance's scene and representative failures, drawn with one painter (one OpenGL context)."""
     from robotool.render.painter import Painter
@@ -127,7 +128,7 @@ def _replay(
     scene: Scene,
     path: Path,
     lines: list[CaptionLine],
-    backend: str | None,
+    backend: BackendName | None,
     painter: Painter,
 ) -> bool:
     """Simulate the world again and draw its end state, captioned with ``lines`` and how it ended.

@@ -80,20 +80,20 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
 
     if summary.repair:
         fig, ax = plt.subplots(figsize=(6, 4))
-        for row in summary.repair:
+        for comparison in summary.repair:
             line = ax.plot(
-                [row.sampled_calls, row.plain_calls],
-                [row.sampled_success, row.plain_success],
+                [comparison.sampled_calls, comparison.plain_calls],
+                [comparison.sampled_success, comparison.plain_success],
                 "o-",
-                label=f"{method_label(row.method)}: plain best-of-K -> K'",
+                label=f"{method_label(comparison.method)}: plain best-of-K -> K'",
             )[0]
             ax.plot(
-                [row.repair_calls],
-                [row.repair_success],
+                [comparison.repair_calls],
+                [comparison.repair_success],
                 "*",
                 markersize=12,
                 color=line.get_color(),
-                label=f"{method_label(row.method)}: K + repair",
+                label=f"{method_label(comparison.method)}: K + repair",
             )
         ax.set(xlabel="LM calls per run", ylabel="success rate", title="Repair against plain sampling")
         save(fig, "repair.png")

@@ -27,6 +27,7 @@ from ray import exceptions as ray_errors
 from robotool.eval.config import EvalError
 from robotool.eval.executor import WorkerLost
 from robotool.version import version
+from robotool.vocabulary import BackendName
 
 J = TypeVar("J")
 R = TypeVar("R")
@@ -77,7 +78,7 @@ def _check_reachable(address: str) -> None:
         raise EvalError(f"cannot reach the Ray cluster at {address}: {e.strerror or e}") from None
 
 
-def task_options(backend: str, resources: dict[str, float]) -> dict[str, float]:
+def task_options(backend: BackendName, resources: dict[str, float]) -> dict[str, float]:
     """What one job's Ray task asks for on a cluster with ``resources``: a CPU, and a share of a GPU when
     it simulates on warp and the cluster has GPUs; no automatic retry (a lost job is submitted again here)."""
     gpu = 1 / JOBS_PER_GPU if backend == "warp" and resources.get("GPU", 0) > 0 else 0
@@ -102,7 +103,7 @@ class RayExecutor:
     def _resources(self) -> dict[str, float]:
         return dict(ray.cluster_resources())
 
-    def backend(self, asked: str | None) -> str:
+    def backend(self, asked: BackendName | None) -> BackendName:
         """``asked``, or warp when the cluster has GPUs, else mujoco."""
         return asked or ("warp" if self._resources().get("GPU", 0) > 0 else "mujoco")
 
@@ -114,7 +115,7 @@ class RayExecutor:
         *,
         skip: Callable[[J], bool],
         exclusive: Callable[[J], bool],
-        backend: str,
+        backend: BackendName,
     ) -> None:
         """See :meth:`~robotool.eval.executor.Executor.run`: ``done`` is called here, in the calling thread.
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from robotool.eval.instances import TaskInstance
 from robotool.eval.pictures import slug
 from robotool.eval.records import RunRecord, Video
+from robotool.vocabulary import BackendName
 
 FOLDER = "videos"
 
@@ -30,7 +31,11 @@ def failed_worlds(records: Sequence[RunRecord], limit: int) -> list[tuple[RunRec
 
 
 def write_run_videos(
-    instances: Sequence[TaskInstance], records: Sequence[RunRecord], folder: Path, limit: int, backend: str | None
+    instances: Sequence[TaskInstance],
+    records: Sequence[RunRecord],
+    folder: Path,
+    limit: int,
+    backend: BackendName | None,
 ) -> list[Video]:
     """Film the first ``limit`` failed worlds of each instance and method into ``folder/videos``."""
     from robotool.render.run_videos import rerun_recorded, write_videos

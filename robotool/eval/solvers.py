@@ -21,7 +21,7 @@ from robotool.eval.records import EqualBudget
 from robotool.program.methods import STAGES_BY_METHOD
 from robotool.solution import Solution
 from robotool.task.task_model import Task
-from robotool.vocabulary import PLANNER_METHODS, MethodName, PlannerMethod
+from robotool.vocabulary import PLANNER_METHODS, BackendName, MethodName, PlannerMethod
 
 if TYPE_CHECKING:
     import dspy
@@ -80,7 +80,7 @@ class SolverSettings(BaseModel):
 
     candidates: int = 1
     worlds: int = 3
-    backend: str | None = None
+    backend: BackendName | None = None
     temperature: float | None = None
     adapter: Literal["chat", "json"] | None = None
     log_prompts: Path | None = None

@@ -45,6 +45,7 @@ from robotool.eval.work import NotAttempted, RunJob, RunWork
 from robotool.processes import cores
 from robotool.safe_text import console_plain, json_text
 from robotool.version import version
+from robotool.vocabulary import BackendName
 
 logger = logging.getLogger(__name__)
 
@@ -78,7 +79,9 @@ class Methods(NamedTuple):
     stages: dict[str, str]
 
 
-def _methods(config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: str) -> Methods:
+def _methods(
+    config: EvalConfig, lm: dspy.LM | None, overrides: Mapping[str, Solver] | None, backend: BackendName
+) -> Methods:
     """Solvers to run and methods skipped; a method asked for by name that cannot run is an error."""
     names = config.methods or ([] if config.programs else list(METHODS))
     unknown = [m for m in names if m not in METHODS]
@@ -187,7 +190,7 @@ def _check_folder(config: EvalConfig) -> None:
 
 
 def _plan(
-    config: EvalConfig, instances: list[TaskInstance], methods: list[str], backend: str
+    config: EvalConfig, instances: list[TaskInstance], methods: list[str], backend: BackendName
 ) -> list[tuple[TaskInstance, RunKey]]:
     """Every run asked for, keyed by the content of its inputs (``backend``: the one the runs use; a compiled
     program's runs also by its file's content)."""
@@ -277,7 +280,7 @@ def _run(
     pending: list[RunJob],
     journal: Journal,
     total: int,
-    backend: str,
+    backend: BackendName,
     console: Console,
 ) -> None:
     """Carry out the pending runs with ``executor``, journaling each record as it comes back.
@@ -316,7 +319,7 @@ def _run(
         raise RunsNotAttempted(len(pending) - len(recorded), total, unavailable[0])
 
 
-def _with_pictures(results: Results, instances: list[TaskInstance], backend: str, processes: int) -> Results:
+def _with_pictures(results: Results, instances: list[TaskInstance], backend: BackendName, processes: int) -> Results:
     """The results with the report's pictures drawn here in ``processes`` processes, failed worlds simulated
     again on ``backend`` (the one the runs used), or a note saying why there are none."""
     if not results.config.pictures:
@@ -331,7 +334,7 @@ def _with_pictures(results: Results, instances: list[TaskInstance], backend: str
     return results.model_copy(update={"pictures": pictures})
 
 
-def _with_videos(results: Results, instances: list[TaskInstance], backend: str) -> Results:
+def _with_videos(results: Results, instances: list[TaskInstance], backend: BackendName) -> Results:
     """The results with the videos ``--videos N`` asked for, or a note saying why there are none."""
     if not results.config.videos:
         return results

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from robotool.rollout import Rollout
 from robotool.task.task_model import Task
 from robotool.verify import run_worlds
+from robotool.vocabulary import BackendName
 
 DEFAULT_WINDOW = 0.05
 """Seconds the first request waits for concurrent ones before its batch runs."""
@@ -31,7 +32,7 @@ class _BatchRequest:
     codes: list[str]
     worlds: int
     seed: int
-    backend: str | None
+    backend: BackendName | None
     result: list[list[Rollout]] | None = None
     error: BaseException | None = None
     done: bool = False
@@ -63,13 +64,13 @@ class RolloutBatcher:
         self._changed = threading.Condition()
 
     def __call__(
-        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: BackendName | None = None
     ) -> list[list[Rollout]]:
         """Like :func:`robotool.verify.run_codes`: each program in ``worlds`` perturbed worlds."""
         return self.run_codes(task, codes, worlds=worlds, seed=seed, backend=backend)
 
     def run_codes(
-        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: str | None = None
+        self, task: Task, codes: Sequence[str], *, worlds: int, seed: int = 0, backend: BackendName | None = None
     ) -> list[list[Rollout]]:
         """Like :func:`robotool.verify.run_codes`, merged with concurrent calls for the same task."""
         if not codes:

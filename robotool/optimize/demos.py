@@ -22,6 +22,7 @@ from robotool.program.lm_program import Proposer
 from robotool.safe_text import json_text
 from robotool.solution import Solution
 from robotool.task.describe import describe
+from robotool.vocabulary import BackendName
 
 Say = Callable[[str], None]
 
@@ -35,7 +36,9 @@ class SolvedInstance(BaseModel):
     solution: Solution
 
 
-def _solved(example: dspy.Example, *, worlds: int, seed: int, backend: str | None, log: Path | None) -> Solution:
+def _solved(
+    example: dspy.Example, *, worlds: int, seed: int, backend: BackendName | None, log: Path | None
+) -> Solution:
     """The planner's solution of an example, from the log folder when an earlier run solved it."""
     from robotool.planner import solve
 
@@ -95,7 +98,7 @@ def planner_demonstrations(
     per_stage: int,
     worlds: int,
     seed: int = 0,
-    backend: str | None = None,
+    backend: BackendName | None = None,
     log: Path | None = None,
     say: Say = lambda _: None,
 ) -> list[DemoSource]:

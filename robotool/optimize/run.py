@@ -30,6 +30,7 @@ from robotool.optimize.verified_metric import Metric
 from robotool.program.compiled import CompiledInfo, DemoSource, Validation, save_compiled
 from robotool.program.lm_program import Proposer
 from robotool.safe_text import json_text
+from robotool.vocabulary import BackendName
 
 Optimizer = Literal["gepa", "mipro", "bootstrap", "simba", "planner-demos"]
 OPTIMIZERS: tuple[Optimizer, ...] = ("gepa", "mipro", "bootstrap", "simba", "planner-demos")
@@ -65,7 +66,7 @@ class OptimizeSettings(BaseModel):
     method: str = "robotool"
     worlds: int = Field(3, ge=1)
     seed: int = Field(0, ge=0)
-    backend: str | None = None
+    backend: BackendName | None = None
     threads: int = Field(4, ge=1)
     lm: str | None = None
     reflection_lm: str | None = None

@@ -22,7 +22,7 @@ from robotool.optimize.batching import RolloutBatcher
 from robotool.optimize.feedback import findings, stage_feedback
 from robotool.solution import Proposal, Solution
 from robotool.verify import select
-from robotool.vocabulary import STAGES, Stage
+from robotool.vocabulary import STAGES, BackendName, Stage
 
 PREDICTOR_STAGES: dict[str, Stage] = {
     "analyze": "analyzer",
@@ -39,7 +39,12 @@ class Metric:
     """Verifies a :class:`~robotool.program.lm_program.Proposer`'s prediction; see the module docstring."""
 
     def __init__(
-        self, *, worlds: int = 3, seed: int = 0, backend: str | None = None, batcher: RolloutBatcher | None = None
+        self,
+        *,
+        worlds: int = 3,
+        seed: int = 0,
+        backend: BackendName | None = None,
+        batcher: RolloutBatcher | None = None,
     ):
         if worlds < 1:
             raise ValueError("worlds must be at least 1")

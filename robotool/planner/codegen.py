@@ -33,6 +33,12 @@ class Ref:
 Axis = tuple[Ref | None, float]
 
 
+def _three(axes: Sequence[Axis]) -> tuple[Axis, Axis, Axis]:
+    """``axes`` as x, y and z (a ValueError unless there are three)."""
+    x, y, z = axes
+    return x, y, z
+
+
 @dataclass(frozen=True)
 class Point:
     """A 3-D target: per axis, ``ref[axis] + offset`` (or the number alone when ``ref`` is None)."""
@@ -42,17 +48,17 @@ class Point:
     @classmethod
     def at(cls, ref: Ref | None, offset: Sequence[float] = (0.0, 0.0, 0.0)) -> Point:
         """``ref`` plus ``offset`` on every axis (absolute numbers when ``ref`` is None)."""
-        return cls(tuple((ref, float(o)) for o in offset))  # type: ignore[arg-type]
+        return cls(_three([(ref, float(o)) for o in offset]))
 
     def with_axis(self, k: int, ref: Ref | None, offset: float) -> Point:
         """This point with axis ``k`` replaced."""
         axes = list(self.axes)
         axes[k] = (ref, float(offset))
-        return Point(tuple(axes))  # type: ignore[arg-type]
+        return Point(_three(axes))
 
     def shifted(self, delta: Sequence[float]) -> Point:
         """This point moved by ``delta``."""
-        return Point(tuple((r, o + float(d)) for (r, o), d in zip(self.axes, delta, strict=True)))  # type: ignore[arg-type]
+        return Point(_three([(r, o + float(d)) for (r, o), d in zip(self.axes, delta, strict=True)]))
 
     def estimate(self) -> np.ndarray:
         """Plan-time value of the point."""

@@ -53,7 +53,7 @@ def repaired(task: Task, program: Program, candidate: Candidate) -> list[Program
                     f"Re-parameterised from the simulator: {motions[failing].skill} measured {distance:.3f} m, so "
                     f"step {program.motions[k].step} aims {distance + MARGIN:.3f} m {word}."
                 )
-                variants.append(program.with_target_shifted(k, shift, why))
+                variants.append(program.with_target_shifted(k, shift.tolist(), why))
     return variants
 
 

@@ -17,6 +17,7 @@ from robotool.planner.codegen import Program
 from robotool.solution import Candidate, CandidateFailure, StageOutputs
 from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
+from robotool.vocabulary import BackendName
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,7 @@ def search(
     *,
     worlds: int,
     seed: int,
-    backend: str | None,
+    backend: BackendName | None,
     budget: Budget,
     start: int = 0,
 ) -> tuple[list[Tried], int]:
@@ -75,20 +76,15 @@ def search(
             for k, (t, p) in enumerate(queue[len(tried) : len(tried) + budget.beam])
             if t == tier
         ]
-        runnable = []
+        runnable, codes = [], []
         for item in batch:
             item.candidate.code, rejection, _ = prepare_code(item.program.code, task)
             if rejection is not None:
                 item.candidate.failure = CandidateFailure(stage="search", kind="rejected", reason=rejection)
-            else:
+            elif item.candidate.code is not None:  # always, without a rejection
                 runnable.append(item)
-        results = run_codes(
-            task,
-            [t.candidate.code for t in runnable],
-            worlds=worlds,
-            seed=seed,  # type: ignore[misc]
-            backend=backend,
-        )
+                codes.append(item.candidate.code)
+        results = run_codes(task, codes, worlds=worlds, seed=seed, backend=backend)
         for item, rollouts in zip(runnable, results, strict=True):
             item.candidate.rollouts = rollouts
             item.candidate.failure = failure_reason(rollouts)

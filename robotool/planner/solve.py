@@ -25,6 +25,7 @@ from robotool.solution import RepairAttempt, RepairRound, Solution, StageOutputs
 from robotool.task.concepts import KeyConcept, key_concepts, surface_under
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
+from robotool.vocabulary import BackendName
 
 KEEP_CALLS = 4  # failed candidates (best first) that keep their rollouts' skill-call traces
 CALCULATION = (
@@ -35,7 +36,13 @@ CALCULATION = (
 
 
 def solve(
-    task: Task, *, worlds: int = 3, seed: int = 0, backend: str | None = None, tools: bool = True, repair: bool = True
+    task: Task,
+    *,
+    worlds: int = 3,
+    seed: int = 0,
+    backend: BackendName | None = None,
+    tools: bool = True,
+    repair: bool = True,
 ) -> Solution:
     """Find the shortest program that the simulator shows reaching the goal, without a language model.
 
@@ -128,7 +135,7 @@ def repair_round(
     *,
     worlds: int,
     seed: int,
-    backend: str | None,
+    backend: BackendName | None,
     beam: int,
 ) -> list[RepairRound]:
     """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``

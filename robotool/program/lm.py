@@ -128,8 +128,10 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
                 f"it needs an API key: set {provider_key_variable(model)}, or name the variable that holds it with "
                 "--api-key-env"
             )
-        elif (variable := provider_key_variable(model)) and lm.kwargs.get("api_key") == os.environ.get(variable):
-            fix = f"check the API key in {variable}, or name another variable with --api-key-env"
+        elif (key_variable := provider_key_variable(model)) and lm.kwargs.get("api_key") == os.environ.get(
+            key_variable
+        ):
+            fix = f"check the API key in {key_variable}, or name another variable with --api-key-env"
         else:
             fix = "check the API key (in the variable --api-key-env names, or the provider's usual one)"
         return LMUnavailableError("authentication", f"{where} rejected the credentials for {model}: {fix}")

@@ -210,7 +210,7 @@ def _reasoning_free(adapter: dspy.Adapter) -> dspy.Adapter:
     """A copy of ``adapter`` that parses replies without the model's reasoning (``<think>...</think>``), so that
     a draft inside the reasoning is never read as an answer."""
     reading = copy.copy(adapter)
-    reading.__class__ = _reasoning_free_class(type(adapter))
+    reading.__class__ = _reasoning_free_class(adapter.__class__)
     return reading
 
 

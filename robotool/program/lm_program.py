@@ -46,7 +46,7 @@ from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, Rep
 from robotool.task.describe import describe
 from robotool.task.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
-from robotool.vocabulary import MethodName
+from robotool.vocabulary import BackendName, MethodName
 
 AdapterName = Literal["chat", "json"]
 SPREAD = (0.7, 1.0)
@@ -302,7 +302,7 @@ class RoboTool(Proposer):
         self,
         *,
         worlds_per_candidate: int = 3,
-        backend: str | None = None,
+        backend: BackendName | None = None,
         seed: int = 0,
         repair_rounds: int = 0,
         repair_tokens: int | None = None,

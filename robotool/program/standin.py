@@ -73,6 +73,7 @@ class StandinServer:
     @property
     def base_url(self) -> str:
         host, port = self._server.server_address[:2]
+        assert isinstance(host, str)  # an IPv4 server's address
         return f"http://{host}:{port}/v1"
 
     def __enter__(self) -> StandinServer:
@@ -86,7 +87,7 @@ class StandinServer:
     def pick(self, body: dict[str, Any], authorization: str | None = None) -> Rule | None:
         """The first rule that matches the request's last user message and has uses left."""
         messages = body.get("messages") or []
-        last_user = next((m for m in reversed(messages) if m.get("role") == "user"), {})
+        last_user: dict[str, Any] = next((m for m in reversed(messages) if m.get("role") == "user"), {})
         text = _text(last_user.get("content", ""))
         with self._lock:
             self.requests.append(body)

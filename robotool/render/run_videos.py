@@ -12,6 +12,7 @@ from robotool.sim.build import build
 from robotool.sim.recorder import StateRecorder, Track
 from robotool.task.task_model import Task
 from robotool.verify import run_worlds
+from robotool.vocabulary import BackendName
 
 
 def video_paths(out: Path, worlds: Sequence[int]) -> dict[int, Path]:
@@ -33,7 +34,7 @@ def write_videos(
 
 
 def rerun_recorded(
-    task: Task, code: str, world_seeds: Mapping[int, int], *, backend: str | None
+    task: Task, code: str, world_seeds: Mapping[int, int], *, backend: BackendName | None
 ) -> tuple[dict[int, Rollout], dict[int, Track]]:
     """Run ``code`` again, recorded, in one world per entry of ``world_seeds`` (world -> the seed it was perturbed
     from, as recorded when it first ran); on the ``mujoco`` backend this repeats those rollouts exactly.

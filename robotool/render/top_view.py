@@ -12,6 +12,7 @@ that ended ``done``). Labels never overlap: each is moved, by as little as it ta
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import mujoco
@@ -20,6 +21,8 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon, Rectangle
+from matplotlib.text import Annotation
+from matplotlib.transforms import Bbox
 
 from robotool import robots
 from robotool.render.picture_model import GOAL_RGBA, ROBOT_RGBA, object_colours
@@ -86,7 +89,7 @@ def _position_at(times: np.ndarray, xy: np.ndarray, t: float) -> np.ndarray:
 def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, track: Track | None = None) -> Figure:
     """The plan of ``rollout`` in ``task`` as a matplotlib figure (``scene`` and ``track`` add the real path)."""
     fig = Figure(figsize=(8, 5.5), dpi=110)
-    FigureCanvasAgg(fig)
+    canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     colours = object_colours(task)
     centres: dict[str, np.ndarray] = {}
@@ -107,7 +110,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
         centres[obj.name] = np.asarray(obj.center[:2], dtype=float)
         ax.annotate(
             f"{plot_text(obj.name)}{' (goal)' if goal else ''}\ntop {obj.top:.2f} m",
-            centres[obj.name],
+            _xy(centres[obj.name]),
             xytext=(0, 0),
             textcoords="offset points",
             fontsize=7,
@@ -146,7 +149,7 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, loc="best")
     fig.tight_layout()
-    _declutter(fig, ax)
+    _declutter(canvas, ax)
     return fig
 
 
@@ -174,7 +177,7 @@ def _draw_ends(
     outlines: list[list[np.ndarray]],
     starts: dict[str, np.ndarray],
     ends: dict[str, tuple[np.ndarray, np.ndarray]],
-    colours: list[tuple[float, ...]],
+    colours: Sequence[tuple[float, ...]],
 ) -> None:
     """Objects that moved, dashed, where they ended."""
     for i, obj in enumerate(task.objects):
@@ -192,7 +195,7 @@ def _draw_ends(
             ax.update_datalim(moved)
         ax.annotate(
             f"{plot_text(obj.name)} (end)",
-            at,
+            _xy(at),
             xytext=(0, 0),
             textcoords="offset points",
             fontsize=7,
@@ -206,13 +209,13 @@ LABEL_STEP = 6.0  # points: how far apart the places tried for a label are
 LABEL_RINGS = 40
 
 
-def _declutter(fig: Figure, ax: Axes) -> None:
+def _declutter(canvas: FigureCanvasAgg, ax: Axes) -> None:
     """Move each label (an annotation with text, placed in offset points) off the labels placed before it: to the
     nearest free place on rings of growing radius around where it was asked for."""
-    renderer = fig.canvas.get_renderer()
-    placed = []
+    renderer = canvas.get_renderer()
+    placed: list[Bbox] = []
     directions = [(0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (-1, 1), (1, -1), (-1, -1)]
-    for label in [t for t in ax.texts if t.get_text()]:
+    for label in [t for t in ax.texts if isinstance(t, Annotation) and t.get_text()]:
         x0, y0 = label.xyann
         tries = [(0.0, 0.0)] + [
             (2 * LABEL_STEP * ring * dx, LABEL_STEP * ring * dy)
@@ -225,6 +228,11 @@ def _declutter(fig: Figure, ax: Axes) -> None:
             if not any(box.overlaps(other) for other in placed):
                 break
         placed.append(box)
+
+
+def _xy(point: np.ndarray) -> tuple[float, float]:
+    """An x-y point as matplotlib's annotations take it."""
+    return float(point[0]), float(point[1])
 
 
 def _start(task: Task, path_xy: np.ndarray | None) -> np.ndarray:
@@ -273,7 +281,7 @@ def _draw_calls(
         if moves_object:
             name = call.args[kinds.index("name")]
             origin = centres.get(name, robot_at)
-        elif path_xy is not None:  # a failed move is drawn from where the robot stopped: the part it could not do
+        elif path_xy is not None and path_times is not None:  # a failed move: drawn from where the robot stopped
             origin = _position_at(path_times, path_xy, call.ended if call.outcome != "done" else call.started)
         else:
             origin = robot_at
@@ -283,7 +291,7 @@ def _draw_calls(
             centres[name] = target
         if not moves_object:
             robot_at = target if call.outcome == "done" else robot_at
-            if path_xy is not None:
+            if path_xy is not None and path_times is not None:
                 robot_at = _position_at(path_times, path_xy, call.ended)
     return robot_at
 
@@ -291,12 +299,12 @@ def _draw_calls(
 def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, colour: Colour, step: int) -> None:
     failed = call.outcome != "done"
     style = {"color": REFUSED if failed else colour, "linestyle": "--" if failed else "-", "linewidth": 1.6}
-    ax.annotate("", xy=target, xytext=origin, arrowprops={"arrowstyle": "->", **style})
+    ax.annotate("", xy=_xy(target), xytext=_xy(origin), arrowprops={"arrowstyle": "->", **style})
     ax.update_datalim([origin, target])  # arrows are annotations: make room for them
     mid = (origin + target) / 2
     ax.annotate(
         plot_text(f"{step}. {call.skill}"),
-        mid,
+        _xy(mid),
         xytext=(0, 0),
         textcoords="offset points",
         fontsize=6.5,
@@ -308,7 +316,7 @@ def _arrow(ax: Axes, origin: np.ndarray, target: np.ndarray, call: SkillCall, co
         ax.plot(*origin, marker="x", color=REFUSED, markersize=9, mew=2)
         ax.annotate(
             plot_text(capped(f"{call.outcome}: {call.reason or ''}", REASON_CHARS)),
-            origin,
+            _xy(origin),
             xytext=(4, -10),
             textcoords="offset points",
             fontsize=6.5,

@@ -169,6 +169,7 @@ def write_mp4(path: Path, images: Iterator[np.ndarray], *, fps: int, width: int,
         with av.open(str(path), mode="w", format="mp4") as container:
             encoder = _encoder(av.codecs_available)
             stream = container.add_stream(encoder, rate=fps)
+            assert isinstance(stream, av.VideoStream)  # a video codec's stream
             stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
             if encoder == "libx264":
                 stream.options = {"crf": "23", "preset": "veryfast"}

@@ -31,6 +31,7 @@ from __future__ import annotations
 import ast
 import builtins
 import re
+from collections.abc import Sequence
 
 from robotool import robots
 from robotool.robots.skills import SkillArgumentError
@@ -147,14 +148,14 @@ def _source_line_segment(code: str, node: ast.AST | str) -> str:
     if line is None or start is None:
         return type(node).__name__
     text = _LINE_BREAK.split(code, maxsplit=line)[line - 1].encode()  # offsets count UTF-8 bytes
-    end = node.end_col_offset if getattr(node, "end_lineno", line) == line else None
+    end = getattr(node, "end_col_offset", None) if getattr(node, "end_lineno", line) == line else None
     return text[start:end].decode(errors="replace") or type(node).__name__
 
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 
-def _scope_bindings(nodes: list[ast.AST]) -> set[str]:
+def _scope_bindings(nodes: Sequence[ast.AST]) -> set[str]:
     """Names bound directly in one scope: targets, loop and comprehension variables, function names.
 
     Nested function and lambda bodies and parameters are their own scopes and are not entered (their
@@ -203,7 +204,7 @@ class _Checker(ast.NodeVisitor):
     def check_module(self, tree: ast.Module) -> None:
         self.in_scope(_scope_bindings(tree.body), tree.body)
 
-    def in_scope(self, names: set[str], body: list[ast.AST]) -> None:
+    def in_scope(self, names: set[str], body: Sequence[ast.AST]) -> None:
         self.scopes.append(names)
         self.bound_anywhere |= names
         for node in body:

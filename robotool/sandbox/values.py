@@ -99,6 +99,7 @@ class SafeStr(str, metaclass=_StrType):
     __slots__ = ()
     shown_as = "str"
 
+    # misc: __new__ returns the builtin's plain str on purpose (a SafeStr is never made: only isinstance matters)
     def __new__(cls, *args: Any, **kwargs: Any) -> str:  # type: ignore[misc]
         return without_addresses(str(*args, **kwargs))
 
@@ -140,13 +141,16 @@ class _Guard(ast.NodeTransformer):
         return ast.copy_location(_call(GUARD, node), node)
 
     def visit_Call(self, node: ast.Call) -> ast.expr:
-        return self.wrap(self.generic_visit(node))
+        self.generic_visit(node)  # rewrites the children in place
+        return self.wrap(node)
 
     def visit_BinOp(self, node: ast.BinOp) -> ast.expr:
-        return self.wrap(self.generic_visit(node))
+        self.generic_visit(node)
+        return self.wrap(node)
 
     def visit_JoinedStr(self, node: ast.JoinedStr) -> ast.expr:
-        return self.wrap(self.generic_visit(node))
+        self.generic_visit(node)
+        return self.wrap(node)
 
     def visit_FormattedValue(self, node: ast.FormattedValue) -> ast.FormattedValue:
         """The value is guarded; a format spec stays an f-string part (its own values are guarded)."""
@@ -170,7 +174,8 @@ class _Guard(ast.NodeTransformer):
             current = ast.Subscript(held, key, ast.Load())
             store = ast.Subscript(ast.Name(_HELD, ast.Load()), ast.Name(_KEY, ast.Load()), ast.Store())
         else:  # attribute targets: refused by the validator
-            return self.generic_visit(node)
+            self.generic_visit(node)
+            return node
         assign = ast.Assign(targets=[store], value=_call(IN_PLACE, current, value, ast.Constant(op)))
         return ast.copy_location(assign, node)
 

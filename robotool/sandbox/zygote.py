@@ -222,7 +222,8 @@ class _Server:
         while True:
             self.reap()
             idle = 0 if len(self.spares) < self.spare_target else None
-            ready = select.select([self.control, self.wake_r], [], [], idle)[0]
+            watched: list[socket.socket | int] = [self.control, self.wake_r]
+            ready = select.select(watched, [], [], idle)[0]
             if self.wake_r in ready:
                 with contextlib.suppress(BlockingIOError):
                     os.read(self.wake_r, 4096)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Protocol
+
 from robotool.sim.backend import BatchedSim, Perturbation
 from robotool.sim.compiled_scene import Scene
 from robotool.vocabulary import BACKENDS, BackendName
@@ -33,7 +35,15 @@ def make_sim(
     )
 
 
-def _backend_class(backend: BackendName) -> type[BatchedSim]:
+class _SimClass(Protocol):
+    """A backend's simulator class, as :func:`make_sim` constructs it."""
+
+    def __call__(
+        self, scene: Scene, nworld: int, perturbation: Perturbation, *, njmax: int, nconmax: int
+    ) -> BatchedSim: ...
+
+
+def _backend_class(backend: BackendName) -> _SimClass:
     """The backend's simulator class, imported when first asked for (Warp takes seconds to load)."""
     if backend == "warp":
         from robotool.sim.backend_warp import WarpSim

@@ -89,7 +89,7 @@ class WarpSim:
         self._eq_active = self.d.eq_active.numpy().copy()
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.tile(mjd.mocap_pos, (nworld, 1, 1))
-        self._graphs: dict[int, object] = {}
+        self._graphs: dict[int, wp.Graph] = {}
         self._state = self._read()
 
     def _substeps(self, nstep: int) -> None:

@@ -215,7 +215,7 @@ class _Run:
         except Exception:  # find the world(s) it came from
             before.restore()
         ends = []
-        for i in worlds:
+        for i in map(int, worlds):
             try:
                 ends += self.controller.tick(state, np.array([i]))
             except Exception as e:  # a controller error in world i ends world i only
@@ -378,7 +378,7 @@ class _Run:
         np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
         self.touched |= touched & alive[:, None]
         self._mark_held(state, alive)
-        for i in np.flatnonzero(alive & self.running()):
+        for i in map(int, np.flatnonzero(alive & self.running())):
             if state.failed[i] is not None:
                 self._end(i, state, f"simulation failed: {state.failed[i]}")
             elif state.time[i] - self.t0[i] > self.max_sim_time:

@@ -77,7 +77,7 @@ class FallTracker:
         self.name = scene.task.objects[index].name
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
-        touch = state.touching[:, self.bodies][:, :, self.others].any(axis=1)  # (nworld, len(others))
+        touch = np.any(state.touching[:, self.bodies][:, :, self.others], axis=1)  # (nworld, len(others))
         height = state.xpos[:, self.body, 2]
         if self.rest_height is None:
             self.rest_height = height.copy()
@@ -86,7 +86,7 @@ class FallTracker:
         fall = self.rest_height - height  # read before this tick's rest: a landing that stops dead still fell
         hard = touch & self.hard
         struck = active & hard.any(axis=1) & (fall > self.max_drop) & ~self.broken
-        for w in np.flatnonzero(struck):
+        for w in map(int, np.flatnonzero(struck)):
             self.broken[w] = True
             self.breaks[w] = Event(
                 kind="broke",

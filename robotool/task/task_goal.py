@@ -46,7 +46,7 @@ class Goal(StrictModel):
         """Which goal this is."""
         for k in ("robot_on", "grasped", "pressed", "lifted", "lowered"):
             if getattr(self, k) is not None:
-                return k  # type: ignore[return-value]
+                return k
         raise AssertionError("validated goal has no kind")
 
     @property

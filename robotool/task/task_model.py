@@ -22,6 +22,12 @@ class Robot(StrictModel):
     position: tuple[FiniteFloat, FiniteFloat] | None = None
     limits: dict[str, Any] = Field(default_factory=dict)
 
+    def required_position(self) -> tuple[float, float]:
+        """The start position, for a robot type whose task-file checks require one (ValueError when absent)."""
+        if self.position is None:
+            raise ValueError(f"the {self.type} robot has no start position")
+        return self.position
+
 
 class Task(StrictModel):
     """A whole task file (format 1)."""

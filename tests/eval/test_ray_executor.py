@@ -117,7 +117,8 @@ def test_killed_ray_workers_lose_no_run(tmp_path: Path, local_ray: None) -> None
     by_run = {(r.key.task, r.key.method): r for r in results.records}
     assert len(by_run) == 6 and len({r.key.id for r in results.records}) == 6
     lost = by_run[("sofa_traversing", "no_tool")]
-    assert lost.failure_class == "invalid" and lost.success_rate == 0.0
+    assert lost.failure_class is None and lost.success_rate == 0.0  # an internal error: left out of the tables
+    assert lost.internal_error is not None and lost.internal_error.reason.startswith("WorkerLost: ")
     assert "WorkerLost" in (lost.error or "") and "lost on all 2 attempts" in (lost.error or "")
     assert all(r.success_rate == 1.0 and r.error is None for r in by_run.values() if r is not lost)
     assert sorted(logs["search"].read_text().split()) == ["milk_reaching", "milk_reaching", "milk_reaching_near",

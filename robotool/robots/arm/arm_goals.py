@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.robots.arm.arm_body import GRIPPER_BODY, graspable_points, held_objects
+from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 
@@ -15,7 +16,9 @@ class GraspedGoal:
     def __init__(self, scene: Scene):
         self.scene = scene
         self.index = scene.object_index(scene.task.goal.object)
-        self.radius = scene.task.limits.grasp_radius  # type: ignore[union-attr]
+        limits = scene.task.limits
+        assert isinstance(limits, ArmLimits)  # the arm's tasks carry the arm's limits
+        self.radius = limits.grasp_radius
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""

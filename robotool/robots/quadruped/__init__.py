@@ -55,8 +55,7 @@ def _planner() -> SearchMacros:
 
 
 def _start_xy(task: Task) -> tuple[float, float]:
-    x, y = task.robot.position  # type: ignore[misc]  # checks.check_robot makes it required
-    return x, y
+    return task.robot.required_position()  # checks.check_robot makes it required
 
 
 def _footprint(task: Task) -> tuple[float, float]:

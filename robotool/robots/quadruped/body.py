@@ -91,7 +91,7 @@ class BodyIds:
 def start_height(task: Task) -> float:
     """Height of the surface under the robot's start footprint (cloth does not count)."""
     limits = _limits(task)
-    feet = np.asarray(task.robot.position) + foot_offsets(limits)  # type: ignore[arg-type]
+    feet = np.asarray(task.robot.position) + foot_offsets(limits)
     solids = [geometry.object_parts(o) for o in task.objects if o.shape != "cloth"]
     return float(geometry.surface_height(feet, solids).max())
 
@@ -106,7 +106,7 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
     """Add the robot body, its joints, its four feet and its five actuators to ``spec``."""
     limits = _limits(task)
     sx, sy, sz = limits.body_size
-    x0, y0 = task.robot.position  # type: ignore[misc]
+    x0, y0 = task.robot.required_position()
     z0 = start_height(task) + 0.001
     leg_mass = LEG_SHARE * limits.mass
     torso_mass = limits.mass - 4 * leg_mass
@@ -117,11 +117,11 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         body.add_joint(
             name=f"{BODY}_{axis}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=np.eye(3)["xyz".index(axis)], ref=ref
         )
-    for name, axis in (("pitch", [0, 1, 0]), ("roll", [1, 0, 0])):
+    for name, hinge in (("pitch", [0, 1, 0]), ("roll", [1, 0, 0])):
         body.add_joint(
             name=f"{BODY}_{name}",
             type=mujoco.mjtJoint.mjJNT_HINGE,
-            axis=axis,
+            axis=hinge,
             pos=[0, 0, com_z],
             damping=TILT_DAMPING,
             armature=0.01,

@@ -30,7 +30,7 @@ def _check_start(task: Task, parts: dict[str, list[geometry.Part]]) -> Problem |
     """The quadruped must start with its body centre over the surface it stands on."""
     limits = task.limits
     assert isinstance(limits, QuadrupedLimits)
-    x, y = task.robot.position  # type: ignore[misc]
+    x, y = task.robot.required_position()
     sx, sy, _ = limits.body_size
     gx, gy = np.meshgrid(np.linspace(x - sx / 2, x + sx / 2, 9), np.linspace(y - sy / 2, y + sy / 2, 5))
     footprint = np.column_stack([gx.ravel(), gy.ravel()])

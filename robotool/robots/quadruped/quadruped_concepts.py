@@ -21,7 +21,7 @@ from robotool.task.task_model import Task
 
 def start_surface(task: Task) -> tuple[str, float]:
     """What the quadruped starts on (an object's name or 'ground') and that surface's height."""
-    x, y = task.robot.position  # type: ignore[misc]
+    x, y = task.robot.required_position()
     return surface_under(task, np.array([x, y]))
 
 
@@ -49,7 +49,9 @@ def key_concepts(task: Task) -> list[KeyConcept]:
                 )
             )
     elif kind == "lifted":
-        lift = task.goal.lifted.height  # type: ignore[union-attr]
+        lifted = task.goal.lifted
+        assert lifted is not None  # the goal's kind
+        lift = lifted.height
         concepts.append(
             KeyConcept(
                 name=f"height {obj.name} must rise, against what the robot can lift by itself",
@@ -65,7 +67,9 @@ def key_concepts(task: Task) -> list[KeyConcept]:
         support_name, support_h = surface_under(task, np.asarray(obj.center[:2]), exclude=obj.name)
         if support_name != start_name:
             concepts += _height_change(start_name, support_name, h0, support_h, limits)
-        if obj.fragile is not None and obj.bottom > task.goal.lowered.height:  # type: ignore[union-attr]
+        lowered = task.goal.lowered
+        assert lowered is not None  # the goal's kind
+        if obj.fragile is not None and obj.bottom > lowered.height:
             concepts.append(
                 KeyConcept(
                     name=f"fall height of {obj.name} to the ground",

@@ -39,7 +39,7 @@ class RobotOnGoal:
         foot_xyz = feet(state, self.ids)
         on_target = feet_touching(state, self.ids, self.target) | self._through_carriers(state, foot_xyz)
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
-        standing = feet_touching(state, self.ids, self.not_robot).all(axis=1)
+        standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
 
     def _through_carriers(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:

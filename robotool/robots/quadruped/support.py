@@ -37,7 +37,7 @@ def feet(state: BatchState, ids: BodyIds) -> np.ndarray:
 
 def feet_touching(state: BatchState, ids: BodyIds, bodies: np.ndarray) -> np.ndarray:
     """(nworld, 4) whether each foot touches any of ``bodies`` (a boolean mask over the model's bodies)."""
-    return state.touching[:, ids.feet][:, :, bodies].any(axis=2)
+    return np.any(state.touching[:, ids.feet][:, :, bodies], axis=2)
 
 
 def tilt(state: BatchState, ids: BodyIds) -> np.ndarray:

@@ -133,7 +133,11 @@ def _rpy(rot: np.ndarray) -> tuple[float, float, float]:
     pitch = math.degrees(math.asin(float(np.clip(-rot[2, 0], -1.0, 1.0))))
     roll = math.degrees(math.atan2(rot[2, 1], rot[2, 2]))
     yaw = math.degrees(math.atan2(rot[1, 0], rot[0, 0]))
-    return tuple(180.0 if abs(a + 180) < 1e-6 else round(a, 6) + 0.0 for a in (roll, pitch, yaw))  # type: ignore[return-value]
+
+    def tidy(a: float) -> float:
+        return 180.0 if abs(a + 180) < 1e-6 else round(a, 6) + 0.0
+
+    return tidy(roll), tidy(pitch), tidy(yaw)
 
 
 def _orient(obj: SceneObject, matrix: np.ndarray) -> tuple[tuple[float, ...], str, tuple[float, float, float]]:
@@ -154,7 +158,7 @@ def _orient(obj: SceneObject, matrix: np.ndarray) -> tuple[tuple[float, ...], st
     size, axis = obj.size, obj.axis
     if obj.shape in ("box", "cloth", "cylinder") and rpy[:2] == (0.0, 0.0) and abs(abs(rpy[2]) - 90) < 1e-6:
         size, rpy = (size[1], size[0], size[2]), (0.0, 0.0, 0.0)
-        axis = {"x": "y", "y": "x"}.get(axis, axis)
+        axis = "y" if axis == "x" else "x" if axis == "y" else axis
     return size, axis, rpy
 
 
@@ -163,10 +167,11 @@ def draw_layout(rng: np.random.Generator, arm: bool) -> RigidPlacement:
     may also turn and shift anywhere on the floor."""
     if arm:
         return RigidPlacement(mirror="y" if rng.random() < 0.5 else "")
-    mirror = str(rng.choice(["", "", "x", "y"]))
+    drawn = str(rng.choice(["", "", "x", "y"]))
+    mirror: Literal["", "x", "y"] = "x" if drawn == "x" else "y" if drawn == "y" else ""
     turns = int(rng.integers(0, 4))
     shift = (round(float(rng.uniform(-1.5, 1.5)), 2), round(float(rng.uniform(-1.5, 1.5)), 2))
-    return RigidPlacement(mirror=mirror, turns=turns, shift=shift)  # type: ignore[arg-type]
+    return RigidPlacement(mirror=mirror, turns=turns, shift=shift)
 
 
 def board_width(layout: RigidPlacement, width: float) -> float:

@@ -148,7 +148,7 @@ def build(rng: np.random.Generator) -> Draft:
         scene[0] = carton(milk_xy)
     outside = milk_xy[0] - ARM_REACH_X
     where = f"{outside:.2f} m beyond the workspace" if outside > 0 else "inside the workspace"
-    tools = {"no_tool": [], "tool": ["hammer"], "unsolvable": []}[variant]
+    needed = {"no_tool": [], "tool": ["hammer"], "unsolvable": []}[variant]
     return Draft(
         variant=variant,
         category="tool_selection",
@@ -156,7 +156,7 @@ def build(rng: np.random.Generator) -> Draft:
         robot={"type": "arm"},
         objects=[layout.place(o) for o in scene],
         goal={"grasped": "milk"},
-        tools=tools,
+        tools=needed,
         decoys=decoys,
         layout=layout,
         varied=f"milk at x = {milk_xy[0]:.2f} m ({where}); {'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",

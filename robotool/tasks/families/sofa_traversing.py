@@ -122,7 +122,7 @@ def build(rng: np.random.Generator) -> Draft:
             decoys.append("plank")
     # Unsolvable scenes have no rigid board at all, only the cloth: a heavy board can be shoved by the walking
     # robot until it wedges across the gap, and a short one can lodge in the gap as a filler.
-    x0, y0 = base.robot.position  # type: ignore[misc]
+    x0, y0 = base.robot.required_position()
     start = (uniform(rng, x0 - 0.02, x0 + 0.02), uniform(rng, y0 - 0.1, y0 + 0.1))  # the feet on sofa_1
     body = (start[0] - 0.33, start[1] - 0.15, start[0] + 0.33, start[1] + 0.15)
     area = hull([footprint(o) for o in scene] + [body])

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.task.scene import SceneObject
 from robotool.tasks.families._common import (
     CLEARANCE,
@@ -104,13 +105,13 @@ def build(rng: np.random.Generator) -> Draft:
     spot = spot_for(rng, CUSHION[:2], floor, [footprint(o) for o in scene] + [body], 0.2)
     scene.append(on_top("soft_cushion", "box", spot, CUSHION, mass=1.0, soft=True, notes="a soft cushion"))
     decoys = ["box_1"] if variant == "unsolvable" else []
-    spot = free_spot(rng, CUSHION[:2], floor, [footprint(o) for o in scene] + [body], 0.2)
-    if variant == "tool" and cushioned and spot is not None and rng.random() < 0.4:
+    free = free_spot(rng, CUSHION[:2], floor, [footprint(o) for o in scene] + [body], 0.2)
+    if variant == "tool" and cushioned and free is not None and rng.random() < 0.4:
         scene.append(
             on_top(
                 "sand_cushion",
                 "box",
-                spot,
+                free,
                 CUSHION,
                 mass=uniform(rng, 7.0, 9.0, 1),
                 soft=True,
@@ -163,7 +164,9 @@ def room_to_land(layout: RigidPlacement, sofa: SceneObject, step: SceneObject, v
     sofa's edge as it can, on the line across the step farthest from the vase."""
     if abs(step.top - sofa.top) <= PUSH_LEVEL:
         return True
-    size = np.asarray(template("vase_lowering").limits.body_size[:2])  # type: ignore[attr-defined]
+    limits = template("vase_lowering").limits
+    assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
+    size = np.asarray(limits.body_size[:2])
     half = size / 2 if layout.turns % 2 == 0 else size[::-1] / 2
     feet = half - QUADRUPED.foot_radius  # the feet's centres sit a foot's radius inside the body's outline
     s, t, v = footprint(sofa), footprint(step), footprint(vase)
