@@ -22,6 +22,7 @@ from robotool.cli.options import (
     EXIT_INTERRUPTED,
     EXIT_USAGE,
     Parser,
+    Verbs,
     add_candidate_options,
     add_lm_options,
     add_world_options,
@@ -214,7 +215,7 @@ def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int
     return 0
 
 
-def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(verbs: Verbs) -> None:
     """Add ``eval`` to the ``robotool`` verbs."""
     p = verbs.add_parser(
         "eval", help="the offline evaluator (same as python -m robotool.eval)", description=DESCRIPTION

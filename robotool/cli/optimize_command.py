@@ -22,6 +22,7 @@ from robotool.cli.options import (
     EXIT_INTERRUPTED,
     EXIT_USAGE,
     Parser,
+    Verbs,
     add_lm_options,
     add_world_options,
     count,
@@ -187,7 +188,7 @@ def cmd_optimize(args: argparse.Namespace, console: Console, errors: Console) ->
     return 0
 
 
-def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(verbs: Verbs) -> None:
     """Add ``optimize`` to the ``robotool`` verbs."""
     p = verbs.add_parser(
         "optimize",

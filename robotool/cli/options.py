@@ -13,7 +13,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
 
 from rich.console import Console
 from rich.text import Text
@@ -75,6 +75,10 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_USAGE, f"error: {message} (see {self.prog} --help)\n")
+
+
+Verbs: TypeAlias = "argparse._SubParsersAction[Parser]"
+"""A parser's verbs (what ``add_subparsers`` returns): each command module registers its own."""
 
 
 def positive_int(text: str) -> int:

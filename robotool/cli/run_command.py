@@ -10,7 +10,7 @@ from rich.console import Console
 
 from robotool import tasks
 from robotool.cli.command import UsageError, set_command
-from robotool.cli.options import DEFAULT_WORLDS, TASK_HELP, add_world_options, output_file
+from robotool.cli.options import DEFAULT_WORLDS, TASK_HELP, Verbs, add_world_options, output_file
 from robotool.cli.outputs import (
     add_html_option,
     add_video_options,
@@ -70,7 +70,7 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
     return 0 if report.success else 1
 
 
-def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(verbs: Verbs) -> None:
     """Add ``run`` to the ``robotool`` verbs."""
     p = verbs.add_parser("run", help="run a skill program file against a task and report what happened")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)

@@ -14,6 +14,7 @@ from robotool import tasks
 from robotool.cli.command import UsageError, set_command
 from robotool.cli.options import (
     TASK_HELP,
+    Verbs,
     add_candidate_options,
     add_lm_options,
     add_world_options,
@@ -140,7 +141,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
     return RoboTool.method(args.method, **options).load(args.program)
 
 
-def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(verbs: Verbs) -> None:
     """Add ``solve`` to the ``robotool`` verbs."""
     p = verbs.add_parser("solve", help="write a skill program for a task (language model or search planner)")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)

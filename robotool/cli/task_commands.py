@@ -10,7 +10,7 @@ from rich.table import Table
 
 from robotool import tasks
 from robotool.cli.command import UsageError, set_command
-from robotool.cli.options import TASK_HELP, output_file, positive_int, seed
+from robotool.cli.options import TASK_HELP, Verbs, output_file, positive_int, seed
 from robotool.cli.outputs import write_file
 from robotool.task.concepts import needs_tool
 from robotool.task.describe import describe
@@ -79,7 +79,7 @@ def cmd_render(args: argparse.Namespace, console: Console, errors: Console) -> i
     return 0
 
 
-def register(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def register(verbs: Verbs) -> None:
     """Add ``tasks``, ``describe`` and ``render`` to the ``robotool`` verbs."""
     p = verbs.add_parser("tasks", help="list the built-in tasks, print one, or write a generated one")
     p.add_argument("--show", metavar="NAME", help="print this built-in task's YAML (a start for a new task file)")

@@ -162,7 +162,7 @@ class ArmController(SkillController):
         timeout = elapsed > self.state.length[worlds] / self.config.speed + self.config.time_margin
         done = ref_done & (remaining < self.config.reached)
         ends = []
-        for k, w in enumerate(worlds):
+        for k, w in enumerate(worlds.tolist()):
             if not (done[k] or stalled[k] or timeout[k]):
                 continue
             measured = dict(self.state.clamp[w]) | {"remaining": float(remaining[k])}

@@ -276,7 +276,7 @@ class Grasp:
             return
         objects = np.flatnonzero(self.parts.grasp_eq >= 0)
         active = state.eq_active[:, eqs]
-        for w in np.flatnonzero(mask & active.any(axis=1)):
+        for w in np.flatnonzero(mask & active.any(axis=1)).tolist():
             i = int(objects[np.argmax(active[w])])
             hold = Hold(
                 self.state.hold_depth[w], self.state.hold_edge[w], self.state.hold_width[w], self.state.hold_centre[w]

@@ -428,17 +428,17 @@ def chain(prog: Program, arm: Arm, holder: SceneObject, links: list[SceneObject]
             objects=[holder.name],
             intent="lower the chain to the table",
         )
-        touch = before.with_axis(2, None, low).shifted((*(n * (0.05 + ATTACH)), 0))
+        contact = before.with_axis(2, None, low).shifted((*(n * (0.05 + ATTACH)), 0))
         prog.motion(
             "move_to_position",
-            point=touch,
+            point=contact,
             objects=[holder.name, link.name],
             intent=f"touch {link.name} with the chain's end so it sticks",
             explanation=f"chain end {tip:.3f} m from the gripper, {ATTACH} m into {link.name}'s near face",
         )
         prog.motion(
             "move_to_position",
-            point=touch.with_axis(2, None, carry),
+            point=contact.with_axis(2, None, carry),
             objects=[holder.name, link.name],
             intent="lift the chain",
         )
@@ -540,6 +540,6 @@ def _press_programs(arm: Arm, button: SceneObject, tools: bool) -> Iterator[Prog
         rest = [m for m in magnets if m is not holder]
         for count in range(1, len(rest) + 1):
             prog = Program()
-            g = chain(prog, arm, holder, rest[:count], n)
-            if g is not None and press_with(prog, arm, button, holder, [holder, *rest[:count]], g):
+            chained = chain(prog, arm, holder, rest[:count], n)
+            if chained is not None and press_with(prog, arm, button, holder, [holder, *rest[:count]], chained):
                 yield prog

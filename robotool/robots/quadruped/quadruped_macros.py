@@ -263,7 +263,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
     support = quad.layout.box(support_name)
     tbox = quad.layout.box(target.name)
     fall = target.bottom
-    cushions = [None]
+    cushions: list[SceneObject | None] = [None]
     if tools:
         cushions += [
             o
@@ -281,7 +281,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
         for cushion in cushions:
             if cushion is None and target.fragile is not None and fall > target.fragile.max_drop:
                 continue
-            pushes = []
+            pushes: list[tuple[str, np.ndarray]] = []
             if cushion is not None:
                 cbox = quad.layout.box(cushion.name)
                 spot = dest.copy()
