@@ -289,7 +289,7 @@ class Referee:
         and the push is stopped and refused, naming them."""
         s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
         step = np.linalg.norm(shift, axis=2)
-        for w in np.flatnonzero(mask & m.moving & (m.pushing >= 0)):
+        for w in map(int, np.flatnonzero(mask & m.moving & (m.pushing >= 0))):
             index = int(m.pushing[w])
             lo, hi = senses.bounds(w, index)
             front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
