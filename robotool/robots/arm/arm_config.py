@@ -1,7 +1,8 @@
-"""The arm controller's tunables and the gripper's dimensions, named and documented in one place (SI units).
+"""The arm's tunables and the gripper's dimensions, named and documented in one place (SI units).
 
 One frozen :class:`ArmConfig`; :data:`ARM` is the robot's instance, read by the controller (:mod:`.arm_controller`,
-:mod:`.arm_grasp`), the body (:mod:`.arm_body`) and the task families that size scenes to the gripper. The workspace
+:mod:`.arm_grasp`), the body (:mod:`.arm_body`), the planner's macros (:mod:`.arm_macros`) and the task families
+that size scenes to the gripper. The workspace
 and the opening come from the task (:class:`~robotool.robots.arm.arm_skills.ArmLimits`); the servos' and the
 contacts' physics from :mod:`.arm_body`.
 """

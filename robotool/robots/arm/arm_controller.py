@@ -166,7 +166,7 @@ class ArmController(SkillController):
             if not (done[k] or stalled[k] or timeout[k]):
                 continue
             measured = dict(self.state.clamp[w]) | {"remaining": float(remaining[k])}
-            reason = self._clamp_reason(w)
+            reason = self._clamp_reason(int(w))
             events = (
                 (Event(kind="clamped", limit="workspace", measured=dict(self.state.clamp[w])),)
                 if self.state.clamp[w]

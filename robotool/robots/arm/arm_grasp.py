@@ -281,7 +281,7 @@ class Grasp:
             hold = Hold(
                 self.state.hold_depth[w], self.state.hold_edge[w], self.state.hold_width[w], self.state.hold_centre[w]
             )
-            weak = self._weak(state, w, i, hold)
+            weak = self._weak(state, int(w), i, hold)
             if weak:
                 self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), False)
                 name = self.scene.object_names[i]

@@ -1,7 +1,9 @@
-"""The quadruped controller's tunables, named and documented in one place (SI units: m, s, rad, kg).
+"""The quadruped's tunables, named and documented in one place (SI units: m, s, rad, kg).
 
 One frozen :class:`QuadrupedConfig` holds every tunable of the skill controller's components (plans, move runner,
-terrain following, referee, rays); :data:`QUADRUPED` is the robot's instance, passed to each component. The legs'
+terrain following, referee, rays), of the push geometry (:mod:`.push`) and of the planner's macros
+(:mod:`.quadruped_routes`, :mod:`.quadruped_macros`); :data:`QUADRUPED` is the robot's instance, passed to each
+controller component and read by the macros and by the task families that size scenes to the robot. The legs'
 limits come from the task (:class:`~robotool.robots.quadruped.quadruped_skills.QuadrupedLimits`); the body's
 physics (masses, servo gains) from :mod:`robotool.robots.quadruped.body`; the foot's size and the terrain sampling
 shared with the planner from :mod:`robotool.robots.quadruped.terrain`.
@@ -18,7 +20,7 @@ from robotool.robots.quadruped.terrain import FOOT_RADIUS, LOOKAHEAD, RISE, SPAC
 
 @dataclass(frozen=True)
 class QuadrupedConfig:
-    """The skill controller's tunables (one instance per robot: :data:`QUADRUPED`)."""
+    """The quadruped's tunables (one instance per robot: :data:`QUADRUPED`)."""
 
     walk_speed: float = 0.4
     """m/s the x-y setpoint moves at."""

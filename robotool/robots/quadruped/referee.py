@@ -289,7 +289,7 @@ class Referee:
         and the push is stopped and refused, naming them."""
         s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
         step = np.linalg.norm(shift, axis=2)
-        for w in np.flatnonzero(mask & m.moving & (m.pushing >= 0)).tolist():
+        for w in map(int, np.flatnonzero(mask & m.moving & (m.pushing >= 0))):
             index = int(m.pushing[w])
             lo, hi = senses.bounds(w, index)
             front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
@@ -297,7 +297,7 @@ class Referee:
             rammed = self._pressed_by(w, index) & ahead
             s.carried[w] += np.where(rammed, step[w], 0.0)
             moved = np.flatnonzero(rammed & (s.carried[w] > self.config.shove))
-            mass = senses.mass(w, index) + sum((senses.mass(w, int(o)) for o in moved), 0.0)
+            mass = senses.mass(w, index) + sum(senses.mass(w, int(o)) for o in moved)
             if mass <= self.limits.max_push_mass or s.shoves[w] is not None or senses.state.failed[w] is not None:
                 continue
             s.shoves[w] = reason = (

@@ -27,7 +27,7 @@ class SceneFacts:
     height: float  # m: the body's height
     lead: float  # s: setpoint lead that cancels the x-y servos' lag at speed
     reach: float  # m a leg reaches down (the step-down limit and the legs' slack)
-    corners: list[np.ndarray]  # per object, (8, 3): its box corners in its own frame
+    corners: list[np.ndarray]  # each object's box corners (8, 3) in its own frame
     geom_object: np.ndarray  # (ngeom,) the object of each geom (-1: none)
     cloth: np.ndarray  # (nobject,) bool
     cloth_crossings: int  # the most recasts one ray cast needs: one per cloth link for every layer of cloth
