@@ -400,3 +400,20 @@ def test_importing_the_planner_does_not_load_dspy() -> None:
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
+
+
+def documented_layers(text: str) -> dict[str, frozenset[str]]:
+    """The layer table of docs/architecture.md's "Layers" section: layer -> the layers it may import."""
+    section = text.split("\n## Layers\n", 1)[1].split("\n## ", 1)[0]
+    table = {}
+    for line in section.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) == 2 and line.startswith("|") and cells[0] not in ("layer", "---"):
+            allowed = "" if cells[1] == "(nothing)" else cells[1]
+            table[cells[0]] = frozenset(name.strip() for name in allowed.split(",") if name.strip())
+    return table
+
+
+def test_the_architecture_doc_shows_the_layer_table_as_it_is() -> None:
+    doc = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    assert documented_layers(doc) == LAYERS
