@@ -728,7 +728,7 @@ class QuadrupedController:
         kind = result.kind.reshape(len(worlds), 4)
         measured = result.measured.reshape(len(worlds), 4)
         meets = travel[:, None] + np.take_along_axis(s, np.minimum(index, SAMPLES - 1), axis=1)
-        edges = np.isin(kind, EDGE_KINDS)  # a gap or a drop
+        edges = np.isin(kind, EDGE_KINDS)
         past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
         relevant = (kind != TerrainKind.NONE) & (meets - past <= self.length[worlds][:, None])
         margin = np.where(edges, FOOT_RADIUS + EDGE_MARGIN, STOP_MARGIN)  # centre before an edge, foot a face
