@@ -9,7 +9,7 @@ from pydantic import BaseModel, Field, computed_field
 from robotool.rollout import Rollout
 from robotool.signatures.models import KeyConcept, ObjectRole, PlanStep, StepParameters
 from robotool.signatures.traces import FailureTrace, RepairScope
-from robotool.vocabulary import FailureStage
+from robotool.vocabulary import CallingStage, FailureStage
 
 FailureKind = Literal["no_reply", "fault", "rejected", "worlds_failed"]
 
@@ -67,7 +67,7 @@ class TokenUsage(BaseModel):
 class LMCall(BaseModel):
     """One request to the language model: which stage and attempt made it, what it cost, how it ended."""
 
-    stage: str
+    stage: CallingStage
     candidate: int | None = Field(None, description="the candidate it belongs to; None for the shared Analyzer")
     attempt: int = Field(1, ge=1, description="1 for the first try, 2+ for format repairs")
     prompt_tokens: int = 0

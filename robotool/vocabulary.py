@@ -20,6 +20,9 @@ def is_stage(name: str) -> TypeGuard[Stage]:
     return name in STAGES
 
 
+CallingStage = Literal[Stage, "repair"]
+"""A stage that calls the language model: the program's four and the repair stage."""
+
 FailureStage = Literal[Stage, "repair", "search", "simulation"]
 """Where a candidate failed: an LM stage, the repair stage, the search planner's code, or the simulated worlds."""
 

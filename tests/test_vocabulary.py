@@ -11,9 +11,8 @@ import ast
 from pathlib import Path
 from typing import get_args
 
-from robotool.methods import STAGES_BY_METHOD
-
 from robotool import vocabulary
+from robotool.program.methods import STAGES_BY_METHOD
 
 PACKAGE = Path(vocabulary.__file__).parent
 

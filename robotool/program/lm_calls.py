@@ -43,6 +43,7 @@ from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
 from robotool.solution import LMCall
+from robotool.vocabulary import CallingStage
 
 T = TypeVar("T")
 
@@ -242,7 +243,7 @@ def reporting_waits(report: WaitReport, every: float = 1.0) -> Iterator[None]:
 
 
 @contextmanager
-def _waiting(stage: str, candidate: int | None) -> Iterator[None]:
+def _waiting(stage: CallingStage, candidate: int | None) -> Iterator[None]:
     """Report the wait for one request (see :func:`reporting_waits`)."""
     hook = _WAIT_REPORT.get()
     if hook is None:
@@ -267,7 +268,7 @@ def _waiting(stage: str, candidate: int | None) -> Iterator[None]:
 
 def call_stage(
     predictor: dspy.Predict,
-    stage: str,
+    stage: CallingStage,
     inputs: dict[str, Any],
     *,
     settings: CallSettings,
@@ -536,7 +537,7 @@ def _validation_detail(error: Any) -> str:
 
 def _record(
     requests: list[_Request],
-    stage: str,
+    stage: CallingStage,
     candidate: int | None,
     attempt: int,
     failure: str | None,

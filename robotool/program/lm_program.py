@@ -46,7 +46,7 @@ from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, Rep
 from robotool.task.describe import describe
 from robotool.task.task_model import Task
 from robotool.verify import chosen, prepare_code, select, verify
-from robotool.vocabulary import BackendName, MethodName
+from robotool.vocabulary import BackendName, MethodName, Stage
 
 AdapterName = Literal["chat", "json"]
 SPREAD = (0.7, 1.0)
@@ -244,7 +244,7 @@ class Proposer(dspy.Module):
         stages, config = candidate.stages, self._config(k)
         concepts = shared.key_concepts or []
 
-        def run(predictor: dspy.Predict, stage: str, inputs: dict[str, Any], **reading: Any) -> dspy.Prediction:
+        def run(predictor: dspy.Predict, stage: Stage, inputs: dict[str, Any], **reading: Any) -> dspy.Prediction:
             result = call_stage(predictor, stage, inputs, settings=settings, candidate=k, config=config, **reading)
             candidate.lm_calls += result.calls
             candidate.notes += [f"{stage}: {note}" for note in result.notes]
@@ -257,7 +257,7 @@ class Proposer(dspy.Module):
                 candidate.notes.append(f"coder: {dropped}")
             return rejection
 
-        stage = "planner"
+        stage: Stage = "planner"
         try:
             with scene_context(task, robots.get(task.embodiment)):
                 if self.plan is not None:
