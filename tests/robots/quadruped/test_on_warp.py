@@ -32,7 +32,8 @@ TOOL_FREE_REFUSAL = {  # task -> (the refused skill, its measured key, the value
 
 @pytest.fixture(scope="session")
 def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]:
-    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp."""
+    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp (once per
+    worker: a task's tests share an xdist group)."""
     cache: dict[str, list[Rollout]] = {}
 
     def batch(task: str) -> list[Rollout]:
@@ -45,7 +46,12 @@ def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]
     return batch
 
 
-@pytest.mark.parametrize("task", QUADRUPED_TASKS)
+def _by_task(names: list[str]) -> list[Any]:
+    """One param per task, in the task's xdist group: its reference and tool-free tests share one Warp batch."""
+    return [pytest.param(name, marks=pytest.mark.xdist_group(f"warp-quadruped-{name}")) for name in names]
+
+
+@pytest.mark.parametrize("task", _by_task(QUADRUPED_TASKS))
 def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], list[Rollout]], task: str) -> None:
     n = WORLDS.get(task, 2)
     rollouts = warp_batch(task)[:n]
@@ -56,7 +62,7 @@ def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], l
     ]
 
 
-@pytest.mark.parametrize("task", sorted(TOOL_FREE_REFUSAL))
+@pytest.mark.parametrize("task", _by_task(sorted(TOOL_FREE_REFUSAL)))
 def test_tool_free_program_is_refused_with_the_measured_value_on_warp(
     sim_scene: Any, warp_batch: Callable[[str], list[Rollout]], task: str
 ) -> None:
