@@ -6,6 +6,7 @@ Fewer worlds than on the C backend (ten for the surfboard bridge, two elsewhere)
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Callable
 from typing import Any
 
@@ -16,7 +17,8 @@ from robotool import tasks
 from robotool.rollout import Rollout
 from robotool.sim.backend import Perturbation
 
-pytest.importorskip("mujoco_warp")
+if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collecting stays quick where deselected
+    pytest.skip("mujoco_warp is not installed", allow_module_level=True)
 pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
 
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
