@@ -15,6 +15,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING, Self
 
+from robotool.eval.executor import PRELOAD
 from robotool.eval.failure_classes import FailureClass
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import Picture, RunRecord, WorldResult
@@ -72,7 +73,9 @@ class PictureDrawer:
         self.backend = backend
         self.handed: list[tuple[TaskInstance, list[RunRecord]]] = []
         self.drawing: list[Future[list[Picture]] | None] = []
-        self.pool = process_pool(min(processes, instances)) if processes > 1 and instances > 1 else None
+        self.pool = None
+        if processes > 1 and instances > 1:
+            self.pool = process_pool(min(processes, instances), preload=PRELOAD)
 
     def draw(self, instance: TaskInstance, records: Sequence[RunRecord]) -> None:
         """Start drawing ``instance``'s pictures from its ``records`` (run order); not thread-safe."""

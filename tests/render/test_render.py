@@ -374,6 +374,7 @@ def test_evaluation_picture_replays_a_later_candidates_world_from_its_recorded_s
     assert failure.world == 1 and failure.reproduced is True
 
 
+@pytest.mark.slow  # two planner runs, then their pictures drawn twice (in pool processes, then here)
 def test_evaluation_pictures_drawn_in_two_processes_are_those_drawn_in_one(tmp_path: Path) -> None:
     # The evaluator draws each instance in a pool process as soon as its last run is recorded, while the other
     # runs go on (in their own pool): the pictures are those drawn one by one afterwards, in instance order.
