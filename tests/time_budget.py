@@ -10,7 +10,8 @@ them. Works with pytest-xdist: the controller adds up the workers' reports.
 The ``slow`` marker has a rule (pyproject.toml): a test that takes over :data:`SLOW_S` seconds on that machine
 is marked slow, so that ``pytest -m "not slow"`` stays a quick check. A run in which a test not marked slow took
 over :data:`MARGIN` times the rule fails, naming it, unless the machine was busier than its cores (the load
-average over its last minute above their number, as when other jobs share it): then the tests are only named.
+average over its last minute above their number, as when other jobs share it) or budgets are being recorded: then
+the tests are only named.
 And the files run longest first (by their budgets, each file's tests together and in their order), so that no
 long file starts last while the other worker sits idle.
 """
@@ -69,15 +70,16 @@ class TimeBudget:
     def pytest_sessionfinish(self, session: pytest.Session, exitstatus: int) -> None:
         if hasattr(self.config, "workerinput"):  # an xdist worker: the controller checks
             return
+        self.unmarked = self.unmarked_slow()
         if self.config.getoption("record_budgets"):
             recorded = {**self.budgets}
             recorded.update({f: float(math.ceil(MARGIN * s + SLACK_S)) for f, s in self.spent.items()})
             BUDGETS.write_text(json.dumps(dict(sorted(recorded.items())), indent=1) + "\n")
+            self.lenient = "budgets recorded"
             return
         self.over = self.over_budget()
-        self.unmarked = self.unmarked_slow()
-        self.loaded = os.getloadavg()[0] > (os.cpu_count() or 1)
-        if (self.over or (self.unmarked and not self.loaded)) and session.exitstatus == 0:
+        self.lenient = "the machine was busier than its cores" if os.getloadavg()[0] > (os.cpu_count() or 1) else ""
+        if (self.over or (self.unmarked and not self.lenient)) and session.exitstatus == 0:
             session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
     @pytest.hookimpl
@@ -88,12 +90,12 @@ class TimeBudget:
                 f"(tests/time_budgets.json): make its tests cheaper, or mark them slow and raise the budget",
                 red=True,
             )
-        loaded = getattr(self, "loaded", False)
+        lenient = getattr(self, "lenient", "")
         for test, spent in sorted(getattr(self, "unmarked", {}).items()):
             terminalreporter.write_line(
                 f"SLOW TEST: {test} took {spent:.1f} s and is not marked slow (the rule in pyproject.toml: over "
                 f"{SLOW_S:.0f} s): make it cheaper, or mark it @pytest.mark.slow"
-                + (" (not failed: the machine was busier than its cores)" if loaded else ""),
-                red=not loaded,
-                yellow=loaded,
+                + (f" (not failed: {lenient})" if lenient else ""),
+                red=not lenient,
+                yellow=bool(lenient),
             )
