@@ -3,6 +3,7 @@ work starts; and the command line's manners: --version, bare help, defaults in -
 
 from __future__ import annotations
 
+import importlib.util
 import io
 import os
 import subprocess
@@ -132,10 +133,12 @@ def test_warp_without_a_gpu_warns_that_it_runs_on_the_cpu() -> None:
     )
 
 
+@pytest.mark.slow  # a new process imports and starts Warp
 @pytest.mark.skipif(default_backend() == "warp", reason="this machine has a CUDA GPU")
 def test_warp_on_the_cpu_adds_no_note_of_its_own() -> None:
     """The warning above is the only one: Warp's native note that it found no CUDA driver is left out."""
-    pytest.importorskip("mujoco_warp")
+    if importlib.util.find_spec("mujoco_warp") is None:  # the child imports it: not here too (4 s of CPU)
+        pytest.skip("mujoco_warp is not installed")
     code = "from robotool.sim.backend_warp import init_warp; init_warp(); import warp; print(warp.is_cpu_available())"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
     assert result.returncode == 0 and result.stdout.strip() == "True", result.stderr

@@ -34,6 +34,7 @@ SHRUNK = {  # command prefix -> documented flags appended to keep the suite fast
     "python -m robotool.eval --executor ray": "--tasks milk_reaching_near --methods no_tool --out results/ray",
 }
 RESULT_EXIT = {"robotool run": {0, 1}}  # documented: 1 when a world missed the goal
+SLOW = ("robotool optimize", "robotool solve", "robotool.eval", "robotool eval", "--video")  # 8-42 s: marked slow
 TIMEOUT_S = 300
 
 
@@ -177,13 +178,17 @@ def _command_line(snippet: Snippet) -> str:
 
 
 def _params() -> list[object]:
-    """One test per snippet; a block that starts a background server keeps its commands on one worker, in order."""
+    """One test per snippet; a block that starts a background server keeps its commands on one worker, in order;
+    commands that search, evaluate or draw a video are marked slow."""
     found = snippets()
     serving = {(s.document, s.block) for s in found if s.background}
     return [
-        pytest.param(s, id=s.id, marks=[pytest.mark.xdist_group(f"{s.document}:{s.block}")])
-        if (s.document, s.block) in serving
-        else pytest.param(s, id=s.id)
+        pytest.param(
+            s,
+            id=s.id,
+            marks=[pytest.mark.xdist_group(f"{s.document}:{s.block}")] * ((s.document, s.block) in serving)
+            + [pytest.mark.slow] * any(word in s.text for word in SLOW),
+        )
         for s in found
     ]
 

@@ -22,7 +22,7 @@ from robotool.signatures.traces import FailureTrace
 from robotool.solution import Candidate, CandidateFailure, RepairAttempt, RepairRound, Solution
 from robotool.task.task_model import Task
 
-pytestmark = pytest.mark.xdist_group("html")
+pytestmark = [pytest.mark.xdist_group("html"), pytest.mark.slow]  # a shared evaluation, a browser: 10-13 s each
 
 SCRIPT = "<script>alert(1)</script>"
 IMG = "<img src=x onerror=\"document.title='pwned'\">"

@@ -31,6 +31,18 @@ from typing import Protocol, Self, TypeVar
 from robotool.processes import process_pool
 from robotool.vocabulary import BackendName
 
+PRELOAD = (
+    "robotool.planner",
+    "robotool.verify",
+    "robotool.eval.work",
+    "robotool.eval.pictures",
+    "robotool.render.painter",
+    "robotool.render.still",
+    "robotool.render.run_videos",
+)
+"""What the evaluator's pool processes (runs and pictures) import, imported once by the fork server before it
+forks them (about a second and a half of CPU per process otherwise)."""
+
 J = TypeVar("J")
 R = TypeVar("R")
 
@@ -167,7 +179,7 @@ def _simulation_pool(processes: int) -> ProcessPoolExecutor:
     from robotool.sandbox.zygote import zygote
 
     zygote().layers()  # the sandbox's layers, learnt (and a missing one warned of) once, here
-    return process_pool(processes, initializer=_quiet_sandbox_warnings)
+    return process_pool(processes, initializer=_quiet_sandbox_warnings, preload=PRELOAD)
 
 
 def _quiet_sandbox_warnings() -> None:

@@ -10,11 +10,12 @@ whose program never ran is drawn at its start. Files go to ``pictures/`` in the 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from concurrent.futures import Future
 from concurrent.futures.process import BrokenProcessPool
-from itertools import repeat
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Self
 
+from robotool.eval.executor import PRELOAD
 from robotool.eval.failure_classes import FailureClass
 from robotool.eval.instances import TaskInstance
 from robotool.eval.records import Picture, RunRecord, WorldResult
@@ -57,20 +58,60 @@ def write_pictures(
 ) -> list[Picture]:
     """Draw every instance's scene and its representative failures into ``folder/pictures``, the instances
     shared out over ``processes`` processes (each drawing and simulating on its own core)."""
-    work = [
-        (instance, [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed])
-        for instance in instances
-    ]
-    parts: list[list[Picture]] | None = None
-    if processes > 1 and len(work) > 1:
-        try:
-            with process_pool(min(processes, len(work))) as pool:
-                parts = list(pool.map(_instance_pictures, *zip(*work, strict=True), repeat(folder), repeat(backend)))
-        except BrokenProcessPool:  # a drawing process died (out of memory?): draw them here
-            parts = None
-    if parts is None:
-        parts = [_instance_pictures(instance, mine, folder, backend) for instance, mine in work]
-    return [picture for part in parts for picture in part]
+    with PictureDrawer(len(instances), folder, backend, processes) as drawer:
+        for instance in instances:
+            drawer.draw(instance, [r for r in records if r.key.task == instance.name and r.key.seed == instance.seed])
+        return drawer.pictures()
+
+
+class PictureDrawer:
+    """Draws instances' pictures in up to ``processes`` pool processes as they are handed over (the evaluator hands
+    over an instance as soon as its last run is recorded, so that drawing overlaps the runs still going); with one
+    process, or for an instance whose drawing process died, here when :meth:`pictures` is asked for."""
+
+    def __init__(self, instances: int, folder: Path, backend: str | None, processes: int = 1) -> None:
+        self.folder = folder
+        self.backend = backend
+        self.handed: list[tuple[TaskInstance, list[RunRecord]]] = []
+        self.drawing: list[Future[list[Picture]] | None] = []
+        self.pool = None
+        if processes > 1 and instances > 1:
+            self.pool = process_pool(min(processes, instances), preload=PRELOAD)
+
+    def draw(self, instance: TaskInstance, records: Sequence[RunRecord]) -> None:
+        """Start drawing ``instance``'s pictures from its ``records`` (run order); not thread-safe."""
+        self.handed.append((instance, list(records)))
+        future = None
+        if self.pool is not None:
+            try:
+                future = self.pool.submit(_instance_pictures, instance, list(records), self.folder, self.backend)
+            except BrokenProcessPool:
+                future = None
+        self.drawing.append(future)
+
+    def pictures(self) -> list[Picture]:
+        """Every picture drawn, instance by instance in the order they were handed over."""
+        parts: list[list[Picture]] = []
+        for (instance, records), future in zip(self.handed, self.drawing, strict=True):
+            part = None
+            if future is not None:
+                try:
+                    part = future.result()
+                except BrokenProcessPool:  # a drawing process died (out of memory?): draw it here
+                    part = None
+            parts.append(part if part is not None else _instance_pictures(instance, records, self.folder, self.backend))
+        return [picture for part in parts for picture in part]
+
+    def close(self) -> None:
+        """Stop the drawing processes (pictures not yet drawn are dropped)."""
+        if self.pool is not None:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 def _instance_pictures(

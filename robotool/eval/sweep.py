@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import threading
 import time
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, NamedTuple
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, NamedTuple, Self
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -258,20 +259,29 @@ def evaluate(
     for line in skipped_lines(skipped):
         console.print(console_plain(line), style="yellow", highlight=False, markup=False)  # may quote an LM error
     _say_reuse(config, plan, journal, console)
-    pending = [RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal]
-    _run(executor, RunWork(chosen, stages), pending, journal, len(plan), backend, console)
-    results = Results(
-        config=config,
-        skipped=skipped,
-        notes=notes,
-        records=[journal.records[k.id] for _, k in plan],
-    )
+    pending = longest_first([RunJob(i, k, config.world_seed(k.run)) for i, k in plan if k.id not in journal])
     drawers = executor.processes if isinstance(executor, LocalExecutor) else cores()
-    results = _with_pictures(results, instances, backend, drawers)
+    with _Pictures(config, instances, plan, journal, backend, drawers) as pictures:
+        _run(executor, RunWork(chosen, stages), pending, journal, len(plan), backend, console, pictures.recorded)
+        results = Results(
+            config=config,
+            skipped=skipped,
+            notes=notes,
+            records=[journal.records[k.id] for _, k in plan],
+        )
+        results = pictures.into(results)
     results = _with_videos(results, instances, backend)
     results.wall_s = time.perf_counter() - started
     _write(results, console)
     return results
+
+
+def longest_first(jobs: list[RunJob]) -> list[RunJob]:
+    """The runs in the order they start, those expected to take longest first, so that no long run starts last
+    while the other processes sit idle: the planner with every object (``search``) before the floor, and the
+    quadruped's runs (more and longer skills to simulate) before the arm's; otherwise in plan order. Only the
+    order changes, not what runs: records are reported in plan order."""
+    return sorted(jobs, key=lambda job: (job.key.method != "search", job.instance.task.embodiment != "quadruped"))
 
 
 def _run(
@@ -282,8 +292,10 @@ def _run(
     total: int,
     backend: BackendName,
     console: Console,
+    recorded_hook: Callable[[RunJob], None],
 ) -> None:
-    """Carry out the pending runs with ``executor``, journaling each record as it comes back.
+    """Carry out the pending runs with ``executor``, journaling each record as it comes back (then telling
+    ``recorded_hook``).
 
     A run that could not be attempted because the language model was unavailable is not journalled, the
     LM runs not yet started are not attempted, and :class:`RunsNotAttempted` is raised once the others
@@ -302,6 +314,7 @@ def _run(
             outcome = crashed(job.instance, job.key, job.world_seed, outcome, 0.0, stages=ran)
         journal.append(outcome)
         recorded.append(job.key.id)
+        recorded_hook(job)
         progress.update(bar, advance=1)
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
@@ -319,19 +332,67 @@ def _run(
         raise RunsNotAttempted(len(pending) - len(recorded), total, unavailable[0])
 
 
-def _with_pictures(results: Results, instances: list[TaskInstance], backend: BackendName, processes: int) -> Results:
-    """The results with the report's pictures drawn here in ``processes`` processes, failed worlds simulated
-    again on ``backend`` (the one the runs used), or a note saying why there are none."""
-    if not results.config.pictures:
-        return results
-    from robotool.errors import RobotoolError
-    from robotool.eval.pictures import write_pictures
+class _Pictures:
+    """The report's pictures, each instance's drawn in ``processes`` processes as soon as its last run is recorded
+    (so that drawing overlaps the runs still going), failed worlds simulated again on ``backend`` (the one the runs
+    used); or a note saying why there are none."""
 
-    try:
-        pictures = write_pictures(instances, results.records, results.config.out_dir, backend, processes)
-    except RobotoolError as e:
-        return results.model_copy(update={"notes": [*results.notes, f"no pictures: {e}"]})
-    return results.model_copy(update={"pictures": pictures})
+    def __init__(
+        self,
+        config: EvalConfig,
+        instances: list[TaskInstance],
+        plan: list[tuple[TaskInstance, RunKey]],
+        journal: Journal,
+        backend: BackendName,
+        processes: int,
+    ) -> None:
+        self.journal = journal
+        self.lock = threading.Lock()
+        self.keys = {id(i): [k.id for j, k in plan if j is i] for i in instances}
+        self.waiting = {id(i): {key for key in self.keys[id(i)] if key not in journal} for i in instances}
+        self.order = {i.label: n for n, i in enumerate(instances)}
+        self.drawer = None
+        if config.pictures:
+            from robotool.eval.pictures import PictureDrawer
+
+            self.drawer = PictureDrawer(len(instances), config.out_dir, backend, processes)
+            for instance in instances:
+                if not self.waiting[id(instance)]:
+                    self._draw(instance)
+
+    def _draw(self, instance: TaskInstance) -> None:
+        assert self.drawer is not None
+        self.drawer.draw(instance, [self.journal.records[key] for key in self.keys[id(instance)]])
+
+    def recorded(self, job: RunJob) -> None:
+        """A run's record is in the journal: draw its instance once its last run is."""
+        if self.drawer is None:
+            return
+        with self.lock:
+            waiting = self.waiting[id(job.instance)]
+            waiting.discard(job.key.id)
+            if not waiting:
+                self._draw(job.instance)
+
+    def into(self, results: Results) -> Results:
+        """``results`` with the pictures in instance order, or a note saying why there are none."""
+        if self.drawer is None:
+            return results
+        from robotool.errors import RobotoolError
+
+        try:
+            pictures = self.drawer.pictures()
+        except RobotoolError as e:
+            return results.model_copy(update={"notes": [*results.notes, f"no pictures: {e}"]})
+        pictures.sort(key=lambda picture: self.order[picture.task])  # instance order, however they finished
+        return results.model_copy(update={"pictures": pictures})
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.drawer is not None:
+            self.drawer.close()
 
 
 def _with_videos(results: Results, instances: list[TaskInstance], backend: BackendName) -> Results:

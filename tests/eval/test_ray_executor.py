@@ -30,6 +30,7 @@ from robotool.task.task_model import Task
 
 TESTS = Path(__file__).parents[1]
 REPO = TESTS.parent
+pytestmark = pytest.mark.xdist_group("ray")  # one worker starts one local Ray (local_ray) for every test here
 
 
 @pytest.fixture(scope="module")

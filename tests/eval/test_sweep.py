@@ -268,3 +268,28 @@ def test_sigkill_mid_run_then_rerun_records_every_run_once(tmp_path: Path) -> No
     ids = [(r["key"]["task"], r["key"]["method"], r["key"]["run"]) for r in records]
     assert len(ids) == 8 and len(set(ids)) == 8
     assert len(journal.read_text().splitlines()) == 8
+
+
+def test_the_longest_runs_start_first_and_records_keep_plan_order(tmp_path: Path) -> None:
+    from robotool.eval.instances import builtin
+    from robotool.eval.records import RunKey
+    from robotool.eval.sweep import longest_first
+    from robotool.eval.work import RunJob
+
+    jobs = [
+        RunJob(builtin(task), RunKey(task=task, method=method, run=0), 0)
+        for task in ("milk_reaching", "vase_lowering")
+        for method in ("no_tool", "search")
+    ]
+    started = [(job.key.task, job.key.method) for job in longest_first(jobs)]
+    assert started == [
+        ("vase_lowering", "search"),
+        ("milk_reaching", "search"),
+        ("vase_lowering", "no_tool"),
+        ("milk_reaching", "no_tool"),
+    ]
+    config = _config(tmp_path, tasks=["milk_reaching_near", "can_grasping"], pictures=False)
+    results = evaluate(config, solvers=STANDINS, console=_quiet())
+    assert [(r.key.task, r.key.method) for r in results.records] == [
+        (task, method) for task in ("milk_reaching_near", "can_grasping") for method in ("search", "no_tool")
+    ]

@@ -138,6 +138,7 @@ def test_a_predicted_push_problem_is_a_typed_record_rendered_for_people() -> Non
     assert str(approach) == f"the way to push box_1: {approach.walk}"
 
 
+@pytest.mark.slow
 def test_solves_a_lever_turned_a_quarter() -> None:
     """Regression: in a cube_lifting scene turned a quarter the robot walks along the board flank first; the board
     used to be narrower than its feet are apart, and every program fell off it."""

@@ -47,6 +47,7 @@ def test_every_layout_fixture_is_here() -> None:
     assert all((LAYOUTS / f"{name}.yaml").is_file() for name in NAMES)
 
 
+@pytest.mark.slow  # a full search on a quadruped layout: 8-50 s each
 @pytest.mark.parametrize("name", NAMES)
 def test_planner_solves_unseen_layout(name: str) -> None:
     task = _load(name)

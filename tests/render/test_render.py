@@ -374,23 +374,24 @@ def test_evaluation_picture_replays_a_later_candidates_world_from_its_recorded_s
     assert failure.world == 1 and failure.reproduced is True
 
 
+@pytest.mark.slow  # two planner runs, then their pictures drawn twice (in pool processes, then here)
 def test_evaluation_pictures_drawn_in_two_processes_are_those_drawn_in_one(tmp_path: Path) -> None:
+    # The evaluator draws each instance in a pool process as soon as its last run is recorded, while the other
+    # runs go on (in their own pool): the pictures are those drawn one by one afterwards, in instance order.
     from rich.console import Console
 
     from robotool.eval import EvalConfig, Settings, evaluate
+    from robotool.eval.executor import LocalExecutor
     from robotool.eval.instances import select
     from robotool.eval.pictures import write_pictures
 
     names = ["milk_reaching", "sofa_traversing"]
     config = EvalConfig(
-        out=tmp_path / "out", settings=Settings(worlds=1, backend="mujoco"), tasks=names, methods=["no_tool"],
-        pictures=False,
+        out=tmp_path / "2", settings=Settings(worlds=1, backend="mujoco"), tasks=names, methods=["no_tool"]
     )
-    results = evaluate(config, console=Console(quiet=True))
+    results = evaluate(config, console=Console(quiet=True), executor=LocalExecutor(1, processes=2))
     instances, _ = select(names, None, None)
-    one, two = (
-        write_pictures(instances, results.records, tmp_path / str(n), "mujoco", processes=n) for n in (1, 2)
-    )
+    one, two = write_pictures(instances, results.records, tmp_path / "1", "mujoco", processes=1), results.pictures
     assert [p.model_dump() for p in one] == [p.model_dump() for p in two]
     assert [p.kind for p in two].count("failure") >= 2 and all(p.reproduced is not False for p in two)
     for picture in two:

@@ -5,6 +5,7 @@ Kept to one model (button_pressing) and a few worlds: the first Warp kernel comp
 
 from __future__ import annotations
 
+import importlib.util
 from typing import Any
 
 import numpy as np
@@ -13,8 +14,8 @@ from fixtures.reference import REFERENCE, TOOL_FREE, program
 
 from robotool import sim
 
-pytest.importorskip("mujoco_warp")
-from robotool.sim.backend_warp import WarpSim
+if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collecting stays quick where deselected
+    pytest.skip("mujoco_warp is not installed", allow_module_level=True)
 
 pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
 
@@ -22,12 +23,16 @@ TASK = "button_pressing"
 PROGRAMS = [program(REFERENCE[TASK]), program(TOOL_FREE[TASK]), program(REFERENCE[TASK])]
 
 
+SHARES_THE_BATCH = pytest.mark.xdist_group("warp-button_pressing")
+
+
 @pytest.fixture(scope="session")
 def warp_rollouts(sim_scene: Any, run_texts: Any) -> list[Any]:
-    """Reference and tool-free programs side by side in one warp batch."""
+    """Reference and tool-free programs side by side in one warp batch (once: its tests share an xdist group)."""
     return run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="warp")
 
 
+@SHARES_THE_BATCH
 def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
     c_rollouts = run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="mujoco")
     assert [r.success for r in warp_rollouts] == [r.success for r in c_rollouts] == [True, False, True]
@@ -36,6 +41,7 @@ def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rol
         assert w.sim_time == pytest.approx(c.sim_time, abs=0.3)  # float32 contacts: a stall may end a tick or two apart
 
 
+@SHARES_THE_BATCH
 def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
     for backend in ("warp", "mujoco"):
         (r,) = run_texts(sim_scene(TASK), PROGRAMS[:1], backend=backend, njmax=8)
@@ -43,6 +49,7 @@ def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_
         assert ("NEFC" in r.error) if backend == "warp" else ("over njmax 8" in r.error)
 
 
+@SHARES_THE_BATCH
 def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
     scene = sim_scene(TASK)
     pnt = np.array([[[0.62, -0.1, 0.5], [0.4, 0.0, 0.5], [1.5, 1.5, 0.5]]] * 2)
@@ -65,9 +72,11 @@ def test_a_world_whose_state_turns_non_finite_fails_alone(
     sim_scene: Any, run_texts: Any, warp_rollouts: list[Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Worlds share Warp's arrays (and its contact pool): one world's NaN state must not reach the others."""
+    from robotool.sim.backend_warp import WarpSim
+
     original = WarpSim.step
 
-    def step(self: WarpSim, nstep: int, active: np.ndarray) -> None:
+    def step(self: Any, nstep: int, active: np.ndarray) -> None:
         if self.state().time[1] > 1.0 and np.isfinite(self.state().qpos[1]).all():
             qpos = self.d.qpos.numpy()
             qpos[1] = np.nan  # world 1's simulation blows up

@@ -6,6 +6,7 @@ Fewer worlds than on the C backend (ten for the surfboard bridge, two elsewhere)
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Callable
 from typing import Any
 
@@ -16,7 +17,8 @@ from robotool import tasks
 from robotool.rollout import Rollout
 from robotool.sim.backend import Perturbation
 
-pytest.importorskip("mujoco_warp")
+if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collecting stays quick where deselected
+    pytest.skip("mujoco_warp is not installed", allow_module_level=True)
 pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
 
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
@@ -32,7 +34,8 @@ TOOL_FREE_REFUSAL = {  # task -> (the refused skill, its measured key, the value
 
 @pytest.fixture(scope="session")
 def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]:
-    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp."""
+    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp (once per
+    worker: a task's tests share an xdist group)."""
     cache: dict[str, list[Rollout]] = {}
 
     def batch(task: str) -> list[Rollout]:
@@ -45,7 +48,12 @@ def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]
     return batch
 
 
-@pytest.mark.parametrize("task", QUADRUPED_TASKS)
+def _by_task(names: list[str]) -> list[Any]:
+    """One param per task, in the task's xdist group: its reference and tool-free tests share one Warp batch."""
+    return [pytest.param(name, marks=pytest.mark.xdist_group(f"warp-quadruped-{name}")) for name in names]
+
+
+@pytest.mark.parametrize("task", _by_task(QUADRUPED_TASKS))
 def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], list[Rollout]], task: str) -> None:
     n = WORLDS.get(task, 2)
     rollouts = warp_batch(task)[:n]
@@ -56,7 +64,7 @@ def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], l
     ]
 
 
-@pytest.mark.parametrize("task", sorted(TOOL_FREE_REFUSAL))
+@pytest.mark.parametrize("task", _by_task(sorted(TOOL_FREE_REFUSAL)))
 def test_tool_free_program_is_refused_with_the_measured_value_on_warp(
     sim_scene: Any, warp_batch: Callable[[str], list[Rollout]], task: str
 ) -> None:

@@ -4,6 +4,7 @@ around the cushion pushed beside it; pushes along one axis that are blocked, rou
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
@@ -44,6 +45,7 @@ def _walk_targets(prog: Program) -> list[np.ndarray]:
     return [m.point.estimate()[:2] for m in prog.motions if m.skill in ("walk_to_position", "climb_to_position")]
 
 
+@pytest.mark.slow
 def test_the_robot_stands_behind_the_vase_with_every_foot_on_the_sofa() -> None:
     """The vase lies by the sofa's corner above the steps: straight behind it the rear feet would hang over the
     0.24 m step, so the robot stands slid along the vase's face (as the push skill may) with all four on the sofa;
@@ -60,6 +62,7 @@ def test_the_robot_stands_behind_the_vase_with_every_foot_on_the_sofa() -> None:
     assert all(r.success for r in rollouts), failure_reason(rollouts)
 
 
+@pytest.mark.slow
 def test_the_robot_stops_short_of_a_vase_lying_ahead_of_the_steps() -> None:
     """Fixed steps lead onto a sofa (toward +y) straight at a vase lying 0.35 m past its edge: the climb onto the
     sofa stops with every foot on it and the body clear of the vase, the robot walks around the vase and pushes it

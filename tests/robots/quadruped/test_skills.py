@@ -29,6 +29,7 @@ def motion_calls(rollout: Rollout) -> list[Any]:
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
 
 
+@pytest.mark.slow  # ten worlds of a whole reference program: up to 8 s
 @pytest.mark.parametrize(
     ("task", "name", "seed"),
     [(task, REFERENCE[task], seed) for task in QUADRUPED_TASKS for seed in (0, 3)]
