@@ -69,7 +69,7 @@ class PictureDrawer:
     over an instance as soon as its last run is recorded, so that drawing overlaps the runs still going); with one
     process, or for an instance whose drawing process died, here when :meth:`pictures` is asked for."""
 
-    def __init__(self, instances: int, folder: Path, backend: str | None, processes: int = 1) -> None:
+    def __init__(self, instances: int, folder: Path, backend: BackendName | None, processes: int = 1) -> None:
         self.folder = folder
         self.backend = backend
         self.handed: list[tuple[TaskInstance, list[RunRecord]]] = []
