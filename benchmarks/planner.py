@@ -156,7 +156,11 @@ def main() -> None:
     )
     parser.add_argument("--no-builtins", action="store_true", help="skip the built-in tasks")
     parser.add_argument("--worlds", type=int, default=3, help="perturbed worlds per candidate")
-    parser.add_argument("--verbose", action="store_true", help="print every unsolved solvable instance")
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="print every instance as it is done, and every solvable one not solved in every world",
+    )
     parser.add_argument("--jobs", type=int, default=1, help="instances planned at once, in worker processes")
     parser.add_argument(
         "--fresh",
@@ -180,7 +184,15 @@ def main() -> None:
         for family in names:
             row = Row(family)
             for job in pending[family]:
-                add(row, job.result())
+                result = job.result()
+                add(row, result)
+                if args.verbose:
+                    print(
+                        f"  {result.label}: {result.seconds:.1f} s, {100 * result.world_rate:.0f}% of worlds"
+                        f"{', held in fresh worlds' if result.held_fresh else ''}"
+                        f"{'' if result.solvable else ', unsolvable'}",
+                        flush=True,
+                    )
             rows.append(row)
             print(row.line(), flush=True)
             for failure in row.failures if args.verbose else []:
