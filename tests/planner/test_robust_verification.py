@@ -13,7 +13,7 @@ import pytest
 from robotool import tasks
 from robotool.planner import search as search_module
 from robotool.planner.codegen import Point, Program
-from robotool.planner.search import Budget, search, verification_seed
+from robotool.planner.search import Budget, order, search, verification_seed
 from robotool.rollout import Rollout
 from robotool.solution import Candidate, StageOutputs, rank
 
@@ -120,3 +120,12 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
         budget=Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5),
     )
     assert [len(codes) for codes, _ in runner.calls] == [1, 3]
+
+
+def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_even_when_shorter() -> None:
+    tight, roomy = _program(1.0), _program(2.0)
+    roomy.motion("walk_to_position", point=Point.at(None, (3.0, 0.0, 0.0)), intent="one more step")
+    tight.slack, roomy.slack = 0.005, 0.05
+    assert order([tight, roomy]) == [roomy, tight]
+    roomy.slack = 0.005  # both tight: the shorter first, as before
+    assert order([tight, roomy]) == [tight, roomy]
