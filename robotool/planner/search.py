@@ -140,7 +140,8 @@ def confirm(task: Task, candidates: list[Candidate], *, worlds: int, seed: int, 
             continue
         assert candidate.code is not None
         fresh = run_codes(task, [candidate.code], worlds=worlds, seed=seed, backend=backend)[0]
-        candidate.rollouts = [*candidate.rollouts, *fresh]
+        planned = len(candidate.rollouts)  # the fresh worlds are numbered after the planning ones (seeds say which)
+        candidate.rollouts += [r.model_copy(update={"world": planned + k}) for k, r in enumerate(fresh)]
         candidate.failure = failure_reason(candidate.rollouts)
         candidate.notes.append(
             f"verified in {worlds} fresh perturbed worlds (seeds {seed}-{seed + worlds - 1}): "

@@ -104,7 +104,9 @@ def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_neve
     (_, planning), (_, verifying) = runner.calls
     assert planning == [7, 8, 9]
     assert len(verifying) == 5 > len(planning) and not set(verifying) & set(planning)
-    assert tried[0].candidate.success_rate == 1.0 and len(tried[0].candidate.rollouts) == 8
+    rollouts = tried[0].candidate.rollouts
+    assert tried[0].candidate.success_rate == 1.0 and [r.world for r in rollouts] == list(range(8))
+    assert [r.seed for r in rollouts] == planning + verifying
 
 
 def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypatch: pytest.MonkeyPatch) -> None:
