@@ -1,8 +1,8 @@
 """Generate-and-test: order candidate programs, verify them in the batched simulator round by round.
 
-Programs are ordered by what the planner predicts from geometry (predicted-feasible first, stances with slack
-before tight ones), then by how many objects they use, then by how many motion steps they take; each round verifies
-the next ``beam`` of them (from one tier: tool-free programs come as their own first tier when the
+Programs are ordered by what the planner predicts from geometry (predicted-feasible first), then by how many
+objects they use, then stances with slack before tight ones, then by how many motion steps they take; each round
+verifies the next ``beam`` of them (from one tier: tool-free programs come as their own first tier when the
 geometry says no tool is needed) in one batch of perturbed worlds (the first round may verify fewer: the best guess
 alone costs least when it holds). A program that succeeds in every one of these planning worlds is then run in
 ``verify`` fresh perturbed worlds, whose seeds the planning worlds never use (:func:`verification_seed`); its
@@ -60,16 +60,16 @@ TIGHT = 0.02  # m: a program whose tightest stance keeps less than this from an 
 
 
 def order(programs: Iterable[Program]) -> list[Program]:
-    """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then not tight
-    (:data:`TIGHT`: a stance with little slack fails in some perturbed worlds), then fewer objects, then fewer
-    steps."""
+    """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then fewer objects,
+    then not tight (:data:`TIGHT`: a stance with little slack fails in some perturbed worlds; but every object more
+    to push is a bigger risk), then fewer steps."""
     seen: set[str] = set()
     unique = []
     for prog in programs:
         if prog.code not in seen:
             seen.add(prog.code)
             unique.append(prog)
-    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, p.slack < TIGHT, *p.cost))
+    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, len(p.objects), p.slack < TIGHT, len(p.steps)))
 
 
 def search(

@@ -125,12 +125,15 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
     assert [len(codes) for codes, _ in runner.calls] == [1, 3]
 
 
-def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_even_when_shorter() -> None:
+def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_and_as_many_objects() -> None:
     tight, roomy = _program(1.0), _program(2.0)
     roomy.motion("walk_to_position", point=Point.at(None, (3.0, 0.0, 0.0)), intent="one more step")
     tight.slack, roomy.slack = 0.005, 0.05
     assert order([tight, roomy]) == [roomy, tight]
     roomy.slack = 0.005  # both tight: the shorter first, as before
+    assert order([tight, roomy]) == [tight, roomy]
+    roomy.slack = 0.05
+    roomy.use("box")  # one object more to push is a bigger risk than a tight stance
     assert order([tight, roomy]) == [tight, roomy]
 
 
