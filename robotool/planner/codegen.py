@@ -184,8 +184,3 @@ class Program:
     def abstract_plan(self) -> str:
         """The plan in words."""
         return " ".join(self.sentences)
-
-    @property
-    def cost(self) -> tuple[int, int]:
-        """Search order: objects used, then motion steps."""
-        return len(self.objects), len(self.steps)
