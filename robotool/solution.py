@@ -139,10 +139,12 @@ class Candidate(BaseModel):
         return done / len(self.rollouts) if self.rollouts else 0.0
 
     def rank_key(self) -> tuple[float, ...]:
-        """Sort key, best first: success rate, then how far failed worlds got (goal sub-conditions met,
-        skill calls completed), then fewer objects touched, then fewer skill calls."""
+        """Sort key, best first: success rate, then more worlds succeeded (at the same rate, one verified in more
+        worlds), then how far failed worlds got (goal sub-conditions met, skill calls completed), then fewer objects
+        touched, then fewer skill calls."""
         return (
             -self.success_rate,
+            -sum(r.success for r in self.rollouts),
             -self.conditions_met,
             -self.calls_completed_in_failures,
             self.objects_touched,

@@ -121,6 +121,7 @@ class Program:
     roles: dict[str, str] = field(default_factory=dict)
     doubt: str | None = None  # a limit the planner predicts the program breaks, if any
     late: int = 0  # how many less likely choices it makes (tried after programs with fewer)
+    slack: float = float("inf")  # m its tightest stance keeps from an edge it must stay within (less: tried later)
     _count: int = 0
 
     def use(self, name: str, role: str | None = None) -> None:
@@ -189,8 +190,3 @@ class Program:
     def abstract_plan(self) -> str:
         """The plan in words."""
         return " ".join(self.sentences)
-
-    @property
-    def cost(self) -> tuple[int, int]:
-        """Search order: objects used, then motion steps."""
-        return len(self.objects), len(self.steps)

@@ -1,10 +1,14 @@
 """Generate-and-test: order candidate programs, verify them in the batched simulator round by round.
 
-Programs are ordered by what the planner predicts from geometry (predicted-feasible first), then by
-how many objects they use, then by how many motion steps they take; each round verifies the next
-``beam`` of them (from one tier: tool-free programs come as their own first tier when the
-geometry says no tool is needed) in one batch of perturbed worlds, and the search stops at the first round with a
-program that succeeded in every world (or when the rounds or the time budget run out).
+Programs are ordered by what the planner predicts from geometry (predicted-feasible first), then by how many
+objects they use, then stances with slack before tight ones, then by how many motion steps they take; each round
+verifies the next ``beam`` of them (from one tier: tool-free programs come as their own first tier when the
+geometry says no tool is needed) in one batch of perturbed worlds (the first round may verify fewer: the best guess
+alone costs least when it holds). A program that succeeds in every one of these planning worlds is then run in
+``verify`` fresh perturbed worlds, whose seeds the planning worlds never use (:func:`verification_seed`); its
+rollouts are the planning and the fresh worlds together, so one that fails a fresh world no longer counts as
+succeeding everywhere and ranks below one that held in all of them. The search stops at the first round with a
+program that succeeded in every planning and fresh world (or when the rounds or the time budget run out).
 """
 
 from __future__ import annotations
@@ -27,6 +31,22 @@ class Budget:
     beam: int  # programs per round (one simulator batch)
     rounds: int  # rounds at most
     seconds: float  # no new round starts after this much time
+    first: int | None = None  # programs in the first round (default: beam)
+    verify: int = 0  # fresh worlds a program that held in every planning world must also hold in
+
+
+VERIFY_OFFSET = 10_000  # verification world seeds start this far from the planning seed
+
+
+def verification_seed(seed: int, worlds: int) -> int:
+    """First world seed of the verification worlds: past every planning world seed (``seed`` to
+    ``seed + worlds - 1``), so the fresh worlds are never planning worlds."""
+    return seed + max(VERIFY_OFFSET, worlds)
+
+
+def held(candidate: Candidate) -> bool:
+    """Whether a candidate ran and succeeded in every one of its worlds."""
+    return bool(candidate.rollouts) and candidate.success_rate == 1.0
 
 
 @dataclass
@@ -37,16 +57,20 @@ class Tried:
     candidate: Candidate
 
 
+TIGHT = 0.02  # m: a program whose tightest stance keeps less than this from an edge is tight (perturbations undo it)
+
+
 def order(programs: Iterable[Program]) -> list[Program]:
-    """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then fewer
-    objects, then fewer steps."""
+    """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then fewer objects,
+    then not tight (:data:`TIGHT`: a stance with little slack fails in some perturbed worlds; but every object more
+    to push is a bigger risk), then fewer steps."""
     seen: set[str] = set()
     unique = []
     for prog in programs:
         if prog.code not in seen:
             seen.add(prog.code)
             unique.append(prog)
-    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, *p.cost))
+    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, len(p.objects), p.slack < TIGHT, len(p.steps)))
 
 
 def search(
@@ -71,9 +95,10 @@ def search(
         if rounds and time.perf_counter() - started > budget.seconds:
             break
         tier = queue[len(tried)][0]
+        size = budget.beam if rounds or budget.first is None else budget.first
         batch = [
             Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p)))
-            for k, (t, p) in enumerate(queue[len(tried) : len(tried) + budget.beam])
+            for k, (t, p) in enumerate(queue[len(tried) : len(tried) + size])
             if t == tier
         ]
         runnable, codes = [], []
@@ -88,8 +113,35 @@ def search(
         for item, rollouts in zip(runnable, results, strict=True):
             item.candidate.rollouts = rollouts
             item.candidate.failure = failure_reason(rollouts)
+        if budget.verify:
+            confirm(
+                task,
+                [t.candidate for t in runnable],
+                worlds=budget.verify,
+                seed=verification_seed(seed, worlds),
+                backend=backend,
+            )
         tried += batch
         rounds += 1
-        if any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in batch):
+        if any(held(t.candidate) for t in batch):
             break
     return tried, rounds
+
+
+def confirm(task: Task, candidates: list[Candidate], *, worlds: int, seed: int, backend: BackendName | None) -> None:
+    """Run the candidates that held in every world, in order, in ``worlds`` fresh worlds from ``seed`` until one
+    holds in all of them too; the fresh rollouts join each one's own (and its failure reason is updated)."""
+    for candidate in candidates:
+        if not held(candidate):
+            continue
+        assert candidate.code is not None
+        fresh = run_codes(task, [candidate.code], worlds=worlds, seed=seed, backend=backend)[0]
+        planned = len(candidate.rollouts)  # the fresh worlds are numbered after the planning ones (seeds say which)
+        candidate.rollouts += [r.model_copy(update={"world": planned + k}) for k, r in enumerate(fresh)]
+        candidate.failure = failure_reason(candidate.rollouts)
+        candidate.notes.append(
+            f"verified in {worlds} fresh perturbed worlds (seeds {seed}-{seed + worlds - 1}): "
+            f"succeeded in {sum(r.success for r in fresh)}"
+        )
+        if held(candidate):
+            return

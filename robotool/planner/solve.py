@@ -17,7 +17,7 @@ from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
-from robotool.planner.search import Budget, Tried, order, search
+from robotool.planner.search import Budget, Tried, held, order, search
 from robotool.robots.registry import SearchMacros
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.signatures.traces import failure_trace
@@ -39,6 +39,7 @@ def solve(
     task: Task,
     *,
     worlds: int = 3,
+    verify: int | None = None,
     seed: int = 0,
     backend: BackendName | None = None,
     tools: bool = True,
@@ -46,11 +47,17 @@ def solve(
 ) -> Solution:
     """Find the shortest program that the simulator shows reaching the goal, without a language model.
 
-    With ``repair``, when no program succeeds in every world, the best failures are re-parameterised from
-    what the simulator measured and verified in one more round (see :mod:`robotool.planner.reparameterise`)."""
+    Candidates are planned in ``worlds`` perturbed worlds; one that succeeds in all of them is verified in
+    ``verify`` more (default ``worlds + 2``), fresh worlds whose seeds planning never uses, before it is returned
+    (see :mod:`robotool.planner.search`). With ``repair``, when no program succeeds in every world, the best
+    failures are re-parameterised from what the simulator measured and verified in one more round (see
+    :mod:`robotool.planner.reparameterise`)."""
     started = time.perf_counter()
     planner = robot_planner(task)
-    budget = Budget(beam=planner.beam, rounds=planner.rounds, seconds=planner.seconds)
+    fresh = worlds + 2 if verify is None else verify
+    budget = Budget(
+        beam=planner.beam, rounds=planner.rounds, seconds=planner.seconds, first=planner.first, verify=fresh
+    )
     concepts = key_concepts(task)
     allowed = goal_objects(task)
     generated = list(planner.candidates(task, tools))
@@ -76,12 +83,13 @@ def solve(
             budget=budget,
         )
         repairs = []
-        if repair and not any(t.candidate.rollouts and t.candidate.success_rate == 1.0 for t in tried):
+        if repair and not any(held(t.candidate) for t in tried):
             repairs = repair_round(
                 task,
                 tried,
                 lambda p: stages_of(task, p, concepts),
                 worlds=worlds,
+                verify=fresh,
                 seed=seed,
                 backend=backend,
                 beam=budget.beam,
@@ -98,7 +106,8 @@ def solve(
         "Produced by the LM-free search planner (robotool.planner): generate-and-test over geometric skill "
         "macros checked in the batched simulator; no language model was used.",
         f"{len(generated)} programs generated, {len(programs)} considered, {len(tried)} verified in {rounds} "
-        f"round(s) of up to {budget.beam}, {worlds} perturbed world(s) each.",
+        f"round(s) of up to {budget.beam}, {worlds} perturbed world(s) each; a program that succeeded in all of "
+        f"them was verified in {fresh} fresh perturbed world(s) before it counted as succeeding.",
     ]
     if not tools:
         solution.notes.append("tools=False: only the goal object (and what it rests on) and the robot were used.")
@@ -134,13 +143,14 @@ def repair_round(
     stages: Callable[[Program], StageOutputs],
     *,
     worlds: int,
+    verify: int,
     seed: int,
     backend: BackendName | None,
     beam: int,
 ) -> list[RepairRound]:
     """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``
-    variants in one batch (appended to ``tried``); the round as the solution records it (none when no failure
-    gave evidence to act on)."""
+    variants in one batch, one that holds in every world then in ``verify`` fresh ones (appended to ``tried``); the
+    round as the solution records it (none when no failure gave evidence to act on)."""
     failures = sorted((t for t in tried if t.candidate.rollouts), key=lambda t: t.candidate.rank_key())[:beam]
     seen = {t.program.code for t in tried}
     variants: list[tuple[Program, Tried]] = []
@@ -158,7 +168,7 @@ def repair_round(
         worlds=worlds,
         seed=seed,
         backend=backend,
-        budget=Budget(beam=len(variants), rounds=1, seconds=float("inf")),
+        budget=Budget(beam=len(variants), rounds=1, seconds=float("inf"), verify=verify),
         start=len(tried),
     )
     record = RepairRound(round=1)

@@ -62,6 +62,8 @@ class SearchMacros:
     """Rounds at most."""
     seconds: float
     """No new round starts after this much time."""
+    first: int | None = None
+    """Programs in the first round (default ``beam``)."""
 
 
 @dataclass(frozen=True)

@@ -127,6 +127,8 @@ class QuadrupedConfig:
     """Predicted-fine approaches kept for a direct climb."""
     landing_step: float = 0.02
     """m between the stops tried when a route's stop on its target is pulled back."""
+    stance_slack: float = 0.05
+    """m a staircase's climb line keeps the feet from the steps' side edges, where the steps allow it."""
 
     @property
     def foot_radius(self) -> float:

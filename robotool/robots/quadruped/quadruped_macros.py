@@ -161,6 +161,7 @@ class Writer:
     def route(self, route: Route) -> None:
         """Write a whole route; record a predicted violation of its walk as the program's doubt."""
         self.prog.late += route.late
+        self.prog.slack = min(self.prog.slack, route.slack)
         for name, role in route.uses:
             self.prog.use(name, role)
         for name, xy, why in route.pushes:

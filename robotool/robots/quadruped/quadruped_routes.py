@@ -46,6 +46,7 @@ class Route:
     uses: list[tuple[str, str]] = field(default_factory=list)  # object, role
     words: str = ""
     late: int = 0  # less likely choices it makes (a step down onto the target: the body rides on a higher step)
+    slack: float = float("inf")  # m the feet keep, at the tightest stance, from the side edges of what they stand on
 
     def layout(self, base: Layout) -> Layout:
         """``base`` with the route's pushes made."""
@@ -105,6 +106,7 @@ DIRECTIONS = tuple(np.array(v, dtype=float) for v in ((1, 0), (-1, 0), (0, 1), (
 FOOT = QUADRUPED.foot_radius  # m the feet sit inside the body's outline: they must be over what it stands on
 ENTRIES = QUADRUPED.entries
 LANDING_STEP = QUADRUPED.landing_step
+STANCE_SLACK = QUADRUPED.stance_slack
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
@@ -351,7 +353,9 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
         if hi < lo - 0.004:
             return None
         lo, hi = _clear_of_neighbours(quad, layout, chain, k, lat, lo, hi)
-        lines.append(float(np.clip(here[lat], lo + 0.02, hi - 0.02)) if hi - lo > 0.04 else (lo + hi) / 2)
+        keep = min(STANCE_SLACK, (hi - lo) / 2)  # as far from both edges as the steps allow, up to STANCE_SLACK
+        lines.append(float(np.clip(here[lat], lo + keep, hi - keep)))
+        route.slack = min(route.slack, lines[-1] - lo, hi - lines[-1])
     d0, lat0 = combo[0][0], 1 - int(np.argmax(np.abs(combo[0][0])))
     axis0 = 1 - lat0
     approach = np.zeros(2)

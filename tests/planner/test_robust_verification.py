@@ -1,0 +1,146 @@
+"""Plans that hold in every world: a program that held in every planning world is verified in more, fresh,
+perturbed worlds before the search stops, and at the same success rate the one verified in more worlds ranks first.
+
+The simulator is replaced by a scripted runner (a fixture: which program succeeds in which world seed), so these
+tests check the search's bookkeeping, not the robot."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import pytest
+
+from robotool import tasks
+from robotool.planner import search as search_module
+from robotool.planner import solve
+from robotool.planner.codegen import Point, Program
+from robotool.planner.search import Budget, order, search, verification_seed
+from robotool.rollout import Rollout
+from robotool.solution import Candidate, StageOutputs, rank
+
+
+def _program(x: float) -> Program:
+    prog = Program()
+    prog.motion("walk_to_position", point=Point.at(None, (x, 0.0, 0.0)), intent=f"walk to x = {x}")
+    return prog
+
+
+def _rollouts(successes: Sequence[bool]) -> list[Rollout]:
+    return [Rollout(world=k, seed=k, success=ok) for k, ok in enumerate(successes)]
+
+
+class ScriptedRunner:
+    """Fixture: runs no simulator; program ``code`` fails exactly in the world seeds ``fails[code]``."""
+
+    def __init__(self, fails: dict[str, set[int]]):
+        self.fails = fails
+        self.calls: list[tuple[list[str], list[int]]] = []
+
+    def __call__(self, task, codes, *, worlds, seed=0, backend=None):  # the shape of run_codes
+        seeds = [seed + r for r in range(worlds)]
+        self.calls.append((list(codes), seeds))
+        return [
+            [Rollout(world=r, seed=s, success=s not in self.fails.get(code, set())) for r, s in enumerate(seeds)]
+            for code in codes
+        ]
+
+
+@pytest.fixture
+def task():
+    return tasks.load("sofa_traversing")
+
+
+def test_a_candidate_that_fails_one_world_ranks_below_one_that_succeeds_in_all() -> None:
+    some = Candidate(index=0, code="a", rollouts=_rollouts([True, True, False]))
+    every = Candidate(index=1, code="b", rollouts=_rollouts([True, True, True]))
+    assert [c.index for c in rank([some, every])] == [1, 0]
+
+
+def test_at_the_same_rate_the_candidate_verified_in_more_worlds_ranks_first() -> None:
+    planned_only = Candidate(index=0, code="a", rollouts=_rollouts([True] * 3))
+    verified = Candidate(index=1, code="b", rollouts=_rollouts([True] * 8))
+    assert [c.index for c in rank([planned_only, verified])] == [1, 0]
+
+
+def test_a_program_that_held_in_the_planning_worlds_but_fails_a_fresh_one_does_not_end_the_search(
+    task, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    first, second = _program(1.0), _program(2.0)
+    fresh = verification_seed(0, 3)
+    runner = ScriptedRunner({first.code: {fresh + 1}})  # the first fails only in the second fresh world
+    monkeypatch.setattr(search_module, "run_codes", runner)
+    tried, rounds = search(
+        task,
+        [[first, second]],
+        lambda p: StageOutputs(),
+        worlds=3,
+        seed=0,
+        backend=None,
+        budget=Budget(beam=1, rounds=4, seconds=float("inf"), verify=5),
+    )
+    assert rounds == 2 and [t.program for t in tried] == [first, second]
+    a, b = (t.candidate for t in tried)
+    assert len(a.rollouts) == len(b.rollouts) == 8
+    assert a.success_rate == pytest.approx(7 / 8) and a.failure is not None and a.failure.failed_worlds == 1
+    assert b.success_rate == 1.0 and b.failure is None
+    assert rank([a, b])[0] is b
+
+
+def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_never_uses(
+    task, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    runner = ScriptedRunner({})
+    monkeypatch.setattr(search_module, "run_codes", runner)
+    seed = 7
+    tried, _ = search(
+        task,
+        [[_program(1.0)]],
+        lambda p: StageOutputs(),
+        worlds=3,
+        seed=seed,
+        backend=None,
+        budget=Budget(beam=3, rounds=1, seconds=float("inf"), verify=5),
+    )
+    (_, planning), (_, verifying) = runner.calls
+    assert planning == [7, 8, 9]
+    assert len(verifying) == 5 > len(planning) and not set(verifying) & set(planning)
+    rollouts = tried[0].candidate.rollouts
+    assert tried[0].candidate.success_rate == 1.0 and [r.world for r in rollouts] == list(range(8))
+    assert [r.seed for r in rollouts] == planning + verifying
+
+
+def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypatch: pytest.MonkeyPatch) -> None:
+    programs = [_program(float(x)) for x in range(1, 5)]
+    runner = ScriptedRunner({p.code: {0} for p in programs})  # every program fails world 0: no early stop
+    monkeypatch.setattr(search_module, "run_codes", runner)
+    search(
+        task,
+        [programs],
+        lambda p: StageOutputs(),
+        worlds=3,
+        seed=0,
+        backend=None,
+        budget=Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5),
+    )
+    assert [len(codes) for codes, _ in runner.calls] == [1, 3]
+
+
+def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_and_as_many_objects() -> None:
+    tight, roomy = _program(1.0), _program(2.0)
+    roomy.motion("walk_to_position", point=Point.at(None, (3.0, 0.0, 0.0)), intent="one more step")
+    tight.slack, roomy.slack = 0.005, 0.05
+    assert order([tight, roomy]) == [roomy, tight]
+    roomy.slack = 0.005  # both tight: the shorter first, as before
+    assert order([tight, roomy]) == [tight, roomy]
+    roomy.slack = 0.05
+    roomy.use("box")  # one object more to push is a bigger risk than a tight stance
+    assert order([tight, roomy]) == [tight, roomy]
+
+
+@pytest.mark.slow
+def test_the_builtin_sofa_climbing_program_holds_in_every_planning_and_fresh_world() -> None:
+    """Its staircase stance once kept 2 cm from the steps' side edges and failed in one of three worlds."""
+    solution = solve(tasks.load("sofa_climbing"))
+    best = next(c for c in solution.candidates if c.index == solution.best)
+    assert solution.success_rate == 1.0, best.failure
+    assert len(best.rollouts) == 3 + 5
