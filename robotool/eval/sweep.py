@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, NamedTuple, Self
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from robotool import robots
 from robotool.errors import LMUnavailableError
 from robotool.eval.config import EvalConfig, EvalError, Request, RunsNotAttempted
 from robotool.eval.executor import Executor, LocalExecutor, WorkerLost
@@ -278,10 +279,12 @@ def evaluate(
 
 def longest_first(jobs: list[RunJob]) -> list[RunJob]:
     """The runs in the order they start, those expected to take longest first, so that no long run starts last
-    while the other processes sit idle: the planner with every object (``search``) before the floor, and the
-    quadruped's runs (more and longer skills to simulate) before the arm's; otherwise in plan order. Only the
+    while the other processes sit idle: the planner with every object (``search``) before the floor, and the runs
+    of robots whose runs cost more (their registry's ``sim.run_cost``) first; otherwise in plan order. Only the
     order changes, not what runs: records are reported in plan order."""
-    return sorted(jobs, key=lambda job: (job.key.method != "search", job.instance.task.embodiment != "quadruped"))
+    return sorted(
+        jobs, key=lambda job: (job.key.method != "search", -robots.get(job.instance.task.embodiment).sim.run_cost)
+    )
 
 
 def _run(

@@ -143,6 +143,9 @@ class SimHooks(Generic[L]):
     """The simulator embodiment for a task's limits: model building and the skill controller."""
     goal_trackers: Callable[[], Mapping[str, Callable[[Scene], GoalTracker]]]
     """Trackers of the goal kinds only this robot has (the object goals are :mod:`robotool.sim.goals`')."""
+    run_cost: float = 1.0
+    """How long a run of this robot's task takes against others' (1: the default), so that a batch of runs
+    starts the longest first (:func:`robotool.eval.sweep.longest_first`)."""
 
 
 @dataclass(frozen=True)

@@ -77,7 +77,8 @@ ROBOT = RobotType(
         planar=True,
     ),
     description=DescriptionHooks(section=quadruped_description.robot_section),
-    sim=SimHooks(embodiment=_embodiment, goal_trackers=_goal_trackers),
+    # more and longer skills to simulate, and a larger planner search, than the arm's
+    sim=SimHooks(embodiment=_embodiment, goal_trackers=_goal_trackers, run_cost=3.0),
     planner=_planner,
     # a refused step, gap or drop measures its kind
     feedback=FeedbackRules(placement_measures=frozenset(terrain.KINDS)),
