@@ -26,6 +26,7 @@ from robotool.robots.quadruped.push import (
     sweep_points,
     sweep_problem,
 )
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths
 
@@ -33,8 +34,6 @@ SAMPLE = 0.02  # m between terrain samples along a walk
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
 # is in the way (the torso's underside rides 0.05 m above the feet)
 BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
-PUSH_STAGING = 0.15  # m behind the push pose where the push skill lines the robot up
-PUSH_RISE = 0.015  # m above the robot's floor that the push skill's sweep tolerates
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
@@ -261,7 +260,7 @@ def _push_pose(
 
     tries = [
         (start, end, start - (end - start) / np.linalg.norm(end - start) * staging)
-        for staging in (PUSH_STAGING, 0.0)
+        for staging in (QUADRUPED.staging, 0.0)
         for start, end in poses
     ]
     # sweep_problem's two readings (the footprint, the feet's paths) for every try at once; then the first clear one
@@ -298,7 +297,7 @@ def push_route(
     box = layout.box(name)
     goal = np.asarray(goal, dtype=float)
     robot = np.asarray(limits.body_size[:2]) / 2
-    blocks = [b for b in layout.boxes(exclude=[name]) if b.top > floor + PUSH_RISE and b.bottom < box.top]
+    blocks = [b for b in layout.boxes(exclude=[name]) if b.top > floor + RISE and b.bottom < box.top]
     lo = np.array([b.lo for b in blocks]).reshape(-1, 2)
     hi = np.array([b.hi for b in blocks]).reshape(-1, 2)
     lanes = [
@@ -318,7 +317,7 @@ def push_route(
         back = box.half[a] + GAP + robot[a]
         for offset in lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a])):
             start, end = frm.copy(), to.copy()
-            start[a] -= sign * (back + PUSH_STAGING)
+            start[a] -= sign * (back + QUADRUPED.staging)
             end[a] -= sign * back
             start[1 - a] += offset
             end[1 - a] += offset
