@@ -81,37 +81,30 @@ Verbs: TypeAlias = "argparse._SubParsersAction[Parser]"
 """A parser's verbs (what ``add_subparsers`` returns): each command module registers its own."""
 
 
-def positive_int(text: str) -> int:
-    """An argument that must be a whole number of at least 1."""
+def _whole_number(text: str, minimum: int, expected: str) -> int:
+    """``text`` as a whole number of at least ``minimum``; the argument error says it ``expected`` one."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {value}")
     return value
+
+
+def positive_int(text: str) -> int:
+    """An argument that must be a whole number of at least 1."""
+    return _whole_number(text, 1, "a positive integer")
 
 
 def seed(text: str) -> int:
     """A seed: a whole number of at least 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a seed (a whole number >= 0), got {value}")
-    return value
+    return _whole_number(text, 0, "a seed (a whole number >= 0)")
 
 
 def count(text: str) -> int:
     """A count that may be zero: a whole number of at least 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {value}")
-    return value
+    return _whole_number(text, 0, "a whole number >= 0")
 
 
 def seconds(text: str) -> float:
