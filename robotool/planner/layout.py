@@ -59,13 +59,19 @@ class Box:
 
 @dataclass
 class Layout:
-    """Load-bearing solids of a scene (cloth excluded), some possibly moved to new x-y centres."""
+    """Load-bearing solids of a scene (cloth excluded), some possibly moved to new x-y centres.
+
+    The objects' parts and boxes are built once per task (shared by every layout derived with :meth:`with_moved`),
+    and each layout stacks its solids once per set of excluded names (:class:`geometry.PartStack`), so that the
+    planner's many height queries cost one vectorised pass each."""
 
     task: Task
     moved: dict[str, np.ndarray] = field(default_factory=dict)
+    _placed: dict[str, tuple[list[geometry.Part], Box]] = field(default_factory=dict, repr=False, compare=False)
+    _stacks: dict[frozenset[str], geometry.PartStack] = field(default_factory=dict, repr=False, compare=False)
 
     def box(self, name: str) -> Box:
-        box = Box.of(self.task.object(name))
+        box = self._placed_as_in_task(name)[1]
         return box.moved_to(self.moved[name]) if name in self.moved else box
 
     def boxes(self, exclude: Iterable[str] = ()) -> list[Box]:
@@ -74,11 +80,16 @@ class Layout:
 
     def with_moved(self, name: str, xy: np.ndarray) -> Layout:
         """A copy with ``name`` moved so that its x-y centre is ``xy``."""
-        return Layout(self.task, {**self.moved, name: np.asarray(xy, dtype=float)})
+        return Layout(self.task, {**self.moved, name: np.asarray(xy, dtype=float)}, _placed=self._placed)
 
-    def solids(self, exclude: Iterable[str] = ()) -> list[list[geometry.Part]]:
-        skip = set(exclude)
-        return [self._parts(o.name) for o in self.task.objects if o.shape != "cloth" and o.name not in skip]
+    def solids(self, exclude: Iterable[str] = ()) -> geometry.PartStack:
+        """The load-bearing solids but ``exclude``, stacked for height queries."""
+        skip = frozenset(exclude)
+        if skip not in self._stacks:
+            self._stacks[skip] = geometry.PartStack.of(
+                [self._parts(o.name) for o in self.task.objects if o.shape != "cloth" and o.name not in skip]
+            )
+        return self._stacks[skip]
 
     def heights(self, xy: np.ndarray, exclude: Iterable[str] = ()) -> np.ndarray:
         """Surface height under each point (n, 2)."""
@@ -106,9 +117,15 @@ class Layout:
         return None
 
     def _parts(self, name: str) -> list[geometry.Part]:
-        obj = self.task.object(name)
-        parts = geometry.object_parts(obj)
+        parts, box = self._placed_as_in_task(name)
         if name in self.moved:
-            shift = np.append(self.moved[name] - Box.of(obj).center, 0.0)
+            shift = np.append(self.moved[name] - box.center, 0.0)
             parts = [geometry.Part(p.kind, p.center + shift, p.half, p.rot) for p in parts]
         return parts
+
+    def _placed_as_in_task(self, name: str) -> tuple[list[geometry.Part], Box]:
+        """``name``'s parts and box where the task file places it (built once per task)."""
+        if name not in self._placed:
+            obj = self.task.object(name)
+            self._placed[name] = (geometry.object_parts(obj), Box.of(obj))
+        return self._placed[name]

@@ -8,7 +8,6 @@ All lengths are metres, world frame, z up; the ground is the plane z = 0.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
@@ -78,37 +77,8 @@ class Part:
 
         Lines that miss the part get NaN in both.
         """
-        n = xy.shape[0]
-        origin = np.column_stack([xy, np.zeros(n)]) - self.center
-        o_local = origin @ self.rot  # (n, 3): R^T (p - c)
-        d_local = self.rot[2]  # R^T e_z
-        t_lo = np.full(n, -np.inf)
-        t_hi = np.full(n, np.inf)
-        axes = range(3) if self.kind == "box" else (2,)
-        for k in axes:
-            o, d, h = o_local[:, k], d_local[k], self.half[k]
-            if abs(d) < 1e-12:
-                outside = np.abs(o) > h
-                t_lo[outside] = np.inf
-                continue
-            a, b = (-h - o) / d, (h - o) / d
-            t_lo = np.maximum(t_lo, np.minimum(a, b))
-            t_hi = np.minimum(t_hi, np.maximum(a, b))
-        if self.kind == "cylinder":
-            r = self.half[0]
-            qa = d_local[0] ** 2 + d_local[1] ** 2
-            qb = 2 * (o_local[:, 0] * d_local[0] + o_local[:, 1] * d_local[1])
-            qc = o_local[:, 0] ** 2 + o_local[:, 1] ** 2 - r * r
-            if qa < 1e-12:
-                t_lo[qc > 0] = np.inf
-            else:
-                disc = qb * qb - 4 * qa * qc
-                ok = disc >= 0
-                root = np.sqrt(np.where(ok, disc, 0.0))
-                t_lo = np.where(ok, np.maximum(t_lo, (-qb - root) / (2 * qa)), np.inf)
-                t_hi = np.minimum(t_hi, (-qb + root) / (2 * qa))
-        hit = t_lo <= t_hi
-        return np.where(hit, t_lo, np.nan), np.where(hit, t_hi, np.nan)
+        low, high = PartStack.of([[self]]).intervals(xy)
+        return low[0], high[0]
 
     def corners(self) -> np.ndarray:
         """The 8 corners of the part's oriented bounding box, world frame (8, 3)."""
@@ -146,12 +116,110 @@ def object_parts(obj: Solid) -> list[Part]:
     return [Part("box", center, size / 2, rot)]
 
 
+@dataclass(frozen=True)
+class PartStack:
+    """The parts of several solids as arrays, so that a vertical ray query runs once over all of them.
+
+    Part ``i`` belongs to the solid whose first part is the last ``first`` entry at or before ``i`` (parts are stored
+    solid by solid). Build it once per scene (:meth:`of`) and query it many times: a ray is crossed only with the
+    parts whose x-y bounds it passes through (a ray outside them misses).
+    """
+
+    cylinder: np.ndarray  # (m,) bool: a cylinder (else a box)
+    center: np.ndarray  # (m, 3)
+    half: np.ndarray  # (m, 3)
+    rot: np.ndarray  # (m, 3, 3)
+    first: np.ndarray  # (s,) index of each solid's first part
+    lo: np.ndarray  # (m, 2) x-y bounds of each part, grown by BOUNDS_SLACK
+    hi: np.ndarray  # (m, 2)
+
+    BOUNDS_SLACK = 1e-9  # m: rays this close outside a part's bounds are still crossed with it exactly
+
+    @classmethod
+    def of(cls, solids: list[list[Part]]) -> PartStack:
+        parts = [p for solid in solids for p in solid]
+        bounds = [p.aabb() for p in parts]
+        return cls(
+            cylinder=np.array([p.kind == "cylinder" for p in parts], dtype=bool),
+            center=np.array([p.center for p in parts], dtype=float).reshape(-1, 3),
+            half=np.array([p.half for p in parts], dtype=float).reshape(-1, 3),
+            rot=np.array([p.rot for p in parts], dtype=float).reshape(-1, 3, 3),
+            first=np.cumsum([0] + [len(solid) for solid in solids[:-1]]).astype(int) if solids else np.zeros(0, int),
+            lo=np.array([b[0][:2] for b in bounds], dtype=float).reshape(-1, 2) - cls.BOUNDS_SLACK,
+            hi=np.array([b[1][:2] for b in bounds], dtype=float).reshape(-1, 2) + cls.BOUNDS_SLACK,
+        )
+
+    @property
+    def solids(self) -> int:
+        return len(self.first)
+
+    def intervals(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where vertical lines through ``xy`` (n, 2) cross each part: (z_low, z_high), each (m, n); NaN where
+        a line misses a part."""
+        x, y = xy[None, :, 0], xy[None, :, 1]
+        near = (x >= self.lo[:, 0, None]) & (x <= self.hi[:, 0, None]) & (y >= self.lo[:, 1, None])
+        near &= y <= self.hi[:, 1, None]
+        part, point = np.nonzero(near)
+        low, high = np.full(near.shape, np.nan), np.full(near.shape, np.nan)
+        low[part, point], high[part, point] = self._crossings(part, xy[point])
+        return low, high
+
+    def _crossings(self, part: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the vertical line through each ``xy`` (K, 2) crosses its ``part`` (K,): (z_low, z_high), NaN
+        where it misses."""
+        origin = np.column_stack([xy, np.zeros(len(xy))]) - self.center[part]
+        o_local = np.empty_like(origin)  # (K, 3): R^T (p - c), one matrix product per part
+        for i in np.unique(part):
+            rows = part == i
+            o_local[rows] = origin[rows] @ self.rot[i]
+        d_local = self.rot[part, 2, :]  # (K, 3): R^T e_z
+        half, cylinder = self.half[part], self.cylinder[part]
+        t_lo, t_hi = np.full(len(part), -np.inf), np.full(len(part), np.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for k in range(3):
+                o, d, h = o_local[:, k], d_local[:, k], half[:, k]
+                slab = ~cylinder if k < 2 else np.ones(len(part), dtype=bool)  # a cylinder: only its caps
+                parallel = np.abs(d) < 1e-12
+                a, b = (-h - o) / d, (h - o) / d
+                crossing = slab & ~parallel
+                t_lo = np.where(crossing, np.maximum(t_lo, np.minimum(a, b)), t_lo)
+                t_hi = np.where(crossing, np.minimum(t_hi, np.maximum(a, b)), t_hi)
+                t_lo = np.where(slab & parallel & (np.abs(o) > h), np.inf, t_lo)
+            if cylinder.any():
+                t_lo, t_hi = _round_side(cylinder, half[:, 0], o_local, d_local, t_lo, t_hi)
+        hit = t_lo <= t_hi
+        return np.where(hit, t_lo, np.nan), np.where(hit, t_hi, np.nan)
+
+    def solid_intervals(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lowest and highest z of each solid along vertical lines through ``xy``: each (s, n), NaN where missed."""
+        low, high = self.intervals(xy)
+        if not self.solids:
+            return low, high
+        return np.fmin.reduceat(low, self.first, axis=0), np.fmax.reduceat(high, self.first, axis=0)
+
+
+def _round_side(
+    cylinder: np.ndarray, r: np.ndarray, o_local: np.ndarray, d_local: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``t_lo``/``t_hi`` (K,) cut by the round sides of the ``cylinder`` rows (radius ``r``); box rows unchanged."""
+    qa = d_local[:, 0] ** 2 + d_local[:, 1] ** 2
+    qb = 2 * (o_local[:, 0] * d_local[:, 0] + o_local[:, 1] * d_local[:, 1])
+    qc = o_local[:, 0] ** 2 + o_local[:, 1] ** 2 - r * r
+    upright = cylinder & (qa < 1e-12)
+    tilted = cylinder & ~(qa < 1e-12)
+    disc = qb * qb - 4 * qa * qc
+    ok = disc >= 0
+    root = np.sqrt(np.where(ok, disc, 0.0))
+    t_lo = np.where(upright & (qc > 0), np.inf, t_lo)
+    t_lo = np.where(tilted, np.where(ok, np.maximum(t_lo, (-qb - root) / (2 * qa)), np.inf), t_lo)
+    t_hi = np.where(tilted, np.minimum(t_hi, (-qb + root) / (2 * qa)), t_hi)
+    return t_lo, t_hi
+
+
 def object_interval(parts: list[Part], xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest z of an object's parts along vertical lines (NaN where missed)."""
-    lows, highs = zip(*(p.vertical_interval(xy) for p in parts), strict=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: lines that miss
-        return np.nanmin(np.vstack(lows), axis=0), np.nanmax(np.vstack(highs), axis=0)
+    low, high = PartStack.of([parts]).solid_intervals(xy)
+    return low[0], high[0]
 
 
 def footprint_grid(parts: list[Part], spacing: float = 0.01, max_per_axis: int = 61) -> np.ndarray:
@@ -166,20 +234,21 @@ def footprint_grid(parts: list[Part], spacing: float = 0.01, max_per_axis: int =
     return np.column_stack([gx.ravel(), gy.ravel()])
 
 
-def surface_height(xy: np.ndarray, solids: list[list[Part]], below: np.ndarray | None = None) -> np.ndarray:
+def surface_height(xy: np.ndarray, solids: list[list[Part]] | PartStack, below: np.ndarray | None = None) -> np.ndarray:
     """Height of the highest surface under each point: the ground or the top of a solid.
 
     With ``below`` (one z per point), only solids whose top is at most that high count, so the
     result is the surface a body with its bottom at ``below`` would rest on.
     """
+    stack = solids if isinstance(solids, PartStack) else PartStack.of(solids)
     best = np.full(xy.shape[0], GROUND_Z)
-    for parts in solids:
-        _, top = object_interval(parts, xy)
-        ok = ~np.isnan(top)
-        if below is not None:
-            ok &= top <= below
-        best = np.where(ok & (top > best), top, best)
-    return best
+    if not stack.solids:
+        return best
+    _, top = stack.solid_intervals(xy)
+    ok = ~np.isnan(top)
+    if below is not None:
+        ok &= top <= below
+    return np.maximum(best, np.where(ok, top, -np.inf).max(axis=0))
 
 
 @dataclass(frozen=True)
