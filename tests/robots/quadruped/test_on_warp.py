@@ -1,7 +1,8 @@
 """The quadruped on mujoco_warp (Warp's CPU device): every built-in quadruped task's reference program and, where
 the task needs a tool, its tool-free program, side by side in one batch per task.
 
-Fewer worlds than on the C backend (ten for the surfboard bridge, two elsewhere): Warp on CPU is slow.
+Two reference worlds per task (the C backend's tests run more): Warp on CPU is slow, and what is checked here is that
+the Warp backend judges the same programs the same way, not how often a program holds under perturbation.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collec
 pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
 
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
-WORLDS = {"sofa_traversing": 10}  # reference worlds per task (default 2)
+WORLDS = 2  # reference worlds per task
 SEED = 5
 
 TOOL_FREE_REFUSAL = {  # task -> (the refused skill, its measured key, the value; None: the world's cube mass)
@@ -40,7 +41,7 @@ def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]
 
     def batch(task: str) -> list[Rollout]:
         if task not in cache:
-            programs = [program(REFERENCE[task])] * WORLDS.get(task, 2)
+            programs = [program(REFERENCE[task])] * WORLDS
             programs += [program(TOOL_FREE[task])] if task in TOOL_FREE else []
             cache[task] = run_texts(sim_scene(task), programs, seed=SEED, backend="warp")
         return cache[task]
@@ -55,9 +56,8 @@ def _by_task(names: list[str]) -> list[Any]:
 
 @pytest.mark.parametrize("task", _by_task(QUADRUPED_TASKS))
 def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], list[Rollout]], task: str) -> None:
-    n = WORLDS.get(task, 2)
-    rollouts = warp_batch(task)[:n]
-    assert sum(r.success for r in rollouts) >= (9 if n == 10 else n), [
+    rollouts = warp_batch(task)[:WORLDS]
+    assert all(r.success for r in rollouts), [
         [(c.skill, c.outcome, c.reason) for c in r.calls if c.outcome != "done"] or r.conditions
         for r in rollouts
         if not r.success
@@ -72,8 +72,7 @@ def test_tool_free_program_is_refused_with_the_measured_value_on_warp(
     direct = warp_batch(task)[-1]
     if value is None:  # the cube's mass in that world, perturbed
         scene = sim_scene(task)
-        n = WORLDS.get(task, 2)
-        value = Perturbation.sample(scene, n + 1, SEED).mass_scale[n, scene.object_index("cube")] * 10.0
+        value = Perturbation.sample(scene, WORLDS + 1, SEED).mass_scale[WORLDS, scene.object_index("cube")] * 10.0
     refused = [c for c in direct.calls if c.outcome == "refused"]
     assert not direct.success and [c.skill for c in refused] == [skill]
     assert refused[0].measured[key] == pytest.approx(value, abs=0.02)
