@@ -193,7 +193,7 @@ class PartStack:
     def solid_intervals(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lowest and highest z of each solid along vertical lines through ``xy``: each (s, n), NaN where missed."""
         low, high = self.intervals(xy)
-        if not self.solids:
+        if len(self.first) == len(self.center):  # one part each (or none at all)
             return low, high
         return np.fmin.reduceat(low, self.first, axis=0), np.fmax.reduceat(high, self.first, axis=0)
 

@@ -111,9 +111,8 @@ def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: 
     :data:`SIDE_MARGIN`."""
     lo = np.minimum(start, end) - half - SIDE_MARGIN
     hi = np.maximum(start, end) + half + SIDE_MARGIN
-    axes = [np.linspace(lo[k], hi[k], max(2, int(np.ceil((hi[k] - lo[k]) / spacing)) + 1)) for k in range(2)]
-    gx, gy = np.meshgrid(*axes, indexing="ij")
-    return np.column_stack([gx.ravel(), gy.ravel()])
+    xs, ys = (np.linspace(lo[k], hi[k], max(2, int(np.ceil((hi[k] - lo[k]) / spacing)) + 1)) for k in range(2))
+    return np.column_stack([np.repeat(xs, len(ys)), np.tile(ys, len(xs))])  # x-major, as meshgrid(indexing="ij")
 
 
 @dataclass(frozen=True)
