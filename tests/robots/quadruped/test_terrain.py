@@ -59,6 +59,28 @@ def test_scan_finds_the_first_broken_limit(
         assert result.index[0] * SPACING == pytest.approx(edge, abs=FOOT_RADIUS + SPACING)
 
 
+@pytest.mark.parametrize(
+    "pieces",
+    [
+        [(0.4, 0.0), (0.5, 0.12), (0.5, 0.24), (0.5, 0.34)],
+        [(0.4, 0.34), (0.4, 0.0), (0.6, 0.34)],
+        [(0.4, 0.34), (0.08, 0.0), (0.6, 0.34)],
+        [(0.4, 0.5), (0.7, 0.0)],
+    ],
+)
+@pytest.mark.filterwarnings("ignore:All-NaN slice encountered:RuntimeWarning")
+def test_a_path_with_missing_readings_leaves_the_others_as_they_read_alone(pieces: list[tuple[float, float]]) -> None:
+    """A path whose rays met nothing (NaN) takes the NaN-aware reading; the paths beside it read as they do alone."""
+    heights = profile(*pieces)
+    alone = scan_paths(heights[None], np.array([heights[0]]), LIMITS)
+    blind = np.full_like(heights, np.nan)
+    together = scan_paths(np.stack([heights, blind]), np.array([heights[0], np.nan]), LIMITS)
+    for field in ("index", "kind", "measured"):
+        assert getattr(together, field)[0] == getattr(alone, field)[0], field
+    np.testing.assert_array_equal(together.level[0], alone.level[0])
+    np.testing.assert_array_equal(together.met[0], alone.met[0])
+
+
 
 @pytest.mark.parametrize(
     ("pieces", "largest"),
