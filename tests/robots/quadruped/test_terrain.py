@@ -81,7 +81,6 @@ def test_a_path_with_missing_readings_leaves_the_others_as_they_read_alone(piece
     np.testing.assert_array_equal(together.met[0], alone.met[0])
 
 
-
 @pytest.mark.parametrize(
     ("pieces", "largest"),
     [
