@@ -6,18 +6,25 @@ import numpy as np
 
 from robotool.robots.quadruped.body import BodyIds
 from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, pass_weight, resting_on, supported
+from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners
+
+EDGE_REACH = FOOT_RADIUS / 2
+"""m: how far past a top's edge a foot's centre may be and still bear on it (its contact faces upward, within 30
+degrees); a foot against a side face has its centre a whole radius out."""
 
 
 class RobotOnGoal:
     """``robot_on: obj``: the robot's weight rests on ``obj``.
 
     Its centre of mass lies over the support of the feet whose weight reaches ``obj`` (at least three of them), and
-    every foot touches something (none hangs over a gap). A foot's weight reaches ``obj`` when it touches ``obj``, or
-    when it stands over ``obj``'s footprint on a movable object (not fragile) that rests on ``obj``, directly or
-    through others (a board lying on a sofa), as the judge traces weight elsewhere (:func:`pass_weight`).
+    every foot touches something (none hangs over a gap). A foot's weight reaches ``obj`` when it stands on ``obj``
+    (it touches ``obj`` with its centre over ``obj``'s top, within :data:`EDGE_REACH` of its edges: a foot pressing
+    on a side face, from the floor beside it, carries nothing), or when it stands over ``obj``'s footprint on a
+    movable object (not fragile) that rests on ``obj``, directly or through others (a board lying on a sofa), as the
+    judge traces weight elsewhere (:func:`pass_weight`).
     """
 
     def __init__(self, scene: Scene):
@@ -37,7 +44,8 @@ class RobotOnGoal:
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         foot_xyz = feet(state, self.ids)
-        on_target = feet_touching(state, self.ids, self.target) | self._through_carriers(state, foot_xyz)
+        on_top = feet_touching(state, self.ids, self.target) & self._over(state, foot_xyz, EDGE_REACH, on_top=True)
+        on_target = on_top | self._through_carriers(state, foot_xyz)
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
@@ -53,8 +61,13 @@ class RobotOnGoal:
         for f in range(under.shape[1]):
             loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
             out[worlds, f] = loaded[:, self.index]
+        return out & self._over(state, foot_xyz, 0.0)
+
+    def _over(self, state: BatchState, foot_xyz: np.ndarray, reach: float, on_top: bool = False) -> np.ndarray:
+        """(nworld, 4) whether each foot's centre lies over the target's footprint grown by ``reach`` (in the target's
+        frame); with ``on_top``, also no lower than ``reach`` under its top (not beside or under it)."""
         body = self.scene.object_body[self.index]
         rel = np.einsum("wji,wfj->wfi", state.xmat(body), foot_xyz - state.xpos[:, body, None, :])
         lo, hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
-        over = np.all((rel[:, :, :2] >= lo[:2]) & (rel[:, :, :2] <= hi[:2]), axis=2)
-        return out & over
+        over = np.all((rel[:, :, :2] >= lo[:2] - reach) & (rel[:, :, :2] <= hi[:2] + reach), axis=2)
+        return over & (rel[:, :, 2] >= hi[2] - reach) if on_top else over

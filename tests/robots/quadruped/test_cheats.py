@@ -191,6 +191,7 @@ CONTROL_CASES = [
     ("programs/lever_any_direction", "lever_mirrored"),
     ("programs/lever_any_direction", "cube_lifting"),
     ("walk_over_board_on_vase", "board_beside_vase"),  # the board bridges the gap clear of the vase
+    ("straddle_the_beam", "low_platform"),  # the same walk onto a low top wider than the stance
 ]
 
 
@@ -260,7 +261,8 @@ def test_a_cloth_on_a_movable_crate_does_not_hide_that_the_robot_stands_on_it() 
     """The rays under the feet see through the cloth: the robot stands on the crate, which is movable, so it may
     push nothing from there."""
     (rollout,) = sim.run_sessions(
-        _scene("push_from_cloth_on_crate"), start_sessions([_text("push_from_cloth_covered_crate")], "quadruped"),
+        _scene("push_from_cloth_on_crate"),
+        start_sessions([_text("push_from_cloth_covered_crate")], "quadruped"),
         perturb=False,
     )
     (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
@@ -284,6 +286,17 @@ def test_the_board_is_refused_with_the_cube_riding_on_it() -> None:
 def test_the_same_walks_succeed_where_the_legs_allow_them(run_texts: Any, program: str, scene: str) -> None:
     rollouts = run_texts(_scene(scene), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+
+
+def test_feet_pressing_on_the_sides_of_a_beam_do_not_stand_on_it() -> None:
+    """Found by an adversarial run: walking along a low beam narrower than the stance, the feet on the floor touched
+    its side faces, and touching the target read as standing on it."""
+    rollouts = sim.run_sessions(
+        _scene("beam_narrower_than_the_feet"), start_sessions([_text("straddle_the_beam")] * 2, "quadruped"), seed=11
+    )
+    for rollout in rollouts:
+        assert "beam" in rollout.touched and rollout.conditions["robot_has_not_fallen"]
+        assert rollout.conditions["robot_weight_on_beam"] is False and not rollout.success
 
 
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
@@ -336,7 +349,8 @@ def test_a_fall_is_read_as_onto_what_the_vase_struck() -> None:
     """The vase, pushed off the sofa with no cushion under it, strikes a hard rug listed after the cushion in the
     task file: the rug, not the cushion, is what it landed on, so it breaks in every world."""
     rollouts = sim.run_sessions(
-        _scene("vase_over_rug"), start_sessions([_text("programs/vase_lowering_no_cushion")] * 3, "quadruped"),
+        _scene("vase_over_rug"),
+        start_sessions([_text("programs/vase_lowering_no_cushion")] * 3, "quadruped"),
         seed=11,
     )
     for rollout in rollouts:
