@@ -143,7 +143,7 @@ class Referee:
 
     def _riders(self, w: int, index: int) -> list[int]:
         """Movable objects that ride on object ``index`` in world ``w``, recursively: higher than what carries them
-        and touching nothing else (but the robot)."""
+        and touching nothing else lower than themselves (but the robot); what lies on a rider rides too."""
         state, owner = self.senses.state, self.scene.body_object
         centres = self.senses.centers(state)[w]
         carried = [index]
@@ -160,7 +160,8 @@ class Referee:
                     or centres[other, 2] <= centres[base, 2]
                 ):
                     continue
-                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other)
+                on_top = (owner >= 0) & (centres[np.maximum(owner, 0), 2] > centres[other, 2])  # lying on it
+                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & ~on_top
                 if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
                     riders.append(int(other))
                     carried.append(int(other))

@@ -192,6 +192,7 @@ CONTROL_CASES = [
     ("programs/lever_any_direction", "cube_lifting"),
     ("walk_over_board_on_vase", "board_beside_vase"),  # the board bridges the gap clear of the vase
     ("straddle_the_beam", "low_platform"),  # the same walk onto a low top wider than the stance
+    ("carry_a_heavy_crate_under_a_book", "light_crate_with_a_book_on_a_pallet"),  # 3.8 kg in all: within the limit
 ]
 
 
@@ -297,6 +298,18 @@ def test_feet_pressing_on_the_sides_of_a_beam_do_not_stand_on_it() -> None:
     for rollout in rollouts:
         assert "beam" in rollout.touched and rollout.conditions["robot_has_not_fallen"]
         assert rollout.conditions["robot_weight_on_beam"] is False and not rollout.success
+
+
+def test_a_book_lying_on_a_heavy_crate_does_not_hide_it_from_the_push_limit() -> None:
+    """Found by an adversarial run: a 10 kg crate riding a pushed 2.5 kg pallet was weighed when alone, but not with a
+    book lying on it (anything the crate touched counted as its support, the book on top included)."""
+    scene = _scene("crate_with_a_book_on_a_pallet")
+    rollouts = sim.run_sessions(
+        scene, start_sessions([_text("carry_a_heavy_crate_under_a_book")] * 2, "quadruped"), seed=11
+    )
+    for rollout in rollouts:
+        assert not rollout.success
+        assert "cannot push pallet: its mass with crate" in failure_reason(rollout), failure_reason(rollout)
 
 
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
