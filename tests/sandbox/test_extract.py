@@ -8,6 +8,9 @@ import pytest
 
 from robotool.sandbox import ProgramRejected, extract, extract_program, validate
 
+# CPU seconds for 100 kB: linear work takes about one on a slow 2-core machine, a quadratic blow-up minutes
+CPU_LIMIT_S = 5.0
+
 PROGRAM = 'import numpy as np\np = np.array(get_center("milk"))\nif p[2] > 0:\n    move_to_position(p)\n'
 
 
@@ -144,14 +147,14 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "f-string-fields",
     ],
 )
-def test_extraction_of_100_kb_finishes_in_a_second(answer: str) -> None:
+def test_extraction_of_100_kb_stays_linear(answer: str) -> None:
     import time
 
     assert 90_000 <= len(answer) <= 100_000
     started = time.process_time()
     with contextlib.suppress(ProgramRejected):
         extract_program(answer)
-    assert time.process_time() - started < 1.0
+    assert time.process_time() - started < CPU_LIMIT_S
 
 
 def test_code_after_long_prose_is_still_found() -> None:

@@ -13,6 +13,9 @@ from robotool.sandbox import ProgramRejected, validate
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_CONSTANTS, NUMPY_FUNCTIONS, NUMPY_LINALG
 from robotool.sandbox.strict import check_user_program
 
+# CPU seconds for 100 kB: linear work takes about one on a slow 2-core machine, a quadratic blow-up minutes
+CPU_LIMIT_S = 5.0
+
 ARM_PROGRAM = """\
 import numpy as np
 import math
@@ -170,14 +173,14 @@ def test_names_resolve_through_scopes() -> None:
     ],
     ids=["bad-lines", "bad-one-line", "long-function", "long-literal", "many-calls", "f-string-fields"],
 )
-def test_validation_of_100_kb_finishes_in_a_second(code: str) -> None:
+def test_validation_of_100_kb_stays_linear(code: str) -> None:
     import time
 
     assert 90_000 <= len(code) <= 100_000
     started = time.process_time()
     with contextlib.suppress(ProgramRejected):
         validate(code, "arm")
-    assert time.process_time() - started < 1.0
+    assert time.process_time() - started < CPU_LIMIT_S
 
 
 @pytest.mark.parametrize("argument", ["0x" + "f" * 5000, "[0x" + "f" * 5000 + ", 0, 0]"], ids=["int", "list"])
