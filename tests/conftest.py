@@ -61,3 +61,21 @@ def pytest_configure(config: pytest.Config) -> None:
     from time_budget import TimeBudget
 
     config.pluginmanager.register(TimeBudget(config), "time_budget")
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Keep ``xdist_group`` working: with ``--dist loadgroup`` pytest-xdist sends the tests whose node ids end in
+    ``@group`` to one worker, and marks them by assigning ``item._nodeid``, which pytest 9.2 no longer reads (it
+    keeps a structured ``_id``), so every group was silently spread over the workers. In a worker, suffix the ids
+    here the way xdist means to (once: an id that already ends so is left alone)."""
+    if not getattr(config.option, "loadgroup", False):
+        return
+    from _pytest.nodeid import coerce_node_id
+
+    for item in items:
+        marks = item.iter_markers("xdist_group")
+        names = {str(m.args[0] if m.args else m.kwargs.get("name", "default")) for m in marks}
+        suffix = "@" + "_".join(sorted(names))
+        if names and not item.nodeid.endswith(suffix):
+            item._id = coerce_node_id(item.nodeid + suffix)  # type: ignore[attr-defined]

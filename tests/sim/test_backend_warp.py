@@ -11,28 +11,25 @@ from typing import Any
 import numpy as np
 import pytest
 from fixtures.reference import REFERENCE, TOOL_FREE, program
+from fixtures.warp_group import ON_WARP
 
 from robotool import sim
 
 if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collecting stays quick where deselected
     pytest.skip("mujoco_warp is not installed", allow_module_level=True)
 
-pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
+pytestmark = [pytest.mark.slow, ON_WARP]  # Warp compiles its kernels on the CPU first
 
 TASK = "button_pressing"
 PROGRAMS = [program(REFERENCE[TASK]), program(TOOL_FREE[TASK]), program(REFERENCE[TASK])]
 
 
-SHARES_THE_BATCH = pytest.mark.xdist_group("warp-button_pressing")
-
-
 @pytest.fixture(scope="session")
 def warp_rollouts(sim_scene: Any, run_texts: Any) -> list[Any]:
-    """Reference and tool-free programs side by side in one warp batch (once: its tests share an xdist group)."""
+    """Reference and tool-free programs side by side in one warp batch (once: the Warp tests share one xdist worker)."""
     return run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="warp")
 
 
-@SHARES_THE_BATCH
 def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
     c_rollouts = run_texts(sim_scene(TASK), PROGRAMS, seed=1, backend="mujoco")
     assert [r.success for r in warp_rollouts] == [r.success for r in c_rollouts] == [True, False, True]
@@ -41,7 +38,6 @@ def test_same_outcomes_as_the_c_backend(sim_scene: Any, run_texts: Any, warp_rol
         assert w.sim_time == pytest.approx(c.sim_time, abs=0.3)  # float32 contacts: a stall may end a tick or two apart
 
 
-@SHARES_THE_BATCH
 def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_rollouts: list[Any]) -> None:
     for backend in ("warp", "mujoco"):
         (r,) = run_texts(sim_scene(TASK), PROGRAMS[:1], backend=backend, njmax=8)
@@ -49,7 +45,6 @@ def test_tiny_njmax_marks_the_world_failed(sim_scene: Any, run_texts: Any, warp_
         assert ("NEFC" in r.error) if backend == "warp" else ("over njmax 8" in r.error)
 
 
-@SHARES_THE_BATCH
 def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
     scene = sim_scene(TASK)
     pnt = np.array([[[0.62, -0.1, 0.5], [0.4, 0.0, 0.5], [1.5, 1.5, 0.5]]] * 2)

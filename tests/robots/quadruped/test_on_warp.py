@@ -13,6 +13,7 @@ from typing import Any
 
 import pytest
 from fixtures.reference import REFERENCE, TOOL_FREE, program
+from fixtures.warp_group import ON_WARP
 
 from robotool import tasks
 from robotool.rollout import Rollout
@@ -20,7 +21,7 @@ from robotool.sim.backend import Perturbation
 
 if importlib.util.find_spec("mujoco_warp") is None:  # not imported here: collecting stays quick where deselected
     pytest.skip("mujoco_warp is not installed", allow_module_level=True)
-pytestmark = pytest.mark.slow  # Warp compiles its kernels on the CPU first
+pytestmark = [pytest.mark.slow, ON_WARP]  # Warp compiles its kernels on the CPU first
 
 QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadruped"]
 WORLDS = 2  # reference worlds per task
@@ -35,8 +36,8 @@ TOOL_FREE_REFUSAL = {  # task -> (the refused skill, its measured key, the value
 
 @pytest.fixture(scope="session")
 def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]:
-    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp (once per
-    worker: a task's tests share an xdist group)."""
+    """``warp_batch(task)``: the reference program's worlds, then the tool-free program's (if any), on Warp (once: the
+    Warp tests share one xdist worker)."""
     cache: dict[str, list[Rollout]] = {}
 
     def batch(task: str) -> list[Rollout]:
@@ -49,12 +50,7 @@ def warp_batch(sim_scene: Any, run_texts: Any) -> Callable[[str], list[Rollout]]
     return batch
 
 
-def _by_task(names: list[str]) -> list[Any]:
-    """One param per task, in the task's xdist group: its reference and tool-free tests share one Warp batch."""
-    return [pytest.param(name, marks=pytest.mark.xdist_group(f"warp-quadruped-{name}")) for name in names]
-
-
-@pytest.mark.parametrize("task", _by_task(QUADRUPED_TASKS))
+@pytest.mark.parametrize("task", QUADRUPED_TASKS)
 def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], list[Rollout]], task: str) -> None:
     rollouts = warp_batch(task)[:WORLDS]
     assert all(r.success for r in rollouts), [
@@ -64,7 +60,7 @@ def test_reference_program_solves_its_task_on_warp(warp_batch: Callable[[str], l
     ]
 
 
-@pytest.mark.parametrize("task", _by_task(sorted(TOOL_FREE_REFUSAL)))
+@pytest.mark.parametrize("task", sorted(TOOL_FREE_REFUSAL))
 def test_tool_free_program_is_refused_with_the_measured_value_on_warp(
     sim_scene: Any, warp_batch: Callable[[str], list[Rollout]], task: str
 ) -> None:
