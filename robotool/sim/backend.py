@@ -96,6 +96,9 @@ class BatchedSim(Protocol):
         """
 
 
+MASS_NOISE = 0.15  # a movable object's mass is scaled by up to this much either way in a perturbed world
+
+
 @dataclass(frozen=True)
 class Perturbation:
     """Per-world changes to the scene: friction and mass scales, and start-pose offsets.
@@ -121,7 +124,7 @@ class Perturbation:
         seed: int,
         *,
         friction: float = 0.2,
-        mass: float = 0.15,
+        mass: float = MASS_NOISE,
         shift: float = 0.005,
         yaw_deg: float = 2.0,
     ) -> Perturbation:

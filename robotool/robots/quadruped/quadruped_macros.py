@@ -30,6 +30,7 @@ from robotool.robots.quadruped.quadruped_routes import (
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import foot_offsets
+from robotool.sim.backend import MASS_NOISE
 from robotool.task.concepts import surface_under
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
@@ -104,7 +105,19 @@ class Writer:
             self.layout = self.layout.with_moved(name, target)
             self.refs.pop(name, None)
         self.doubt(problem)
+        self.doubt(self._near_push_limit(name))
         self.prog.use(name)
+
+    def _near_push_limit(self, name: str) -> str | None:
+        """A doubt when ``name`` may weigh more than the robot may push in some perturbed world (masses vary by up
+        to :data:`~robotool.sim.backend.MASS_NOISE`): such a push fails in a share of the worlds."""
+        mass, limit = self.quad.task.object(name).effective_mass, self.quad.limits.max_push_mass
+        if mass * (1 + MASS_NOISE) <= limit:
+            return None
+        return (
+            f"{name}'s mass, {mass:.2f} kg, is within {MASS_NOISE:.0%} of the push limit of {limit:g} kg: "
+            "a perturbed world may make it too heavy to push"
+        )
 
     def _predict_pushes(self, name: str, targets: list[np.ndarray]) -> tuple[list[PushStep], str | None]:
         """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is: for each, the walk
