@@ -122,6 +122,7 @@ class Program:
     doubt: str | None = None  # a limit the planner predicts the program breaks, if any
     late: int = 0  # how many less likely choices it makes (tried after programs with fewer)
     slack: float = float("inf")  # m its tightest stance keeps from an edge it must stay within (less: tried later)
+    thin: list[str] = field(default_factory=list)  # other margins it leaves too thin for some perturbed worlds
     _count: int = 0
 
     def use(self, name: str, role: str | None = None) -> None:

@@ -62,15 +62,21 @@ TIGHT = 0.02  # m: a program whose tightest stance keeps less than this from an 
 
 def order(programs: Iterable[Program]) -> list[Program]:
     """Distinct programs, best guess first: predicted feasible, then fewer less likely choices, then fewer objects,
-    then not tight (:data:`TIGHT`: a stance with little slack fails in some perturbed worlds; but every object more
-    to push is a bigger risk), then fewer steps."""
+    then not tight (:func:`tight`: a stance with little slack, or a push near the mass limit, fails in some perturbed
+    worlds; but every object more to push is a bigger risk), then fewer steps."""
     seen: set[str] = set()
     unique = []
     for prog in programs:
         if prog.code not in seen:
             seen.add(prog.code)
             unique.append(prog)
-    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, len(p.objects), p.slack < TIGHT, len(p.steps)))
+    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, len(p.objects), tight(p), len(p.steps)))
+
+
+def tight(prog: Program) -> bool:
+    """Whether a program leaves a margin that perturbed worlds may undo: a stance within :data:`TIGHT` of an edge,
+    or another margin the macros found thin (an object to push whose mass may exceed the push limit)."""
+    return prog.slack < TIGHT or bool(prog.thin)
 
 
 def search(
