@@ -106,8 +106,9 @@ class Writer:
             self.refs.pop(name, None)
         self.doubt(problem)
         mass, limit = self.quad.task.object(name).effective_mass, self.quad.limits.max_push_mass
-        if mass * (1 + MASS_NOISE) > limit:  # perturbed worlds scale masses by up to MASS_NOISE
-            self.prog.thin.append(f"{name}'s {mass:.2f} kg is within {MASS_NOISE:.0%} of the {limit:g} kg push limit")
+        heavy = f"{name}'s {mass:.2f} kg is within {MASS_NOISE:.0%} of the {limit:g} kg push limit"
+        if mass * (1 + MASS_NOISE) > limit and heavy not in self.prog.thin:  # perturbed worlds scale masses so
+            self.prog.thin.append(heavy)
         self.prog.use(name)
 
     def _predict_pushes(self, name: str, targets: list[np.ndarray]) -> tuple[list[PushStep], str | None]:
