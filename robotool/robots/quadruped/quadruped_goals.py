@@ -35,6 +35,7 @@ class RobotOnGoal:
         self.target = scene.body_object == self.index
         self.not_robot = ~scene.robot_body
         self.corners = local_corners(scene)
+        self.lo, self.hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
         objects = scene.task.objects
         self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)
         self.member = scene.body_object[None, :] == np.arange(len(objects))[:, None]  # (nobject, nbody)
@@ -44,16 +45,21 @@ class RobotOnGoal:
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         foot_xyz = feet(state, self.ids)
-        on_top = feet_touching(state, self.ids, self.target) & self._over(state, foot_xyz, EDGE_REACH, on_top=True)
-        on_target = on_top | self._through_carriers(state, foot_xyz)
+        rel = self._in_target_frame(state, foot_xyz)
+        on_top = (
+            feet_touching(state, self.ids, self.target)
+            & self._over(rel, EDGE_REACH)
+            & (rel[:, :, 2] >= self.hi[2] - EDGE_REACH)  # not beside or under its top
+        )
+        on_target = on_top | (self._through_carriers(state) & self._over(rel, 0.0))
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
 
-    def _through_carriers(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:
-        """(nworld, 4) whether each foot stands over the target's footprint on carriers that pass its weight to it."""
-        out = np.zeros(foot_xyz.shape[:2], dtype=bool)
+    def _through_carriers(self, state: BatchState) -> np.ndarray:
+        """(nworld, 4) whether each foot stands on carriers that pass its weight to the target."""
         under = (state.touching[:, self.ids.feet].astype(float) @ self.member.T.astype(float) > 0) & self.carrier
+        out = np.zeros(under.shape[:2], dtype=bool)
         worlds = np.flatnonzero(under.any(axis=(1, 2)))
         if worlds.size == 0:
             return out
@@ -61,13 +67,14 @@ class RobotOnGoal:
         for f in range(under.shape[1]):
             loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
             out[worlds, f] = loaded[:, self.index]
-        return out & self._over(state, foot_xyz, 0.0)
+        return out
 
-    def _over(self, state: BatchState, foot_xyz: np.ndarray, reach: float, on_top: bool = False) -> np.ndarray:
-        """(nworld, 4) whether each foot's centre lies over the target's footprint grown by ``reach`` (in the target's
-        frame); with ``on_top``, also no lower than ``reach`` under its top (not beside or under it)."""
+    def _in_target_frame(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:
+        """(nworld, 4, 3) the feet's centres in the target's frame."""
         body = self.scene.object_body[self.index]
-        rel = np.einsum("wji,wfj->wfi", state.xmat(body), foot_xyz - state.xpos[:, body, None, :])
-        lo, hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
-        over = np.all((rel[:, :, :2] >= lo[:2] - reach) & (rel[:, :, :2] <= hi[:2] + reach), axis=2)
-        return over & (rel[:, :, 2] >= hi[2] - reach) if on_top else over
+        return np.einsum("wji,wfj->wfi", state.xmat(body), foot_xyz - state.xpos[:, body, None, :])
+
+    def _over(self, rel: np.ndarray, reach: float) -> np.ndarray:
+        """(nworld, 4) whether each foot's centre (``rel``, in the target's frame) lies over the target's footprint
+        grown by ``reach``."""
+        return np.all((rel[:, :, :2] >= self.lo[:2] - reach) & (rel[:, :, :2] <= self.hi[:2] + reach), axis=2)
