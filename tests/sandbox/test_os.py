@@ -305,6 +305,16 @@ def test_kernel_interfaces_to_other_processes_and_descriptors_are_denied() -> No
     assert set(outcomes.values()) == {"1"} and all(o.endswith(" denied") for o in outcomes), ended.output
 
 
+def test_namespaces_clocks_devices_and_other_processes_are_denied() -> None:
+    """A new user namespace, fork, the host's clocks, name and swap, device nodes and links, System V IPC, another
+    process's limits and signals, and terminal ioctls on stdout: each fails with EPERM, from the filter."""
+    ended = run_unchecked((ESCAPES / "namespaces_clocks_and_devices.py").read_text())
+    assert ended.error is None, ended.error
+    outcomes = dict(line.rsplit(" ", 1) for line in ended.output.splitlines())
+    assert len(outcomes) == 24
+    assert set(outcomes.values()) == {"1"} and all(o.endswith(" denied") for o in outcomes), ended.output
+
+
 def test_allowed_system_calls_refuse_the_arguments_a_worker_never_needs() -> None:
     """futex and madvise are allowed, but not their priority-inheritance and requeue operations, shared
     futexes, page merging across processes, page-out or poisoning; executable memory stays refused however
