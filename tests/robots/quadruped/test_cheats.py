@@ -329,6 +329,23 @@ def test_a_crate_raked_along_in_the_crook_of_a_pushed_hook_is_rammed() -> None:
         assert "pushing hook rammed crate" in failure_reason(rollout), failure_reason(rollout)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: a rider must touch nothing lower than itself but what the push moves, so a crate whose "
+    "edge also rests on a fixed strip is not weighed, though the pallet drags it along",
+)
+def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed() -> None:
+    """Found by an adversarial run this session: a 2.5 kg pallet carrying a 10 kg crate, whose edge also rests on a
+    fixed strip, was pushed 0.7 m with the crate riding along (the push was allowed, as for the pallet alone)."""
+    (rollout,) = sim.run_sessions(
+        _scene("crate_on_a_pallet_and_a_strip"),
+        start_sessions([_text("drag_a_heavy_crate_half_on_a_strip")], "quadruped"),
+        seed=11,
+    )
+    (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
+    assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
+
+
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
     vase, read as a step."""
