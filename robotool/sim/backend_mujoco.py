@@ -12,19 +12,16 @@ world diverged. The constraints' inverse weights stay those of the nominal model
 from __future__ import annotations
 
 import copy
-import ctypes
-import functools
 import logging
 import os
-import sys
 import threading
-from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from robotool.sim import ray_cast
 from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, geom_groups, weld_relpose
 from robotool.sim.compiled_scene import Scene
 
@@ -52,6 +49,20 @@ def subtree_masses(mass: np.ndarray, parent: np.ndarray) -> np.ndarray:
     for body in range(len(out) - 1, 0, -1):
         out[parent[body]] += out[body]
     return out
+
+
+@dataclass
+class _GeomPoses:
+    """Each world's geom poses as its ``MjData`` holds them, copied for the ray casts (``fresh``: since the last
+    step)."""
+
+    xpos: np.ndarray  # (nworld, ngeom, 3)
+    xmat: np.ndarray  # (nworld, ngeom, 9)
+    fresh: np.ndarray  # (nworld,) bool
+
+    @classmethod
+    def empty(cls, nworld: int, ngeom: int) -> _GeomPoses:
+        return cls(np.zeros((nworld, ngeom, 3)), np.zeros((nworld, ngeom, 9)), np.zeros(nworld, dtype=bool))
 
 
 class MujocoSim:
@@ -90,6 +101,9 @@ class MujocoSim:
         self._touching = np.zeros((nworld, model.nbody, model.nbody), dtype=bool)
         self._touch_pairs: list[np.ndarray | None] = [None] * nworld  # body pairs set in _touching
         self._geom_body = model.geom_bodyid.copy()
+        self._ray_geoms = ray_cast.RayGeoms.of(model)
+        self._eligible: dict[tuple[int, int], np.ndarray] = {}  # (exclude_body, skip_group) -> geoms rays may hit
+        self._poses = _GeomPoses.empty(nworld, model.ngeom)
         self._failed: list[str | None] = [None] * nworld
         self._nthread = nthread or min(os.cpu_count() or 1, nworld)
         self._pool = ThreadPoolExecutor(self._nthread - 1) if self._nthread > 1 else None
@@ -141,6 +155,7 @@ class MujocoSim:
     def step(self, nstep: int, active: np.ndarray) -> None:
         """Step the active, non-failed worlds ``nstep`` times, in parallel chunks."""
         worlds = np.flatnonzero(np.asarray(active) & np.array([f is None for f in self._failed]))
+        self._poses.fresh[worlds] = False
         if self._pool is None or worlds.size < 2:
             self._run(worlds, nstep)
             return
@@ -193,113 +208,43 @@ class MujocoSim:
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world with ``mj_ray``; distance inf and geom -1 where nothing is hit.
-
-        A ray equal to the one before it in its world (a path read past its end repeats its last point) takes the
-        earlier one's answer: ``mj_ray`` of the same ray on the same state gives the same answer."""
+        """Rays per world, as ``mj_ray`` casts them (:mod:`robotool.sim.ray_cast`), all at once; distance inf and geom
+        -1 where nothing is hit. The geoms are read where ``mj_ray`` reads them (each world's ``MjData``)."""
         nworld, nray = pnt.shape[:2]
         dist = np.full((nworld, nray), np.inf)
         geom = np.full((nworld, nray), -1, dtype=int)
         if not nray:
             return dist, geom
-        groups = geom_groups(skip_group)
-        pnt, vec = np.ascontiguousarray(pnt, dtype=np.float64), np.ascontiguousarray(vec, dtype=np.float64)
-        fresh = np.ones((nworld, nray), dtype=bool)
-        fresh[:, 1:] = np.any((pnt[:, 1:] != pnt[:, :-1]) | (vec[:, 1:] != vec[:, :-1]), axis=2)
-        source = np.maximum.accumulate(np.where(fresh, np.arange(nray), 0), axis=1)  # the ray each one repeats
-        worlds, rows = np.nonzero(fresh & ~np.isnan(pnt[:, :1, 0]))  # the rays to cast (a world without: NaN)
-        flat = worlds * nray + rows
-        x, hit = np.full(nworld * nray, -1.0), np.full(nworld * nray, -1, dtype=np.int32)
-        x[flat] = _ray_caster()(
-            self.models, self.datas, worlds, flat, pnt.reshape(-1, 3), vec.reshape(-1, 3), groups, exclude_body, hit
+        key = (exclude_body, skip_group)
+        if key not in self._eligible:
+            self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), exclude_body)
+        index = self._eligible[key]
+        worlds = np.flatnonzero(~np.isnan(np.asarray(pnt)[:, 0, 0]))
+        xpos, xmat = self._geom_poses(worlds)
+        x, hit = ray_cast.cast(
+            self._ray_geoms,
+            index,
+            xpos[worlds[:, None], index],
+            xmat[worlds[:, None], index],
+            np.asarray(pnt, dtype=np.float64)[worlds],
+            np.asarray(vec, dtype=np.float64)[worlds],
         )
-        flat = (np.arange(nworld)[:, None] * nray + source).ravel()  # each ray's answer, repeated ones included
-        x, hit = x[flat].reshape(nworld, nray), hit[flat].reshape(nworld, nray)
-        found = x >= 0
-        dist[found], geom[found] = x[found], hit[found]
+        dist[worlds] = np.where(x >= 0, x, np.inf)
+        geom[worlds] = hit
         return dist, geom
+
+    def _geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every geom's position (nworld, ngeom, 3) and rotation (nworld, ngeom, 9) in the worlds asked for (the
+        rest left stale), read once per step."""
+        poses = self._poses
+        missing = [int(w) for w in worlds if not poses.fresh[w]]
+        for w in missing:
+            poses.xpos[w] = self.datas[w].geom_xpos
+            poses.xmat[w] = self.datas[w].geom_xmat
+            poses.fresh[w] = True
+        return poses.xpos, poses.xmat
 
     def close(self) -> None:
         """Stop the worker threads."""
         if self._pool is not None:
             self._pool.shutdown()
-
-
-RayCaster = Callable[
-    [
-        list[mujoco.MjModel],
-        list[mujoco.MjData],
-        np.ndarray,
-        np.ndarray,
-        np.ndarray,
-        np.ndarray,
-        np.ndarray,
-        int,
-        np.ndarray,
-    ],
-    list[float],
-]
-
-
-@functools.cache
-def _ray_caster() -> RayCaster:
-    """``cast(models, datas, worlds, rows, pnt, vec, groups, exclude_body, hit)``: ``mj_ray`` in world ``worlds[i]``
-    of ray ``rows[i]`` of ``pnt`` and ``vec`` (n, 3, contiguous float64) for each i, its hit geom written to ``hit``
-    (n,) int32 at the same row, the distances returned.
-
-    It calls the MuJoCo library's own ``mj_ray`` through ctypes (the same function on the same state: the same
-    answers) at a third of the binding's cost per call, the rays' hot loop; the binding where the library file is
-    not where a Linux wheel puts it."""
-    library = Path(mujoco.__file__).parent / f"libmujoco.so.{mujoco.__version__}"
-    if not (sys.platform.startswith("linux") and library.is_file()):
-
-        def cast_binding(
-            models: list[mujoco.MjModel],
-            datas: list[mujoco.MjData],
-            worlds: np.ndarray,
-            rows: np.ndarray,
-            pnt: np.ndarray,
-            vec: np.ndarray,
-            groups: np.ndarray,
-            exclude_body: int,
-            hit: np.ndarray,
-        ) -> list[float]:
-            return [
-                mujoco.mj_ray(models[w], datas[w], pnt[r], vec[r], groups, 1, exclude_body, hit[r : r + 1])
-                for w, r in zip(worlds.tolist(), rows.tolist(), strict=True)
-            ]
-
-        return cast_binding
-    ray = ctypes.CDLL(str(library)).mj_ray
-    address = ctypes.c_void_p
-    ray.argtypes = [address, address, address, address, address, ctypes.c_bool, ctypes.c_int, address, address]
-    ray.restype = ctypes.c_double
-
-    def cast_c(
-        models: list[mujoco.MjModel],
-        datas: list[mujoco.MjData],
-        worlds: np.ndarray,
-        rows: np.ndarray,
-        pnt: np.ndarray,
-        vec: np.ndarray,
-        groups: np.ndarray,
-        exclude_body: int,
-        hit: np.ndarray,
-    ) -> list[float]:
-        used = np.unique(worlds)
-        ma, da = np.zeros(len(models), dtype=np.uint64), np.zeros(len(models), dtype=np.uint64)
-        ma[used], da[used] = [models[w]._address for w in used], [datas[w]._address for w in used]
-        g = groups.ctypes.data
-        return [
-            ray(m, d, p, v, g, True, exclude_body, h, None)
-            for m, d, p, v, h in zip(
-                ma[worlds].tolist(),
-                da[worlds].tolist(),
-                (pnt.ctypes.data + 24 * rows).tolist(),
-                (vec.ctypes.data + 24 * rows).tolist(),
-                (hit.ctypes.data + 4 * rows).tolist(),
-                strict=True,
-            )
-        ]
-
-    return cast_c

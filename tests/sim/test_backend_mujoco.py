@@ -1,17 +1,16 @@
 """The C MuJoCo backend: subtree masses follow a perturbed mass, a spinning object keeps its energy, and the batched
-rays answer as mj_ray."""
+rays (:mod:`robotool.sim.ray_cast`) answer as mj_ray, bit for bit."""
 
 from __future__ import annotations
 
 import copy
-import sys
 from typing import Any
 
 import mujoco
 import numpy as np
 import pytest
 
-from robotool.sim import backend_mujoco
+from robotool.sim import backend, ray_cast
 from robotool.sim.backend import Perturbation
 from robotool.sim.backend_mujoco import MujocoSim, subtree_masses
 
@@ -82,38 +81,106 @@ def test_a_spinning_vase_on_the_floor_gains_no_energy(sim_scene: Any) -> None:
         sim.close()
 
 
-@pytest.mark.parametrize("platform", [sys.platform, "elsewhere"])
-def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(
-    sim_scene: Any, platform: str, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """The batched rays (the library's mj_ray through ctypes, or the binding where the library is not found; a
-    repeated ray answered once) give exactly what the binding's mj_ray gives ray by ray: hits on objects and on the
-    floor, misses, the robot skipped, a body left out, and worlds without rays (NaN)."""
-    monkeypatch.setattr(sys, "platform", platform)
-    backend_mujoco._ray_caster.cache_clear()
+def _mj_ray_one_by_one(
+    models: list[mujoco.MjModel], datas: list[mujoco.MjData], pnt: np.ndarray, vec: np.ndarray, exclude: int, skip: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The binding's mj_ray, ray by ray: (distance, inf where missed), (geom, -1), each (nworld, nray)."""
+    groups = np.ones(6, dtype=np.uint8)
+    if skip >= 0:
+        groups[skip] = 0
+    dist, geom = np.full(pnt.shape[:2], np.inf), np.full(pnt.shape[:2], -1)
+    hit = np.zeros(1, dtype=np.int32)
+    for w, r in np.ndindex(*pnt.shape[:2]):
+        x = mujoco.mj_ray(models[w], datas[w], pnt[w, r], vec[w, r], groups, 1, exclude, hit)
+        if x >= 0:
+            dist[w, r], geom[w, r] = x, hit[0]
+    return dist, geom
+
+
+@pytest.mark.parametrize("direction", ["down", "any"])
+def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any, direction: str) -> None:
+    """The batched rays (numpy, :mod:`robotool.sim.ray_cast`) give exactly what the binding's mj_ray gives ray by
+    ray, bit for bit: hits on objects and on the floor, misses, the robot skipped, a body left out, and worlds without
+    rays (NaN); downward rays (the quadruped's) and rays in any direction."""
     scene = sim_scene("sofa_climbing")
     sim, nworld = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 0), njmax=scene.njmax, nconmax=scene.nconmax), 3
     try:
+        sim.step(100, np.ones(nworld, dtype=bool))  # the boxes settle: tilted a little, off their start poses
         rng = np.random.default_rng(0)
         xy = rng.uniform(-1.0, 4.0, (nworld, 40, 2))
-        xy[:, 20:30] = xy[:, 19:20]  # a path read past its end: the same ray again
         pnt = np.concatenate([xy, np.full((nworld, 40, 1), 0.8)], axis=2)
-        pnt[:, 35:, 2] = -1.0  # under the floor, pointing down: nothing is hit
+        pnt[:, 35:, 2] = -1.0  # under the floor: nothing is hit going down
         pnt[2] = np.nan  # no rays in this world
-        vec = np.tile([0.0, 0.0, -1.0], (nworld, 40, 1))
+        vec = np.tile([0.0, 0.0, -1.0], (nworld, 40, 1)) if direction == "down" else rng.normal(size=(nworld, 40, 3))
         box = scene.object_body[scene.object_index("box_1")]
         for exclude, skip in ((-1, -1), (box, 2)):  # group 2: the robot's geoms
             dist, geom = sim.rays(pnt, vec, exclude_body=exclude, skip_group=skip)
-            groups = np.ones(6, dtype=np.uint8)
-            if skip >= 0:
-                groups[skip] = 0
-            hit = np.zeros(1, dtype=np.int32)
-            for w in range(2):
-                for r in range(40):
-                    x = mujoco.mj_ray(sim.models[w], sim.datas[w], pnt[w, r], vec[w, r], groups, 1, exclude, hit)
-                    assert (dist[w, r], geom[w, r]) == ((x, hit[0]) if x >= 0 else (np.inf, -1))
+            want_dist, want_geom = _mj_ray_one_by_one(sim.models[:2], sim.datas[:2], pnt[:2], vec[:2], exclude, skip)
+            np.testing.assert_array_equal(dist[:2], want_dist)
+            np.testing.assert_array_equal(geom[:2], want_geom)
             assert np.isinf(dist[2]).all() and (geom[2] == -1).all()
             assert {-1, 0} < set(geom[:2].ravel().tolist())  # misses, the floor and objects were all met
     finally:
         sim.close()
-        backend_mujoco._ray_caster.cache_clear()
+
+
+def _every_shape() -> mujoco.MjModel:
+    """A bounded plane and tilted, offset spheres, capsules, ellipsoids, cylinders and boxes, one invisible, one with
+    an invisible material, a few sharing a pose (ties) and one in group 3."""
+    spec = mujoco.MjSpec()
+    spec.add_material(name="clear", rgba=[1, 1, 1, 0])
+    world = spec.worldbody
+    world.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[2.0, 1.5, 0.1], quat=[0.99, 0.1, 0.0, 0.05])
+    rng = np.random.default_rng(3)
+    kinds = [
+        mujoco.mjtGeom.mjGEOM_SPHERE,
+        mujoco.mjtGeom.mjGEOM_CAPSULE,
+        mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+        mujoco.mjtGeom.mjGEOM_CYLINDER,
+        mujoco.mjtGeom.mjGEOM_BOX,
+    ]
+    for n in range(20):
+        quat = rng.normal(size=4)
+        body = world.add_body(pos=rng.uniform(-1.0, 1.0, 3), quat=quat / np.linalg.norm(quat))
+        body.add_freejoint()
+        geom = body.add_geom(type=kinds[n % len(kinds)], size=rng.uniform(0.05, 0.3, 3))
+        if n == 7:
+            geom.rgba = [1, 0, 0, 0]
+        if n == 8:
+            geom.material = "clear"
+        if n == 9:
+            geom.group = 3
+    twin = world.add_body(pos=[0.2, 0.2, 0.3])
+    twin.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.1, 0.1, 0.1])
+    twin.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.1, 0.1, 0.1])  # the same box again: mj_ray keeps the first
+    return spec.compile()
+
+
+@pytest.mark.parametrize(("exclude", "skip"), [(-1, -1), (3, 3)])
+def test_every_primitive_shape_answers_as_mj_ray(exclude: int, skip: int) -> None:
+    """Each primitive geom type, posed anywhere, hit from outside, from inside and edge-on, gives mj_ray's answer bit
+    for bit; invisible geoms (their own alpha or their material's) are not hit, nor a left-out group or body."""
+    model = _every_shape()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    rng = np.random.default_rng(4)
+    pnt = rng.uniform(-1.5, 1.5, (1, 3000, 3))
+    vec = rng.normal(size=(1, 3000, 3))
+    vec[0, :500] = [0.0, 0.0, -1.0]
+    vec[0, 500:600, :2] = 0.0  # along z, either way
+    geoms = ray_cast.RayGeoms.of(model)
+    index = geoms.eligible(backend.geom_groups(skip), exclude)
+    x, hit = ray_cast.cast(geoms, index, data.geom_xpos[None, index], data.geom_xmat[None, index], pnt, vec)
+    want_dist, want_geom = _mj_ray_one_by_one([model], [data], pnt, vec, exclude, skip)
+    np.testing.assert_array_equal(np.where(x >= 0, x, np.inf), want_dist)
+    np.testing.assert_array_equal(hit, want_geom)
+    assert len(set(hit.ravel().tolist())) > 15  # most shapes were met
+
+
+def test_a_mesh_is_refused_with_its_type_named() -> None:
+    spec = mujoco.MjSpec()
+    spec.add_mesh(name="tetra", uservert=[0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1])
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="tetra")
+    geoms = ray_cast.RayGeoms.of(spec.compile())
+    with pytest.raises(ray_cast.UnsupportedGeom, match="mjGEOM_MESH"):
+        geoms.eligible(backend.geom_groups(-1), -1)
