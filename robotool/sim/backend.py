@@ -85,6 +85,11 @@ class BatchedSim(Protocol):
     def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
         """Move geom ``geom`` to ``pos`` in its body's frame in ``worlds``."""
 
+    def contact_normals(self, world: int) -> np.ndarray:
+        """(nbody, nbody, 3) after the last step in ``world``: for each pair of bodies that touch (geoms within
+        :data:`TOUCH_DISTANCE`), the sum of their contacts' unit normals pointing from the first body to the second
+        (antisymmetric); zeros for the pairs that do not touch. Which way one body presses on another."""
+
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -221,6 +226,19 @@ def touching_from_contacts(
     w, b1, b2 = world[near], geom_body[geom[near, 0]], geom_body[geom[near, 1]]
     out[w, b1, b2] = True
     out[w, b2, b1] = True
+    return out
+
+
+def normals_from_contacts(
+    nbody: int, geom_body: np.ndarray, geom: np.ndarray, dist: np.ndarray, normal: np.ndarray
+) -> np.ndarray:
+    """(nbody, nbody, 3) summed unit normals between touching bodies (see :meth:`BatchedSim.contact_normals`) from
+    one world's contacts: geom pairs (n, 2), distances (n,) and normals from the first geom to the second (n, 3)."""
+    out = np.zeros((nbody, nbody, 3))
+    near = dist <= TOUCH_DISTANCE
+    b1, b2, n = geom_body[geom[near, 0]], geom_body[geom[near, 1]], np.asarray(normal, dtype=float)[near]
+    np.add.at(out, (b1, b2), n)
+    np.add.at(out, (b2, b1), -n)
     return out
 
 

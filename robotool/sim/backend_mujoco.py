@@ -22,7 +22,14 @@ import mujoco
 import numpy as np
 
 from robotool.sim import ray_cast
-from robotool.sim.backend import TOUCH_DISTANCE, BatchState, Perturbation, geom_groups, weld_relpose
+from robotool.sim.backend import (
+    TOUCH_DISTANCE,
+    BatchState,
+    Perturbation,
+    geom_groups,
+    normals_from_contacts,
+    weld_relpose,
+)
 from robotool.sim.compiled_scene import Scene
 
 _LOG = logging.getLogger("robotool.sim")
@@ -204,6 +211,13 @@ class MujocoSim:
         """Move geom ``geom`` in its body's frame, in each world's model copy."""
         for w in np.asarray(worlds, dtype=int).reshape(-1):
             self.models[w].geom_pos[geom] = pos
+
+    def contact_normals(self, world: int) -> np.ndarray:
+        """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from its
+        ``MjData``'s contacts."""
+        d = self.datas[world]
+        con = d.contact
+        return normals_from_contacts(self.scene.model.nbody, self._geom_body, con.geom, con.dist, con.frame[:, :3])
 
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1

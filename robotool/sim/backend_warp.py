@@ -21,6 +21,7 @@ from robotool.sim.backend import (
     Perturbation,
     cuda_driver_found,
     geom_groups,
+    normals_from_contacts,
     touching_from_contacts,
     weld_relpose,
 )
@@ -174,6 +175,20 @@ class WarpSim:
         self._geom_pos[np.asarray(worlds, dtype=int).reshape(-1), geom] = pos
         with wp.ScopedDevice(self.device):
             self.m.geom_pos.assign(self._geom_pos.astype(np.float32))
+
+    def contact_normals(self, world: int) -> np.ndarray:
+        """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from the
+        batch's contact list after the last step."""
+        contact = self.d.contact
+        nacon = int(self.d.nacon.numpy()[0])
+        mine = contact.worldid.numpy()[:nacon] == world
+        return normals_from_contacts(
+            self.scene.model.nbody,
+            self.scene.model.geom_bodyid,
+            contact.geom.numpy()[:nacon][mine],
+            contact.dist.numpy()[:nacon][mine],
+            contact.frame.numpy()[:nacon][mine][:, 0, :],
+        )
 
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1

@@ -184,3 +184,20 @@ def test_a_mesh_is_refused_with_its_type_named() -> None:
     geoms = ray_cast.RayGeoms.of(spec.compile())
     with pytest.raises(ray_cast.UnsupportedGeom, match="mjGEOM_MESH"):
         geoms.eligible(backend.geom_groups(-1), -1)
+
+
+def test_contact_normals_say_which_way_touching_bodies_press(sim_scene: Any) -> None:
+    """A box resting on the floor: the normals between the floor's body and the box's point up from the floor (and
+    down from the box); bodies that do not touch have none."""
+    scene = sim_scene("sofa_climbing")
+    sim = MujocoSim(scene, 1, Perturbation.none(scene, 1), njmax=scene.njmax, nconmax=scene.nconmax)
+    try:
+        sim.step(50, np.ones(1, dtype=bool))
+        normals = sim.contact_normals(0)
+        box_1, box_2 = (scene.object_body[scene.object_index(n)] for n in ("box_1", "box_2"))
+        up = normals[0, box_1]
+        assert up[2] > 0.5 and np.allclose(up[:2], 0.0, atol=1e-3), up
+        np.testing.assert_array_equal(normals, -normals.transpose(1, 0, 2))
+        assert not sim.state().touching[0, box_1, box_2] and not normals[box_1, box_2].any()
+    finally:
+        sim.close()

@@ -56,6 +56,20 @@ def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -
     assert dist_c[0, 0] == pytest.approx(0.5 - 0.08) and dist_c[0, 1] == pytest.approx(0.5 - 0.03, abs=1e-3)
 
 
+def test_contact_normals_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    """Which way touching bodies press on each other, from Warp's batched contact list as from each MjData's."""
+    scene = sim_scene(TASK)
+    sims = [sim.make_sim(scene, 2, backend=b) for b in ("mujoco", "warp")]
+    for s in sims:
+        s.step(scene.control_substeps, np.ones(2, dtype=bool))
+    (c, w) = (s.contact_normals(1) for s in sims)
+    touching = np.linalg.norm(c, axis=2) > 0
+    assert touching.any()
+    np.testing.assert_array_equal(np.linalg.norm(w, axis=2) > 0, touching)
+    unit = [n[touching] / np.linalg.norm(n[touching], axis=1, keepdims=True) for n in (c, w)]
+    np.testing.assert_allclose(unit[1], unit[0], atol=1e-3)
+
+
 @pytest.mark.parametrize("task_name", ["can_grasping", "milk_reaching", "milk_reaching_near"])
 def test_reference_programs_solve_the_other_arm_tasks(sim_scene: Any, run_texts: Any, task_name: str) -> None:
     """Grasps by contact, rigid holds and sheet carriers behave on Warp as on C (fewer worlds: Warp on CPU is slow)."""

@@ -40,6 +40,7 @@ from robotool.sim.embodiment import SkillEnd
 
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
+RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -282,12 +283,14 @@ class Referee:
         self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
     ) -> None:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
-        objects that the pushed object presses, directly or through others, and whose centres lie beyond its front
-        face (what rides on it is checked when the push starts; what it drags by friction is not rammed); the travel
-        of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed object and
-        the rammed objects that travelled more than ``shove`` weigh more than the push limit, the robot shoved them
-        (a light object used as a ram moves no more than the robot may push): the world fails (:meth:`conditions`)
-        and the push is stopped and refused, naming them."""
+        objects that the pushed object presses, directly or through others, and that lie ahead of it: their centres
+        beyond its front face, or the contacts through which it presses them facing along the push (within
+        :data:`RAM_ANGLE`; an object caught in the crook of a hook, behind the hook's front face, is rammed). What
+        rides on it is checked when the push starts; what it drags by friction, pressing down on it, is not rammed.
+        The travel of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed
+        object and the rammed objects that travelled more than ``shove`` weigh more than the push limit, the robot
+        shoved them (a light object used as a ram moves no more than the robot may push): the world fails
+        (:meth:`conditions`) and the push is stopped and refused, naming them."""
         s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
         step = np.linalg.norm(shift, axis=2)
         for w in map(int, np.flatnonzero(mask & m.moving & (m.pushing >= 0))):
@@ -295,7 +298,8 @@ class Referee:
             lo, hi = senses.bounds(w, index)
             front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
             ahead = (centres[w] - centres[w, index]) @ m.u[w] > front  # centres beyond that face
-            rammed = self._pressed_by(w, index) & ahead
+            pressed = self._pressed_by(w, index)
+            rammed = pressed & (ahead | self._pressed_along(w, index, pressed, m.u[w]))
             s.carried[w] += np.where(rammed, step[w], 0.0)
             moved = np.flatnonzero(rammed & (s.carried[w] > self.config.shove))
             mass = senses.mass(w, index) + sum(senses.mass(w, int(o)) for o in moved)
@@ -308,6 +312,19 @@ class Referee:
             )
             measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
             moves.refuse(int(w), reason, measured, ends)
+
+    def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """(nobject,) the ``pressed`` objects that object ``index`` and the others it presses press on along ``u``
+        (x-y) in world ``w``: the summed normals of their contacts with it point within :data:`RAM_ANGLE` of ``u``."""
+        owner = self.scene.body_object
+        member = (owner[None, :] == np.arange(len(self.scene.object_names))[:, None]).astype(float)  # (nobj, nbody)
+        normals = np.einsum("ab,bcx,dc->adx", member, self.senses.sim.contact_normals(w), member)  # object to object
+        group = pressed.copy()
+        group[index] = True
+        towards = np.einsum("a,abx->bx", group.astype(float), normals)  # on each object, from the group's others
+        length = np.linalg.norm(towards, axis=1)
+        along = towards[:, :2] @ u > np.cos(RAM_ANGLE) * np.maximum(length, 1e-12)
+        return pressed & along
 
     def _pressed_by(self, w: int, index: int) -> np.ndarray:
         """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other
