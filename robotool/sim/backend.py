@@ -12,7 +12,7 @@ import ctypes.util
 import functools
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 import mujoco
@@ -44,19 +44,31 @@ class BatchState:
     eq_active: np.ndarray  # (nworld, neq) bool
     touching: np.ndarray  # (nworld, nbody, nbody) bool
     failed: list[str | None]
+    _xmats: dict[int, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def xmat(self, body: int) -> np.ndarray:
-        """Rotation matrices of one body in every world, (nworld, 3, 3)."""
-        q = self.xquat[:, body]
-        w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-        return np.stack(
-            [
-                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-            ],
-            axis=1,
-        )
+        """Rotation matrices of one body in every world, (nworld, 3, 3) (computed once per state and body: do not
+        write into it)."""
+        cached = self._xmats.get(body)
+        if cached is None:
+            cached = self._xmats[body] = quat_to_mat(self.xquat[:, body])
+        return cached
+
+
+def quat_to_mat(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (n, 3, 3) of unit quaternions ``q`` (n, 4), w first."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    out = np.empty((len(q), 3, 3))
+    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    out[:, 0, 1] = 2 * (x * y - w * z)
+    out[:, 0, 2] = 2 * (x * z + w * y)
+    out[:, 1, 0] = 2 * (x * y + w * z)
+    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    out[:, 1, 2] = 2 * (y * z - w * x)
+    out[:, 2, 0] = 2 * (x * z - w * y)
+    out[:, 2, 1] = 2 * (y * z + w * x)
+    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
 
 
 class BatchedSim(Protocol):
