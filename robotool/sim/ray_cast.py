@@ -83,18 +83,19 @@ def cast(
         return np.full(shape, -1.0), np.full(shape, -1, dtype=int)
     x = np.full((*shape, len(index)), -1.0)
     kinds = geoms.type[index]
-    for kind, test in _TESTS.items():
-        cols = np.flatnonzero(kinds == kind)
-        if not cols.size:
-            continue
-        size = geoms.size[index[cols]]  # (c, 3)
-        pos, mat = xpos[:, cols], xmat[:, cols]
-        if kind not in _BOUND:
-            x[..., cols] = test(pos[:, None], mat[:, None], size, pnt[:, :, None], vec[:, :, None])
-            continue
-        near = _sphere_hit(pos[:, None], _BOUND[kind](size), pnt[:, :, None], vec[:, :, None]) >= 0
-        w, n, c = np.nonzero(near)
-        x[w, n, cols[c]] = test(pos[w, c], mat[w, c], size[c], pnt[w, n], vec[w, n])
+    with np.errstate(invalid="ignore", divide="ignore"):  # the tests mask what a zero or a NaN makes of a ray
+        for kind, test in _TESTS.items():
+            cols = np.flatnonzero(kinds == kind)
+            if not cols.size:
+                continue
+            size = geoms.size[index[cols]]  # (c, 3)
+            pos, mat = xpos[:, cols], xmat[:, cols]
+            if kind not in _BOUND:
+                x[..., cols] = test(pos[:, None], mat[:, None], size, pnt[:, :, None], vec[:, :, None])
+                continue
+            near = _sphere_hit(pos[:, None], _BOUND[kind](size), pnt[:, :, None], vec[:, :, None]) >= 0
+            w, n, c = np.nonzero(near)
+            x[w, n, cols[c]] = test(pos[w, c], mat[w, c], size[c], pnt[w, n], vec[w, n])
     hit = x >= 0
     best = np.argmin(np.where(hit, x, np.inf), axis=2)[..., None]  # the first of equals, as mj_ray keeps the earlier
     found = np.take_along_axis(hit, best, axis=2)[..., 0]
@@ -120,10 +121,9 @@ def _quad(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.n
     """Both roots of a x^2 + 2 b x + c = 0 (-1 when none are real) and the least non-negative one (-1: none)."""
     det = b * b - a * c
     ok = (det >= 0) & (a >= MINVAL)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        root = np.sqrt(np.where(ok, det, 0.0))
-        x0 = np.where(ok, (-b - root) / np.where(ok, a, 1.0), -1.0)
-        x1 = np.where(ok, (-b + root) / np.where(ok, a, 1.0), -1.0)
+    root = np.sqrt(np.where(ok, det, 0.0))
+    x0 = np.where(ok, (-b - root) / np.where(ok, a, 1.0), -1.0)
+    x1 = np.where(ok, (-b + root) / np.where(ok, a, 1.0), -1.0)
     least = np.where(x0 >= 0, x0, np.where(x1 >= 0, x1, -1.0))
     return x0, x1, least
 
@@ -146,8 +146,7 @@ def _nearest(x: np.ndarray, sol: np.ndarray, ok: np.ndarray) -> np.ndarray:
 def _plane(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarray, vec: np.ndarray) -> np.ndarray:
     p0, p1, p2, v0, v1, v2 = _local(pos, mat, pnt, vec)
     front = v2 <= -MINVAL
-    with np.errstate(invalid="ignore", divide="ignore"):
-        x = -p2 / np.where(front, v2, -1.0)
+    x = -p2 / np.where(front, v2, -1.0)
     a, b = p0 + x * v0, p1 + x * v1
     inside = ((size[..., 0] <= 0) | (np.abs(a) <= size[..., 0])) & ((size[..., 1] <= 0) | (np.abs(b) <= size[..., 1]))
     return np.where(front & (x >= 0) & inside, x, -1.0)
@@ -188,8 +187,7 @@ def _cylinder(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarra
     x = np.full(np.broadcast_shapes(p0.shape, r.shape), -1.0)
     axial = np.abs(v2) > MINVAL
     for side in (-1.0, 1.0):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            sol = (side * h - p2) / np.where(axial, v2, 1.0)
+        sol = (side * h - p2) / np.where(axial, v2, 1.0)
         a, b = p0 + sol * v0, p1 + sol * v1
         x = _nearest(x, sol, axial & (sol >= 0) & (a * a + b * b <= r * r))
     sol = _quad(v0 * v0 + v1 * v1, v0 * p0 + v1 * p1, p0 * p0 + p1 * p1 - r * r)[2]
@@ -204,8 +202,7 @@ def _box(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarray, ve
     for i, (j, k) in enumerate(((1, 2), (0, 2), (0, 1))):
         facing = np.abs(lv[i]) > MINVAL
         for side in (-1.0, 1.0):
-            with np.errstate(invalid="ignore", divide="ignore"):
-                sol = (side * size[..., i] - lp[i]) / np.where(facing, lv[i], 1.0)
+            sol = (side * size[..., i] - lp[i]) / np.where(facing, lv[i], 1.0)
             a, b = lp[j] + sol * lv[j], lp[k] + sol * lv[k]
             inside = (np.abs(a) <= size[..., j]) & (np.abs(b) <= size[..., k])
             x = _nearest(x, sol, facing & (sol >= 0) & inside)
