@@ -41,6 +41,8 @@ from robotool.sim.embodiment import SkillEnd
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
 RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
+BEARING_ANGLE = np.radians(60.0)  # rad: a contact whose normal is within this of up bears weight (riders' supports)
+RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -144,9 +146,12 @@ class Referee:
 
     def _riders(self, w: int, index: int) -> list[int]:
         """Movable objects that ride on object ``index`` in world ``w``, recursively: higher than what carries them
-        and touching nothing else lower than themselves (but the robot); what lies on a rider rides too."""
+        and borne up by nothing else (but the robot): every body whose contacts press up on them (summed normal within
+        :data:`BEARING_ANGLE` of up) is the pushed object's or a rider's; what only touches a side, or lies on top,
+        bears none of their weight. What lies on a rider rides too."""
         state, owner = self.senses.state, self.scene.body_object
         centres = self.senses.centers(state)[w]
+        normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
         carried = [index]
         riders: list[int] = []
         robot = self.scene.robot_body
@@ -161,8 +166,9 @@ class Referee:
                     or centres[other, 2] <= centres[base, 2]
                 ):
                     continue
-                on_top = (owner >= 0) & (centres[np.maximum(owner, 0), 2] > centres[other, 2])  # lying on it
-                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & ~on_top
+                onto = normals[:, owner == other].sum(axis=1)  # (nbody, 3) from each body onto it
+                bearing = onto[:, 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(onto, axis=1)  # pressing up on it
+                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & bearing
                 if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
                     riders.append(int(other))
                     carried.append(int(other))
@@ -284,9 +290,10 @@ class Referee:
     ) -> None:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
         objects that the pushed object presses, directly or through others, and that lie ahead of it: their centres
-        beyond its front face, or the contacts through which it presses them facing along the push (within
-        :data:`RAM_ANGLE`; an object caught in the crook of a hook, behind the hook's front face, is rammed). What
-        rides on it is checked when the push starts; what it drags by friction, pressing down on it, is not rammed.
+        beyond its front face, or the contacts through which it or another pressed object presses them facing along
+        the push (:meth:`_pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
+        rammed, books lying on it or not). What rides on it is checked when the push starts; what it drags by
+        friction, pressing down on it, is not rammed.
         The travel of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed
         object and the rammed objects that travelled more than ``shove`` weigh more than the push limit, the robot
         shoved them (a light object used as a ram moves no more than the robot may push): the world fails
@@ -314,17 +321,23 @@ class Referee:
             moves.refuse(int(w), reason, measured, ends)
 
     def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """(nobject,) the ``pressed`` objects that object ``index`` and the others it presses press on along ``u``
-        (x-y) in world ``w``: the summed normals of their contacts with it point within :data:`RAM_ANGLE` of ``u``."""
+        """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
+        (x-y) in world ``w``: for one of them, the horizontal part of the summed normals of its contacts with the
+        object is at least :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``. Each presser is judged
+        alone, by its horizontal part only, so that what lies on the object (pressing down) or under it (carrying
+        it) neither hides a push nor makes one."""
+        normals = self._object_normals(w)[:, :, :2]  # (nobject, nobject, 2) x-y, from one object onto another
+        pressers = pressed.copy()
+        pressers[index] = True
+        along = normals[pressers] @ u  # (npresser, nobject)
+        flat = np.linalg.norm(normals[pressers], axis=2)
+        return pressed & ((along >= RAM_PRESS) & (along > np.cos(RAM_ANGLE) * flat)).any(axis=0)
+
+    def _object_normals(self, w: int) -> np.ndarray:
+        """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
         owner = self.scene.body_object
         member = (owner[None, :] == np.arange(len(self.scene.object_names))[:, None]).astype(float)  # (nobj, nbody)
-        normals = np.einsum("ab,bcx,dc->adx", member, self.senses.sim.contact_normals(w), member)  # object to object
-        group = pressed.copy()
-        group[index] = True
-        towards = np.einsum("a,abx->bx", group.astype(float), normals)  # on each object, from the group's others
-        length = np.linalg.norm(towards, axis=1)
-        along = towards[:, :2] @ u > np.cos(RAM_ANGLE) * np.maximum(length, 1e-12)
-        return pressed & along
+        return np.einsum("ab,bcx,dc->adx", member, self.senses.sim.contact_normals(w), member)
 
     def _pressed_by(self, w: int, index: int) -> np.ndarray:
         """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other

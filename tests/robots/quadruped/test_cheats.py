@@ -313,22 +313,42 @@ def test_a_book_lying_on_a_heavy_crate_does_not_hide_it_from_the_push_limit() ->
 
 
 @pytest.mark.slow
-def test_a_crate_raked_along_in_the_crook_of_a_pushed_hook_is_rammed() -> None:
-    """Found by an adversarial run: pushing a 4 kg hook 8 cm at a time raked a 20 kg crate caught in its crook 2.1 m
-    toward the ledge; the ram rule only counted objects beyond the pushed object's front face."""
-    scene = _scene("crate_in_the_crook_of_a_hook")
-    rollouts = sim.run_sessions(
-        scene, start_sessions([_text("rake_a_heavy_crate_with_a_hook")] * 2, "quadruped"), seed=11
-    )
+@pytest.mark.parametrize(
+    ("layout", "program"),
+    [
+        ("crate_in_the_crook_of_a_hook", "rake_a_heavy_crate_with_a_hook"),
+        ("crate_under_books_in_the_crook_of_a_hook", "rake_a_heavy_crate_under_books_with_a_hook"),
+        ("crate_under_a_cloth_in_the_crook_of_a_hook", "rake_a_heavy_crate_under_books_with_a_hook"),
+    ],
+)
+def test_a_crate_raked_along_in_the_crook_of_a_pushed_hook_is_rammed(layout: str, program: str) -> None:
+    """Found by adversarial runs: pushing a 4 kg hook 8 cm at a time raked a 20 kg crate caught in its crook 2.1 m
+    toward the ledge (the ram rule only counted objects beyond the pushed object's front face); then, once contacts
+    facing along the push counted, books or a cloth lying on the crate hid it again (their contacts pressing down were
+    summed with the hook's pressing along) and the crate, raked 1.1 m, was climbed onto the ledge: a success."""
+    rollouts = sim.run_sessions(_scene(layout), start_sessions([_text(program)] * 2, "quadruped"), seed=11)
     for rollout in rollouts:
         assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
         assert "pushing hook rammed crate" in failure_reason(rollout), failure_reason(rollout)
 
 
+def test_a_crate_riding_a_pallet_is_weighed_though_a_block_touches_its_flank() -> None:
+    """Found by an adversarial run: a 10 kg crate lying wholly on a pushed 2.5 kg pallet rode along 0.67 m because its
+    flank touched a 0.2 kg block on the floor, which the riders rule took for a support (it bears no weight)."""
+    rollouts = sim.run_sessions(
+        _scene("crate_on_a_pallet_touching_a_block"),
+        start_sessions([_text("drag_a_heavy_crate_touching_a_block")] * 2, "quadruped"),
+        seed=11,
+    )
+    for rollout in rollouts:
+        (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
+        assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
+
+
 @pytest.mark.xfail(
     strict=True,
-    reason="an open loophole: a rider must touch nothing lower than itself but what the push moves, so a crate whose "
-    "edge also rests on a fixed strip is not weighed, though the pallet drags it along",
+    reason="an open loophole: a rider must be borne up by nothing but what the push moves, so a crate whose edge also "
+    "rests on a fixed strip is not weighed, though the pallet drags it along (weighing its share needs contact forces)",
 )
 def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed() -> None:
     """Found by an adversarial run this session: a 2.5 kg pallet carrying a 10 kg crate, whose edge also rests on a
