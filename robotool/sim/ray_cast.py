@@ -5,8 +5,9 @@ from its front only and within its size (a size of 0: unbounded), a sphere, caps
 its surface at the least non-negative distance, with the same bounding-sphere rejections; a geom is eligible unless
 it belongs to the excluded body, is invisible (alpha 0, its material's when it has one) or lies in a left-out group.
 Ties go to the lower geom index, as in ``mj_ray``. Meshes, height fields and SDF geoms are not handled: a scene
-with an eligible one is refused (:class:`UnsupportedGeom`). The answers agree with ``mj_ray``'s to rounding (tests
-compare them on built scenes), at a small fraction of the cost of one call per ray.
+with an eligible one is refused (:class:`UnsupportedGeom`). The answers are ``mj_ray``'s bit for bit (the same
+arithmetic in the same order; tests compare them ray by ray on built scenes and on every primitive shape), at a small
+fraction of the cost of one call per ray.
 """
 
 from __future__ import annotations
