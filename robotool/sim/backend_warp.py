@@ -92,6 +92,7 @@ class WarpSim:
         self.mocap_pos = np.tile(mjd.mocap_pos, (nworld, 1, 1))
         self._graphs: dict[int, wp.Graph] = {}
         self._state = self._read()
+        self._contacts: tuple[np.ndarray, ...] | None = None  # the contact list read back for contact_normals
 
     def _substeps(self, nstep: int) -> None:
         for _ in range(nstep):
@@ -117,6 +118,7 @@ class WarpSim:
             else:
                 wp.capture_launch(graph)
         self._state = self._read()
+        self._contacts = None
 
     def _read(self) -> BatchState:
         d, model = self.d, self.scene.model
@@ -179,15 +181,18 @@ class WarpSim:
     def contact_normals(self, world: int) -> np.ndarray:
         """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from the
         batch's contact list after the last step."""
-        contact = self.d.contact
-        nacon = int(self.d.nacon.numpy()[0])
-        mine = contact.worldid.numpy()[:nacon] == world
+        if self._contacts is None:  # read back once per step, whichever worlds ask
+            contact, nacon = self.d.contact, int(self.d.nacon.numpy()[0])
+            self._contacts = (
+                contact.worldid.numpy()[:nacon],
+                contact.geom.numpy()[:nacon],
+                contact.dist.numpy()[:nacon],
+                contact.frame.numpy()[:nacon][:, 0, :],
+            )
+        worldid, geom, dist, normal = self._contacts
+        mine = worldid == world
         return normals_from_contacts(
-            self.scene.model.nbody,
-            self.scene.model.geom_bodyid,
-            contact.geom.numpy()[:nacon][mine],
-            contact.dist.numpy()[:nacon][mine],
-            contact.frame.numpy()[:nacon][mine][:, 0, :],
+            self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
         )
 
     def rays(

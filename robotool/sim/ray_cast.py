@@ -30,7 +30,6 @@ _PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX = (
         mujoco.mjtGeom.mjGEOM_BOX,
     )
 )
-HANDLED = (_PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX)
 
 
 class UnsupportedGeom(ValueError):
@@ -64,7 +63,7 @@ class RayGeoms:
         """Indices of the geoms a ray may hit (``groups``: 1 where a group is included)."""
         keep = self.visible & (self.body != exclude_body) & (np.asarray(groups)[self.group] != 0)
         index = np.flatnonzero(keep)
-        odd = sorted({int(t) for t in self.type[index]} - set(HANDLED))
+        odd = sorted({int(t) for t in self.type[index]} - set(_TESTS))
         if odd:
             names = ", ".join(mujoco.mjtGeom(t).name for t in odd)
             raise UnsupportedGeom(f"rays cannot be cast against geoms of type {names}")
