@@ -14,7 +14,7 @@ from fixtures.paths import FIXTURES
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout
-from robotool.robots.quadruped.predict import push_route, walk_violation
+from robotool.robots.quadruped.predict import LANE, push_route, walk_violation
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
@@ -103,4 +103,31 @@ def test_a_push_is_routed_around_what_stands_in_its_way() -> None:
         assert np.sum(np.abs(target - here) > 1e-9) == 1  # one axis per leg
         swept = Box("box_a", np.minimum(here, target) - box.half, np.maximum(here, target) + box.half, 0.0, 0.2)
         assert swept.overlap(wall) < 0
+        here = target
+
+
+def test_a_routed_push_passes_other_objects_with_room_to_drift() -> None:
+    """The lane round the wall's near end would sweep box_a 1 mm past a crate (a long push drifts more than that):
+    the route keeps at least half a lane off the wall and the crate on every leg (they are not where it starts or
+    ends)."""
+    task = parse_task({
+        "format": 1, "name": "push_past_a_crate", "instruction": "Stand on the block.",
+        "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
+        "objects": [
+            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
+            {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False},
+            {"name": "crate", "shape": "box", "center": [1.0, -1.451, 0.2], "size": [0.4, 0.4, 0.4], "movable": False},
+            {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False},
+        ],
+        "goal": {"robot_on": "block"},
+    })
+    layout, goal = Layout(task), np.array([2.0, 0.0])
+    route = push_route(layout, "box_a", goal, task.limits, 0.0)
+    assert route is not None and np.allclose(route[-1], goal)
+    box, here = layout.box("box_a"), layout.box("box_a").center
+    for target in route:
+        swept = Box("box_a", np.minimum(here, target) - box.half, np.maximum(here, target) + box.half, 0.0, 0.2)
+        for other in ("wall", "crate"):
+            assert swept.overlap(layout.box(other)) <= -LANE / 2, (other, here, target)
         here = target

@@ -307,11 +307,22 @@ def push_route(
         for a in (0, 1)
     ]
 
-    def clear(rect_lo: np.ndarray, rect_hi: np.ndarray) -> bool:
-        return not np.any(np.all((np.minimum(rect_hi, hi) - np.maximum(rect_lo, lo)) > CONTACT / 4, axis=1))
+    def gap(rect_lo: np.ndarray, rect_hi: np.ndarray) -> np.ndarray:
+        """(nblock,) how far each block lies from the rectangle (negative: how deep they overlap)."""
+        return np.max(np.maximum(lo - rect_hi, rect_lo - hi), axis=1)
+
+    # a block the object starts or ends beside is met as the task wants; any other it passes a lane's width off,
+    # since a long push drifts sideways a little (half a lane to spare: the lanes lie a whole lane off)
+    beside = (gap(box.center - box.half, box.center + box.half) < LANE / 2) | (
+        gap(goal - box.half, goal + box.half) < LANE / 2
+    )
+    keep_off = np.where(beside, -CONTACT / 4, LANE / 2)
+
+    def clear(rect_lo: np.ndarray, rect_hi: np.ndarray, margin: np.ndarray | float = -CONTACT / 4) -> bool:
+        return not np.any(gap(rect_lo, rect_hi) < margin)
 
     def leg_ok(a: int, frm: np.ndarray, to: np.ndarray) -> bool:
-        if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half):
+        if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half, keep_off):
             return False
         sign = np.sign(to[a] - frm[a])
         back = box.half[a] + GAP + robot[a]
