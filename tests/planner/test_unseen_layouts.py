@@ -14,7 +14,7 @@ from fixtures.paths import FIXTURES
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout
-from robotool.robots.quadruped.predict import LANE, push_route, walk_violation
+from robotool.robots.quadruped.predict import LANE, drift_room, push_route, walk_violation
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
@@ -131,3 +131,24 @@ def test_a_routed_push_passes_other_objects_with_room_to_drift() -> None:
         for other in ("wall", "crate"):
             assert swept.overlap(layout.box(other)) <= -LANE / 2, (other, here, target)
         here = target
+
+
+def test_a_push_that_ends_beside_a_wall_comes_straight_at_it() -> None:
+    """box_a must end against the long side of a wall. The skill's own legs (the shorter axis first) would slide it
+    1.5 m along that side, 5 mm off, where a little drift catches the wall's corner: that way leaves no room to drift;
+    the routed way keeps a lane off the wall and comes straight at it."""
+    task = parse_task({
+        "format": 1, "name": "push_to_a_wall", "instruction": "Stand on the block.",
+        "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
+        "objects": [
+            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
+            {"name": "wall", "shape": "box", "center": [1.5, -1.0, 0.4], "size": [2.0, 0.2, 0.8], "movable": False},
+        ],
+        "goal": {"robot_on": "wall"},
+    })
+    layout, goal = Layout(task), np.array([2.0, -0.695])  # 5 mm off the wall's side
+    assert not drift_room(layout, "box_a", [goal], 0.0)
+    route = push_route(layout, "box_a", goal, task.limits, 0.0)
+    assert route is not None and np.allclose(route[-1], goal) and drift_room(layout, "box_a", route, 0.0)
+    assert abs(route[-1][1] - route[-2][1]) > 1e-9  # the last leg comes at the wall across its side

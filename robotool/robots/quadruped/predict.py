@@ -8,7 +8,7 @@ predict a walk (:func:`walk_violation`) or a push (:func:`push_problem`) on a pl
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -282,6 +282,51 @@ def _push_pose(
     return None
 
 
+def _obstacles(layout: Layout, name: str, floor: float) -> tuple[np.ndarray, np.ndarray]:
+    """The x-y bounds (k, 2), (k, 2) of the objects a push of ``name`` on a floor at ``floor`` could run into: those
+    standing above the floor and reaching below the top of ``name``."""
+    top = layout.box(name).top
+    blocks = [b for b in layout.boxes(exclude=[name]) if b.top > floor + RISE and b.bottom < top]
+    return np.array([b.lo for b in blocks]).reshape(-1, 2), np.array([b.hi for b in blocks]).reshape(-1, 2)
+
+
+def _gaps(rect_lo: np.ndarray, rect_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(k,) how far each box (``lo``, ``hi``) lies from the rectangle (negative: how deep they overlap)."""
+    return np.max(np.maximum(lo - rect_hi, rect_lo - hi), axis=1)
+
+
+def _drift_room(
+    half: np.ndarray, frm: np.ndarray, to: np.ndarray, lo: np.ndarray, hi: np.ndarray, from_start: bool, to_goal: bool
+) -> bool:
+    """Whether an object of half size ``half`` pushed straight from ``frm`` to ``to`` passes the boxes (``lo``,
+    ``hi``) with half a :data:`LANE` to spare (a long push drifts sideways a little). Within a lane of where it starts
+    (``from_start``) and of its goal (``to_goal``) it may meet them: it may start against one, and end against one
+    it comes straight at, but not slide along one on its way there."""
+    length = float(np.linalg.norm(to - frm))
+    near, far = (LANE if from_start else 0.0), length - (LANE if to_goal else 0.0)
+    if far <= near:
+        return True
+    u = (to - frm) / length
+    a, b = frm + near * u, frm + far * u
+    return not np.any(_gaps(np.minimum(a, b) - half, np.maximum(a, b) + half, lo, hi) < LANE / 2)
+
+
+def drift_room(layout: Layout, name: str, targets: Sequence[np.ndarray], floor: float) -> bool:
+    """Whether pushing ``name`` through ``targets`` in turn (each as the push skill makes it: the shorter axis first)
+    passes everything above the floor at ``floor`` with room to drift (:func:`_drift_room`)."""
+    lo, hi = _obstacles(layout, name, floor)
+    box, goal = layout.box(name), np.asarray(targets[-1], dtype=float)
+    here, first = box.center, True
+    for xy in targets:
+        for leg in legs(here, np.asarray(xy, dtype=float)):
+            to = here.copy()
+            to[leg.axis] = leg.target
+            if not _drift_room(box.half, here, to, lo, hi, first, bool(np.allclose(to, goal))):
+                return False
+            here, first = to, False
+    return True
+
+
 def push_route(
     layout: Layout, name: str, goal: np.ndarray, limits: QuadrupedLimits, floor: float
 ) -> list[np.ndarray] | None:
@@ -297,9 +342,7 @@ def push_route(
     box = layout.box(name)
     goal = np.asarray(goal, dtype=float)
     robot = np.asarray(limits.body_size[:2]) / 2
-    blocks = [b for b in layout.boxes(exclude=[name]) if b.top > floor + RISE and b.bottom < box.top]
-    lo = np.array([b.lo for b in blocks]).reshape(-1, 2)
-    hi = np.array([b.hi for b in blocks]).reshape(-1, 2)
+    lo, hi = _obstacles(layout, name, floor)
     lanes = [
         sorted(
             {float(box.center[a]), float(goal[a]), *(lo[:, a] - box.half[a] - LANE), *(hi[:, a] + box.half[a] + LANE)}
@@ -307,22 +350,13 @@ def push_route(
         for a in (0, 1)
     ]
 
-    def gap(rect_lo: np.ndarray, rect_hi: np.ndarray) -> np.ndarray:
-        """(nblock,) how far each block lies from the rectangle (negative: how deep they overlap)."""
-        return np.max(np.maximum(lo - rect_hi, rect_lo - hi), axis=1)
-
-    # a block the object starts or ends beside is met as the task wants; any other it passes a lane's width off,
-    # since a long push drifts sideways a little (half a lane to spare: the lanes lie a whole lane off)
-    beside = (gap(box.center - box.half, box.center + box.half) < LANE / 2) | (
-        gap(goal - box.half, goal + box.half) < LANE / 2
-    )
-    keep_off = np.where(beside, -CONTACT / 4, LANE / 2)
-
-    def clear(rect_lo: np.ndarray, rect_hi: np.ndarray, margin: np.ndarray | float = -CONTACT / 4) -> bool:
-        return not np.any(gap(rect_lo, rect_hi) < margin)
+    def clear(rect_lo: np.ndarray, rect_hi: np.ndarray) -> bool:
+        return not np.any(_gaps(rect_lo, rect_hi, lo, hi) < -CONTACT / 4)
 
     def leg_ok(a: int, frm: np.ndarray, to: np.ndarray) -> bool:
-        if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half, keep_off):
+        if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half):
+            return False
+        if not _drift_room(box.half, frm, to, lo, hi, np.array_equal(frm, box.center), np.array_equal(to, goal)):
             return False
         sign = np.sign(to[a] - frm[a])
         back = box.half[a] + GAP + robot[a]

@@ -15,7 +15,14 @@ import numpy as np
 
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Layout
-from robotool.robots.quadruped.predict import detour, push_problem, push_route, push_staging, walk_violation
+from robotool.robots.quadruped.predict import (
+    detour,
+    drift_room,
+    push_problem,
+    push_route,
+    push_staging,
+    walk_violation,
+)
 from robotool.robots.quadruped.push import lateral_offsets, legs
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
@@ -75,18 +82,20 @@ class Writer:
         return self.refs[name]
 
     def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine (else the straight way, its
-        problem kept as the program's doubt): in one skill call, or one axis at a time, or routed around what stands
-        in the way; before each push whose own way to where the robot lines up is predicted blocked, the robot walks
-        there around what stands in the way."""
+        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine that leaves it room to drift
+        (:func:`~.predict.drift_room`), else the first predicted fine, else the straight way, its problem kept as the
+        program's doubt: in one skill call, or one axis at a time, or routed around what stands in the way; before
+        each push whose own way to where the robot lines up is predicted blocked, the robot walks there around what
+        stands in the way."""
         xy = np.asarray(xy, dtype=float)
         predicted = None
         for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level):
             found = self._predict_pushes(name, plan)
-            predicted = predicted or found
-            if found[1] is None:
+            if found[1] is None and drift_room(self.layout, name, plan, self.level):
                 predicted = found
                 break
+            if predicted is None or (predicted[1] is not None and found[1] is None):
+                predicted = found
         assert predicted is not None
         steps, problem = predicted
         for path, target, end in steps:
