@@ -334,7 +334,8 @@ def push_route(
     the shortest found (each extra leg counts :data:`LEG_COST`), or None.
 
     The object's centre moves on lanes clear of the other objects' sides (their boxes grown by the object's half size
-    and :data:`LANE`); a leg is kept when the object's swept footprint meets no other object and the robot's, from
+    and :data:`LANE`); a leg is kept when the object's swept footprint meets no other object and passes them with
+    room to drift (:func:`_drift_room`: so a goal beside something is come at across its side), and the robot's, from
     where it lines up behind the object to the end of the push, meets nothing above the floor at one of the
     offsets along the face that the push skill may take. Boxes only: the prediction of each push
     (:func:`push_problem`) is the judge of the route found.
