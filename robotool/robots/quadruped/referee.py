@@ -145,12 +145,12 @@ class Referee:
         )
 
     def _riders(self, w: int, index: int) -> list[int]:
-        """Movable objects that ride on object ``index`` in world ``w``, recursively: higher than what carries them
-        and borne up by nothing else (but the robot): every body whose contacts press up on them (summed normal within
-        :data:`BEARING_ANGLE` of up) is the pushed object's or a rider's; what only touches a side, or lies on top,
-        bears none of their weight. What lies on a rider rides too."""
+        """Movable objects that ride on object ``index`` in world ``w``, recursively: borne up by nothing else (but
+        the robot): every body whose contacts press up on them (summed normal within :data:`BEARING_ANGLE` of up) is
+        the pushed object's or a rider's; what only touches a side, or lies on top, bears none of their weight. Where
+        their centres lie does not matter (a crate on the tray of an upright L lies lower than the L's centre). What
+        lies on a rider rides too."""
         state, owner = self.senses.state, self.scene.body_object
-        centres = self.senses.centers(state)[w]
         normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
         carried = [index]
         riders: list[int] = []
@@ -159,12 +159,7 @@ class Referee:
             base = carried.pop()
             touching = state.touching[w][owner == base].any(axis=0)
             for other in np.unique(owner[touching & (owner >= 0)]):
-                if (
-                    other == index
-                    or other in riders
-                    or not self.facts.movable[other]
-                    or centres[other, 2] <= centres[base, 2]
-                ):
+                if other == index or other in riders or not self.facts.movable[other]:
                     continue
                 onto = normals[:, owner == other].sum(axis=1)  # (nbody, 3) from each body onto it
                 bearing = onto[:, 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(onto, axis=1)  # pressing up on it

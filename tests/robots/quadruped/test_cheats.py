@@ -345,6 +345,31 @@ def test_a_crate_riding_a_pallet_is_weighed_though_a_block_touches_its_flank() -
         assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
 
 
+def test_a_crate_on_the_tray_of_an_upright_hook_is_weighed_though_it_lies_lower_than_the_hook() -> None:
+    """Found by an adversarial run: a 2 kg hook stood on edge carried a 12 kg crate on its tray 1 m to a ledge, which
+    the crate then stepped the robot onto: a success. The riders rule weighed only objects whose centre lies above the
+    pushed object's, and the upright hook's centre is 0.25 m up. With a 2 kg crate the same push is allowed."""
+    layout = LAYOUTS / "crate_on_the_tray_of_an_upright_hook.yaml"
+    rollouts = sim.run_sessions(
+        _scene("crate_on_the_tray_of_an_upright_hook"),
+        start_sessions([_text("carry_a_heavy_crate_on_an_upright_hook")] * 2, "quadruped"),
+        seed=11,
+    )
+    for rollout in rollouts:
+        (push, *_) = [c for c in rollout.calls if c.skill == "push_to_position"]
+        assert not rollout.success
+        assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
+    data = tasks.load(layout).model_dump(mode="json", exclude_defaults=True)
+    next(o for o in data["objects"] if o["name"] == "crate")["mass"] = 2.0
+    (light,) = sim.run_sessions(
+        sim.build(parse_task(data)),
+        start_sessions([_text("carry_a_heavy_crate_on_an_upright_hook")], "quadruped"),
+        seed=11,
+    )
+    (push, *_) = [c for c in light.calls if c.skill == "push_to_position"]
+    assert push.outcome == "done", push.reason
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="an open loophole: a rider must be borne up by nothing but what the push moves, so a crate whose edge also "
