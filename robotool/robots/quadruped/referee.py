@@ -204,15 +204,17 @@ class Referee:
         self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
     ) -> None:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
-        torso touches outside a push of it or of something it touches (and the contact that lasts on from the push
-        until the next walk), and that no foot stands on (a lever tips under the robot), is remembered where it is;
+        torso or a leg touches outside a push of it or of something it touches (and the contact that lasts on from the
+        push until the next walk), and that no foot stands on (:meth:`_stood_on`: a lever tips under the robot; a leg
+        pressing on its side stands on nothing), is remembered where it is;
         while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
         they are split between steps onto it); once it lies more than ``shove`` from that place, it was shoved
         (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
         limit, and what it moved may slide or tip on after the robot stops). The world fails (:meth:`conditions`)
         and a move in progress there is stopped and refused, naming the object."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
-        touched = state.touching[:, facts.ids.body][:, scene.object_body] & facts.movable & ~facts.cloth
+        robot = np.concatenate([[facts.ids.body], facts.ids.feet])
+        touched = state.touching[:, robot][:, :, scene.object_body].any(axis=1) & facts.movable & ~facts.cloth
         touched &= mask[:, None]
         pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
         pushed &= mask[:, None]
@@ -220,7 +222,7 @@ class Referee:
             pushed[w] |= state.touching[w, scene.object_body[m.pushing[w]]][scene.object_body]
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
-        stood_on = state.touching[:, facts.ids.feet][:, :, scene.object_body].any(axis=1)  # it carries a foot
+        stood_on = self._stood_on(mask)
         excused = (s.pressed | stood_on) & mask[:, None]
         s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
         first = touched & ~s.pressed & ~stood_on & np.isnan(s.bumped[:, :, 0])
@@ -235,6 +237,19 @@ class Referee:
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
             moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
+
+    def _stood_on(self, mask: np.ndarray) -> np.ndarray:
+        """(nworld, nobject) the objects a foot stands on, in the worlds in ``mask``: its contacts press the foot up
+        (summed normal within :data:`BEARING_ANGLE` of up). A leg pressing on an object's side does not stand on it
+        (it may drive a low object along between the feet, as a walk must not)."""
+        state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
+        on = state.touching[:, feet_ids][:, :, bodies]  # (nworld, 4, nobject)
+        out = np.zeros((on.shape[0], on.shape[2]), dtype=bool)
+        for w in np.flatnonzero(mask & on.any(axis=(1, 2))):
+            normals = self.senses.sim.contact_normals(int(w))[bodies][:, feet_ids]  # from each object onto each foot
+            up = normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=2)
+            out[w] = (up & on[w].T).any(axis=1)
+        return out
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its

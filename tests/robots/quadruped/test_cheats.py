@@ -370,6 +370,26 @@ def test_a_crate_on_the_tray_of_an_upright_hook_is_weighed_though_it_lies_lower_
     assert push.outcome == "done", push.reason
 
 
+def test_a_heavy_disc_driven_along_between_the_legs_is_a_shove() -> None:
+    """Found by an adversarial run: a 6 kg weight plate, 0.04 m high, fits under the belly and between the feet's
+    paths; walking over it, the front legs' sides drove it off the platform, so it was lowered: a success in every
+    world. Shoves counted the torso's contacts only, and any leg touching an object stood on it. The honest push is
+    refused for its mass, so only the cheat could succeed."""
+    scene = _scene("heavy_disc_on_a_platform")
+    rollouts = sim.run_sessions(
+        scene, start_sessions([_text("plow_a_heavy_disc_with_the_legs")] * 2, "quadruped"), seed=11
+    )
+    for rollout in rollouts:
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+        assert "ran into weight_plate" in failure_reason(rollout), failure_reason(rollout)
+    honest = (
+        'p, s = get_position("platform"), get_size("platform")\n'
+        'push_to_position("weight_plate", [p[0] + s[0] / 2 + 0.2, 0.0, 0.0])\n'
+    )
+    (pushed,) = sim.run_sessions(scene, start_sessions([honest], "quadruped"), seed=11)
+    assert "exceeds the push limit" in failure_reason(pushed), failure_reason(pushed)
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="an open loophole: a rider must be borne up by nothing but what the push moves, so a crate whose edge also "
