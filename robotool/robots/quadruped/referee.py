@@ -42,6 +42,8 @@ FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
 RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
 BEARING_ANGLE = np.radians(60.0)  # rad: a contact whose normal is within this of up bears weight (riders' supports)
+STILL = 1e-5  # m an object may move in a tick and count as still: whether a foot stands on it matters not (a shove
+# of 3 cm at this pace would take 150 s)
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
@@ -222,7 +224,8 @@ class Referee:
             pushed[w] |= state.touching[w, scene.object_body[m.pushing[w]]][scene.object_body]
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
-        stood_on = self._stood_on(mask)
+        moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~facts.cloth & ~s.pressed
+        stood_on = self._stood_on(mask[:, None] & moved_now)
         excused = (s.pressed | stood_on) & mask[:, None]
         s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
         first = touched & ~s.pressed & ~stood_on & np.isnan(s.bumped[:, :, 0])
@@ -238,14 +241,15 @@ class Referee:
             )
             moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
 
-    def _stood_on(self, mask: np.ndarray) -> np.ndarray:
-        """(nworld, nobject) the objects a foot stands on, in the worlds in ``mask``: its contacts press the foot up
-        (summed normal within :data:`BEARING_ANGLE` of up). A leg pressing on an object's side does not stand on it
-        (it may drive a low object along between the feet, as a walk must not)."""
+    def _stood_on(self, asked: np.ndarray) -> np.ndarray:
+        """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a foot stands on: its contacts press the
+        foot up (summed normal within :data:`BEARING_ANGLE` of up). A leg pressing on an object's side does not stand
+        on it (it may drive a low object along between the feet, as a walk must not). Only what moved this tick needs
+        asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere."""
         state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
-        on = state.touching[:, feet_ids][:, :, bodies]  # (nworld, 4, nobject)
-        out = np.zeros((on.shape[0], on.shape[2]), dtype=bool)
-        for w in np.flatnonzero(mask & on.any(axis=(1, 2))):
+        on = state.touching[:, feet_ids][:, :, bodies] & asked[:, None, :]  # (nworld, 4, nobject)
+        out = np.zeros(asked.shape, dtype=bool)
+        for w in np.flatnonzero(on.any(axis=(1, 2))):
             normals = self.senses.sim.contact_normals(int(w))[bodies][:, feet_ids]  # from each object onto each foot
             up = normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=2)
             out[w] = (up & on[w].T).any(axis=1)
