@@ -7,6 +7,8 @@ those need: a walk over a box between the feet, a push routed around a wall."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from fixtures.paths import FIXTURES
@@ -81,19 +83,27 @@ def test_a_walk_over_a_box_between_the_feet_is_predicted_to_run_into_it() -> Non
     assert walk_violation(Layout(task), start, [np.array([-0.5, -0.6])], task.limits) is None
 
 
-def test_a_push_is_routed_around_what_stands_in_its_way() -> None:
-    """box_a must reach the far side of a fixed wall: the route goes round the wall's end in axis-aligned legs, and
-    neither the box nor the robot behind it meets the wall on any leg."""
-    task = parse_task({
-        "format": 1, "name": "push_around", "instruction": "Stand on the block.", "category": "sequential_tool_use",
+WALL = {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False}
+BLOCK = {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False}
+
+
+def _box_a_to_push(name: str, others: list[dict[str, Any]], target: str) -> Task:
+    """A quadruped scene with a 2 kg box ``box_a`` at the origin to push, the ``others``, and ``target`` to stand on."""
+    return parse_task({
+        "format": 1, "name": name, "instruction": f"Stand on the {target}.", "category": "sequential_tool_use",
         "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
         "objects": [
             {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
-            {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False},
-            {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False},
+            *others,
         ],
-        "goal": {"robot_on": "block"},
+        "goal": {"robot_on": target},
     })
+
+
+def test_a_push_is_routed_around_what_stands_in_its_way() -> None:
+    """box_a must reach the far side of a fixed wall: the route goes round the wall's end in axis-aligned legs, and
+    neither the box nor the robot behind it meets the wall on any leg."""
+    task = _box_a_to_push("push_around", [WALL, BLOCK], "block")
     layout, goal = Layout(task), np.array([2.0, 0.0])
     route = push_route(layout, "box_a", goal, task.limits, 0.0)
     assert route is not None and len(route) >= 3 and np.allclose(route[-1], goal)
@@ -110,18 +120,8 @@ def test_a_routed_push_passes_other_objects_with_room_to_drift() -> None:
     """The lane round the wall's near end would sweep box_a 1 mm past a crate (a long push drifts more than that):
     the route keeps at least half a lane off the wall and the crate on every leg (they are not where it starts or
     ends)."""
-    task = parse_task({
-        "format": 1, "name": "push_past_a_crate", "instruction": "Stand on the block.",
-        "category": "sequential_tool_use",
-        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
-        "objects": [
-            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
-            {"name": "wall", "shape": "box", "center": [1.0, 0.4, 0.4], "size": [0.2, 2.4, 0.8], "movable": False},
-            {"name": "crate", "shape": "box", "center": [1.0, -1.451, 0.2], "size": [0.4, 0.4, 0.4], "movable": False},
-            {"name": "block", "shape": "box", "center": [3.0, 0.0, 0.2], "size": [0.6, 0.6, 0.4], "movable": False},
-        ],
-        "goal": {"robot_on": "block"},
-    })
+    crate = {"name": "crate", "shape": "box", "center": [1.0, -1.451, 0.2], "size": [0.4, 0.4, 0.4], "movable": False}
+    task = _box_a_to_push("push_past_a_crate", [WALL, crate, BLOCK], "block")
     layout, goal = Layout(task), np.array([2.0, 0.0])
     route = push_route(layout, "box_a", goal, task.limits, 0.0)
     assert route is not None and np.allclose(route[-1], goal)
@@ -137,16 +137,8 @@ def test_a_push_that_ends_beside_a_wall_comes_straight_at_it() -> None:
     """box_a must end against the long side of a wall. The skill's own legs (the shorter axis first) would slide it
     1.5 m along that side, 5 mm off, where a little drift catches the wall's corner: that way leaves no room to drift;
     the routed way keeps a lane off the wall and comes straight at it."""
-    task = parse_task({
-        "format": 1, "name": "push_to_a_wall", "instruction": "Stand on the block.",
-        "category": "sequential_tool_use",
-        "robot": {"type": "quadruped", "position": [-1.5, 0.0]},
-        "objects": [
-            {"name": "box_a", "shape": "box", "center": [0.0, 0.0, 0.1], "size": [0.4, 0.4, 0.2], "mass": 2.0},
-            {"name": "wall", "shape": "box", "center": [1.5, -1.0, 0.4], "size": [2.0, 0.2, 0.8], "movable": False},
-        ],
-        "goal": {"robot_on": "wall"},
-    })
+    wall = {"name": "wall", "shape": "box", "center": [1.5, -1.0, 0.4], "size": [2.0, 0.2, 0.8], "movable": False}
+    task = _box_a_to_push("push_to_a_wall", [wall], "wall")
     layout, goal = Layout(task), np.array([2.0, -0.695])  # 5 mm off the wall's side
     assert not drift_room(layout, "box_a", [goal], 0.0)
     route = push_route(layout, "box_a", goal, task.limits, 0.0)
