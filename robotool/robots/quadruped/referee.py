@@ -44,6 +44,7 @@ RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push d
 BEARING_ANGLE = np.radians(60.0)  # rad: a contact whose normal is within this of up bears weight (riders' supports)
 STILL = 1e-5  # m an object may move in a tick and count as still: whether a foot stands on it matters not (a shove
 # of 3 cm at this pace would take 150 s)
+SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
@@ -336,16 +337,19 @@ class Referee:
 
     def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
-        (x-y) in world ``w``: for one of them, the horizontal part of the summed normals of its contacts with the
-        object is at least :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``. Each presser is judged
-        alone, by its horizontal part only, so that what lies on the object (pressing down) or under it (carrying
-        it) neither hides a push nor makes one."""
-        normals = self._object_normals(w)[:, :, :2]  # (nobject, nobject, 2) x-y, from one object onto another
+        (x-y) or aside in world ``w``: for one of them, the horizontal part of the summed normals of its contacts with
+        the object is at least :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within
+        :data:`SIDE_ANGLE` of horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of
+        its way moves it as surely as its face does). Each presser is judged alone, by its horizontal part, so that
+        what lies on the object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push
+        nor makes one."""
+        normals = self._object_normals(w)  # (nobject, nobject, 3) from one object onto another
         pressers = pressed.copy()
         pressers[index] = True
-        along = normals[pressers] @ u  # (npresser, nobject)
-        flat = np.linalg.norm(normals[pressers], axis=2)
-        return pressed & ((along >= RAM_PRESS) & (along > np.cos(RAM_ANGLE) * flat)).any(axis=0)
+        flat = np.linalg.norm(normals[pressers][:, :, :2], axis=2)  # (npresser, nobject)
+        along = normals[pressers][:, :, :2] @ u
+        aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(normals[pressers], axis=2)
+        return pressed & ((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0)
 
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""

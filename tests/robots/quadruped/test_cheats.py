@@ -390,6 +390,20 @@ def test_a_heavy_disc_driven_along_between_the_legs_is_a_shove() -> None:
     assert "exceeds the push limit" in failure_reason(pushed), failure_reason(pushed)
 
 
+def test_a_heavy_crate_wedged_aside_by_a_pushed_hook_is_rammed() -> None:
+    """Found by an adversarial run: a 3 kg hook pushed along a rail wedged a 15 kg crate, turned 20 degrees, sideways
+    off a platform (lowered: a success in every world). Its tip pressed the crate's slanted face, 70 degrees off the
+    push, and the ram rule counted only contacts facing within 60 degrees of the push; a side pressed counts now."""
+    rollouts = sim.run_sessions(
+        _scene("crate_aslant_beside_a_hooks_path"),
+        start_sessions([_text("wedge_a_heavy_crate_aside_with_a_hook")] * 2, "quadruped"),
+        seed=11,
+    )
+    for rollout in rollouts:
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+        assert "pushing hook rammed crate" in failure_reason(rollout), failure_reason(rollout)
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="an open loophole: a rider must be borne up by nothing but what the push moves, so a crate whose edge also "
