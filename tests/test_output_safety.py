@@ -26,11 +26,11 @@ from rich.console import Console
 
 import robotool
 from robotool.cli import main
-from robotool.cli.options import print_error
+from robotool.cli.options import make_console, print_error
 from robotool.eval.records import Picture
 from robotool.eval.report import _pictures_section
 from robotool.render.overlay import CaptionLine, draw_caption
-from robotool.safe_text import CUT, SINKS, markdown_text, mask_addresses, one_line
+from robotool.safe_text import CUT, SINKS, console_markup, markdown_text, mask_addresses, one_line
 from robotool.signatures.repair import ShownTrace
 from robotool.signatures.traces import FailureTrace, TracedCall
 
@@ -159,7 +159,6 @@ ESCAPERS = {
 }
 
 HOST_TEXT_ONLY = {
-    ("robotool/cli/task_commands.py", "console"): "built-in task YAML, scene descriptions and paths the user typed",
     ("robotool/cli/solve_command.py", "console"): "paths the user typed and the model's name; program and model text "
     "goes through robotool.cli.summary",
     ("robotool/cli/run_command.py", "console"): "paths the user typed; program text goes through robotool.cli.summary",
@@ -267,6 +266,29 @@ def test_an_error_message_quoting_a_program_reaches_the_terminal_escaped() -> No
     console = Console(file=StringIO(), width=200)
     print_error(console, "no object named '\x1b]52;c;eA==\x07'")
     assert console.file.getvalue() == "error: no object named '\\x1b]52;c;eA==\\x07'\n"  # type: ignore[attr-defined]
+
+
+def test_describe_shows_a_task_file_s_text_with_its_controls_escaped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run: ``describe`` printed a task file's instruction and notes raw (an OSC 52 clipboard
+    write, a screen clear, a bidi override, an 8-bit CSI, a window title); any task file may be described."""
+    text = (Path(robotool.__file__).parent / "tasks" / "data" / "sofa_traversing.yaml").read_text(encoding="utf-8")
+    hostile = "\x1b]52;c;cHduZWQ=\x07\x1b[2J\u202e\x9b31m\x1b]0;TITLE\x07"
+    text = re.sub(r"(?m)^instruction: .*$", lambda _: f"instruction: {json.dumps('Stand on sofa_2. ' + hostile)}", text)
+    path = tmp_path / "hostile.yaml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["describe", str(path)]) == 0
+    shown = capsys.readouterr().out
+    assert not _RAW.search(shown) and "\\x1b]52;c;cHduZWQ=\\x07" in shown
+
+
+def test_an_emoji_code_in_a_program_s_text_stays_text(capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by an adversarial run: a program's ``:white_check_mark: every world succeeded`` (an object name, an
+    exception) painted a tick in the host's tables: rich reads emoji codes, which markup escaping leaves alone."""
+    make_console().print(console_markup(":white_check_mark: every world succeeded :x:"))
+    shown = capsys.readouterr().out
+    assert ":white_check_mark: every world succeeded :x:" in shown and "\u2705" not in shown and "\u274c" not in shown
 
 
 @pytest.mark.parametrize("text", ["- nested", "+ nested", "1. ordered", "# heading", "> quote"])

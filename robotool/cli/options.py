@@ -222,11 +222,12 @@ def add_candidate_options(parser: argparse.ArgumentParser) -> argparse._Argument
 
 def make_console(*, stderr: bool = False) -> Console:
     """A console for output; when it is not a terminal (and ``COLUMNS`` is not set), tables keep
-    :data:`CAPTURED_WIDTH` columns instead of rich's 80."""
+    :data:`CAPTURED_WIDTH` columns instead of rich's 80. Emoji codes stay text (``:white_check_mark:`` in a program's
+    string must not paint a tick in the host's tables; :func:`robotool.safe_text.console_markup` leaves them)."""
     stream = sys.stderr if stderr else sys.stdout
     if stream.isatty() or os.environ.get("COLUMNS"):
-        return Console(stderr=stderr)
-    return Console(stderr=stderr, width=CAPTURED_WIDTH)
+        return Console(stderr=stderr, emoji=False)
+    return Console(stderr=stderr, width=CAPTURED_WIDTH, emoji=False)
 
 
 def warnings_in_one_line() -> None:

@@ -12,6 +12,7 @@ from robotool import tasks
 from robotool.cli.command import UsageError, set_command
 from robotool.cli.options import TASK_HELP, Verbs, output_file, positive_int, seed
 from robotool.cli.outputs import write_file
+from robotool.safe_text import console_plain
 from robotool.task.concepts import needs_tool
 from robotool.task.describe import describe
 
@@ -62,7 +63,7 @@ def _write_generated(args: argparse.Namespace, console: Console) -> int:
 def cmd_describe(args: argparse.Namespace, console: Console, errors: Console) -> int:
     """Print the natural-language description of a task."""
     task = tasks.load(args.task)
-    console.print(describe(task), markup=False, highlight=False, soft_wrap=True)
+    console.print(console_plain(describe(task)), markup=False, highlight=False, soft_wrap=True)  # any task file's text
     return 0
 
 

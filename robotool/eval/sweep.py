@@ -245,7 +245,7 @@ def evaluate(
     unavailable for some runs: they are not journalled, and no report is written.
     """
     started = time.perf_counter()
-    console = console or Console()
+    console = console or Console(emoji=False)  # emoji codes in a program's text stay text
     lm = _lm(config, lm)
     if lm is not None and config.settings.lm is None:
         config = config.model_copy(update={"settings": config.settings.model_copy(update={"lm": lm.model})})
