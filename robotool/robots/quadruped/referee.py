@@ -216,9 +216,8 @@ class Referee:
         limit, and what it moved may slide or tip on after the robot stops). The world fails (:meth:`conditions`)
         and a move in progress there is stopped and refused, naming the object."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
-        robot = np.concatenate([[facts.ids.body], facts.ids.feet])
-        touched = state.touching[:, robot][:, :, scene.object_body].any(axis=1) & facts.movable & ~facts.cloth
-        touched &= mask[:, None]
+        touched = state.touching[:, scene.robot_body][:, :, scene.object_body].any(axis=1)  # by the torso or a leg
+        touched &= facts.movable & ~facts.cloth & mask[:, None]
         pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
         pushed &= mask[:, None]
         for w in np.flatnonzero(pushed.any(axis=1)):  # what the pushed object moves by touching it moves with it
@@ -346,9 +345,10 @@ class Referee:
         normals = self._object_normals(w)  # (nobject, nobject, 3) from one object onto another
         pressers = pressed.copy()
         pressers[index] = True
-        flat = np.linalg.norm(normals[pressers][:, :, :2], axis=2)  # (npresser, nobject)
-        along = normals[pressers][:, :, :2] @ u
-        aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(normals[pressers], axis=2)
+        pressing = normals[pressers]  # (npresser, nobject, 3)
+        flat = np.linalg.norm(pressing[:, :, :2], axis=2)
+        along = pressing[:, :, :2] @ u
+        aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
         return pressed & ((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0)
 
     def _object_normals(self, w: int) -> np.ndarray:
