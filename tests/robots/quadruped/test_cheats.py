@@ -178,6 +178,8 @@ LAYOUT_CASES = [
     ("ram_heavy_step_with_light_box", "climb_heavy_step_and_light_box"),
     ("shove_block_in_small_steps", "ledge_heavy_block"),  # shoves under 3 cm, each followed by a step onto it
     ("programs/vase_lowering", "vase_heavy"),
+    # a heavy low disc walked over with one foot's path along its rim (the foot on its edge excuses nothing)
+    ("plow_a_heavy_disc_under_one_foot_line", "heavy_disc_on_a_platform"),
 ]
 
 CONTROL_CASES = [
