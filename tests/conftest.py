@@ -13,6 +13,15 @@ import robotool  # noqa: F401 - before any test imports mujoco: picks EGL for re
 dspy.configure_cache(enable_disk_cache=False, enable_memory_cache=False)
 
 
+@pytest.fixture(autouse=True)
+def _no_wait_between_lm_retries(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In-process LM requests retry at once here instead of after 1, 2, 4 ... s (the stand-in servers answer at
+    once); tests/test_lm_retry_waits.py checks the waits themselves."""
+    from robotool.program import lm_calls
+
+    monkeypatch.setattr(lm_calls, "_retry_delay", lambda fault, attempt: 0.0)
+
+
 @functools.cache
 def _scene(task_name: str):  # -> robotool.sim.Scene, imported lazily
     from robotool import sim, tasks

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import importlib
 import re
+from dataclasses import replace
 
 import pytest
 import yaml
@@ -15,6 +17,8 @@ from robotool.signatures.models import PlanStep, StepParameters
 from robotool.solution import Solution
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
+
+solve_module = importlib.import_module("robotool.planner.solve")  # the package re-exports solve() under this name
 
 PLANNER = REPO / "robotool" / "planner"
 
@@ -114,10 +118,15 @@ def test_planner_source_names_no_task_or_family() -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("family", "seed"), [("sofa_climbing", 1021), ("sofa_climbing", 1028)])
-def test_solves_generated_staircases_that_once_failed(family: str, seed: int) -> None:
-    """Regression: a last step level with the target (1021) and a box that drifted along another's face (1028)."""
+def test_solves_generated_staircases_that_once_failed(family: str, seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Regression: a last step level with the target (1021) and a box that drifted along another's face (1028): the
+    planner's first round (its best guess) reaches the goal. One round: the later rounds, which look for a program
+    that holds in every world, cost 1028 a minute and this test asserts none of them."""
+    search_macros = solve_module.robot_planner
+    monkeypatch.setattr(solve_module, "robot_planner", lambda task: replace(search_macros(task), rounds=1))
     instance = tasks.generate(family, seed)
-    solution = solve(instance.task, worlds=2)
+    solution = solve(instance.task, worlds=2, repair=False)
+    assert len(solution.candidates) == 1
     assert solution.success, solution.candidates[0].failure if solution.candidates else solution.notes
 
 
