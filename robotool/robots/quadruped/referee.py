@@ -320,7 +320,9 @@ class Referee:
             front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
             ahead = (centres[w] - centres[w, index]) @ m.u[w] > front  # centres beyond that face
             pressed = self._pressed_by(w, index)
-            rammed = pressed & (ahead | self._pressed_along(w, index, pressed, m.u[w]))
+            rammed = pressed & ahead
+            if (pressed & ~ahead).any():  # the contact normals only where they can add a rammed object
+                rammed |= self._pressed_along(w, index, pressed, m.u[w])
             s.carried[w] += np.where(rammed, step[w], 0.0)
             moved = np.flatnonzero(rammed & (s.carried[w] > self.config.shove))
             mass = senses.mass(w, index) + sum(senses.mass(w, int(o)) for o in moved)
