@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.robots.quadruped.body import BodyIds
-from robotool.robots.quadruped.support import centre_of_mass, feet, feet_touching, pass_weight, resting_on, supported
+from robotool.robots.quadruped.support import (
+    Parts,
+    centre_of_mass,
+    feet,
+    feet_touching,
+    pass_weight,
+    resting_on,
+    supported,
+)
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
@@ -37,8 +45,9 @@ class RobotOnGoal:
         self.corners = local_corners(scene)
         self.lo, self.hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
         objects = scene.task.objects
-        self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)
-        self.member = scene.body_object[None, :] == np.arange(len(objects))[:, None]  # (nobject, nbody)
+        self.parts = Parts.of(scene, self.corners)
+        self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)[self.parts.owner]
+        self.nobject = len(objects)
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
@@ -57,16 +66,18 @@ class RobotOnGoal:
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
 
     def _through_carriers(self, state: BatchState) -> np.ndarray:
-        """(nworld, 4) whether each foot stands on carriers that pass its weight to the target."""
-        under = (state.touching[:, self.ids.feet].astype(float) @ self.member.T.astype(float) > 0) & self.carrier
+        """(nworld, 4) whether each foot stands on carriers that pass its weight to the target (a cloth's link passes
+        it to what that link lies on)."""
+        on_feet = state.touching[:, self.ids.feet].astype(float)  # (nworld, 4, nbody)
+        under = (on_feet @ self.parts.member.T.astype(float) > 0) & self.carrier  # (nworld, 4, npart)
         out = np.zeros(under.shape[:2], dtype=bool)
         worlds = np.flatnonzero(under.any(axis=(1, 2)))
         if worlds.size == 0:
             return out
-        rests = resting_on(state, self.scene, self.corners, worlds)
+        rests = resting_on(state, self.parts, worlds)
         for f in range(under.shape[1]):
             loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
-            out[worlds, f] = loaded[:, self.index]
+            out[worlds, f] = self.parts.objects(loaded, self.nobject)[:, self.index]
         return out
 
     def _in_target_frame(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:

@@ -283,20 +283,24 @@ class Referee:
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
         ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
-        on (touching it, that object's centre below its underside along its own up axis: under a board lying flat or
-        leaning on it from the floor); a fixed object passes it to the ground.
+        on (:func:`~.support.resting_on`: under a board lying flat or leaning on it from the floor; under the very
+        link of a cloth the foot stands on); a fixed object passes it to the ground.
         Also (nworld, nobject) the object that passed the weight on to each one."""
-        state, owner, facts = self.senses.state, self.scene.body_object, self.facts
+        state, facts, parts = self.senses.state, self.facts, self.facts.parts
         nworld, nobject = self.senses.sim.nworld, len(self.scene.object_names)
         loaded, via = np.zeros((nworld, nobject), dtype=bool), np.zeros((nworld, nobject), dtype=int)
-        member = (owner[None, :] == np.arange(nobject)[:, None]).astype(float)  # (nobject, nbody)
-        carrier = facts.movable & ~facts.fragile
-        under_feet = (state.touching[:, facts.ids.feet].any(axis=1).astype(float) @ member.T > 0) & carrier
+        carrier = (facts.movable & ~facts.fragile)[parts.owner]
+        on_feet = state.touching[:, facts.ids.feet].any(axis=1).astype(float)  # (nworld, nbody)
+        under_feet = (on_feet @ parts.member.T.astype(float) > 0) & carrier  # (nworld, npart)
         worlds = np.flatnonzero(mask & under_feet.any(axis=1))
         if worlds.size == 0:
             return loaded, via
-        rests = resting_on(state, self.scene, facts.corners, worlds)
-        loaded[worlds], via[worlds] = pass_weight(rests, under_feet[worlds], carrier)
+        load, passed_by = pass_weight(resting_on(state, parts, worlds), under_feet[worlds], carrier)
+        loaded[worlds] = parts.objects(load, nobject)
+        for o in np.flatnonzero(loaded[worlds].any(axis=0)):  # the part that passed it to one of o's loaded parts
+            own = np.flatnonzero(parts.owner == o)
+            first = own[np.argmax(load[:, own], axis=1)]
+            via[worlds, o] = parts.owner[passed_by[np.arange(len(worlds)), first]]
         return loaded, via
 
     def _rams(

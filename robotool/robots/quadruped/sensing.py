@@ -12,6 +12,7 @@ import numpy as np
 
 from robotool.robots.quadruped.body import LEG_SLACK, XY_KP, BodyIds
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.support import Parts
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners, world_corners
@@ -34,12 +35,14 @@ class SceneFacts:
     movable: np.ndarray  # (nobject,) bool
     fragile: np.ndarray  # (nobject,) bool
     not_robot: np.ndarray  # (nbody,) bool: bodies that are not the robot's
+    parts: Parts  # the objects' parts that bear weight apart (a cloth's links)
 
     @classmethod
     def of(cls, scene: Scene, limits: QuadrupedLimits) -> SceneFacts:
         model = scene.model
         ids = BodyIds.of(model)
         geom_object = scene.body_object[model.geom_bodyid]
+        corners = local_corners(scene)
         cloth = np.array([o.shape == "cloth" for o in scene.task.objects], dtype=bool)
         return cls(
             ids=ids,
@@ -47,13 +50,14 @@ class SceneFacts:
             height=limits.body_size[2],
             lead=ids.xy_kv / XY_KP,
             reach=limits.max_step_down + LEG_SLACK,
-            corners=local_corners(scene),
+            corners=corners,
             geom_object=geom_object,
             cloth=cloth,
             cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,
             movable=np.array([o.movable for o in scene.task.objects]),
             fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
             not_robot=~scene.robot_body,
+            parts=Parts.of(scene, corners),
         )
 
 

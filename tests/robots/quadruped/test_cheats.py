@@ -180,6 +180,10 @@ LAYOUT_CASES = [
     ("programs/vase_lowering", "vase_heavy"),
     # a heavy low disc walked over with one foot's path along its rim (the foot on its edge excuses nothing)
     ("plow_a_heavy_disc_under_one_foot_line", "heavy_disc_on_a_platform"),
+    # a cloth draped from one surface onto another carries weight only where it lies: the part under the feet
+    ("stand_on_a_cloth_that_hangs_down_to_the_goal", "cloth_from_a_balcony_onto_a_mat"),  # on the balcony, 0.7 m up
+    ("stand_on_a_cloth_that_hangs_from_the_goal", "cloth_from_a_wall_top_into_its_crook"),  # on the floor below it
+    ("walk_over_a_blanket_on_glass", "blanket_over_a_glass_step"),  # the feet on the part lying on the glass
 ]
 
 CONTROL_CASES = [
@@ -195,6 +199,7 @@ CONTROL_CASES = [
     ("walk_over_board_on_vase", "board_beside_vase"),  # the board bridges the gap clear of the vase
     ("straddle_the_beam", "low_platform"),  # the same walk onto a low top wider than the stance
     ("carry_a_heavy_crate_under_a_book", "light_crate_with_a_book_on_a_pallet"),  # 3.8 kg in all: within the limit
+    ("walk_onto_the_middle_of_the_mat", "blanket_on_a_mat"),  # the links under the feet lie on the mat
 ]
 
 
@@ -539,3 +544,18 @@ def test_a_push_refused_for_a_drop_names_the_place_under_the_straight_on_push() 
     assert "pushing from [3.00, 0." in push.reason, push.reason
     x, y = (float(v) for v in push.reason.rsplit(" at [", 1)[1].rstrip("]").split(", "))
     assert abs(x - 3.0) < 0.35 and abs(y - 0.95) < 0.05 and "a drop of 0.34 m" in push.reason, push.reason
+
+
+def test_a_walk_on_the_part_of_a_blanket_lying_on_the_floor_does_not_crush_the_glass_it_also_covers() -> None:
+    """The honest side of the cloth rule: weight goes where the links under the feet lie. The blanket over the glass
+    step turned end for end (its first link, which stood for the whole cloth, now on the glass): a walk that keeps
+    every foot on the part lying on the floor stands on nothing fragile; the walk over the glass still crushes it."""
+    data = tasks.load(LAYOUTS / "blanket_over_a_glass_step.yaml").model_dump(mode="json", exclude_defaults=True)
+    blanket = next(o for o in data["objects"] if o["name"] == "blanket")
+    blanket["rpy"] = [0.0, 0.0, 180.0]
+    scene = sim.build(Task.model_validate(data))
+    short = "walk_to_position([-0.5, 0.0, 0.0])\n"  # the front feet at x = -0.2, the glass from x = 0
+    rollouts = sim.run_sessions(scene, start_sessions([short, _text("walk_over_a_blanket_on_glass")], "quadruped"))
+    assert [c.outcome for c in rollouts[0].calls] == ["done"], [c.reason for c in rollouts[0].calls]
+    assert rollouts[0].conditions["robot_stood_on_nothing_fragile"] is True
+    assert rollouts[1].conditions["robot_stood_on_nothing_fragile"] is False, failure_reason(rollouts[1])
