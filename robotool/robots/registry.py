@@ -39,8 +39,7 @@ from robotool.robots.skills import SceneBox, SkillArgumentError, SkillSpec, chec
 if TYPE_CHECKING:
     from robotool.planner.codegen import Program
     from robotool.rollout import EventKind, SkillCall
-    from robotool.sim.compiled_scene import Scene
-    from robotool.sim.embodiment import Embodiment, GoalTracker
+    from robotool.sim.embodiment import Embodiment, GoalTrackerFactory
     from robotool.task.key_concept import KeyConcept
     from robotool.task.scene import SceneObject
     from robotool.task.task_model import Task
@@ -141,7 +140,7 @@ class SimHooks(Generic[L]):
 
     embodiment: Callable[[L], Embodiment]
     """The simulator embodiment for a task's limits: model building and the skill controller."""
-    goal_trackers: Callable[[], Mapping[str, Callable[[Scene], GoalTracker]]]
+    goal_trackers: Callable[[], Mapping[str, GoalTrackerFactory]]
     """Trackers of the goal kinds only this robot has (the object goals are :mod:`robotool.sim.goals`')."""
     run_cost: float = 1.0
     """How long a run of this robot's task takes against others' (1: the default), so that a batch of runs

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import copy
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -206,3 +207,8 @@ class GoalTracker(Protocol):
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         """Named sub-conditions now, each (nworld,) bool."""
+
+
+GoalTrackerFactory = Callable[["Scene", "BatchedSim"], GoalTracker]
+"""Makes a robot's goal tracker for a scene and the simulator that runs it (to read what the batched state does not
+hold, such as which way touching bodies press on each other)."""

@@ -13,7 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from robotool import robots
-from robotool.sim.backend import BatchState
+from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import GoalTracker
 from robotool.sim.object_goals import LiftedGoal, LoweredGoal
@@ -46,8 +46,9 @@ OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
 """Trackers of the goal kinds about objects, which any robot may support."""
 
 
-def goal_tracker(scene: Scene) -> GoalTracker:
-    """The tracker for the scene's goal kind: an object goal's, or one of the robot's own."""
+def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
+    """The tracker for the scene's goal kind: an object goal's, or one of the robot's own (run by ``sim``)."""
     kind = scene.task.goal.kind
-    factory = OBJECT_GOALS.get(kind) or robots.get(scene.task.embodiment).sim.goal_trackers()[kind]
-    return factory(scene)
+    if kind in OBJECT_GOALS:
+        return OBJECT_GOALS[kind](scene)
+    return robots.get(scene.task.embodiment).sim.goal_trackers()[kind](scene, sim)

@@ -164,7 +164,7 @@ class _Run:
         self.controller: SkillController = embodiment_for(scene.task).controller(sim)
         self.magnets = Magnets(scene)
         self.sheets = Sheets(scene, sim.nworld)
-        self.goal: GoalTracker = goal_tracker(scene)
+        self.goal: GoalTracker = goal_tracker(scene, sim)
         nworld, nobj = sim.nworld, len(scene.object_names)
         self.touched = np.zeros((nworld, nobj), dtype=bool)
         self.robot_welds = _robot_welds(scene)

@@ -8,7 +8,7 @@ controller), :mod:`.arm_goals` (``grasped``), :mod:`.arm_macros` (planner) and :
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from robotool.robots.arm import arm_concepts, arm_description
@@ -28,8 +28,7 @@ from robotool.task.task_model import Task
 from robotool.task.task_problem import Problem
 
 if TYPE_CHECKING:
-    from robotool.sim.compiled_scene import Scene
-    from robotool.sim.embodiment import Embodiment, GoalTracker
+    from robotool.sim.embodiment import Embodiment, GoalTrackerFactory
 
 
 def _embodiment(limits: ArmLimits) -> Embodiment:
@@ -38,10 +37,10 @@ def _embodiment(limits: ArmLimits) -> Embodiment:
     return ArmEmbodiment(limits)
 
 
-def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
+def _goal_trackers() -> Mapping[str, GoalTrackerFactory]:
     from robotool.robots.arm.arm_goals import GraspedGoal  # the simulator loads on first use
 
-    return {"grasped": GraspedGoal}
+    return {"grasped": lambda scene, sim: GraspedGoal(scene)}
 
 
 def _planner() -> SearchMacros:

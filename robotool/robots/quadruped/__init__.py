@@ -14,7 +14,7 @@ its legs (:mod:`.terrain`, read by the controller, the planner and the key conce
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from robotool.robots.quadruped import checks, quadruped_concepts, quadruped_description, terrain
@@ -32,8 +32,7 @@ from robotool.robots.registry import (
 from robotool.task.task_model import Task
 
 if TYPE_CHECKING:
-    from robotool.sim.compiled_scene import Scene
-    from robotool.sim.embodiment import Embodiment, GoalTracker
+    from robotool.sim.embodiment import Embodiment, GoalTrackerFactory
 
 
 def _embodiment(limits: QuadrupedLimits) -> Embodiment:
@@ -42,7 +41,7 @@ def _embodiment(limits: QuadrupedLimits) -> Embodiment:
     return QuadrupedEmbodiment(limits)
 
 
-def _goal_trackers() -> Mapping[str, Callable[[Scene], GoalTracker]]:
+def _goal_trackers() -> Mapping[str, GoalTrackerFactory]:
     from robotool.robots.quadruped.quadruped_goals import RobotOnGoal  # the simulator loads on first use
 
     return {"robot_on": RobotOnGoal}

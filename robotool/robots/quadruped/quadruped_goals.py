@@ -15,7 +15,7 @@ from robotool.robots.quadruped.support import (
     supported,
 )
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
-from robotool.sim.backend import BatchState
+from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners
 
@@ -32,11 +32,12 @@ class RobotOnGoal:
     (it touches ``obj`` with its centre over ``obj``'s top, within :data:`EDGE_REACH` of its edges: a foot pressing
     on a side face, from the floor beside it, carries nothing), or when it stands over ``obj``'s footprint on a
     movable object (not fragile) that rests on ``obj``, directly or through others (a board lying on a sofa), as the
-    judge traces weight elsewhere (:func:`pass_weight`).
+    judge traces weight elsewhere (:func:`resting_on`, :func:`pass_weight`). ``obj``'s top and footprint are those
+    of the face that looks up now (a wall box turned on its side has its top where it stands).
     """
 
-    def __init__(self, scene: Scene):
-        self.scene = scene
+    def __init__(self, scene: Scene, sim: BatchedSim):
+        self.scene, self.sim = scene, sim
         self.name = scene.task.goal.object
         self.index = scene.object_index(self.name)
         self.ids = BodyIds.of(scene.model)
@@ -45,7 +46,7 @@ class RobotOnGoal:
         self.corners = local_corners(scene)
         self.lo, self.hi = self.corners[self.index].min(axis=0), self.corners[self.index].max(axis=0)
         objects = scene.task.objects
-        self.parts = Parts.of(scene, self.corners)
+        self.parts = Parts.of(scene)
         self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)[self.parts.owner]
         self.nobject = len(objects)
 
@@ -54,13 +55,13 @@ class RobotOnGoal:
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         foot_xyz = feet(state, self.ids)
-        rel = self._in_target_frame(state, foot_xyz)
+        height, footprint = self._in_target_frame(state, foot_xyz)
         on_top = (
             feet_touching(state, self.ids, self.target)
-            & self._over(rel, EDGE_REACH)
-            & (rel[:, :, 2] >= self.hi[2] - EDGE_REACH)  # not beside or under its top
+            & self._over(footprint, EDGE_REACH)
+            & (height >= -EDGE_REACH)  # not beside or under its top
         )
-        on_target = on_top | (self._through_carriers(state) & self._over(rel, 0.0))
+        on_target = on_top | (self._through_carriers(state) & self._over(footprint, 0.0))
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
@@ -74,18 +75,30 @@ class RobotOnGoal:
         worlds = np.flatnonzero(under.any(axis=(1, 2)))
         if worlds.size == 0:
             return out
-        rests = resting_on(state, self.parts, worlds)
+        rests = resting_on(np.stack([self.sim.contact_normals(int(w)) for w in worlds]), self.parts)
         for f in range(under.shape[1]):
             loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
             out[worlds, f] = self.parts.objects(loaded, self.nobject)[:, self.index]
         return out
 
-    def _in_target_frame(self, state: BatchState, foot_xyz: np.ndarray) -> np.ndarray:
-        """(nworld, 4, 3) the feet's centres in the target's frame."""
+    def _in_target_frame(self, state: BatchState, foot_xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The feet's centres against the target's face that looks up now (its local axis nearest the world's up):
+        their height above that top (nworld, 4) and, for each foot, how far outside the top's extent it lies along
+        each of the other two axes (nworld, 4, 2; 0 inside, positive outside)."""
         body = self.scene.object_body[self.index]
-        return np.einsum("wji,wfj->wfi", state.xmat(body), foot_xyz - state.xpos[:, body, None, :])
+        frame = state.xmat(body)  # (nworld, 3, 3): the target's axes in world coordinates, as columns
+        rel = np.einsum("wji,wfj->wfi", frame, foot_xyz - state.xpos[:, body, None, :])
+        worlds = np.arange(len(rel))
+        up = np.argmax(np.abs(frame[:, 2, :]), axis=1)  # (nworld,)
+        sign = np.sign(frame[worlds, 2, up])
+        top = np.where(sign > 0, self.hi[up], -self.lo[up])
+        height = sign[:, None] * rel[worlds, :, up] - top[:, None]
+        flat = np.array([[a for a in range(3) if a != u] for u in range(3)])[up]  # (nworld, 2) the other two axes
+        along = np.take_along_axis(rel, flat[:, None, :].repeat(rel.shape[1], axis=1), axis=2)
+        outside = np.maximum(self.lo[flat][:, None, :] - along, along - self.hi[flat][:, None, :])
+        return height, outside
 
-    def _over(self, rel: np.ndarray, reach: float) -> np.ndarray:
-        """(nworld, 4) whether each foot's centre (``rel``, in the target's frame) lies over the target's footprint
-        grown by ``reach``."""
-        return np.all((rel[:, :, :2] >= self.lo[:2] - reach) & (rel[:, :, :2] <= self.hi[:2] + reach), axis=2)
+    def _over(self, outside: np.ndarray, reach: float) -> np.ndarray:
+        """(nworld, 4) whether each foot's centre lies over the target's top grown by ``reach`` (``outside``: from
+        :meth:`_in_target_frame`)."""
+        return np.all(outside <= reach, axis=2)

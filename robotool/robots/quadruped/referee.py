@@ -26,6 +26,7 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import (
+    BEARING_ANGLE,
     centre_of_mass,
     feet,
     feet_touching,
@@ -41,7 +42,6 @@ from robotool.sim.embodiment import SkillEnd
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
 RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
-BEARING_ANGLE = np.radians(60.0)  # rad: a contact whose normal is within this of up bears weight (riders' supports)
 STILL = 1e-5  # m an object may move in a tick and count as still: whether a foot stands on it matters not (a shove
 # of 3 cm at this pace would take 150 s)
 SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
@@ -283,8 +283,8 @@ class Referee:
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
         ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
-        on (:func:`~.support.resting_on`: under a board lying flat or leaning on it from the floor; under the very
-        link of a cloth the foot stands on); a fixed object passes it to the ground.
+        on (:func:`~.support.resting_on`: what bears it up, such as what a board lies on or leans on from the floor,
+        or what the very link of a cloth under the foot lies on); a fixed object passes it to the ground.
         Also (nworld, nobject) the object that passed the weight on to each one."""
         state, facts, parts = self.senses.state, self.facts, self.facts.parts
         nworld, nobject = self.senses.sim.nworld, len(self.scene.object_names)
@@ -295,7 +295,8 @@ class Referee:
         worlds = np.flatnonzero(mask & under_feet.any(axis=1))
         if worlds.size == 0:
             return loaded, via
-        load, passed_by = pass_weight(resting_on(state, parts, worlds), under_feet[worlds], carrier)
+        normals = np.stack([self.senses.sim.contact_normals(int(w)) for w in worlds])
+        load, passed_by = pass_weight(resting_on(normals, parts), under_feet[worlds], carrier)
         loaded[worlds] = parts.objects(load, nobject)
         for o in np.flatnonzero(loaded[worlds].any(axis=0)):  # the part that passed it to one of o's loaded parts
             own = np.flatnonzero(parts.owner == o)

@@ -57,7 +57,7 @@ class SceneFacts:
             movable=np.array([o.movable for o in scene.task.objects]),
             fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
             not_robot=~scene.robot_body,
-            parts=Parts.of(scene, corners),
+            parts=Parts.of(scene),
         )
 
 

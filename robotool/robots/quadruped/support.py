@@ -84,49 +84,30 @@ def unsupported_feet(touching: np.ndarray) -> str:
     return "the " + ", ".join(FOOT_NAMES[i] for i in sorted(free)) + (" feet" if len(free) > 1 else " foot")
 
 
-LIMP_DEPTH = FOOT_RADIUS
-"""m: how far below the top of what it lies on a cloth's link's centre may be and still rest on it (over a rounded
-top, a bunched cloth)."""
+BEARING_ANGLE = np.radians(60.0)
+"""rad: a contact whose summed normal lies within this of up bears weight: what it presses up carries on it."""
 
 
 @dataclass(frozen=True)
 class Parts:
-    """The parts of the scene's objects that bear weight apart: a rigid object is one part (its root body, with the
-    bounding box of its shapes), a cloth one per link (each link's box). A cloth is limp: weight put on one of its
-    links goes to what that link lies on, not to wherever the rest of the cloth lies."""
+    """The parts of the scene's objects that bear weight apart: a rigid object is one part (all its bodies), a cloth
+    one per link. A cloth is limp: weight put on one of its links goes to what that link lies on, not to wherever the
+    rest of the cloth lies."""
 
-    body: np.ndarray  # (npart,) each part's body (a rigid object's root body)
-    owner: np.ndarray  # (npart,) the object it belongs to
+    owner: np.ndarray  # (npart,) the object each part belongs to
     member: np.ndarray  # (npart, nbody) the bodies whose contacts are its contacts
-    lo: np.ndarray  # (npart, 3) its box in its body's frame
-    hi: np.ndarray  # (npart, 3)
-    limp: np.ndarray  # (npart,) a cloth's link
 
     @classmethod
-    def of(cls, scene: Scene, corners: list[np.ndarray]) -> Parts:
-        """``corners``: each object's corners in its body frame (:func:`robotool.sim.object_goals.local_corners`)."""
-        model, owner_of = scene.model, scene.body_object
+    def of(cls, scene: Scene) -> Parts:
+        owner_of = scene.body_object
         cloth = [o.shape == "cloth" for o in scene.task.objects]
-        bodies = [
-            int(b) for b in np.flatnonzero(owner_of >= 0) if cloth[owner_of[b]] or b == scene.object_body[owner_of[b]]
-        ]
-        owner = owner_of[bodies]
-        limp = np.array([cloth[o] for o in owner], dtype=bool)
-        member = np.zeros((len(bodies), model.nbody), dtype=bool)
-        lo, hi = np.zeros((len(bodies), 3)), np.zeros((len(bodies), 3))
-        for p, (b, o) in enumerate(zip(bodies, owner, strict=True)):
-            if limp[p]:
-                member[p, b] = True
-                half = model.geom_size[np.flatnonzero(model.geom_bodyid == b)[0]]  # the link's box, on its origin
-                lo[p], hi[p] = -half, half
-            else:
-                member[p] = owner_of == o
-                lo[p], hi[p] = corners[o].min(axis=0), corners[o].max(axis=0)
-        return cls(np.array(bodies, dtype=int), owner, member, lo, hi, limp)
-
-    def of_objects(self, load: np.ndarray) -> np.ndarray:
-        """(k, npart) the parts of the objects in ``load`` (k, nobject)."""
-        return load[:, self.owner]
+        rows = [owner_of == o for o in range(len(cloth)) if not cloth[o]]
+        owner = [o for o in range(len(cloth)) if not cloth[o]]
+        for b in np.flatnonzero(owner_of >= 0):
+            if cloth[owner_of[b]]:
+                rows.append(np.arange(len(owner_of)) == b)
+                owner.append(int(owner_of[b]))
+        return cls(np.array(owner, dtype=int), np.array(rows, dtype=bool).reshape(len(owner), len(owner_of)))
 
     def objects(self, parts: np.ndarray, nobject: int) -> np.ndarray:
         """(k, nobject) the objects with a part in ``parts`` (k, npart)."""
@@ -135,25 +116,19 @@ class Parts:
         return out
 
 
-def resting_on(state: BatchState, parts: Parts, worlds: np.ndarray) -> np.ndarray:
-    """[k, a, b]: part ``a`` rests on part ``b`` (:class:`Parts`) in world ``worlds[k]``: they touch, and
-
-    - a rigid ``a``: ``b``'s centre lies below ``a``'s underside along ``a``'s own up axis (a board lying flat on
-      ``b``, or leaning on it from the floor);
-    - a cloth's link ``a``: its centre lies over ``b``'s top, in ``b``'s frame: within ``b``'s footprint, no more
-      than :data:`LIMP_DEPTH` below its top (a link hanging down ``b``'s side, or lying on the floor beside it, or in
-      the crook of an L, lies on none of it)."""
+def resting_on(normals: np.ndarray, parts: Parts) -> np.ndarray:
+    """[k, a, b]: part ``a`` rests on part ``b`` (:class:`Parts`) in each of k worlds: ``b`` bears it up, the contacts
+    through which ``b`` presses on ``a`` summing to a normal within :data:`BEARING_ANGLE` of up (a board lying on
+    ``b`` or leaning on its edge from the floor, a cloth's link lying on it), however either is turned or shaped; what
+    only touches a side (in the crook of an L, down a wall) or lies on top bears nothing. ``normals`` (k, nbody, nbody,
+    3): each world's summed contact normals from one body onto another
+    (:meth:`~robotool.sim.backend.BatchedSim.contact_normals`)."""
     member = parts.member.astype(float)
-    touching = (member @ state.touching[worlds].astype(float) @ member.T) > 0  # (k, npart, npart)
-    centres = state.xpos[worlds][:, parts.body]  # (k, npart, 3)
-    frames = np.stack([state.xmat(int(b))[worlds] for b in parts.body], axis=1)  # (k, npart, 3, 3)
-    offset = centres[:, None, :, :] - centres[:, :, None, :]  # [k, a, b]: from a's centre to b's
-    below = np.einsum("kaj,kabj->kab", frames[:, :, :, 2], offset) < parts.lo[None, :, None, 2]
-    within = np.einsum("kbji,kabj->kabi", frames, -offset)  # a's centre in b's frame
-    footprint = (within[..., :2] >= parts.lo[None, None, :, :2]) & (within[..., :2] <= parts.hi[None, None, :, :2])
-    over = footprint.all(axis=3)
-    over &= within[..., 2] >= parts.hi[None, None, :, 2] - LIMP_DEPTH
-    return touching & np.where(parts.limp[None, :, None], over, below)
+    onto = np.einsum("pb,kbcx,qc->kpqx", member, normals, member)  # [k, b, a]: from part b onto part a
+    bears = onto[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(onto, axis=3)
+    rests = bears.transpose(0, 2, 1).copy()
+    rests[:, np.arange(len(parts.owner)), np.arange(len(parts.owner))] = False
+    return rests
 
 
 def pass_weight(rests: np.ndarray, load: np.ndarray, carrier: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

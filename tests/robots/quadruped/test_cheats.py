@@ -184,6 +184,13 @@ LAYOUT_CASES = [
     ("stand_on_a_cloth_that_hangs_down_to_the_goal", "cloth_from_a_balcony_onto_a_mat"),  # on the balcony, 0.7 m up
     ("stand_on_a_cloth_that_hangs_from_the_goal", "cloth_from_a_wall_top_into_its_crook"),  # on the floor below it
     ("walk_over_a_blanket_on_glass", "blanket_over_a_glass_step"),  # the feet on the part lying on the glass
+    ("walk_over_a_blanket_on_glass_and_a_strip", "blanket_over_glass_and_a_strip"),  # each link lies on both
+    # what bears a part up is read from the contacts that press it up, whichever way it is turned or shaped
+    ("stand_on_the_low_end_of_a_board_leaning_on_the_goal", "a_board_leaning_on_a_wall_box_turned_on_its_side"),
+    ("stand_in_the_crook_of_the_goal_wall", "l_wall_on_an_upside_down_board"),  # the board under the wall
+    ("stand_on_the_board_in_the_crook_of_the_goal_wall", "board_in_the_crook_of_a_tall_wall"),  # against its side
+    ("walk_over_board_on_vase", "board_upside_down_on_vase"),
+    ("walk_over_board_on_vase", "tray_hook_on_edge_on_vase"),
 ]
 
 CONTROL_CASES = [
@@ -467,7 +474,11 @@ def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
 
 @pytest.mark.parametrize(
     ("program", "scene"),
-    [("walk_over_board_on_vase", "board_on_vase"), ("walk_up_board_leaning_on_vase", "ramp_on_vase")],
+    [
+        ("walk_over_board_on_vase", "board_on_vase"),
+        ("walk_up_board_leaning_on_vase", "ramp_on_vase"),
+        ("walk_over_board_on_vase", "board_upside_down_on_vase"),  # the same box, its own up axis pointing down
+    ],
 )
 def test_standing_on_a_board_that_rests_on_the_vase_breaks_it(program: str, scene: str) -> None:
     """The feet touch only the board, but the board lies on the glass vase, or leans on it from the floor: the
