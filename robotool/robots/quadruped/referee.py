@@ -257,8 +257,9 @@ class Referee:
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
-        centre above the object's centre, or a belly that touches one whose centre lies under the torso, rests the
-        robot's weight on it, which breaks it (a low vase read as a step is no footing); so does standing on a
+        centre above the object's centre, a belly that touches one whose centre lies under the torso, or a foot or the
+        belly that it bears up (:meth:`_borne_by`: the foot of a glass L, whose centre lies in the air above it),
+        rests the robot's weight on it, which breaks it (a low vase read as a step is no footing); so does standing on a
         movable object that rests on it (:meth:`_loaded`: a board lying on a vase). The world fails
         (:meth:`conditions`) and a move in progress there is stopped and refused, naming the object."""
         s, state, facts, names = self.state, self.senses.state, self.facts, self.scene.object_names
@@ -270,6 +271,7 @@ class Referee:
         under = np.all(np.abs(centres[:, :, :2] - torso[:, None, :2]) < facts.half, axis=2)
         by_belly = state.touching[:, facts.ids.body][:, bodies] & under
         stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
+        stood_on |= self._borne_by(bodies, mask & ~stood_on.any(axis=1))
         loaded, via = self._loaded(mask)
         for w in np.flatnonzero((stood_on | loaded[:, facts.fragile]).any(axis=1)):
             if s.crushes[w] is not None or state.failed[w] is not None:
@@ -279,6 +281,19 @@ class Referee:
             what = name if stood_on[w].any() else f"{names[via[w, index]]}, which rests on {name}"
             s.crushes[w] = reason = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
             moves.refuse(int(w), reason, {}, ends)
+
+    def _borne_by(self, bodies: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """(nworld, len(bodies)) which of ``bodies`` bear the robot up, in the worlds in ``mask``: the contacts through
+        which one presses on a foot or the torso sum to a normal within :data:`BEARING_ANGLE` of up."""
+        state, ids = self.senses.state, self.facts.ids
+        robot = np.array([*ids.feet, ids.body])
+        touch = state.touching[:, robot][:, :, bodies]  # (nworld, 5, nbodies)
+        out = np.zeros((len(mask), len(bodies)), dtype=bool)
+        for w in np.flatnonzero(mask & touch.any(axis=(1, 2))):
+            normals = self.senses.sim.contact_normals(int(w))[bodies][:, robot]  # from each body onto each robot part
+            up = normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=2)
+            out[w] = (up & touch[w].T).any(axis=1)
+        return out
 
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in

@@ -191,6 +191,8 @@ LAYOUT_CASES = [
     ("stand_on_the_board_in_the_crook_of_the_goal_wall", "board_in_the_crook_of_a_tall_wall"),  # against its side
     ("walk_over_board_on_vase", "board_upside_down_on_vase"),
     ("walk_over_board_on_vase", "tray_hook_on_edge_on_vase"),
+    ("stand_on_a_board_on_the_goal_walls_foot", "l_wall_on_its_side_with_a_board_on_its_foot"),  # far below its top
+    ("walk_along_the_foot_of_a_glass_l", "corridor_floored_by_a_glass_l"),  # its centre in the air above its foot
 ]
 
 CONTROL_CASES = [
@@ -416,6 +418,24 @@ def test_a_heavy_crate_wedged_aside_by_a_pushed_hook_is_rammed() -> None:
     for rollout in rollouts:
         assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
         assert "pushing hook rammed crate" in failure_reason(rollout), failure_reason(rollout)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: what bears a part up is read from the sum of its contacts' unit normals, not from their "
+    "forces, so a board with a lip pressed on a glass vase's side (four sideways contacts) and its edge on the vase's "
+    "top (two upward ones) sums to 63 degrees from up and does not rest on the vase, though the vase carries up to "
+    "45 N as the robot crosses: weighing each contact by its force needs contact forces from both backends",
+)
+def test_a_board_whose_lip_presses_a_vases_side_still_loads_the_vase_it_lies_on() -> None:
+    """Found by an adversarial run this session (the summed-normal rest rule): the honest plain board on the same
+    vase is refused for crushing it, and so must this one be."""
+    rollouts = sim.run_sessions(
+        _scene("lipped_board_on_a_tall_vase"), start_sessions([_text("walk_over_board_on_vase")] * 2, "quadruped")
+    )
+    assert all(r.conditions["robot_stood_on_nothing_fragile"] is False for r in rollouts), [
+        failure_reason(r) for r in rollouts
+    ]
 
 
 @pytest.mark.xfail(
