@@ -56,13 +56,9 @@ class RobotOnGoal:
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         foot_xyz = feet(state, self.ids)
         height, footprint = self._in_target_frame(state, foot_xyz)
-        on_top = (
-            feet_touching(state, self.ids, self.target)
-            & self._over(footprint, EDGE_REACH)
-            & (height >= -EDGE_REACH)  # not beside or under its top
-        )
-        on_top_face = self._over(footprint, 0.0) & (height >= -EDGE_REACH)  # over its top, not in an L's crook
-        on_target = on_top | (self._through_carriers(state) & on_top_face)
+        above = height >= -EDGE_REACH  # not beside or under its top (nor in an L's crook)
+        on_top = feet_touching(state, self.ids, self.target) & self._over(footprint, EDGE_REACH) & above
+        on_target = on_top | (self._through_carriers(state) & self._over(footprint, 0.0) & above)
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}

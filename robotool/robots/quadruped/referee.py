@@ -26,7 +26,7 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import (
-    BEARING_ANGLE,
+    bears_up,
     centre_of_mass,
     feet,
     feet_touching,
@@ -149,7 +149,7 @@ class Referee:
 
     def _riders(self, w: int, index: int) -> list[int]:
         """Movable objects that ride on object ``index`` in world ``w``, recursively: borne up by nothing else (but
-        the robot): every body whose contacts press up on them (summed normal within :data:`BEARING_ANGLE` of up) is
+        the robot): every body whose contacts press up on them (:func:`~.support.bears_up`) is
         the pushed object's or a rider's; what only touches a side, or lies on top, bears none of their weight. Where
         their centres lie does not matter (a crate on the tray of an upright L lies lower than the L's centre). What
         lies on a rider rides too."""
@@ -165,7 +165,7 @@ class Referee:
                 if other == index or other in riders or not self.facts.movable[other]:
                     continue
                 onto = normals[:, owner == other].sum(axis=1)  # (nbody, 3) from each body onto it
-                bearing = onto[:, 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(onto, axis=1)  # pressing up on it
+                bearing = bears_up(onto)  # pressing up on it
                 supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & bearing
                 if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
                     riders.append(int(other))
@@ -243,7 +243,7 @@ class Referee:
 
     def _stood_on(self, asked: np.ndarray) -> np.ndarray:
         """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a foot stands on: its contacts press the
-        foot up (summed normal within :data:`BEARING_ANGLE` of up). A leg pressing on an object's side does not stand
+        foot up (:func:`~.support.bears_up`). A leg pressing on an object's side does not stand
         on it (it may drive a low object along between the feet, as a walk must not). Only what moved this tick needs
         asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere."""
         state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
@@ -251,8 +251,7 @@ class Referee:
         out = np.zeros(asked.shape, dtype=bool)
         for w in np.flatnonzero(on.any(axis=(1, 2))):
             normals = self.senses.sim.contact_normals(int(w))[bodies][:, feet_ids]  # from each object onto each foot
-            up = normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=2)
-            out[w] = (up & on[w].T).any(axis=1)
+            out[w] = (bears_up(normals) & on[w].T).any(axis=1)
         return out
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
@@ -284,15 +283,14 @@ class Referee:
 
     def _borne_by(self, bodies: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """(nworld, len(bodies)) which of ``bodies`` bear the robot up, in the worlds in ``mask``: the contacts through
-        which one presses on a foot or the torso sum to a normal within :data:`BEARING_ANGLE` of up."""
+        which one presses on a foot or the torso press it up (:func:`~.support.bears_up`)."""
         state, ids = self.senses.state, self.facts.ids
         robot = np.array([*ids.feet, ids.body])
         touch = state.touching[:, robot][:, :, bodies]  # (nworld, 5, nbodies)
         out = np.zeros((len(mask), len(bodies)), dtype=bool)
         for w in np.flatnonzero(mask & touch.any(axis=(1, 2))):
             normals = self.senses.sim.contact_normals(int(w))[bodies][:, robot]  # from each body onto each robot part
-            up = normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=2)
-            out[w] = (up & touch[w].T).any(axis=1)
+            out[w] = (bears_up(normals) & touch[w].T).any(axis=1)
         return out
 
     def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

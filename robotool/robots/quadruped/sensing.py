@@ -42,7 +42,6 @@ class SceneFacts:
         model = scene.model
         ids = BodyIds.of(model)
         geom_object = scene.body_object[model.geom_bodyid]
-        corners = local_corners(scene)
         cloth = np.array([o.shape == "cloth" for o in scene.task.objects], dtype=bool)
         return cls(
             ids=ids,
@@ -50,7 +49,7 @@ class SceneFacts:
             height=limits.body_size[2],
             lead=ids.xy_kv / XY_KP,
             reach=limits.max_step_down + LEG_SLACK,
-            corners=corners,
+            corners=local_corners(scene),
             geom_object=geom_object,
             cloth=cloth,
             cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,

@@ -88,6 +88,12 @@ BEARING_ANGLE = np.radians(60.0)
 """rad: a contact whose summed normal lies within this of up bears weight: what it presses up carries on it."""
 
 
+def bears_up(normals: np.ndarray) -> np.ndarray:
+    """Whether summed contact normals (..., 3), each from one body onto another, press it up: within
+    :data:`BEARING_ANGLE` of up (none where nothing touches)."""
+    return normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=-1)
+
+
 @dataclass(frozen=True)
 class Parts:
     """The parts of the scene's objects that bear weight apart: a rigid object is one part (all its bodies), a cloth
@@ -125,8 +131,7 @@ def resting_on(normals: np.ndarray, parts: Parts) -> np.ndarray:
     (:meth:`~robotool.sim.backend.BatchedSim.contact_normals`)."""
     member = parts.member.astype(float)
     onto = np.einsum("pb,kbcx,qc->kpqx", member, normals, member)  # [k, b, a]: from part b onto part a
-    bears = onto[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(onto, axis=3)
-    rests = bears.transpose(0, 2, 1).copy()
+    rests = bears_up(onto).transpose(0, 2, 1).copy()
     rests[:, np.arange(len(parts.owner)), np.arange(len(parts.owner))] = False
     return rests
 
