@@ -161,6 +161,13 @@ class Program:
         if point is not None:
             self.parameters.append(point.parameters(len(self.steps), obj, explanation or intent))
 
+    def turn(self, heading: int, intent: str) -> None:
+        """Turn in place to ``heading`` (degrees); a plan step without parameters."""
+        self.lines.append(f"turn_to_heading({heading})")
+        self.steps.append(PlanStep(skill="turn_to_heading", objects=[], intent=intent))
+        self.motions.append(Motion(len(self.lines) - 1, "turn_to_heading", None, None, len(self.steps), intent))
+        self.say(f"Turn in place to a heading of {heading} degrees.")
+
     def with_target_shifted(self, motion: int, delta: Sequence[float], why: str) -> Program:
         """A copy whose ``motion``-th motion call (from 0) aims ``delta`` further; ``why`` joins the plan."""
         move = self.motions[motion]

@@ -24,7 +24,7 @@ class SkillSpec(BaseModel):
 
     name: str
     params: tuple[tuple[str, str], ...] = Field(
-        description="(parameter name, type) pairs; types are 'name' or 'position'"
+        description="(parameter name, type) pairs; types are 'name', 'position' or 'angle' (degrees)"
     )
     returns: str
     kind: Literal["query", "motion"]
@@ -40,6 +40,8 @@ QUERY_NAME = (("name", "name"),)
 """The parameters of a query about one object."""
 POSITION = (("position", "position"),)
 """The parameters of a motion to one position."""
+HEADING = (("heading", "angle"),)
+"""The parameters of a turn to one heading (degrees about z)."""
 
 
 class SkillArgumentError(ValueError):
@@ -67,9 +69,9 @@ class SceneBox:
 def check_arguments(spec: SkillSpec, args: tuple[object, ...], scene: SceneBox | None = None) -> tuple[object, ...]:
     """Check a call of ``spec``'s arguments and return them normalized (positions as 3 floats).
 
-    Raises :class:`SkillArgumentError` for a wrong argument count, a name that is not a string, a position
-    that is not three finite numbers, or (given the ``scene``'s box) a position more than
-    :data:`MAX_DISTANCE_FROM_SCENE` outside it. A 2-number position gets z = 0.
+    Raises :class:`SkillArgumentError` for a wrong argument count, a name that is not a string, an angle that
+    is not one finite number, a position that is not three finite numbers, or (given the ``scene``'s box) a
+    position more than :data:`MAX_DISTANCE_FROM_SCENE` outside it. A 2-number position gets z = 0.
     """
     name = spec.name
     if len(args) != len(spec.params):
@@ -80,6 +82,9 @@ def check_arguments(spec: SkillSpec, args: tuple[object, ...], scene: SceneBox |
             if not isinstance(value, str):
                 raise SkillArgumentError(f"{name}: {param} must be an object name, got {_shown(value)}")
             out.append(value)
+            continue
+        if kind == "angle":
+            out.append(_angle(name, param, value))
             continue
         position = _position(name, param, value)
         if scene is not None and scene.distance(position) > MAX_DISTANCE_FROM_SCENE:
@@ -98,6 +103,19 @@ def _shown(value: object) -> str:
         return reprlib.repr(value)
     except ValueError:  # Python refuses to turn an integer of more than 4300 digits into text
         return f"a {type(value).__name__} too large to show"
+
+
+def _angle(skill: str, param: str, value: object) -> float:
+    """An angle argument in degrees: one finite real number (not text or a truth value)."""
+    if not isinstance(value, numbers.Real) or isinstance(value, bool | np.bool_):
+        raise SkillArgumentError(f"{skill}: {param} must be a number of degrees, got {_shown(value)}")
+    try:
+        angle = float(value)
+    except OverflowError:  # an integer beyond any float
+        angle = math.inf
+    if not math.isfinite(angle):
+        raise SkillArgumentError(f"{skill}: {param} must be a finite number of degrees, got {_shown(value)}")
+    return angle
 
 
 def _position(skill: str, param: str, value: object) -> tuple[float, float, float]:

@@ -37,6 +37,7 @@ BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its fac
 LEG_SHARE = 0.02  # of the robot's mass in each leg; the torso carries the rest
 XY_KP = 20000.0  # N/m
 XY_FORCE = 120.0  # N: the most the legs push sideways (about the weight: a blocked push cannot flip the body)
+YAW_OMEGA = 300.0  # rad/s: the yaw servo's natural frequency (stiff: a push's twist turns the body < 0.1 deg)
 LIFT_KP = 30000.0  # N/m
 LIFT_FACTOR = 2.0  # the lift motor's force bound, in robot weights
 TILT_FACTOR = 0.15  # m: the pitch and roll motors' torque bound, in robot weights times this lever
@@ -63,6 +64,9 @@ class BodyIds:
     actuator: np.ndarray  # (5,) x servo, y servo, lift motor, pitch motor, roll motor
     leg_qpos: np.ndarray  # (4,) qpos addresses of the legs' slides (0: nominal, negative: reaching down)
     leg_actuator: np.ndarray  # (4,) the legs' servos
+    yaw_qpos: int  # qpos address of the yaw hinge (rad, 0: the body's length along x)
+    yaw_qvel: int
+    yaw_actuator: int  # the yaw servo
     xy_kv: float  # N s/m of the x-y servos
     masses: np.ndarray  # (5,) the root body's mass, then the feet's
     com_offsets: np.ndarray  # (5, 3) each body's centre of mass in its own frame
@@ -82,6 +86,9 @@ class BodyIds:
             actuator=np.array(acts),
             leg_qpos=np.array([model.jnt_qposadr[model.joint(f"{BODY}_leg{i}").id] for i in range(4)]),
             leg_actuator=np.array([model.actuator(f"{BODY}_leg{i}").id for i in range(4)]),
+            yaw_qpos=int(model.jnt_qposadr[model.joint(f"{BODY}_yaw").id]),
+            yaw_qvel=int(model.jnt_dofadr[model.joint(f"{BODY}_yaw").id]),
+            yaw_actuator=model.actuator(f"{BODY}_yaw").id,
             xy_kv=float(-model.actuator_biasprm[acts[0], 2]),
             masses=model.body_mass[bodies].copy(),
             com_offsets=model.body_ipos[bodies].copy(),
@@ -117,6 +124,7 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         body.add_joint(
             name=f"{BODY}_{axis}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=np.eye(3)["xyz".index(axis)], ref=ref
         )
+    body.add_joint(name=f"{BODY}_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], armature=0.01)
     for name, hinge in (("pitch", [0, 1, 0]), ("roll", [1, 0, 0])):
         body.add_joint(
             name=f"{BODY}_{name}",
@@ -172,3 +180,8 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         tilt.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
         tilt.ctrlrange = [-1.0, 1.0]
         tilt.gainprm[0] = TILT_FACTOR * limits.mass * GRAVITY  # torque per unit of control
+    yaw = spec.add_actuator(name=f"{BODY}_yaw", target=f"{BODY}_yaw", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    inertia = limits.mass * (sx**2 + sy**2) / 12  # about the body's vertical axis
+    yaw.set_to_position(kp=inertia * YAW_OMEGA**2, kv=2.0 * inertia * YAW_OMEGA)
+    yaw.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    yaw.forcerange = [-XY_FORCE * (sx + sy), XY_FORCE * (sx + sy)]  # the legs' sideways push, at the corners

@@ -27,10 +27,12 @@ from robotool.vocabulary import MoveEnd
 
 @dataclass
 class Move:
-    """One straight move to ``goal`` (x-y); ``pushing`` is the object index being pushed or -1."""
+    """One straight move to ``goal`` (x-y); ``pushing`` is the object index being pushed or -1. A move with a
+    ``turn`` (rad, the heading to reach) turns in place at ``goal`` instead."""
 
     goal: np.ndarray
     pushing: int = -1
+    turn: float = float("nan")
 
 
 SkillPlan = Generator[Move, MoveEnd, MoveEnd | None]
@@ -50,6 +52,7 @@ class MoveState:
     best: np.ndarray  # (nworld,) m: the least distance to its end so far
     progress_time: np.ndarray  # (nworld,) s: when it last came 1 cm closer
     setpoint: np.ndarray  # (nworld, 2) the x-y setpoint
+    turn: np.ndarray  # (nworld,) rad: the heading a turn in place reaches (NaN: a straight move)
 
     @classmethod
     def empty(cls, nworld: int, setpoint: np.ndarray) -> MoveState:
@@ -63,6 +66,7 @@ class MoveState:
             best=np.full(nworld, np.inf),
             progress_time=np.zeros(nworld),
             setpoint=setpoint,
+            turn=np.full(nworld, np.nan),
         )
 
 
@@ -136,6 +140,7 @@ class MoveRunner:
         s.u[w] = delta / length if length > 1e-9 else np.array([1.0, 0.0])
         s.length[w] = length
         s.pushing[w] = move.pushing
+        s.turn[w] = move.turn
         self.terrain.start_move(w)
         if move.pushing >= 0:
             self.on_push(w, move.pushing)
@@ -155,10 +160,19 @@ class MoveRunner:
         ctrl[worlds[:, None], act[:2]] = self.state.setpoint[worlds]
         ctrl[worlds, act[2]] = OFF
         ctrl[worlds[:, None], act[3:]] = 0.0
+        quarter = np.pi / 2  # the heading held is the nearest quarter turn (a push's twist does not build up)
+        ctrl[worlds, self.ids.yaw_actuator] = np.round(self.senses.yaw(worlds) / quarter) * quarter
         self.terrain.state.lift[worlds] = np.nan
 
     def drive(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
-        """Read the terrain where needed, then lift, stop, refuse or advance, in all moving worlds at once."""
+        """Turn the worlds that turn in place; elsewhere read the terrain where needed, then lift, stop, refuse or
+        advance, in all moving worlds at once."""
+        turning = ~np.isnan(self.state.turn[worlds])
+        if turning.any():
+            self._turn(worlds[turning], ends)
+            worlds = worlds[~turning]
+            if not worlds.size:
+                return
         s, t, terrain, config = self.state, self.terrain.state, self.terrain, self.config
         state = self.senses.state
         q = state.qpos[worlds][:, self.ids.qpos]
@@ -196,11 +210,29 @@ class MoveRunner:
         s.setpoint[worlds] = sp
         self.sim.ctrl[worlds[:, None], self.ids.actuator[:2]] = sp + self.senses.facts.lead * velocity
 
+    def _turn(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
+        """Move the heading setpoints of turns in place toward their headings at turning speed (x-y held, legs as
+        they stand: :meth:`.plans.Plans.turn` turns only where the feet's arcs stay level and the body's sweep is
+        clear); end the turns that are there and still, or that stalled."""
+        s, config, ids = self.state, self.config, self.ids
+        state, ctrl = self.senses.state, self.sim.ctrl
+        setpoint = ctrl[worlds, ids.yaw_actuator]
+        step = config.turn_speed * self.senses.scene.control_dt
+        ctrl[worlds, ids.yaw_actuator] = setpoint + np.clip(s.turn[worlds] - setpoint, -step, step)
+        yaw = self.senses.yaw(worlds)
+        reach = float(np.linalg.norm(self.senses.facts.half))  # m a corner travels per rad
+        remaining = np.abs(s.turn[worlds] - yaw) * reach
+        qvel = state.qvel[worlds]
+        still = (np.abs(qvel[:, ids.qvel[:3]]).max(axis=1) < config.settled_speed) & (
+            np.abs(qvel[:, [*ids.qvel[3:], ids.yaw_qvel]]).max(axis=1) < config.settled_turn
+        )
+        there = (np.abs(s.turn[worlds] - yaw) < config.turn_arrived) & still
+        self._end_moves(worlds, state.qpos[worlds][:, ids.qpos], remaining, there, ends)
+
     def _check_arrival(self, worlds: np.ndarray, q: np.ndarray, travel: np.ndarray, ends: list[SkillEnd]) -> None:
         """End the moves whose body reached its stopping point (done or refused), stalled or ran out of time."""
         s, t, config = self.state, self.terrain.state, self.config
         state = self.senses.state
-        now = state.time[worlds]
         qvel = state.qvel[worlds][:, self.ids.qvel]
         still = (np.abs(qvel[:, :3]).max(axis=1) < config.settled_speed) & (
             np.abs(qvel[:, 3:]).max(axis=1) < config.settled_turn
@@ -211,6 +243,15 @@ class MoveRunner:
         finished = there & (
             (t.stop[worlds] >= s.length[worlds] - 1e-9) | np.array([t.findings[w] is not None for w in worlds])
         )
+        self._end_moves(worlds, q, remaining, finished, ends)
+
+    def _end_moves(
+        self, worlds: np.ndarray, q: np.ndarray, remaining: np.ndarray, finished: np.ndarray, ends: list[SkillEnd]
+    ) -> None:
+        """Advance the plans of the moves that ``finished`` (done, or refused with the terrain's finding) or made no
+        1 cm of progress (``remaining``, m) for the stall time."""
+        s, t, config = self.state, self.terrain.state, self.config
+        now = self.senses.state.time[worlds]
         better = remaining < s.best[worlds] - 0.01
         s.best[worlds] = np.where(better, remaining, s.best[worlds])
         s.progress_time[worlds] = np.where(better, now, s.progress_time[worlds])
@@ -218,8 +259,15 @@ class MoveRunner:
         for k in np.flatnonzero(finished | stalled):
             w = int(worlds[k])
             finding = t.findings[w]
-            if stalled[k]:
+            if stalled[k] and not np.isnan(s.turn[w]):
+                short = float(np.degrees(abs(s.turn[w] - self.senses.yaw(w))))
                 outcome: MoveEnd = (
+                    "stalled",
+                    f"the turn was blocked at [{q[k, 0]:.2f}, {q[k, 1]:.2f}], {short:.0f} deg short of the heading",
+                    {"angle": round(short, 1)},
+                )
+            elif stalled[k]:
+                outcome = (
                     "stalled",
                     f"blocked at [{q[k, 0]:.2f}, {q[k, 1]:.2f}], {remaining[k]:.2f} m short of the goal",
                     {"distance": round(float(remaining[k]), 3)},

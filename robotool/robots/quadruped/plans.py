@@ -28,21 +28,29 @@ from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.referee import Referee
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import feet
-from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, Finding, check_walk
+from robotool.robots.quadruped.terrain import (
+    FOOT_NAMES,
+    FOOT_RADIUS,
+    RISE,
+    Finding,
+    check_walk,
+    quarter_turns,
+    turn_sweep,
+    turned,
+)
 
 
 class Plans:
-    """Makes the plans of ``walk_to_position`` and ``push_to_position`` in one world (no state of its own: a plan's
-    progress lives in its generator, which the move runner holds)."""
+    """Makes the plans of ``walk_to_position``, ``turn_to_heading`` and ``push_to_position`` in one world (no state
+    of its own: a plan's progress lives in its generator, which the move runner holds)."""
 
     def __init__(self, senses: Senses, rays: Rays, referee: Referee, limits: QuadrupedLimits, config: QuadrupedConfig):
         self.senses, self.rays, self.referee, self.limits, self.config = senses, rays, referee, limits, config
         self.scene = senses.scene
 
-    @property
-    def half(self) -> np.ndarray:
-        """(2,) m: the body's half length and half width."""
-        return self.senses.facts.half
+    def _limits(self, w: int) -> QuadrupedLimits:
+        """The limits with the body's outline as it is turned now in world ``w`` (x and y swapped at a quarter)."""
+        return turned(self.limits, int(quarter_turns(self.senses.yaw(w))))
 
     def walk(self, w: int, target: tuple[float, float, float]) -> SkillPlan:
         """Straight to ``target`` when the feet's paths allow it; else along an L (one axis, then the other) that
@@ -61,7 +69,8 @@ class Plans:
                 lo, hi = self.senses.bounds(w, obstacle)
                 if not np.all((goal >= lo) & (goal <= hi)):  # the goal is not on it: go around it
                     gap = self.config.push_gap
-                    ways.append(route(here, goal, lo - self.half - gap, hi + self.half + gap))
+                    half = self.senses.half_now(w)
+                    ways.append(route(here, goal, lo - half - gap, hi + half + gap))
             clear = next((way for way in ways if self._check(w, here, way) is None), None)
             if clear is not None:
                 path = clear
@@ -72,6 +81,48 @@ class Plans:
             outcome = yield Move(waypoint)
             if outcome[0] != "done":
                 return outcome
+        return None
+
+    def turn(self, w: int, heading: float) -> SkillPlan:
+        """Turn in place to ``heading`` (degrees from +x, a quarter turn's multiple), the shorter way round; refused
+        where a foot's arc would leave the level it stands on or the body's sweep meets anything above it."""
+        quarters = heading / 90.0
+        if abs(quarters - round(quarters)) > 1e-6:
+            reason = f"the robot turns by quarter turns: heading {heading:g} is not 0, 90, 180 or 270"
+            return "refused", reason, {}
+        yaw = float(self.senses.yaw(w))
+        target = yaw + float(np.angle(np.exp(1j * (np.radians(heading) - yaw))))  # the shorter way round
+        if abs(target - yaw) < self.config.turn_arrived:
+            return None
+        problem = self._sweep_problem(w, yaw, target)
+        if problem is not None:
+            return "refused", f"cannot turn to {heading:g} deg: {problem}", {}
+        outcome = yield Move(self.senses.position(w), turn=target)
+        return None if outcome[0] == "done" else outcome
+
+    def _sweep_problem(self, w: int, yaw: float, target: float) -> str | None:
+        """What a turn in place from heading ``yaw`` to ``target`` (rad) in world ``w`` would meet: anything in the
+        body's sweep (its outline and ``side_margin``) above the feet's level, or a foot's arc leaving the level it
+        stands on; None when the way round is clear."""
+        here = self.senses.position(w)
+        arcs, sweep = turn_sweep(self.limits, yaw, target, self.config.side_margin)
+        levels = feet(self.senses.state, self.senses.facts.ids)[w, :, 2] - FOOT_RADIUS
+        top = float(levels.min()) + self.config.ray_height
+        points = (here + sweep).reshape(-1, 2)
+        heights, objects = self.rays.heights(w, points, top)
+        high = heights > levels.max() + RISE
+        if high.any():
+            k = int(np.argmax(high))
+            name = self.scene.object_names[objects[k]] if objects[k] >= 0 else "something"
+            return f"{name} stands in the body's way at [{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
+        under = self.rays.heights(w, (here + arcs).reshape(-1, 2), top)[0].reshape(arcs.shape[:2])
+        off = np.abs(under - levels) > RISE
+        if off.any():
+            k, foot = np.argwhere(off)[0]
+            x, y = here + arcs[k, foot]
+            step = under[k, foot] - levels[foot]
+            edge = "step" if step > 0 else "drop"
+            return f"the {FOOT_NAMES[foot]} foot would meet a {abs(step):.2f} m {edge} at [{x:.2f}, {y:.2f}]"
         return None
 
     def push(self, w: int, name: str, target: tuple[float, float, float]) -> SkillPlan:
@@ -100,7 +151,8 @@ class Plans:
                 robot = senses.position(w)
                 staging = start - (end - start) / np.linalg.norm(end - start) * behind
                 gap = config.push_gap
-                ways = routes(robot, staging, lo - self.half - gap / 2, hi + self.half + gap / 2)
+                half = senses.half_now(w)
+                ways = routes(robot, staging, lo - half - gap / 2, hi + half + gap / 2)
                 if attempt:  # a correction goes only a way round that the legs can walk, or not at all
                     way = next((way for way in ways if self._check(w, robot, [*way, start]) is None), None)
                     if way is None:
@@ -150,8 +202,9 @@ class Plans:
         centres = feet(self.senses.state, self.senses.facts.ids)[w]
         floor = float(centres[:, 2].min() - FOOT_RADIUS)
         width = hi[1 - leg.axis] - lo[1 - leg.axis]
-        offsets = lateral_offsets(width, 2 * self.half[1 - leg.axis])
-        poses = [push_pose(lo, hi, leg, self.half, float(o)) for o in offsets]
+        half, limits = self.senses.half_now(w), self._limits(w)
+        offsets = lateral_offsets(width, 2 * half[1 - leg.axis])
+        poses = [push_pose(lo, hi, leg, half, float(o)) for o in offsets]
 
         def heights(xy: np.ndarray) -> np.ndarray:
             z, objects = self.rays.heights(w, xy, floor + self.config.ray_height)
@@ -161,7 +214,7 @@ class Plans:
         for staging in (self.config.staging, 0.0):
             for start, end in poses:
                 behind = start - (end - start) / np.linalg.norm(end - start) * staging
-                found = sweep_problem(heights, behind, end, self.limits, floor)
+                found = sweep_problem(heights, behind, end, limits, floor)
                 if found is None:
                     return (start, end, staging), ""
                 if found.kind == "drop" and not problem:
@@ -178,7 +231,7 @@ class Plans:
             return self.rays.heights(w, xy, top)[0]
 
         bottom = feet(state, ids)[w, :, 2] - FOOT_RADIUS
-        finding = check_walk(heights, here, path, self.limits, start_levels=bottom)
+        finding = check_walk(heights, here, path, self._limits(w), start_levels=bottom)
         if finding is None:
             return None
         where = np.array(finding.where)

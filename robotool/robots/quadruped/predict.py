@@ -28,7 +28,7 @@ from robotool.robots.quadruped.push import (
 )
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths, turn_sweep
 
 SAMPLE = 0.02  # m between terrain samples along a walk
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
@@ -39,6 +39,21 @@ DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
 REMEMBERED = 20_000  # walk predictions kept (the same walks recur across a task's candidate programs)
 _walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
+
+
+def turn_violation(layout: Layout, start: np.ndarray, limits: QuadrupedLimits, heading: float) -> str | None:
+    """Predict whether a turn in place at ``start`` from heading 0 to ``heading`` (degrees) breaks a rule, as the
+    simulator checks it (:meth:`.plans.Plans.turn`): a foot's arc leaving the level under the feet, or anything in
+    the body's sweep above it; the problem in words, or None."""
+    here = np.asarray(start, dtype=float)
+    arcs, sweep = turn_sweep(limits, 0.0, float(np.radians(heading)), QUADRUPED.side_margin)
+    levels = layout.heights(here + foot_offsets(limits))
+    if np.any(layout.heights((here + sweep).reshape(-1, 2)) > levels.max() + RISE):
+        return "something stands in the body's way as the robot turns"
+    under = layout.heights((here + arcs).reshape(-1, 2)).reshape(arcs.shape[:2])
+    if np.any(np.abs(under - levels) > RISE):
+        return "a foot would cross an edge as the robot turns"
+    return None
 
 
 def walk_violation(

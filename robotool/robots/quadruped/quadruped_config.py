@@ -62,6 +62,10 @@ class QuadrupedConfig:
     """m/s: a move ends only once the body is this still."""
     settled_turn: float = 0.2
     """rad/s of pitch and roll, likewise."""
+    turn_speed: float = 1.0
+    """rad/s the heading setpoint of a turn moves at."""
+    turn_arrived: float = 0.01
+    """rad from a turn's heading that counts as there."""
     leash: float = 0.06
     """m the setpoint may run ahead of the body."""
     stall_time: float = 3.0

@@ -32,7 +32,7 @@ from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.referee import Referee
 from robotool.robots.quadruped.sensing import SceneFacts, Senses
 from robotool.robots.quadruped.support import feet
-from robotool.robots.quadruped.terrain import FOOT_RADIUS
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, quarter_turns
 from robotool.robots.quadruped.terrain_following import TerrainFollowing
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, size_now, world_mask
@@ -80,7 +80,12 @@ class QuadrupedController(SkillController):
             if failures[w] is not None:
                 ends.append(SkillEnd(world=int(w), outcome="refused", reason=f"the robot has fallen ({failures[w]})"))
                 continue
-            plan = self.plans.push(w, *args) if skill == "push_to_position" else self.plans.walk(w, args[0])
+            if skill == "push_to_position":
+                plan = self.plans.push(w, *args)
+            elif skill == "turn_to_heading":
+                plan = self.plans.turn(w, args[0])
+            else:
+                plan = self.plans.walk(w, args[0])
             end = self.moves.begin(w, plan)
             if end is not None:
                 ends.append(end)
@@ -107,7 +112,8 @@ class QuadrupedController(SkillController):
         name, scene = args[0], self.senses.scene
         if name == "robot":
             if skill == "get_size":
-                return list(self.limits.body_size)
+                sx, sy, sz = self.limits.body_size
+                return [sy, sx, sz] if quarter_turns(self.senses.yaw(world)) % 2 else [sx, sy, sz]
             centres = feet(state, self.senses.facts.ids)[world]
             x, y = centres[:, :2].mean(axis=0)
             return [float(x), float(y), float(centres[:, 2].mean() - FOOT_RADIUS + self.senses.facts.height / 2)]

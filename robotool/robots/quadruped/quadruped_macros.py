@@ -15,12 +15,14 @@ import numpy as np
 
 from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Layout
+from robotool.planner.search import tight
 from robotool.robots.quadruped.predict import (
     detour,
     drift_room,
     push_problem,
     push_route,
     push_staging,
+    turn_violation,
     walk_violation,
 )
 from robotool.robots.quadruped.push import lateral_offsets, legs
@@ -186,20 +188,46 @@ class Writer:
         self.doubt(walk_violation(self.layout, self.here, [xy for xy, _ in route.waypoints], self.quad.limits))
         for xy, surface in route.waypoints:
             self.walk(xy, surface, f"walk onto {surface}" if surface != "ground" else "walk into position")
+        self.stance(*route.waypoints[-1])
         self.prog.say(route.words)
+
+    def stance(self, xy: np.ndarray, surface: str) -> None:
+        """Keep how far the feet standing at ``xy`` on ``surface`` are from its top's edges as the program's slack
+        when it is the least yet; feet beyond them are its doubt (the body does not fit there as it is turned)."""
+        if surface == "ground":
+            return
+        box = self.layout.box(surface)
+        slack = float((box.half - np.abs(xy + foot_offsets(self.quad.limits) - box.center)).min())
+        self.prog.slack = min(self.prog.slack, slack)
+        if slack < 0:
+            self.doubt(f"a foot would stand off {surface}'s top: the body does not fit there as it is turned")
 
 
 # --- goals ----------------------------------------------------------------------------------------------
 
 
 def candidates(task: Task, tools: bool) -> Iterator[Program]:
-    """Every program the macros make for the task (unordered; the search orders them)."""
-    quad = Quadruped(task)
+    """Every program the macros make for the task (unordered; the search orders them). When each program the robot
+    can make facing as it starts is predicted to fail or leaves a thin margin (:func:`.search.tight`), the programs
+    it can make after a quarter turn in place (its x and y sizes swapped) are made too."""
+    facing = list(_programs(Quadruped(task), tools))
+    yield from facing
+    limits = task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    if all(p.doubt is not None or tight(p) for p in facing) and limits.body_size[0] != limits.body_size[1]:
+        quad = Quadruped(task, heading=90)
+        if turn_violation(quad.layout, quad.start, limits, quad.heading) is None:
+            yield from _programs(quad, tools)
+
+
+def _programs(quad: Quadruped, tools: bool) -> Iterator[Program]:
+    """The programs of the macros for ``quad`` (see :func:`candidates`)."""
+    task = quad.task
     goal = task.goal
     target = task.object(goal.object)
     if goal.kind == "robot_on":
         for route in routes_onto(quad, target.name, tools):
-            prog = Program()
+            prog = quad.program()
             prog.use(target.name, "target")
             Writer(quad, prog).route(route)
             yield prog
@@ -237,7 +265,7 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
     fulcrum = quad.layout.box(fulcrums[0].name)
     near = np.sign((quad.start - bbox.center) @ lat) or 1.0
     for side, clearance in itertools.product((near, -near), CLEARANCES):
-        prog = Program()
+        prog = quad.program()
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
         prog.use(fulcrums[0].name, "tool: the fulcrum")
@@ -305,7 +333,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     continue
                 pushes.append((cushion.name, spot))
             for route in routes_onto(_after_pushes(quad, pushes), support_name, tools):
-                prog = Program()
+                prog = quad.program()
                 prog.use(target.name, "target")
                 w = Writer(quad, prog)
                 for name, spot in pushes:
@@ -340,7 +368,7 @@ def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quad
     the way onto a surface is planned around what they moved (a cushion pushed beside a sofa stands in the way)."""
     if not pushes:
         return quad
-    w = Writer(quad, Program())
+    w = Writer(quad, Program())  # only its layout and end are read
     for name, spot in pushes:
         w.push(name, spot, "")
     return quad.after(w.layout, w.here, [name for name, _ in pushes])

@@ -14,13 +14,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from robotool.planner.codegen import Program
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, walk_violation
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import RISE, foot_offsets
+from robotool.robots.quadruped.terrain import RISE, foot_offsets, turned
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
 
@@ -59,16 +60,24 @@ class Route:
 class Quadruped:
     """The quadruped's view of one task: its limits, body, start and the objects' boxes."""
 
-    def __init__(self, task: Task):
+    def __init__(self, task: Task, heading: int = 0):
         self.task = task
+        self.heading = heading  # degrees: the quarter turn its programs open with (0: none; then the body lies so)
         limits = task.limits
         assert isinstance(limits, QuadrupedLimits)
-        self.limits = limits
+        self.limits = turned(limits, heading // 90)
         self.half = np.asarray(limits.body_size[:2]) / 2
         self.start = np.asarray(task.robot.position, dtype=float)
         self.floor_name, self.floor = start_surface(task)
         self.layout = Layout(task)
         self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
+
+    def program(self) -> Program:
+        """A new program, opening with the robot's turn when it has one."""
+        prog = Program()
+        if self.heading:
+            prog.turn(self.heading, f"turn so that the body's length lies along {'xy'[self.heading // 90 % 2]}")
+        return prog
 
     def pushable(self, obj: SceneObject, level: float) -> bool:
         """Whether the robot may push ``obj`` from a surface at height ``level``."""

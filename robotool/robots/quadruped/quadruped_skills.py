@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from robotool.robots.skills import POSITION, QUERY_NAME, SkillSpec
+from robotool.robots.skills import HEADING, POSITION, QUERY_NAME, SkillSpec
 
 
 class QuadrupedLimits(BaseModel):
@@ -57,6 +57,18 @@ QUADRUPED_SKILLS: tuple[SkillSpec, ...] = (
         semantics=(
             "Like walk_to_position, but used to step up onto a higher surface; the same "
             "step-up, gap and drop limits apply."
+        ),
+    ),
+    SkillSpec(
+        name="turn_to_heading",
+        params=HEADING,
+        returns="None",
+        kind="motion",
+        semantics=(
+            "Turn in place about the body's centre until its front faces heading degrees from +x "
+            "(0: length along x; 90: along y, which swaps the body's x and y sizes); only quarter turns "
+            "(0, 90, 180, 270) are possible. Refused where a foot would cross an edge on the way or the "
+            "body would sweep into something."
         ),
     ),
     SkillSpec(

@@ -36,7 +36,7 @@ from robotool.robots.quadruped.support import (
     tilt,
     unsupported_feet,
 )
-from robotool.robots.quadruped.terrain import RISE
+from robotool.robots.quadruped.terrain import RISE, rotated
 from robotool.sim.embodiment import SkillEnd
 
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
@@ -267,7 +267,8 @@ class Referee:
         foot_z = feet(state, facts.ids)[:, :, 2]
         by_foot = state.touching[:, facts.ids.feet][:, :, bodies] & (foot_z[:, :, None] > centres[:, None, :, 2])
         torso = state.xpos[:, facts.ids.body]
-        under = np.all(np.abs(centres[:, :, :2] - torso[:, None, :2]) < facts.half, axis=2)
+        along_body = rotated(centres[:, :, :2] - torso[:, None, :2], -self.senses.yaw())
+        under = np.all(np.abs(along_body) < facts.half, axis=2)
         by_belly = state.touching[:, facts.ids.body][:, bodies] & under
         stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
         stood_on |= self._borne_by(bodies, mask & ~stood_on.any(axis=1))

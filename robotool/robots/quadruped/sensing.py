@@ -13,6 +13,7 @@ import numpy as np
 from robotool.robots.quadruped.body import LEG_SLACK, XY_KP, BodyIds
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.support import Parts
+from robotool.robots.quadruped.terrain import quarter_turns
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners, world_corners
@@ -72,6 +73,14 @@ class Senses:
     def position(self, w: int) -> np.ndarray:
         """The x-y of the body's slides (the servos' coordinates) in world ``w``."""
         return self.state.qpos[w, self.facts.ids.qpos[:2]].copy()
+
+    def yaw(self, worlds: np.ndarray | int | slice = slice(None)) -> np.ndarray:
+        """The body's heading (rad about z, 0: its length along x) in ``worlds`` (default: all)."""
+        return self.state.qpos[worlds, self.facts.ids.yaw_qpos]
+
+    def half_now(self, w: int) -> np.ndarray:
+        """(2,) m: the x-y half sizes of the body's outline in world ``w`` as it is turned now (quarter turns)."""
+        return self.facts.half[::-1].copy() if quarter_turns(self.yaw(w)) % 2 else self.facts.half.copy()
 
     def centers(self, state: BatchState) -> np.ndarray:
         """Object centres (nworld, nobject, 3), read-only: body origins; a cloth's is the mean of its links."""

@@ -240,6 +240,40 @@ def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:
     return np.array([[sx * hx, sy * hy] for sx in (-1, 1) for sy in (-1, 1)])
 
 
+def turned(limits: QuadrupedLimits, quarters: int) -> QuadrupedLimits:
+    """``limits`` as the body lies after ``quarters`` quarter turns about z: its x and y sizes swapped when odd (the
+    terrain checks read the body's outline axis-aligned)."""
+    if quarters % 2 == 0:
+        return limits
+    sx, sy, sz = limits.body_size
+    return limits.model_copy(update={"body_size": (sy, sx, sz)})
+
+
+def quarter_turns(yaw: np.ndarray | float) -> np.ndarray:
+    """The nearest whole number of quarter turns (0-3) to each heading ``yaw`` (rad)."""
+    return np.mod(np.round(np.asarray(yaw) / (np.pi / 2)), 4).astype(int)
+
+
+def rotated(points: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """x-y ``points`` (n, 2), or (k, n, 2) one set per heading, turned by each heading ``yaw`` (k,) rad -> (k, n, 2)."""
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    x, y = points[..., 0], points[..., 1]
+    return np.stack([c * x - s * y, s * x + c * y], axis=-1)
+
+
+TURN_SAMPLE = 0.05  # rad between the headings, and m between the points of the outline, where a turn is read
+
+
+def turn_sweep(limits: QuadrupedLimits, yaw: float, target: float, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """What a turn in place from heading ``yaw`` to ``target`` (rad) passes over, as offsets from the body's centre:
+    the feet's arcs (n, 4, 2) and points covering its outline grown by ``margin`` (n, m, 2), at n headings."""
+    angles = np.linspace(yaw, target, int(np.ceil(abs(target - yaw) / TURN_SAMPLE)) + 1)
+    half = np.asarray(limits.body_size[:2]) / 2 + margin
+    axes = (np.linspace(-h, h, int(np.ceil(2 * h / TURN_SAMPLE)) + 1) for h in half)
+    outline = np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 2)
+    return rotated(foot_offsets(limits), angles), rotated(outline, angles)
+
+
 def foot_paths(feet: np.ndarray, direction: np.ndarray, length: float, back: float = 0.0) -> np.ndarray:
     """Sample points (4, n, 2) on the feet's straight paths: from ``back`` behind each foot ``feet`` (4, 2) to
     ``length`` ahead along the unit ``direction``."""

@@ -35,6 +35,7 @@ from robotool.robots.quadruped.terrain import (
     TerrainKind,
     finding_kind,
     limit_of,
+    rotated,
     scan_paths,
 )
 
@@ -108,8 +109,8 @@ class TerrainFollowing:
         k, local = len(worlds), self.config.local
         facts = self.senses.facts
         points = centres[:, :, None, :2] + local[None, None, :, None] * u[:, None, None, :]
-        grid = np.array(self.config.torso_grid)
-        torso = self.senses.state.qpos[worlds][:, None, facts.ids.qpos[:2]] + grid * facts.half
+        grid = rotated(np.array(self.config.torso_grid) * facts.half, self.senses.yaw(worlds))
+        torso = self.senses.state.qpos[worlds][:, None, facts.ids.qpos[:2]] + grid
         top = centres[:, :, 2].min(axis=1) + self.config.ray_height
         z, objects = self.rays.cast(worlds, np.concatenate([points.reshape(k, -1, 2), torso], axis=1), top)
         pushed = (objects == pushing[:, None]) & (objects >= 0)
