@@ -37,7 +37,8 @@ BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its fac
 LEG_SHARE = 0.02  # of the robot's mass in each leg; the torso carries the rest
 XY_KP = 20000.0  # N/m
 XY_FORCE = 120.0  # N: the most the legs push sideways (about the weight: a blocked push cannot flip the body)
-YAW_OMEGA = 300.0  # rad/s: the yaw servo's natural frequency (stiff: a push's twist turns the body < 0.1 deg)
+YAW_TWIST = 0.002  # rad the yaw servo gives under its whole torque (the legs' sideways push at the corners)
+YAW_OMEGA = 100.0  # rad/s: the yaw's natural frequency, set by the hinge's armature (stiffer slows the solver)
 LIFT_KP = 30000.0  # N/m
 LIFT_FACTOR = 2.0  # the lift motor's force bound, in robot weights
 TILT_FACTOR = 0.15  # m: the pitch and roll motors' torque bound, in robot weights times this lever
@@ -124,7 +125,15 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         body.add_joint(
             name=f"{BODY}_{axis}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=np.eye(3)["xyz".index(axis)], ref=ref
         )
-    body.add_joint(name=f"{BODY}_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], armature=0.01)
+    twist = XY_FORCE * (sx + sy)  # N m: the legs' sideways push at the corners, the yaw servo's torque bound
+    yaw_kp = twist / YAW_TWIST
+    inertia = limits.mass * (sx**2 + sy**2) / 12 + yaw_kp / YAW_OMEGA**2  # about the vertical, armature included
+    body.add_joint(
+        name=f"{BODY}_yaw",
+        type=mujoco.mjtJoint.mjJNT_HINGE,
+        axis=[0, 0, 1],
+        armature=yaw_kp / YAW_OMEGA**2,
+    )
     for name, hinge in (("pitch", [0, 1, 0]), ("roll", [1, 0, 0])):
         body.add_joint(
             name=f"{BODY}_{name}",
@@ -181,7 +190,6 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
         tilt.ctrlrange = [-1.0, 1.0]
         tilt.gainprm[0] = TILT_FACTOR * limits.mass * GRAVITY  # torque per unit of control
     yaw = spec.add_actuator(name=f"{BODY}_yaw", target=f"{BODY}_yaw", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-    inertia = limits.mass * (sx**2 + sy**2) / 12  # about the body's vertical axis
-    yaw.set_to_position(kp=inertia * YAW_OMEGA**2, kv=2.0 * inertia * YAW_OMEGA)
+    yaw.set_to_position(kp=yaw_kp, kv=2.0 * np.sqrt(yaw_kp * inertia))
     yaw.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-    yaw.forcerange = [-XY_FORCE * (sx + sy), XY_FORCE * (sx + sy)]  # the legs' sideways push, at the corners
+    yaw.forcerange = [-twist, twist]

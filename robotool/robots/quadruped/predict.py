@@ -8,9 +8,9 @@ predict a walk (:func:`walk_violation`) or a push (:func:`push_problem`) on a pl
 from __future__ import annotations
 
 import heapq
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, TypeVar, cast
 
 import numpy as np
 
@@ -37,8 +37,31 @@ BELLY_LINES = 5  # lines between the feet's paths along which the surface under 
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
-REMEMBERED = 20_000  # walk predictions kept (the same walks recur across a task's candidate programs)
+REMEMBERED = 20_000  # predictions kept of each kind (the same walks and pushes recur across a task's programs)
+Pose = tuple[np.ndarray, np.ndarray, np.ndarray]  # a push leg's start and end poses and its staging point
 _walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
+_poses: dict[tuple[object, ...], tuple[object, Pose | None]] = {}
+T = TypeVar("T")
+
+
+def _remembered(
+    memo: dict[tuple[object, ...], tuple[object, T]], key: tuple[object, ...], layout: Layout, compute: Callable[[], T]
+) -> T:
+    """``compute()`` once per ``key`` (which starts with the id of the layout's task, and says how the layout moved
+    its objects) while ``memo`` holds it: the entry holds its task, so an id is never reused while it is
+    remembered."""
+    task, known = memo.get(key, (None, None))
+    if task is layout.task:
+        return cast(T, known)
+    if len(memo) >= REMEMBERED:
+        memo.clear()
+    memo[key] = (layout.task, found := compute())
+    return found
+
+
+def _moved(layout: Layout) -> tuple[tuple[str, bytes], ...]:
+    """Where ``layout`` moved its objects, as a key."""
+    return tuple(sorted((name, xy.tobytes()) for name, xy in layout.moved.items()))
 
 
 def turn_violation(layout: Layout, start: np.ndarray, limits: QuadrupedLimits, heading: float) -> str | None:
@@ -71,16 +94,9 @@ def walk_violation(
     """
     skip = list(exclude)
     goals = [np.asarray(g, dtype=float) for g in waypoints]
-    moved = tuple(sorted((name, xy.tobytes()) for name, xy in layout.moved.items()))
     path = (np.asarray(start, dtype=float).tobytes(), *(g.tobytes() for g in goals))
-    key = (id(layout.task), moved, path, tuple(skip), limits)
-    task, known = _walks.get(key, (None, None))
-    if task is layout.task:  # the entry holds its task, so an id is never reused while it is remembered
-        return known
-    if len(_walks) >= REMEMBERED:
-        _walks.clear()
-    _walks[key] = (layout.task, found := _walk_violation(layout, start, goals, limits, skip))
-    return found
+    key = (id(layout.task), _moved(layout), path, tuple(skip), limits)
+    return _remembered(_walks, key, layout, lambda: _walk_violation(layout, start, goals, limits, skip))
 
 
 def _walk_violation(
@@ -262,10 +278,25 @@ def push_staging(
     return None if pose is None else pose[2]
 
 
-def _push_pose(
+def _push_pose(layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float) -> Pose | None:
+    """The skill's choice of start and end poses for one leg, and its staging point (None: nowhere clear); read-only
+    arrays, remembered (the same pushes recur across a task's programs)."""
+    key = (id(layout.task), _moved(layout), name, box.lo.tobytes(), box.hi.tobytes(), leg.axis, leg.target, limits)
+    return _remembered(
+        _poses, (*key, floor), layout, lambda: _read_only(_choose_push_pose(layout, name, box, leg, limits, floor))
+    )
+
+
+def _read_only(pose: Pose | None) -> Pose | None:
+    for a in pose or ():
+        a.flags.writeable = False
+    return pose
+
+
+def _choose_push_pose(
     layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """The skill's choice of start and end poses for one leg, and its staging point (None: nowhere clear)."""
+) -> Pose | None:
+    """:func:`_push_pose`, read from the layout."""
     half = np.asarray(limits.body_size[:2]) / 2
     offsets = lateral_offsets(float(box.hi[1 - leg.axis] - box.lo[1 - leg.axis]), 2 * float(half[1 - leg.axis]))
     poses = [push_pose(box.lo, box.hi, leg, half, float(o)) for o in offsets]
