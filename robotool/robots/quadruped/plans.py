@@ -110,7 +110,10 @@ class Plans:
         top = float(levels.min()) + self.config.ray_height
         points = (here + sweep).reshape(-1, 2)
         heights, objects = self.rays.heights(w, points, top)
-        high = heights > levels.max() + RISE
+        standing_on = self.rays.heights(w, here + arcs[0], top)[1]
+        facts = self.senses.facts
+        loose = (objects >= 0) & facts.movable[objects] & ~facts.cloth[objects] & ~np.isin(objects, standing_on)
+        high = (heights > levels.max() + RISE) | loose  # a loose object, however thin, would be swept along
         if high.any():
             k = int(np.argmax(high))
             name = self.scene.object_names[objects[k]] if objects[k] >= 0 else "something"

@@ -26,6 +26,7 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import (
+    FOOTING_ANGLE,
     bears_up,
     centre_of_mass,
     feet,
@@ -243,15 +244,16 @@ class Referee:
 
     def _stood_on(self, asked: np.ndarray) -> np.ndarray:
         """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a foot stands on: its contacts press the
-        foot up (:func:`~.support.bears_up`). A leg pressing on an object's side does not stand
-        on it (it may drive a low object along between the feet, as a walk must not). Only what moved this tick needs
-        asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere."""
+        foot up within :data:`~.support.FOOTING_ANGLE` of up. A leg pressing on an object's side, or a foot on the rim
+        of a plate too thin for the legs to notice, does not stand on it (it may drive it along, as a walk must not).
+        Only what moved this tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved
+        nowhere."""
         state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
         on = state.touching[:, feet_ids][:, :, bodies] & asked[:, None, :]  # (nworld, 4, nobject)
         out = np.zeros(asked.shape, dtype=bool)
         for w in np.flatnonzero(on.any(axis=(1, 2))):
             normals = self.senses.sim.contact_normals(int(w))[bodies][:, feet_ids]  # from each object onto each foot
-            out[w] = (bears_up(normals) & on[w].T).any(axis=1)
+            out[w] = (bears_up(normals, FOOTING_ANGLE) & on[w].T).any(axis=1)
         return out
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:

@@ -88,10 +88,15 @@ BEARING_ANGLE = np.radians(60.0)
 """rad: a contact whose summed normal lies within this of up bears weight: what it presses up carries on it."""
 
 
-def bears_up(normals: np.ndarray) -> np.ndarray:
-    """Whether summed contact normals (..., 3), each from one body onto another, press it up: within
-    :data:`BEARING_ANGLE` of up (none where nothing touches)."""
-    return normals[..., 2] > np.cos(BEARING_ANGLE) * np.linalg.norm(normals, axis=-1)
+FOOTING_ANGLE = np.radians(30.0)
+"""rad: a foot stands on what presses it up within this of up, which may then move with it; a rim that presses a
+frictionless foot up at a steeper angle takes more of its push sideways than up, and is pushed, not stood on."""
+
+
+def bears_up(normals: np.ndarray, within: float = BEARING_ANGLE) -> np.ndarray:
+    """Whether summed contact normals (..., 3), each from one body onto another, press it up: within ``within``
+    (rad, default :data:`BEARING_ANGLE`) of up (none where nothing touches)."""
+    return normals[..., 2] > np.cos(within) * np.linalg.norm(normals, axis=-1)
 
 
 @dataclass(frozen=True)

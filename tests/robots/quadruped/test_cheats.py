@@ -193,6 +193,8 @@ LAYOUT_CASES = [
     ("walk_over_board_on_vase", "tray_hook_on_edge_on_vase"),
     ("stand_on_a_board_on_the_goal_walls_foot", "l_wall_on_its_side_with_a_board_on_its_foot"),  # far below its top
     ("walk_along_the_foot_of_a_glass_l", "corridor_floored_by_a_glass_l"),  # its centre in the air above its foot
+    # a plate thinner than a step the legs notice, too heavy to push, swept off by a foot on its rim
+    ("turn_sweeps_a_thin_plate_off", "lead_plate_beside_the_robot"),
 ]
 
 CONTROL_CASES = [
@@ -314,6 +316,19 @@ def test_feet_pressing_on_the_sides_of_a_beam_do_not_stand_on_it() -> None:
     for rollout in rollouts:
         assert "beam" in rollout.touched and rollout.conditions["robot_has_not_fallen"]
         assert rollout.conditions["robot_weight_on_beam"] is False and not rollout.success
+
+
+@pytest.mark.parametrize("seed", [11, 23])
+def test_a_foot_plowing_a_thin_heavy_plate_along_by_its_rim_does_not_stand_on_it(seed: int) -> None:
+    """Found by an adversarial run: a walk whose front foot met the rim of a 1.45 cm steel plate (8.5 kg: over the push
+    limit) plowed it off the platform in some worlds; the rim pressed the foot up within 60 degrees of up, which counted
+    as standing on the plate and excused its travel."""
+    scene = _scene("greased_plate_on_a_platform")
+    rollouts = sim.run_sessions(
+        scene, start_sessions([_text("walk_plows_a_thin_plate_off")] * 3, "quadruped"), seed=seed
+    )
+    for rollout in rollouts:
+        assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
 
 
 def test_a_book_lying_on_a_heavy_crate_does_not_hide_it_from_the_push_limit() -> None:
@@ -484,12 +499,16 @@ def test_a_scene_solved_by_pushing_the_vase_from_a_step_level_with_the_sofa_is_l
 def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
     """The vase, pushed off the 0.34 m sofa into the slot between it and the cushion, glances off the cushion's edge
     and grazes the sofa's side on its way down: read at the control ticks it was never clear of everything at once,
-    yet it struck the hard floor more than 0.3 m below where it lay (this world's cushion ends 0.10 m out)."""
+    yet it struck the hard floor more than 0.3 m below where it lay. Where the push leaves the cushion varies: in
+    some of these six worlds it leaves a slot the vase falls through, in the rest it catches the vase, as it should."""
     code = (CHEATS / "vase_into_slot_beside_cushion.py").read_text()
-    (rollout,) = sim.run_sessions(_scene("vase_lowering"), start_sessions([code], "quadruped"), seed=0)
-    assert rollout.conditions["glass_vase_lowered"] and not rollout.success
-    (broke,) = [e for e in rollout.events if e.kind == "broke"]
-    assert broke.detail == "the ground" and broke.measured["fall"] > 0.3, broke
+    rollouts = sim.run_sessions(_scene("vase_lowering"), start_sessions([code] * 6, "quadruped"), seed=0)
+    falls = [e for r in rollouts for e in r.events if e.kind == "broke" and "the ground" in (e.detail or "")]
+    assert falls and all(e.measured["fall"] > 0.3 for e in falls), falls
+    for rollout in rollouts:
+        assert rollout.conditions["glass_vase_lowered"]
+        broke = any(e.kind == "broke" for e in rollout.events)
+        assert rollout.success is not broke, rollout.events
 
 
 @pytest.mark.parametrize(
