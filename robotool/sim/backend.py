@@ -102,6 +102,10 @@ class BatchedSim(Protocol):
         :data:`TOUCH_DISTANCE`), the sum of their contacts' unit normals pointing from the first body to the second
         (antisymmetric); zeros for the pairs that do not touch. Which way one body presses on another."""
 
+    def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every geom's position (nworld, ngeom, 3) and rotation matrix (nworld, ngeom, 9) after the last step, current
+        in ``worlds`` (the other worlds' rows may be stale); read-only."""
+
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:

@@ -234,7 +234,7 @@ class MujocoSim:
             self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), exclude_body)
         index = self._eligible[key]
         worlds = np.flatnonzero(~np.isnan(np.asarray(pnt)[:, 0, 0]))
-        xpos, xmat = self._geom_poses(worlds)
+        xpos, xmat = self.geom_poses(worlds)
         x, hit = ray_cast.cast(
             self._ray_geoms,
             index,
@@ -247,7 +247,7 @@ class MujocoSim:
         geom[worlds] = hit
         return dist, geom
 
-    def _geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position (nworld, ngeom, 3) and rotation (nworld, ngeom, 9) in the worlds asked for (the
         rest left stale), read once per step."""
         poses = self._poses

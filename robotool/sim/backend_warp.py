@@ -93,6 +93,7 @@ class WarpSim:
         self._graphs: dict[int, wp.Graph] = {}
         self._state = self._read()
         self._contacts: tuple[np.ndarray, ...] | None = None  # the contact list read back for contact_normals
+        self._geoms: tuple[np.ndarray, np.ndarray] | None = None  # the geoms' poses read back for geom_poses
 
     def _substeps(self, nstep: int) -> None:
         for _ in range(nstep):
@@ -118,7 +119,7 @@ class WarpSim:
             else:
                 wp.capture_launch(graph)
         self._state = self._read()
-        self._contacts = None
+        self._contacts = self._geoms = None
 
     def _read(self) -> BatchState:
         d, model = self.d, self.scene.model
@@ -194,6 +195,17 @@ class WarpSim:
         return normals_from_contacts(
             self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
         )
+
+    def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every geom's position and rotation matrix in every world (:meth:`BatchedSim.geom_poses`), read back once
+        per step."""
+        if self._geoms is None:
+            nworld, ngeom = self.nworld, self.scene.model.ngeom
+            self._geoms = (
+                self.d.geom_xpos.numpy().astype(float).reshape(nworld, ngeom, 3),
+                self.d.geom_xmat.numpy().astype(float).reshape(nworld, ngeom, 9),
+            )
+        return self._geoms
 
     def rays(
         self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1

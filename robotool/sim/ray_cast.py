@@ -209,6 +209,29 @@ def _box(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarray, ve
     return x
 
 
+def contains(geoms: RayGeoms, geom: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, pnt: np.ndarray) -> np.ndarray:
+    """Whether each point ``pnt`` (n, 3) lies inside its geom ``geom`` (n,) posed at ``xpos`` (n, 3) and ``xmat``
+    (n, 9): a ray cast from inside a geom meets it where it leaves it (``mj_ray``'s answer), not where it enters. A
+    plane holds nothing."""
+    zero = np.zeros_like(pnt)
+    p0, p1, p2 = _local(xpos, xmat, pnt, zero)[:3]
+    size, kind = geoms.size[geom], geoms.type[geom]
+    s0, s1, s2 = size[:, 0], size[:, 1], size[:, 2]
+    radial = p0 * p0 + p1 * p1
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inside = {
+            _SPHERE: p0 * p0 + p1 * p1 + p2 * p2 < s0 * s0,
+            _CAPSULE: radial + np.maximum(np.abs(p2) - s1, 0.0) ** 2 < s0 * s0,
+            _ELLIPSOID: (p0 / s0) ** 2 + (p1 / s1) ** 2 + (p2 / s2) ** 2 < 1.0,
+            _CYLINDER: (radial < s0 * s0) & (np.abs(p2) < s1),
+            _BOX: (np.abs(p0) < s0) & (np.abs(p1) < s1) & (np.abs(p2) < s2),
+        }
+    out = np.zeros(len(geom), dtype=bool)
+    for shape, held in inside.items():
+        out |= (kind == shape) & held
+    return out
+
+
 _BOUND = {  # the squared radius of the sphere mj_ray tests first, by shape
     _CAPSULE: lambda size: (size[:, 0] + size[:, 1]) * (size[:, 0] + size[:, 1]),
     _CYLINDER: lambda size: size[:, 0] * size[:, 0] + size[:, 1] * size[:, 1],

@@ -201,3 +201,54 @@ def test_contact_normals_say_which_way_touching_bodies_press(sim_scene: Any) -> 
         assert not sim.state().touching[0, box_1, box_2] and not normals[box_1, box_2].any()
     finally:
         sim.close()
+
+
+def test_contains_tells_points_inside_each_primitive_shape_from_points_just_outside() -> None:
+    """Points 10 % inside a geom's surface lie in it, points 10 % outside do not, for every primitive shape posed
+    anywhere (a ray that starts inside a geom meets it where it leaves it, so its readers ask this)."""
+    model = _every_shape()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    geoms = ray_cast.RayGeoms.of(model)
+    rng = np.random.default_rng(5)
+    solid = np.flatnonzero(geoms.type != mujoco.mjtGeom.mjGEOM_PLANE)
+    box, sphere, capsule, ellipsoid = (
+        int(t)
+        for t in (
+            mujoco.mjtGeom.mjGEOM_BOX,
+            mujoco.mjtGeom.mjGEOM_SPHERE,
+            mujoco.mjtGeom.mjGEOM_CAPSULE,
+            mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+        )
+    )
+    for g in solid:
+        size, kind = model.geom_size[g], int(geoms.type[g])
+        u = rng.normal(size=(200, 3))
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        if kind == box:
+            surface, centre = size * u / np.abs(u).max(axis=1, keepdims=True), np.zeros((200, 3))
+        elif kind in (sphere, capsule):
+            centre = np.zeros((200, 3))
+            if kind == capsule:  # on its side, from a point of its segment, or on a cap, from the segment's end
+                centre[:100, 2], u[:100, 2] = rng.uniform(-size[1], size[1], 100), 0.0
+                u[:100] /= np.linalg.norm(u[:100], axis=1, keepdims=True)
+                centre[100:, 2] = size[1] * np.sign(u[100:, 2])
+            surface = size[0] * u
+        elif kind == ellipsoid:
+            surface, centre = size * u, np.zeros((200, 3))
+        else:  # a cylinder: on its side or a cap
+            side = np.stack([u[:, 0], u[:, 1]], axis=1) / np.linalg.norm(u[:, :2], axis=1, keepdims=True)
+            t = rng.uniform(-1.0, 1.0, 200)
+            surface = np.column_stack([size[0] * side, size[1] * t])
+            surface[:100, :2] *= rng.uniform(0, 1, (100, 1))  # on a cap
+            surface[:100, 2] = size[1] * np.sign(t[:100])
+            centre = np.zeros((200, 3))
+        mat = data.geom_xmat[g].reshape(3, 3)
+        for scale, expected in ((0.9, True), (1.1, False)):
+            local = centre + scale * surface
+            pnt = data.geom_xpos[g] + local @ mat.T
+            n = len(pnt)
+            got = ray_cast.contains(
+                geoms, np.full(n, g), np.tile(data.geom_xpos[g], (n, 1)), np.tile(data.geom_xmat[g], (n, 1)), pnt
+            )
+            assert got.all() == expected and got.any() == expected, (mujoco.mjtGeom(kind).name, scale)

@@ -11,6 +11,7 @@ from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import SceneFacts
 from robotool.sim.backend import BatchedSim
+from robotool.sim.ray_cast import contains
 
 
 class Rays:
@@ -70,7 +71,9 @@ class Rays:
         self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int
     ) -> tuple[np.ndarray, np.ndarray]:
         """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
-        ``exclude`` left out: surface heights (0 where nothing is hit) and the geoms hit (-1: none)."""
+        ``exclude`` left out: surface heights (0 where nothing is hit) and the geoms hit (-1: none). A ray that starts
+        inside a geom (a wall taller than the rays' start) meets it where it leaves it, at its bottom: it reads that
+        geom at the ray's start instead, something at least that high."""
         nworld, nray = self.sim.nworld, xy.shape[1]
         pnt = np.full((nworld, nray, 3), np.nan)
         pnt[worlds, :, :2] = xy
@@ -79,4 +82,25 @@ class Rays:
         vec[..., 2] = -1.0
         dist, geom = self.sim.rays(pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
         dist, geom = dist[worlds], geom[worlds]
-        return np.where(np.isfinite(dist), start - dist, 0.0), geom
+        z = np.where(np.isfinite(dist), start - dist, 0.0)
+        within = self._inside(worlds, pnt[worlds], exclude)
+        rows, cols = np.nonzero(within >= 0)
+        z[rows, cols], geom[rows, cols] = start[rows, cols], within[rows, cols]
+        return z, geom
+
+    def _inside(self, worlds: np.ndarray, pnt: np.ndarray, exclude: int) -> np.ndarray:
+        """The geom (k, nray) each ray start ``pnt`` (k, nray, 3) lies inside, body ``exclude`` left out (-1: none):
+        each solid geom near enough (its bounding radius) is tested."""
+        xpos, xmat = self.sim.geom_poses(worlds)
+        geoms = self.facts.ray_geoms
+        solids = self.facts.solids[geoms.body[self.facts.solids] != exclude]
+        reach = self.sim.scene.model.geom_rbound[solids]
+        centres = xpos[worlds][:, solids]  # (k, g, 3)
+        near = np.all(np.abs(pnt[:, :, None, :] - centres[:, None, :, :]) < reach[None, None, :, None], axis=3)
+        out = np.full(pnt.shape[:2], -1)
+        k, n, g = np.nonzero(near)
+        if k.size:
+            geom = solids[g]
+            inside = contains(geoms, geom, xpos[worlds[k], geom], xmat[worlds[k], geom], pnt[k, n])
+            out[k[inside], n[inside]] = geom[inside]
+        return out

@@ -210,7 +210,8 @@ class Referee:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
         torso or a leg touches outside a push of it or of something it touches (and the contact that lasts on from the
         push until the next walk), and that no foot stands on (:meth:`_stood_on`: a lever tips under the robot; a leg
-        pressing on its side stands on nothing), is remembered where it is;
+        pressing on its side stands on nothing) or that the torso touches too (a sled stood on and walked into by its
+        wall is driven, not stood on), is remembered where it is;
         while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
         they are split between steps onto it); once it lies more than ``shove`` from that place, it was shoved
         (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
@@ -226,7 +227,8 @@ class Referee:
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
         moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~facts.cloth & ~s.pressed
-        stood_on = self._stood_on(mask[:, None] & moved_now)
+        by_torso = state.touching[:, facts.ids.body][:, scene.object_body]  # the torso drives what it presses on
+        stood_on = self._stood_on(mask[:, None] & moved_now & ~by_torso)
         excused = (s.pressed | stood_on) & mask[:, None]
         s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
         first = touched & ~s.pressed & ~stood_on & np.isnan(s.bumped[:, :, 0])

@@ -195,6 +195,9 @@ LAYOUT_CASES = [
     ("walk_along_the_foot_of_a_glass_l", "corridor_floored_by_a_glass_l"),  # its centre in the air above its foot
     # a plate thinner than a step the legs notice, too heavy to push, swept off by a foot on its rim
     ("turn_sweeps_a_thin_plate_off", "lead_plate_beside_the_robot"),
+    # a heavy sled stood on and walked into by its wall, taller than the rays' start, rams what the push rules refuse
+    ("walk_into_a_sleds_wall_to_ram_a_board_across", "sled_rams_a_board_across_a_gap"),
+    ("walk_into_a_sleds_wall_to_ram_a_crate_off", "sled_rams_a_crate_off_a_ledge"),
 ]
 
 CONTROL_CASES = [

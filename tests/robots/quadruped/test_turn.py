@@ -88,3 +88,24 @@ def test_the_planner_turns_where_the_robot_fits_only_turned() -> None:
     solution = solve(_task("platform_narrower_than_the_robot_is_long"), worlds=2)
     assert solution.success_rate == 1.0
     assert solution.code is not None and solution.code.startswith("turn_to_heading(90)\n"), solution.code
+
+
+def test_a_wall_taller_than_the_rays_start_reads_as_high_as_the_start() -> None:
+    """Found by an adversarial run: a downward ray that starts inside a wall meets the wall where it leaves it, at its
+    bottom, level with the floor: the 1.5 m wall of a sled read as floor, and walks and turns drove the torso into
+    it. A ray that starts inside a geom reads that geom at the ray's start."""
+    import numpy as np
+
+    from robotool.robots.quadruped.quadruped_controller import QuadrupedController
+    from robotool.sim.backend_choice import make_sim
+
+    task = _task("sled_rams_a_board_across_a_gap")
+    simulator = make_sim(sim.build(task), 1)
+    simulator.step(1, np.ones(1, dtype=bool))
+    rays = QuadrupedController(simulator, task.limits).plans.rays
+    xs = np.arange(-1.0, -0.6, 0.002)
+    heights, objects = rays.heights(0, np.column_stack([xs, np.zeros_like(xs)]), 0.95)
+    wall = heights == 0.95  # the sled's upright, 12 mm thick, up to 1.84 m
+    assert 4 <= wall.sum() <= 7 and np.all(objects[wall] == task.object_names.index("sled")), xs[wall]
+    assert np.all((xs[wall] > -0.72) & (xs[wall] < -0.69))
+    assert np.all(heights[~wall] < 0.37)  # the sled's plate and the sofa read as they are
