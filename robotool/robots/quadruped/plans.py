@@ -10,6 +10,8 @@ closer and a way round it is clear. Nothing here reads the task's category or na
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from robotool.robots.quadruped.move_runner import Move, SkillPlan, finding_measured
@@ -37,6 +39,7 @@ from robotool.robots.quadruped.terrain import (
     quarter_turns,
     turn_sweep,
     turned,
+    turned_feet,
 )
 
 
@@ -233,10 +236,13 @@ class Plans:
         def heights(xy: np.ndarray) -> np.ndarray:
             return self.rays.heights(w, xy, top)[0]
 
-        bottom = feet(state, ids)[w, :, 2] - FOOT_RADIUS
-        finding = check_walk(heights, here, path, self._limits(w), start_levels=bottom)
+        quarters = int(quarter_turns(self.senses.yaw(w)))
+        order = turned_feet(self.limits, quarters)  # the feet in the order of the turned outline's corners
+        bottom = feet(state, ids)[w, order, 2] - FOOT_RADIUS
+        finding = check_walk(heights, here, path, turned(self.limits, quarters), start_levels=bottom)
         if finding is None:
             return None
+        finding = replace(finding, foot=FOOT_NAMES[order[FOOT_NAMES.index(finding.foot)]])
         where = np.array(finding.where)
         ahead = path[0] - here
         probe = where + ahead / max(float(np.linalg.norm(ahead)), 1e-9) * FOOT_RADIUS

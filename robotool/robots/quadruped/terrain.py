@@ -249,6 +249,14 @@ def turned(limits: QuadrupedLimits, quarters: int) -> QuadrupedLimits:
     return limits.model_copy(update={"body_size": (sy, sx, sz)})
 
 
+def turned_feet(limits: QuadrupedLimits, quarters: int) -> np.ndarray:
+    """Which foot (order FOOT_NAMES) stands at each of :func:`foot_offsets` ``(turned(limits, quarters))`` once the
+    body has made ``quarters`` quarter turns."""
+    moved = rotated(foot_offsets(limits), np.array([quarters * np.pi / 2]))[0]
+    corners = foot_offsets(turned(limits, quarters))
+    return np.argmin(np.linalg.norm(moved[None, :, :] - corners[:, None, :], axis=2), axis=1)
+
+
 def quarter_turns(yaw: np.ndarray | float) -> np.ndarray:
     """The nearest whole number of quarter turns (0-3) to each heading ``yaw`` (rad)."""
     return np.mod(np.round(np.asarray(yaw) / (np.pi / 2)), 4).astype(int)

@@ -109,3 +109,15 @@ def test_a_wall_taller_than_the_rays_start_reads_as_high_as_the_start() -> None:
     assert 4 <= wall.sum() <= 7 and np.all(objects[wall] == task.object_names.index("sled")), xs[wall]
     assert np.all((xs[wall] > -0.72) & (xs[wall] < -0.69))
     assert np.all(heights[~wall] < 0.37)  # the sled's plate and the sofa read as they are
+
+
+def test_after_a_quarter_turn_each_corner_of_the_turned_outline_has_its_own_foot() -> None:
+    """Facing +y, the rear-left foot stands at the outline's -x, -y corner and the front-left at its -x, +y one: walks
+    planned on the turned outline read each foot's level, and name each foot, by where it stands."""
+    from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+    from robotool.robots.quadruped.terrain import FOOT_NAMES, turned_feet
+
+    names = [[FOOT_NAMES[i] for i in turned_feet(QuadrupedLimits(), q)] for q in range(4)]
+    assert names[0] == list(FOOT_NAMES)
+    assert names[1] == ["rear-left", "front-left", "rear-right", "front-right"]
+    assert names[2] == ["front-left", "front-right", "rear-left", "rear-right"]
