@@ -96,6 +96,20 @@ def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, 
             assert not any(c.outcome == "stalled" for c in rollout.calls), [c for c in rollout.calls]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: the grip's load counts what is welded to the held object, not what rests on it, so a "
+    "2 kg crate lying on a light plank held 0.21 m away is lifted with it; counting riders whenever they touch also "
+    "refused honest drags (a can riding paper pulled along the table), and counting them only once the held object "
+    "leaves its support did not yet tell the two apart: the grip's share of the load needs contact forces",
+)
+def test_a_crate_resting_on_a_held_plank_loads_the_grip(run_texts: Any) -> None:
+    """Found by an adversarial run (every world of seeds 11 and 2 succeeded)."""
+    code = (CHEATS / "arm_lift_a_plank_under_a_crate.py").read_text()
+    for rollout in run_texts(_task("arm_crate_on_a_plank"), [code] * 2, seed=11):
+        assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+
+
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
 
 
