@@ -269,6 +269,8 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
         prog.use(fulcrums[0].name, "tool: the fulcrum")
+        if quad.extent(a) < quad.extent(lat):  # a lever is walked lengthwise: across it, the feet straddle less
+            prog.thin.append(f"the body lies across {board_name}: it would walk the lever sideways")
         w = Writer(quad, prog)
         beside = float(np.abs(lat) @ bbox.half) + quad.extent(lat) + SIDE
         for prop in props:
@@ -286,7 +288,9 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
             w.floor_walk(xy, "walk beside the board")
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
+        w.stance(step_on, board_name)
         w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
+        w.stance(end, board_name)
         prog.say(
             (f"Push {', '.join(p.name for p in props)} out from under {board_name}. " if props else "")
             + f"Step onto {board_name} by {fulcrums[0].name} and walk to its far end: "

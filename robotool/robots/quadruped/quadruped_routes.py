@@ -66,7 +66,7 @@ class Quadruped:
         limits = task.limits
         assert isinstance(limits, QuadrupedLimits)
         self.limits = turned(limits, heading // 90)
-        self.half = np.asarray(limits.body_size[:2]) / 2
+        self.half = np.asarray(self.limits.body_size[:2]) / 2  # as the body lies after the turn
         self.start = np.asarray(task.robot.position, dtype=float)
         self.floor_name, self.floor = start_surface(task)
         self.layout = Layout(task)

@@ -8,7 +8,7 @@ import pytest
 
 from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
-from robotool.planner.search import tight
+from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner
 from robotool.robots.quadruped.predict import push_problem
 from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
@@ -152,3 +152,21 @@ def test_an_object_pushed_twice_is_noted_thin_once() -> None:
     writer.push("box_1", start + np.array([0.3, 0.0]), "first")
     writer.push("box_1", start + np.array([0.3, 0.3]), "then")
     assert prog.thin == ["box_1's 4.50 kg is within 15% of the 5 kg push limit"]
+
+
+def test_a_robot_planned_after_a_quarter_turn_has_its_outline_turned() -> None:
+    task = generate("cube_lifting", 0).task
+    sx, sy = task.limits.body_size[:2]
+    turned = Quadruped(task, heading=90)
+    assert turned.extent(np.array([1.0, 0.0])) == pytest.approx(sy / 2)
+    assert turned.extent(np.array([0.0, 1.0])) == pytest.approx(sx / 2)
+
+
+def test_a_lever_lying_across_the_body_is_walked_lengthwise_after_a_quarter_turn() -> None:
+    """A lever along y, the body long along x: walking it as the robot starts is sideways (thin); the programs made
+    after a quarter turn, which walk it lengthwise, come first and stand on its top with room to spare."""
+    task = generate("cube_lifting", 0).task  # turned 90 degrees: the board lies along y
+    programs = order(candidates(task, True))
+    facing = [p for p in programs if "turn_to_heading" not in p.code]
+    assert facing and all(any("sideways" in note for note in p.thin) for p in facing)
+    assert programs[0].code.startswith("turn_to_heading(90)") and not tight(programs[0])
