@@ -71,12 +71,28 @@ def run_codes(
 
     World ``r`` of program ``i`` is world ``i * worlds + r`` of the batch (the index a ``recorder`` names).
     """
-    if not codes:
+    return run_seeded(task, [(code, range(seed, seed + worlds)) for code in codes], backend=backend, recorder=recorder)
+
+
+def run_seeded(
+    task: Task,
+    runs: Sequence[tuple[str, Sequence[int]]],
+    *,
+    backend: BackendName | None = None,
+    recorder: StateRecorder | None = None,
+) -> list[list[Rollout]]:
+    """Run each (validated) program in the perturbed worlds of its own seeds, all in one batch: one list of
+    rollouts per run, in its seeds' order (each rollout's ``world`` is its index in the batch)."""
+    if not runs:
         return []
-    programs = [code for code in codes for _ in range(worlds)]
-    world_seeds = [seed + r for _ in codes for r in range(worlds)]
+    programs = [code for code, seeds in runs for _ in seeds]
+    world_seeds = [s for _, seeds in runs for s in seeds]
     rollouts = run_worlds(task, programs, world_seeds, backend=backend, recorder=recorder)
-    return [rollouts[i * worlds : (i + 1) * worlds] for i in range(len(codes))]
+    out, start = [], 0
+    for _, seeds in runs:
+        out.append(rollouts[start : start + len(seeds)])
+        start += len(seeds)
+    return out
 
 
 class CodeRunner(Protocol):

@@ -7,8 +7,11 @@ geometry says no tool is needed) in one batch of perturbed worlds (the first rou
 alone costs least when it holds). A program that succeeds in every one of these planning worlds is then run in
 ``verify`` fresh perturbed worlds, whose seeds the planning worlds never use (:func:`verification_seed`); its
 rollouts are the planning and the fresh worlds together, so one that fails a fresh world no longer counts as
-succeeding everywhere and ranks below one that held in all of them. The search stops at the first round with a
-program that succeeded in every planning and fresh world (or when the rounds or the time budget run out).
+succeeding everywhere and ranks below one that held in all of them. The first round's best guess runs in its fresh
+worlds in the same batch as its planning worlds (most often it holds, and one batch of eight worlds costs much less
+than two of three and five: the controller's tick costs nearly as much for few worlds as for many); those fresh
+rollouts count only if it held in every planning world. The search stops at the first round with a program that
+succeeded in every planning and fresh world (or when the rounds or the time budget run out).
 """
 
 from __future__ import annotations
@@ -18,9 +21,10 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 from robotool.planner.codegen import Program
+from robotool.rollout import Rollout
 from robotool.solution import Candidate, CandidateFailure, StageOutputs
 from robotool.task.task_model import Task
-from robotool.verify import failure_reason, prepare_code, run_codes
+from robotool.verify import failure_reason, prepare_code, run_seeded
 from robotool.vocabulary import BackendName
 
 
@@ -115,17 +119,22 @@ def search(
             elif item.candidate.code is not None:  # always, without a rejection
                 runnable.append(item)
                 codes.append(item.candidate.code)
-        results = run_codes(task, codes, worlds=worlds, seed=seed, backend=backend)
+        planning = range(seed, seed + worlds)
+        fresh = range(verification_seed(seed, worlds), verification_seed(seed, worlds) + budget.verify)
+        ahead = bool(budget.verify) and not rounds and bool(codes)  # the best guess's fresh worlds, in this batch
+        runs = [(code, [*planning, *fresh] if ahead and k == 0 else planning) for k, code in enumerate(codes)]
+        results = run_seeded(task, runs, backend=backend)
         for item, rollouts in zip(runnable, results, strict=True):
-            item.candidate.rollouts = rollouts
-            item.candidate.failure = failure_reason(rollouts)
+            item.candidate.rollouts = rollouts[:worlds]
+            item.candidate.failure = failure_reason(item.candidate.rollouts)
         if budget.verify:
             confirm(
                 task,
                 [t.candidate for t in runnable],
                 worlds=budget.verify,
-                seed=verification_seed(seed, worlds),
+                seed=fresh.start,
                 backend=backend,
+                ran={runnable[0].candidate.index: results[0][worlds:]} if ahead else {},
             )
         tried += batch
         rounds += 1
@@ -134,14 +143,25 @@ def search(
     return tried, rounds
 
 
-def confirm(task: Task, candidates: list[Candidate], *, worlds: int, seed: int, backend: BackendName | None) -> None:
+def confirm(
+    task: Task,
+    candidates: list[Candidate],
+    *,
+    worlds: int,
+    seed: int,
+    backend: BackendName | None,
+    ran: dict[int, list[Rollout]] | None = None,
+) -> None:
     """Run the candidates that held in every world, in order, in ``worlds`` fresh worlds from ``seed`` until one
-    holds in all of them too; the fresh rollouts join each one's own (and its failure reason is updated)."""
+    holds in all of them too; the fresh rollouts join each one's own (and its failure reason is updated). ``ran``:
+    fresh rollouts already run, by candidate index (their seeds these same ones), used instead of running again."""
     for candidate in candidates:
         if not held(candidate):
             continue
         assert candidate.code is not None
-        fresh = run_codes(task, [candidate.code], worlds=worlds, seed=seed, backend=backend)[0]
+        fresh = (ran or {}).get(candidate.index)
+        if fresh is None:
+            fresh = run_seeded(task, [(candidate.code, range(seed, seed + worlds))], backend=backend)[0]
         planned = len(candidate.rollouts)  # the fresh worlds are numbered after the planning ones (seeds say which)
         candidate.rollouts += [r.model_copy(update={"world": planned + k}) for k, r in enumerate(fresh)]
         candidate.failure = failure_reason(candidate.rollouts)

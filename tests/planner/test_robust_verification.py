@@ -34,14 +34,13 @@ class ScriptedRunner:
 
     def __init__(self, fails: dict[str, set[int]]):
         self.fails = fails
-        self.calls: list[tuple[list[str], list[int]]] = []
+        self.calls: list[list[tuple[str, list[int]]]] = []  # one batch a call: each program with its world seeds
 
-    def __call__(self, task, codes, *, worlds, seed=0, backend=None):  # the shape of run_codes
-        seeds = [seed + r for r in range(worlds)]
-        self.calls.append((list(codes), seeds))
+    def __call__(self, task, runs, *, backend=None):  # the shape of run_seeded
+        self.calls.append([(code, list(seeds)) for code, seeds in runs])
         return [
             [Rollout(world=r, seed=s, success=s not in self.fails.get(code, set())) for r, s in enumerate(seeds)]
-            for code in codes
+            for code, seeds in runs
         ]
 
 
@@ -68,7 +67,7 @@ def test_a_program_that_held_in_the_planning_worlds_but_fails_a_fresh_one_does_n
     first, second = _program(1.0), _program(2.0)
     fresh = verification_seed(0, 3)
     runner = ScriptedRunner({first.code: {fresh + 1}})  # the first fails only in the second fresh world
-    monkeypatch.setattr(search_module, "run_codes", runner)
+    monkeypatch.setattr(search_module, "run_seeded", runner)
     tried, rounds = search(
         task,
         [[first, second]],
@@ -86,11 +85,33 @@ def test_a_program_that_held_in_the_planning_worlds_but_fails_a_fresh_one_does_n
     assert rank([a, b])[0] is b
 
 
+def test_the_fresh_worlds_run_ahead_for_a_best_guess_that_fails_a_planning_world_are_not_counted(
+    task, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    first, second = _program(1.0), _program(2.0)
+    runner = ScriptedRunner({first.code: {1}})  # the best guess fails planning world seed 1, holds in every fresh one
+    monkeypatch.setattr(search_module, "run_seeded", runner)
+    tried, rounds = search(
+        task,
+        [[first, second]],
+        lambda p: StageOutputs(),
+        worlds=3,
+        seed=0,
+        backend=None,
+        budget=Budget(beam=1, rounds=4, seconds=float("inf"), verify=5),
+    )
+    a, b = (t.candidate for t in tried)
+    assert rounds == 2 and [r.seed for r in a.rollouts] == [0, 1, 2]  # planning worlds only: it did not hold
+    assert a.success_rate == pytest.approx(2 / 3) and not any("fresh" in note for note in a.notes)
+    assert b.success_rate == 1.0 and len(b.rollouts) == 8
+    assert [[len(seeds) for _, seeds in batch] for batch in runner.calls] == [[8], [3], [5]]
+
+
 def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_never_uses(
     task, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     runner = ScriptedRunner({})
-    monkeypatch.setattr(search_module, "run_codes", runner)
+    monkeypatch.setattr(search_module, "run_seeded", runner)
     seed = 7
     tried, _ = search(
         task,
@@ -101,7 +122,9 @@ def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_neve
         backend=None,
         budget=Budget(beam=3, rounds=1, seconds=float("inf"), verify=5),
     )
-    (_, planning), (_, verifying) = runner.calls
+    ((batch),) = runner.calls  # the best guess runs in its fresh worlds in the same batch as its planning ones
+    ((_, seeds),) = batch
+    planning, verifying = seeds[:3], seeds[3:]
     assert planning == [7, 8, 9]
     assert len(verifying) == 5 > len(planning) and not set(verifying) & set(planning)
     rollouts = tried[0].candidate.rollouts
@@ -112,7 +135,7 @@ def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_neve
 def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypatch: pytest.MonkeyPatch) -> None:
     programs = [_program(float(x)) for x in range(1, 5)]
     runner = ScriptedRunner({p.code: {0} for p in programs})  # every program fails world 0: no early stop
-    monkeypatch.setattr(search_module, "run_codes", runner)
+    monkeypatch.setattr(search_module, "run_seeded", runner)
     search(
         task,
         [programs],
@@ -122,7 +145,8 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
         backend=None,
         budget=Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5),
     )
-    assert [len(codes) for codes, _ in runner.calls] == [1, 3]
+    assert [len(batch) for batch in runner.calls] == [1, 3]
+    assert [len(seeds) for _, seeds in runner.calls[0]] == [3 + 5]  # the best guess's fresh worlds ran ahead
 
 
 def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_and_as_many_objects() -> None:
