@@ -267,6 +267,27 @@ def push_problem(
     return None, robot
 
 
+def off_centre(
+    layout: Layout, name: str, targets: Sequence[np.ndarray], limits: QuadrupedLimits, floor: float
+) -> float:
+    """How far from ``name``'s centre line the robot lines up for the pushes through ``targets`` (as the skill lines
+    up, :func:`_push_pose`), at most, as a share of the object's half width across the push: over about a half, the
+    push turns the object as much as it moves it; over 1, the robot's centre passes beside it."""
+    worst = 0.0
+    for xy in targets:
+        box = layout.box(name)
+        for leg in legs(box.center, np.asarray(xy, dtype=float)):
+            across = 1 - leg.axis
+            pose = _push_pose(layout, name, box, leg, limits, floor)
+            if pose is not None:
+                worst = max(worst, abs(float(pose[0][across] - box.center[across])) / float(box.half[across]))
+            end_center = box.center.copy()
+            end_center[leg.axis] = leg.target
+            box = box.moved_to(end_center)
+            layout = layout.with_moved(name, end_center)
+    return worst
+
+
 def push_staging(
     layout: Layout, name: str, dest: np.ndarray, limits: QuadrupedLimits, floor: float
 ) -> np.ndarray | None:

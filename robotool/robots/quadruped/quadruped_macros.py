@@ -14,11 +14,12 @@ from collections.abc import Iterator
 import numpy as np
 
 from robotool.planner.codegen import Point, Program, Ref
-from robotool.planner.layout import Layout
+from robotool.planner.layout import Box, Layout
 from robotool.planner.search import tight
 from robotool.robots.quadruped.predict import (
     detour,
     drift_room,
+    off_centre,
     push_problem,
     push_route,
     push_staging,
@@ -45,6 +46,8 @@ from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
 
 # --- writing routes into programs ---------------------------------------------------------------------
+
+OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it: thin
 
 
 def _push_plans(
@@ -100,6 +103,9 @@ class Writer:
                 predicted = found
         assert predicted is not None
         steps, problem = predicted
+        off = off_centre(self.layout, name, [target for _, target, _ in steps], self.quad.limits, self.level)
+        if off > OFF_CENTRE:
+            self.prog.thin.append(f"the push of {name} lines up {off:.0%} of its half width off its centre: it turns")
         for path, target, end in steps:
             for via in path:
                 self.walk(via, self.surface, f"walk to where the push of {name} lines up")
@@ -239,7 +245,10 @@ def _programs(quad: Quadruped, tools: bool) -> Iterator[Program]:
 
 
 def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
-    """Lift ``target`` by standing on the far end of the board it rests on, after pushing away what props it."""
+    """Lift ``target`` by standing on the far end of the board it rests on, after pushing away what props it. The
+    robot pushes facing as ``quad`` is turned; it walks the lever lengthwise, so when its body lies across the board
+    it first walks clear of the board's end and turns a quarter (or, where that turn is predicted blocked, walks it
+    sideways, which is thin)."""
     task = quad.task
     board_name, _ = surface_under(task, np.asarray(target.center[:2]), exclude=target.name)
     if board_name == "ground":
@@ -264,13 +273,12 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
     lat = np.array([-a[1], a[0]])
     fulcrum = quad.layout.box(fulcrums[0].name)
     near = np.sign((quad.start - bbox.center) @ lat) or 1.0
+    across = quad.extent(a) < quad.extent(lat)  # the body lies across the board as it pushes
     for side, clearance in itertools.product((near, -near), CLEARANCES):
         prog = quad.program()
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
         prog.use(fulcrums[0].name, "tool: the fulcrum")
-        if quad.extent(a) < quad.extent(lat):  # a lever is walked lengthwise: across it, the feet straddle less
-            prog.thin.append(f"the body lies across {board_name}: it would walk the lever sideways")
         w = Writer(quad, prog)
         beside = float(np.abs(lat) @ bbox.half) + quad.extent(lat) + SIDE
         for prop in props:
@@ -282,11 +290,16 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
             w.floor_walk(bbox.center + lat * side * beside + a * along, f"walk beside {prop.name}")
             w.push(prop.name, out, "out from under the board")
-        step_on = fulcrum.center - a * (quad.extent(a) + 0.01)
+        if across:
+            w = _turned_lengthwise(w, bbox, a, lat * side, board_name)
+        walker = w.quad
+        beside = float(np.abs(lat) @ bbox.half) + walker.extent(lat) + SIDE
+        step_on = fulcrum.center - a * (walker.extent(a) + 0.01)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
-        end = bbox.center + a * (float(np.abs(a) @ bbox.half) - quad.extent(a) - INSET)
+        end = bbox.center + a * (float(np.abs(a) @ bbox.half) - walker.extent(a) - INSET)
         for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
-            w.floor_walk(xy, "walk beside the board")
+            if np.linalg.norm(xy - w.here) > 1e-6:  # (after a turn the robot stands in that lane already)
+                w.floor_walk(xy, "walk beside the board")
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
         w.stance(step_on, board_name)
         w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
@@ -297,6 +310,27 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             + f"the lever lifts {target.name}."
         )
         yield prog
+
+
+def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, board: str) -> Writer:
+    """Walk past the board's far end (``a`` points to it), into the lane beside it on its ``out`` side, and make a
+    quarter turn there, so that the body lies along the board: a writer for the rest of the program, as the body
+    then lies. Where that walk or turn is predicted blocked, no turn: the same writer, the program noted thin (the
+    lever is walked sideways)."""
+    quad, limits = w.quad, w.quad.task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    sweep = float(np.linalg.norm(quad.half)) + SIDE  # how far the turn reaches, with the side margin
+    lane = float(np.abs(out) @ bbox.half) + quad.extent(a) + SIDE  # beside the board once turned
+    spot = bbox.center + out * lane + a * (float(np.abs(a) @ bbox.half) + sweep)
+    problem = walk_violation(w.layout, w.here, detour(w.layout, w.here, spot, quad.limits), quad.limits)
+    problem = problem or turn_violation(w.layout, spot, limits, 90)
+    if problem is not None:
+        w.prog.thin.append(f"the body lies across {board}: it would walk the lever sideways ({problem})")
+        return w
+    w.floor_walk(spot, f"walk clear of {board}'s end to turn")
+    heading = 90 - quad.heading
+    w.prog.turn(heading, f"turn so that the body's length lies along {board}")
+    return Writer(Quadruped(quad.task, heading=heading).after(w.layout, spot, quad.placed), w.prog)
 
 
 def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Program]:
