@@ -70,6 +70,11 @@ def pytest_configure(config: pytest.Config) -> None:
     from time_budget import TimeBudget
 
     config.pluginmanager.register(TimeBudget(config), "time_budget")
+    workers = os.environ.get("PYTEST_XDIST_WORKER_COUNT")
+    if workers:  # a pytest-xdist worker: the other workers simulate at the same time
+        from robotool.sim.backend_mujoco import share_cores
+
+        share_cores(int(workers))
 
 
 @pytest.hookimpl(trylast=True)

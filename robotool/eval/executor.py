@@ -19,6 +19,7 @@ once in this process.
 from __future__ import annotations
 
 import contextvars
+import functools
 import pickle
 import threading
 import warnings
@@ -179,11 +180,14 @@ def _simulation_pool(processes: int) -> ProcessPoolExecutor:
     from robotool.sandbox.zygote import zygote
 
     zygote().layers()  # the sandbox's layers, learnt (and a missing one warned of) once, here
-    return process_pool(processes, initializer=_quiet_sandbox_warnings, preload=PRELOAD)
+    return process_pool(processes, initializer=functools.partial(_start_pool_process, processes), preload=PRELOAD)
 
 
-def _quiet_sandbox_warnings() -> None:
-    """In a pool process: the parent already warned about a missing sandbox layer."""
+def _start_pool_process(processes: int) -> None:
+    """In a pool process: the parent already warned about a missing sandbox layer; the cores are shared with the
+    pool's other ``processes``."""
     from robotool.sandbox.jail import SandboxWarning
+    from robotool.sim.backend_mujoco import share_cores
 
     warnings.simplefilter("ignore", SandboxWarning)
+    share_cores(processes)

@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from robotool.sim import backend, ray_cast
+from robotool.sim import backend, backend_mujoco, ray_cast
 from robotool.sim.backend import Perturbation
 from robotool.sim.backend_mujoco import MujocoSim, subtree_masses
 
@@ -252,3 +252,13 @@ def test_contains_tells_points_inside_each_primitive_shape_from_points_just_outs
                 geoms, np.full(n, g), np.tile(data.geom_xpos[g], (n, 1)), np.tile(data.geom_xmat[g], (n, 1)), pnt
             )
             assert got.all() == expected and got.any() == expected, (mujoco.mjtGeom(kind).name, scale)
+
+
+def test_a_process_that_shares_the_cores_steps_its_worlds_on_its_share(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(backend_mujoco, "cores", lambda: 4)
+    monkeypatch.setattr(backend_mujoco, "_sharing", 1)
+    assert [backend_mujoco._threads(n) for n in (1, 3, 8)] == [1, 3, 4]  # alone: every core, one a world at most
+    backend_mujoco.share_cores(2)
+    assert [backend_mujoco._threads(n) for n in (1, 3, 8)] == [1, 2, 2]
+    backend_mujoco.share_cores(8)  # more processes than cores: still one thread each
+    assert [backend_mujoco._threads(n) for n in (1, 3, 8)] == [1, 1, 1]
