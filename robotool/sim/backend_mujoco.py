@@ -53,7 +53,7 @@ def share_cores(processes: int) -> None:
     """Declare this process one of ``processes`` that simulate at once on this machine (evaluator pool processes,
     test workers): each batch then steps its worlds on this process's share of the cores, at least one thread,
     instead of on every core (with every core busy, threads that wait for one cost more than they save: 15 % of a
-    batch of eight quadruped worlds on two cores)."""
+    batch of eight legged-robot worlds on two cores)."""
     global _sharing
     _sharing = max(1, processes)
 
