@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 from robotool import tasks
 from robotool.planner import solve
+from robotool.sim.backend_mujoco import share_cores
 from robotool.solution import Solution
 from robotool.task.task_model import Task
 from robotool.tasks.families import families, generate
@@ -174,7 +175,8 @@ def main() -> None:
     seeds = range(int(first), int(last or first) + 1)
     rows = []
     names = families() if args.families is None else args.families
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+    # the worker processes simulate at once: each batch steps on its process's share of the cores
+    with ProcessPoolExecutor(max_workers=args.jobs, initializer=share_cores, initargs=(args.jobs,)) as pool:
         pending = {
             family: [
                 pool.submit(attempt_family, family, seed, args.worlds, not args.no_repair, args.fresh) for seed in seeds
