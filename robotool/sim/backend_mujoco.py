@@ -46,6 +46,8 @@ _WARNINGS = {
     mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
 }
 CHUNKS_PER_THREAD = 4  # worlds are handed out in this many chunks per thread, taken as threads free up
+_WARNING_KINDS = list(_WARNINGS)
+_WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 _sharing = 1  # processes of this machine that simulate at once, this one included (see share_cores)
 
 
@@ -61,10 +63,6 @@ def share_cores(processes: int) -> None:
 def _threads(nworld: int) -> int:
     """Threads to step ``nworld`` worlds on: this process's share of the cores, at most one a world."""
     return max(1, min(cores() // _sharing, nworld))
-
-
-_WARNING_KINDS = list(_WARNINGS)
-_WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
 
 
 def subtree_masses(mass: np.ndarray, parent: np.ndarray) -> np.ndarray:
