@@ -14,9 +14,10 @@ from robotool import tasks
 from robotool.planner import search as search_module
 from robotool.planner import solve
 from robotool.planner.codegen import Point, Program
-from robotool.planner.search import Budget, order, search, verification_seed
+from robotool.planner.search import Budget, Tried, order, search, verification_seed
 from robotool.rollout import Rollout
 from robotool.solution import Candidate, StageOutputs, rank
+from robotool.task.task_model import Task
 
 
 def _program(x: float) -> Program:
@@ -27,6 +28,11 @@ def _program(x: float) -> Program:
 
 def _rollouts(successes: Sequence[bool]) -> list[Rollout]:
     return [Rollout(world=k, seed=k, success=ok) for k, ok in enumerate(successes)]
+
+
+def _search(task: Task, programs: list[Program], budget: Budget, seed: int = 0) -> tuple[list[Tried], int]:
+    """The search over ``programs`` (one tier) with 3 planning worlds from ``seed``."""
+    return search(task, [programs], lambda p: StageOutputs(), worlds=3, seed=seed, backend=None, budget=budget)
 
 
 class ScriptedRunner:
@@ -68,15 +74,7 @@ def test_a_program_that_held_in_the_planning_worlds_but_fails_a_fresh_one_does_n
     fresh = verification_seed(0, 3)
     runner = ScriptedRunner({first.code: {fresh + 1}})  # the first fails only in the second fresh world
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    tried, rounds = search(
-        task,
-        [[first, second]],
-        lambda p: StageOutputs(),
-        worlds=3,
-        seed=0,
-        backend=None,
-        budget=Budget(beam=1, rounds=4, seconds=float("inf"), verify=5),
-    )
+    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, seconds=float("inf"), verify=5))
     assert rounds == 2 and [t.program for t in tried] == [first, second]
     a, b = (t.candidate for t in tried)
     assert len(a.rollouts) == len(b.rollouts) == 8
@@ -91,15 +89,7 @@ def test_the_fresh_worlds_run_ahead_for_a_best_guess_that_fails_a_planning_world
     first, second = _program(1.0), _program(2.0)
     runner = ScriptedRunner({first.code: {1}})  # the best guess fails planning world seed 1, holds in every fresh one
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    tried, rounds = search(
-        task,
-        [[first, second]],
-        lambda p: StageOutputs(),
-        worlds=3,
-        seed=0,
-        backend=None,
-        budget=Budget(beam=1, rounds=4, seconds=float("inf"), verify=5),
-    )
+    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, seconds=float("inf"), verify=5))
     a, b = (t.candidate for t in tried)
     assert rounds == 2 and [r.seed for r in a.rollouts] == [0, 1, 2]  # planning worlds only: it did not hold
     assert a.success_rate == pytest.approx(2 / 3) and not any("fresh" in note for note in a.notes)
@@ -113,15 +103,7 @@ def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_neve
     runner = ScriptedRunner({})
     monkeypatch.setattr(search_module, "run_seeded", runner)
     seed = 7
-    tried, _ = search(
-        task,
-        [[_program(1.0)]],
-        lambda p: StageOutputs(),
-        worlds=3,
-        seed=seed,
-        backend=None,
-        budget=Budget(beam=3, rounds=1, seconds=float("inf"), verify=5),
-    )
+    tried, _ = _search(task, [_program(1.0)], Budget(beam=3, rounds=1, seconds=float("inf"), verify=5), seed=seed)
     ((batch),) = runner.calls  # the best guess runs in its fresh worlds in the same batch as its planning ones
     ((_, seeds),) = batch
     planning, verifying = seeds[:3], seeds[3:]
@@ -136,15 +118,7 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
     programs = [_program(float(x)) for x in range(1, 5)]
     runner = ScriptedRunner({p.code: {0} for p in programs})  # every program fails world 0: no early stop
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    search(
-        task,
-        [programs],
-        lambda p: StageOutputs(),
-        worlds=3,
-        seed=0,
-        backend=None,
-        budget=Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5),
-    )
+    _search(task, programs, Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5))
     assert [len(batch) for batch in runner.calls] == [1, 3]
     assert [len(seeds) for _, seeds in runner.calls[0]] == [3 + 5]  # the best guess's fresh worlds ran ahead
 
