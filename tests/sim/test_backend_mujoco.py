@@ -9,6 +9,7 @@ from typing import Any
 import mujoco
 import numpy as np
 import pytest
+from fixtures.paths import FIXTURES
 
 from robotool.sim import backend, backend_mujoco, ray_cast
 from robotool.sim.backend import Perturbation
@@ -262,3 +263,19 @@ def test_a_process_that_shares_the_cores_steps_its_worlds_on_its_share(monkeypat
     assert [backend_mujoco._threads(n) for n in (1, 3, 8)] == [1, 2, 2]
     backend_mujoco.share_cores(8)  # more processes than cores: still one thread each
     assert [backend_mujoco._threads(n) for n in (1, 3, 8)] == [1, 1, 1]
+
+
+def test_the_share_of_cores_changes_no_rollout(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Threads only split the worlds between them: every world steps alone, so one thread or two give the same
+    rollouts."""
+    from robotool import tasks
+    from robotool.verify import run_codes
+
+    task = tasks.load("sofa_climbing")
+    code = (FIXTURES / "programs" / "sofa_climbing_direct.py").read_text()
+    monkeypatch.setattr(backend_mujoco, "cores", lambda: 2)
+    monkeypatch.setattr(backend_mujoco, "_sharing", 1)  # put back after the test
+    two = run_codes(task, [code], worlds=3, seed=5)[0]
+    backend_mujoco.share_cores(2)
+    one = run_codes(task, [code], worlds=3, seed=5)[0]
+    assert [r.model_dump() for r in one] == [r.model_dump() for r in two]

@@ -104,6 +104,8 @@ CASES = [
     ("push_box_from_its_top", "sofa_climbing"),
     ("programs/cube_lifting_lever_only", "cube_lifting"),
     ("vase_onto_cushion_edge", "vase_lowering"),
+    ("turn_in_place_on_the_propped_lever", "cube_lifting"),  # jolts of quarter turns on the propped raised end
+    ("turn_on_the_lever_to_sweep_the_cube", "cube_lifting"),  # the body's sweep would meet the cube
 ]
 
 
