@@ -262,9 +262,15 @@ def push_problem(
             if problem:
                 return PushBlock("approach", name, walk=problem), robot
         robot = end - (end - start) / np.linalg.norm(end - start) * GAP
-        box = box.moved_to(end_center)
-        layout = layout.with_moved(name, end_center)
+        layout, box = _after_leg(layout, name, box, leg)
     return None, robot
+
+
+def _after_leg(layout: Layout, name: str, box: Box, leg: Leg) -> tuple[Layout, Box]:
+    """The layout and ``name``'s box once a push leg has taken it to the leg's target."""
+    end_center = box.center.copy()
+    end_center[leg.axis] = leg.target
+    return layout.with_moved(name, end_center), box.moved_to(end_center)
 
 
 def off_centre(
@@ -281,10 +287,7 @@ def off_centre(
             pose = _push_pose(layout, name, box, leg, limits, floor)
             if pose is not None:
                 worst = max(worst, abs(float(pose[0][across] - box.center[across])) / float(box.half[across]))
-            end_center = box.center.copy()
-            end_center[leg.axis] = leg.target
-            box = box.moved_to(end_center)
-            layout = layout.with_moved(name, end_center)
+            layout, box = _after_leg(layout, name, box, leg)
     return worst
 
 
