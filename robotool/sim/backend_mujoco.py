@@ -235,7 +235,7 @@ class MujocoSim:
         return normals_from_contacts(self.scene.model.nbody, self._geom_body, con.geom, con.dist, con.frame[:, :3])
 
     def rays(
-        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int | np.ndarray = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
         """Rays per world, as ``mj_ray`` casts them (:mod:`robotool.sim.ray_cast`), all at once; distance inf and geom
         -1 where nothing is hit. The geoms are read where ``mj_ray`` reads them (each world's ``MjData``)."""
@@ -244,9 +244,10 @@ class MujocoSim:
         geom = np.full((nworld, nray), -1, dtype=int)
         if not nray:
             return dist, geom
-        key = (exclude_body, skip_group)
+        per_ray = np.ndim(exclude_body) > 0
+        key = (-1 if per_ray else int(exclude_body), skip_group)
         if key not in self._eligible:
-            self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), exclude_body)
+            self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), key[0])
         index = self._eligible[key]
         worlds = np.flatnonzero(~np.isnan(np.asarray(pnt)[:, 0, 0]))
         xpos, xmat = self.geom_poses(worlds)
@@ -257,6 +258,7 @@ class MujocoSim:
             xmat[worlds[:, None], index],
             np.asarray(pnt, dtype=np.float64)[worlds],
             np.asarray(vec, dtype=np.float64)[worlds],
+            np.asarray(exclude_body)[worlds] if per_ray else None,
         )
         dist[worlds] = np.where(x >= 0, x, np.inf)
         geom[worlds] = hit

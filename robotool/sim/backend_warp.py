@@ -208,12 +208,30 @@ class WarpSim:
         return self._geoms
 
     def rays(
-        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int = -1, skip_group: int = -1
+        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int | np.ndarray = -1, skip_group: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit."""
+        """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit. Rays that leave out
+        bodies of their own (``exclude_body`` (nworld, nray)) are cast once per body left out."""
         nworld, nray = pnt.shape[:2]
         skipped = np.isnan(pnt[:, :1, :1]) if nray else np.zeros((nworld, 1, 1), dtype=bool)
         start = np.where(skipped, 0.0, pnt)
+        if np.ndim(exclude_body) == 0:
+            d, g = self._rays(start, vec, int(exclude_body), skip_group)
+        else:
+            exclude = np.asarray(exclude_body)
+            d, g = np.zeros((nworld, nray)), np.zeros((nworld, nray), dtype=int)
+            for body in np.unique(exclude):
+                mine = exclude == body
+                d_body, g_body = self._rays(start, vec, int(body), skip_group)
+                d[mine], g[mine] = d_body[mine], g_body[mine]
+        miss = (d < 0) | skipped[:, :, 0]
+        return np.where(miss, np.inf, d), np.where(miss, -1, g)
+
+    def _rays(
+        self, start: np.ndarray, vec: np.ndarray, exclude_body: int, skip_group: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``mjw.rays`` read back: distances (negative: nothing hit) and geoms."""
+        nworld, nray = start.shape[:2]
         with wp.ScopedDevice(self.device):
             dist = wp.zeros((nworld, nray), dtype=float)
             geom = wp.zeros((nworld, nray), dtype=int)
@@ -231,6 +249,4 @@ class WarpSim:
                 geom,
                 normal,
             )
-        d, g = dist.numpy().astype(float), geom.numpy().astype(int)
-        miss = (d < 0) | skipped[:, :, 0]
-        return np.where(miss, np.inf, d), np.where(miss, -1, g)
+        return dist.numpy().astype(float), geom.numpy().astype(int)

@@ -71,10 +71,17 @@ class RayGeoms:
 
 
 def cast(
-    geoms: RayGeoms, index: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, pnt: np.ndarray, vec: np.ndarray
+    geoms: RayGeoms,
+    index: np.ndarray,
+    xpos: np.ndarray,
+    xmat: np.ndarray,
+    pnt: np.ndarray,
+    vec: np.ndarray,
+    exclude: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rays ``pnt + x * vec`` (w, n, 3) against geoms ``index`` (k,) posed at ``xpos`` (w, k, 3) and ``xmat``
     (w, k, 9), world by world: the least distance x >= 0 (-1 where nothing is hit) and the geom (-1), (w, n).
+    ``exclude`` (w, n), when given, is a body each ray leaves out (-1: none), as if its geoms were not in ``index``.
 
     A capsule, cylinder or box is tested only against the rays that meet its bounding sphere (``mj_ray``'s own first
     rejection), each such pair alone; the other shapes against every ray."""
@@ -97,6 +104,8 @@ def cast(
             w, n, c = np.nonzero(near)
             x[w, n, cols[c]] = test(pos[w, c], mat[w, c], size[c], pnt[w, n], vec[w, n])
     hit = x >= 0
+    if exclude is not None:
+        hit &= geoms.body[index][None, None, :] != exclude[:, :, None]
     best = np.argmin(np.where(hit, x, np.inf), axis=2)[..., None]  # the first of equals, as mj_ray keeps the earlier
     found = np.take_along_axis(hit, best, axis=2)[..., 0]
     return np.where(found, np.take_along_axis(x, best, axis=2)[..., 0], -1.0), np.where(found, index[best[..., 0]], -1)

@@ -83,16 +83,23 @@ def test_a_spinning_vase_on_the_floor_gains_no_energy(sim_scene: Any) -> None:
 
 
 def _mj_ray_one_by_one(
-    models: list[mujoco.MjModel], datas: list[mujoco.MjData], pnt: np.ndarray, vec: np.ndarray, exclude: int, skip: int
+    models: list[mujoco.MjModel],
+    datas: list[mujoco.MjData],
+    pnt: np.ndarray,
+    vec: np.ndarray,
+    exclude: int | np.ndarray,
+    skip: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The binding's mj_ray, ray by ray: (distance, inf where missed), (geom, -1), each (nworld, nray)."""
+    """The binding's mj_ray, ray by ray: (distance, inf where missed), (geom, -1), each (nworld, nray); ``exclude``
+    is one body for every ray or each ray's own (nworld, nray)."""
     groups = np.ones(6, dtype=np.uint8)
     if skip >= 0:
         groups[skip] = 0
     dist, geom = np.full(pnt.shape[:2], np.inf), np.full(pnt.shape[:2], -1)
     hit = np.zeros(1, dtype=np.int32)
+    excluded = np.broadcast_to(exclude, pnt.shape[:2])
     for w, r in np.ndindex(*pnt.shape[:2]):
-        x = mujoco.mj_ray(models[w], datas[w], pnt[w, r], vec[w, r], groups, 1, exclude, hit)
+        x = mujoco.mj_ray(models[w], datas[w], pnt[w, r], vec[w, r], groups, 1, int(excluded[w, r]), hit)
         if x >= 0:
             dist[w, r], geom[w, r] = x, hit[0]
     return dist, geom
@@ -102,7 +109,7 @@ def _mj_ray_one_by_one(
 def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any, direction: str) -> None:
     """The batched rays (numpy, :mod:`robotool.sim.ray_cast`) give exactly what the binding's mj_ray gives ray by
     ray, bit for bit: hits on objects and on the floor, misses, the robot skipped, a body left out, and worlds without
-    rays (NaN); downward rays (the quadruped's) and rays in any direction."""
+    rays (NaN); downward rays (the quadruped's) and rays in any direction; each ray leaving out a body of its own."""
     scene = sim_scene("sofa_climbing")
     sim, nworld = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 0), njmax=scene.njmax, nconmax=scene.nconmax), 3
     try:
@@ -114,9 +121,11 @@ def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any, directio
         pnt[2] = np.nan  # no rays in this world
         vec = np.tile([0.0, 0.0, -1.0], (nworld, 40, 1)) if direction == "down" else rng.normal(size=(nworld, 40, 3))
         box = scene.object_body[scene.object_index("box_1")]
-        for exclude, skip in ((-1, -1), (box, 2)):  # group 2: the robot's geoms
+        own = rng.choice([-1, box, scene.object_body[scene.object_index("box_2")]], size=(nworld, 40))
+        for exclude, skip in ((-1, -1), (box, 2), (own, 2)):  # group 2: the robot's geoms
             dist, geom = sim.rays(pnt, vec, exclude_body=exclude, skip_group=skip)
-            want_dist, want_geom = _mj_ray_one_by_one(sim.models[:2], sim.datas[:2], pnt[:2], vec[:2], exclude, skip)
+            mine = exclude[:2] if np.ndim(exclude) else exclude
+            want_dist, want_geom = _mj_ray_one_by_one(sim.models[:2], sim.datas[:2], pnt[:2], vec[:2], mine, skip)
             np.testing.assert_array_equal(dist[:2], want_dist)
             np.testing.assert_array_equal(geom[:2], want_geom)
             assert np.isinf(dist[2]).all() and (geom[2] == -1).all()

@@ -41,20 +41,18 @@ class Rays:
         z, geom = self._cast_from(worlds, xy, start, exclude)
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
-        for _ in range(self.facts.cloth_crossings):
+        for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: all rays on a link at once
             if not through.any():
                 break
-            link = model.geom_bodyid[geom[through][0]]
-            again = through & (model.geom_bodyid[np.maximum(geom, 0)] == link)
-            rows = np.flatnonzero(again.any(axis=1))
-            count = again[rows].sum(axis=1)
-            first = np.argsort(~again[rows], axis=1, kind="stable")[:, : count.max()]  # each row's rays to redo first
+            rows = np.flatnonzero(through.any(axis=1))
+            count = through[rows].sum(axis=1)
+            first = np.argsort(~through[rows], axis=1, kind="stable")[:, : count.max()]  # each row's rays to redo first
             redo = np.where(np.arange(first.shape[1])[None, :] < count[:, None], first, first[:, :1])  # padded
             z_again, geom_again = self._cast_from(
                 worlds[rows],
                 np.take_along_axis(xy[rows], redo[:, :, None], axis=1),
                 np.take_along_axis(z[rows], redo, axis=1) + self.config.cloth_step,
-                int(link),
+                model.geom_bodyid[np.take_along_axis(geom[rows], redo, axis=1)],  # each ray leaves its link out
             )
             z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
             through = self._on_cloth(geom)
@@ -68,19 +66,24 @@ class Rays:
         return (objects >= 0) & self.facts.cloth[np.maximum(objects, 0)]
 
     def _cast_from(
-        self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int
+        self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int | np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
-        ``exclude`` left out: surface heights (0 where nothing is hit) and the geoms hit (-1: none). A ray that starts
-        inside a geom (a wall taller than the rays' start) meets it where it leaves it, at its bottom: it reads that
-        geom at the ray's start instead, something at least that high."""
+        ``exclude`` (one for all rays, or (k, nray): each ray's own) left out: surface heights (0 where nothing is hit)
+        and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller than the rays' start) meets it
+        where it leaves it, at its bottom: it reads that geom at the ray's start instead, something at least that
+        high."""
         nworld, nray = self.sim.nworld, xy.shape[1]
         pnt = np.full((nworld, nray, 3), np.nan)
         pnt[worlds, :, :2] = xy
         pnt[worlds, :, 2] = start
         vec = np.zeros((nworld, nray, 3))
         vec[..., 2] = -1.0
-        dist, geom = self.sim.rays(pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
+        excluded: int | np.ndarray = exclude
+        if np.ndim(exclude) > 0:
+            excluded = np.full((nworld, nray), -1)
+            excluded[worlds] = exclude
+        dist, geom = self.sim.rays(pnt, vec, exclude_body=excluded, skip_group=ROBOT_GROUP)
         dist, geom = dist[worlds], geom[worlds]
         z = np.where(np.isfinite(dist), start - dist, 0.0)
         within = self._inside(worlds, pnt[worlds], exclude)
@@ -88,15 +91,17 @@ class Rays:
         z[rows, cols], geom[rows, cols] = start[rows, cols], within[rows, cols]
         return z, geom
 
-    def _inside(self, worlds: np.ndarray, pnt: np.ndarray, exclude: int) -> np.ndarray:
-        """The geom (k, nray) each ray start ``pnt`` (k, nray, 3) lies inside, body ``exclude`` left out (-1: none):
-        each solid geom near enough (its bounding radius) is tested."""
+    def _inside(self, worlds: np.ndarray, pnt: np.ndarray, exclude: int | np.ndarray) -> np.ndarray:
+        """The geom (k, nray) each ray start ``pnt`` (k, nray, 3) lies inside, body ``exclude`` (one, or each ray's
+        own) left out (-1: none): each solid geom near enough (its bounding radius) is tested."""
         xpos, xmat = self.sim.geom_poses(worlds)
         geoms = self.facts.ray_geoms
-        solids = self.facts.solids[geoms.body[self.facts.solids] != exclude]
+        solids = self.facts.solids
         reach = self.sim.scene.model.geom_rbound[solids]
         centres = xpos[worlds][:, solids]  # (k, g, 3)
         near = np.all(np.abs(pnt[:, :, None, :] - centres[:, None, :, :]) < reach[None, None, :, None], axis=3)
+        left_out = np.asarray(exclude)
+        near &= geoms.body[solids] != (left_out[..., None] if left_out.ndim else left_out)
         out = np.full(pnt.shape[:2], -1)
         k, n, g = np.nonzero(near)
         if k.size:
