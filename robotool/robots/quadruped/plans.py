@@ -17,12 +17,12 @@ import numpy as np
 from robotool.robots.quadruped.move_runner import Move, SkillPlan, finding_measured
 from robotool.robots.quadruped.push import (
     Leg,
+    first_clear_sweep,
     lateral_offsets,
     legs,
     push_pose,
     route,
     routes,
-    sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -216,17 +216,15 @@ class Plans:
             z, objects = self.rays.heights(w, xy, floor + self.config.ray_height)
             return np.where(objects == index, floor, z)
 
-        problem = ""  # the first drop found: under the pose nearest straight-on, where the robot would push from
-        for staging in (self.config.staging, 0.0):
-            for start, end in poses:
-                behind = start - (end - start) / np.linalg.norm(end - start) * staging
-                found = sweep_problem(heights, behind, end, limits, floor)
-                if found is None:
-                    return (start, end, staging), ""
-                if found.kind == "drop" and not problem:
-                    where = f"[{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}]"
-                    problem = f": pushing from {where}, {found}"
-        return None, problem
+        tries = [(start, end, staging) for staging in (self.config.staging, 0.0) for start, end in poses]
+        sweeps = [(start - (end - start) / np.linalg.norm(end - start) * staging, end) for start, end, staging in tries]
+        clear, drop = first_clear_sweep(heights, sweeps, limits, floor)
+        if clear is not None:
+            return tries[clear], ""
+        if drop is None:
+            return None, ""
+        start, end, _ = tries[drop[0]]  # the first drop found: under the pose nearest straight-on
+        return None, f": pushing from [{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}], {drop[1]}"
 
     def _check(self, w: int, here: np.ndarray, path: list[np.ndarray]) -> tuple[Finding, int] | None:
         """The first finding on a walk through ``path`` in world ``w`` and the object there (-1: none)."""

@@ -19,12 +19,11 @@ from robotool.robots.quadruped.push import (
     GAP,
     SIDE_MARGIN,
     Leg,
+    first_clear_sweep,
     lateral_offsets,
     legs,
     push_pose,
     route,
-    sweep_points,
-    sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -317,9 +316,6 @@ def _read_only(pose: Pose | None) -> Pose | None:
     return pose
 
 
-TRIES_AT_ONCE = 6  # push poses whose sweeps are read in one layout query
-
-
 def _choose_push_pose(
     layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float
 ) -> Pose | None:
@@ -336,25 +332,8 @@ def _choose_push_pose(
         for staging in (QUADRUPED.staging, 0.0)
         for start, end in poses
     ]
-    # sweep_problem's two readings (the footprint, the feet's paths) for a few tries at once, in order (the first
-    # clear one is most often among the first); the first clear one is confirmed by sweep_problem itself
-    feet = foot_offsets(limits)
-    for first in range(0, len(tries), TRIES_AT_ONCE):
-        chunk = tries[first : first + TRIES_AT_ONCE]
-        swept = [sweep_points(behind, end, half) for _, end, behind in chunk]
-        paths = [
-            foot_paths(
-                behind + feet, (end - behind) / np.linalg.norm(end - behind), float(np.linalg.norm(end - behind))
-            ).reshape(-1, 2)
-            for _, end, behind in chunk
-        ]
-        read = swept + paths
-        z = np.split(heights(np.concatenate(read)), np.cumsum([len(p) for p in read])[:-1])
-        for k, (start, end, behind) in enumerate(chunk):
-            clear = z[k].max() <= floor + RISE and z[len(chunk) + k].min() >= floor - RISE
-            if clear and sweep_problem(heights, behind, end, limits, floor) is None:
-                return start, end, behind
-    return None
+    clear, _ = first_clear_sweep(heights, [(behind, end) for _, end, behind in tries], limits, floor)
+    return None if clear is None else tries[clear]
 
 
 def _obstacles(layout: Layout, name: str, floor: float) -> tuple[np.ndarray, np.ndarray]:

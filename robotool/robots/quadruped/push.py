@@ -139,11 +139,59 @@ def sweep_problem(
     nothing higher than the floor, and the feet's paths nothing lower (no drop, no gap under where it stands).
     """
     half = np.asarray(limits.body_size[:2]) / 2
-    if np.any(heights(sweep_points(behind, end, half)) > floor + RISE):
-        return SweepProblem("blocked", "something stands in its way")
+    if _blocked(heights(sweep_points(behind, end, half)), floor):
+        return BLOCKED
+    points = _feet_paths(behind, end, limits)
+    return _drop(points, heights(points), floor)
+
+
+TRIES_AT_ONCE = 6  # push sweeps read in one call of the heights
+
+
+def first_clear_sweep(
+    heights: Callable[[np.ndarray], np.ndarray],
+    sweeps: list[tuple[np.ndarray, np.ndarray]],
+    limits: QuadrupedLimits,
+    floor: float,
+) -> tuple[int | None, tuple[int, SweepProblem] | None]:
+    """The index of the first of ``sweeps`` (``behind``, ``end``) with no :func:`sweep_problem` (None: none), and the
+    first drop met before it (its index and the problem; None: none).
+
+    The footprints and the feet's paths of :data:`TRIES_AT_ONCE` sweeps are read in one call of ``heights``, in order
+    (the first clear one is most often among the first); ``heights`` must read each point on its own."""
+    half = np.asarray(limits.body_size[:2]) / 2
+    first_drop = None
+    for first in range(0, len(sweeps), TRIES_AT_ONCE):
+        chunk = sweeps[first : first + TRIES_AT_ONCE]
+        paths = [_feet_paths(behind, end, limits) for behind, end in chunk]
+        read = [sweep_points(behind, end, half) for behind, end in chunk] + paths
+        z = np.split(heights(np.concatenate(read)), np.cumsum([len(p) for p in read])[:-1])
+        for k, points in enumerate(paths):
+            if _blocked(z[k], floor):
+                continue
+            drop = _drop(points, z[len(chunk) + k], floor)
+            if drop is None:
+                return first + k, first_drop
+            first_drop = first_drop or (first + k, drop)
+    return None, first_drop
+
+
+BLOCKED = SweepProblem("blocked", "something stands in its way")
+
+
+def _blocked(footprint: np.ndarray, floor: float) -> bool:
+    """Whether the heights under a sweep's footprint meet something higher than the floor."""
+    return bool(np.any(footprint > floor + RISE))
+
+
+def _feet_paths(behind: np.ndarray, end: np.ndarray, limits: QuadrupedLimits) -> np.ndarray:
+    """Sample points (n, 2) on the feet's paths of a push sweep from ``behind`` to ``end``."""
     u = (end - behind) / max(float(np.linalg.norm(end - behind)), 1e-9)
-    points = foot_paths(behind + foot_offsets(limits), u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
-    under = heights(points)
+    return foot_paths(behind + foot_offsets(limits), u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
+
+
+def _drop(points: np.ndarray, under: np.ndarray, floor: float) -> SweepProblem | None:
+    """The drop under the feet's ``points`` (their heights ``under``) of a sweep over a floor at ``floor``, or None."""
     if under.min() < floor - RISE:
         k = int(under.argmin())
         where = f"[{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
