@@ -11,7 +11,9 @@ import pytest
 from robotool import tasks
 from robotool.robots.quadruped.push import (
     SIDE_MARGIN,
+    TRIES_AT_ONCE,
     Leg,
+    first_clear_sweep,
     legs,
     push_pose,
     route,
@@ -175,6 +177,36 @@ def test_a_push_sweep_keeps_the_whole_outline_clear(overlap: float, clear: bool)
     solids = [geometry.object_parts(SceneObject.model_validate(block))]
     problem = sweep_problem(heights_over(solids), behind, end, LIMITS, 0.0)
     assert (problem is None) == clear, problem
+
+
+def test_the_first_clear_push_sweep_is_the_first_one_sweep_problem_clears_read_a_few_at_a_time() -> None:
+    """Sweeps across a floor with a block and a pit: :func:`first_clear_sweep` names the first one with no problem and
+    the first drop before it, as :func:`sweep_problem` finds them one by one, reading a few sweeps in each call."""
+    parts = [
+        {"name": "block", "shape": "box", "center": [0.9, 0.5, 0.08], "size": [0.3, 0.3, 0.16]},
+        {"name": "floor", "shape": "box", "center": [0.0, 0.5, -0.1], "size": [4.0, 3.0, 0.2]},
+    ]
+    solids = [geometry.object_parts(SceneObject.model_validate(p)) for p in parts]
+    floor_with_pit = heights_over(solids)
+    calls: list[int] = []
+
+    def heights(xy: np.ndarray) -> np.ndarray:
+        calls.append(len(xy))
+        z = floor_with_pit(xy)
+        return np.where(np.hypot(xy[:, 0] + 0.4, xy[:, 1] - 0.5) < 0.15, -0.3, z)  # a pit under some sweeps
+
+    sweeps = [(np.array([x, 0.0]), np.array([x, 1.0])) for x in np.arange(-0.6, 1.4, 0.1)]
+    problems = [sweep_problem(heights, behind, end, LIMITS, 0.0) for behind, end in sweeps]
+    assert {p.kind for p in problems if p} == {"blocked", "drop"} and None in problems
+    for start in range(len(sweeps)):
+        calls.clear()
+        clear, drop = first_clear_sweep(heights, sweeps[start:], LIMITS, 0.0)
+        rest = problems[start:]
+        want = next((k for k, p in enumerate(rest) if p is None), None)
+        before = rest[: want if want is not None else len(rest)]
+        drops = [(k, p) for k, p in enumerate(before) if p and p.kind == "drop"]
+        assert clear == want and drop == (drops[0] if drops else None), (start, clear, want)
+        assert len(calls) <= -(-len(rest) // TRIES_AT_ONCE)
 
 
 def test_route_goes_around_the_object() -> None:
