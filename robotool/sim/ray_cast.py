@@ -205,17 +205,17 @@ def _cylinder(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarra
 
 
 def _box(pos: np.ndarray, mat: np.ndarray, size: np.ndarray, pnt: np.ndarray, vec: np.ndarray) -> np.ndarray:
-    local = _local(pos, mat, pnt, vec)
+    """The six faces at once (axis-major, each axis's -side first): the nearest face met within its rectangle."""
+    local = np.stack(_local(pos, mat, pnt, vec))  # (6, ...): the point's x, y, z, then the direction's
     lp, lv = local[:3], local[3:]
-    x = np.full(np.broadcast_shapes(lp[0].shape, size[..., 0].shape), -1.0)
-    for i, (j, k) in enumerate(((1, 2), (0, 2), (0, 1))):
-        facing = np.abs(lv[i]) > MINVAL
-        for side in (-1.0, 1.0):
-            sol = (side * size[..., i] - lp[i]) / np.where(facing, lv[i], 1.0)
-            a, b = lp[j] + sol * lv[j], lp[k] + sol * lv[k]
-            inside = (np.abs(a) <= size[..., j]) & (np.abs(b) <= size[..., k])
-            x = _nearest(x, sol, facing & (sol >= 0) & inside)
-    return x
+    half = np.stack(np.broadcast_arrays(*(size[..., i] for i in range(3))))  # (3, ...)
+    axis, j, k = np.array([0, 0, 1, 1, 2, 2]), np.array([1, 1, 0, 0, 0, 0]), np.array([2, 2, 2, 2, 1, 1])
+    side = np.array([-1.0, 1.0] * 3).reshape(6, *([1] * (local.ndim - 1)))
+    facing = np.abs(lv[axis]) > MINVAL
+    sol = (side * half[axis] - lp[axis]) / np.where(facing, lv[axis], 1.0)
+    a, b = lp[j] + sol * lv[j], lp[k] + sol * lv[k]
+    ok = facing & (sol >= 0) & (np.abs(a) <= half[j]) & (np.abs(b) <= half[k])
+    return np.where(ok.any(axis=0), np.where(ok, sol, np.inf).min(axis=0), -1.0)
 
 
 def contains(geoms: RayGeoms, geom: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, pnt: np.ndarray) -> np.ndarray:
@@ -227,17 +227,18 @@ def contains(geoms: RayGeoms, geom: np.ndarray, xpos: np.ndarray, xmat: np.ndarr
     size, kind = geoms.size[geom], geoms.type[geom]
     s0, s1, s2 = size[:, 0], size[:, 1], size[:, 2]
     radial = p0 * p0 + p1 * p1
-    with np.errstate(invalid="ignore", divide="ignore"):
-        inside = {
-            _SPHERE: p0 * p0 + p1 * p1 + p2 * p2 < s0 * s0,
-            _CAPSULE: radial + np.maximum(np.abs(p2) - s1, 0.0) ** 2 < s0 * s0,
-            _ELLIPSOID: (p0 / s0) ** 2 + (p1 / s1) ** 2 + (p2 / s2) ** 2 < 1.0,
-            _CYLINDER: (radial < s0 * s0) & (np.abs(p2) < s1),
-            _BOX: (np.abs(p0) < s0) & (np.abs(p1) < s1) & (np.abs(p2) < s2),
-        }
+    inside = {
+        _SPHERE: lambda: p0 * p0 + p1 * p1 + p2 * p2 < s0 * s0,
+        _CAPSULE: lambda: radial + np.maximum(np.abs(p2) - s1, 0.0) ** 2 < s0 * s0,
+        _ELLIPSOID: lambda: (p0 / s0) ** 2 + (p1 / s1) ** 2 + (p2 / s2) ** 2 < 1.0,
+        _CYLINDER: lambda: (radial < s0 * s0) & (np.abs(p2) < s1),
+        _BOX: lambda: (np.abs(p0) < s0) & (np.abs(p1) < s1) & (np.abs(p2) < s2),
+    }
     out = np.zeros(len(geom), dtype=bool)
-    for shape, held in inside.items():
-        out |= (kind == shape) & held
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for shape in np.unique(kind):  # only the shapes there are
+            if int(shape) in inside:
+                out |= (kind == shape) & inside[int(shape)]()
     return out
 
 
