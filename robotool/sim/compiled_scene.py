@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import mujoco
 import numpy as np
@@ -31,9 +32,9 @@ class Scene:
     nconmax: int
     njmax: int
 
-    @property
+    @cached_property
     def control_dt(self) -> float:
-        """Seconds between control ticks."""
+        """Seconds between control ticks (read once: the model's timestep does not change)."""
         return self.control_substeps * self.model.opt.timestep
 
     def object_index(self, name: str) -> int:

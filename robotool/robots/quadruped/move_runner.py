@@ -17,7 +17,7 @@ from robotool.robots.quadruped.body import OFF
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import feet
-from robotool.robots.quadruped.terrain import RISE, Finding
+from robotool.robots.quadruped.terrain import RISE, Finding, clamp
 from robotool.robots.quadruped.terrain_following import TerrainFollowing
 from robotool.sim.embodiment import SkillEnd, error_end
 from robotool.vocabulary import MoveEnd
@@ -218,7 +218,7 @@ class MoveRunner:
         state, ctrl = self.senses.state, self.sim.ctrl
         setpoint = ctrl[worlds, ids.yaw_actuator]
         step = config.turn_speed * self.senses.scene.control_dt
-        ctrl[worlds, ids.yaw_actuator] = setpoint + np.clip(s.turn[worlds] - setpoint, -step, step)
+        ctrl[worlds, ids.yaw_actuator] = setpoint + clamp(s.turn[worlds] - setpoint, -step, step)
         yaw = self.senses.yaw(worlds)
         reach = float(np.linalg.norm(self.senses.facts.half))  # m a corner travels per rad
         remaining = np.abs(s.turn[worlds] - yaw) * reach

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robotool.robots.quadruped.body import BodyIds
-from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS
+from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, clamp
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 
@@ -45,7 +45,7 @@ def feet_touching(state: BatchState, ids: BodyIds, bodies: np.ndarray) -> np.nda
 def tilt(state: BatchState, ids: BodyIds) -> np.ndarray:
     """Angle between the body's up axis and the world's, radians (nworld,)."""
     up = state.xmat(ids.body)[:, 2, 2]
-    return np.arccos(np.clip(up, -1.0, 1.0))
+    return np.arccos(clamp(up, -1.0, 1.0))
 
 
 def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin: float = 0.0) -> np.ndarray:

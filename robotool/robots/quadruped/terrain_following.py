@@ -33,6 +33,7 @@ from robotool.robots.quadruped.terrain import (
     SPACING,
     Finding,
     TerrainKind,
+    clamp,
     finding_kind,
     limit_of,
     rotated,
@@ -98,7 +99,7 @@ class TerrainFollowing:
     def gather(self, table: np.ndarray, index: np.ndarray) -> np.ndarray:
         """``table`` (k, 4, samples) at ``index`` (k, 5) for every foot -> (k, 4, 5) (NaN out of range)."""
         ok = (index >= 0) & (index < self.samples)
-        out = np.take_along_axis(table, np.clip(index, 0, self.samples - 1)[:, None, :].repeat(4, axis=1), axis=2)
+        out = np.take_along_axis(table, clamp(index, 0, self.samples - 1)[:, None, :].repeat(4, axis=1), axis=2)
         return np.where(ok[:, None, :], out, np.nan)
 
     def local(
@@ -130,7 +131,7 @@ class TerrainFollowing:
         object ``pushing`` (k,)); set where each must stop and why."""
         s, config, samples, behind = self.state, self.config, self.samples, self.behind
         bottom = centres[:, :, 2] - FOOT_RADIUS
-        ahead = np.clip(length - travel, 0.0, config.scan_ahead) + LOOKAHEAD
+        ahead = clamp(length - travel, 0.0, config.scan_ahead) + LOOKAHEAD
         sample = np.minimum(-config.back + np.arange(samples) * SPACING, ahead[:, None])  # (k, samples)
         points = centres[:, :, None, :2] + sample[:, None, :, None] * u[:, None, None, :]
         z, objects = self.rays.cast(worlds, points.reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height)
@@ -216,7 +217,7 @@ class TerrainFollowing:
         hold_len = round(config.hold_behind / SPACING)
         span = np.arange(-hold_len - RADIUS_SAMPLES, round(config.lift_ahead / SPACING) + 1)
         window = index[:, 1, None] + span[None, :]  # around each foot's centre
-        values = np.take_along_axis(s.level[worlds], np.clip(window, 0, samples - 1)[:, None, :].repeat(4, axis=1), 2)
+        values = np.take_along_axis(s.level[worlds], clamp(window, 0, samples - 1)[:, None, :].repeat(4, axis=1), 2)
         last = np.round((s.stop[worlds] - s.scan_t0[worlds] + config.back) / SPACING)  # the move's end (the foot's)
         values = np.where(((window >= 0) & (window < samples) & (window <= last[:, None]))[:, None, :], values, np.nan)
         values = np.where(np.isnan(values), -np.inf, values)
@@ -233,9 +234,9 @@ class TerrainFollowing:
         crossing &= ~self._no_footing(worlds, travel, up | hold, footing, centres)
         up &= crossing[:, None]
         clear = under_torso - BELLY_HEIGHT + config.torso_clearance  # the lowest the feet's level may be there
-        stance = np.clip(under - np.maximum(under.max(axis=1), clear)[:, None] - config.press, -self.reach, 0.0)
+        stance = clamp(under - np.maximum(under.max(axis=1), clear)[:, None] - config.press, -self.reach, 0.0)
         legs = s.legs[worlds]
-        step = np.clip(stance - legs, -config.leg_speed * dt, config.leg_speed * dt)
+        step = clamp(stance - legs, -config.leg_speed * dt, config.leg_speed * dt)
         s.legs[worlds] = np.where(crossing[:, None], legs, legs + step)  # held while the lift carries the body
         sim.ctrl[worlds[:, None], ids.leg_actuator] = s.legs[worlds]
         need = np.where(up, ahead + config.clearance, np.where(hold, behind, -np.inf)) - bottom
@@ -247,7 +248,7 @@ class TerrainFollowing:
         s.lift[worlds] = target
         sim.ctrl[worlds, ids.actuator[2]] = np.where(np.isnan(target), OFF, target)
         angle, rate = q[:, 3:], self.senses.state.qvel[worlds][:, ids.qvel[3:]]
-        level = np.clip(-angle * config.tilt_gain - rate * config.tilt_damping, -1.0, 1.0) * ~np.isnan(target)[:, None]
+        level = clamp(-angle * config.tilt_gain - rate * config.tilt_damping, -1.0, 1.0) * ~np.isnan(target)[:, None]
         sim.ctrl[worlds[:, None], ids.actuator[3:]] = level
         return np.any(up & (bottom < ahead + config.clearance / 2), axis=1)
 
