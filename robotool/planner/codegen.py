@@ -40,10 +40,22 @@ def _three(axes: Sequence[Axis]) -> tuple[Axis, Axis, Axis]:
 
 
 @dataclass(frozen=True)
+class Direction:
+    """A unit x-y direction the program computes when it runs, from one queried position toward another: ``var``
+    holds the difference and ``norm`` its length. ``value`` is the plan-time estimate."""
+
+    var: str
+    norm: str
+    value: tuple[float, float]
+
+
+@dataclass(frozen=True)
 class Point:
-    """A 3-D target: per axis, ``ref[axis] + offset`` (or the number alone when ``ref`` is None)."""
+    """A 3-D target: per axis, ``ref[axis] + offset`` (or the number alone when ``ref`` is None), plus, when
+    ``along`` is given, ``distance`` times a :class:`Direction` in x and y."""
 
     axes: tuple[Axis, Axis, Axis]
+    along: tuple[Direction, float] | None = None
 
     @classmethod
     def at(cls, ref: Ref | None, offset: Sequence[float] = (0.0, 0.0, 0.0)) -> Point:
@@ -54,25 +66,36 @@ class Point:
         """This point with axis ``k`` replaced."""
         axes = list(self.axes)
         axes[k] = (ref, float(offset))
-        return Point(_three(axes))
+        return Point(_three(axes), self.along)
 
     def shifted(self, delta: Sequence[float]) -> Point:
         """This point moved by ``delta``."""
-        return Point(_three([(r, o + float(d)) for (r, o), d in zip(self.axes, delta, strict=True)]))
+        return Point(_three([(r, o + float(d)) for (r, o), d in zip(self.axes, delta, strict=True)]), self.along)
 
     def estimate(self) -> np.ndarray:
         """Plan-time value of the point."""
-        return np.array([(r.value[k] if r else 0.0) + o for k, (r, o) in enumerate(self.axes)])
+        point = np.array([(r.value[k] if r else 0.0) + o for k, (r, o) in enumerate(self.axes)])
+        if self.along is not None:
+            direction, distance = self.along
+            point[:2] += distance * np.array(direction.value)
+        return point
 
     def code(self) -> str:
         """The point as a Python list expression."""
-        return "[" + ", ".join(_axis_code(r, o, k) for k, (r, o) in enumerate(self.axes)) + "]"
+        axes = [_axis_code(r, o, k) for k, (r, o) in enumerate(self.axes)]
+        if self.along is not None:
+            direction, distance = self.along
+            sign = "+" if distance >= 0 else "-"
+            for k in (0, 1):
+                axes[k] += f" {sign} {abs(distance):.4f} * {direction.var}[{k}] / {direction.norm}"
+        return "[" + ", ".join(axes) + "]"
 
     def parameters(self, step: int, obj: str | None, explanation: str) -> StepParameters:
         """Typed parameters: an offset from one object's centre when that is what it is, else a target."""
         refs = {r for r, _ in self.axes}
         offset = [round(o, 4) for _, o in self.axes]
-        if len(refs) == 1 and (ref := next(iter(refs))) is not None and ref.skill in ("get_center", "get_position"):
+        simple = len(refs) == 1 and self.along is None
+        if simple and (ref := next(iter(refs))) is not None and ref.skill in ("get_center", "get_position"):
             return StepParameters(step=step, object=obj, relative_to=ref.obj, offset=offset, explanation=explanation)
         return StepParameters(
             step=step,
@@ -142,6 +165,16 @@ class Program:
         ref = Ref(f"p{self._count}", obj, skill, (float(value[0]), float(value[1]), float(value[2])))
         self.lines.append(f"{ref.var} = {skill}({obj!r})")
         return ref
+
+    def direction(self, start: Ref, end: Ref) -> Direction:
+        """The unit x-y direction from ``start``'s position toward ``end``'s, computed when the program runs."""
+        self._count += 1
+        var, norm = f"d{self._count}", f"n{self._count}"
+        self.lines.append(f"{var} = [{end.var}[0] - {start.var}[0], {end.var}[1] - {start.var}[1]]")
+        self.lines.append(f"{norm} = ({var}[0] ** 2 + {var}[1] ** 2) ** 0.5")
+        planned = np.array(end.value[:2]) - np.array(start.value[:2])
+        unit = planned / max(float(np.linalg.norm(planned)), 1e-9)
+        return Direction(var, norm, (float(unit[0]), float(unit[1])))
 
     def motion(
         self,

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator
+from dataclasses import replace
 
 import numpy as np
 
-from robotool.planner.codegen import Point, Program, Ref
+from robotool.planner.codegen import Direction, Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.planner.search import tight
 from robotool.robots.quadruped.predict import (
@@ -78,6 +79,7 @@ class Writer:
         self.level = quad.floor
         self.surface = quad.floor_name
         self.refs: dict[str, Ref] = {}
+        self.directions: dict[tuple[str, str], Direction] = {}  # (from, toward) query variables -> direction
 
     def position(self, name: str) -> Ref:
         """Query where ``name`` is now (once per placement)."""
@@ -154,11 +156,15 @@ class Writer:
         if problem and not self.prog.doubt:
             self.prog.doubt = problem
 
-    def walk(self, xy: np.ndarray, surface: str, intent: str) -> None:
-        """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object."""
+    def walk(self, xy: np.ndarray, surface: str, intent: str, along_from: str | None = None) -> None:
+        """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object.
+        With ``along_from``, a movable surface's point is placed along the line from that object's centre through
+        the surface's as they lie when the walk runs (a lever that turned about its load keeps the robot on it)."""
         height = 0.0 if surface == "ground" else self.layout.box(surface).top
         if surface == "ground" or not self.quad.task.object(surface).movable:
             point = Point.at(None, (*xy, height))
+        elif along_from is not None:
+            point = self._along(xy, surface, along_from)
         else:  # a movable surface may not be quite where it was pushed to
             point = Point.at(self.position(surface), (*(xy - self.layout.box(surface).center), 0.0))
         skill = "climb_to_position" if height > self.level + 0.015 else "walk_to_position"
@@ -166,6 +172,19 @@ class Writer:
         self.level = max(height, self.level) if skill == "climb_to_position" else height
         self.here = np.asarray(xy, dtype=float)
         self.surface = surface
+
+    def _along(self, xy: np.ndarray, surface: str, start: str) -> Point:
+        """``xy`` on ``surface`` as a distance along the direction from ``start``'s centre to ``surface``'s, read when
+        the program runs, from ``surface``'s centre (what lies off that line stays a fixed offset)."""
+        ref, origin = self.position(surface), self.position(start)
+        key = (origin.var, ref.var)
+        if key not in self.directions:
+            self.directions[key] = self.prog.direction(origin, ref)
+        direction = self.directions[key]
+        offset = np.asarray(xy, dtype=float) - self.layout.box(surface).center
+        distance = float(offset @ np.array(direction.value))
+        across = offset - distance * np.array(direction.value)
+        return replace(Point.at(ref, (*across, 0.0)), along=(direction, distance))
 
     def around(self, xy: np.ndarray) -> None:
         """Walk on the floor around what stands between the robot and ``xy`` (:func:`detour`), up to the last turn
@@ -300,9 +319,10 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
             if np.linalg.norm(xy - w.here) > 1e-6:  # (after a turn the robot stands in that lane already)
                 w.floor_walk(xy, "walk beside the board")
-        w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum")
+        w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum", along_from=target.name)
         w.stance(step_on, board_name)
-        w.walk(end, board_name, f"walk to {board_name}'s far end so it tips and lifts {target.name}")
+        lift = f"walk to {board_name}'s far end so it tips and lifts {target.name}"
+        w.walk(end, board_name, lift, along_from=target.name)
         w.stance(end, board_name)
         prog.say(
             (f"Push {', '.join(p.name for p in props)} out from under {board_name}. " if props else "")

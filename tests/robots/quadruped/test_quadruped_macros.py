@@ -186,3 +186,32 @@ def test_a_prop_pushed_off_its_centre_line_is_pushed_after_a_quarter_turn_and_th
     assert not tight(best) and best.code.startswith("turn_to_heading(90)")
     code = best.code
     assert code.index("push_to_position") < code.index("turn_to_heading(0)") < code.index("climb_to_position")
+
+
+def _turned_about_the_cube(task: Task, degrees: float) -> Task:
+    """``task`` with the board and the cube on it turned about the cube's centre by ``degrees`` of yaw (the fulcrum,
+    fixed to the floor, stays where it is: the board still lies across it)."""
+    data = task.model_dump(mode="json")
+    pivot = np.array(task.object("cube").center[:2])
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    for obj in data["objects"]:
+        if obj["name"] in ("surfboard", "cube"):
+            x, y = np.array(obj["center"][:2]) - pivot
+            obj["center"][:2] = [float(pivot[0] + c * x - s * y), float(pivot[1] + s * x + c * y)]
+            obj["rpy"][2] += degrees
+    return Task.model_validate(data)
+
+
+def test_a_lever_that_turned_about_its_load_is_walked_along_its_new_axis() -> None:
+    """A push of the prop can drag the board's raised end along, turning the lever about its load: the walk onto the
+    lever and to its far end follow the line from the load through the board's centre as they lie when the walk runs,
+    so a program planned for the board as laid out still stands on the board's far end once it turned."""
+    data = tasks.load("cube_lifting").model_dump(mode="json")
+    data["objects"] = [o for o in data["objects"] if o["name"] != "chair"]  # the raised end stays up: the load
+    planned = Task.model_validate(data)  # outweighs it about the fulcrum
+    lever = next(p for p in order(candidates(planned, True)) if "surfboard" in p.code)
+    turned = _turned_about_the_cube(planned, 12.0)
+    code, rejection, _ = prepare_code(lever.code, turned)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(turned, [code], worlds=3, seed=2)
+    assert all(r.success for r in rollouts), failure_reason(rollouts)
