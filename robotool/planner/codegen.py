@@ -4,7 +4,8 @@ A :class:`Program` collects the lines of a skill program (the form the sandbox a
 as plain functions, no imports beyond numpy/math, no definitions) together with one typed
 :class:`~robotool.signatures.models.PlanStep` and :class:`~robotool.signatures.models.StepParameters`
 per motion skill. Positions that depend on where objects are when the step runs are written as
-:class:`Point` values: per axis, a number or a queried position (:class:`Ref`) plus an offset.
+:class:`Point` values: per axis, a number or a queried position (:class:`Ref`) plus an offset, and, where a
+target lies along a line between two objects as they lie then, a distance along a :class:`Direction`.
 """
 
 from __future__ import annotations
