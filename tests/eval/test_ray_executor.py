@@ -136,6 +136,7 @@ def test_killed_ray_workers_lose_no_run(tmp_path: Path, local_ray: None) -> None
     assert len(logs["search"].read_text().split()) == 4 and len(logs["no_tool"].read_text().split()) == 4
 
 
+@pytest.mark.slow
 def test_lm_runs_on_ray_match_the_local_executor_over_http(tmp_path: Path, local_ray: None) -> None:
     """The LM travels with the Ray task and its workers call the stand-in server over HTTP."""
     from robotool.eval.ray_executor import RayExecutor
