@@ -41,7 +41,7 @@ class Rays:
         z, geom = self._cast_from(worlds, xy, start, exclude)
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
-        for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: all rays on a link at once
+        for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: every ray on any link at once
             if not through.any():
                 break
             rows = np.flatnonzero(through.any(axis=1))
