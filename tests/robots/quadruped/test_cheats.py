@@ -614,3 +614,21 @@ def test_a_walk_on_the_part_of_a_blanket_lying_on_the_floor_does_not_crush_the_g
     assert [c.outcome for c in rollouts[0].calls] == ["done"], [c.reason for c in rollouts[0].calls]
     assert rollouts[0].conditions["robot_stood_on_nothing_fragile"] is True
     assert rollouts[1].conditions["robot_stood_on_nothing_fragile"] is False, failure_reason(rollouts[1])
+
+
+@pytest.mark.slow  # two cloths lying on each other: many contacts to simulate
+def test_two_cloths_laid_across_the_gap_one_on_the_other_are_no_bridge() -> None:
+    """A second strip of cloth laid on the first across sofa_traversing's gap: every ray over the gap meets a cloth
+    link, then the other cloth's, before what carries them (each ray leaves out each link it met, in one recast per
+    layer); two layers of cloth carry no more than one, so the walk across is refused or the robot falls."""
+    data = tasks.load("sofa_traversing").model_dump(mode="json", exclude_defaults=True)
+    data["objects"] = [o for o in data["objects"] if o["name"] != "surfboard"]
+    cloth = next(o for o in data["objects"] if o["name"] == "strip_of_cloth")
+    cloth["center"] = [0.95, 0.0, 0.342]  # spans the 0.40 m gap, 0.35 m on each sofa
+    data["objects"].append({**cloth, "name": "second_cloth", "center": [0.95, 0.0, 0.35]})
+    (rollout,) = sim.run_sessions(
+        sim.build(parse_task(data)), start_sessions([_text("programs/sofa_traversing_direct")], "quadruped"), seed=0
+    )
+    (walk,) = [c for c in rollout.calls if c.skill == "walk_to_position"]
+    assert not rollout.success and walk.outcome in ("refused", "fell"), (walk.outcome, walk.reason)
+    assert walk.reason and ("gap" in walk.reason or "fell" in walk.reason), walk.reason
