@@ -121,6 +121,11 @@ class QuadrupedConfig:
     prop_clearances: tuple[float, ...] = (0.5, 0.2)
     """m a prop pushed out from under a board keeps from the board's side: far enough to be left behind by the
     board's end when friction drags it sideways part of the way, else just clear."""
+    prop_min_clearance: float = 0.05
+    """m: where each of ``prop_clearances`` would push a prop into something, it is pushed only as far as the floor
+    leaves room (with ``prop_room_margin`` to spare), keeping at least this much from the board's side."""
+    prop_room_margin: float = 0.05
+    """m a prop pushed as far as the room allows stops short of what stands beyond it."""
     board_side: float = 0.25
     """m the robot keeps from a board it walks beside."""
     fall_off: float = 0.01

@@ -8,7 +8,6 @@ program whose walk is predicted to break a limit keeps that as its ``doubt`` and
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Iterator
 from dataclasses import replace
 
@@ -33,6 +32,8 @@ from robotool.robots.quadruped.quadruped_routes import (
     FALL_OFF,
     INSET,
     LEVEL,
+    MIN_CLEARANCE,
+    ROOM_MARGIN,
     SIDE,
     PushStep,
     Quadruped,
@@ -293,7 +294,8 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
     fulcrum = quad.layout.box(fulcrums[0].name)
     near = np.sign((quad.start - bbox.center) @ lat) or 1.0
     across = quad.extent(a) < quad.extent(lat)  # the body lies across the board as it pushes
-    for side, clearance in itertools.product((near, -near), CLEARANCES):
+    sides = [(side, c) for side in (near, -near) for c in _prop_clearances(quad, props, bbox, -side * lat)]
+    for side, clearance in sides:
         prog = quad.program()
         prog.use(target.name, "target")
         prog.use(board_name, f"tool: a lever over {fulcrums[0].name}, {target.name} on one end")
@@ -302,9 +304,7 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         beside = float(np.abs(lat) @ bbox.half) + quad.extent(lat) + SIDE
         for prop in props:
             p = quad.layout.box(prop.name)
-            out = p.center.copy()
-            away = float(np.abs(lat) @ (bbox.half + p.half)) + clearance + abs((p.center - bbox.center) @ lat)
-            out -= side * lat * away
+            out = _prop_spot(p, bbox, -side * lat, clearance)
             prog.use(prop.name, f"obstacle: props up {board_name}'s far end; push it out of the way")
             along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
             w.floor_walk(bbox.center + lat * side * beside + a * along, f"walk beside {prop.name}")
@@ -330,6 +330,32 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             + f"the lever lifts {target.name}."
         )
         yield prog
+
+
+def _prop_spot(prop: Box, board: Box, direction: np.ndarray, clearance: float) -> np.ndarray:
+    """Where ``prop`` is pushed along ``direction`` (a unit axis across ``board``) out from under the board: its near
+    side ``clearance`` beyond the board's side (counting its offset from the board's centre line as if against the
+    push)."""
+    offset = abs(float((prop.center - board.center) @ direction))
+    away = float(np.abs(direction) @ (board.half + prop.half)) + clearance + offset
+    return prop.center + direction * away
+
+
+def _prop_clearances(quad: Quadruped, props: list[SceneObject], board: Box, direction: np.ndarray) -> list[float]:
+    """How far beyond ``board``'s side the props are pushed along ``direction``: :data:`CLEARANCES`, and where each of
+    them would push a prop into something, the most the floor leaves room for (on a 2.5 cm grid, keeping
+    :data:`ROOM_MARGIN` from what stands beyond), down to :data:`MIN_CLEARANCE`."""
+    clearances = list(CLEARANCES)
+    for prop in props:
+        p = quad.layout.box(prop.name)
+        if all(quad.layout.collides(p.moved_to(_prop_spot(p, board, direction, c))) for c in CLEARANCES):
+            for c in np.arange(min(CLEARANCES), MIN_CLEARANCE - 1e-9, -0.025):
+                spot = _prop_spot(p, board, direction, float(c))
+                room = Box(p.name, spot - p.half - ROOM_MARGIN, spot + p.half + ROOM_MARGIN, p.bottom, p.top)
+                if quad.layout.collides(room) is None:
+                    clearances.append(round(float(c), 3))
+                    break
+    return clearances
 
 
 def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, board: str) -> Writer:

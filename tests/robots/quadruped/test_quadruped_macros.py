@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fixtures.paths import FIXTURES
 
 from robotool import tasks
 from robotool.planner.codegen import Program
@@ -13,7 +14,7 @@ from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner
 from robotool.robots.quadruped.predict import push_problem
 from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
-from robotool.robots.quadruped.quadruped_routes import Quadruped, _lined_up
+from robotool.robots.quadruped.quadruped_routes import MIN_CLEARANCE, ROOM_MARGIN, Quadruped, _lined_up
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
@@ -215,3 +216,20 @@ def test_a_lever_that_turned_about_its_load_is_walked_along_its_new_axis() -> No
     assert rejection is None and code is not None
     (rollouts,) = run_codes(turned, [code], worlds=3, seed=2)
     assert all(r.success for r in rollouts), failure_reason(rollouts)
+
+
+def test_a_prop_whose_usual_push_would_ram_a_heavy_box_is_pushed_only_as_far_as_the_floor_leaves_room() -> None:
+    """Pushed toward +x by the usual clearances the chair would ram the toolbox beyond it; pushed the other way the
+    robot would stand under the board's raised end: every program the macros made was doubted. A program now pushes
+    the chair just clear of the board and short of the toolbox, and is predicted fine."""
+    task = tasks.load(FIXTURES / "layouts" / "lever_prop_pushed_toward_a_toolbox.yaml")
+    layout = Layout(task)
+    board, chair, toolbox = (layout.box(n) for n in ("surfboard", "chair", "toolbox"))
+    fine = [p for p in candidates(task, tools=True) if p.doubt is None]
+    assert fine
+    for prog in fine:
+        (push,) = [m for m in prog.motions if m.skill == "push_to_position"]
+        assert push.point is not None
+        spot = chair.moved_to(push.point.estimate()[:2])
+        assert spot.lo[0] - board.hi[0] >= MIN_CLEARANCE - 1e-9  # out from under the board
+        assert toolbox.lo[0] - spot.hi[0] >= ROOM_MARGIN - 1e-9  # short of the toolbox
