@@ -26,12 +26,11 @@ from robotool.robots.quadruped.predict import (
     turn_violation,
     walk_violation,
 )
-from robotool.robots.quadruped.push import lateral_offsets, legs
+from robotool.robots.quadruped.push import legs
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
     FALL_OFF,
     INSET,
-    LEVEL,
     MIN_CLEARANCE,
     ROOM_MARGIN,
     SIDE,
@@ -424,10 +423,10 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     prog.use(name, f"tool: a soft landing for {target.name}")
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
                 w.route(route)
-                behind = _stance_behind(quad, w.layout, target.name, direction, support.top)
+                behind = push_staging(w.layout, target.name, dest, w.quad.limits, support.top)
                 if behind is None:
                     behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
-                    w.doubt(f"no room for the feet on {support_name} behind {target.name}")
+                    w.doubt(f"no clear place on {support_name} to push {target.name} from")
                 for via in detour(w.layout, w.here, behind, quad.limits)[:-1]:
                     w.walk(via, support_name, f"walk around what stands on {support_name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
@@ -456,22 +455,3 @@ def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quad
     for name, spot in pushes:
         w.push(name, spot, "")
     return quad.after(w.layout, w.here, [name for name, _ in pushes])
-
-
-def _stance_behind(
-    quad: Quadruped, layout: Layout, name: str, direction: np.ndarray, level: float
-) -> np.ndarray | None:
-    """Where to stand behind ``name`` to push it along ``direction``: straight behind it, else slid along its face to
-    the nearest offset the push skill may take (:func:`robotool.robots.quadruped.push.lateral_offsets`) with every
-    foot on the surface at ``level`` it stands on; None when there is no such place."""
-    box = layout.box(name)
-    axis = int(np.argmax(np.abs(direction)))
-    lat = 1 - axis
-    straight = box.center - direction * (box.half[axis] + quad.extent(direction) + 0.05)
-    for offset in lateral_offsets(2 * float(box.half[lat]), 2 * float(quad.half[lat])):
-        stance = straight.copy()
-        stance[lat] += offset
-        feet = layout.heights(stance + foot_offsets(quad.limits), exclude=[name])
-        if np.all(np.abs(feet - level) <= LEVEL / 2):
-            return stance
-    return None

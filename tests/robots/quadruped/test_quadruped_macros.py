@@ -233,3 +233,17 @@ def test_a_prop_whose_usual_push_would_ram_a_heavy_box_is_pushed_only_as_far_as_
         spot = chair.moved_to(push.point.estimate()[:2])
         assert spot.lo[0] - board.hi[0] >= MIN_CLEARANCE - 1e-9  # out from under the board
         assert toolbox.lo[0] - spot.hi[0] >= ROOM_MARGIN - 1e-9  # short of the toolbox
+
+
+def test_the_robot_lines_up_behind_the_vase_where_the_push_skill_does_clear_of_a_taller_step() -> None:
+    """The planner used to stand behind the vase wherever every foot was level with the sofa: there a front foot
+    came down 6 mm from the side of the top step (taller than the sofa), the robot stood tilted on its edge and the
+    push skill found no clear place to push from. It now walks to where the skill lines up (its sweep clear of the
+    step), and the program succeeds."""
+    task = tasks.load(FIXTURES / "layouts" / "vase_beside_a_taller_step.yaml")
+    prog = order(candidates(task, tools=True))[0]
+    assert prog.doubt is None
+    code, rejection, _ = prepare_code(prog.code, task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=2, seed=0)
+    assert all(r.success for r in rollouts), failure_reason(rollouts)
