@@ -32,7 +32,7 @@ from robotool.sim.backend_mujoco import share_cores
 from robotool.solution import Solution
 from robotool.task.task_model import Task
 from robotool.tasks.families import families, generate
-from robotool.verify import run_codes
+from robotool.verify import failure_reason, run_codes
 
 FRESH_SEED = 50_000  # first world seed of the re-run in fresh worlds, far from the planner's own seeds
 
@@ -107,8 +107,9 @@ def attempt(label: str, task: Task, solvable: bool, needs_tool: bool, worlds: in
     if held and fresh:
         rollouts = run_codes(task, [solution.code], worlds=fresh, seed=FRESH_SEED)[0]
         held = all(r.success for r in rollouts)
-        if not held:
-            failure = f"failed {sum(not r.success for r in rollouts)} of {fresh} fresh worlds"
+        reason = failure_reason(rollouts)
+        if reason is not None:
+            failure = f"in fresh worlds, {reason}"
     return Attempt(
         label,
         solvable,
