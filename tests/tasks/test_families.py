@@ -149,15 +149,16 @@ def test_boards_the_robot_walks_along_carry_its_feet_in_any_turn(family: str, bo
     assert turned  # some scenes are turned a quarter
 
 
-@pytest.mark.parametrize(("turns", "vase_x", "room"), [(0, 2.85, True), (1, 2.85, False), (1, 3.1, True)])
-def test_a_vase_where_the_steps_lead_leaves_room_to_land_only_beside_it(turns: int, vase_x: float, room: bool) -> None:
-    """The vase lies 0.15 m past the sofa's edge, beside the line up the steps. Climbing along its length (no
-    turn), the robot stops on the sofa on a line across the steps that misses the vase; in a quarter-turned scene it
-    climbs flank first on the one line across them and runs into the vase, unless the vase lies farther in."""
+@pytest.mark.parametrize(("vase_y", "vase_x", "room"), [(0.7, 2.85, True), (0.5, 2.85, False), (0.5, 3.1, True)])
+def test_room_to_land_where_the_steps_lead_beside_or_past_the_vase(vase_y: float, vase_x: float, room: bool) -> None:
+    """The vase lies 0.15 m past the sofa's edge. Beside the middle of the step (y 0.7), the robot climbing along its
+    length stops on a line across the step that misses the vase; across the middle (y 0.5) every line meets it, head
+    first or flank first; 0.4 m past the edge the robot lands before it flank first (after a quarter turn on the
+    floor, which a turned scene once ruled out: the planner solved vase_lowering seed 9814, labelled unsolvable so)."""
     sofa = thing("sofa", "box", (3.0, 0.2, 0.17), (0.9, 1.5, 0.34), movable=False)
     step = thing("box_2", "box", (2.35, 0.5, 0.12), (0.4, 0.6, 0.24), movable=False)
-    vase = thing("glass_vase", "box", (vase_x, 0.7, 0.39), (0.3, 0.1, 0.1), mass=0.5)
-    assert vase_lowering.room_to_land(RigidPlacement(turns=turns), sofa, step, vase) is room
+    vase = thing("glass_vase", "box", (vase_x, vase_y, 0.39), (0.3, 0.1, 0.1), mass=0.5)
+    assert vase_lowering.room_to_land(sofa, step, vase) is room
 
 
 def test_a_vase_where_the_steps_lead_onto_a_sofa_level_with_them_can_be_pushed_aside_from_the_step() -> None:
@@ -165,7 +166,15 @@ def test_a_vase_where_the_steps_lead_onto_a_sofa_level_with_them_can_be_pushed_a
     sofa = thing("sofa", "box", (3.0, 0.2, 0.115), (0.9, 1.5, 0.23), movable=False)
     step = thing("box_2", "box", (2.35, 0.5, 0.12), (0.4, 0.6, 0.24), movable=False)
     vase = thing("glass_vase", "box", (2.85, 0.7, 0.28), (0.3, 0.1, 0.1), mass=0.5)
-    assert vase_lowering.room_to_land(RigidPlacement(turns=1), sofa, step, vase)
+    assert vase_lowering.room_to_land(sofa, step, vase)
+
+
+def test_a_vase_scene_the_planner_solved_after_a_quarter_turn_is_labelled_solvable() -> None:
+    """vase_lowering seed 9814 was labelled unsolvable (no room to land flank first, the only way a robot that never
+    turns climbs in that turned scene), yet the search planner solved it in every world, fresh ones too: the robot
+    turned a quarter on the floor, climbed head first beside the vase and pushed it off onto the cushion."""
+    instance = tasks.generate("vase_lowering", 9814)
+    assert instance.solvable and "lead onto" not in instance.description
 
 
 def test_vase_scenes_without_room_to_land_are_unsolvable() -> None:

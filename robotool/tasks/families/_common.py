@@ -176,8 +176,8 @@ def draw_layout(rng: np.random.Generator, arm: bool) -> RigidPlacement:
 
 def board_width(layout: RigidPlacement, width: float) -> float:
     """The width of a board the quadruped walks along (along the template's x): ``width`` as in the template, or
-    :data:`SIDEWAYS_BOARD_WIDTH` when the layout turns the scene a quarter. The robot never turns, so it then walks
-    along the board flank first, its feet as far apart across the board as its body is long."""
+    :data:`SIDEWAYS_BOARD_WIDTH` when the layout turns the scene a quarter, so that the robot can walk along the board
+    without a turn, flank first, its feet as far apart across the board as its body is long."""
     return width if layout.turns % 2 == 0 else max(width, SIDEWAYS_BOARD_WIDTH)
 
 

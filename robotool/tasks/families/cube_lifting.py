@@ -11,7 +11,7 @@ Randomizations:
       cannot raise it by itself: the lever is needed either way);
     - the chair's place along the board's raised end (its height follows the board), the robot's start
       on the floor on either side of the lever; in scenes turned a quarter the board is wider than the robot
-      is long (the robot never turns, so it walks along the board flank first);
+      is long (so that it can walk along the board flank first, without a turn);
     - decoys: a box too heavy to push elsewhere on the floor; in unsolvable scenes the chair is too heavy
       to push away (6-10 kg) or the cube too heavy for the robot's weight on the lever (25-30 kg);
     - 0-3 fixed pieces of furniture away from the lever; the whole scene mirrored, turned by quarter turns

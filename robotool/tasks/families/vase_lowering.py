@@ -13,9 +13,9 @@ Randomizations:
     - decoys: a sand-filled cushion too heavy to push; in unsolvable scenes the first step is a fixed box
       too tall to climb (0.28-0.32 m), so the sofa cannot be reached; a scene that needs the steps is also
       unsolvable when the vase lies where they lead onto the sofa, so near its edge that the robot cannot stop
-      there with every foot on the sofa and its body clear of the vase (the robot never turns: across a
-      quarter-turned scene it climbs flank first, on one line across the steps), unless the sofa's top is level
-      with the top step's (within the push's 0.04 m): then the robot, on the step, pushes the vase out of its way;
+      there with every foot on the sofa and its body clear of the vase, its length along the climb or across it
+      (it may turn a quarter on the floor first), unless the sofa's top is level with the top step's (within the
+      push's 0.04 m): then the robot, on the step, pushes the vase out of its way;
     - 0-3 fixed pieces of furniture away from the scene; the whole scene mirrored, turned by quarter
       turns and shifted on the floor.
 Success conditions:
@@ -33,7 +33,6 @@ from robotool.tasks.families._common import (
     CLEARANCE,
     FLOOR_CLUTTER,
     Draft,
-    RigidPlacement,
     draw_layout,
     draw_variant,
     footprint,
@@ -131,7 +130,7 @@ def build(rng: np.random.Generator) -> Draft:
         margin=0.1,
     )
     goal_height = 0.20 if height > MAX_DROP else 0.05
-    blocked = variant == "tool" and not room_to_land(layout, scene[0], scene[2], scene[3])
+    blocked = variant == "tool" and not room_to_land(scene[0], scene[2], scene[3])
     if blocked:
         variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
     tools = {
@@ -155,19 +154,24 @@ def build(rng: np.random.Generator) -> Draft:
     )
 
 
-def room_to_land(layout: RigidPlacement, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
-    """Whether the robot, climbing from ``step`` onto ``sofa`` (along the template's +x, before ``layout`` places the
+def room_to_land(sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
+    """Whether the robot, climbing from ``step`` onto ``sofa`` (along the template's +x, before the layout places the
     scene), can stop on the sofa with every foot on it and its body clear of ``vase`` and of a higher step behind it,
     or, on a sofa level with the step, push the vase out of its way from the step first.
 
-    The robot never turns, so across a quarter-turned scene its body lies across the climb; it stops as near the
-    sofa's edge as it can, on the line across the step farthest from the vase."""
+    The robot may turn a quarter in place on the floor before it climbs, so its body may lie along the climb or
+    across it, however the scene is turned; it stops as near the sofa's edge as it can, on the line across the
+    step farthest from the vase."""
     if abs(step.top - sofa.top) <= PUSH_LEVEL:
         return True
     limits = template("vase_lowering").limits
     assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
     size = np.asarray(limits.body_size[:2])
-    half = size / 2 if layout.turns % 2 == 0 else size[::-1] / 2
+    return any(_lands(half, sofa, step, vase) for half in (size / 2, size[::-1] / 2))
+
+
+def _lands(half: np.ndarray, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
+    """:func:`room_to_land` for a body of x-y half size ``half`` (along the climb, across it)."""
     feet = half - QUADRUPED.foot_radius  # the feet's centres sit a foot's radius inside the body's outline
     s, t, v = footprint(sofa), footprint(step), footprint(vase)
     behind = half[0] + SIDE_MARGIN if step.top > sofa.top + SAME_LEVEL else feet[0]

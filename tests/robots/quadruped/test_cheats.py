@@ -553,12 +553,13 @@ def test_a_fall_is_read_as_onto_what_the_vase_struck() -> None:
     ],
 )
 def test_a_vase_where_the_steps_lead_onto_a_lower_sofa_is_out_of_reach(program: str, reasons: tuple[str, ...]) -> None:
-    """vase_lowering seed 1028 (labelled unsolvable): the vase lies where the steps lead onto a sofa 0.04 m lower than
-    the top step, so there is no room to land and no push from the step."""
+    """vase_lowering seed 1028: the vase lies where the steps lead onto a sofa 0.04 m lower than the top step, so the
+    robot walking straight on meets the vase and cannot push it from the step. (The scene is solvable: after a
+    quarter turn on the floor the robot lands clear of the vase, as the planner's program does; the family once
+    labelled it unsolvable.)"""
     instance = generate("vase_lowering", 1028)
     code = (CHEATS / f"{program}.py").read_text()
     rollouts = sim.run_sessions(instance.task, start_sessions([code] * 3, "quadruped"), seed=0)
-    assert not instance.solvable
     for rollout in rollouts:
         assert not rollout.success
         assert any(r in (failure_reason(rollout) or "") for r in reasons), failure_reason(rollout)
