@@ -176,6 +176,9 @@ LAYOUT_CASES = [
     ("walk_through_vase", "vase_lowering"),
     ("walk_flank_grazing_vase", "vase_heavy"),  # a foot brushes the vase's end while the body shoves it
     ("ram_vase_with_book", "vase_heavy_with_book"),
+    # the vase beside a step taller than the sofa: pushed from a stance with a foot on the step's edge, or walked off
+    ("push_vase_with_a_foot_on_the_taller_step", "vase_beside_a_taller_step"),
+    ("walk_vase_off_beside_the_taller_step", "vase_beside_a_taller_step"),
     # a light box pushed into a step too heavy to push, as a ram, a box length at a time
     ("ram_heavy_step_with_light_box", "climb_heavy_step_and_light_box"),
     ("shove_block_in_small_steps", "ledge_heavy_block"),  # shoves under 3 cm, each followed by a step onto it
