@@ -105,9 +105,8 @@ def attempt(label: str, task: Task, solvable: bool, needs_tool: bool, worlds: in
     failure = "" if solution.success_rate == 1.0 else str((best.failure if best else None) or "no candidate ran")
     held = solution.success and solution.code is not None
     if held and fresh:
-        rollouts = run_codes(task, [solution.code], worlds=fresh, seed=FRESH_SEED)[0]
-        held = all(r.success for r in rollouts)
-        reason = failure_reason(rollouts)
+        reason = failure_reason(run_codes(task, [solution.code], worlds=fresh, seed=FRESH_SEED)[0])
+        held = reason is None
         if reason is not None:
             failure = f"in fresh worlds, {reason}"
     return Attempt(
