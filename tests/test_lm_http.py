@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import socket
+import time
 from pathlib import Path
 
 import dspy
@@ -380,3 +381,12 @@ def test_eval_with_a_rejected_key_records_nothing_and_says_why_in_one_line(tmp_p
     _assert_one_line(capsys.readouterr().err, "rejected the credentials for openai/standin", "--api-key-env")
     journal = tmp_path / "out" / "journal.jsonl"
     assert not journal.exists() or journal.read_text().strip() == ""
+
+
+def test_the_standin_stops_at_once_when_its_block_is_left() -> None:
+    """Leaving the ``with`` block does not wait out a half-second poll (60 suite tests each start a stand-in)."""
+    started = time.perf_counter()
+    for _ in range(3):
+        with StandinServer(Script(rules=[])):
+            pass
+    assert (time.perf_counter() - started) / 3 < 0.25

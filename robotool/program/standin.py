@@ -27,6 +27,9 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+SHUTDOWN_POLL_S = 0.02
+"""How often the serving thread checks whether it is asked to stop: leaving the ``with`` block waits up to this."""
+
 
 class Rule(BaseModel):
     """One scripted answer: used for requests whose last user message contains ``match``."""
@@ -68,7 +71,7 @@ class StandinServer:
         handler = _handler_for(self)
         self._server = ThreadingHTTPServer(("127.0.0.1", port), handler)
         self._server.daemon_threads = True
-        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+        self._thread = threading.Thread(target=self._server.serve_forever, args=(SHUTDOWN_POLL_S,), daemon=True)
 
     @property
     def base_url(self) -> str:
