@@ -179,6 +179,9 @@ LAYOUT_CASES = [
     # the vase beside a step taller than the sofa: pushed from a stance with a foot on the step's edge, or walked off
     ("push_vase_with_a_foot_on_the_taller_step", "vase_beside_a_taller_step"),
     ("walk_vase_off_beside_the_taller_step", "vase_beside_a_taller_step"),
+    # a lever whose prop can be pushed out only as far as a heavy toolbox beyond it leaves room
+    ("push_prop_into_the_toolbox", "lever_prop_pushed_toward_a_toolbox"),
+    ("lever_with_the_prop_half_out", "lever_prop_pushed_toward_a_toolbox"),
     # a light box pushed into a step too heavy to push, as a ram, a box length at a time
     ("ram_heavy_step_with_light_box", "climb_heavy_step_and_light_box"),
     ("shove_block_in_small_steps", "ledge_heavy_block"),  # shoves under 3 cm, each followed by a step onto it
@@ -219,6 +222,7 @@ CONTROL_CASES = [
     ("straddle_the_beam", "low_platform"),  # the same walk onto a low top wider than the stance
     ("carry_a_heavy_crate_under_a_book", "light_crate_with_a_book_on_a_pallet"),  # 3.8 kg in all: within the limit
     ("walk_onto_the_middle_of_the_mat", "blanket_on_a_mat"),  # the links under the feet lie on the mat
+    ("lever_with_the_prop_pushed_short_of_the_toolbox", "lever_prop_pushed_toward_a_toolbox"),  # the room the floor has
 ]
 
 
