@@ -170,26 +170,49 @@ def detour(
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else the shortest way found
     through the L-corners and the corners of the objects (grown by the body and a margin), each stretch predicted
     fine (a lazy A* search: a stretch is predicted only when it is the best way left); ``[goal]`` when none is
-    found within :data:`DETOUR_CHECKS` predictions."""
+    found within :data:`DETOUR_CHECKS` predictions. A stretch whose body passes a movable object closer than
+    ``QUADRUPED.detour_slack`` (but one it starts or ends that close to) counts ``QUADRUPED.detour_tight_cost``
+    longer than it is, so a way with room is taken unless it is much longer."""
     skip = list(exclude)
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     if walk_violation(layout, start, [goal], limits, skip) is None:
         return [goal]
-    half = np.asarray(limits.body_size[:2]) / 2 + 0.1
+    half = np.asarray(limits.body_size[:2]) / 2
     points = [start, goal, np.array([goal[0], start[1]]), np.array([start[0], goal[1]])]
     for box in layout.boxes(skip):
-        lo, hi = box.lo - half, box.hi + half
+        lo, hi = box.lo - half - 0.1, box.hi + half + 0.1
         points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
-    frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1)]
+    room = half + QUADRUPED.detour_slack
+    passed = [
+        box
+        for box in layout.boxes(skip)
+        if layout.task.object(box.name).movable
+        and layout.task.object(box.name).shape != "cloth"
+        and not any(np.all(np.abs(end - box.center) < box.half + room) for end in (start, goal))
+    ]
+
+    def extra_cost(a: np.ndarray, b: np.ndarray) -> float | None:
+        """None where the stretch from ``a`` to ``b`` is predicted to break a limit, else what it costs beyond its
+        length."""
+        if walk_violation(layout, a, [b], limits, skip) is not None:
+            return None
+        tight = any(_segment_meets(a, b, box.lo - room, box.hi + room) for box in passed)
+        return QUADRUPED.detour_tight_cost if tight else 0.0
+
+    frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1, False)]
     parent: dict[int, int] = {}
     checks = 0
     while frontier and checks < DETOUR_CHECKS:
-        _, cost, node, frm = heapq.heappop(frontier)
+        estimate, cost, node, frm, charged = heapq.heappop(frontier)
         if node in parent:
             continue
-        if frm >= 0:
+        if frm >= 0 and not charged:
             checks += 1
-            if walk_violation(layout, points[frm], [points[node]], limits, skip) is not None:
+            extra = extra_cost(points[frm], points[node])
+            if extra is None:
+                continue
+            if extra > 0:  # back in line at its true cost: a way with room may yet come first
+                heapq.heappush(frontier, (estimate + extra, cost + extra, node, frm, True))
                 continue
         parent[node] = frm
         if node == 1:
@@ -201,8 +224,22 @@ def detour(
         for k, p in enumerate(points):
             if k not in parent and k != node:
                 g = cost + float(np.linalg.norm(p - points[node]))
-                heapq.heappush(frontier, (g + float(np.linalg.norm(goal - p)), g, k, node))
+                heapq.heappush(frontier, (g + float(np.linalg.norm(goal - p)), g, k, node, False))
     return [goal]
+
+
+def _segment_meets(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether the segment from ``a`` to ``b`` (x-y) passes through the open box ``lo``-``hi`` (a slab test)."""
+    enter, leave = 0.0, 1.0
+    for axis in range(2):
+        d = b[axis] - a[axis]
+        if abs(d) < 1e-12:
+            if not lo[axis] < a[axis] < hi[axis]:
+                return False
+            continue
+        t0, t1 = sorted(((lo[axis] - a[axis]) / d, (hi[axis] - a[axis]) / d))
+        enter, leave = max(enter, t0), min(leave, t1)
+    return enter < leave
 
 
 @dataclass(frozen=True)

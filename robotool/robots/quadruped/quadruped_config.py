@@ -108,6 +108,12 @@ class QuadrupedConfig:
     """m: shorter pushes along an axis are skipped."""
     side_margin: float = 0.01
     """m beyond the body's outline that must be clear of anything higher than its floor."""
+    detour_slack: float = 0.05
+    """m a way around something keeps between the body and the movable objects it passes, where it can: an object's
+    perturbed pose and a walk's drift use up a bare margin."""
+    detour_tight_cost: float = 1.0
+    """m of walking that a stretch of a way around something counts for beyond its length when it passes a movable
+    object closer than ``detour_slack``: a way with room is taken unless it is this much longer."""
     exit_margin: float = 0.005
     """m beyond the side of a box that a route starting inside it steps out to."""
 

@@ -3,12 +3,15 @@ no physics)."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from fixtures.paths import FIXTURES
 
 from robotool import tasks
-from robotool.planner.layout import Layout
+from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_staging, walk_violation
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
@@ -114,6 +117,56 @@ def test_a_detour_finds_the_long_way_round_a_lever() -> None:
     way = detour(layout, start, goal, task.limits)
     assert len(way) > 1 and np.allclose(way[-1], goal)
     assert walk_violation(layout, start, way, task.limits) is None
+
+
+def _closest_approach(way: list[np.ndarray], start: np.ndarray, half: np.ndarray, box: Box) -> float:
+    """The least gap (m) between the body's outline, walked along ``way`` from ``start``, and ``box``'s footprint."""
+    points = np.concatenate(
+        [np.linspace(a, b, int(np.linalg.norm(b - a) / 0.005) + 2) for a, b in itertools.pairwise([start, *way])]
+    )
+    gaps = np.maximum(np.maximum(box.lo - (points + half), (points - half) - box.hi), 0.0)
+    return float(np.linalg.norm(gaps, axis=1).min())
+
+
+def test_a_detour_keeps_room_beside_a_movable_box_it_passes() -> None:
+    """``staircase_three`` once box_c and box_b are pushed into place: from behind box_b to where box_a's push lines
+    up, the shortest way (down past box_a's +x face) puts the hind feet 1 cm inside its edge, and in a perturbed world
+    the body ran into box_a and moved it. The way taken now keeps the detour's slack from box_a."""
+    task = tasks.load(FIXTURES / "layouts" / "staircase_three.yaml")
+    layout = Layout(task).with_moved("box_c", np.array([2.748, 0.0])).with_moved("box_b", np.array([2.346, 0.0]))
+    start, goal = np.array([1.791, 0.0]), np.array([1.3, -1.73])
+    way = detour(layout, start, goal, task.limits)
+    assert np.allclose(way[-1], goal) and walk_violation(layout, start, way, task.limits) is None
+    half = np.asarray(task.limits.body_size[:2]) / 2
+    assert _closest_approach(way, start, half, layout.box("box_a")) >= QUADRUPED.detour_slack - 1e-9, way
+
+
+def test_a_detour_passes_close_to_movable_crates_where_the_way_with_room_is_much_longer() -> None:
+    """Two heavy crates, 10 m long, leave a passage 2 cm wider than the body each side: the way round them keeps room
+    but is 10 m longer, so the way through the passage is taken."""
+    half = np.asarray(_step_task(1.0).limits.body_size[:2]) / 2
+    crate = {"shape": "box", "size": [10.0, 0.2, 0.5], "movable": True, "mass": 80.0}
+    side = 5.0 + half[0] + 0.02
+    task = parse_task(
+        {
+            "format": 1,
+            "name": "passage",
+            "instruction": "Stand on the mat.",
+            "category": "sequential_tool_use",
+            "robot": {"type": "quadruped", "position": [0.6, 0.0]},
+            "objects": [
+                {**crate, "name": "crate_west", "center": [-side, 1.0, 0.25]},
+                {**crate, "name": "crate_east", "center": [side, 1.0, 0.25]},
+                {"name": "mat", "shape": "box", "center": [0.0, 2.5, 0.01], "size": [1.0, 1.0, 0.02], "movable": False},
+            ],
+            "goal": {"robot_on": "mat"},
+        }
+    )
+    layout, start, goal = Layout(task), np.array([0.6, 0.0]), np.array([0.0, 2.0])
+    assert walk_violation(layout, start, [goal], task.limits) is not None
+    way = detour(layout, start, goal, task.limits)
+    assert np.allclose(way[-1], goal) and walk_violation(layout, start, way, task.limits) is None
+    assert sum(np.linalg.norm(b - a) for a, b in itertools.pairwise([start, *way])) < 3.0, way
 
 
 def _vase_step_task(fragile: bool) -> Task:
