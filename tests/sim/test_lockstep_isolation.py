@@ -207,3 +207,16 @@ def test_a_world_whose_physics_blows_up_fails_alone(
     broken = rollouts[1]
     assert broken.error == "simulation failed: physics diverged (bad velocity)" and not broken.success
     assert broken.calls[-1].outcome == "error" and broken.calls[-1].reason == broken.error
+
+
+def test_a_worlds_rollout_does_not_depend_on_the_others_in_its_batch() -> None:
+    """Worlds perturbed from given seeds: a program run alone and the same program run beside others (a longer walk
+    that keeps the batch stepping after it ends, a walk into the gap that is refused) meet the same world and
+    end the same, call by call, to the simulated second (the planner compares candidates batched together)."""
+    scene = sim.build(tasks.load("sofa_traversing"))
+    short = "walk_to_position([0.3, 0.0, 0.0])\n"
+    others = ["walk_to_position([-3.0, 0.0, 0.0])\n", "walk_to_position([1.5, 0.0, 0.0])\n"]
+    (alone,) = sim.run_sessions(scene, sandbox.start_sessions([short], "quadruped"), world_seeds=[12])
+    batched = sim.run_sessions(scene, sandbox.start_sessions([*others, short], "quadruped"), world_seeds=[11, 13, 12])
+    assert batched[2].model_dump(exclude={"world"}) == alone.model_dump(exclude={"world"})
+    assert batched[0].sim_time > alone.sim_time and batched[1].calls[0].outcome != "done", batched[1].calls
