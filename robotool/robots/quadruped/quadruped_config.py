@@ -134,8 +134,10 @@ class QuadrupedConfig:
     """m a prop pushed as far as the room allows stops short of what stands beyond it."""
     board_side: float = 0.25
     """m the robot keeps from a board it walks beside."""
-    fall_off: float = 0.01
-    """m an object pushed off an edge goes past it (beyond its own half size): the feet stay on."""
+    tip_past: float = 0.03
+    """m past an edge that an object pushed off it has its centre: it tips over the edge and falls while the robot
+    stops behind it (pushed wholly past the edge, it fell with the robot still walking on behind it, and its rising
+    edge met a front foot)."""
     max_steps: int = 3
     """Objects a staircase may use below the target."""
     entries: int = 2

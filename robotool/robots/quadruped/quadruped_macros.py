@@ -29,11 +29,11 @@ from robotool.robots.quadruped.predict import (
 from robotool.robots.quadruped.push import legs
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
-    FALL_OFF,
     INSET,
     MIN_CLEARANCE,
     ROOM_MARGIN,
     SIDE,
+    TIP_PAST,
     PushStep,
     Quadruped,
     Route,
@@ -403,7 +403,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
         axis = int(np.argmax(np.abs(direction)))
         edge = support.center[axis] + direction[axis] * support.half[axis]
         dest = tbox.center.copy()
-        dest[axis] = edge + direction[axis] * (tbox.half[axis] + FALL_OFF)
+        dest[axis] = edge + direction[axis] * TIP_PAST
         for cushion in cushions:
             if cushion is None and target.fragile is not None and fall > target.fragile.max_drop:
                 continue
@@ -436,7 +436,7 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     obj=target.name,
                     point=Point.at(ref, (*(dest - tbox.center), 0.0)),
                     intent=f"push {target.name} off {support_name}'s edge",
-                    explanation=f"its centre {tbox.half[axis] + FALL_OFF:.2f} m past the edge",
+                    explanation=f"its centre {TIP_PAST:.2f} m past the edge: it tips off",
                 )
                 prog.say(
                     (f"Push {pushes[0][0]} beside {support_name}; " if pushes else "")

@@ -14,12 +14,12 @@ from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner
 from robotool.robots.quadruped.predict import push_problem
 from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
-from robotool.robots.quadruped.quadruped_routes import MIN_CLEARANCE, ROOM_MARGIN, Quadruped, _lined_up
+from robotool.robots.quadruped.quadruped_routes import MIN_CLEARANCE, ROOM_MARGIN, TIP_PAST, Quadruped, _lined_up
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.tasks.families import generate
-from robotool.verify import failure_reason, prepare_code, run_codes
+from robotool.verify import failure_reason, prepare_code, run_codes, run_seeded
 
 
 def _box(name: str, center: list[float], size: list[float], **more: object) -> dict[str, object]:
@@ -94,6 +94,27 @@ def test_the_robot_stops_short_of_a_vase_lying_ahead_of_the_steps() -> None:
     (rollouts,) = run_codes(task, [code], worlds=1, seed=0)
     assert all(r.success for r in rollouts), failure_reason(rollouts)
 
+
+
+@pytest.mark.slow
+def test_the_vase_is_pushed_until_it_tips_off_and_the_robot_stays_behind_it() -> None:
+    """vase_lowering seed 9905: the planner pushed the vase wholly past the sofa's edge (its centre its half size and
+    1 cm beyond), the robot walking on behind it as it fell; in one of five fresh worlds (seed 50001) the vase's
+    rising edge met a front foot, which read as standing on the glass. The push now stops with the vase's centre
+    just past the edge: it tips off on its own while the robot stands behind it."""
+    task = generate("vase_lowering", 9905).task
+    sofa = Layout(task).box("sofa")
+    fine = [p for p in order(candidates(task, tools=True)) if p.doubt is None][:2]
+    for prog in fine:
+        (push,) = [m for m in prog.motions if m.skill == "push_to_position" and m.obj == "glass_vase"]
+        assert push.point is not None
+        dest = push.point.estimate()[:2]
+        past = np.maximum(sofa.lo - dest, dest - sofa.hi).max()
+        assert past == pytest.approx(TIP_PAST, abs=1e-3), (dest, sofa.lo, sofa.hi)
+    codes = [prepare_code(p.code, task)[0] for p in fine]
+    assert all(codes)
+    for rollouts in run_seeded(task, [(code, [50_001]) for code in codes if code is not None]):
+        assert rollouts[0].conditions["robot_stood_on_nothing_fragile"], failure_reason(rollouts)
 
 
 def test_an_object_past_its_place_is_not_lined_up_on_the_next_links_spot() -> None:
