@@ -640,3 +640,21 @@ def test_two_cloths_laid_across_the_gap_one_on_the_other_are_no_bridge() -> None
     (walk,) = [c for c in rollout.calls if c.skill == "walk_to_position"]
     assert not rollout.success and walk.outcome in ("refused", "fell"), (walk.outcome, walk.reason)
     assert walk.reason and ("gap" in walk.reason or "fell" in walk.reason), walk.reason
+
+
+def test_a_vase_pushed_to_just_short_of_the_sofas_edge_is_not_lowered() -> None:
+    """The reference program's push stopped with the vase's centre 2 cm short of the sofa's edge (the planner stops it
+    3 cm past the edge, where it tips off on its own): the vase stays on the sofa and is not lowered in any world;
+    pushed to 3 cm past, it tips off onto the cushion in the same worlds."""
+    reference = (PROGRAMS / "vase_lowering.py").read_text()
+    pushed = "edge_y + vase_size[1] / 2 + 0.01"
+    codes = [reference.replace(pushed, "edge_y - 0.02"), reference.replace(pushed, "edge_y + 0.03")]
+    assert reference not in codes
+    rollouts = sim.run_sessions(
+        _scene("vase_lowering"), start_sessions(codes * 2, "quadruped"), world_seeds=[11, 11, 12, 12]
+    )
+    short, tipped = rollouts[0::2], rollouts[1::2]
+    for rollout in short:
+        assert not rollout.success and not rollout.conditions["glass_vase_lowered"], rollout.conditions
+        assert rollout.conditions["glass_vase_unbroken"] and rollout.conditions["robot_has_not_fallen"]
+    assert all(r.success for r in tipped), [failure_reason(r) for r in tipped]
