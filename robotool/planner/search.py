@@ -37,6 +37,7 @@ class Budget:
     seconds: float  # no new round starts after this much time
     first: int | None = None  # programs in the first round (default: beam)
     verify: int = 0  # fresh worlds a program that held in every planning world must also hold in
+    doubted_rounds: int | None = None  # rounds at most while every program run was doubted and none succeeded anywhere
 
 
 VERIFY_OFFSET = 10_000  # verification world seeds start this far from the planning seed
@@ -138,9 +139,20 @@ def search(
             )
         tried += batch
         rounds += 1
-        if any(held(t.candidate) for t in batch):
+        if any(held(t.candidate) for t in batch) or _hopeless(tried, rounds, budget):
             break
     return tried, rounds
+
+
+def _hopeless(tried: list[Tried], rounds: int, budget: Budget) -> bool:
+    """Whether the search stops early: ``budget.doubted_rounds`` rounds have run, every program in them was predicted
+    to break a limit and none succeeded in any world (those left are doubted too: doubted programs come last)."""
+    return (
+        budget.doubted_rounds is not None
+        and rounds >= budget.doubted_rounds
+        and all(t.program.doubt is not None for t in tried)
+        and not any(r.success for t in tried for r in t.candidate.rollouts)
+    )
 
 
 def confirm(

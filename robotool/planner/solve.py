@@ -56,7 +56,12 @@ def solve(
     planner = robot_planner(task)
     fresh = worlds + 2 if verify is None else verify
     budget = Budget(
-        beam=planner.beam, rounds=planner.rounds, seconds=planner.seconds, first=planner.first, verify=fresh
+        beam=planner.beam,
+        rounds=planner.rounds,
+        seconds=planner.seconds,
+        first=planner.first,
+        verify=fresh,
+        doubted_rounds=planner.doubted_rounds,
     )
     concepts = key_concepts(task)
     allowed = goal_objects(task)

@@ -63,6 +63,9 @@ class SearchMacros:
     """No new round starts after this much time."""
     first: int | None = None
     """Programs in the first round (default ``beam``)."""
+    doubted_rounds: int | None = None
+    """Rounds at most while every program run was predicted to break a limit and none succeeded in any world (the
+    programs are ordered, so the rest are doubted too); None: no such limit."""
 
 
 @dataclass(frozen=True)

@@ -142,3 +142,31 @@ def test_the_builtin_sofa_climbing_program_holds_in_every_planning_and_fresh_wor
     best = next(c for c in solution.candidates if c.index == solution.best)
     assert solution.success_rate == 1.0, best.failure
     assert len(best.rollouts) == 3 + 5
+
+
+def _doubted(x: float) -> Program:
+    prog = _program(x)
+    prog.doubt = "step up of 0.16 m exceeds the limit of 0.12 m"
+    return prog
+
+
+@pytest.mark.parametrize(
+    ("doubted", "fails", "rounds"),
+    [
+        (True, set(range(100)), 2),  # every program predicted to break a limit, none succeeded anywhere: stop
+        (True, {0, 1}, 4),  # one succeeded in a world: a doubt is not proof, go on
+        (False, set(range(100)), 4),  # programs predicted fine: go on
+    ],
+)
+def test_a_search_whose_programs_are_all_doubted_and_all_fail_stops_after_its_doubted_rounds(
+    task, monkeypatch: pytest.MonkeyPatch, doubted: bool, fails: set[int], rounds: int
+) -> None:
+    """All-doubted vase scenes (seeds 73, 84, 9803, 9811, 9900, 9912, 9913) ran all four rounds and the repair round
+    and none succeeded; the one all-doubted scene solved (9704) was solved in round 2. So a search stops after
+    ``doubted_rounds`` rounds while every program it ran was doubted and none succeeded in any world."""
+    programs = [(_doubted if doubted else _program)(float(x)) for x in range(1, 11)]
+    runner = ScriptedRunner({p.code: fails for p in programs})
+    monkeypatch.setattr(search_module, "run_seeded", runner)
+    budget = Budget(beam=3, rounds=4, seconds=float("inf"), first=1, verify=5, doubted_rounds=2)
+    tried, ran = _search(task, programs, budget)
+    assert ran == rounds and len(tried) == 1 + 3 * (rounds - 1)
