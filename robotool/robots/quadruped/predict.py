@@ -19,6 +19,7 @@ from robotool.robots.quadruped.push import (
     GAP,
     SIDE_MARGIN,
     Leg,
+    crosses,
     first_clear_sweep,
     lateral_offsets,
     legs,
@@ -178,17 +179,17 @@ def detour(
     if walk_violation(layout, start, [goal], limits, skip) is None:
         return [goal]
     half = np.asarray(limits.body_size[:2]) / 2
+    boxes = layout.boxes(skip)
     points = [start, goal, np.array([goal[0], start[1]]), np.array([start[0], goal[1]])]
-    for box in layout.boxes(skip):
+    for box in boxes:
         lo, hi = box.lo - half - 0.1, box.hi + half + 0.1
         points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
     room = half + QUADRUPED.detour_slack
+    movable = {o.name for o in layout.task.objects if o.movable and o.shape != "cloth"}
     passed = [
         box
-        for box in layout.boxes(skip)
-        if layout.task.object(box.name).movable
-        and layout.task.object(box.name).shape != "cloth"
-        and not any(np.all(np.abs(end - box.center) < box.half + room) for end in (start, goal))
+        for box in boxes
+        if box.name in movable and not any(np.all(np.abs(end - box.center) < box.half + room) for end in (start, goal))
     ]
 
     def extra_cost(a: np.ndarray, b: np.ndarray) -> float | None:
@@ -196,7 +197,7 @@ def detour(
         length."""
         if walk_violation(layout, a, [b], limits, skip) is not None:
             return None
-        tight = any(_segment_meets(a, b, box.lo - room, box.hi + room) for box in passed)
+        tight = any(crosses(a, b, box.lo - room, box.hi + room) for box in passed)
         return QUADRUPED.detour_tight_cost if tight else 0.0
 
     frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1, False)]
@@ -226,20 +227,6 @@ def detour(
                 g = cost + float(np.linalg.norm(p - points[node]))
                 heapq.heappush(frontier, (g + float(np.linalg.norm(goal - p)), g, k, node, False))
     return [goal]
-
-
-def _segment_meets(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
-    """Whether the segment from ``a`` to ``b`` (x-y) passes through the open box ``lo``-``hi`` (a slab test)."""
-    enter, leave = 0.0, 1.0
-    for axis in range(2):
-        d = b[axis] - a[axis]
-        if abs(d) < 1e-12:
-            if not lo[axis] < a[axis] < hi[axis]:
-                return False
-            continue
-        t0, t1 = sorted(((lo[axis] - a[axis]) / d, (hi[axis] - a[axis]) / d))
-        enter, leave = max(enter, t0), min(leave, t1)
-    return enter < leave
 
 
 @dataclass(frozen=True)

@@ -216,7 +216,7 @@ def routes(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
     if np.all((start > lo) & (start < hi)):
         out = _nearest_exit(start, lo, hi)
         return [[out, *way] for way in routes(out, goal, lo, hi)]
-    if not _crosses(start, goal, lo, hi):
+    if not crosses(start, goal, lo, hi):
         return [[goal]]
     corners = [np.array([x, y]) for x, y in ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1]))]
     found: dict[tuple[int, ...], tuple[float, list[np.ndarray]]] = {}
@@ -226,7 +226,7 @@ def routes(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
                 ids = tuple((i + direction * k) % 4 for k in range(count))
                 path = [corners[k] for k in ids]
                 points = [start, *path, goal]
-                if ids in found or any(_crosses(p, q, lo, hi) for p, q in pairwise(points)):
+                if ids in found or any(crosses(p, q, lo, hi) for p, q in pairwise(points)):
                     continue
                 found[ids] = (sum(float(np.linalg.norm(q - p)) for p, q in pairwise(points)), [*path, goal])
     ways = [way for _, way in sorted(found.values(), key=lambda f: f[0])]
@@ -242,7 +242,7 @@ def _nearest_exit(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return out
 
 
-def _crosses(p: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+def crosses(p: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
     """Whether segment p-q passes through the open box (lo, hi) (slab test)."""
     t0, t1 = 0.0, 1.0
     d = q - p
