@@ -139,7 +139,7 @@ def test_warp_on_the_cpu_adds_no_note_of_its_own() -> None:
     """The warning above is the only one: Warp's native note that it found no CUDA driver is left out."""
     if importlib.util.find_spec("mujoco_warp") is None:  # the child imports it: not here too (4 s of CPU)
         pytest.skip("mujoco_warp is not installed")
-    code = "from robotool.sim.backend_warp import init_warp; init_warp(); import warp; print(warp.is_cpu_available())"
+    code = "from robotool.sim.warp_runtime import init_warp; init_warp(); import warp; print(warp.is_cpu_available())"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
     assert result.returncode == 0 and result.stdout.strip() == "True", result.stderr
     assert result.stderr == ""

@@ -8,9 +8,6 @@ whose sticky overflow flag is set (contacts or constraint rows over ``nconmax``/
 
 from __future__ import annotations
 
-import os
-import sys
-
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
@@ -19,34 +16,16 @@ import warp as wp
 from robotool.sim.backend import (
     BatchState,
     Perturbation,
-    cuda_driver_found,
     geom_groups,
     normals_from_contacts,
     touching_from_contacts,
     weld_relpose,
 )
 from robotool.sim.compiled_scene import Scene
+from robotool.sim.warp_runtime import init_warp
 
 _BATCHED = ("geom_friction", "body_mass", "body_inertia", "eq_data", "geom_pos")
 _OVERFLOWS = {int(f): f.name for f in mjw.OverflowType if int(f)}
-
-
-def init_warp() -> None:
-    """``wp.init()`` without its banner and per-module load messages; without a CUDA driver, the line Warp's native
-    library prints about it is left out too (the command line says once that warp runs on the CPU)."""
-    wp.config.log_level = wp.LOG_WARNING
-    if cuda_driver_found():
-        wp.init()
-        return
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-            wp.init()
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
 
 
 class WarpSim:

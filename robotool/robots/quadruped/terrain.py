@@ -128,115 +128,17 @@ def scan_paths(
     The heights are first taken as the foot rests on them (:func:`foot_support`); a gap's width is measured
     between the edges the foot's centre passes, plus the foot's diameter: the width between the surfaces.
     ``into_gap`` (P,) is how far a path starts inside a gap it is already striding (counted in its width).
-    Vectorised over paths: the loop runs over samples only.
+    Each path is followed sample by sample in compiled code (:mod:`.path_kernel`): at every sample the surface is
+    compared with the level the foot stands at and with the lowest and highest levels over the last
+    :data:`SLOPE_RUN`; a path ends at its first finding (its level NaN from there).
     """
-    heights = foot_support(np.asarray(heights, dtype=float))
-    npath, n = heights.shape
+    from robotool.robots.quadruped.path_kernel import follow  # Warp loads on the first scan, not on every import
+
+    supported = foot_support(np.asarray(heights, dtype=float))
+    npath = supported.shape[0]
     already = np.zeros(npath) if into_gap is None else np.asarray(into_gap, dtype=float)
-    current = np.asarray(start, dtype=float).copy()
-    out = PathScan(
-        level=np.full((npath, n), np.nan),
-        index=np.full(npath, n),
-        kind=np.full(npath, TerrainKind.NONE, dtype=int),
-        measured=np.zeros(npath),
-        met=np.zeros((npath, n, len(KINDS))),
-    )
-    level, met = out.level, out.met
-    skip = np.zeros(npath, dtype=int)  # samples each path has still to stride over a gap
-    run = round(SLOPE_RUN / SPACING)
-    trail = np.concatenate([np.repeat(current[:, None], run, axis=1), np.full((npath, n), np.nan)], axis=1)
-    changes = np.flatnonzero(np.any(np.abs(np.diff(heights, axis=1)) > 1e-9, axis=0)) + 1
-    busy = np.zeros(n + run + 1, dtype=bool)  # samples within SLOPE_RUN after a change (or the first)
-    for c in np.concatenate([[0], changes]):
-        busy[c : c + run + 1] = True
-    # the window of recent levels is filled before it is read, so it holds NaN only where the input does
-    finite = not (np.isnan(heights).any() or np.isnan(current).any())
-    lowest, highest = (np.minimum.reduce, np.maximum.reduce) if finite else (np.nanmin, np.nanmax)
-    step_limit = limit_of("step", limits) + TOLERANCE  # :func:`exceeds` for a step
-    live = np.ones(npath, dtype=bool)
-    none = int(TerrainKind.NONE)
-    k = 0
-    while k < n:
-        if not busy[k]:  # flat for every path since the last change: each keeps its level (or strides on)
-            end = k + int(np.argmax(busy[k:n])) if busy[k:n].any() else n
-            level[live, k:end] = current[live, None]
-            trail[:, k + run : end + run] = current[:, None]
-            skip = np.maximum(skip - (end - k), 0)
-            k = end
-            continue
-        h = heights[:, k]
-        recent = trail[:, k : k + run]  # the levels over the last SLOPE_RUN
-        low, high = np.fmin(lowest(recent, axis=1), current), np.fmax(highest(recent, axis=1), current)
-        striding = live & (skip > 0)
-        skip -= striding
-        free = live & ~striding
-        climbed = h - low
-        rise = free & (h - current > RISE)
-        too_high = free & (climbed > step_limit)  # a step, or a slope as steep as one
-        steps = rise | too_high
-        if steps.any():
-            _found(out, too_high, k, TerrainKind.STEP, climbed)
-            met[steps, k, 0] = climbed[steps]
-            current = np.where(steps, h, current)
-        dip = free & ~steps & (high - h > limits.max_step_up)
-        if dip.any():
-            _dip(out, heights, k, dip, high, current, already, skip, limits)
-        follow = free & ~steps & ~dip
-        current = np.where(follow, h, current)
-        live = out.kind == none
-        level[:, k] = np.where(live, current, level[:, k])
-        trail[:, k + run] = current
-        if not live.any():
-            break
-        k += 1
-    return out
-
-
-def _dip(
-    out: PathScan,
-    heights: np.ndarray,
-    k: int,
-    dip: np.ndarray,
-    high: np.ndarray,
-    current: np.ndarray,
-    already: np.ndarray,
-    skip: np.ndarray,
-    limits: QuadrupedLimits,
-) -> None:
-    """The paths ``dip`` drop at sample ``k`` by more than a climbable step below ``high`` (the top of the edge or
-    slope): a gap when the surface comes back within the path (too wide: a finding, else stridden over, ``skip`` set),
-    else a step down (too deep: a finding). ``current`` and ``skip`` are updated in place."""
-    h = heights[:, k]
-    rows_dip = np.flatnonzero(dip)
-    current[rows_dip] = high[rows_dip]  # from the top of an edge or of a steep slope down
-    back = heights[rows_dip, k:] >= (current[rows_dip] - limits.max_step_up)[:, None]
-    returns = back.any(axis=1)
-    entered = already[rows_dip] * (k == 0)  # from the near edge to the foot (then one radius, not two)
-    width = np.where(returns, back.argmax(axis=1) * SPACING + 2 * FOOT_RADIUS, 0.0)
-    width = np.where(returns & (entered > 0), width + entered - FOOT_RADIUS, width)
-    gap = np.zeros(len(dip), dtype=bool)
-    gap[rows_dip] = returns
-    wide = np.zeros(len(dip))
-    wide[rows_dip] = width
-    too_wide = gap & exceeds("gap", wide, limits)
-    _found(out, too_wide, k, TerrainKind.GAP, wide)
-    out.met[gap, k, 1] = wide[gap]
-    stride = gap & ~too_wide
-    skip[stride] = (
-        np.round(np.maximum(wide[stride] - 2 * FOOT_RADIUS - already[stride] * (k == 0), 0.0) / SPACING).astype(int) - 1
-    )
-    down = dip & ~gap
-    too_deep = down & exceeds("drop", current - h, limits)
-    _found(out, too_deep, k, TerrainKind.DROP, current - h)
-    out.met[down, k, 2] = (current - h)[down]
-    step_down = down & ~too_deep
-    current[step_down] = h[step_down]
-
-
-def _found(out: PathScan, mask: np.ndarray, k: int, code: TerrainKind, value: np.ndarray) -> None:
-    out.index[mask] = k
-    out.kind[mask] = code
-    out.measured[mask] = value[mask]
+    level, index, kind, measured, met = follow(supported, np.asarray(start, dtype=float), already, limits)
+    return PathScan(level=level, index=index, kind=kind, measured=measured, met=met)
 
 
 def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:

@@ -22,7 +22,15 @@ from robotool.robots.quadruped.push import (
     sweep_problem,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import FOOT_NAMES, FOOT_RADIUS, KINDS, check_walk, scan_paths, survey_walk
+from robotool.robots.quadruped.terrain import (
+    FOOT_NAMES,
+    FOOT_RADIUS,
+    KINDS,
+    check_walk,
+    foot_support,
+    scan_paths,
+    survey_walk,
+)
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
@@ -70,7 +78,6 @@ def test_scan_finds_the_first_broken_limit(
         [(0.4, 0.5), (0.7, 0.0)],
     ],
 )
-@pytest.mark.filterwarnings("ignore:All-NaN slice encountered:RuntimeWarning")
 def test_a_path_with_missing_readings_leaves_the_others_as_they_read_alone(pieces: list[tuple[float, float]]) -> None:
     """A path whose rays met nothing (NaN) takes the NaN-aware reading; the paths beside it read as they do alone."""
     heights = profile(*pieces)
@@ -119,6 +126,17 @@ def test_paths_are_scanned_together_and_each_from_its_own_level() -> None:
     gap, stairs = profile((0.4, 0.34), (0.4, 0.0), (0.6, 0.34)), profile((0.4, 0.0), (0.5, 0.12), (0.5, 0.24))
     result = scan_paths(np.stack([gap, stairs, gap]), np.array([0.34, 0.0, 0.0]), LIMITS)
     assert list(result.kind) == [KINDS.index("gap") + 1, 0, KINDS.index("step") + 1]  # the last starts too low
+
+
+def test_a_path_reads_the_same_alone_and_beside_paths_that_change() -> None:
+    """A gentle slope (a nanometre a sample, as a tilted board reads) is followed sample by sample whatever the other
+    paths in the scan meet: a world's terrain reading must not depend on the worlds scanned with it."""
+    slope = 0.2 + 1e-9 * np.arange(150)
+    stairs = profile((0.4, 0.0), (0.5, 0.12), (0.6, 0.24))
+    alone = scan_paths(slope[None], slope[:1], LIMITS)
+    together = scan_paths(np.stack([slope, stairs]), np.array([slope[0], 0.0]), LIMITS)
+    np.testing.assert_array_equal(together.level[0], alone.level[0])
+    np.testing.assert_array_equal(alone.level[0], foot_support(slope[None])[0])  # as the foot rests on it
 
 
 def test_a_gap_already_entered_counts_from_its_edge() -> None:

@@ -1,0 +1,30 @@
+"""Warp, loaded quietly: the simulator's warp backend and the compiled kernels that run on the CPU share it."""
+
+from __future__ import annotations
+
+import functools
+import os
+import sys
+
+import warp as wp
+
+from robotool.sim.backend import cuda_driver_found
+
+
+@functools.cache
+def init_warp() -> None:
+    """``wp.init()`` without its banner and per-module load messages; without a CUDA driver, the line Warp's native
+    library prints about it is left out too (the command line says once that warp runs on the CPU)."""
+    wp.config.log_level = wp.LOG_WARNING
+    if cuda_driver_found():
+        wp.init()
+        return
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
