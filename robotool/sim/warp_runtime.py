@@ -6,6 +6,7 @@ import functools
 import os
 import sys
 
+import numpy as np
 import warp as wp
 
 from robotool.sim.backend import cuda_driver_found
@@ -28,3 +29,9 @@ def init_warp() -> None:
     finally:
         os.dup2(saved, 2)
         os.close(saved)
+
+
+def cpu_view(values: np.ndarray, dtype: type = wp.float64) -> wp.array:
+    """A Warp array on the CPU over a C-contiguous numpy array's memory, without a copy (CPU launches run before they
+    return, so the numpy array outlives the view's use)."""
+    return wp.array(ptr=values.ctypes.data, dtype=dtype, shape=values.shape, device="cpu")

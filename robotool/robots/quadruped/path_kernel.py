@@ -25,7 +25,7 @@ from robotool.robots.quadruped.terrain import (
     TerrainKind,
     limit_of,
 )
-from robotool.sim.warp_runtime import init_warp
+from robotool.sim.warp_runtime import cpu_view, init_warp
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,7 @@ class FollowRules:
         return np.array([r.rise, r.step_limit, r.max_step_up, r.gap_limit, r.drop_limit, r.spacing, r.radius])
 
 
+wp.set_module_options({"fuse_fp": False})  # no fused multiply-adds: each product and sum rounds as numpy's do
 STEP_CODE, GAP_CODE, DROP_CODE = (
     wp.constant(int(kind)) for kind in (TerrainKind.STEP, TerrainKind.GAP, TerrainKind.DROP)
 )
@@ -187,12 +188,8 @@ def follow(
         wp.launch(
             _follow,
             dim=npath,
-            inputs=[_view(paths), _view(rules.values), rules.run, _view(out), _view(finding)],
+            inputs=[cpu_view(paths), cpu_view(rules.values), rules.run, cpu_view(out), cpu_view(finding)],
             device="cpu",
         )
     return out[..., 3], finding[:, 0].astype(np.int64), finding[:, 1].astype(np.int64), finding[:, 2], out[..., :3]
 
-
-def _view(values: np.ndarray) -> wp.array:
-    """A Warp array over a C-contiguous float64 numpy array's memory (no copy; the launch runs before it returns)."""
-    return wp.array(ptr=values.ctypes.data, dtype=wp.float64, shape=values.shape, device="cpu")

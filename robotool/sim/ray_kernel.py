@@ -1,0 +1,297 @@
+"""The ray tests of :func:`robotool.sim.ray_cast.cast`, compiled: a Warp kernel on the CPU, one thread per ray, each
+testing the eligible geoms in index order and keeping the nearest hit (the first of equals).
+
+Each shape's test is MuJoCo's (``engine_ray.c``) with its arithmetic in the same order and without fused
+multiply-adds, so every product and sum rounds as in ``mj_ray`` and the answers are the same to the bit. Warp loads
+the first time a ray is cast.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import warp as wp
+
+from robotool.sim.warp_runtime import cpu_view, init_warp
+
+wp.set_module_options({"fuse_fp": False})  # no fused multiply-adds: each product and sum rounds as mj_ray's do
+
+PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX = (
+    wp.constant(int(t))
+    for t in (
+        mujoco.mjtGeom.mjGEOM_PLANE,
+        mujoco.mjtGeom.mjGEOM_SPHERE,
+        mujoco.mjtGeom.mjGEOM_CAPSULE,
+        mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+        mujoco.mjtGeom.mjGEOM_CYLINDER,
+        mujoco.mjtGeom.mjGEOM_BOX,
+    )
+)
+SUPPORTED = (int(PLANE), int(SPHERE), int(CAPSULE), int(ELLIPSOID), int(CYLINDER), int(BOX))
+MINVAL = wp.constant(wp.float64(1e-15))  # MuJoCo's mjMINVAL
+MISS = wp.constant(wp.float64(-1.0))
+
+
+@wp.func
+def _least_root(a: wp.float64, b: wp.float64, c: wp.float64) -> wp.float64:
+    """The least non-negative root of a x^2 + 2 b x + c = 0 (-1: none)."""
+    det = b * b - a * c
+    if det < wp.float64(0.0) or a < MINVAL:
+        return MISS
+    root = wp.sqrt(det)
+    x0 = (-b - root) / a
+    if x0 >= wp.float64(0.0):
+        return x0
+    x1 = (-b + root) / a
+    if x1 >= wp.float64(0.0):
+        return x1
+    return MISS
+
+
+@wp.func
+def _root(a: wp.float64, b: wp.float64, c: wp.float64, which: wp.float64) -> wp.float64:
+    """One root of a x^2 + 2 b x + c = 0: ``which`` -1 the lesser, +1 the greater (-1 when none is real)."""
+    det = b * b - a * c
+    if det < wp.float64(0.0) or a < MINVAL:
+        return MISS
+    root = wp.sqrt(det)
+    if which < wp.float64(0.0):
+        return (-b - root) / a
+    return (-b + root) / a
+
+
+@wp.func
+def _nearer(x: wp.float64, sol: wp.float64, ok: bool) -> wp.float64:
+    """``sol`` where ``ok`` and it is nearer than ``x`` (or ``x`` is no hit yet), else ``x``."""
+    if ok and (x < wp.float64(0.0) or sol < x):
+        return sol
+    return x
+
+
+@wp.func
+def _sphere_hit(pos: wp.vec3d, radius_sqr: wp.float64, pnt: wp.vec3d, vec: wp.vec3d) -> wp.float64:
+    """MuJoCo's ray_sphere: the least non-negative distance to a sphere of squared radius ``radius_sqr`` (-1)."""
+    d0 = pnt[0] - pos[0]
+    d1 = pnt[1] - pos[1]
+    d2 = pnt[2] - pos[2]
+    a = vec[0] * vec[0] + vec[1] * vec[1] + vec[2] * vec[2]
+    b = vec[0] * d0 + vec[1] * d1 + vec[2] * d2
+    c = d0 * d0 + d1 * d1 + d2 * d2 - radius_sqr
+    return _least_root(a, b, c)
+
+
+@wp.func
+def _local(pos: wp.vec3d, mat: wp.array(dtype=wp.float64), m: int, p: wp.vec3d) -> wp.vec3d:
+    """``mat`` (9 values from ``m``)' (``p`` - ``pos``): a point in the geom's frame (``pos`` 0 for a direction)."""
+    d0 = p[0] - pos[0]
+    d1 = p[1] - pos[1]
+    d2 = p[2] - pos[2]
+    return wp.vec3d(
+        mat[m + 0] * d0 + mat[m + 3] * d1 + mat[m + 6] * d2,
+        mat[m + 1] * d0 + mat[m + 4] * d1 + mat[m + 7] * d2,
+        mat[m + 2] * d0 + mat[m + 5] * d1 + mat[m + 8] * d2,
+    )
+
+
+@wp.func
+def _plane(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+    if v[2] > -MINVAL:  # hit from its front only
+        return MISS
+    x = -p[2] / v[2]
+    if x < wp.float64(0.0):
+        return MISS
+    a = p[0] + x * v[0]
+    b = p[1] + x * v[1]
+    if (size[0] <= wp.float64(0.0) or wp.abs(a) <= size[0]) and (size[1] <= wp.float64(0.0) or wp.abs(b) <= size[1]):
+        return x
+    return MISS
+
+
+@wp.func
+def _capsule(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+    r = size[0]
+    h = size[1]
+    sol = _least_root(v[0] * v[0] + v[1] * v[1], v[0] * p[0] + v[1] * p[1], p[0] * p[0] + p[1] * p[1] - r * r)
+    x = _nearer(MISS, sol, sol >= wp.float64(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
+    a = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    for s in range(2):  # the top cap's upper half, then the bottom cap's lower half
+        side = wp.float64(1.0)
+        if s == 1:
+            side = wp.float64(-1.0)
+        q2 = p[2] - side * h
+        b = v[0] * p[0] + v[1] * p[1] + v[2] * q2
+        c = p[0] * p[0] + p[1] * p[1] + q2 * q2 - r * r
+        for w in range(2):
+            which = wp.float64(-1.0)
+            if w == 1:
+                which = wp.float64(1.0)
+            root = _root(a, b, c, which)
+            z = p[2] + root * v[2]
+            beyond = z <= -h
+            if s == 0:
+                beyond = z >= h
+            x = _nearer(x, root, root >= wp.float64(0.0) and beyond)
+    return x
+
+
+@wp.func
+def _ellipsoid(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+    s0 = wp.float64(1.0) / (size[0] * size[0])
+    s1 = wp.float64(1.0) / (size[1] * size[1])
+    s2 = wp.float64(1.0) / (size[2] * size[2])
+    a = s0 * v[0] * v[0] + s1 * v[1] * v[1] + s2 * v[2] * v[2]
+    b = s0 * v[0] * p[0] + s1 * v[1] * p[1] + s2 * v[2] * p[2]
+    c = s0 * p[0] * p[0] + s1 * p[1] * p[1] + s2 * p[2] * p[2] - wp.float64(1.0)
+    return _least_root(a, b, c)
+
+
+@wp.func
+def _cylinder(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+    r = size[0]
+    h = size[1]
+    x = MISS
+    if wp.abs(v[2]) > MINVAL:  # the caps
+        for s in range(2):
+            side = wp.float64(-1.0)
+            if s == 1:
+                side = wp.float64(1.0)
+            sol = (side * h - p[2]) / v[2]
+            a = p[0] + sol * v[0]
+            b = p[1] + sol * v[1]
+            x = _nearer(x, sol, sol >= wp.float64(0.0) and a * a + b * b <= r * r)
+    sol = _least_root(v[0] * v[0] + v[1] * v[1], v[0] * p[0] + v[1] * p[1], p[0] * p[0] + p[1] * p[1] - r * r)
+    return _nearer(x, sol, sol >= wp.float64(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
+
+
+@wp.func
+def _box(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+    """The six faces: the nearest met within its rectangle."""
+    x = MISS
+    for face in range(6):
+        axis = face // 2
+        side = wp.float64(-1.0)
+        if face % 2 == 1:
+            side = wp.float64(1.0)
+        j = 0
+        k = 2
+        if axis == 0:
+            j = 1
+        if axis == 2:
+            k = 1
+        if wp.abs(v[axis]) > MINVAL:
+            sol = (side * size[axis] - p[axis]) / v[axis]
+            a = p[j] + sol * v[j]
+            b = p[k] + sol * v[k]
+            x = _nearer(x, sol, sol >= wp.float64(0.0) and wp.abs(a) <= size[j] and wp.abs(b) <= size[k])
+    return x
+
+
+@wp.func
+def _bounded(t: wp.int32) -> bool:
+    """Whether ``mj_ray`` tests a shape's bounding sphere first (a capsule, cylinder or box)."""
+    if t == CAPSULE:
+        return True
+    if t == CYLINDER:
+        return True
+    return t == BOX
+
+
+@wp.kernel
+def _cast(
+    kind: wp.array(dtype=wp.int32),
+    size: wp.array2d(dtype=wp.float64),
+    bound: wp.array(dtype=wp.float64),
+    body: wp.array(dtype=wp.int32),
+    xpos: wp.array3d(dtype=wp.float64),
+    xmat: wp.array(dtype=wp.float64),
+    pnt: wp.array3d(dtype=wp.float64),
+    vec: wp.array3d(dtype=wp.float64),
+    exclude: wp.array2d(dtype=wp.int32),
+    dist: wp.array2d(dtype=wp.float64),
+    hit: wp.array2d(dtype=wp.int32),
+):
+    w, n = wp.tid()
+    start = wp.vec3d(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
+    direction = wp.vec3d(vec[w, n, 0], vec[w, n, 1], vec[w, n, 2])
+    best = MISS
+    found = wp.int32(-1)
+    ngeom = kind.shape[0]
+    for c in range(ngeom):
+        if body[c] == exclude[w, n]:
+            continue
+        pos = wp.vec3d(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
+        half = wp.vec3d(size[c, 0], size[c, 1], size[c, 2])
+        t = kind[c]
+        x = MISS
+        if t == SPHERE:
+            x = _sphere_hit(pos, half[0] * half[0], start, direction)
+        elif not _bounded(t) or _sphere_hit(pos, bound[c], start, direction) >= wp.float64(0.0):
+            m = (w * ngeom + c) * 9
+            p = _local(pos, xmat, m, start)
+            v = _local(wp.vec3d(), xmat, m, direction)
+            if t == PLANE:
+                x = _plane(p, v, half)
+            elif t == CAPSULE:
+                x = _capsule(p, v, half)
+            elif t == ELLIPSOID:
+                x = _ellipsoid(p, v, half)
+            elif t == CYLINDER:
+                x = _cylinder(p, v, half)
+            elif t == BOX:
+                x = _box(p, v, half)
+        if x >= wp.float64(0.0) and (found < 0 or x < best):
+            best = x
+            found = wp.int32(c)
+    dist[w, n] = best
+    hit[w, n] = found
+
+
+def cast(
+    kind: np.ndarray,
+    size: np.ndarray,
+    bound: np.ndarray,
+    body: np.ndarray,
+    xpos: np.ndarray,
+    xmat: np.ndarray,
+    pnt: np.ndarray,
+    vec: np.ndarray,
+    exclude: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rays ``pnt + x * vec`` (w, n, 3) against k geoms (their ``kind``, ``size`` (k, 3), squared bounding radius
+    ``bound`` and ``body``) posed at ``xpos`` (w, k, 3) and ``xmat`` (w, k, 9), each ray leaving out the body
+    ``exclude`` (w, n) (-1: none): the least distance x >= 0 (-1 where nothing is hit) and the hit geom's position
+    among the k (-1), (w, n)."""
+    nworld, nray = pnt.shape[:2]
+    dist = np.empty((nworld, nray))
+    hit = np.empty((nworld, nray), dtype=np.int32)
+    if not (nworld and nray):
+        return dist, hit.astype(int)
+    init_warp()
+
+    def floats(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=np.float64)
+
+    def ints(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=np.int32)
+
+    kind, body, exclude = ints(kind), ints(body), ints(exclude)
+    size, bound, xpos, xmat, pnt, vec = (floats(a) for a in (size, bound, xpos, xmat, pnt, vec))
+    wp.launch(
+        _cast,
+        dim=(nworld, nray),
+        inputs=[
+            cpu_view(kind, wp.int32),
+            cpu_view(size),
+            cpu_view(bound),
+            cpu_view(body, wp.int32),
+            cpu_view(xpos),
+            cpu_view(xmat.reshape(-1)),
+            cpu_view(pnt),
+            cpu_view(vec),
+            cpu_view(exclude, wp.int32),
+            cpu_view(dist),
+            cpu_view(hit, wp.int32),
+        ],
+        device="cpu",
+    )
+    return dist, hit.astype(int)
