@@ -192,4 +192,3 @@ def follow(
             device="cpu",
         )
     return out[..., 3], finding[:, 0].astype(np.int64), finding[:, 1].astype(np.int64), finding[:, 2], out[..., :3]
-
