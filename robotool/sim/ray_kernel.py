@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import warp as wp
 
-from robotool.sim.warp_runtime import cpu_view, init_warp
+from robotool.sim.warp_runtime import Float, Floats, Floats2, Floats3, Int, Ints, Vec3, cpu_view, init_warp
 
 wp.set_module_options({"fuse_fp": False})  # no fused multiply-adds: each product and sum rounds as mj_ray's do
 
@@ -28,48 +28,48 @@ PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX = (
     )
 )
 SUPPORTED = (int(PLANE), int(SPHERE), int(CAPSULE), int(ELLIPSOID), int(CYLINDER), int(BOX))
-MINVAL = wp.constant(wp.float64(1e-15))  # MuJoCo's mjMINVAL
-MISS = wp.constant(wp.float64(-1.0))
+MINVAL = wp.constant(Float(1e-15))  # MuJoCo's mjMINVAL
+MISS = wp.constant(Float(-1.0))
 
 
 @wp.func
-def _least_root(a: wp.float64, b: wp.float64, c: wp.float64) -> wp.float64:
+def _least_root(a: Float, b: Float, c: Float) -> Float:
     """The least non-negative root of a x^2 + 2 b x + c = 0 (-1: none)."""
     det = b * b - a * c
-    if det < wp.float64(0.0) or a < MINVAL:
+    if det < Float(0.0) or a < MINVAL:
         return MISS
     root = wp.sqrt(det)
     x0 = (-b - root) / a
-    if x0 >= wp.float64(0.0):
+    if x0 >= Float(0.0):
         return x0
     x1 = (-b + root) / a
-    if x1 >= wp.float64(0.0):
+    if x1 >= Float(0.0):
         return x1
     return MISS
 
 
 @wp.func
-def _root(a: wp.float64, b: wp.float64, c: wp.float64, which: wp.float64) -> wp.float64:
+def _root(a: Float, b: Float, c: Float, which: Float) -> Float:
     """One root of a x^2 + 2 b x + c = 0: ``which`` -1 the lesser, +1 the greater (-1 when none is real)."""
     det = b * b - a * c
-    if det < wp.float64(0.0) or a < MINVAL:
+    if det < Float(0.0) or a < MINVAL:
         return MISS
     root = wp.sqrt(det)
-    if which < wp.float64(0.0):
+    if which < Float(0.0):
         return (-b - root) / a
     return (-b + root) / a
 
 
 @wp.func
-def _nearer(x: wp.float64, sol: wp.float64, ok: bool) -> wp.float64:
+def _nearer(x: Float, sol: Float, ok: bool) -> Float:
     """``sol`` where ``ok`` and it is nearer than ``x`` (or ``x`` is no hit yet), else ``x``."""
-    if ok and (x < wp.float64(0.0) or sol < x):
+    if ok and (x < Float(0.0) or sol < x):
         return sol
     return x
 
 
 @wp.func
-def _sphere_hit(pos: wp.vec3d, radius_sqr: wp.float64, pnt: wp.vec3d, vec: wp.vec3d) -> wp.float64:
+def _sphere_hit(pos: Vec3, radius_sqr: Float, pnt: Vec3, vec: Vec3) -> Float:
     """MuJoCo's ray_sphere: the least non-negative distance to a sphere of squared radius ``radius_sqr`` (-1)."""
     d0 = pnt[0] - pos[0]
     d1 = pnt[1] - pos[1]
@@ -81,12 +81,12 @@ def _sphere_hit(pos: wp.vec3d, radius_sqr: wp.float64, pnt: wp.vec3d, vec: wp.ve
 
 
 @wp.func
-def _local(pos: wp.vec3d, mat: wp.array(dtype=wp.float64), m: int, p: wp.vec3d) -> wp.vec3d:
+def _local(pos: Vec3, mat: Floats, m: int, p: Vec3) -> Vec3:
     """``mat`` (9 values from ``m``)' (``p`` - ``pos``): a point in the geom's frame (``pos`` 0 for a direction)."""
     d0 = p[0] - pos[0]
     d1 = p[1] - pos[1]
     d2 = p[2] - pos[2]
-    return wp.vec3d(
+    return Vec3(
         mat[m + 0] * d0 + mat[m + 3] * d1 + mat[m + 6] * d2,
         mat[m + 1] * d0 + mat[m + 4] * d1 + mat[m + 7] * d2,
         mat[m + 2] * d0 + mat[m + 5] * d1 + mat[m + 8] * d2,
@@ -94,84 +94,84 @@ def _local(pos: wp.vec3d, mat: wp.array(dtype=wp.float64), m: int, p: wp.vec3d) 
 
 
 @wp.func
-def _plane(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+def _plane(p: Vec3, v: Vec3, size: Vec3) -> Float:
     if v[2] > -MINVAL:  # hit from its front only
         return MISS
     x = -p[2] / v[2]
-    if x < wp.float64(0.0):
+    if x < Float(0.0):
         return MISS
     a = p[0] + x * v[0]
     b = p[1] + x * v[1]
-    if (size[0] <= wp.float64(0.0) or wp.abs(a) <= size[0]) and (size[1] <= wp.float64(0.0) or wp.abs(b) <= size[1]):
+    if (size[0] <= Float(0.0) or wp.abs(a) <= size[0]) and (size[1] <= Float(0.0) or wp.abs(b) <= size[1]):
         return x
     return MISS
 
 
 @wp.func
-def _capsule(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+def _capsule(p: Vec3, v: Vec3, size: Vec3) -> Float:
     r = size[0]
     h = size[1]
     sol = _least_root(v[0] * v[0] + v[1] * v[1], v[0] * p[0] + v[1] * p[1], p[0] * p[0] + p[1] * p[1] - r * r)
-    x = _nearer(MISS, sol, sol >= wp.float64(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
+    x = _nearer(MISS, sol, sol >= Float(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
     a = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
     for s in range(2):  # the top cap's upper half, then the bottom cap's lower half
-        side = wp.float64(1.0)
+        side = Float(1.0)
         if s == 1:
-            side = wp.float64(-1.0)
+            side = Float(-1.0)
         q2 = p[2] - side * h
         b = v[0] * p[0] + v[1] * p[1] + v[2] * q2
         c = p[0] * p[0] + p[1] * p[1] + q2 * q2 - r * r
         for w in range(2):
-            which = wp.float64(-1.0)
+            which = Float(-1.0)
             if w == 1:
-                which = wp.float64(1.0)
+                which = Float(1.0)
             root = _root(a, b, c, which)
             z = p[2] + root * v[2]
             beyond = z <= -h
             if s == 0:
                 beyond = z >= h
-            x = _nearer(x, root, root >= wp.float64(0.0) and beyond)
+            x = _nearer(x, root, root >= Float(0.0) and beyond)
     return x
 
 
 @wp.func
-def _ellipsoid(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
-    s0 = wp.float64(1.0) / (size[0] * size[0])
-    s1 = wp.float64(1.0) / (size[1] * size[1])
-    s2 = wp.float64(1.0) / (size[2] * size[2])
+def _ellipsoid(p: Vec3, v: Vec3, size: Vec3) -> Float:
+    s0 = Float(1.0) / (size[0] * size[0])
+    s1 = Float(1.0) / (size[1] * size[1])
+    s2 = Float(1.0) / (size[2] * size[2])
     a = s0 * v[0] * v[0] + s1 * v[1] * v[1] + s2 * v[2] * v[2]
     b = s0 * v[0] * p[0] + s1 * v[1] * p[1] + s2 * v[2] * p[2]
-    c = s0 * p[0] * p[0] + s1 * p[1] * p[1] + s2 * p[2] * p[2] - wp.float64(1.0)
+    c = s0 * p[0] * p[0] + s1 * p[1] * p[1] + s2 * p[2] * p[2] - Float(1.0)
     return _least_root(a, b, c)
 
 
 @wp.func
-def _cylinder(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+def _cylinder(p: Vec3, v: Vec3, size: Vec3) -> Float:
     r = size[0]
     h = size[1]
     x = MISS
     if wp.abs(v[2]) > MINVAL:  # the caps
         for s in range(2):
-            side = wp.float64(-1.0)
+            side = Float(-1.0)
             if s == 1:
-                side = wp.float64(1.0)
+                side = Float(1.0)
             sol = (side * h - p[2]) / v[2]
             a = p[0] + sol * v[0]
             b = p[1] + sol * v[1]
-            x = _nearer(x, sol, sol >= wp.float64(0.0) and a * a + b * b <= r * r)
+            x = _nearer(x, sol, sol >= Float(0.0) and a * a + b * b <= r * r)
     sol = _least_root(v[0] * v[0] + v[1] * v[1], v[0] * p[0] + v[1] * p[1], p[0] * p[0] + p[1] * p[1] - r * r)
-    return _nearer(x, sol, sol >= wp.float64(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
+    return _nearer(x, sol, sol >= Float(0.0) and wp.abs(p[2] + sol * v[2]) <= h)
 
 
 @wp.func
-def _box(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
+def _box(p: Vec3, v: Vec3, size: Vec3) -> Float:
     """The six faces: the nearest met within its rectangle."""
     x = MISS
     for face in range(6):
         axis = face // 2
-        side = wp.float64(-1.0)
+        side = Float(-1.0)
         if face % 2 == 1:
-            side = wp.float64(1.0)
+            side = Float(1.0)
         j = 0
         k = 2
         if axis == 0:
@@ -182,12 +182,12 @@ def _box(p: wp.vec3d, v: wp.vec3d, size: wp.vec3d) -> wp.float64:
             sol = (side * size[axis] - p[axis]) / v[axis]
             a = p[j] + sol * v[j]
             b = p[k] + sol * v[k]
-            x = _nearer(x, sol, sol >= wp.float64(0.0) and wp.abs(a) <= size[j] and wp.abs(b) <= size[k])
+            x = _nearer(x, sol, sol >= Float(0.0) and wp.abs(a) <= size[j] and wp.abs(b) <= size[k])
     return x
 
 
 @wp.func
-def _bounded(t: wp.int32) -> bool:
+def _bounded(t: Int) -> bool:
     """Whether ``mj_ray`` tests a shape's bounding sphere first (a capsule, cylinder or box)."""
     if t == CAPSULE:
         return True
@@ -198,37 +198,40 @@ def _bounded(t: wp.int32) -> bool:
 
 @wp.kernel
 def _cast(
-    kind: wp.array(dtype=wp.int32),
-    size: wp.array2d(dtype=wp.float64),
-    bound: wp.array(dtype=wp.float64),
-    body: wp.array(dtype=wp.int32),
-    xpos: wp.array3d(dtype=wp.float64),
-    xmat: wp.array(dtype=wp.float64),
-    pnt: wp.array3d(dtype=wp.float64),
-    vec: wp.array3d(dtype=wp.float64),
-    exclude: wp.array2d(dtype=wp.int32),
-    dist: wp.array2d(dtype=wp.float64),
-    hit: wp.array2d(dtype=wp.int32),
+    kind: Ints,
+    size: Floats2,
+    bound: Floats,
+    body: Ints,
+    xpos: Floats3,
+    xmat: Floats,
+    pnt: Floats3,
+    vec: Floats3,
+    exclude: Ints,
+    dist: Floats,
+    hit: Ints,
 ):
-    w, n = wp.tid()
-    start = wp.vec3d(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
-    direction = wp.vec3d(vec[w, n, 0], vec[w, n, 1], vec[w, n, 2])
+    """One thread per ray, world-major (``exclude``, ``dist`` and ``hit`` flat over worlds and rays)."""
+    i = wp.tid()
+    w = i // pnt.shape[1]
+    n = i % pnt.shape[1]
+    start = Vec3(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
+    direction = Vec3(vec[w, n, 0], vec[w, n, 1], vec[w, n, 2])
     best = MISS
-    found = wp.int32(-1)
+    found = Int(-1)
     ngeom = kind.shape[0]
     for c in range(ngeom):
-        if body[c] == exclude[w, n]:
+        if body[c] == exclude[i]:
             continue
-        pos = wp.vec3d(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
-        half = wp.vec3d(size[c, 0], size[c, 1], size[c, 2])
+        pos = Vec3(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
+        half = Vec3(size[c, 0], size[c, 1], size[c, 2])
         t = kind[c]
         x = MISS
         if t == SPHERE:
             x = _sphere_hit(pos, half[0] * half[0], start, direction)
-        elif not _bounded(t) or _sphere_hit(pos, bound[c], start, direction) >= wp.float64(0.0):
+        elif not _bounded(t) or _sphere_hit(pos, bound[c], start, direction) >= Float(0.0):
             m = (w * ngeom + c) * 9
             p = _local(pos, xmat, m, start)
-            v = _local(wp.vec3d(), xmat, m, direction)
+            v = _local(Vec3(), xmat, m, direction)
             if t == PLANE:
                 x = _plane(p, v, half)
             elif t == CAPSULE:
@@ -239,11 +242,11 @@ def _cast(
                 x = _cylinder(p, v, half)
             elif t == BOX:
                 x = _box(p, v, half)
-        if x >= wp.float64(0.0) and (found < 0 or x < best):
+        if x >= Float(0.0) and (found < 0 or x < best):
             best = x
-            found = wp.int32(c)
-    dist[w, n] = best
-    hit[w, n] = found
+            found = Int(c)
+    dist[i] = best
+    hit[i] = found
 
 
 def cast(
@@ -278,7 +281,7 @@ def cast(
     size, bound, xpos, xmat, pnt, vec = (floats(a) for a in (size, bound, xpos, xmat, pnt, vec))
     wp.launch(
         _cast,
-        dim=(nworld, nray),
+        dim=nworld * nray,
         inputs=[
             cpu_view(kind, wp.int32),
             cpu_view(size),
@@ -288,9 +291,9 @@ def cast(
             cpu_view(xmat.reshape(-1)),
             cpu_view(pnt),
             cpu_view(vec),
-            cpu_view(exclude, wp.int32),
-            cpu_view(dist),
-            cpu_view(hit, wp.int32),
+            cpu_view(exclude.reshape(-1), wp.int32),
+            cpu_view(dist.reshape(-1)),
+            cpu_view(hit.reshape(-1), wp.int32),
         ],
         device="cpu",
     )

@@ -5,11 +5,25 @@ from __future__ import annotations
 import functools
 import os
 import sys
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import warp as wp
 
 from robotool.sim.backend import cuda_driver_found
+
+if TYPE_CHECKING:  # the type checker cannot read Warp's kernel dialect: to it, kernel values are Any
+    Floats: Any
+    Floats2: Any
+    Floats3: Any
+    Ints: Any
+    Float: Any
+    Int: Any
+    Vec3: Any
+else:  # what Warp reads in a kernel's annotations and calls
+    Floats, Floats2, Floats3 = (kind(dtype=wp.float64) for kind in (wp.array, wp.array2d, wp.array3d))
+    Ints = wp.array(dtype=wp.int32)
+    Float, Int, Vec3 = wp.float64, wp.int32, wp.vec3d
 
 
 @functools.cache

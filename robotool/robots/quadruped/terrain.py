@@ -22,14 +22,18 @@ rule that judges a measured value against its limit.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+
+if TYPE_CHECKING:
+    from robotool.robots.quadruped.path_kernel import FollowRules
 
 
 class TerrainKind(IntEnum):
@@ -137,8 +141,26 @@ def scan_paths(
     supported = foot_support(np.asarray(heights, dtype=float))
     npath = supported.shape[0]
     already = np.zeros(npath) if into_gap is None else np.asarray(into_gap, dtype=float)
-    level, index, kind, measured, met = follow(supported, np.asarray(start, dtype=float), already, limits)
+    level, index, kind, measured, met = follow(supported, np.asarray(start, dtype=float), already, _rules(limits))
     return PathScan(level=level, index=index, kind=kind, measured=measured, met=met)
+
+
+@functools.lru_cache(maxsize=64)
+def _rules(limits: QuadrupedLimits) -> FollowRules:
+    """The follower's thresholds for ``limits`` (each finding's limit with :data:`TOLERANCE`, as :func:`exceeds`)."""
+    from robotool.robots.quadruped.path_kernel import FollowRules
+
+    return FollowRules(
+        rise=RISE,
+        step_limit=limit_of("step", limits) + TOLERANCE,
+        max_step_up=limits.max_step_up,
+        gap_limit=limit_of("gap", limits) + TOLERANCE,
+        drop_limit=limit_of("drop", limits) + TOLERANCE,
+        spacing=SPACING,
+        radius=FOOT_RADIUS,
+        run=round(SLOPE_RUN / SPACING),
+        codes=(TerrainKind.STEP, TerrainKind.GAP, TerrainKind.DROP),
+    )
 
 
 def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:
