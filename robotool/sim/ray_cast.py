@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-MINVAL = 1e-15  # MuJoCo's mjMINVAL
 NGROUP = 6  # MuJoCo's mjNGROUP
 _PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX = (
     int(t)
@@ -107,43 +106,33 @@ def cast(
     return x, np.where(hit >= 0, index[np.maximum(hit, 0)], -1)
 
 
-def _local(pos: np.ndarray, mat: np.ndarray, pnt: np.ndarray, vec: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The ray in the geom's frame: lpnt = mat' (pnt - pos), lvec = mat' vec, as (x, y, z) components."""
-    d0, d1, d2 = pnt[..., 0] - pos[..., 0], pnt[..., 1] - pos[..., 1], pnt[..., 2] - pos[..., 2]
-    v0, v1, v2 = vec[..., 0], vec[..., 1], vec[..., 2]
-    m = [mat[..., i] for i in range(9)]
-    return (
-        m[0] * d0 + m[3] * d1 + m[6] * d2,
-        m[1] * d0 + m[4] * d1 + m[7] * d2,
-        m[2] * d0 + m[5] * d1 + m[8] * d2,
-        m[0] * v0 + m[3] * v1 + m[6] * v2,
-        m[1] * v0 + m[4] * v1 + m[7] * v2,
-        m[2] * v0 + m[5] * v1 + m[8] * v2,
+def inside(
+    geoms: RayGeoms,
+    candidates: np.ndarray,
+    xpos: np.ndarray,
+    xmat: np.ndarray,
+    pnt: np.ndarray,
+    exclude: np.ndarray | None = None,
+) -> np.ndarray:
+    """The geom among ``candidates`` (k,), posed at ``xpos`` (w, k, 3) and ``xmat`` (w, k, 9), that each point ``pnt``
+    (w, n, 3) lies inside (the last of several; -1: none), (w, n): a ray cast from inside a geom meets it where it
+    leaves it (``mj_ray``'s answer), not where it enters. ``exclude`` (w, n), when given, is a body each point leaves
+    out (-1: none). A plane holds nothing."""
+    from robotool.sim import ray_kernel  # Warp loads on the first use, not on every import
+
+    shape = pnt.shape[:2]
+    if not len(candidates):
+        return np.full(shape, -1)
+    found = ray_kernel.inside(
+        geoms.type[candidates],
+        geoms.size[candidates],
+        geoms.body[candidates],
+        xpos,
+        xmat,
+        pnt,
+        np.full(shape, -1) if exclude is None else exclude,
     )
-
-
-def contains(geoms: RayGeoms, geom: np.ndarray, xpos: np.ndarray, xmat: np.ndarray, pnt: np.ndarray) -> np.ndarray:
-    """Whether each point ``pnt`` (n, 3) lies inside its geom ``geom`` (n,) posed at ``xpos`` (n, 3) and ``xmat``
-    (n, 9): a ray cast from inside a geom meets it where it leaves it (``mj_ray``'s answer), not where it enters. A
-    plane holds nothing."""
-    zero = np.zeros_like(pnt)
-    p0, p1, p2 = _local(xpos, xmat, pnt, zero)[:3]
-    size, kind = geoms.size[geom], geoms.type[geom]
-    s0, s1, s2 = size[:, 0], size[:, 1], size[:, 2]
-    radial = p0 * p0 + p1 * p1
-    inside = {
-        _SPHERE: lambda: p0 * p0 + p1 * p1 + p2 * p2 < s0 * s0,
-        _CAPSULE: lambda: radial + np.maximum(np.abs(p2) - s1, 0.0) ** 2 < s0 * s0,
-        _ELLIPSOID: lambda: (p0 / s0) ** 2 + (p1 / s1) ** 2 + (p2 / s2) ** 2 < 1.0,
-        _CYLINDER: lambda: (radial < s0 * s0) & (np.abs(p2) < s1),
-        _BOX: lambda: (np.abs(p0) < s0) & (np.abs(p1) < s1) & (np.abs(p2) < s2),
-    }
-    out = np.zeros(len(geom), dtype=bool)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for shape in np.unique(kind):  # only the shapes there are
-            if int(shape) in inside:
-                out |= (kind == shape) & inside[int(shape)]()
-    return out
+    return np.where(found >= 0, candidates[np.maximum(found, 0)], -1)
 
 
 _SUPPORTED = {_PLANE, _SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX}  # the shapes the ray tests handle

@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import warp as wp
 
-from robotool.sim.warp_runtime import Float, Floats, Floats2, Floats3, Int, Ints, Vec3, cpu_view, init_warp
+from robotool.sim.warp_runtime import Float, Floats, Floats2, Floats3, Int, Ints, Vec3, launch_on_cpu
 
 wp.set_module_options({"fuse_fp": False})  # no fused multiply-adds: each product and sum rounds as mj_ray's do
 
@@ -187,6 +187,53 @@ def _box(p: Vec3, v: Vec3, size: Vec3) -> Float:
 
 
 @wp.func
+def _holds(t: Int, p: Vec3, s: Vec3) -> bool:
+    """Whether the point ``p`` (in the geom's frame) lies inside a geom of type ``t`` and size ``s``."""
+    radial = p[0] * p[0] + p[1] * p[1]
+    if t == SPHERE:
+        return p[0] * p[0] + p[1] * p[1] + p[2] * p[2] < s[0] * s[0]
+    if t == CAPSULE:
+        beyond = wp.max(wp.abs(p[2]) - s[1], Float(0.0))
+        return radial + beyond * beyond < s[0] * s[0]
+    if t == ELLIPSOID:
+        a = p[0] / s[0]
+        b = p[1] / s[1]
+        c = p[2] / s[2]
+        return a * a + b * b + c * c < Float(1.0)
+    if t == CYLINDER:
+        return radial < s[0] * s[0] and wp.abs(p[2]) < s[1]
+    if t == BOX:
+        return wp.abs(p[0]) < s[0] and wp.abs(p[1]) < s[1] and wp.abs(p[2]) < s[2]
+    return False
+
+
+@wp.kernel
+def _inside(
+    kind: Ints,
+    size: Floats2,
+    body: Ints,
+    xpos: Floats3,
+    xmat: Floats,
+    pnt: Floats3,
+    exclude: Ints,
+    found: Ints,
+):
+    """One thread per point, world-major (``exclude`` and ``found`` flat over worlds and points)."""
+    i = wp.tid()
+    w = i // pnt.shape[1]
+    n = i % pnt.shape[1]
+    point = Vec3(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
+    ngeom = kind.shape[0]
+    which = Int(-1)
+    for c in range(ngeom):
+        if body[c] != exclude[i]:
+            pos = Vec3(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
+            if _holds(kind[c], _local(pos, xmat, (w * ngeom + c) * 9, point), Vec3(size[c, 0], size[c, 1], size[c, 2])):
+                which = Int(c)
+    found[i] = which
+
+
+@wp.func
 def _bounded(t: Int) -> bool:
     """Whether ``mj_ray`` tests a shape's bounding sphere first (a capsule, cylinder or box)."""
     if t == CAPSULE:
@@ -264,37 +311,43 @@ def cast(
     ``bound`` and ``body``) posed at ``xpos`` (w, k, 3) and ``xmat`` (w, k, 9), each ray leaving out the body
     ``exclude`` (w, n) (-1: none): the least distance x >= 0 (-1 where nothing is hit) and the hit geom's position
     among the k (-1), (w, n)."""
-    nworld, nray = pnt.shape[:2]
-    dist = np.empty((nworld, nray))
-    hit = np.empty((nworld, nray), dtype=np.int32)
-    if not (nworld and nray):
-        return dist, hit.astype(int)
-    init_warp()
-
-    def floats(values: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(values, dtype=np.float64)
-
-    def ints(values: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(values, dtype=np.int32)
-
-    kind, body, exclude = ints(kind), ints(body), ints(exclude)
-    size, bound, xpos, xmat, pnt, vec = (floats(a) for a in (size, bound, xpos, xmat, pnt, vec))
-    wp.launch(
-        _cast,
-        dim=nworld * nray,
-        inputs=[
-            cpu_view(kind, wp.int32),
-            cpu_view(size),
-            cpu_view(bound),
-            cpu_view(body, wp.int32),
-            cpu_view(xpos),
-            cpu_view(xmat.reshape(-1)),
-            cpu_view(pnt),
-            cpu_view(vec),
-            cpu_view(exclude.reshape(-1), wp.int32),
-            cpu_view(dist.reshape(-1)),
-            cpu_view(hit.reshape(-1), wp.int32),
-        ],
-        device="cpu",
-    )
+    shape = pnt.shape[:2]
+    dist, hit = np.empty(shape), np.empty(shape, dtype=np.int32)
+    if dist.size:
+        geoms = (_ints(kind), _floats(size), _floats(bound), _ints(body))
+        rays = (_floats(pnt), _floats(vec), _ints(exclude))
+        launch_on_cpu(_cast, dist.size, *geoms, *_poses(xpos, xmat), *rays, dist.reshape(-1), hit.reshape(-1))
     return dist, hit.astype(int)
+
+
+def inside(
+    kind: np.ndarray,
+    size: np.ndarray,
+    body: np.ndarray,
+    xpos: np.ndarray,
+    xmat: np.ndarray,
+    pnt: np.ndarray,
+    exclude: np.ndarray,
+) -> np.ndarray:
+    """The geom among k (their ``kind``, ``size`` (k, 3) and ``body``, posed at ``xpos`` (w, k, 3) and ``xmat``
+    (w, k, 9)) that each point ``pnt`` (w, n, 3) lies inside, the body ``exclude`` (w, n) left out: its position among
+    the k (the last of several; -1: none), (w, n). A plane holds nothing."""
+    found = np.empty(pnt.shape[:2], dtype=np.int32)
+    if found.size:
+        geoms = (_ints(kind), _floats(size), _ints(body))
+        launch_on_cpu(_inside, found.size, *geoms, *_poses(xpos, xmat), _floats(pnt), _ints(exclude), found.reshape(-1))
+    return found.astype(int)
+
+
+def _floats(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64)
+
+
+def _ints(values: np.ndarray) -> np.ndarray:
+    """Flat int32 values (the kernels index per-ray values by the ray's flat index)."""
+    return np.ascontiguousarray(values, dtype=np.int32).reshape(-1)
+
+
+def _poses(xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (w, k, 3) and rotations flat, as the kernels read them."""
+    return _floats(xpos), _floats(xmat).reshape(-1)

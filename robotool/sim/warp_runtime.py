@@ -45,7 +45,20 @@ def init_warp() -> None:
         os.close(saved)
 
 
-def cpu_view(values: np.ndarray, dtype: type = wp.float64) -> wp.array:
-    """A Warp array on the CPU over a C-contiguous numpy array's memory, without a copy (CPU launches run before they
-    return, so the numpy array outlives the view's use)."""
-    return wp.array(ptr=values.ctypes.data, dtype=dtype, shape=values.shape, device="cpu")
+_DTYPES = {np.dtype(np.float64): wp.float64, np.dtype(np.int32): wp.int32}
+
+
+def cpu_view(values: np.ndarray) -> wp.array:
+    """A Warp array on the CPU over a C-contiguous float64 or int32 numpy array's memory, without a copy (CPU launches
+    run before they return, so the numpy array outlives the view's use; a kernel's writes land in it)."""
+    if not values.flags.c_contiguous or values.dtype not in _DTYPES:
+        raise ValueError(f"a kernel reads C-contiguous float64 or int32 arrays, not {values.dtype} {values.strides}")
+    return wp.array(ptr=values.ctypes.data, dtype=_DTYPES[values.dtype], shape=values.shape, device="cpu")
+
+
+def launch_on_cpu(kernel: Any, dim: int, *args: np.ndarray | int) -> None:
+    """Run ``kernel`` on the CPU in ``dim`` threads, its array arguments numpy arrays viewed in place
+    (:func:`cpu_view`)."""
+    init_warp()
+    inputs = [cpu_view(a) if isinstance(a, np.ndarray) else a for a in args]
+    wp.launch(kernel, dim=dim, inputs=inputs, device="cpu")

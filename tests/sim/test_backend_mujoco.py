@@ -213,7 +213,7 @@ def test_contact_normals_say_which_way_touching_bodies_press(sim_scene: Any) -> 
         sim.close()
 
 
-def test_contains_tells_points_inside_each_primitive_shape_from_points_just_outside() -> None:
+def test_inside_tells_points_inside_each_primitive_shape_from_points_just_outside() -> None:
     """Points 10 % inside a geom's surface lie in it, points 10 % outside do not, for every primitive shape posed
     anywhere (a ray that starts inside a geom meets it where it leaves it, so its readers ask this)."""
     model = _every_shape()
@@ -257,11 +257,27 @@ def test_contains_tells_points_inside_each_primitive_shape_from_points_just_outs
         for scale, expected in ((0.9, True), (1.1, False)):
             local = centre + scale * surface
             pnt = data.geom_xpos[g] + local @ mat.T
-            n = len(pnt)
-            got = ray_cast.contains(
-                geoms, np.full(n, g), np.tile(data.geom_xpos[g], (n, 1)), np.tile(data.geom_xmat[g], (n, 1)), pnt
+            found = ray_cast.inside(
+                geoms, np.array([g]), data.geom_xpos[None, [g]], data.geom_xmat[None, [g]], pnt[None]
             )
+            got = found[0] == g
             assert got.all() == expected and got.any() == expected, (mujoco.mjtGeom(kind).name, scale)
+
+
+def test_a_point_inside_two_geoms_reads_the_later_one_unless_their_body_is_left_out() -> None:
+    """The twin boxes share one pose: a point in both reads the later geom (as the rays' readers expect); left out by
+    its body, neither holds it; a point in no geom reads -1."""
+    model = _every_shape()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    geoms = ray_cast.RayGeoms.of(model)
+    solid = np.flatnonzero(geoms.type != mujoco.mjtGeom.mjGEOM_PLANE)
+    twin = np.flatnonzero(model.geom_bodyid == model.geom_bodyid[-1])
+    pnt = np.array([[data.geom_xpos[twin[0]], [5.0, 5.0, 5.0]]])
+    xpos, xmat = data.geom_xpos[None, solid], data.geom_xmat[None, solid]
+    assert ray_cast.inside(geoms, solid, xpos, xmat, pnt).tolist() == [[twin[1], -1]]
+    left_out = np.full((1, 2), model.geom_bodyid[-1])
+    assert ray_cast.inside(geoms, solid, xpos, xmat, pnt, left_out).tolist() == [[-1, -1]]
 
 
 def test_a_process_that_shares_the_cores_steps_its_worlds_on_its_share(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
-from robotool.sim.warp_runtime import Float, Floats, Floats2, Floats3, Int, cpu_view, init_warp
+from robotool.sim.warp_runtime import Float, Floats, Floats2, Floats3, Int, launch_on_cpu
 
 wp.set_module_options({"fuse_fp": False})  # no fused multiply-adds: each product and sum rounds as numpy's do
 
@@ -157,18 +157,5 @@ def follow(
     finding = np.zeros((npath, 3))
     finding[:, 0] = n
     if npath and n:
-        init_warp()
-        wp.launch(
-            _follow,
-            dim=npath,
-            inputs=[
-                cpu_view(paths),
-                cpu_view(rules.values()),
-                rules.run,
-                *rules.codes,
-                cpu_view(out),
-                cpu_view(finding),
-            ],
-            device="cpu",
-        )
+        launch_on_cpu(_follow, npath, paths, rules.values(), rules.run, *rules.codes, out, finding)
     return out[..., 3], finding[:, 0].astype(np.int64), finding[:, 1].astype(np.int64), finding[:, 2], out[..., :3]

@@ -11,7 +11,7 @@ from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import SceneFacts
 from robotool.sim.backend import BatchedSim
-from robotool.sim.ray_cast import contains
+from robotool.sim.ray_cast import inside
 
 
 class Rays:
@@ -93,19 +93,9 @@ class Rays:
 
     def _inside(self, worlds: np.ndarray, pnt: np.ndarray, exclude: int | np.ndarray) -> np.ndarray:
         """The geom (k, nray) each ray start ``pnt`` (k, nray, 3) lies inside, body ``exclude`` (one, or each ray's
-        own) left out (-1: none): each solid geom near enough (its bounding radius) is tested."""
+        own) left out (-1: none); only solid geoms are tested."""
         xpos, xmat = self.sim.geom_poses(worlds)
-        geoms = self.facts.ray_geoms
         solids = self.facts.solids
-        reach = self.sim.scene.model.geom_rbound[solids]
-        centres = xpos[worlds][:, solids]  # (k, g, 3)
-        near = np.all(np.abs(pnt[:, :, None, :] - centres[:, None, :, :]) < reach[None, None, :, None], axis=3)
-        left_out = np.asarray(exclude)
-        near &= geoms.body[solids] != (left_out[..., None] if left_out.ndim else left_out)
-        out = np.full(pnt.shape[:2], -1)
-        k, n, g = np.nonzero(near)
-        if k.size:
-            geom = solids[g]
-            inside = contains(geoms, geom, xpos[worlds[k], geom], xmat[worlds[k], geom], pnt[k, n])
-            out[k[inside], n[inside]] = geom[inside]
-        return out
+        rows = worlds[:, None]
+        left_out = np.broadcast_to(np.asarray(exclude), pnt.shape[:2])
+        return inside(self.facts.ray_geoms, solids, xpos[rows, solids], xmat[rows, solids], pnt, left_out)
