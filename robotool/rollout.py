@@ -65,8 +65,13 @@ class Event(BaseModel):
     detail: str | None = None
 
     def describe(self, calls: list[SkillCall]) -> str:
-        """One clause for a failure reason, e.g. ``call 4 move_to_position: clamped 0.119 m at the workspace edge``."""
-        where = f"call {self.call + 1} {calls[self.call].skill}: " if self.call is not None else ""
+        """One clause for a failure reason, e.g. ``call 4 move_to_position: clamped 0.119 m at the workspace edge``
+        (``call 4:`` alone where ``calls`` no longer holds that call: a search keeps the calls of its best few
+        candidates only)."""
+        where = ""
+        if self.call is not None:
+            skill = f" {calls[self.call].skill}" if 0 <= self.call < len(calls) else ""
+            where = f"call {self.call + 1}{skill}: "
         m = self.measured
         if self.kind == "clamped":
             target = _point(m, "target_")

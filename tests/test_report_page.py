@@ -172,6 +172,24 @@ def test_solve_writes_a_page_with_every_candidate_and_the_repair(
     assert "<td>ground truth</td>" in text and "(missed)" not in text  # no Analyzer ran: nothing was graded
 
 
+def test_solve_writes_a_page_for_candidates_whose_calls_were_not_kept(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A search keeps the skill calls of its best few failed candidates only; the others' events still name their
+    calls by number, and the page says which (it raised IndexError on such a candidate)."""
+    import robotool.planner
+    from robotool.rollout import Event, Rollout
+
+    solution = _solution_with_a_repair()
+    refusal = Event(kind="refused", call=3, detail="the way is blocked by surfboard")
+    stripped = Rollout(world=0, seed=7, success=False, calls=[], events=[refusal])  # TEST FIXTURE
+    solution.candidates[0].rollouts = [stripped]
+    monkeypatch.setattr(robotool.planner, "solve", lambda task, **_: solution)  # TEST FIXTURE
+    page = tmp_path / "solve.html"
+    assert main(["solve", "sofa_traversing", "--planner", "search", "--html", str(page)]) == 0
+    assert "call 4: refused" in page.read_text(encoding="utf-8")
+
+
 # -- in the browser ------------------------------------------------------------------------------------------
 
 
