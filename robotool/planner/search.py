@@ -84,6 +84,10 @@ def tight(prog: Program) -> bool:
     return prog.slack < TIGHT or bool(prog.thin)
 
 
+FollowUp = Callable[[list[Tried]], list[tuple[Program, Tried]]]
+"""Programs made from a round's failures (each with the failure it came from), verified in the next round."""
+
+
 def search(
     task: Task,
     tiers: list[list[Program]],
@@ -94,24 +98,32 @@ def search(
     backend: BackendName | None,
     budget: Budget,
     start: int = 0,
+    follow_up: FollowUp | None = None,
 ) -> tuple[list[Tried], int]:
     """Verify programs in rounds, tier by tier (a round never mixes tiers; each tier already ordered).
 
-    Candidates are numbered from ``start``. Returns what was tried and how many rounds ran."""
+    Candidates are numbered from ``start``. After a round in which nothing held, ``follow_up`` may make programs from
+    its failures: they join the next round after its own programs (as candidates ``repaired_from`` their sources),
+    or make a round of their own once the tiers are spent. Returns what was tried and how many rounds ran."""
     started = time.perf_counter()
     tried: list[Tried] = []
     rounds = 0
     queue = [(k, p) for k, tier in enumerate(tiers) for p in tier]
-    while rounds < budget.rounds and len(tried) < len(queue):
+    taken = 0  # programs of the queue verified so far
+    carried: list[tuple[Program, Tried]] = []
+    while rounds < budget.rounds and (taken < len(queue) or carried):
         if rounds and time.perf_counter() - started > budget.seconds:
             break
-        tier = queue[len(tried)][0]
         size = budget.beam if rounds or budget.first is None else budget.first
-        batch = [
-            Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p)))
-            for k, (t, p) in enumerate(queue[len(tried) : len(tried) + size])
-            if t == tier
-        ]
+        tier = queue[taken][0] if taken < len(queue) else None
+        own = [p for t, p in queue[taken : taken + size] if t == tier]
+        taken += len(own)
+        batch = [Tried(p, Candidate(index=start + len(tried) + k, stages=stages(p))) for k, p in enumerate(own)]
+        for program, source in carried:
+            made = Candidate(index=start + len(tried) + len(batch), stages=stages(program))
+            mark_repaired(made, source.candidate)
+            batch.append(Tried(program, made))
+        carried = []
         runnable, codes = [], []
         for item in batch:
             item.candidate.code, rejection, _ = prepare_code(item.program.code, task)
@@ -141,7 +153,15 @@ def search(
         rounds += 1
         if any(held(t.candidate) for t in batch) or _hopeless(tried, rounds, budget):
             break
+        if follow_up is not None:
+            carried = follow_up(batch)
     return tried, rounds
+
+
+def mark_repaired(candidate: Candidate, source: Candidate) -> None:
+    """Record that ``candidate`` was re-parameterised from ``source``."""
+    candidate.repaired_from = source.index
+    candidate.notes.append(f"re-parameterised from candidate {source.index}")
 
 
 def _hopeless(tried: list[Tried], rounds: int, budget: Budget) -> bool:

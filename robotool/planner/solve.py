@@ -17,7 +17,7 @@ from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
-from robotool.planner.search import Budget, Tried, held, order, search
+from robotool.planner.search import Budget, Tried, held, mark_repaired, order, search
 from robotool.robots.registry import SearchMacros
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.signatures.traces import failure_trace
@@ -86,10 +86,10 @@ def solve(
             seed=seed,
             backend=backend,
             budget=budget,
+            follow_up=(lambda batch: near_miss_repairs(task, batch, budget.beam)) if repair else None,
         )
-        repairs = []
         if repair and not any(held(t.candidate) for t in tried):
-            repairs = repair_round(
+            repair_round(
                 task,
                 tried,
                 lambda p: stages_of(task, p, concepts),
@@ -100,6 +100,7 @@ def solve(
                 beam=budget.beam,
             )
     verified_at = time.perf_counter()
+    repairs = repair_record(tried)
     solution = _solution(task, tried, concepts, tools)
     solution.repairs = repairs
     solution.timings = {
@@ -142,6 +143,17 @@ def robot_planner(task: Task) -> SearchMacros:
     return make()
 
 
+NEAR_MISS_VARIANTS = 2  # variants made at once from a program that succeeded in some worlds but not all
+
+
+def near_miss_repairs(task: Task, batch: list[Tried], limit: int) -> list[tuple[Program, Tried]]:
+    """Variants of a round's near misses (programs that succeeded in some of their worlds but not all), the best
+    first, :data:`NEAR_MISS_VARIANTS` each and ``limit`` in all: a plan that mostly works is re-parameterised from
+    what the simulator measured in the world it failed, in the next round, instead of after every other plan."""
+    near = [t for t in batch if t.candidate.rollouts and 0.0 < t.candidate.success_rate < 1.0]
+    return _variants(task, sorted(near, key=lambda t: t.candidate.rank_key()), set(), limit, NEAR_MISS_VARIANTS)
+
+
 def repair_round(
     task: Task,
     tried: list[Tried],
@@ -152,20 +164,14 @@ def repair_round(
     seed: int,
     backend: BackendName | None,
     beam: int,
-) -> list[RepairRound]:
+) -> None:
     """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``
-    variants in one batch, one that holds in every world then in ``verify`` fresh ones (appended to ``tried``); the
-    round as the solution records it (none when no failure gave evidence to act on)."""
+    variants not tried yet in one batch, one that holds in every world then in ``verify`` fresh ones (appended to
+    ``tried``)."""
     failures = sorted((t for t in tried if t.candidate.rollouts), key=lambda t: t.candidate.rank_key())[:beam]
-    seen = {t.program.code for t in tried}
-    variants: list[tuple[Program, Tried]] = []
-    for source in failures:
-        for variant in repaired(task, source.program, source.candidate):
-            if variant.code not in seen and len(variants) < 2 * beam:
-                seen.add(variant.code)
-                variants.append((variant, source))
+    variants = _variants(task, failures, {t.program.code for t in tried}, 2 * beam, None)
     if not variants:
-        return []
+        return
     new, _ = search(
         task,
         [[v for v, _ in variants]],
@@ -176,26 +182,48 @@ def repair_round(
         budget=Budget(beam=len(variants), rounds=1, seconds=float("inf"), verify=verify),
         start=len(tried),
     )
+    for made, (_, source) in zip(new, variants, strict=True):
+        mark_repaired(made.candidate, source.candidate)
+    tried += new
+
+
+def _variants(
+    task: Task, sources: list[Tried], seen: set[str], limit: int, each: int | None
+) -> list[tuple[Program, Tried]]:
+    """Up to ``limit`` re-parameterised variants of ``sources`` (``each`` at most per source), none in ``seen``."""
+    variants: list[tuple[Program, Tried]] = []
+    for source in sources:
+        made = [v for v in repaired(task, source.program, source.candidate) if v.code not in seen][:each]
+        for variant in made[: limit - len(variants)]:
+            seen.add(variant.code)
+            variants.append((variant, source))
+    return variants
+
+
+def repair_record(tried: list[Tried]) -> list[RepairRound]:
+    """The re-parameterised candidates as the solution records them: one round of attempts, each with the failure
+    it came from (none when nothing was re-parameterised)."""
+    by_index = {t.candidate.index: t for t in tried}
     record = RepairRound(round=1)
-    for made, (variant, source) in zip(new, variants, strict=True):
-        made.candidate.repaired_from = source.candidate.index
-        made.candidate.notes.append(f"re-parameterised from candidate {source.candidate.index}")
-        trace = failure_trace(source.candidate.rollouts)
+    for made in tried:
+        source_index = made.candidate.repaired_from
+        if source_index is None:
+            continue
+        trace = failure_trace(by_index[source_index].candidate.rollouts)
         assert trace is not None  # a source has a failed world
         record.attempts.append(
             RepairAttempt(
-                source=source.candidate.index,
+                source=source_index,
                 candidate=made.candidate.index,
                 shown=trace,
                 scope="parameters",
-                diagnosis=variant.sentences[-1],
+                diagnosis=made.program.sentences[-1],
                 changed=["parameters", "code"],
                 success_rate=made.candidate.success_rate,
                 failure=made.candidate.failure,
             )
         )
-    tried += new
-    return [record]
+    return [record] if record.attempts else []
 
 
 def goal_objects(task: Task) -> set[str]:
