@@ -85,7 +85,7 @@ def tight(prog: Program) -> bool:
 
 
 FollowUp = Callable[[list[Tried]], list[tuple[Program, Tried]]]
-"""Programs made from a round's failures (each with the failure it came from), verified in the next round."""
+"""Programs made from the first round's failures (each with the failure it came from), verified in the second."""
 
 
 def search(
@@ -102,9 +102,10 @@ def search(
 ) -> tuple[list[Tried], int]:
     """Verify programs in rounds, tier by tier (a round never mixes tiers; each tier already ordered).
 
-    Candidates are numbered from ``start``. After a round in which nothing held, ``follow_up`` may make programs from
-    its failures: they join the next round after its own programs (as candidates ``repaired_from`` their sources),
-    or make a round of their own once the tiers are spent. Returns what was tried and how many rounds ran."""
+    Candidates are numbered from ``start``. When nothing held in the first round (the best guess, when the budget
+    runs it alone), ``follow_up`` may make programs from its failures: they join the second round after its own
+    programs (as candidates ``repaired_from`` their sources), or make a round of their own when no program is left.
+    Returns what was tried and how many rounds ran."""
     started = time.perf_counter()
     tried: list[Tried] = []
     rounds = 0
@@ -153,7 +154,7 @@ def search(
         rounds += 1
         if any(held(t.candidate) for t in batch) or _hopeless(tried, rounds, budget):
             break
-        if follow_up is not None:
+        if follow_up is not None and rounds == 1:
             carried = follow_up(batch)
     return tried, rounds
 

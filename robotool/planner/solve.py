@@ -148,8 +148,9 @@ NEAR_MISS_VARIANTS = 2  # variants made at once from a program that succeeded in
 
 def near_miss_repairs(task: Task, batch: list[Tried], limit: int) -> list[tuple[Program, Tried]]:
     """Variants of a round's near misses (programs that succeeded in some of their worlds but not all), the best
-    first, :data:`NEAR_MISS_VARIANTS` each and ``limit`` in all: a plan that mostly works is re-parameterised from
-    what the simulator measured in the world it failed, in the next round, instead of after every other plan."""
+    first, :data:`NEAR_MISS_VARIANTS` each and ``limit`` in all: a best guess that mostly works is re-parameterised
+    from what the simulator measured in the world it failed, in the second round, instead of after every other
+    plan."""
     near = [t for t in batch if t.candidate.rollouts and 0.0 < t.candidate.success_rate < 1.0]
     return _variants(task, sorted(near, key=lambda t: t.candidate.rank_key()), set(), limit, NEAR_MISS_VARIANTS)
 
