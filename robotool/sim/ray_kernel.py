@@ -311,6 +311,7 @@ def cast(
     ``bound`` and ``body``) posed at ``xpos`` (w, k, 3) and ``xmat`` (w, k, 9), each ray leaving out the body
     ``exclude`` (w, n) (-1: none): the least distance x >= 0 (-1 where nothing is hit) and the hit geom's position
     among the k (-1), (w, n)."""
+    _check_shapes(kind, size, body, xpos, xmat, pnt, exclude, bound=bound, vec=vec)
     shape = pnt.shape[:2]
     dist, hit = np.empty(shape), np.empty(shape, dtype=np.int32)
     if dist.size:
@@ -332,11 +333,40 @@ def inside(
     """The geom among k (their ``kind``, ``size`` (k, 3) and ``body``, posed at ``xpos`` (w, k, 3) and ``xmat``
     (w, k, 9)) that each point ``pnt`` (w, n, 3) lies inside, the body ``exclude`` (w, n) left out: its position among
     the k (the last of several; -1: none), (w, n). A plane holds nothing."""
+    _check_shapes(kind, size, body, xpos, xmat, pnt, exclude)
     found = np.empty(pnt.shape[:2], dtype=np.int32)
     if found.size:
         geoms = (_ints(kind), _floats(size), _ints(body))
         launch_on_cpu(_inside, found.size, *geoms, *_poses(xpos, xmat), _floats(pnt), _ints(exclude), found.reshape(-1))
     return found.astype(int)
+
+
+def _check_shapes(
+    kind: np.ndarray,
+    size: np.ndarray,
+    body: np.ndarray,
+    xpos: np.ndarray,
+    xmat: np.ndarray,
+    pnt: np.ndarray,
+    exclude: np.ndarray,
+    bound: np.ndarray | None = None,
+    vec: np.ndarray | None = None,
+) -> None:
+    """Refuse arrays whose shapes do not match (the kernels read them by index, unchecked)."""
+    k, (w, n) = len(kind), np.shape(pnt)[:2]
+    expected = [
+        ("size", size, (k, 3)),
+        ("body", body, (k,)),
+        ("xpos", xpos, (w, k, 3)),
+        ("xmat", xmat, (w, k, 9)),
+        ("pnt", pnt, (w, n, 3)),
+        ("exclude", exclude, (w, n)),
+        *([("bound", bound, (k,))] if bound is not None else []),
+        *([("vec", vec, (w, n, 3))] if vec is not None else []),
+    ]
+    for name, values, shape in expected:
+        if np.shape(values) != shape:
+            raise ValueError(f"{name} has shape {np.shape(values)}, not {shape}")
 
 
 def _floats(values: np.ndarray) -> np.ndarray:

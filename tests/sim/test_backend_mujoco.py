@@ -280,6 +280,20 @@ def test_a_point_inside_two_geoms_reads_the_later_one_unless_their_body_is_left_
     assert ray_cast.inside(geoms, solid, xpos, xmat, pnt, left_out).tolist() == [[-1, -1]]
 
 
+def test_the_compiled_ray_tests_refuse_arrays_they_would_read_past() -> None:
+    """The kernels index their arrays unchecked: a per-ray array shaped for fewer rays, or a view that is not
+    contiguous, is refused before the launch instead of being read past its end."""
+    from robotool.sim import ray_kernel
+    from robotool.sim.warp_runtime import cpu_view
+
+    geoms = (np.array([6]), np.ones((1, 3)), np.ones(1), np.zeros(1))
+    poses, rays = (np.zeros((2, 1, 3)), np.zeros((2, 1, 9))), (np.zeros((2, 5, 3)), np.zeros((2, 5, 3)))
+    with pytest.raises(ValueError, match=r"exclude has shape \(2, 1\), not \(2, 5\)"):
+        ray_kernel.cast(*geoms, *poses, *rays, np.zeros((2, 1)))
+    with pytest.raises(ValueError, match="C-contiguous"):
+        cpu_view(np.zeros((4, 4))[:, 1])
+
+
 def test_a_process_that_shares_the_cores_steps_its_worlds_on_its_share(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(backend_mujoco, "cores", lambda: 4)
     monkeypatch.setattr(backend_mujoco, "_sharing", 1)
