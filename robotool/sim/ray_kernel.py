@@ -33,6 +33,12 @@ MISS = wp.constant(Float(-1.0))
 
 
 @wp.func
+def _row(values: Floats3, a: Int, b: Int) -> Vec3:
+    """``values[a, b]``, three numbers, as a vector."""
+    return Vec3(values[a, b, 0], values[a, b, 1], values[a, b, 2])
+
+
+@wp.func
 def _least_root(a: Float, b: Float, c: Float) -> Float:
     """The least non-negative root of a x^2 + 2 b x + c = 0 (-1: none)."""
     det = b * b - a * c
@@ -221,14 +227,13 @@ def _inside(
     """One thread per point, world-major (``exclude`` and ``found`` flat over worlds and points)."""
     i = wp.tid()
     w = i // pnt.shape[1]
-    n = i % pnt.shape[1]
-    point = Vec3(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
+    point = _row(pnt, w, i % pnt.shape[1])
     ngeom = kind.shape[0]
     which = Int(-1)
     for c in range(ngeom):
         if body[c] != exclude[i]:
-            pos = Vec3(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
-            if _holds(kind[c], _local(pos, xmat, (w * ngeom + c) * 9, point), Vec3(size[c, 0], size[c, 1], size[c, 2])):
+            local = _local(_row(xpos, w, c), xmat, (w * ngeom + c) * 9, point)
+            if _holds(kind[c], local, Vec3(size[c, 0], size[c, 1], size[c, 2])):
                 which = Int(c)
     found[i] = which
 
@@ -260,16 +265,15 @@ def _cast(
     """One thread per ray, world-major (``exclude``, ``dist`` and ``hit`` flat over worlds and rays)."""
     i = wp.tid()
     w = i // pnt.shape[1]
-    n = i % pnt.shape[1]
-    start = Vec3(pnt[w, n, 0], pnt[w, n, 1], pnt[w, n, 2])
-    direction = Vec3(vec[w, n, 0], vec[w, n, 1], vec[w, n, 2])
+    start = _row(pnt, w, i % pnt.shape[1])
+    direction = _row(vec, w, i % pnt.shape[1])
     best = MISS
     found = Int(-1)
     ngeom = kind.shape[0]
     for c in range(ngeom):
         if body[c] == exclude[i]:
             continue
-        pos = Vec3(xpos[w, c, 0], xpos[w, c, 1], xpos[w, c, 2])
+        pos = _row(xpos, w, c)
         half = Vec3(size[c, 0], size[c, 1], size[c, 2])
         t = kind[c]
         x = MISS
