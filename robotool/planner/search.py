@@ -10,8 +10,10 @@ rollouts are the planning and the fresh worlds together, so one that fails a fre
 succeeding everywhere and ranks below one that held in all of them. The first round's best guess runs in its fresh
 worlds in the same batch as its planning worlds (most often it holds, and one batch of eight worlds costs much less
 than two of three and five: the controller's tick costs nearly as much for few worlds as for many); those fresh
-rollouts count only if it held in every planning world. The search stops at the first round with a program that
-succeeded in every planning and fresh world (or when the rounds or the time budget run out).
+rollouts count only if it held in every planning world. When the first round holds nothing, programs the caller
+makes from its failures (the planner's variants of a near miss) join the second round. The search stops at the first
+round with a program that succeeded in every planning and fresh world (or when the rounds or the time budget run
+out).
 """
 
 from __future__ import annotations

@@ -194,10 +194,14 @@ def _variants(
     """Up to ``limit`` re-parameterised variants of ``sources`` (``each`` at most per source), none in ``seen``."""
     variants: list[tuple[Program, Tried]] = []
     for source in sources:
-        made = [v for v in repaired(task, source.program, source.candidate) if v.code not in seen][:each]
-        for variant in made[: limit - len(variants)]:
-            seen.add(variant.code)
-            variants.append((variant, source))
+        made = 0
+        for variant in repaired(task, source.program, source.candidate):
+            if len(variants) == limit or made == each:
+                break
+            if variant.code not in seen:
+                seen.add(variant.code)
+                variants.append((variant, source))
+                made += 1
     return variants
 
 

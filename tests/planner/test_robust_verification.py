@@ -213,7 +213,7 @@ def test_only_near_misses_are_re_parameterised_between_rounds_the_best_first(
 
     def variants(_task: Task, program: Program, _candidate: Candidate) -> list[Program]:  # TEST FIXTURE
         x = program.motions[0].point.axes[0][1]
-        return [_program(x + d) for d in (0.1, -0.1, 0.2)]
+        return [_program(x + d) for d in (0.1, 0.1, -0.1, 0.2)]  # the same variant twice is tried once
 
     monkeypatch.setattr(solve_module, "repaired", variants)
     rates = {1.0: [True, False, False], 2.0: [True, True, False], 3.0: [False] * 3, 4.0: [True] * 3}
