@@ -84,6 +84,8 @@ CASES = [
     ("gap_zigzag", "no_board"),
     ("gap_diagonal", "sofa_traversing"),
     ("gap_diagonal", "no_board"),
+    ("gap_turned_short_walks", "no_board"),  # turned, every 3 cm walk reads the paths again: gap 0.40 m refused
+    ("gap_turned_short_walks", "sofa_traversing"),  # the board beside it refuses the turn; the walks, the gap
     ("gap_front_half_over", "sofa_traversing"),
     ("gap_front_half_over", "no_board"),
     ("gap_back_and_forth", "no_board"),
