@@ -138,9 +138,7 @@ class LocalExecutor:
         parallel = lanes if simulations == len(jobs) else max(self.workers, lanes)
         try:
             with ThreadPoolExecutor(max_workers=parallel) as pool:
-                futures: list[Future[None]] = [
-                    pool.submit(contextvars.copy_context().run, one, job) for job in jobs
-                ]
+                futures: list[Future[None]] = [pool.submit(contextvars.copy_context().run, one, job) for job in jobs]
                 try:
                     for future in as_completed(futures):
                         future.result()

@@ -13,9 +13,7 @@ EXECUTORS: tuple[ExecutorName, ...] = ("local", "ray")
 RAY_MISSING = "the Ray executor needs Ray, which is not installed: pip install 'robotool[ray]'"
 
 
-def make_executor(
-    name: ExecutorName, *, workers: int, processes: int = 1, address: str | None = None
-) -> Executor:
+def make_executor(name: ExecutorName, *, workers: int, processes: int = 1, address: str | None = None) -> Executor:
     """The executor the command line names; ``address`` is the Ray cluster's (None: a Ray on this machine).
 
     Raises :class:`~robotool.eval.config.EvalError` when Ray is asked for and not installed, or cannot connect.

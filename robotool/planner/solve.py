@@ -152,7 +152,8 @@ def near_miss_repairs(task: Task, batch: list[Tried], limit: int) -> list[tuple[
     from what the simulator measured in the world it failed, in the second round, instead of after every other
     plan."""
     near = [t for t in batch if t.candidate.rollouts and 0.0 < t.candidate.success_rate < 1.0]
-    return _variants(task, sorted(near, key=lambda t: t.candidate.rank_key()), set(), limit, NEAR_MISS_VARIANTS)
+    tried = {t.program.code for t in batch}
+    return _variants(task, sorted(near, key=lambda t: t.candidate.rank_key()), tried, limit, NEAR_MISS_VARIANTS)
 
 
 def repair_round(

@@ -27,7 +27,6 @@ PLANE, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX = (
         mujoco.mjtGeom.mjGEOM_BOX,
     )
 )
-SUPPORTED = (int(PLANE), int(SPHERE), int(CAPSULE), int(ELLIPSOID), int(CYLINDER), int(BOX))
 MINVAL = wp.constant(Float(1e-15))  # MuJoCo's mjMINVAL
 MISS = wp.constant(Float(-1.0))
 
@@ -36,22 +35,6 @@ MISS = wp.constant(Float(-1.0))
 def _row(values: Floats3, a: Int, b: Int) -> Vec3:
     """``values[a, b]``, three numbers, as a vector."""
     return Vec3(values[a, b, 0], values[a, b, 1], values[a, b, 2])
-
-
-@wp.func
-def _least_root(a: Float, b: Float, c: Float) -> Float:
-    """The least non-negative root of a x^2 + 2 b x + c = 0 (-1: none)."""
-    det = b * b - a * c
-    if det < Float(0.0) or a < MINVAL:
-        return MISS
-    root = wp.sqrt(det)
-    x0 = (-b - root) / a
-    if x0 >= Float(0.0):
-        return x0
-    x1 = (-b + root) / a
-    if x1 >= Float(0.0):
-        return x1
-    return MISS
 
 
 @wp.func
@@ -64,6 +47,18 @@ def _root(a: Float, b: Float, c: Float, which: Float) -> Float:
     if which < Float(0.0):
         return (-b - root) / a
     return (-b + root) / a
+
+
+@wp.func
+def _least_root(a: Float, b: Float, c: Float) -> Float:
+    """The least non-negative root of a x^2 + 2 b x + c = 0 (-1: none)."""
+    x0 = _root(a, b, c, Float(-1.0))
+    if x0 >= Float(0.0):
+        return x0
+    x1 = _root(a, b, c, Float(1.0))
+    if x1 >= Float(0.0):
+        return x1
+    return MISS
 
 
 @wp.func

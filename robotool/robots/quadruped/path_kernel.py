@@ -9,6 +9,7 @@ halves round to even (``rint``), as numpy rounds them. Warp loads the first time
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,20 +35,11 @@ class FollowRules:
     run: int  # samples over which a rise or fall counts as one edge
     codes: tuple[int, int, int]  # the codes of a step, a gap and a drop finding
 
+    @functools.cached_property
     def values(self) -> np.ndarray:
         """The thresholds as the kernel reads them."""
         r = self
         return np.array([r.rise, r.step_limit, r.max_step_up, r.gap_limit, r.drop_limit, r.spacing, r.radius])
-
-
-@wp.func
-def _fmin(a: Float, b: Float) -> Float:
-    """The lesser of two values, a NaN ignored (``np.fmin``)."""
-    if wp.isnan(a):
-        return b
-    if wp.isnan(b):
-        return a
-    return wp.min(a, b)
 
 
 @wp.func
@@ -58,6 +50,12 @@ def _fmax(a: Float, b: Float) -> Float:
     if wp.isnan(b):
         return a
     return wp.max(a, b)
+
+
+@wp.func
+def _fmin(a: Float, b: Float) -> Float:
+    """The lesser of two values, a NaN ignored (``np.fmin``; negation is exact)."""
+    return -_fmax(-a, -b)
 
 
 @wp.kernel
@@ -157,5 +155,5 @@ def follow(
     finding = np.zeros((npath, 3))
     finding[:, 0] = n
     if npath and n:
-        launch_on_cpu(_follow, npath, paths, rules.values(), rules.run, *rules.codes, out, finding)
+        launch_on_cpu(_follow, npath, paths, rules.values, rules.run, *rules.codes, out, finding)
     return out[..., 3], finding[:, 0].astype(np.int64), finding[:, 1].astype(np.int64), finding[:, 2], out[..., :3]
