@@ -107,14 +107,18 @@ class BatchedSim(Protocol):
         in ``worlds`` (the other worlds' rows may be stale); read-only."""
 
     def rays(
-        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int | np.ndarray = -1, skip_group: int = -1
+        self,
+        worlds: np.ndarray,
+        pnt: np.ndarray,
+        vec: np.ndarray,
+        exclude_body: int | np.ndarray = -1,
+        skip_group: int = -1,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Cast rays (nworld, nray, 3) from ``pnt`` along ``vec`` against the current geoms.
+        """Cast rays (k, nray, 3) from ``pnt`` along ``vec`` in ``worlds`` (k,) against their current geoms.
 
         Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
-        (-1 where none), both (nworld, nray). Geoms of ``exclude_body`` (one body for every ray, or
-        (nworld, nray): each ray's own; -1: none) and geoms in geom group ``skip_group`` are ignored;
-        a world whose first ray starts at NaN is not cast (inf, -1).
+        (-1 where none), both (k, nray). Geoms of ``exclude_body`` (one body for every ray, or
+        (k, nray): each ray's own; -1: none) and geoms in geom group ``skip_group`` are ignored.
         """
 
 

@@ -48,6 +48,7 @@ _WARNINGS = {
 CHUNKS_PER_THREAD = 4  # worlds are handed out in this many chunks per thread, taken as threads free up
 _WARNING_KINDS = list(_WARNINGS)
 _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
+_NO_PAIRS = np.zeros((0, 2), dtype=np.int32)
 _sharing = 1  # processes of this machine that simulate at once, this one included (see share_cores)
 
 
@@ -120,8 +121,7 @@ class MujocoSim:
         self._xquat = np.zeros((nworld, model.nbody, 4))
         self._sensordata = np.zeros((nworld, model.nsensordata))
         self._eq_active = np.zeros((nworld, model.neq), dtype=bool)
-        self._touching = np.zeros((nworld, model.nbody, model.nbody), dtype=bool)
-        self._touch_pairs: list[np.ndarray | None] = [None] * nworld  # body pairs set in _touching
+        self._touching_geoms: list[np.ndarray] = [_NO_PAIRS] * nworld  # geom pairs within touching distance
         self._geom_body = model.geom_bodyid.copy()
         self._ray_geoms = ray_cast.RayGeoms.of(model)
         self._eligible: dict[tuple[int, int], np.ndarray] = {}  # (exclude_body, skip_group) -> geoms rays may hit
@@ -141,18 +141,11 @@ class MujocoSim:
         self._xquat[w] = d.xquat
         self._sensordata[w] = d.sensordata
         self._eq_active[w] = d.eq_active
-        touching = self._touching[w]
-        previous = self._touch_pairs[w]
-        if previous is not None:  # clear only what was set last time
-            touching[previous[:, 0], previous[:, 1]] = False
-            touching[previous[:, 1], previous[:, 0]] = False
-            self._touch_pairs[w] = None
-        if d.ncon:
+        if d.ncon:  # the pairs only: the bodies' table is built for every world at once (_touching)
             con = d.contact
-            bodies = self._geom_body[con.geom[con.dist <= TOUCH_DISTANCE]]
-            touching[bodies[:, 0], bodies[:, 1]] = True
-            touching[bodies[:, 1], bodies[:, 0]] = True
-            self._touch_pairs[w] = bodies
+            self._touching_geoms[w] = con.geom[con.dist <= TOUCH_DISTANCE]
+        else:
+            self._touching_geoms[w] = _NO_PAIRS
         if self._failed[w] is None:
             self._failed[w] = self._failure(d)
 
@@ -197,6 +190,20 @@ class MujocoSim:
         for future in helpers:
             future.result()
 
+    def _touching(self) -> np.ndarray:
+        """(nworld, nbody, nbody): which bodies touch in each world, from the geom pairs gathered after its last
+        step (built here, for all worlds at once, and not per world in the stepping threads, where it held the GIL
+        for most of a world's gathering)."""
+        nbody = self.scene.model.nbody
+        touching = np.zeros((self.nworld, nbody, nbody), dtype=bool)
+        counts = [len(pairs) for pairs in self._touching_geoms]
+        if sum(counts):
+            world = np.repeat(np.arange(self.nworld), counts)
+            bodies = self._geom_body[np.concatenate(self._touching_geoms)]
+            touching[world, bodies[:, 0], bodies[:, 1]] = True
+            touching[world, bodies[:, 1], bodies[:, 0]] = True
+        return touching
+
     def state(self) -> BatchState:
         """Copies of the gathered state (safe to keep across steps)."""
         return BatchState(
@@ -207,7 +214,7 @@ class MujocoSim:
             xquat=self._xquat.copy(),
             sensordata=self._sensordata.copy(),
             eq_active=self._eq_active.copy(),
-            touching=self._touching.copy(),
+            touching=self._touching(),
             failed=list(self._failed),
         )
 
@@ -235,34 +242,37 @@ class MujocoSim:
         return normals_from_contacts(self.scene.model.nbody, self._geom_body, con.geom, con.dist, con.frame[:, :3])
 
     def rays(
-        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int | np.ndarray = -1, skip_group: int = -1
+        self,
+        worlds: np.ndarray,
+        pnt: np.ndarray,
+        vec: np.ndarray,
+        exclude_body: int | np.ndarray = -1,
+        skip_group: int = -1,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world, as ``mj_ray`` casts them (:mod:`robotool.sim.ray_cast`), all at once; distance inf and geom
-        -1 where nothing is hit. The geoms are read where ``mj_ray`` reads them (each world's ``MjData``)."""
-        nworld, nray = pnt.shape[:2]
-        dist = np.full((nworld, nray), np.inf)
-        geom = np.full((nworld, nray), -1, dtype=int)
-        if not nray:
-            return dist, geom
+        """Rays in ``worlds``, as ``mj_ray`` casts them (:mod:`robotool.sim.ray_cast`), all at once; distance inf and
+        geom -1 where nothing is hit. The geoms are read where ``mj_ray`` reads them (each world's ``MjData``)."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        nray = pnt.shape[1]
+        if len(pnt) != len(worlds):
+            raise ValueError(f"rays for {len(pnt)} worlds in {len(worlds)} worlds")
+        if not nray or not worlds.size:
+            return np.full((len(worlds), nray), np.inf), np.full((len(worlds), nray), -1, dtype=int)
         per_ray = np.ndim(exclude_body) > 0
         key = (-1 if per_ray else int(exclude_body), skip_group)
         if key not in self._eligible:
             self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), key[0])
         index = self._eligible[key]
-        worlds = np.flatnonzero(~np.isnan(np.asarray(pnt)[:, 0, 0]))
         xpos, xmat = self.geom_poses(worlds)
         x, hit = ray_cast.cast(
             self._ray_geoms,
             index,
             xpos[worlds[:, None], index],
             xmat[worlds[:, None], index],
-            np.asarray(pnt, dtype=np.float64)[worlds],
-            np.asarray(vec, dtype=np.float64)[worlds],
-            np.asarray(exclude_body)[worlds] if per_ray else None,
+            np.asarray(pnt, dtype=np.float64),
+            np.asarray(vec, dtype=np.float64),
+            np.asarray(exclude_body) if per_ray else None,
         )
-        dist[worlds] = np.where(x >= 0, x, np.inf)
-        geom[worlds] = hit
-        return dist, geom
+        return np.where(x >= 0, x, np.inf), hit
 
     def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position (nworld, ngeom, 3) and rotation (nworld, ngeom, 9) in the worlds asked for (the

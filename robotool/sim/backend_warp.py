@@ -187,23 +187,32 @@ class WarpSim:
         return self._geoms
 
     def rays(
-        self, pnt: np.ndarray, vec: np.ndarray, exclude_body: int | np.ndarray = -1, skip_group: int = -1
+        self,
+        worlds: np.ndarray,
+        pnt: np.ndarray,
+        vec: np.ndarray,
+        exclude_body: int | np.ndarray = -1,
+        skip_group: int = -1,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays per world with ``mjw.rays``; distance inf and geom -1 where nothing is hit. Rays that leave out
-        bodies of their own (``exclude_body`` (nworld, nray)) are cast once per body left out."""
-        nworld, nray = pnt.shape[:2]
-        skipped = np.isnan(pnt[:, :1, :1]) if nray else np.zeros((nworld, 1, 1), dtype=bool)
-        start = np.where(skipped, 0.0, pnt)
+        """Rays in ``worlds`` with ``mjw.rays`` (cast in every world, the others' from the origin, and read back for
+        ``worlds``); distance inf and geom -1 where nothing is hit. Rays that leave out bodies of their own
+        (``exclude_body`` (k, nray)) are cast once per body left out."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        nray = pnt.shape[1]
+        if len(pnt) != len(worlds):
+            raise ValueError(f"rays for {len(pnt)} worlds in {len(worlds)} worlds")
+        start, direction = np.zeros((self.nworld, nray, 3)), np.zeros((self.nworld, nray, 3))
+        start[worlds], direction[worlds] = pnt, vec
         if np.ndim(exclude_body) == 0:
-            d, g = self._rays(start, vec, int(exclude_body), skip_group)
+            d, g = (a[worlds] for a in self._rays(start, direction, int(exclude_body), skip_group))
         else:
             exclude = np.asarray(exclude_body)
-            d, g = np.zeros((nworld, nray)), np.zeros((nworld, nray), dtype=int)
+            d, g = np.zeros((len(worlds), nray)), np.zeros((len(worlds), nray), dtype=int)
             for body in np.unique(exclude):
                 mine = exclude == body
-                d_body, g_body = self._rays(start, vec, int(body), skip_group)
+                d_body, g_body = (a[worlds] for a in self._rays(start, direction, int(body), skip_group))
                 d[mine], g[mine] = d_body[mine], g_body[mine]
-        miss = (d < 0) | skipped[:, :, 0]
+        miss = d < 0
         return np.where(miss, np.inf, d), np.where(miss, -1, g)
 
     def _rays(

@@ -5,6 +5,8 @@ from __future__ import annotations
 import functools
 import os
 import sys
+import threading
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -46,19 +48,72 @@ def init_warp() -> None:
 
 
 _DTYPES = {np.dtype(np.float64): wp.float64, np.dtype(np.int32): wp.int32}
+_NUMPY: dict[Any, np.dtype] = {wp.float64: np.dtype(np.float64), wp.int32: np.dtype(np.int32)}
 
 
 def cpu_view(values: np.ndarray) -> wp.array:
     """A Warp array on the CPU over a C-contiguous float64 or int32 numpy array's memory, without a copy (CPU launches
     run before they return, so the numpy array outlives the view's use; a kernel's writes land in it)."""
-    if not values.flags.c_contiguous or values.dtype not in _DTYPES:
-        raise ValueError(f"a kernel reads C-contiguous float64 or int32 arrays, not {values.dtype} {values.strides}")
+    _check_layout(values)
     return wp.array(ptr=values.ctypes.data, dtype=_DTYPES[values.dtype], shape=values.shape, device="cpu")
 
 
+def _check_layout(values: np.ndarray) -> None:
+    if not values.flags.c_contiguous or values.dtype not in _DTYPES:
+        raise ValueError(f"a kernel reads C-contiguous float64 or int32 arrays, not {values.dtype} {values.strides}")
+
+
+@dataclass
+class _Replay:
+    """A kernel's launch recorded once (Warp's ``record_cmd``) and replayed with new arguments: an array argument is
+    handed over as the C struct that Warp would build for it (its pointer, shape and strides), not as a ``wp.array``
+    packed anew on every launch (two thirds of a small launch's time)."""
+
+    launch: Any
+    expected: list[tuple[int, np.dtype] | None]  # each argument's (ndim, dtype) when it is an array
+    struct: type  # Warp's C array struct
+
+    @classmethod
+    def record(cls, kernel: Any, dim: int, args: tuple[np.ndarray | int, ...]) -> _Replay:
+        inputs = [cpu_view(a) if isinstance(a, np.ndarray) else a for a in args]
+        launch = wp.launch(kernel, dim=dim, inputs=inputs, device="cpu", record_cmd=True)
+        expected = [
+            (arg.type.ndim, _NUMPY[arg.type.dtype]) if wp.types.is_array(arg.type) else None for arg in kernel.adj.args
+        ]
+        struct = next(type(launch.params[1 + i]) for i, e in enumerate(expected) if e is not None)  # after the bounds
+        return cls(launch, expected, struct)
+
+    def run(self, dim: int, args: tuple[np.ndarray | int, ...]) -> None:
+        if len(args) != len(self.expected):
+            raise TypeError(f"the kernel takes {len(self.expected)} arguments, not {len(args)}")
+        for i, (value, expected) in enumerate(zip(args, self.expected, strict=True)):
+            if expected is None:
+                self.launch.set_param_at_index(i, value)
+                continue
+            if not isinstance(value, np.ndarray) or (value.ndim, value.dtype) != expected:
+                got = f"{value.ndim}-d {value.dtype}" if isinstance(value, np.ndarray) else type(value).__name__
+                raise ValueError(f"argument {i} must be a {expected[0]}-d {expected[1]} array, not {got}")
+            _check_layout(value)
+            ndim = value.ndim
+            self.launch.set_param_at_index_from_ctype(
+                i, self.struct(data=value.ctypes.data, ndim=ndim, shape=value.shape, strides=value.strides)
+            )
+        self.launch.set_dim(dim)
+        self.launch.launch()
+
+
+_replays = threading.local()  # per thread: a recorded launch's arguments are rewritten on every replay
+
+
 def launch_on_cpu(kernel: Any, dim: int, *args: np.ndarray | int) -> None:
-    """Run ``kernel`` on the CPU in ``dim`` threads, its array arguments numpy arrays viewed in place
-    (:func:`cpu_view`)."""
+    """Run ``kernel`` on the CPU in ``dim`` threads, its array arguments numpy arrays viewed in place (C-contiguous,
+    float64 or int32, of the dimensions the kernel declares): the first launch of a kernel in a thread is recorded,
+    later ones replay it with their own arguments (:class:`_Replay`)."""
     init_warp()
-    inputs = [cpu_view(a) if isinstance(a, np.ndarray) else a for a in args]
-    wp.launch(kernel, dim=dim, inputs=inputs, device="cpu")
+    cache: dict[Any, _Replay] = _replays.__dict__.setdefault("by_kernel", {})
+    replay = cache.get(kernel)
+    if replay is None:
+        cache[kernel] = _Replay.record(kernel, dim, args)
+        cache[kernel].launch.launch()
+        return
+    replay.run(dim, args)

@@ -14,6 +14,7 @@ from fixtures.paths import FIXTURES
 from robotool.sim import backend, backend_mujoco, ray_cast
 from robotool.sim.backend import Perturbation
 from robotool.sim.backend_mujoco import MujocoSim, subtree_masses
+from robotool.sim.warp_runtime import launch_on_cpu
 
 SPINS = [(5.0, 25.0, 5.0), (-3.0, 30.0, 2.0), (4.0, -20.0, -6.0), (1.0, 28.0, -4.0)]  # rad/s, in the vase's frame
 
@@ -108,8 +109,9 @@ def _mj_ray_one_by_one(
 @pytest.mark.parametrize("direction", ["down", "any"])
 def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any, direction: str) -> None:
     """The batched rays (numpy, :mod:`robotool.sim.ray_cast`) give exactly what the binding's mj_ray gives ray by
-    ray, bit for bit: hits on objects and on the floor, misses, the robot skipped, a body left out, and worlds without
-    rays (NaN); downward rays (the quadruped's) and rays in any direction; each ray leaving out a body of its own."""
+    ray, bit for bit: hits on objects and on the floor, misses, the robot skipped, a body left out, and the worlds
+    asked for only (in any order); downward rays (the quadruped's) and rays in any direction; each ray leaving out a
+    body of its own."""
     scene = sim_scene("sofa_climbing")
     sim, nworld = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 0), njmax=scene.njmax, nconmax=scene.nconmax), 3
     try:
@@ -118,18 +120,18 @@ def test_rays_answer_as_the_binding_s_mj_ray_one_by_one(sim_scene: Any, directio
         xy = rng.uniform(-1.0, 4.0, (nworld, 40, 2))
         pnt = np.concatenate([xy, np.full((nworld, 40, 1), 0.8)], axis=2)
         pnt[:, 35:, 2] = -1.0  # under the floor: nothing is hit going down
-        pnt[2] = np.nan  # no rays in this world
         vec = np.tile([0.0, 0.0, -1.0], (nworld, 40, 1)) if direction == "down" else rng.normal(size=(nworld, 40, 3))
         box = scene.object_body[scene.object_index("box_1")]
         own = rng.choice([-1, box, scene.object_body[scene.object_index("box_2")]], size=(nworld, 40))
         for exclude, skip in ((-1, -1), (box, 2), (own, 2)):  # group 2: the robot's geoms
-            dist, geom = sim.rays(pnt, vec, exclude_body=exclude, skip_group=skip)
-            mine = exclude[:2] if np.ndim(exclude) else exclude
-            want_dist, want_geom = _mj_ray_one_by_one(sim.models[:2], sim.datas[:2], pnt[:2], vec[:2], mine, skip)
-            np.testing.assert_array_equal(dist[:2], want_dist)
-            np.testing.assert_array_equal(geom[:2], want_geom)
-            assert np.isinf(dist[2]).all() and (geom[2] == -1).all()
-            assert {-1, 0} < set(geom[:2].ravel().tolist())  # misses, the floor and objects were all met
+            worlds = np.array([2, 0])  # world 1 casts no rays
+            mine = exclude[worlds] if np.ndim(exclude) else exclude
+            dist, geom = sim.rays(worlds, pnt[worlds], vec[worlds], exclude_body=mine, skip_group=skip)
+            models, datas = [sim.models[w] for w in worlds], [sim.datas[w] for w in worlds]
+            want_dist, want_geom = _mj_ray_one_by_one(models, datas, pnt[worlds], vec[worlds], mine, skip)
+            np.testing.assert_array_equal(dist, want_dist)
+            np.testing.assert_array_equal(geom, want_geom)
+            assert {-1, 0} < set(geom.ravel().tolist())  # misses, the floor and objects were all met
     finally:
         sim.close()
 
@@ -292,6 +294,58 @@ def test_the_compiled_ray_tests_refuse_arrays_they_would_read_past() -> None:
         ray_kernel.cast(*geoms, *poses, *rays, np.zeros((2, 1)))
     with pytest.raises(ValueError, match="C-contiguous"):
         cpu_view(np.zeros((4, 4))[:, 1])
+
+
+def test_which_bodies_touch_is_read_from_each_world_s_own_contacts_after_its_last_step(sim_scene: Any) -> None:
+    """The touching table (built for all worlds at once) holds, in each world, the body pairs of that world's contacts
+    within touching distance after its last step: a world left out of a step keeps its own, and pairs that no
+    longer touch are gone."""
+    scene = sim_scene("sofa_climbing")
+    sim = MujocoSim(scene, 3, Perturbation.sample(scene, 3, 2), njmax=scene.njmax, nconmax=scene.nconmax)
+    try:
+        for active in ([True, True, True], [True, False, True], [False, True, False]):
+            sim.step(40, np.array(active))
+            touching = sim.state().touching
+            for w, d in enumerate(sim.datas):
+                want = np.zeros_like(touching[w])
+                for con in d.contact[: d.ncon] if d.ncon else []:
+                    if con.dist <= backend.TOUCH_DISTANCE:
+                        a, b = scene.model.geom_bodyid[con.geom]
+                        want[a, b] = want[b, a] = True
+                np.testing.assert_array_equal(touching[w], want)
+            assert touching.any(axis=(1, 2)).all()
+    finally:
+        sim.close()
+
+
+def test_a_replayed_launch_reads_its_own_arrays_and_refuses_the_wrong_kind() -> None:
+    """A kernel's later launches replay its first with their own arrays (sizes, values and outputs of their own), and
+    an array of the wrong dimension or type is refused before the launch, as Warp's own packing would refuse it."""
+    from robotool.sim import ray_kernel
+
+    rng = np.random.default_rng(1)
+    half = rng.uniform(0.1, 0.3, (2, 3))
+    geoms = (np.full(2, int(mujoco.mjtGeom.mjGEOM_BOX)), half, (half**2).sum(axis=1), np.arange(2))
+    answers = []
+    for nworld, nray in ((2, 5), (3, 11), (2, 5)):  # recorded, replayed larger, replayed as the first
+        poses = rng.uniform(-0.2, 0.2, (nworld, 2, 3)), np.tile(np.eye(3).ravel(), (nworld, 2, 1))
+        pnt = np.concatenate([rng.uniform(-0.3, 0.3, (nworld, nray, 2)), np.ones((nworld, nray, 1))], axis=2)
+        vec = np.tile([0.0, 0.0, -1.0], (nworld, nray, 1))
+        dist, hit = ray_kernel.cast(*geoms, *poses, pnt, vec, np.full((nworld, nray), -1))
+        top = pnt[..., 2:3] - (poses[0][:, None, :, 2] + half[None, None, :, 2])  # down to each box's top
+        over = np.all(np.abs(pnt[:, :, None, :2] - poses[0][:, None, :, :2]) <= half[None, None, :, :2], axis=3)
+        np.testing.assert_allclose(np.where(hit >= 0, dist, np.inf), np.where(over, top, np.inf).min(axis=2))
+        assert (hit >= 0).any() and (hit < 0).any()
+        answers.append((dist, hit))
+    for a, b in zip(answers[0], answers[2], strict=True):
+        assert a.shape == b.shape == (2, 5)
+    ints, floats = np.zeros(1, dtype=np.int32), np.zeros(1)
+    geom_args = (ints, np.zeros((1, 3)), floats, ints)
+    rays = (np.zeros((1, 1, 3)), np.zeros((1, 1, 3)), ints, floats, ints)
+    with pytest.raises(ValueError, match="argument 4 must be a 3-d float64 array, not 2-d float64"):
+        launch_on_cpu(ray_kernel._cast, 1, *geom_args, np.zeros((1, 3)), floats, *rays)
+    with pytest.raises(ValueError, match="argument 0 must be a 1-d int32 array, not 1-d int64"):
+        launch_on_cpu(ray_kernel._cast, 1, np.zeros(1, dtype=int), *geom_args[1:], np.zeros((1, 1, 3)), floats, *rays)
 
 
 def test_a_process_that_shares_the_cores_steps_its_worlds_on_its_share(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -49,7 +49,7 @@ def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -
     scene = sim_scene(TASK)
     pnt = np.array([[[0.62, -0.1, 0.5], [0.4, 0.0, 0.5], [1.5, 1.5, 0.5]]] * 2)
     vec = np.tile([0.0, 0.0, -1.0], (2, 3, 1))
-    results = [sim.make_sim(scene, 2, backend=b).rays(pnt, vec) for b in ("mujoco", "warp")]
+    results = [sim.make_sim(scene, 2, backend=b).rays(np.arange(2), pnt, vec) for b in ("mujoco", "warp")]
     (dist_c, geom_c), (dist_w, geom_w) = results
     np.testing.assert_allclose(dist_w, dist_c, atol=1e-4)
     np.testing.assert_array_equal(geom_w, geom_c)

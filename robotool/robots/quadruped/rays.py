@@ -73,20 +73,14 @@ class Rays:
         and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller than the rays' start) meets it
         where it leaves it, at its bottom: it reads that geom at the ray's start instead, something at least that
         high."""
-        nworld, nray = self.sim.nworld, xy.shape[1]
-        pnt = np.full((nworld, nray, 3), np.nan)
-        pnt[worlds, :, :2] = xy
-        pnt[worlds, :, 2] = start
-        vec = np.zeros((nworld, nray, 3))
+        pnt = np.empty((*xy.shape[:2], 3))
+        pnt[..., :2] = xy
+        pnt[..., 2] = start
+        vec = np.zeros(pnt.shape)
         vec[..., 2] = -1.0
-        excluded: int | np.ndarray = exclude
-        if np.ndim(exclude) > 0:
-            excluded = np.full((nworld, nray), -1)
-            excluded[worlds] = exclude
-        dist, geom = self.sim.rays(pnt, vec, exclude_body=excluded, skip_group=ROBOT_GROUP)
-        dist, geom = dist[worlds], geom[worlds]
+        dist, geom = self.sim.rays(worlds, pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
         z = np.where(np.isfinite(dist), start - dist, 0.0)
-        within = self._inside(worlds, pnt[worlds], exclude)
+        within = self._inside(worlds, pnt, exclude)
         rows, cols = np.nonzero(within >= 0)
         z[rows, cols], geom[rows, cols] = start[rows, cols], within[rows, cols]
         return z, geom

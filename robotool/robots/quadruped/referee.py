@@ -336,28 +336,35 @@ class Referee:
         shoved them (a light object used as a ram moves no more than the robot may push): the world fails
         (:meth:`conditions`) and the push is stopped and refused, naming them."""
         s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
-        step = np.linalg.norm(shift, axis=2)
-        for w in map(int, np.flatnonzero(mask & m.moving & (m.pushing >= 0))):
-            index = int(m.pushing[w])
-            lo, hi = senses.bounds(w, index)
-            front = float(np.abs(m.u[w]) @ (hi - lo)) / 2  # from the pushed object's centre to its front face
-            ahead = (centres[w] - centres[w, index]) @ m.u[w] > front  # centres beyond that face
-            pressed = self._pressed_by(w, index)
-            rammed = pressed & ahead
-            if (pressed & ~ahead).any():  # the contact normals only where they can add a rammed object
-                rammed |= self._pressed_along(w, index, pressed, m.u[w])
-            s.carried[w] += np.where(rammed, step[w], 0.0)
-            moved = np.flatnonzero(rammed & (s.carried[w] > self.config.shove))
-            mass = senses.mass(w, index) + sum(senses.mass(w, int(o)) for o in moved)
-            if mass <= self.limits.max_push_mass or s.shoves[w] is not None or senses.state.failed[w] is not None:
+        worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
+        if not worlds.size:
+            return
+        index, u = m.pushing[worlds], m.u[worlds]
+        extent = np.zeros((len(worlds), 2))
+        for o in np.unique(index):  # the pushed objects' x-y extents
+            lo, hi = senses.boxes(int(o))
+            extent[index == o] = (hi - lo)[worlds[index == o], :2]
+        front = np.einsum("ki,ki->k", np.abs(u), extent) / 2  # from the pushed object's centre to its front face
+        ahead = np.einsum("koi,ki->ko", centres[worlds] - centres[worlds, index][:, None], u) > front[:, None]
+        pressed = self._pressed_by(worlds, index)
+        rammed = pressed & ahead
+        for k in np.flatnonzero((pressed & ~ahead).any(axis=1)):  # the normals only where they can add a rammed one
+            rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
+        s.carried[worlds] += np.where(rammed, np.linalg.norm(shift[worlds], axis=2), 0.0)
+        moved = rammed & (s.carried[worlds] > self.config.shove)
+        masses = senses.masses()[worlds]
+        mass = masses[np.arange(len(worlds)), index] + np.where(moved, masses, 0.0).sum(axis=1)
+        for k in np.flatnonzero(mass > self.limits.max_push_mass):
+            w = int(worlds[k])
+            if s.shoves[w] is not None or senses.state.failed[w] is not None:
                 continue
             s.shoves[w] = reason = (
-                f"pushing {names[index]} rammed "
-                f"{', '.join(names[o] for o in moved)}: {mass:.1f} kg in all, over the "
+                f"pushing {names[index[k]]} rammed "
+                f"{', '.join(names[o] for o in np.flatnonzero(moved[k]))}: {mass[k]:.1f} kg in all, over the "
                 f"push limit of {self.limits.max_push_mass:.1f} kg (a push moves only what the robot may push)"
             )
-            measured = {"mass": round(mass, 3), "limit": self.limits.max_push_mass}
-            moves.refuse(int(w), reason, measured, ends)
+            measured = {"mass": round(float(mass[k]), 3), "limit": self.limits.max_push_mass}
+            moves.refuse(w, reason, measured, ends)
 
     def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
@@ -378,23 +385,19 @@ class Referee:
 
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
-        owner = self.scene.body_object
-        member = (owner[None, :] == np.arange(len(self.scene.object_names))[:, None]).astype(float)  # (nobj, nbody)
+        member = self.facts.bodies
         return np.einsum("ab,bcx,dc->adx", member, self.senses.sim.contact_normals(w), member)
 
-    def _pressed_by(self, w: int, index: int) -> np.ndarray:
-        """(nobject,) the movable objects that object ``index`` touches in world ``w``, directly or through other
-        movable objects (itself left out)."""
-        owner = self.scene.body_object
-        touching = self.senses.state.touching[w]
-        group = np.zeros(len(self.scene.object_names), dtype=bool)
-        group[index] = True
-        frontier = [index]
-        while frontier:
-            near = touching[owner == frontier.pop()].any(axis=0) & (owner >= 0)
-            for other in np.unique(owner[near]):
-                if self.facts.movable[other] and not group[other]:
-                    group[other] = True
-                    frontier.append(int(other))
-        group[index] = False
-        return group
+    def _pressed_by(self, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """(k, nobject) the movable objects that object ``index[i]`` touches in world ``worlds[i]``, directly or
+        through other movable objects (itself left out)."""
+        member = self.facts.bodies
+        touch = (np.einsum("ab,kbc,dc->kad", member, self.senses.state.touching[worlds], member) > 0).astype(float)
+        own = np.arange(len(self.scene.object_names))[None, :] == np.asarray(index)[:, None]
+        group = own.copy()
+        while True:
+            near = np.einsum("ka,kab->kb", group.astype(float), touch) > 0
+            added = near & self.facts.movable & ~group
+            if not added.any():
+                return group & ~own
+            group |= added

@@ -36,6 +36,7 @@ class SceneFacts:
     cloth: np.ndarray  # (nobject,) bool
     cloth_crossings: int  # the most recasts one ray cast needs: one per cloth link for every layer of cloth
     movable: np.ndarray  # (nobject,) bool
+    bodies: np.ndarray  # (nobject, nbody) 1.0 where a body is the object's, else 0.0
     fragile: np.ndarray  # (nobject,) bool
     not_robot: np.ndarray  # (nbody,) bool: bodies that are not the robot's
     parts: Parts  # the objects' parts that bear weight apart (a cloth's links)
@@ -63,6 +64,7 @@ class SceneFacts:
             cloth=cloth,
             cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,
             movable=np.array([o.movable for o in scene.task.objects]),
+            bodies=(scene.body_object[None, :] == np.arange(len(scene.task.objects))[:, None]).astype(float),
             fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
             not_robot=~scene.robot_body,
             parts=Parts.of(scene),
@@ -79,6 +81,7 @@ class Senses:
         self.scene: Scene = sim.scene
         self.state: BatchState = sim.state()
         self._memo: tuple[BatchState | None, dict[Any, np.ndarray]] = (None, {})  # see of_state
+        self._masses: np.ndarray | None = None  # see masses: the perturbed masses do not change
 
     def position(self, w: int) -> np.ndarray:
         """The x-y of the body's slides (the servos' coordinates) in world ``w``."""
@@ -115,13 +118,19 @@ class Senses:
 
     def bounds3(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned bounds of an object in world ``w``."""
+        lo, hi = self.boxes(index)
+        return lo[w], hi[w]
+
+    def boxes(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        """World axis-aligned bounds (nworld, 3) of an object in every world, read-only."""
         if self.facts.cloth[index]:
-            center = self.centers(self.state)[w, index]
+            center = self.centers(self.state)[:, index]
             half = np.asarray(self.scene.task.objects[index].size) / 2
             return center - half, center + half
         state, body, corners = self.state, self.scene.object_body[index], self.facts.corners
-        found = self.of_state(state, ("corners", index), lambda: world_corners(state, body, corners[index]))[w]
-        return found.min(axis=0), found.max(axis=0)
+        found = self.of_state(state, ("corners", index), lambda: world_corners(state, body, corners[index]))
+        lo = self.of_state(state, ("lo", index), lambda: found.min(axis=1))
+        return lo, self.of_state(state, ("hi", index), lambda: found.max(axis=1))
 
     def bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned x-y bounds of an object in world ``w``."""
@@ -131,3 +140,10 @@ class Senses:
     def mass(self, w: int, index: int) -> float:
         """World ``w``'s (perturbed) mass of object ``index``, all its bodies."""
         return float(self.sim.body_mass[w, self.scene.body_object == index].sum())
+
+    def masses(self) -> np.ndarray:
+        """(nworld, nobject) each world's (perturbed) mass of each object, all its bodies, read-only."""
+        if self._masses is None:
+            self._masses = np.stack([self.sim.body_mass[:, row > 0].sum(axis=1) for row in self.facts.bodies], axis=1)
+            self._masses.flags.writeable = False
+        return self._masses
