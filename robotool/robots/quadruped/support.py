@@ -48,29 +48,37 @@ def tilt(state: BatchState, ids: BodyIds) -> np.ndarray:
     return np.arccos(clamp(up, -1.0, 1.0))
 
 
+def _next_touching() -> np.ndarray:
+    """(16, 4): for each set of touching feet (bit k: foot ``CYCLE[k]`` touches), the position in :data:`CYCLE` of
+    the next touching foot counter-clockwise from each position (-1: none)."""
+    table = np.full((16, 4), -1)
+    for pattern, j in np.ndindex(16, 4):
+        for step in (1, 2, 3):
+            if pattern >> ((j + step) % 4) & 1:
+                table[pattern, j] = (j + step) % 4
+                break
+    return table
+
+
+_NEXT_TOUCHING = _next_touching()
+
+
 def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin: float = 0.0) -> np.ndarray:
     """(nworld,) whether the centre of mass ``com`` (nworld, >=2) lies inside the support of the touching feet.
 
     ``foot_xy`` (nworld, 4, >=2); ``margin`` (m) shrinks the support. Fewer than three touching feet support nothing.
     """
-    nworld = com.shape[0]
     order = np.array(CYCLE)
     pts = foot_xy[:, order, :2]
     on = touching[:, order]
-    inside = on.sum(axis=1) >= 3
-    for j in range(4):  # each touching foot, to the next touching foot counter-clockwise
-        nxt = np.full(nworld, -1)
-        for step in (3, 2, 1):  # the nearest wins: written last
-            k = (j + step) % 4
-            nxt = np.where(on[:, k], k, nxt)
-        a = pts[:, j]
-        b = pts[np.arange(nworld), np.maximum(nxt, 0)]
-        edge = b - a
-        rel = com[:, :2] - a
-        length = np.maximum(np.linalg.norm(edge, axis=1), 1e-9)
-        cross = (edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0]) / length
-        inside &= ~on[:, j] | (cross >= margin)
-    return inside
+    nxt = _NEXT_TOUCHING[on.astype(int) @ (1 << np.arange(4))]  # (nworld, 4): each touching foot's next one
+    a = pts
+    b = np.take_along_axis(pts, np.maximum(nxt, 0)[:, :, None], axis=1)
+    edge = b - a
+    rel = com[:, None, :2] - a
+    length = np.maximum(np.linalg.norm(edge, axis=2), 1e-9)
+    cross = (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0]) / length
+    return (on.sum(axis=1) >= 3) & np.all(~on | (cross >= margin), axis=1)
 
 
 def unsupported_feet(touching: np.ndarray) -> str:

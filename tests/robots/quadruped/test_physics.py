@@ -12,7 +12,7 @@ import pytest
 from robotool import sim, tasks
 from robotool.robots.quadruped.body import ROBOT_GROUP
 from robotool.robots.quadruped.quadruped_controller import QuadrupedController
-from robotool.robots.quadruped.support import feet
+from robotool.robots.quadruped.support import CYCLE, feet, supported
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim import lockstep as runner
 from robotool.sim.backend_choice import make_sim
@@ -217,3 +217,24 @@ def test_a_foot_may_cross_one_edge_after_another_over_a_narrow_tread() -> None:
     (rollout,) = sim.run_programs(parse_task(data), [program], perturb=False)
     assert [c.outcome for c in rollout.calls] == ["done", "done"], [(c.outcome, c.reason) for c in rollout.calls]
     assert rollout.calls[-1].measured == {}
+
+
+def test_the_centre_of_mass_is_supported_inside_the_polygon_of_the_touching_feet() -> None:
+    """Weight on feet: at least three feet touch, and the centre of mass lies at least ``margin`` inside every edge
+    of the polygon through the touching feet taken counter-clockwise (checked one world at a time here)."""
+    rng = np.random.default_rng(4)
+    n = 4000
+    corners = np.array([[-0.2, -0.1], [-0.2, 0.1], [0.2, -0.1], [0.2, 0.1]])  # rear-right, rear-left, front-...
+    foot_xy = np.concatenate([corners + rng.normal(0.0, 0.04, (n, 4, 2)), np.zeros((n, 4, 1))], axis=2)
+    com = rng.uniform(-0.3, 0.3, (n, 3))
+    touching = rng.random((n, 4)) < 0.75
+    for margin in (0.0, 0.03):
+        got = supported(com, foot_xy, touching, margin)
+        for w in range(n):
+            ring = [foot_xy[w, f, :2] for f in CYCLE if touching[w, f]]
+            inside = len(ring) >= 3
+            for a, b in zip(ring, ring[1:] + ring[:1], strict=True) if inside else ():
+                edge, rel = b - a, com[w, :2] - a
+                inside &= (edge[0] * rel[1] - edge[1] * rel[0]) / np.linalg.norm(edge) >= margin
+            assert got[w] == inside, (w, margin)
+        assert 0.05 < got.mean() < 0.5
