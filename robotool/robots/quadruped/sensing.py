@@ -139,7 +139,7 @@ class Senses:
 
     def mass(self, w: int, index: int) -> float:
         """World ``w``'s (perturbed) mass of object ``index``, all its bodies."""
-        return float(self.sim.body_mass[w, self.scene.body_object == index].sum())
+        return float(self.masses()[w, index])
 
     def masses(self) -> np.ndarray:
         """(nworld, nobject) each world's (perturbed) mass of each object, all its bodies, read-only."""
