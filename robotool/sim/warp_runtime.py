@@ -65,13 +65,14 @@ def _check_layout(values: np.ndarray) -> None:
 
 @dataclass
 class _Replay:
-    """A kernel's launch recorded once (Warp's ``record_cmd``) and replayed with new arguments: an array argument is
-    handed over as the C struct that Warp would build for it (its pointer, shape and strides), not as a ``wp.array``
-    packed anew on every launch (two thirds of a small launch's time)."""
+    """A kernel's launch recorded once (Warp's ``record_cmd``) and replayed with new arguments: each array argument is
+    a C struct (its pointer, shape and strides, as Warp would build it) handed to the launch once and rewritten in
+    place for every replay, not a ``wp.array`` packed anew on every launch (most of a small launch's time)."""
 
     launch: Any
     expected: list[tuple[int, np.dtype] | None]  # each argument's (ndim, dtype) when it is an array
-    struct: type  # Warp's C array struct
+    structs: list[Any]  # each array argument's C struct (None for the others)
+    dim: int = -1  # the launch's number of threads, set when it changes
 
     @classmethod
     def record(cls, kernel: Any, dim: int, args: tuple[np.ndarray | int, ...]) -> _Replay:
@@ -80,8 +81,14 @@ class _Replay:
         expected = [
             (arg.type.ndim, _NUMPY[arg.type.dtype]) if wp.types.is_array(arg.type) else None for arg in kernel.adj.args
         ]
-        struct = next(type(launch.params[1 + i]) for i, e in enumerate(expected) if e is not None)  # after the bounds
-        return cls(launch, expected, struct)
+        structs = [  # of the type Warp packed for the argument (after the launch bounds)
+            type(launch.params[1 + i])(ndim=e[0], shape=(0,) * e[0], strides=(0,) * e[0]) if e else None
+            for i, e in enumerate(expected)
+        ]
+        for i, struct in enumerate(structs):
+            if struct is not None:
+                launch.set_param_at_index_from_ctype(i, struct)
+        return cls(launch, expected, structs)
 
     def run(self, dim: int, args: tuple[np.ndarray | int, ...]) -> None:
         if len(args) != len(self.expected):
@@ -94,11 +101,13 @@ class _Replay:
                 got = f"{value.ndim}-d {value.dtype}" if isinstance(value, np.ndarray) else type(value).__name__
                 raise ValueError(f"argument {i} must be a {expected[0]}-d {expected[1]} array, not {got}")
             _check_layout(value)
-            ndim = value.ndim
-            self.launch.set_param_at_index_from_ctype(
-                i, self.struct(data=value.ctypes.data, ndim=ndim, shape=value.shape, strides=value.strides)
-            )
-        self.launch.set_dim(dim)
+            struct = self.structs[i]
+            struct.data = value.ctypes.data
+            struct.shape[: value.ndim] = value.shape
+            struct.strides[: value.ndim] = value.strides
+        if dim != self.dim:
+            self.launch.set_dim(dim)
+            self.dim = dim
         self.launch.launch()
 
 
@@ -113,7 +122,5 @@ def launch_on_cpu(kernel: Any, dim: int, *args: np.ndarray | int) -> None:
     cache: dict[Any, _Replay] = _replays.__dict__.setdefault("by_kernel", {})
     replay = cache.get(kernel)
     if replay is None:
-        cache[kernel] = _Replay.record(kernel, dim, args)
-        cache[kernel].launch.launch()
-        return
+        replay = cache[kernel] = _Replay.record(kernel, dim, args)
     replay.run(dim, args)
