@@ -194,14 +194,15 @@ class WarpSim:
         exclude_body: int | np.ndarray = -1,
         skip_group: int = -1,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Rays in ``worlds`` with ``mjw.rays`` (cast in every world, the others' from the origin, and read back for
-        ``worlds``); distance inf and geom -1 where nothing is hit. Rays that leave out bodies of their own
+        """Rays in ``worlds`` with ``mjw.rays`` (cast in every world, the others' from the origin down, and read back
+        for ``worlds``); distance inf and geom -1 where nothing is hit. Rays that leave out bodies of their own
         (``exclude_body`` (k, nray)) are cast once per body left out."""
         worlds = np.asarray(worlds, dtype=int).reshape(-1)
         nray = pnt.shape[1]
         if len(pnt) != len(worlds):
             raise ValueError(f"rays for {len(pnt)} worlds in {len(worlds)} worlds")
         start, direction = np.zeros((self.nworld, nray, 3)), np.zeros((self.nworld, nray, 3))
+        direction[..., 2] = -1.0  # the other worlds' rays: from the origin, down (read back for none)
         start[worlds], direction[worlds] = pnt, vec
         if np.ndim(exclude_body) == 0:
             d, g = (a[worlds] for a in self._rays(start, direction, int(exclude_body), skip_group))

@@ -49,10 +49,14 @@ def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -
     scene = sim_scene(TASK)
     pnt = np.array([[[0.62, -0.1, 0.5], [0.4, 0.0, 0.5], [1.5, 1.5, 0.5]]] * 2)
     vec = np.tile([0.0, 0.0, -1.0], (2, 3, 1))
-    results = [sim.make_sim(scene, 2, backend=b).rays(np.arange(2), pnt, vec) for b in ("mujoco", "warp")]
-    (dist_c, geom_c), (dist_w, geom_w) = results
+    sims = [sim.make_sim(scene, 2, backend=b) for b in ("mujoco", "warp")]
+    (dist_c, geom_c), (dist_w, geom_w) = (s.rays(np.arange(2), pnt, vec) for s in sims)
     np.testing.assert_allclose(dist_w, dist_c, atol=1e-4)
     np.testing.assert_array_equal(geom_w, geom_c)
+    for s, (dist, geom) in zip(sims, ((dist_c, geom_c), (dist_w, geom_w)), strict=True):  # one world asked for
+        one = s.rays(np.array([1]), pnt[1:], vec[1:])
+        np.testing.assert_array_equal(one[0], dist[1:])
+        np.testing.assert_array_equal(one[1], geom[1:])
     assert dist_c[0, 0] == pytest.approx(0.5 - 0.08) and dist_c[0, 1] == pytest.approx(0.5 - 0.03, abs=1e-3)
 
 
