@@ -114,7 +114,8 @@ class BatchedSim(Protocol):
         exclude_body: int | np.ndarray = -1,
         skip_group: int = -1,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Cast rays (k, nray, 3) from ``pnt`` along ``vec`` in ``worlds`` (k,) against their current geoms.
+        """Cast rays (k, nray, 3) from ``pnt`` along ``vec`` in ``worlds`` (k,: each at most once) against their
+        current geoms.
 
         Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
         (-1 where none), both (k, nray). Geoms of ``exclude_body`` (one body for every ray, or

@@ -201,6 +201,8 @@ class WarpSim:
         nray = pnt.shape[1]
         if len(pnt) != len(worlds):
             raise ValueError(f"rays for {len(pnt)} worlds in {len(worlds)} worlds")
+        if len(np.unique(worlds)) != len(worlds):  # one batch of rays per world: a second would overwrite the first
+            raise ValueError(f"worlds {worlds.tolist()} name a world twice")
         start, direction = np.zeros((self.nworld, nray, 3)), np.zeros((self.nworld, nray, 3))
         direction[..., 2] = -1.0  # the other worlds' rays: from the origin, down (read back for none)
         start[worlds], direction[worlds] = pnt, vec

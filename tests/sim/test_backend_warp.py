@@ -57,6 +57,8 @@ def test_rays_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -
         one = s.rays(np.array([1]), pnt[1:], vec[1:])
         np.testing.assert_array_equal(one[0], dist[1:])
         np.testing.assert_array_equal(one[1], geom[1:])
+    with pytest.raises(ValueError, match=r"worlds \[1, 1\] name a world twice"):
+        sims[1].rays(np.array([1, 1]), pnt, vec)
     assert dist_c[0, 0] == pytest.approx(0.5 - 0.08) and dist_c[0, 1] == pytest.approx(0.5 - 0.03, abs=1e-3)
 
 
