@@ -273,6 +273,42 @@ def test_a_push_that_rams_an_object_over_the_push_limit_is_refused_naming_it() -
     assert rollout.conditions["robot_shoved_nothing"] is False
 
 
+def test_a_ram_beside_honest_pushes_in_one_batch_is_refused_in_its_own_worlds_only() -> None:
+    """The ram rule is judged for every pushing world at once: worlds ramming the heavy step with the light box sit in
+    one batch beside worlds pushing the light box aside and back, clear of everything, all the while. The rams are
+    refused naming the step, with the mass of their own world; the honest pushes in between are done."""
+    aside = (  # pushing the whole time the rams push, back and forth across the robot's way
+        'for dy in (-0.6, 0.6, -0.6):\n    box = get_position("light_box")\n'
+        '    push_to_position("light_box", [box[0], box[1] + dy, box[2]])\n'
+    )
+    programs = [aside, _text("ram_heavy_step_with_light_box")] * 2  # an honest push first in the batch
+    scene = _scene("climb_heavy_step_and_light_box")
+    rollouts = sim.run_sessions(scene, start_sessions(programs, "quadruped"), seed=11)
+    masses = []
+    for rollout in rollouts[1::2]:
+        push = next(c for c in rollout.calls if c.outcome == "refused")
+        assert push.skill == "push_to_position" and "rammed heavy_box" in push.reason, push
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+        masses.append(push.measured["mass"])
+    assert masses[0] != masses[1]  # each world weighs its own perturbed masses
+    for rollout in rollouts[::2]:
+        assert [c.outcome for c in rollout.calls if c.skill == "push_to_position"] == ["done"] * 3, rollout.calls
+        assert rollout.conditions["robot_shoved_nothing"] is True
+
+
+def test_a_climb_run_beside_worlds_that_built_the_staircase_reads_its_own_terrain() -> None:
+    """Worlds of one batch share its ray casts and touching table: a program that waits until the worlds beside it have
+    pushed box_1 against box_2, then climbs where their staircase stands without building its own, is refused at
+    box_2's step in each of its worlds, as its own terrain shows (and theirs succeed)."""
+    honest, cheat = _text("programs/sofa_climbing"), _text("climb_beside_a_neighbours_staircase")
+    rollouts = sim.run_sessions(_scene("sofa_climbing"), start_sessions([honest, cheat] * 2, "quadruped"), seed=11)
+    assert [r.success for r in rollouts] == [True, False, True, False], [failure_reason(r) for r in rollouts]
+    for rollout in rollouts[1::2]:
+        climb = next(c for c in rollout.calls if c.outcome != "done")
+        assert climb.skill == "climb_to_position" and climb.outcome == "refused", climb
+        assert "blocked by box_2: step up of 0.24 m" in climb.reason, climb.reason
+
+
 def test_the_box_under_the_front_feet_is_one_the_robot_stands_on() -> None:
     """With its front feet on box_1 and its rear feet on the floor, the robot stands on box_1: the rays under the feet
     start above the highest foot, so the push of box_1 is refused."""
