@@ -47,8 +47,8 @@ def init_warp() -> None:
         os.close(saved)
 
 
-_DTYPES = {np.dtype(np.float64): wp.float64, np.dtype(np.int32): wp.int32}
-_NUMPY: dict[Any, np.dtype] = {wp.float64: np.dtype(np.float64), wp.int32: np.dtype(np.int32)}
+_DTYPES: dict[np.dtype, Any] = {np.dtype(np.float64): wp.float64, np.dtype(np.int32): wp.int32}
+_NUMPY: dict[Any, np.dtype] = {kind: dtype for dtype, kind in _DTYPES.items()}
 
 
 def cpu_view(values: np.ndarray) -> wp.array:

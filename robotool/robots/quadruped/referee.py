@@ -352,7 +352,7 @@ class Referee:
             rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
         s.carried[worlds] += np.where(rammed, np.linalg.norm(shift[worlds], axis=2), 0.0)
         moved = rammed & (s.carried[worlds] > self.config.shove)
-        masses = senses.masses()[worlds]
+        masses = senses.masses(worlds)
         mass = masses[np.arange(len(worlds)), index] + np.where(moved, masses, 0.0).sum(axis=1)
         for k in np.flatnonzero(mass > self.limits.max_push_mass):
             w = int(worlds[k])

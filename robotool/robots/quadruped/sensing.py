@@ -81,7 +81,6 @@ class Senses:
         self.scene: Scene = sim.scene
         self.state: BatchState = sim.state()
         self._memo: tuple[BatchState | None, dict[Any, np.ndarray]] = (None, {})  # see of_state
-        self._masses: np.ndarray | None = None  # see masses: the perturbed masses do not change
 
     def position(self, w: int) -> np.ndarray:
         """The x-y of the body's slides (the servos' coordinates) in world ``w``."""
@@ -139,11 +138,9 @@ class Senses:
 
     def mass(self, w: int, index: int) -> float:
         """World ``w``'s (perturbed) mass of object ``index``, all its bodies."""
-        return float(self.masses()[w, index])
+        return float(self.sim.body_mass[w, self.scene.body_object == index].sum())
 
-    def masses(self) -> np.ndarray:
-        """(nworld, nobject) each world's (perturbed) mass of each object, all its bodies, read-only."""
-        if self._masses is None:
-            self._masses = np.stack([self.sim.body_mass[:, row > 0].sum(axis=1) for row in self.facts.bodies], axis=1)
-            self._masses.flags.writeable = False
-        return self._masses
+    def masses(self, worlds: np.ndarray) -> np.ndarray:
+        """(k, nobject) each of ``worlds``' (perturbed) masses of every object, all its bodies (summed as
+        :meth:`mass` sums them; read from the simulator each time: no state of its own)."""
+        return np.stack([self.sim.body_mass[worlds][:, row > 0].sum(axis=1) for row in self.facts.bodies], axis=1)

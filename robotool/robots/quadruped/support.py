@@ -61,6 +61,8 @@ def _next_touching() -> np.ndarray:
 
 
 _NEXT_TOUCHING = _next_touching()
+_ORDER = np.array(CYCLE)
+_BITS = 1 << np.arange(4)  # a set of touching feet, in CYCLE's order, as the row of _NEXT_TOUCHING
 
 
 def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin: float = 0.0) -> np.ndarray:
@@ -68,14 +70,11 @@ def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin
 
     ``foot_xy`` (nworld, 4, >=2); ``margin`` (m) shrinks the support. Fewer than three touching feet support nothing.
     """
-    order = np.array(CYCLE)
-    pts = foot_xy[:, order, :2]
-    on = touching[:, order]
-    nxt = _NEXT_TOUCHING[on.astype(int) @ (1 << np.arange(4))]  # (nworld, 4): each touching foot's next one
-    a = pts
-    b = np.take_along_axis(pts, np.maximum(nxt, 0)[:, :, None], axis=1)
-    edge = b - a
-    rel = com[:, None, :2] - a
+    pts = foot_xy[:, _ORDER, :2]
+    on = touching[:, _ORDER]
+    nxt = _NEXT_TOUCHING[on.astype(int) @ _BITS]  # (nworld, 4): each touching foot's next one
+    edge = np.take_along_axis(pts, np.maximum(nxt, 0)[:, :, None], axis=1) - pts
+    rel = com[:, None, :2] - pts
     length = np.maximum(np.linalg.norm(edge, axis=2), 1e-9)
     cross = (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0]) / length
     return (on.sum(axis=1) >= 3) & np.all(~on | (cross >= margin), axis=1)
