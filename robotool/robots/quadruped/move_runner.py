@@ -27,11 +27,13 @@ from robotool.vocabulary import MoveEnd
 
 @dataclass
 class Move:
-    """One straight move to ``goal`` (x-y); ``pushing`` is the object index being pushed or -1. A move with a
-    ``turn`` (rad, the heading to reach) turns in place at ``goal`` instead."""
+    """One straight move to ``goal`` (x-y); ``pushing`` is the object index being pushed or -1, and ``face`` (rad,
+    counter-clockwise) how far a push turns the body off the quarter heading it holds as it starts (flat again after
+    ``config.face_travel``). A move with a ``turn`` (rad, the heading to reach) turns in place at ``goal`` instead."""
 
     goal: np.ndarray
     pushing: int = -1
+    face: float = 0.0
     turn: float = float("nan")
 
 
@@ -144,6 +146,8 @@ class MoveRunner:
         self.terrain.start_move(w)
         if move.pushing >= 0:
             self.on_push(w, move.pushing)
+            quarter = np.pi / 2
+            self.sim.ctrl[w, self.ids.yaw_actuator] = np.round(self.senses.yaw(w) / quarter) * quarter + move.face
         s.best[w], s.progress_time[w] = np.inf, float(self.senses.state.time[w])
 
     def _end(self, w: int, outcome: MoveEnd | None) -> SkillEnd:
@@ -192,6 +196,9 @@ class MoveRunner:
         local = np.where(pushed, terrain.gather(t.heights[worlds], index), local)
         waiting = terrain.lift(worlds, q, travel, centres, local, under_torso, index)
         self._steer(worlds, q, waiting)
+        flat = worlds[(pushing >= 0) & (travel > config.face_travel)]  # the face turned at a push's start: flat again
+        quarter = np.pi / 2
+        self.sim.ctrl[flat, self.ids.yaw_actuator] = np.round(self.senses.yaw(flat) / quarter) * quarter
         self._check_arrival(worlds, q, travel, ends)
 
     def _steer(self, worlds: np.ndarray, q: np.ndarray, waiting: np.ndarray) -> None:

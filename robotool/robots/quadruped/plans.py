@@ -17,12 +17,14 @@ import numpy as np
 from robotool.robots.quadruped.move_runner import Move, SkillPlan, finding_measured
 from robotool.robots.quadruped.push import (
     Leg,
+    face_turn,
     first_clear_sweep,
     lateral_offsets,
     legs,
     push_pose,
     route,
     routes,
+    turned_feet_drop,
 )
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -153,7 +155,7 @@ class Plans:
                     if attempt:  # no way to correct the drift: the push stopped where it did
                         break
                     return "refused", f"cannot push {name}: no clear place to stand behind it{problem}", {}
-                start, end, behind = pose
+                start, end, behind, face = pose
                 robot = senses.position(w)
                 staging = start - (end - start) / np.linalg.norm(end - start) * behind
                 gap = config.push_gap
@@ -170,7 +172,7 @@ class Plans:
                     if outcome[0] != "done":
                         return outcome
                 height = senses.centers(senses.state)[w, index, 2]
-                outcome = yield Move(end, pushing=index)
+                outcome = yield Move(end, pushing=index, face=face)
                 if outcome[0] not in ("done", "stalled"):
                     return outcome
                 blocked |= outcome[0] == "stalled"
@@ -180,7 +182,7 @@ class Plans:
                     short = (leg.target - centre[leg.axis]) * u[leg.axis]
                     if blocked or short < config.min_leg or abs(centre[2] - height) > RISE:  # (not after it fell off)
                         break
-                    outcome = yield Move(senses.position(w) + u * short, pushing=index)
+                    outcome = yield Move(senses.position(w) + u * short, pushing=index, face=face)
                     if outcome[0] not in ("done", "stalled"):
                         return outcome
                     blocked |= outcome[0] == "stalled"
@@ -197,10 +199,11 @@ class Plans:
 
     def _clear_pose(
         self, w: int, index: int, leg: Leg, lo: np.ndarray, hi: np.ndarray
-    ) -> tuple[tuple[np.ndarray, np.ndarray, float] | None, str]:
+    ) -> tuple[tuple[np.ndarray, np.ndarray, float, float] | None, str]:
         """The push start and end poses nearest straight-on whose sweep meets nothing above the floor and whose
-        feet stay over the floor (no drop, no gap), with how far behind the start the robot lines up; when there
-        is none, what was wrong under the feet.
+        feet stay over the floor (no drop, no gap), with how far behind the start the robot lines up and how far it
+        turns its face as it pushes (:func:`~.push.face_turn`, where the turned feet stay over the floor from the
+        start, else none); when there is none, what was wrong under the feet.
 
         Poses whose sweep is clear from the staging point (``staging`` behind the start, where the robot lines up)
         come first, so that the robot can line up there; failing those, a clear sweep from the start will do.
@@ -220,7 +223,11 @@ class Plans:
         sweeps = [(start - (end - start) / np.linalg.norm(end - start) * staging, end) for start, end, staging in tries]
         clear, drop = first_clear_sweep(heights, sweeps, limits, floor)
         if clear is not None:
-            return tries[clear], ""
+            start, end, staging = tries[clear]
+            face = face_turn(start, end, lo, hi)
+            if face and turned_feet_drop(heights, start, end, limits, face, floor) is not None:
+                face = 0.0
+            return (start, end, staging, face), ""
         if drop is None:
             return None, ""
         start, end, _ = tries[drop[0]]  # the first drop found: under the pose nearest straight-on

@@ -4,7 +4,9 @@ A push moves the object along x and y in turn (the shorter leg first), each leg 
 the robot's face flat against the object's face, so an axis-aligned body never pushes on a corner.
 For each leg the robot stands on the object's far side; if the straight-on pose or its sweep would run
 into something higher than the floor it stands on (another object, a board overhead), the pose slides
-along the object's face to the nearest clear one that still overlaps the face.
+along the object's face to the nearest clear one that still overlaps the face. Lined up well off the
+object's centre line, the robot starts the push with its face turned a little toward that line
+(:func:`face_turn`), so that it meets the object nearest the line first, and flat again once it moves.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ SAME_SURFACE = QUADRUPED.same_surface
 MIN_LEG = QUADRUPED.min_leg
 SIDE_MARGIN = QUADRUPED.side_margin
 EXIT_MARGIN = QUADRUPED.exit_margin
+FACE_TURN = QUADRUPED.face_turn
+FACE_TURN_FROM = QUADRUPED.face_turn_from
 
 
 @dataclass(frozen=True)
@@ -104,6 +108,38 @@ def push_pose(
     end = start.copy()
     end[a] += leg.target - center[a] + sign * GAP
     return start, end
+
+
+def face_turn(start: np.ndarray, end: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+    """How far (rad, counter-clockwise) the body turns its face toward the centre line of an object with x-y bounds
+    ``lo``-``hi`` as a push from ``start`` to ``end`` (robot centres) starts: :data:`FACE_TURN` where it lines up off
+    that line by more than :data:`FACE_TURN_FROM` of the object's half width across the push, else none (a flat
+    face). The face then meets the object at its inner end first: met at its outer end, the object turns away and
+    slides off the face."""
+    u = (end - start) / max(float(np.linalg.norm(end - start)), 1e-9)
+    to_centre = (lo + hi) / 2 - start
+    offset = float(u[0] * to_centre[1] - u[1] * to_centre[0])  # > 0: the centre line lies to the left
+    half_across = float(np.abs([-u[1], u[0]]) @ ((hi - lo) / 2))
+    if abs(offset) <= FACE_TURN_FROM * half_across:
+        return 0.0
+    return -float(np.sign(offset)) * FACE_TURN
+
+
+def turned_feet_drop(
+    heights: Callable[[np.ndarray], np.ndarray],
+    start: np.ndarray,
+    end: np.ndarray,
+    limits: QuadrupedLimits,
+    angle: float,
+    floor: float,
+) -> SweepProblem | None:
+    """The drop under the feet of a body turned by ``angle`` (rad) on a push from ``start`` to ``end`` (robot
+    centres) over a floor at ``floor`` (None: they stay over the floor); ``heights`` as for :func:`sweep_problem`."""
+    c, s = np.cos(angle), np.sin(angle)
+    feet = foot_offsets(limits) @ np.array([[c, s], [-s, c]])  # each row turned counter-clockwise
+    length = float(np.linalg.norm(end - start))
+    points = foot_paths(start + feet, (end - start) / max(length, 1e-9), length).reshape(-1, 2)
+    return _drop(points, heights(points), floor)
 
 
 def sweep_points(start: np.ndarray, end: np.ndarray, half: np.ndarray, spacing: float = 0.05) -> np.ndarray:

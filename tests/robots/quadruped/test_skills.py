@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
+import numpy as np
 import pytest
 from fixtures.reference import REFERENCE, program
 
@@ -180,3 +181,29 @@ def test_a_push_that_turns_the_object_off_its_line_is_corrected_until_the_object
     rollouts = sim.run_programs(generate("cube_lifting", 1022).task, [program] * 3, world_seeds=[0, 1, 2])
     pushes = [r.calls[-1] for r in rollouts]
     assert all(p.skill == "push_to_position" and p.outcome == "done" for p in pushes), pushes
+
+
+def test_a_push_lined_up_off_the_centre_turns_the_face_so_the_object_does_not_slide_off_it() -> None:
+    """The board's raised end, 0.16 m over the chair, keeps the robot 0.08 m off the chair's centre line as it pushes
+    the chair out sideways. With a flat face, a chair whose perturbed yaw turns its near face's outer end toward the
+    robot met the face there first, turned and slid off it 0.3 m along the board, dragging the board round, and the
+    push stalled 0.4 m short (regression: these three worlds). The face turned toward the centre line meets the chair
+    at its inner end: the chair goes out straight and the board stays where it lay."""
+
+    boards: list[list[float]] = []
+
+    def program(robot: Any) -> None:
+        robot.turn_to_heading(90)
+        robot.walk_to_position([-1.3688, -0.3850, 0.0])
+        robot.walk_to_position([-1.3688, -1.6350, 0.0])
+        robot.walk_to_position([-1.0188, -1.8600, 0.0])
+        chair = robot.get_position("chair")
+        robot.push_to_position("chair", [chair[0], chair[1] + 1.228, chair[2]])
+        boards.append(robot.get_position("surfboard"))
+
+    task = generate("cube_lifting", 9610).task
+    rollouts = sim.run_programs(task, [program] * 3, world_seeds=[8002, 8006, 8007])
+    pushes = [r.calls[-2] for r in rollouts]
+    assert all(p.skill == "push_to_position" and p.outcome == "done" for p in pushes), pushes
+    lay = task.object("surfboard").center
+    assert len(boards) == 3 and all(np.hypot(b[0] - lay[0], b[1] - lay[1]) < 0.05 for b in boards), boards

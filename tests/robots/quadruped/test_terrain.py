@@ -10,9 +10,12 @@ import pytest
 
 from robotool import tasks
 from robotool.robots.quadruped.push import (
+    FACE_TURN,
+    FACE_TURN_FROM,
     SIDE_MARGIN,
     TRIES_AT_ONCE,
     Leg,
+    face_turn,
     first_clear_sweep,
     legs,
     push_pose,
@@ -20,6 +23,7 @@ from robotool.robots.quadruped.push import (
     routes,
     rule_violation,
     sweep_problem,
+    turned_feet_drop,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import (
@@ -195,6 +199,35 @@ def test_a_push_sweep_keeps_the_whole_outline_clear(overlap: float, clear: bool)
     solids = [geometry.object_parts(SceneObject.model_validate(block))]
     problem = sweep_problem(heights_over(solids), behind, end, LIMITS, 0.0)
     assert (problem is None) == clear, problem
+
+
+@pytest.mark.parametrize(
+    ("offset", "turn"),
+    [(0.0, 0.0), (FACE_TURN_FROM * 0.25 - 0.01, 0.0), (0.08, FACE_TURN), (-0.08, -FACE_TURN), (0.2, FACE_TURN)],
+)
+def test_a_push_lined_up_off_the_centre_turns_the_face_toward_the_centre_line(offset: float, turn: float) -> None:
+    """A push toward +y of a chair 0.5 m wide with the robot ``offset`` to the -x side of its centre line (the centre
+    to the robot's right): past a quarter of the half width the face turns counter-clockwise, its right end ahead, so
+    that it meets the chair nearest the centre line first; to the other side, clockwise; nearer the line, flat."""
+    lo, hi = np.array([-0.25, 0.5]), np.array([0.25, 0.9])
+    start, end = np.array([-offset, 0.0]), np.array([-offset, 0.6])
+    assert face_turn(start, end, lo, hi) == pytest.approx(turn)
+    turned = face_turn(np.array([0.0, offset]), np.array([0.6, offset]), np.array([0.5, -0.25]), np.array([0.9, 0.25]))
+    assert turned == pytest.approx(turn), "the same push turned a quarter clockwise (toward +x) turns the face alike"
+
+
+def test_a_turned_face_is_kept_only_where_the_turned_feet_stay_over_the_floor() -> None:
+    """Along a platform's edge (a drop of 0.3 m past it) 3 mm beyond the flat feet's centres, the feet of a body
+    turned 2.5 degrees swing 5 mm over it at one end: a drop; the flat feet keep to the platform."""
+    edge = LIMITS.body_size[0] / 2 - FOOT_RADIUS + 0.003  # 3 mm beyond the flat feet's centres
+
+    def heights(xy: np.ndarray) -> np.ndarray:
+        return np.where(xy[:, 0] > edge, -0.3, 0.0)
+
+    start, end = np.array([0.0, 0.0]), np.array([0.0, 0.6])
+    assert turned_feet_drop(heights, start, end, LIMITS, 0.0, 0.0) is None
+    drop = turned_feet_drop(heights, start, end, LIMITS, FACE_TURN, 0.0)
+    assert drop is not None and drop.kind == "drop", drop
 
 
 def test_the_first_clear_push_sweep_is_the_first_one_sweep_problem_clears_read_a_few_at_a_time() -> None:
