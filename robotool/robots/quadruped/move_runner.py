@@ -28,8 +28,8 @@ from robotool.vocabulary import MoveEnd
 @dataclass
 class Move:
     """One straight move to ``goal`` (x-y); ``pushing`` is the object index being pushed or -1, and ``face`` (rad,
-    counter-clockwise) how far a push turns the body off the quarter heading it holds as it starts (flat again after
-    ``config.face_travel``). A move with a ``turn`` (rad, the heading to reach) turns in place at ``goal`` instead."""
+    counter-clockwise) how far a push turns the body off the quarter heading it holds. A move with a ``turn`` (rad,
+    the heading to reach) turns in place at ``goal`` instead."""
 
     goal: np.ndarray
     pushing: int = -1
@@ -196,9 +196,6 @@ class MoveRunner:
         local = np.where(pushed, terrain.gather(t.heights[worlds], index), local)
         waiting = terrain.lift(worlds, q, travel, centres, local, under_torso, index)
         self._steer(worlds, q, waiting)
-        flat = worlds[(pushing >= 0) & (travel > config.face_travel)]  # the face turned at a push's start: flat again
-        quarter = np.pi / 2
-        self.sim.ctrl[flat, self.ids.yaw_actuator] = np.round(self.senses.yaw(flat) / quarter) * quarter
         self._check_arrival(worlds, q, travel, ends)
 
     def _steer(self, worlds: np.ndarray, q: np.ndarray, waiting: np.ndarray) -> None:

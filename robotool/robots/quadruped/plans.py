@@ -202,8 +202,8 @@ class Plans:
     ) -> tuple[tuple[np.ndarray, np.ndarray, float, float] | None, str]:
         """The push start and end poses nearest straight-on whose sweep meets nothing above the floor and whose
         feet stay over the floor (no drop, no gap), with how far behind the start the robot lines up and how far it
-        turns its face as it pushes (:func:`~.push.face_turn`, where the turned feet stay over the floor from the
-        start, else none); when there is none, what was wrong under the feet.
+        turns its face as it pushes (:func:`~.push.face_turn`, where something lies on the object and the turned
+        feet stay over the floor from the start, else none); when there is none, what was wrong under the feet.
 
         Poses whose sweep is clear from the staging point (``staging`` behind the start, where the robot lines up)
         come first, so that the robot can line up there; failing those, a clear sweep from the start will do.
@@ -224,7 +224,7 @@ class Plans:
         clear, drop = first_clear_sweep(heights, sweeps, limits, floor)
         if clear is not None:
             start, end, staging = tries[clear]
-            face = face_turn(start, end, lo, hi)
+            face = face_turn(start, end, lo, hi) if self.referee.loaded(w, index) else 0.0
             if face and turned_feet_drop(heights, start, end, limits, face, floor) is not None:
                 face = 0.0
             return (start, end, staging, face), ""

@@ -5,8 +5,8 @@ the robot's face flat against the object's face, so an axis-aligned body never p
 For each leg the robot stands on the object's far side; if the straight-on pose or its sweep would run
 into something higher than the floor it stands on (another object, a board overhead), the pose slides
 along the object's face to the nearest clear one that still overlaps the face. Lined up well off the
-object's centre line, the robot starts the push with its face turned a little toward that line
-(:func:`face_turn`), so that it meets the object nearest the line first, and flat again once it moves.
+centre line of an object that something lies on, the robot pushes with its face turned a little toward
+that line (:func:`face_turn`), so that it meets the object nearest the line first.
 """
 
 from __future__ import annotations
@@ -112,10 +112,10 @@ def push_pose(
 
 def face_turn(start: np.ndarray, end: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
     """How far (rad, counter-clockwise) the body turns its face toward the centre line of an object with x-y bounds
-    ``lo``-``hi`` as a push from ``start`` to ``end`` (robot centres) starts: :data:`FACE_TURN` where it lines up off
-    that line by more than :data:`FACE_TURN_FROM` of the object's half width across the push, else none (a flat
-    face). The face then meets the object at its inner end first: met at its outer end, the object turns away and
-    slides off the face."""
+    ``lo``-``hi`` for a push from ``start`` to ``end`` (robot centres): :data:`FACE_TURN` where it lines up off that
+    line by more than :data:`FACE_TURN_FROM` of the object's half width across the push, else none (a flat face). The
+    face then meets the object at its inner end first: met at its outer end, an object with weight on part of its top
+    turns away and slides off the face (the push skill turns the face for such objects only)."""
     u = (end - start) / max(float(np.linalg.norm(end - start)), 1e-9)
     to_centre = (lo + hi) / 2 - start
     offset = float(u[0] * to_centre[1] - u[1] * to_centre[0])  # > 0: the centre line lies to the left

@@ -109,13 +109,11 @@ class QuadrupedConfig:
     side_margin: float = 0.01
     """m beyond the body's outline that must be clear of anything higher than its floor."""
     face_turn: float = float(np.radians(2.5))
-    """rad the body turns its face toward the pushed object's centre line as a push starts lined up off that line
-    (more than ``face_turn_from`` of the object's half width), where the turned feet stay over the floor: the face
-    then meets the object first at its inner end, nearest the centre line, and not at the outer end, which would turn
-    the object and slide it off the face. After ``face_travel`` the face is flat again (a turned face pushes the
-    object a little sideways)."""
-    face_travel: float = 0.2
-    """m of a push's travel after which the body's face is turned flat again."""
+    """rad the body turns its face toward the centre line of a pushed object that something lies on, as it pushes
+    lined up off that line (more than ``face_turn_from`` of the object's half width), where the turned feet stay over
+    the floor. The weight on part of the top drags on that part and turns the object; the turned face meets it first
+    at its inner end, nearest the centre line, and not at the outer end, where the object would turn further away and
+    slide off the face. (A flat face pushes a free object straighter: a turned one drifts it a little sideways.)"""
     face_turn_from: float = 0.25
     """the share of the pushed object's half width (across the push) beyond which the body's face is turned."""
     detour_slack: float = 0.05

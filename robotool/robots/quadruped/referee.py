@@ -148,6 +148,17 @@ class Referee:
             limits=self.limits,
         )
 
+    def loaded(self, w: int, index: int) -> bool:
+        """Whether another object lies on object ``index`` in world ``w``, borne up by it at least in part (a board's
+        raised end resting on a chair, though the board also rests on its fulcrum): its weight on part of the top
+        drags on that part as the object is pushed."""
+        owner = self.scene.body_object
+        mine = owner == index
+        normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
+        touching = self.senses.state.touching[w][mine].any(axis=0) & (owner >= 0) & ~mine
+        others = np.unique(owner[touching])
+        return any((bears_up(normals[:, owner == other].sum(axis=1)) & mine).any() for other in others)
+
     def _riders(self, w: int, index: int) -> list[int]:
         """Movable objects that ride on object ``index`` in world ``w``, recursively: borne up by nothing else (but
         the robot): every body whose contacts press up on them (:func:`~.support.bears_up`) is
