@@ -207,3 +207,28 @@ def test_a_push_lined_up_off_the_centre_turns_the_face_so_the_object_does_not_sl
     assert all(p.skill == "push_to_position" and p.outcome == "done" for p in pushes), pushes
     lay = task.object("surfboard").center
     assert len(boards) == 3 and all(np.hypot(b[0] - lay[0], b[1] - lay[1]) < 0.05 for b in boards), boards
+
+
+def test_what_lies_on_an_object_is_read_from_the_contacts_that_bear_it_up() -> None:
+    """The board's raised end lies on the chair, though the board also rests on the roller, and the cube lies on the
+    board: the chair, the board and the roller are loaded (a push of the chair or the board lined up off its centre
+    line turns the face); the cube touches the board only from above, and nothing lies on the furniture."""
+    from robotool.sim.backend_choice import make_sim
+    from robotool.sim.build import embodiment_for
+
+    task = generate("cube_lifting", 9610).task
+    scene = sim.build(task)
+    simulator = make_sim(scene, 1, backend="mujoco", perturbation=Perturbation.none(scene, 1))
+    simulator.step(200, np.ones(1, dtype=bool))
+    controller = embodiment_for(task).controller(simulator)
+    controller.tick(simulator.state())
+    loaded = {name: controller.referee.loaded(0, k) for k, name in enumerate(scene.object_names)}
+    assert loaded == {
+        "yoga_roller": True,
+        "surfboard": True,
+        "cube": False,
+        "chair": True,
+        "side_table_1": False,
+        "bin_1": False,
+        "side_table_2": False,
+    }
