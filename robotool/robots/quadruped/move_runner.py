@@ -146,9 +146,13 @@ class MoveRunner:
         self.terrain.start_move(w)
         if move.pushing >= 0:
             self.on_push(w, move.pushing)
-            quarter = np.pi / 2
-            self.sim.ctrl[w, self.ids.yaw_actuator] = np.round(self.senses.yaw(w) / quarter) * quarter + move.face
+            self.sim.ctrl[w, self.ids.yaw_actuator] = self._quarter_heading(w) + move.face
         s.best[w], s.progress_time[w] = np.inf, float(self.senses.state.time[w])
+
+    def _quarter_heading(self, worlds: np.ndarray | int) -> np.ndarray:
+        """The heading a robot holds in ``worlds``: the nearest quarter turn to its heading now (rad)."""
+        quarter = np.pi / 2
+        return np.round(self.senses.yaw(worlds) / quarter) * quarter
 
     def _end(self, w: int, outcome: MoveEnd | None) -> SkillEnd:
         self.state.plans[w] = None
@@ -164,8 +168,7 @@ class MoveRunner:
         ctrl[worlds[:, None], act[:2]] = self.state.setpoint[worlds]
         ctrl[worlds, act[2]] = OFF
         ctrl[worlds[:, None], act[3:]] = 0.0
-        quarter = np.pi / 2  # the heading held is the nearest quarter turn (a push's twist does not build up)
-        ctrl[worlds, self.ids.yaw_actuator] = np.round(self.senses.yaw(worlds) / quarter) * quarter
+        ctrl[worlds, self.ids.yaw_actuator] = self._quarter_heading(worlds)  # (a push's twist does not build up)
         self.terrain.state.lift[worlds] = np.nan
 
     def drive(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:

@@ -20,7 +20,7 @@ import numpy as np
 
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths
+from robotool.robots.quadruped.terrain import RISE, foot_offsets, foot_paths, rotated
 
 # the push geometry's tunables, documented in QuadrupedConfig
 GAP = QUADRUPED.push_gap
@@ -135,10 +135,7 @@ def turned_feet_drop(
 ) -> SweepProblem | None:
     """The drop under the feet of a body turned by ``angle`` (rad) on a push from ``start`` to ``end`` (robot
     centres) over a floor at ``floor`` (None: they stay over the floor); ``heights`` as for :func:`sweep_problem`."""
-    c, s = np.cos(angle), np.sin(angle)
-    feet = foot_offsets(limits) @ np.array([[c, s], [-s, c]])  # each row turned counter-clockwise
-    length = float(np.linalg.norm(end - start))
-    points = foot_paths(start + feet, (end - start) / max(length, 1e-9), length).reshape(-1, 2)
+    points = _feet_paths(start, end, limits, angle)
     return _drop(points, heights(points), floor)
 
 
@@ -220,10 +217,12 @@ def _blocked(footprint: np.ndarray, floor: float) -> bool:
     return bool(np.any(footprint > floor + RISE))
 
 
-def _feet_paths(behind: np.ndarray, end: np.ndarray, limits: QuadrupedLimits) -> np.ndarray:
-    """Sample points (n, 2) on the feet's paths of a push sweep from ``behind`` to ``end``."""
+def _feet_paths(behind: np.ndarray, end: np.ndarray, limits: QuadrupedLimits, angle: float = 0.0) -> np.ndarray:
+    """Sample points (n, 2) on the feet's paths of a push sweep from ``behind`` to ``end``, the body turned by
+    ``angle`` (rad, counter-clockwise) off its axis-aligned pose."""
     u = (end - behind) / max(float(np.linalg.norm(end - behind)), 1e-9)
-    return foot_paths(behind + foot_offsets(limits), u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
+    feet = rotated(foot_offsets(limits), np.array([angle]))[0] if angle else foot_offsets(limits)
+    return foot_paths(behind + feet, u, float(np.linalg.norm(end - behind))).reshape(-1, 2)
 
 
 def _drop(points: np.ndarray, under: np.ndarray, floor: float) -> SweepProblem | None:

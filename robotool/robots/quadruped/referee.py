@@ -156,8 +156,11 @@ class Referee:
         mine = owner == index
         normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
         touching = self.senses.state.touching[w][mine].any(axis=0) & (owner >= 0) & ~mine
-        others = np.unique(owner[touching])
-        return any((bears_up(normals[:, owner == other].sum(axis=1)) & mine).any() for other in others)
+        return any((self._bearing(normals, other) & mine).any() for other in np.unique(owner[touching]))
+
+    def _bearing(self, normals: np.ndarray, index: int) -> np.ndarray:
+        """(nbody,) the bodies that press up on object ``index`` (``normals``: a world's contact normals)."""
+        return bears_up(normals[:, self.scene.body_object == index].sum(axis=1))
 
     def _riders(self, w: int, index: int) -> list[int]:
         """Movable objects that ride on object ``index`` in world ``w``, recursively: borne up by nothing else (but
@@ -176,8 +179,7 @@ class Referee:
             for other in np.unique(owner[touching & (owner >= 0)]):
                 if other == index or other in riders or not self.facts.movable[other]:
                     continue
-                onto = normals[:, owner == other].sum(axis=1)  # (nbody, 3) from each body onto it
-                bearing = bears_up(onto)  # pressing up on it
+                bearing = self._bearing(normals, other)  # pressing up on it
                 supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & bearing
                 if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
                     riders.append(int(other))

@@ -216,7 +216,7 @@ def test_a_push_lined_up_off_the_centre_turns_the_face_toward_the_centre_line(of
     assert turned == pytest.approx(turn), "the same push turned a quarter clockwise (toward +x) turns the face alike"
 
 
-def test_a_turned_face_is_kept_only_where_the_turned_feet_stay_over_the_floor() -> None:
+def test_the_turned_feet_meet_a_drop_where_the_flat_feet_keep_to_the_platform() -> None:
     """Along a platform's edge (a drop of 0.3 m past it) 3 mm beyond the flat feet's centres, the feet of a body
     turned 2.5 degrees swing 5 mm over it at one end: a drop; the flat feet keep to the platform."""
     edge = LIMITS.body_size[0] / 2 - FOOT_RADIUS + 0.003  # 3 mm beyond the flat feet's centres
