@@ -108,6 +108,7 @@ CASES = [
     ("vase_onto_cushion_edge", "vase_lowering"),
     ("turn_in_place_on_the_propped_lever", "cube_lifting"),  # jolts of quarter turns on the propped raised end
     ("turn_on_the_lever_to_sweep_the_cube", "cube_lifting"),  # the body's sweep would meet the cube
+    ("wedge_the_chair_under_the_board", "cube_lifting"),  # no stance: the sweep under the board meets it
 ]
 
 
