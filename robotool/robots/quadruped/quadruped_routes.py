@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from robotool.planner.codegen import Program
-from robotool.planner.layout import Box, Layout
+from robotool.planner.layout import CONTACT, Box, Layout
 from robotool.robots.quadruped.predict import detour, walk_violation
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
@@ -118,6 +118,9 @@ FOOT = QUADRUPED.foot_radius  # m the feet sit inside the body's outline: they m
 ENTRIES = QUADRUPED.entries
 LANDING_STEP = QUADRUPED.landing_step
 STANCE_SLACK = QUADRUPED.stance_slack
+LANE_TOLERANCE = 0.02  # m: lanes closer than this are one
+LINE_UP_REACH = 2.0  # m a line-up point is moved back, at most, to stand on the floor
+LINE_UP_STEP = 0.05  # m between the line-up points tried
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
@@ -165,16 +168,16 @@ def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
         return
     found = []
     for d in DIRECTIONS:
-        entry = _entry(quad, box, d, quad.start)
-        if entry is None:
-            continue
-        approach, inside = entry
-        path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, inside]
-        if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
-            found.append((_length(quad.start, path), approach, inside, d))
+        for approach, inside in _entries(quad, box, d, quad.start):
+            route = Route(
+                waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words
+            )
+            route = _landing(quad, name, route)  # short of what stands on the top
+            path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, route.waypoints[-1][0]]
+            if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
+                found.append((_length(quad.start, path), route))
     found.sort(key=lambda f: f[0])
-    for _, approach, inside, _ in found[:ENTRIES]:
-        yield Route(waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words)
+    yield from (route for _, route in found[:ENTRIES])
     if not found:
         yield straight
 
@@ -184,17 +187,46 @@ def _length(start: np.ndarray, path: list[np.ndarray]) -> float:
     return sum(float(np.linalg.norm(b - a)) for a, b in itertools.pairwise(points))
 
 
-def _entry(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Where to line up (outside ``box``, facing ``d``) and where to stop on its top, or None when the box is too
-    narrow across ``d`` for the feet."""
+def _entries(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Where to line up (outside ``box``, facing ``d``, on the robot's floor) and where to stop on its top, one pair
+    for each lane across ``d`` worth trying: the one toward ``frm`` and, for each object standing before the face it
+    climbs (a step up to it, which the feet must stay on), the lanes along its middle and along each side; none when
+    the box is too narrow across ``d`` for the feet."""
     axis = int(np.argmax(np.abs(d)))
     lat = 1 - axis
     if box.half[lat] < quad.half[lat] - FOOT:
-        return None
+        return []
     inside = quad.top_point(box, d, frm)
-    approach = inside.copy()
-    approach[axis] = box.center[axis] - d[axis] * (box.half[axis] + quad.half[axis] + APPROACH)
-    return approach, inside
+    room = max(box.half[lat] - quad.half[lat] - INSET, 0.0)
+    face = box.center[axis] - d[axis] * box.half[axis]
+    reach = 2 * quad.half[axis] + APPROACH  # objects this near before the face lie in the climb's lane
+    lanes = [inside[lat]]
+    for other in quad.layout.boxes([box.name]):
+        before = (face - other.center[axis]) * d[axis]  # how far before the face its centre lies
+        if -CONTACT <= before - other.half[axis] < reach and abs(other.center[lat] - box.center[lat]) < box.half[lat]:
+            spare = max(other.half[lat] - quad.half[lat] - INSET, 0.0)  # the feet stay on it across this
+            for lane in other.center[lat] + np.array([0.0, -spare, spare]):
+                lanes.append(box.center[lat] + float(np.clip(lane - box.center[lat], -room, room)))
+    out: list[tuple[np.ndarray, np.ndarray]] = []
+    for lane in lanes:
+        if any(abs(lane - stop[lat]) < LANE_TOLERANCE for _, stop in out):
+            continue
+        stop = inside.copy()
+        stop[lat] = lane
+        approach = stop.copy()
+        approach[axis] = face - d[axis] * (quad.half[axis] + APPROACH)
+        out.append((_on_floor(quad, approach, -d), stop))
+    return out
+
+
+def _on_floor(quad: Quadruped, xy: np.ndarray, away: np.ndarray) -> np.ndarray:
+    """``xy``, or the first point from it along ``away`` where the body stands clear on the robot's floor (steps
+    before a face are climbed from there, not lined up on); ``xy`` when none is within :data:`LINE_UP_REACH`."""
+    for back in np.arange(0.0, LINE_UP_REACH, LINE_UP_STEP):
+        point = xy + away * back
+        if quad.layout.heights(sweep_points(point, point, quad.half)).max() <= quad.floor + RISE:
+            return point
+    return xy
 
 
 def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:

@@ -11,10 +11,18 @@ from robotool import tasks
 from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
 from robotool.planner.search import order, tight
-from robotool.planner.solve import robot_planner
-from robotool.robots.quadruped.predict import push_problem
+from robotool.planner.solve import robot_planner, solve
+from robotool.robots.quadruped.predict import detour, push_problem, walk_violation
+from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
-from robotool.robots.quadruped.quadruped_routes import MIN_CLEARANCE, ROOM_MARGIN, TIP_PAST, Quadruped, _lined_up
+from robotool.robots.quadruped.quadruped_routes import (
+    MIN_CLEARANCE,
+    ROOM_MARGIN,
+    TIP_PAST,
+    Quadruped,
+    _direct,
+    _lined_up,
+)
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
@@ -115,6 +123,49 @@ def test_the_vase_is_pushed_until_it_tips_off_and_the_robot_stays_behind_it() ->
     assert all(codes)
     for rollouts in run_seeded(task, [(code, [50_001]) for code in codes if code is not None]):
         assert rollouts[0].conditions["robot_stood_on_nothing_fragile"], failure_reason(rollouts)
+
+
+def test_a_climb_onto_a_sofa_lines_up_in_the_lane_of_the_steps_before_it_on_the_floor() -> None:
+    """Fixed steps stand against the sofa's -x side along its +y end; the robot comes from far off to -y. Lined up
+    in the lane toward it (the sofa's -y end), the feet would miss the steps, and the line-up point, counted from
+    the sofa's face, would lie on box_1: the climb is lined up in the steps' lane, on the floor before box_1, and the
+    walk is predicted fine (before, no line-up was, and the robot tried to climb the sofa's 0.34 m side)."""
+    task = parse_task({
+        "format": 1, "name": "steps_at_one_end", "category": "sequential_tool_use",
+        "instruction": "Get onto the sofa.",
+        "robot": {"type": "quadruped", "position": [-1.0, -1.5]},
+        "objects": [
+            _box("sofa", [2.0, 0.0, 0.17], [0.9, 1.5, 0.34], movable=False),
+            _box("box_1", [0.95, 0.45, 0.06], [0.4, 0.6, 0.12], movable=False),
+            _box("box_2", [1.35, 0.45, 0.12], [0.4, 0.6, 0.24], movable=False),
+        ],
+        "goal": {"robot_on": "sofa"},
+    })
+    quad = Quadruped(task)
+    route = next(_direct(quad, "sofa"))
+    (approach, floor), (stop, sofa) = route.waypoints
+    assert (floor, sofa) == (quad.floor_name, "sofa")
+    layout = Layout(task)
+    assert layout.heights(sweep_points(approach, approach, quad.half)).max() == 0.0
+    steps = layout.box("box_1")
+    assert np.all(np.abs(stop[1] + foot_offsets(task.limits)[:, 1] - steps.center[1]) < steps.half[1])
+    path = [*detour(layout, quad.start, approach, quad.limits)[:-1], approach, stop]
+    assert walk_violation(layout, quad.start, path, quad.limits) is None
+
+
+@pytest.mark.slow
+def test_the_planner_lines_up_the_climb_in_the_steps_lane_after_pushing_the_cushion_beside_the_sofa() -> None:
+    """vase_lowering seed 9811: the cushion is pushed beside the sofa's -y side, and the robot, standing behind it,
+    must climb the steps against the sofa's -x side. Every line-up used to fall off the steps' lane or onto box_2,
+    and the planner returned a straight climb that ran into the cushion in every world; it now solves the task in
+    every planning and verification world and in five fresh ones."""
+    task = generate("vase_lowering", 9811).task
+    solution = solve(task)
+    assert solution.code is not None and solution.success_rate == 1.0
+    code, rejection, _ = prepare_code(solution.code, task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=5, seed=50_000)
+    assert all(r.success for r in rollouts), failure_reason(rollouts)
 
 
 def test_an_object_past_its_place_is_not_lined_up_on_the_next_links_spot() -> None:
