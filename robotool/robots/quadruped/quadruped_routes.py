@@ -412,6 +412,9 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
         stance = np.zeros(2)
         stance[axis] = boxes[k].center[axis]
         stance[1 - axis] = lines[min(k, len(lines) - 1)]
+        if k < len(chain) - 1 and _walked_over(quad, boxes[k], combo[max(k - 1, 0)][0], d, previous, stance):
+            route.uses.append((chain[k].name, f"tool: a step up to {chain[k + 1].name}"))
+            continue
         if k:  # straight onto this step along the last climb, then over to this climb's line
             prev_d = combo[k - 1][0]
             prev_axis = int(np.argmax(np.abs(prev_d)))
@@ -436,6 +439,17 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
         + f", then climb it onto {chain[-1].name}."
     )
     return route
+
+
+def _walked_over(
+    quad: Quadruped, link: Box, came: np.ndarray, goes: np.ndarray, here: np.ndarray, stance: np.ndarray
+) -> bool:
+    """Whether the robot climbs on over ``link`` without stopping on it: the climb onto it (along ``came``) and the
+    next (along ``goes``) run straight on in one lane, and the link is shorter along them than the body, whose feet
+    would stand on its edges if it stopped there (a perturbed pose then leaves a pair of them over the edge)."""
+    axis = int(np.argmax(np.abs(goes)))
+    straight = bool(np.allclose(came, goes)) and abs(here[1 - axis] - stance[1 - axis]) < LANE_TOLERANCE
+    return straight and 2 * link.half[axis] < 2 * quad.half[axis] + 2 * FOOT
 
 
 def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray | None:

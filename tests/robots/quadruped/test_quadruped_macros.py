@@ -168,6 +168,23 @@ def test_the_planner_lines_up_the_climb_in_the_steps_lane_after_pushing_the_cush
     assert all(r.success for r in rollouts), failure_reason(rollouts)
 
 
+@pytest.mark.slow
+def test_a_step_shorter_than_the_body_is_climbed_over_without_stopping_on_it() -> None:
+    """sofa_climbing seed 9805: box_1, 0.6 m along the climb, is pushed against the sofa's side and the robot
+    (0.65 m long) climbs it straight on onto the sofa. Stopping on box_1 first, the feet stood on its edges, and in
+    one of ten fresh worlds the rear pair was over the edge and the robot fell: the climb now goes on over box_1 to
+    the sofa in one call, and the program holds in all ten."""
+    task = generate("sofa_climbing", 9805).task
+    solution = solve(task)
+    assert solution.code is not None and solution.success_rate == 1.0
+    climbs = [line for line in solution.code.splitlines() if line.startswith("climb_to_position")]
+    assert len(climbs) == 1, solution.code  # onto the sofa: no stop on box_1 first
+    code, rejection, _ = prepare_code(solution.code, task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=10, seed=50_000)
+    assert all(r.success for r in rollouts), failure_reason(rollouts)
+
+
 def test_an_object_past_its_place_is_not_lined_up_on_the_next_links_spot() -> None:
     """box_1 is to stand against box_2's -x side (climb toward +x) but starts at a larger x than that spot: lined up
     across first, it would be pushed onto box_2 itself and its last push would run away from the face."""
