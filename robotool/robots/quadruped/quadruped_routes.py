@@ -159,7 +159,8 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
 
 def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
     """Walk onto ``name``: straight when that is predicted fine, else lined up along an axis with one of its
-    sides (reached around what stands in the way), the shortest predicted-fine approaches first."""
+    sides (reached around what stands in the way), in the first lane predicted fine from each side
+    (:func:`_entries`), the shortest predicted-fine approaches first."""
     box = quad.layout.box(name)
     words = f"Walk onto {name}."
     straight = Route(waypoints=[(box.center, name)], words=words)
@@ -176,6 +177,7 @@ def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
             path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, route.waypoints[-1][0]]
             if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
                 found.append((_length(quad.start, path), route))
+                break  # the first lane predicted fine from this side
     found.sort(key=lambda f: f[0])
     yield from (route for _, route in found[:ENTRIES])
     if not found:
