@@ -155,6 +155,7 @@ LAYOUT_CASES = [
     ("climb_tall_box", "climb_mirrored"),
     ("climb_tall_box", "climb_plus_y"),
     ("climb_one_box_at_sofa", "climb_mirrored"),
+    ("climb_with_one_row_of_feet_on_narrow_stairs", "climb_stairs_narrower_than_the_feet"),  # a row climbs 0.34 m
     ("climb_toward_diagonal", "climb_plus_y"),
     ("climb_toward_diagonal", "climb_stairs_wrong_order"),
     ("climb_toward_front_feet", "climb_mirrored"),
