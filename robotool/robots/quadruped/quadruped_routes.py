@@ -103,10 +103,15 @@ class Quadruped:
         """Half length of the body along direction ``u``."""
         return float(np.abs(u) @ self.half)
 
+    def room(self, box: Box) -> np.ndarray:
+        """How far (x, y) the body's centre may stand off ``box``'s centre with the body on its top, ``INSET`` from
+        its edges (0 where it does not fit)."""
+        return np.maximum(box.half - self.half - INSET, 0.0)
+
     def top_point(self, box: Box, toward: np.ndarray, frm: np.ndarray) -> np.ndarray:
         """A point well on ``box``'s top for a robot arriving from ``frm``: its centre, or, for a long box,
         the point along the arrival direction that leaves room for the body."""
-        room = np.maximum(box.half - self.half - INSET, 0.0)
+        room = self.room(box)
         along = np.clip(frm - box.center, -room, room)
         return np.where(np.abs(toward) > 0.5, box.center, box.center + along)
 
@@ -199,14 +204,14 @@ def _entries(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> list[
     if box.half[lat] < quad.half[lat] - FOOT:
         return []
     inside = quad.top_point(box, d, frm)
-    room = max(box.half[lat] - quad.half[lat] - INSET, 0.0)
+    room = quad.room(box)[lat]
     face = box.center[axis] - d[axis] * box.half[axis]
     reach = 2 * quad.half[axis] + APPROACH  # objects this near before the face lie in the climb's lane
     lanes = [inside[lat]]
     for other in quad.layout.boxes([box.name]):
         before = (face - other.center[axis]) * d[axis]  # how far before the face its centre lies
         if -CONTACT <= before - other.half[axis] < reach and abs(other.center[lat] - box.center[lat]) < box.half[lat]:
-            spare = max(other.half[lat] - quad.half[lat] - INSET, 0.0)  # the feet stay on it across this
+            spare = quad.room(other)[lat]  # the feet stay on it across this
             for lane in other.center[lat] + np.array([0.0, -spare, spare]):
                 lanes.append(box.center[lat] + float(np.clip(lane - box.center[lat], -room, room)))
     out: list[tuple[np.ndarray, np.ndarray]] = []
