@@ -156,10 +156,14 @@ class Writer:
         if problem and not self.prog.doubt:
             self.prog.doubt = problem
 
-    def walk(self, xy: np.ndarray, surface: str, intent: str, along_from: str | None = None) -> None:
+    def walk(
+        self, xy: np.ndarray, surface: str, intent: str, along_from: str | None = None, fixed_axis: int | None = None
+    ) -> None:
         """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object.
         With ``along_from``, a movable surface's point is placed along the line from that object's centre through
-        the surface's as they lie when the walk runs (a lever that turned about its load keeps the robot on it)."""
+        the surface's as they lie when the walk runs (a lever that turned about its load keeps the robot on it);
+        with ``fixed_axis``, the point's coordinate on that axis is the planned number (a spot placed by something
+        fixed, such as a lever's fulcrum), the others follow the surface."""
         height = 0.0 if surface == "ground" else self.layout.box(surface).top
         if surface == "ground" or not self.quad.task.object(surface).movable:
             point = Point.at(None, (*xy, height))
@@ -167,6 +171,8 @@ class Writer:
             point = self._along(xy, surface, along_from)
         else:  # a movable surface may not be quite where it was pushed to
             point = Point.at(self.position(surface), (*(xy - self.layout.box(surface).center), 0.0))
+            if fixed_axis is not None:
+                point = point.with_axis(fixed_axis, None, float(xy[fixed_axis]))
         skill = "climb_to_position" if height > self.level + 0.015 else "walk_to_position"
         self.prog.motion(skill, point=point, objects=[] if surface == "ground" else [surface], intent=intent)
         self.level = max(height, self.level) if skill == "climb_to_position" else height
@@ -318,7 +324,9 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
             if np.linalg.norm(xy - w.here) > 1e-6:  # (after a turn the robot stands in that lane already)
                 w.floor_walk(xy, "walk beside the board")
-        w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum", along_from=target.name)
+        # beside the fulcrum, which stays where it is, though the prop's push may have dragged the board along: the
+        # climb runs straight on from the lane, clear of the fulcrum's end sticking out beside a dragged board
+        w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum", fixed_axis=axis)
         w.stance(step_on, board_name)
         lift = f"walk to {board_name}'s far end so it tips and lifts {target.name}"
         w.walk(end, board_name, lift, along_from=target.name)
