@@ -29,6 +29,7 @@ from robotool.robots.quadruped.predict import (
 from robotool.robots.quadruped.push import legs
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
+    DIRECTIONS,
     INSET,
     MIN_CLEARANCE,
     ROOM_MARGIN,
@@ -48,6 +49,9 @@ from robotool.task.task_model import Task
 
 # --- writing routes into programs ---------------------------------------------------------------------
 
+STEP_ON_NEAR = 0.01  # m the feet step onto a lever at least this far short of its fulcrum's centre line
+FULCRUM_CLEARANCE = 0.02  # m the feet keep from a lever's fulcrum as they step on, where the load leaves room
+LOAD_CLEARANCE = 0.03  # m the body's rear keeps from the load on the lever's other end as the feet step on
 OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it: thin
 
 
@@ -240,15 +244,52 @@ class Writer:
 def candidates(task: Task, tools: bool) -> Iterator[Program]:
     """Every program the macros make for the task (unordered; the search orders them). When each program the robot
     can make facing as it starts is predicted to fail or leaves a thin margin (:func:`.search.tight`), the programs
-    it can make after a quarter turn in place (its x and y sizes swapped) are made too."""
-    facing = list(_programs(Quadruped(task), tools))
-    yield from facing
+    it can make after a quarter turn in place (its x and y sizes swapped) are made too; when every one is predicted
+    to fail, those it can make after pushing an object out of the way first (:func:`_cleared`)."""
+    quads = [Quadruped(task)]
+    made = list(_programs(quads[0], tools))
+    yield from made
     limits = task.limits
     assert isinstance(limits, QuadrupedLimits)
-    if all(p.doubt is not None or tight(p) for p in facing) and limits.body_size[0] != limits.body_size[1]:
+    if all(p.doubt is not None or tight(p) for p in made) and limits.body_size[0] != limits.body_size[1]:
         quad = Quadruped(task, heading=90)
         if turn_violation(quad.layout, quad.start, limits, quad.heading) is None:
-            yield from _programs(quad, tools)
+            quads.append(quad)
+            turned = list(_programs(quad, tools))
+            yield from turned
+            made += turned
+    if tools and all(p.doubt is not None for p in made):
+        for quad in quads:
+            yield from _cleared(quad, tools)
+
+
+def _cleared(quad: Quadruped, tools: bool) -> Iterator[Program]:
+    """For a task whose every program is predicted to break a limit (a cushion standing where the climb lines up):
+    the programs made after first pushing one object on the robot's floor out of the way, those not predicted to
+    break one. Each object the robot may push there (not the goal's) goes, along an axis, to where its footprint is
+    clear of where it stood by the body's length, the first such spot free and its push predicted fine."""
+    goal = quad.task.goal.object
+    for obj in quad.task.objects:
+        if obj.name == goal or not quad.pushable(obj, quad.floor):
+            continue
+        box = quad.layout.box(obj.name)
+        for d in DIRECTIONS:
+            spot = box.center + d * (2 * float(np.abs(d) @ box.half) + 2 * float(quad.half.max()))
+            if quad.layout.collides(box.moved_to(spot)) is not None:
+                continue
+            opening = quad.program()
+            opening.use(obj.name, "obstacle: it stands in the way; push it aside first")
+            w = Writer(quad, opening)
+            w.push(obj.name, spot, "out of the way")
+            if opening.doubt is not None:
+                continue
+            opening.say(f"Push {obj.name} out of the way.")
+            after = quad.after(w.layout, w.here, [obj.name])
+            after.opening = opening
+            fine = [p for p in _programs(after, tools) if p.doubt is None]
+            yield from fine
+            if fine:
+                break
 
 
 def _programs(quad: Quadruped, tools: bool) -> Iterator[Program]:
@@ -318,7 +359,7 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             w = _turned_lengthwise(w, bbox, a, lat * side, board_name)
         walker = w.quad
         beside = float(np.abs(lat) @ bbox.half) + walker.extent(lat) + SIDE
-        step_on = fulcrum.center - a * (walker.extent(a) + 0.01)
+        step_on = fulcrum.center - a * _step_on_distance(walker.extent(a), fulcrum, quad.layout.box(target.name), a)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
         end = bbox.center + a * (float(np.abs(a) @ bbox.half) - walker.extent(a) - INSET)
         for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
@@ -337,6 +378,19 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             + f"the lever lifts {target.name}."
         )
         yield prog
+
+
+def _step_on_distance(extent: float, fulcrum: Box, load: Box, a: np.ndarray) -> float:
+    """How far before the fulcrum's centre (toward the ``load``, against ``a``) the body's centre stands as it steps
+    onto the lever: where the load leaves room, with the feet (``extent``, the body's half length along the lever,
+    reaches their outer edge) :data:`FULCRUM_CLEARANCE` clear of the fulcrum's footprint, else as far as the body's
+    rear stays :data:`LOAD_CLEARANCE` short of the load; never nearer than :data:`STEP_ON_NEAR` short of the fulcrum's
+    centre line. (Stepped on with the feet over the fulcrum's top, the robot fell walking out to the far end in some
+    worlds where it held a few millimetres further back.)"""
+    near = extent + STEP_ON_NEAR
+    clear = extent + float(np.abs(a) @ fulcrum.half) + FULCRUM_CLEARANCE
+    room = float((fulcrum.center - load.center) @ a) - float(np.abs(a) @ load.half) - extent - LOAD_CLEARANCE
+    return max(near, min(clear, room))
 
 
 def _prop_spot(prop: Box, board: Box, direction: np.ndarray, clearance: float) -> np.ndarray:

@@ -73,9 +73,12 @@ class Quadruped:
         self.floor_name, self.floor = start_surface(task)
         self.layout = Layout(task)
         self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
+        self.opening: Program | None = None  # what its programs open with, made before (a push out of the way)
 
     def program(self) -> Program:
-        """A new program, opening with the robot's turn when it has one."""
+        """A new program, opening with the robot's turn when it has one, or with a copy of its ``opening``."""
+        if self.opening is not None:
+            return copy.deepcopy(self.opening)
         prog = Program()
         if self.heading:
             prog.turn(self.heading, f"turn so that the body's length lies along {'xy'[self.heading // 90 % 2]}")

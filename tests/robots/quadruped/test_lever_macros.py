@@ -31,6 +31,8 @@ def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_l
     ran aslant from the lane, and its front foot met the fulcrum's end sticking out beside a dragged board.)"""
     task = tasks.load(FIXTURES / "layouts" / "lever_plus_y.yaml")  # the lever runs along y, the cube at +y
     fulcrum_y = task.object("yoga_roller").center[1]
+    cube_face = Layout(task).box("cube").lo[1]  # the tilted cube's near side
+    length, width = task.limits.body_size[:2]
     for prog in candidates(task, tools=True):
         (climb,) = [m for m in prog.motions if m.skill == "climb_to_position"]
         lane = prog.motions[prog.motions.index(climb) - 1]
@@ -38,4 +40,7 @@ def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_l
         (x_ref, _), (y_ref, y), _ = climb.point.axes
         assert y_ref is None and x_ref is not None and x_ref.obj == "surfboard"
         assert lane.point.axes[1] == (None, y)  # the lane's walk ends level with the spot: the climb is straight on
-        assert 0.15 < y - fulcrum_y < 0.34  # the body's near end a centimetre short of the fulcrum's centre line
+        turned = any(m.skill == "turn_to_heading" for m in prog.motions)  # the body's length along the board
+        half = (length if turned else width) / 2
+        assert y - half >= fulcrum_y + 0.01 - 1e-9  # the feet at least 1 cm short of the fulcrum's centre line
+        assert y + half <= cube_face - 0.03 + 1e-9 or y - half >= fulcrum_y + 0.05 + 0.02 - 1e-9  # room kept

@@ -185,6 +185,24 @@ def test_a_step_shorter_than_the_body_is_climbed_over_without_stopping_on_it() -
     assert all(r.success for r in rollouts), failure_reason(rollouts)
 
 
+@pytest.mark.slow
+def test_a_cushion_standing_where_every_climb_lines_up_is_pushed_out_of_the_way_first() -> None:
+    """vase_lowering seed 8500: the cushion stands between the robot and the steps against the sofa, where every climb
+    the turned robot can make lines up, and the robot facing as it starts does not fit beside the vase on the sofa.
+    Every program was predicted to break a limit and each one tried failed: the planner gave up. The programs made
+    after first pushing the cushion out of the way are predicted fine, and the first one holds in three worlds."""
+    task = generate("vase_lowering", 8500).task
+    fine = [p for p in candidates(task, tools=True) if p.doubt is None]
+    assert fine
+    for prog in fine:
+        first = next(m for m in prog.motions if m.skill == "push_to_position")
+        assert first.obj == "soft_cushion" and prog.roles["soft_cushion"].startswith("obstacle")
+    code, rejection, _ = prepare_code(order(fine)[0].code, task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=3, seed=50_000)
+    assert all(r.success for r in rollouts), failure_reason(rollouts)
+
+
 def test_an_object_past_its_place_is_not_lined_up_on_the_next_links_spot() -> None:
     """box_1 is to stand against box_2's -x side (climb toward +x) but starts at a larger x than that spot: lined up
     across first, it would be pushed onto box_2 itself and its last push would run away from the face."""
