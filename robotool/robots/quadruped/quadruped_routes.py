@@ -155,10 +155,9 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
     for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
         stop = previous + (last - previous) * s / length
         feet = layout.heights(stop + foot_offsets(quad.limits))
-        body = layout.heights(sweep_points(stop, stop, quad.half))
         if (
             np.all(np.abs(feet - top) <= LEVEL / 2)
-            and body.max() <= top + RISE
+            and _highest_under(quad, layout, stop) <= top + RISE
             and walk_violation(layout, previous, [stop], quad.limits) is None
         ):
             return replace(route, waypoints=[*route.waypoints[:-1], (stop, name)])
@@ -234,9 +233,14 @@ def _on_floor(quad: Quadruped, xy: np.ndarray, away: np.ndarray) -> np.ndarray:
     before a face are climbed from there, not lined up on); ``xy`` when none is within :data:`LINE_UP_REACH`."""
     for back in np.arange(0.0, LINE_UP_REACH, LINE_UP_STEP):
         point = xy + away * back
-        if quad.layout.heights(sweep_points(point, point, quad.half)).max() <= quad.floor + RISE:
+        if _highest_under(quad, quad.layout, point) <= quad.floor + RISE:
             return point
     return xy
+
+
+def _highest_under(quad: Quadruped, layout: Layout, xy: np.ndarray) -> float:
+    """The highest surface of ``layout`` under the body's outline (and its side margin) standing at ``xy``."""
+    return float(layout.heights(sweep_points(xy, xy, quad.half)).max())
 
 
 def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
@@ -459,7 +463,7 @@ def _walked_over(
     would stand on its edges if it stopped there (a perturbed pose then leaves a pair of them over the edge)."""
     axis = int(np.argmax(np.abs(goes)))
     straight = bool(np.allclose(came, goes)) and abs(here[1 - axis] - stance[1 - axis]) < LANE_TOLERANCE
-    return straight and 2 * link.half[axis] < 2 * quad.half[axis] + 2 * FOOT
+    return straight and link.half[axis] < quad.half[axis] + FOOT
 
 
 def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray | None:
