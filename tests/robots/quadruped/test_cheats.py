@@ -109,6 +109,8 @@ CASES = [
     ("turn_in_place_on_the_propped_lever", "cube_lifting"),  # jolts of quarter turns on the propped raised end
     ("turn_on_the_lever_to_sweep_the_cube", "cube_lifting"),  # the body's sweep would meet the cube
     ("wedge_the_chair_under_the_board", "cube_lifting"),  # no stance: the sweep under the board meets it
+    ("push_the_chair_from_on_the_lever", "cube_lifting"),  # refused: it stands on the board, which is movable
+    ("stand_on_the_rollers_end_beside_the_board", "cube_lifting"),  # runs into the board, or the cube stays down
 ]
 
 
