@@ -23,6 +23,7 @@ from robotool.robots.quadruped.push import (
     first_clear_sweep,
     lateral_offsets,
     legs,
+    nearest_exit,
     push_pose,
     route,
 )
@@ -36,6 +37,7 @@ BRUSH = 0.03  # m: something this much higher than the surface under the feet, a
 BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
+WIDE_DETOUR_CHECKS = 400  # the same, where the planner looks harder (once every usual program is predicted to fail)
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
 REMEMBERED = 20_000  # predictions kept of each kind (the same walks and pushes recur across a task's programs)
 Pose = tuple[np.ndarray, np.ndarray, np.ndarray]  # a push leg's start and end poses and its staging point
@@ -166,12 +168,17 @@ def _fragile_footing(
 
 
 def detour(
-    layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
+    layout: Layout,
+    start: np.ndarray,
+    goal: np.ndarray,
+    limits: QuadrupedLimits,
+    exclude: Iterable[str] = (),
+    checks: int = DETOUR_CHECKS,
 ) -> list[np.ndarray]:
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else the shortest way found
     through the L-corners and the corners of the objects (grown by the body and a margin), each stretch predicted
     fine (a lazy A* search: a stretch is predicted only when it is the best way left); ``[goal]`` when none is
-    found within :data:`DETOUR_CHECKS` predictions. A stretch whose body passes a movable object closer than
+    found within ``checks`` predictions. A stretch whose body passes a movable object closer than
     ``QUADRUPED.detour_slack`` (but one it starts or ends that close to) counts ``QUADRUPED.detour_tight_cost``
     longer than it is, so a way with room is taken unless it is much longer."""
     skip = list(exclude)
@@ -184,6 +191,9 @@ def detour(
     for box in boxes:
         lo, hi = box.lo - half - 0.1, box.hi + half + 0.1
         points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
+        beside = np.all((start > lo) & (start < hi)) and not np.all((start > box.lo) & (start < box.hi))
+        if beside:  # (the robot just pushed it, say): first straight away from it
+            points.append(nearest_exit(start, lo, hi))
     room = half + QUADRUPED.detour_slack
     movable = {o.name for o in layout.task.objects if o.movable and o.shape != "cloth"}
     passed = [
@@ -202,13 +212,13 @@ def detour(
 
     frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1, False)]
     parent: dict[int, int] = {}
-    checks = 0
-    while frontier and checks < DETOUR_CHECKS:
+    made = 0
+    while frontier and made < checks:
         estimate, cost, node, frm, charged = heapq.heappop(frontier)
         if node in parent:
             continue
         if frm >= 0 and not charged:
-            checks += 1
+            made += 1
             extra = extra_cost(points[frm], points[node])
             if extra is None:
                 continue

@@ -16,7 +16,7 @@ import numpy as np
 
 from robotool.planner.codegen import Program
 from robotool.planner.layout import CONTACT, Box, Layout
-from robotool.robots.quadruped.predict import detour, walk_violation
+from robotool.robots.quadruped.predict import DETOUR_CHECKS, detour, walk_violation
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
@@ -74,6 +74,7 @@ class Quadruped:
         self.layout = Layout(task)
         self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
         self.opening: Program | None = None  # what its programs open with, made before (a push out of the way)
+        self.detour_checks = DETOUR_CHECKS  # walks predicted at most when its writer looks for a way around
 
     def program(self) -> Program:
         """A new program, opening with the robot's turn when it has one, or with a copy of its ``opening``."""
@@ -129,6 +130,8 @@ STANCE_SLACK = QUADRUPED.stance_slack
 LANE_TOLERANCE = 0.02  # m: lanes closer than this are one
 LINE_UP_REACH = 2.0  # m a line-up point is moved back, at most, to stand on the floor
 LINE_UP_STEP = 0.05  # m between the line-up points tried
+MIN_APPROACH = 0.01  # m before a step the robot lines up, at least, where something stands behind
+APPROACH_STEP = 0.01  # m between the line-up distances tried
 
 
 def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
@@ -181,7 +184,8 @@ def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
                 waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words
             )
             route = _landing(quad, name, route)  # short of what stands on the top
-            path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, route.waypoints[-1][0]]
+            way = detour(quad.layout, quad.start, approach, quad.limits, checks=quad.detour_checks)
+            path = [*way[:-1], approach, route.waypoints[-1][0]]
             if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
                 found.append((_length(quad.start, path), route))
                 break  # the first lane predicted fine from this side
@@ -225,6 +229,20 @@ def _entries(quad: Quadruped, box: Box, d: np.ndarray, frm: np.ndarray) -> list[
         approach = stop.copy()
         approach[axis] = face - d[axis] * (quad.half[axis] + APPROACH)
         out.append((_on_floor(quad, approach, -d), stop))
+    return out
+
+
+def _line_up(quad: Quadruped, layout: Layout, xy: np.ndarray, face: float, d: np.ndarray) -> np.ndarray:
+    """Where the robot lines up in ``xy``'s lane to climb the first step of a staircase, whose face is at ``face``,
+    along ``d``: :data:`APPROACH` before it, or nearer, down to :data:`MIN_APPROACH`, where something stands behind
+    that spot and the nearer one is clear of it (a heavy object left just before the step)."""
+    axis = int(np.argmax(np.abs(d)))
+    out = np.array(xy, dtype=float)
+    for gap in (APPROACH, *np.arange(APPROACH - APPROACH_STEP, MIN_APPROACH - 1e-9, -APPROACH_STEP)):
+        out[axis] = face - d[axis] * (quad.half[axis] + gap)
+        if _highest_under(quad, layout, out) <= quad.floor + RISE:
+            return out
+    out[axis] = face - d[axis] * (quad.half[axis] + APPROACH)
     return out
 
 
@@ -409,15 +427,15 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
         hi = min(boxes[k].hi[lat], boxes[k + 1].hi[lat]) - foot
         if hi < lo - 0.004:
             return None
-        lo, hi = _clear_of_neighbours(quad, layout, chain, k, lat, lo, hi)
+        lo, hi = _clear_of_neighbours(quad, layout, chain, k, lat, lo, hi, d if k == 0 else None)
         keep = min(STANCE_SLACK, (hi - lo) / 2)  # as far from both edges as the steps allow, up to STANCE_SLACK
         lines.append(float(np.clip(here[lat], lo + keep, hi - keep)))
         route.slack = min(route.slack, lines[-1] - lo, hi - lines[-1])
     d0, lat0 = combo[0][0], 1 - int(np.argmax(np.abs(combo[0][0])))
     axis0 = 1 - lat0
     approach = np.zeros(2)
-    approach[axis0] = boxes[0].center[axis0] - d0[axis0] * (boxes[0].half[axis0] + quad.half[axis0] + APPROACH)
     approach[lat0] = lines[0]
+    approach = _line_up(quad, layout, approach, boxes[0].center[axis0] - d0[axis0] * boxes[0].half[axis0], d0)
     route.waypoints.append((approach, quad.floor_name))
     previous = approach
     for k in range(len(chain)):
@@ -482,13 +500,24 @@ def _lined_up(center: np.ndarray, xy: np.ndarray, d: np.ndarray) -> np.ndarray |
 
 
 def _clear_of_neighbours(
-    quad: Quadruped, layout: Layout, chain: list[SceneObject], k: int, lat: int, lo: float, hi: float
+    quad: Quadruped,
+    layout: Layout,
+    chain: list[SceneObject],
+    k: int,
+    lat: int,
+    lo: float,
+    hi: float,
+    lined_up: np.ndarray | None = None,
 ) -> tuple[float, float]:
     """Narrow the climb line's range ``lo``-``hi`` (across the climb from link ``k`` onto link ``k + 1``) so that the
-    body's flanks keep clear of other objects standing beside the two steps; unchanged when no line is clear."""
+    body's flanks keep clear of other objects standing beside the two steps, and, with ``lined_up`` (the first climb's
+    direction), of those standing where the robot lines up before the first step; unchanged when no line is clear."""
     axis = 1 - lat
     a, b = layout.box(chain[k].name), layout.box(chain[k + 1].name)
     span = (min(a.lo[axis], b.lo[axis]) - quad.half[axis], max(a.hi[axis], b.hi[axis]) + quad.half[axis])
+    if lined_up is not None:  # the whole body stands APPROACH before the first step's face as it lines up
+        reach = float(quad.half[axis]) + APPROACH
+        span = (span[0] - reach, span[1]) if lined_up[axis] > 0 else (span[0], span[1] + reach)
     names = {o.name for o in chain}
     new_lo, new_hi = lo, hi
     for obj in quad.task.objects:

@@ -16,6 +16,8 @@ from robotool.robots.quadruped.predict import detour, push_problem, walk_violati
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
 from robotool.robots.quadruped.quadruped_routes import (
+    APPROACH,
+    MIN_APPROACH,
     MIN_CLEARANCE,
     ROOM_MARGIN,
     TIP_PAST,
@@ -34,9 +36,11 @@ def _box(name: str, center: list[float], size: list[float], **more: object) -> d
     return {"name": name, "shape": "box", "center": center, "size": size, **more}
 
 
-def _vase_task(vase: list[float], cushion: list[float], steps_y: float) -> Task:
-    """A 0.34 m sofa (x 1.55-2.45, y -1.65 to -0.15) with two fixed steps against its -x side; a glass vase on it
-    and a soft cushion on the floor."""
+def _vase_task(
+    vase: list[float], cushion: list[float], steps_y: float, more: tuple[dict[str, object], ...] = ()
+) -> Task:
+    """A 0.34 m sofa (x 1.55-2.45, y -1.65 to -0.15) with two fixed steps against its -x side (x 0.75-1.55, 0.6 m
+    wide); a glass vase on it, a soft cushion and ``more`` objects on the floor."""
     return parse_task({
         "format": 1, "name": "vase_test", "category": "sequential_tool_use",
         "instruction": "Put the glass vase down on the ground without breaking it.",
@@ -47,6 +51,7 @@ def _vase_task(vase: list[float], cushion: list[float], steps_y: float) -> Task:
             _box("box_2", [1.35, steps_y, 0.12], [0.4, 0.6, 0.24], movable=False),
             _box("glass_vase", [*vase, 0.39], [0.3, 0.1, 0.1], mass=0.5, fragile={"max_drop": 0.3}),
             _box("soft_cushion", [*cushion, 0.08], [0.5, 0.5, 0.16], mass=1.0, soft=True),
+            *more,
         ],
         "goal": {"lowered": {"object": "glass_vase", "height": 0.2}},
     })
@@ -192,6 +197,72 @@ def test_a_cushion_standing_where_every_climb_lines_up_is_pushed_out_of_the_way_
         first = next(m for m in prog.motions if m.skill == "push_to_position")
         assert first.obj == "soft_cushion" and prog.roles["soft_cushion"].startswith("obstacle")
     _assert_holds_in_fresh_worlds(task, order(fine)[0].code, worlds=3)
+
+
+def _sand_bag(center: list[float]) -> dict[str, object]:
+    """A 9 kg bag on the floor: over the push limit, an obstacle that stays where it is."""
+    return _box("sand_bag", [*center, 0.08], [0.5, 0.5, 0.16], mass=9.0)
+
+
+def _staircase_line_ups(task: Task) -> list[np.ndarray]:
+    """Where the robot lines up before its first climb, in each staircase program predicted fine that the robot
+    makes facing as it starts (no quarter turn)."""
+    out = []
+    for prog in candidates(task, tools=True):
+        turns = any(m.skill == "turn_to_heading" for m in prog.motions)
+        if prog.doubt is None and not turns and any("staircase" in s for s in prog.sentences):
+            first = next(k for k, m in enumerate(prog.motions) if m.skill == "climb_to_position")
+            out.append(prog.motions[first - 1].point.estimate()[:2])
+    return out
+
+
+def test_a_heavy_object_just_before_the_first_step_lines_the_climb_up_nearer_the_step() -> None:
+    """The bag covers the steps' lane and leaves 0.70 m before box_1's face: the robot (0.65 m) lined up the usual
+    0.10 m before the face stood over the bag, and every staircase program it made facing as it starts was predicted
+    to break a limit (a quarter-turned robot climbing sideways was left). It now lines up nearer the face, its rear
+    clear of the bag."""
+    task = _vase_task([1.80, -1.45], [0.5, -2.3], -1.05, (_sand_bag([-0.2, -1.05]),))
+    line_ups = _staircase_line_ups(task)
+    assert line_ups
+    half = task.limits.body_size[0] / 2
+    for xy in line_ups:
+        assert 0.75 - half - APPROACH < xy[0] <= 0.75 - half - MIN_APPROACH + 1e-9  # nearer box_1's face (x 0.75)
+        assert xy[0] - half > 0.05  # the body's rear clear of the bag (x up to 0.05)
+
+
+def test_the_climb_lines_up_in_a_lane_clear_of_a_heavy_object_before_the_first_step() -> None:
+    """The bag stands before the -y half of box_1, where the robot lines up: the staircase's lane across the climb
+    now keeps the body clear of what stands there as it lines up, not only beside the steps."""
+    task = _vase_task([1.80, -1.45], [0.5, -2.3], -1.05, (_sand_bag([-0.1, -1.4]),))
+    line_ups = _staircase_line_ups(task)
+    assert line_ups
+    half = task.limits.body_size[1] / 2
+    assert all(xy[1] - half > -1.15 for xy in line_ups)  # the body's side clear of the bag (y up to -1.15)
+
+
+@pytest.mark.slow
+def test_a_climb_lined_up_nearer_the_step_holds_in_the_simulator() -> None:
+    """The program lined up nearer box_1's face (the bag just behind it) climbs and lowers the vase in three worlds."""
+    task = _vase_task([1.80, -1.45], [0.5, -2.3], -1.05, (_sand_bag([-0.2, -1.05]),))
+    fine = [p for p in candidates(task, tools=True) if p.doubt is None and "staircase" in " ".join(p.sentences)]
+    _assert_holds_in_fresh_worlds(task, order(fine)[0].code, worlds=3)
+
+
+@pytest.mark.slow
+def test_the_robot_turns_between_pushing_the_cushion_and_climbing_when_no_one_heading_does_both() -> None:
+    """vase_lowering seed 8907: the heavy sand cushion stands 0.30 m before the steps' first face, where only the
+    robot turned a quarter (0.30 m along the climb) lines up, and turned it cannot push the soft cushion round the sofa
+    past what stands on the floor; facing as it starts it can. Every program made with one heading was predicted to
+    break a limit and the search gave up. The robot now pushes the cushion, walks clear of it, turns and climbs: a
+    program predicted fine, which holds in three fresh worlds."""
+    task = generate("vase_lowering", 8907).task
+    fine = [p for p in candidates(task, tools=True) if p.doubt is None]
+    assert fine
+    prog = order(fine)[0]
+    skills = [m.skill for m in prog.motions]
+    turn = skills.index("turn_to_heading")
+    assert "push_to_position" in skills[:turn] and "climb_to_position" in skills[turn:]
+    _assert_holds_in_fresh_worlds(task, prog.code, worlds=3)
 
 
 def _assert_holds_in_fresh_worlds(task: Task, text: str, worlds: int) -> None:
