@@ -12,7 +12,7 @@ from robotool import tasks
 from robotool.planner.layout import Box, Layout
 from robotool.robots.quadruped.predict import detour, push_staging, walk_violation
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
-from robotool.robots.quadruped.terrain import FOOT_RADIUS
+from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 
@@ -188,3 +188,31 @@ def test_a_fragile_object_is_no_footing_however_low() -> None:
     task = _vase_step_task(fragile=True)
     problem = walk_violation(Layout(task), *walk, task.limits)
     assert problem is not None and "stand on vase, which is fragile" in problem
+
+
+def test_a_way_round_keeps_every_foot_off_a_step_beside_it() -> None:
+    """vase_lowering seed 9109's floor: the way round the heavy bag ran along the bag's grown side, which passes
+    within the feet's reach of box_1 (a 0.12 m step, within the step-up limit): the robot walked there with two feet
+    up on the step and two on the floor, and fell. A way round now keeps every foot on the floor's level."""
+    box = {"shape": "box", "movable": False}
+    task = parse_task({
+        "format": 1, "name": "steps_and_bag", "instruction": "Climb onto the sofa.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [0.0, 0.3]},
+        "objects": [
+            {**box, "name": "sofa", "center": [-0.44, 3.34, 0.157], "size": [1.5, 0.9, 0.314]},
+            {**box, "name": "box_1", "center": [-0.369, 2.288, 0.06], "size": [0.6, 0.4, 0.12]},
+            {**box, "name": "box_2", "center": [-0.369, 2.689, 0.12], "size": [0.6, 0.4, 0.24]},
+            {"name": "sand_bag", "shape": "box", "center": [-1.057, 1.575, 0.08], "size": [0.5, 0.5, 0.16],
+             "mass": 8.6},
+        ],
+        "goal": {"robot_on": "sofa"},
+    })
+    layout = Layout(task)
+    start, goal = np.array([-2.12, 3.03]), np.array([-0.3695, 1.838])  # to where the climb of box_1 lines up
+    way = detour(layout, start, goal, task.limits)
+    assert len(way) > 1 and walk_violation(layout, start, way, task.limits) is None
+    feet = foot_offsets(task.limits)
+    for a, b in itertools.pairwise([start, *way]):
+        along = np.linspace(0.0, 1.0, 50)[:, None, None]
+        points = a + along * (b - a) + feet  # (50, 4, 2): every foot along the stretch
+        assert np.all(layout.heights(points.reshape(-1, 2)) < 0.04), (a, b)
