@@ -23,7 +23,6 @@ from robotool.robots.quadruped.push import (
     first_clear_sweep,
     lateral_offsets,
     legs,
-    nearest_exit,
     push_pose,
     route,
 )
@@ -37,8 +36,7 @@ BRUSH = 0.03  # m: something this much higher than the surface under the feet, a
 BELLY_LINES = 5  # lines between the feet's paths along which the surface under the torso is read
 LANE = 0.05  # m a pushed object keeps from the side of another that it is pushed past
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
-ON_LEVEL = QUADRUPED.same_surface  # m from the level it starts on that a way around keeps every foot (no step)
-WIDE_DETOUR_CHECKS = 400  # the same, where the planner looks harder (once every usual program is predicted to fail)
+ON_LEVEL = QUADRUPED.same_surface  # m from the level it starts on that a way around's turns keep every foot
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
 REMEMBERED = 20_000  # predictions kept of each kind (the same walks and pushes recur across a task's programs)
 Pose = tuple[np.ndarray, np.ndarray, np.ndarray]  # a push leg's start and end poses and its staging point
@@ -169,18 +167,13 @@ def _fragile_footing(
 
 
 def detour(
-    layout: Layout,
-    start: np.ndarray,
-    goal: np.ndarray,
-    limits: QuadrupedLimits,
-    exclude: Iterable[str] = (),
-    checks: int = DETOUR_CHECKS,
+    layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
 ) -> list[np.ndarray]:
     """Waypoints from ``start`` to ``goal``: straight when the walk is predicted fine, else the shortest way found
-    through the L-corners and the corners of the objects (grown by the body and a margin), each stretch predicted
-    fine and keeping every foot on the start's level, so that a way round never stands or walks half on a step (a
-    lazy A* search: a stretch is predicted only when it is the best way left); ``[goal]`` when none is found within
-    ``checks`` predictions. A stretch whose body passes a movable object closer than
+    through the L-corners and the corners of the objects (grown by the body and a margin) where all four feet stand
+    on the start's level (a way round never stops half on a step), each stretch predicted fine (a lazy A* search: a
+    stretch is predicted only when it is the best way left); ``[goal]`` when none is found within
+    :data:`DETOUR_CHECKS` predictions. A stretch whose body passes a movable object closer than
     ``QUADRUPED.detour_slack`` (but one it starts or ends that close to) counts ``QUADRUPED.detour_tight_cost``
     longer than it is, so a way with room is taken unless it is much longer."""
     skip = list(exclude)
@@ -193,9 +186,6 @@ def detour(
     for box in boxes:
         lo, hi = box.lo - half - 0.1, box.hi + half + 0.1
         points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
-        beside = np.all((start > lo) & (start < hi)) and not np.all((start > box.lo) & (start < box.hi))
-        if beside:  # (the robot just pushed it, say): first straight away from it
-            points.append(nearest_exit(start, lo, hi))
     offsets = foot_offsets(limits)
     level = float(layout.heights(start + offsets, skip).max())
     feet = layout.heights((np.array(points[2:])[:, None, :] + offsets).reshape(-1, 2), skip).reshape(-1, len(offsets))
@@ -211,20 +201,20 @@ def detour(
     def extra_cost(a: np.ndarray, b: np.ndarray) -> float | None:
         """None where the stretch from ``a`` to ``b`` is predicted to break a limit, else what it costs beyond its
         length."""
-        if walk_violation(layout, a, [b], limits, skip) is not None or not _on_level(layout, a, b, limits, level, skip):
+        if walk_violation(layout, a, [b], limits, skip) is not None:
             return None
         tight = any(crosses(a, b, box.lo - room, box.hi + room) for box in passed)
         return QUADRUPED.detour_tight_cost if tight else 0.0
 
     frontier = [(float(np.linalg.norm(goal - start)), 0.0, 0, -1, False)]
     parent: dict[int, int] = {}
-    made = 0
-    while frontier and made < checks:
+    checks = 0
+    while frontier and checks < DETOUR_CHECKS:
         estimate, cost, node, frm, charged = heapq.heappop(frontier)
         if node in parent:
             continue
         if frm >= 0 and not charged:
-            made += 1
+            checks += 1
             extra = extra_cost(points[frm], points[node])
             if extra is None:
                 continue
@@ -243,17 +233,6 @@ def detour(
                 g = cost + float(np.linalg.norm(p - points[node]))
                 heapq.heappush(frontier, (g + float(np.linalg.norm(goal - p)), g, k, node, False))
     return [goal]
-
-
-def _on_level(
-    layout: Layout, start: np.ndarray, end: np.ndarray, limits: QuadrupedLimits, level: float, skip: list[str]
-) -> bool:
-    """Whether every foot stays within :data:`ON_LEVEL` of ``level`` walking straight from ``start`` to ``end``."""
-    length = float(np.linalg.norm(end - start))
-    if length < 1e-9:
-        return True
-    paths = foot_paths(start + foot_offsets(limits), (end - start) / length, length)
-    return bool(np.all(np.abs(layout.heights(paths.reshape(-1, 2), skip) - level) <= ON_LEVEL))
 
 
 @dataclass(frozen=True)

@@ -249,7 +249,7 @@ def routes(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
     straight out through the nearest side. ``[[goal]]`` when there is no way round (the goal inside the box).
     """
     if np.all((start > lo) & (start < hi)):
-        out = nearest_exit(start, lo, hi)
+        out = _nearest_exit(start, lo, hi)
         return [[out, *way] for way in routes(out, goal, lo, hi)]
     if not crosses(start, goal, lo, hi):
         return [[goal]]
@@ -268,7 +268,7 @@ def routes(start: np.ndarray, goal: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
     return ways or [[goal]]
 
 
-def nearest_exit(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def _nearest_exit(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The point just outside the box ``lo``-``hi`` straight out from ``p`` (inside it) through the nearest side."""
     sides = np.array([p[0] - lo[0], hi[0] - p[0], p[1] - lo[1], hi[1] - p[1]])
     k = int(np.argmin(sides))

@@ -17,7 +17,6 @@ from robotool.planner.codegen import Direction, Point, Program, Ref
 from robotool.planner.layout import Box, Layout
 from robotool.planner.search import tight
 from robotool.robots.quadruped.predict import (
-    WIDE_DETOUR_CHECKS,
     detour,
     drift_room,
     off_centre,
@@ -53,8 +52,6 @@ from robotool.task.task_model import Task
 STEP_ON_NEAR = 0.01  # m the feet step onto a lever at least this far short of its fulcrum's centre line
 FULCRUM_CLEARANCE = 0.02  # m the feet keep from a lever's fulcrum as they step on, where the load leaves room
 LOAD_CLEARANCE = 0.03  # m the body's rear keeps from the load on the lever's other end as the feet step on
-TURN_SPOT_REACH = 0.6  # m from where it stands the robot looks, at most, for a clear spot to turn in place
-TURN_SPOT_STEP = 0.05  # m between the spots tried
 OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it: thin
 
 
@@ -149,7 +146,7 @@ class Writer:
             path: list[np.ndarray] = []
             staging = push_staging(layout, name, xy, limits, self.level) if problem else None
             if problem and problem.kind == "approach" and staging is not None:
-                way = detour(layout, here, staging, limits, checks=self.quad.detour_checks)
+                way = detour(layout, here, staging, limits)
                 if walk_violation(layout, here, way, limits) is None:
                     path = way
                     problem, end = push_problem(layout, name, xy, limits, self.level, staging)
@@ -202,7 +199,7 @@ class Writer:
     def around(self, xy: np.ndarray) -> None:
         """Walk on the floor around what stands between the robot and ``xy`` (:func:`detour`), up to the last turn
         before it."""
-        for via in detour(self.layout, self.here, xy, self.quad.limits, checks=self.quad.detour_checks)[:-1]:
+        for via in detour(self.layout, self.here, xy, self.quad.limits)[:-1]:
             self.walk(via, self.quad.floor_name, "walk around what stands in the way")
 
     def floor_walk(self, xy: np.ndarray, intent: str) -> None:
@@ -248,8 +245,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
     """Every program the macros make for the task (unordered; the search orders them). When each program the robot
     can make facing as it starts is predicted to fail or leaves a thin margin (:func:`.search.tight`), the programs
     it can make after a quarter turn in place (its x and y sizes swapped) are made too; when every one is predicted
-    to fail, those it can make turning in place between pushing a soft landing and climbing (for a lowering), then
-    those it can make after pushing an object out of the way first (:func:`_cleared`)."""
+    to fail, those it can make after pushing an object out of the way first (:func:`_cleared`)."""
     quads = [Quadruped(task)]
     made = list(_programs(quads[0], tools))
     yield from made
@@ -262,13 +258,6 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
             turned = list(_programs(quad, tools))
             yield from turned
             made += turned
-    if tools and task.goal.kind == "lowered" and all(p.doubt is not None for p in made):
-        for quad in quads:
-            wide = quad.after(quad.layout, quad.start, ())
-            wide.detour_checks = WIDE_DETOUR_CHECKS  # a last resort: it looks harder for ways around
-            turning = list(_lowerings(wide, task.object(task.goal.object), tools, turning=True))
-            yield from turning
-            made += turning
     if tools and all(p.doubt is not None for p in made):
         for quad in quads:
             yield from _cleared(quad, tools)
@@ -451,10 +440,8 @@ def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, boa
     return Writer(Quadruped(quad.task, heading=heading).after(w.layout, spot, quad.placed), w.prog)
 
 
-def _lowerings(quad: Quadruped, target: SceneObject, tools: bool, turning: bool = False) -> Iterator[Program]:
-    """Get onto the surface ``target`` rests on and push it off an edge, onto a soft object when the fall is high.
-    With ``turning``, only the programs whose robot makes a quarter turn in place between pushing the soft object
-    and the way onto the surface (a heading that fits the push and one that fits the climb)."""
+def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Program]:
+    """Get onto the surface ``target`` rests on and push it off an edge, onto a soft object when the fall is high."""
     task = quad.task
     goal = task.goal.lowered
     assert goal is not None
@@ -490,78 +477,35 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool, turning: bool 
                 if quad.layout.collides(cbox.moved_to(spot), ignore=[target.name]) is not None:
                     continue
                 pushes.append((cushion.name, spot))
-            elif turning:
-                continue
-            climber: Quadruped | None = _after_pushes(quad, pushes)
-            if turning and climber is not None:
-                climber = _turned_in_place(climber)
-            if climber is None:
-                continue
-            for route in routes_onto(climber, support_name, tools):
+            for route in routes_onto(_after_pushes(quad, pushes), support_name, tools):
                 prog = quad.program()
                 prog.use(target.name, "target")
                 w = Writer(quad, prog)
                 for name, spot in pushes:
                     prog.use(name, f"tool: a soft landing for {target.name}")
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
-                if turning:
-                    if np.linalg.norm(climber.start - w.here) > 1e-6:
-                        w.walk(climber.start, quad.floor_name, "walk clear to turn")
-                    prog.turn(climber.heading, f"turn so that the body fits the way onto {support_name}")
-                    w = Writer(climber, prog)
-                _write_lowering(w, route, target, support_name, dest, direction)
+                w.route(route)
+                behind = push_staging(w.layout, target.name, dest, w.quad.limits, support.top)
+                if behind is None:
+                    behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
+                    w.doubt(f"no clear place on {support_name} to push {target.name} from")
+                for via in detour(w.layout, w.here, behind, quad.limits)[:-1]:
+                    w.walk(via, support_name, f"walk around what stands on {support_name}")
+                w.walk(behind, support_name, f"walk behind {target.name}")
+                ref = w.position(target.name)
+                prog.motion(
+                    "push_to_position",
+                    obj=target.name,
+                    point=Point.at(ref, (*(dest - tbox.center), 0.0)),
+                    intent=f"push {target.name} off {support_name}'s edge",
+                    explanation=f"its centre {TIP_PAST:.2f} m past the edge: it tips off",
+                )
                 prog.say(
                     (f"Push {pushes[0][0]} beside {support_name}; " if pushes else "")
                     + f"push {target.name} off {support_name}"
                     + (f" onto {pushes[0][0]}." if pushes else ".")
                 )
-                if not turning or prog.doubt is None:
-                    yield prog
-
-
-def _write_lowering(
-    w: Writer, route: Route, target: SceneObject, support_name: str, dest: np.ndarray, direction: np.ndarray
-) -> None:
-    """Write ``route`` onto ``support_name``, the walk behind ``target`` and its push to ``dest`` (x-y), off the
-    edge that ``direction`` points to."""
-    quad, prog = w.quad, w.prog
-    w.route(route)
-    tbox = w.layout.box(target.name)
-    support = w.layout.box(support_name)
-    axis = int(np.argmax(np.abs(direction)))
-    behind = push_staging(w.layout, target.name, dest, quad.limits, support.top)
-    if behind is None:
-        behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
-        w.doubt(f"no clear place on {support_name} to push {target.name} from")
-    for via in detour(w.layout, w.here, behind, quad.limits, checks=quad.detour_checks)[:-1]:
-        w.walk(via, support_name, f"walk around what stands on {support_name}")
-    w.walk(behind, support_name, f"walk behind {target.name}")
-    ref = w.position(target.name)
-    prog.motion(
-        "push_to_position",
-        obj=target.name,
-        point=Point.at(ref, (*(dest - tbox.center), 0.0)),
-        intent=f"push {target.name} off {support_name}'s edge",
-        explanation=f"its centre {TIP_PAST:.2f} m past the edge: it tips off",
-    )
-
-
-def _turned_in_place(quad: Quadruped) -> Quadruped | None:
-    """``quad`` after a quarter turn in place at the nearest clear spot to where it stands: the first, going out
-    along the axes in steps of :data:`TURN_SPOT_STEP` up to :data:`TURN_SPOT_REACH`, where the turn and the walk there
-    are predicted fine (None: no such spot)."""
-    limits = quad.task.limits
-    assert isinstance(limits, QuadrupedLimits)
-    for distance in np.arange(0.0, TURN_SPOT_REACH + 1e-9, TURN_SPOT_STEP):
-        for d in DIRECTIONS[: 1 if distance == 0 else None]:
-            spot = quad.start + d * distance
-            if turn_violation(quad.layout, spot, limits, 90) is None and (
-                distance == 0 or walk_violation(quad.layout, quad.start, [spot], quad.limits) is None
-            ):
-                turned = Quadruped(quad.task, heading=90 - quad.heading).after(quad.layout, spot, quad.placed)
-                turned.detour_checks = quad.detour_checks
-                return turned
-    return None
+                yield prog
 
 
 def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quadruped:

@@ -16,7 +16,7 @@ import numpy as np
 
 from robotool.planner.codegen import Program
 from robotool.planner.layout import CONTACT, Box, Layout
-from robotool.robots.quadruped.predict import DETOUR_CHECKS, detour, walk_violation
+from robotool.robots.quadruped.predict import detour, walk_violation
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
@@ -74,7 +74,6 @@ class Quadruped:
         self.layout = Layout(task)
         self.placed: frozenset[str] = frozenset()  # objects already pushed where the program needs them
         self.opening: Program | None = None  # what its programs open with, made before (a push out of the way)
-        self.detour_checks = DETOUR_CHECKS  # walks predicted at most when its writer looks for a way around
 
     def program(self) -> Program:
         """A new program, opening with the robot's turn when it has one, or with a copy of its ``opening``."""
@@ -184,8 +183,7 @@ def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
                 waypoints=[(approach, quad.floor_name), (inside, name)], words=f"Line up beside {name}; " + words
             )
             route = _landing(quad, name, route)  # short of what stands on the top
-            way = detour(quad.layout, quad.start, approach, quad.limits, checks=quad.detour_checks)
-            path = [*way[:-1], approach, route.waypoints[-1][0]]
+            path = [*detour(quad.layout, quad.start, approach, quad.limits)[:-1], approach, route.waypoints[-1][0]]
             if walk_violation(quad.layout, quad.start, path, quad.limits) is None:
                 found.append((_length(quad.start, path), route))
                 break  # the first lane predicted fine from this side
