@@ -236,7 +236,7 @@ def _line_up(quad: Quadruped, layout: Layout, xy: np.ndarray, face: float, d: np
     that spot and the nearer one is clear of it (a heavy object left just before the step)."""
     axis = int(np.argmax(np.abs(d)))
     out = np.array(xy, dtype=float)
-    for gap in (APPROACH, *np.arange(APPROACH - APPROACH_STEP, MIN_APPROACH - 1e-9, -APPROACH_STEP)):
+    for gap in np.arange(APPROACH, MIN_APPROACH - 1e-9, -APPROACH_STEP):
         out[axis] = face - d[axis] * (quad.half[axis] + gap)
         if _highest_under(quad, layout, out) <= quad.floor + RISE:
             return out
