@@ -111,6 +111,7 @@ CASES = [
     ("wedge_the_chair_under_the_board", "cube_lifting"),  # no stance: the sweep under the board meets it
     ("push_the_chair_from_on_the_lever", "cube_lifting"),  # refused: it stands on the board, which is movable
     ("stand_on_the_rollers_end_beside_the_board", "cube_lifting"),  # runs into the board, or the cube stays down
+    ("climb_the_soft_cushion_as_a_first_step", "vase_lowering"),  # its 0.16 m top is a step up over the limit
 ]
 
 
