@@ -33,7 +33,9 @@ def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_l
     fulcrum_y = task.object("yoga_roller").center[1]
     cube_face = Layout(task).box("cube").lo[1]  # the tilted cube's near side
     length, width = task.limits.body_size[:2]
-    for prog in candidates(task, tools=True):
+    programs = list(candidates(task, tools=True))
+    assert programs
+    for prog in programs:
         (climb,) = [m for m in prog.motions if m.skill == "climb_to_position"]
         lane = prog.motions[prog.motions.index(climb) - 1]
         assert climb.point is not None and lane.point is not None and climb.point.along is None

@@ -204,15 +204,23 @@ def _sand_bag(center: list[float]) -> dict[str, object]:
     return _box("sand_bag", [*center, 0.08], [0.5, 0.5, 0.16], mass=9.0)
 
 
+def _straight_staircases(task: Task) -> list[Program]:
+    """The staircase programs predicted fine that the robot makes facing as it starts (no quarter turn)."""
+    return [
+        prog
+        for prog in candidates(task, tools=True)
+        if prog.doubt is None
+        and any("staircase" in s for s in prog.sentences)
+        and not any(m.skill == "turn_to_heading" for m in prog.motions)
+    ]
+
+
 def _staircase_line_ups(task: Task) -> list[np.ndarray]:
-    """Where the robot lines up before its first climb, in each staircase program predicted fine that the robot
-    makes facing as it starts (no quarter turn)."""
+    """Where the robot lines up before its first climb, in each of :func:`_straight_staircases`."""
     out = []
-    for prog in candidates(task, tools=True):
-        turns = any(m.skill == "turn_to_heading" for m in prog.motions)
-        if prog.doubt is None and not turns and any("staircase" in s for s in prog.sentences):
-            first = next(k for k, m in enumerate(prog.motions) if m.skill == "climb_to_position")
-            out.append(prog.motions[first - 1].point.estimate()[:2])
+    for prog in _straight_staircases(task):
+        first = next(k for k, m in enumerate(prog.motions) if m.skill == "climb_to_position")
+        out.append(prog.motions[first - 1].point.estimate()[:2])
     return out
 
 
@@ -244,13 +252,7 @@ def test_the_climb_lines_up_in_a_lane_clear_of_a_heavy_object_before_the_first_s
 def test_a_climb_lined_up_nearer_the_step_holds_in_the_simulator() -> None:
     """The program lined up nearer box_1's face (the bag just behind it) climbs and lowers the vase in three worlds."""
     task = _vase_task([1.80, -1.45], [0.5, -2.3], -1.05, (_sand_bag([-0.2, -1.05]),))
-    fine = [
-        p
-        for p in candidates(task, tools=True)
-        if p.doubt is None
-        and any("staircase" in s for s in p.sentences)
-        and not any(m.skill == "turn_to_heading" for m in p.motions)
-    ]
+    fine = _straight_staircases(task)
     assert fine
     _assert_holds_in_fresh_worlds(task, order(fine)[0].code, worlds=3)
 
