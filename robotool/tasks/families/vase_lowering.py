@@ -15,7 +15,8 @@ Randomizations:
       unsolvable when the vase lies where they lead onto the sofa, so near its edge that the robot cannot stop
       there with every foot on the sofa and its body clear of the vase, its length along the climb or across it
       (it may turn a quarter on the floor first), unless the sofa's top is level with the top step's (within the
-      push's 0.04 m): then the robot, on the step, pushes the vase out of its way;
+      1.5 cm a push keeps its feet to): then the robot, on the step, pushes the vase out of its way; and when the
+      sand cushion stands where the robot must line up before the first step, in every lane across it;
     - 0-3 fixed pieces of furniture away from the scene; the whole scene mirrored, turned by quarter
       turns and shifted on the floor.
 Success conditions:
@@ -51,8 +52,8 @@ CUSHION = (0.5, 0.5, 0.16)
 STEP = (0.4, 0.6)
 SIDE_MARGIN = QUADRUPED.side_margin  # m its body keeps from what it must not touch
 SAME_LEVEL = QUADRUPED.rise  # m: a step top no higher than this above the sofa's does not meet the body
-PUSH_LEVEL = QUADRUPED.same_surface  # m: a robot on the step pushes what rests on a sofa top no farther than this
-# from the step's (the push rules' same surface)
+PUSH_LEVEL = QUADRUPED.rise  # m: a robot standing across the step and the sofa pushes only where their tops differ by
+# no more than this (the push skill keeps its feet's paths this close to the level it stands on)
 
 
 def build(rng: np.random.Generator) -> Draft:
@@ -131,7 +132,8 @@ def build(rng: np.random.Generator) -> Draft:
     )
     goal_height = 0.20 if height > MAX_DROP else 0.05
     blocked = variant == "tool" and not room_to_land(scene[0], scene[2], scene[3])
-    if blocked:
+    shut_out = variant == "tool" and not room_to_line_up(scene[1], [o for o in scene if o.name == "sand_cushion"])
+    if blocked or shut_out:
         variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
     tools = {
         "no_tool": [],
@@ -150,6 +152,7 @@ def build(rng: np.random.Generator) -> Draft:
         layout=layout,
         varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
         + ("the vase lies where the steps lead onto the sofa; " if blocked else "")
+        + ("the sand cushion stands where the robot lines up for the steps; " if shut_out else "")
         + f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
 
@@ -168,6 +171,34 @@ def room_to_land(sofa: SceneObject, step: SceneObject, vase: SceneObject) -> boo
     assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
     size = np.asarray(limits.body_size[:2])
     return any(_lands(half, sofa, step, vase) for half in (size / 2, size[::-1] / 2))
+
+
+def room_to_line_up(step: SceneObject, blockers: list[SceneObject]) -> bool:
+    """Whether the robot can stand right before ``step``'s face (climbing it along the template's +x, before the
+    layout places the scene), its length along the climb or across it (it may turn a quarter on the floor), in some
+    lane where every foot lands on the step, its body clear of every one of ``blockers`` (objects standing on the
+    floor that it can neither push nor climb).
+
+    Nothing is kept in reserve (no margin, no room to walk there): a scene is labelled unsolvable only where no
+    program could line up."""
+    limits = template("vase_lowering").limits
+    assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
+    size = limits.body_size[:2]
+    return any(_lines_up(step, blockers, length, width) for length, width in (size, size[::-1]))
+
+
+def _lines_up(step: SceneObject, blockers: list[SceneObject], length: float, width: float) -> bool:
+    """:func:`room_to_line_up` for a body ``length`` long along the climb and ``width`` across it."""
+    feet = width / 2 - QUADRUPED.foot_radius  # the feet's centres sit a foot's radius inside the body's outline
+    lo_x, lo_y, _, hi_y = footprint(step)
+    lanes = [(lo_y + feet, hi_y - feet)]  # the body's centre lines across the step, as intervals still open
+    for blocker in blockers:
+        b = footprint(blocker)
+        if b[0] >= lo_x or b[2] <= lo_x - length:  # clear of the body right before the face
+            continue
+        shut = (b[1] - width / 2, b[3] + width / 2)  # centre lines whose body meets it
+        lanes = [part for lo, hi in lanes for part in ((lo, min(hi, shut[0])), (max(lo, shut[1]), hi))]
+    return any(lo <= hi for lo, hi in lanes)
 
 
 def _lands(half: np.ndarray, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:
