@@ -242,16 +242,17 @@ class Writer:
 
 
 def candidates(task: Task, tools: bool) -> Iterator[Program]:
-    """Every program the macros make for the task (unordered; the search orders them). When each program the robot
-    can make facing as it starts is predicted to fail or leaves a thin margin (:func:`.search.tight`), the programs
-    it can make after a quarter turn in place (its x and y sizes swapped) are made too; when every one is predicted
-    to fail, those it can make after pushing an object out of the way first (:func:`_cleared`)."""
+    """Every program the macros make for the task (unordered; the search orders them). When the programs the robot
+    can make facing as it starts that the search would try first (:func:`_leading`) leave a thin margin
+    (:func:`.search.tight`), or every one is predicted to fail, the programs it can make after a quarter turn in place
+    (its x and y sizes swapped) are made too; when every one is predicted to fail, those it can make after pushing
+    an object out of the way first (:func:`_cleared`)."""
     quads = [Quadruped(task)]
     made = list(_programs(quads[0], tools))
     yield from made
     limits = task.limits
     assert isinstance(limits, QuadrupedLimits)
-    if all(p.doubt is not None or tight(p) for p in made) and limits.body_size[0] != limits.body_size[1]:
+    if all(tight(p) for p in _leading(made)) and limits.body_size[0] != limits.body_size[1]:
         quad = Quadruped(task, heading=90)
         if turn_violation(quad.layout, quad.start, limits, quad.heading) is None:
             quads.append(quad)
@@ -261,6 +262,17 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
     if tools and all(p.doubt is not None for p in made):
         for quad in quads:
             yield from _cleared(quad, tools)
+
+
+def _leading(programs: list[Program]) -> list[Program]:
+    """The programs not predicted to fail that the search tries first, before it weighs margins: those making the
+    fewest less likely choices with the fewest objects (:func:`robotool.planner.search.order`). A program that needs
+    a third box for its staircase comes after a tight one with two, so a tight two-box staircase walked flank first
+    (its feet 5 mm inside the boxes' sides) is tried before the one the robot walks turned a quarter, unless that one
+    is made too."""
+    fine = [p for p in programs if p.doubt is None]
+    first = min(((p.late, len(p.objects)) for p in fine), default=None)
+    return [p for p in fine if (p.late, len(p.objects)) == first]
 
 
 def _cleared(quad: Quadruped, tools: bool) -> Iterator[Program]:
