@@ -144,7 +144,8 @@ def routes_onto(quad: Quadruped, name: str, tools: bool) -> Iterator[Route]:
 def _landing(quad: Quadruped, name: str, route: Route) -> Route:
     """``route`` with its stop on ``name`` pulled back along the way it arrives, when the walk to the stop is predicted
     to run into something standing on the top (an object lying ahead of the steps): to the farthest point with every
-    foot on the top, the body's outline (and its side margin) clear of what stands there, and the walk there
+    foot on the top (over ``name`` itself: a surface as high beside it, such as the platform the walk starts on, is
+    not its top), the body's outline (and its side margin) clear of what stands there, and the walk there
     predicted fine; unchanged when the walk is fine, or when no point is."""
     last, surface = route.waypoints[-1]
     if surface != name:
@@ -156,9 +157,10 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
     top, length = layout.box(name).top, float(np.linalg.norm(last - previous))
     for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
         stop = previous + (last - previous) * s / length
-        feet = layout.heights(stop + foot_offsets(quad.limits))
+        feet = stop + foot_offsets(quad.limits)
         if (
-            np.all(np.abs(feet - top) <= LEVEL / 2)
+            np.all(np.abs(layout.heights(feet) - top) <= LEVEL / 2)
+            and not np.isnan(layout.top_of(name, feet)).any()  # over the top itself, not one as high beside it
             and _highest_under(quad, layout, stop) <= top + RISE
             and walk_violation(layout, previous, [stop], quad.limits) is None
         ):

@@ -22,7 +22,9 @@ from robotool.robots.quadruped.quadruped_routes import (
     ROOM_MARGIN,
     TIP_PAST,
     Quadruped,
+    Route,
     _direct,
+    _landing,
     _lined_up,
 )
 from robotool.robots.quadruped.terrain import foot_offsets
@@ -431,3 +433,27 @@ def test_a_tight_two_box_staircase_brings_the_programs_the_robot_makes_turned_a_
     assert first.doubt is None and not tight(first), first.sentences
     assert first.motions[0].skill == "turn_to_heading" and "box_3" not in first.objects, first.sentences
     _assert_holds_in_fresh_worlds(task, first.code, worlds=3)
+
+
+def test_a_landing_is_never_pulled_back_onto_another_surface_as_high() -> None:
+    """Two stages 0.25 m high, 0.4 m apart: the walk from the first onto the second is predicted to break the gap
+    limit, so the stop on the second is pulled back along the way, to the farthest point with every foot at the
+    second's height. A point on the first stage, as high, passed that test: the route then ended on the stage it
+    started on. Now only points over the second stage count; there is none the walk reaches, so the route is left as
+    it was (its walk predicted to fail)."""
+    task = parse_task({
+        "format": 1,
+        "name": "two_stages",
+        "category": "sequential_tool_use",
+        "instruction": "Cross to the other stage.",
+        "robot": {"type": "quadruped", "position": [0.0, -0.5]},
+        "objects": [
+            _box("stage_a", [0.0, 0.0, 0.125], [1.0, 1.4, 0.25], movable=False),
+            _box("stage_b", [0.0, 1.8, 0.125], [1.0, 1.4, 0.25], movable=False),
+        ],
+        "goal": {"robot_on": "stage_b"},
+    })
+    quad = Quadruped(task)
+    route = Route(waypoints=[(np.array([0.0, 1.8]), "stage_b")])
+    (stop, surface), = _landing(quad, "stage_b", route).waypoints
+    assert surface == "stage_b" and stop[1] - quad.half.min() > 1.1, stop  # over stage_b (it starts at y 1.1)
