@@ -164,3 +164,36 @@ def test_lowers_a_vase_lying_where_the_steps_lead_without_standing_on_it() -> No
     instance = tasks.generate("vase_lowering", 1098)
     solution = solve(instance.task, worlds=2)
     assert solution.success, solution.candidates[0].failure if solution.candidates else solution.notes
+
+
+def _cane_task(yaw: float) -> Task:
+    """A juice box 0.11 m beyond the workspace's -y wall and a cane lying flat, turned ``yaw`` degrees (at -90 its
+    shaft runs along y, the way the fingers close; at 0, along x, like the hammer of milk_reaching)."""
+    grasp = [-0.265, 0.0, 0.03] if yaw else [-0.1, -0.175, 0.03]
+    return parse_task({
+        "format": 1,
+        "name": "juice_and_cane",
+        "category": "tool_selection",
+        "instruction": "Grasp the juice box.",
+        "robot": {"type": "arm"},
+        "objects": [
+            {"name": "juice", "shape": "box", "center": [0.05, -0.56, 0.07], "size": [0.05, 0.04, 0.14],
+             "mass": 0.2, "graspable_point": [0.05, -0.56, 0.12]},
+            {"name": "cane", "shape": "hook", "center": [-0.2, -0.1, 0.015], "size": [0.4, 0.15, 0.03],
+             "rpy": [0, 0, yaw], "mass": 0.3, "graspable_point": grasp},
+        ],
+        "goal": {"grasped": "juice"},
+    })
+
+
+def test_a_tool_wider_across_the_fingers_than_their_opening_is_not_planned_with() -> None:
+    """Found on a held-out task file: the fingers close along y and open 6 cm, so a cane whose shaft runs along y
+    cannot be held at it (the simulator says the fingers rest on top of it). The planner made hook programs with it
+    anyway, each failing at the grasp; now it counts only what fits between the fingers as a tool. The same cane
+    turned along x is still planned with."""
+    from robotool.robots.arm.arm_macros import Arm, candidates
+
+    along_y, along_x = _cane_task(-90.0), _cane_task(0.0)
+    assert not Arm(along_y).graspable(along_y.object("cane"))
+    assert all("cane" not in p.objects for p in candidates(along_y, tools=True))
+    assert Arm(along_x).graspable(along_x.object("cane"))

@@ -13,6 +13,7 @@ from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
 from robotool.robots.arm.arm_config import ARM
 from robotool.robots.arm.arm_skills import ArmLimits
+from robotool.sim.build import is_sheet
 from robotool.task import geometry
 from robotool.task.concepts import press_point
 from robotool.task.scene import SceneObject
@@ -37,6 +38,7 @@ class Arm:
         limits = task.limits
         assert isinstance(limits, ArmLimits)
         self.lo, self.hi = np.asarray(limits.workspace_min), np.asarray(limits.workspace_max)
+        self.opening = limits.gripper_opening
 
     def inside(self, point: np.ndarray, margin: float = 0.0) -> bool:
         """Whether an x-y(-z) point lies in the workspace, ``margin`` inside its walls."""
@@ -54,11 +56,35 @@ class Arm:
         return float(min(max(others, default=0.0) + CARRY + below, self.hi[2]))
 
     def graspable(self, obj: SceneObject) -> bool:
-        return obj.movable and obj.shape not in ("cloth", "button") and self.inside(np.asarray(obj.grasp_point))
+        """Whether the fingers can hold ``obj`` at its graspable point: movable, in the workspace, and no wider
+        there across the fingers (along y, the way they close) than their opening; a sheet is pinched."""
+        return (
+            obj.movable
+            and obj.shape not in ("cloth", "button")
+            and self.inside(np.asarray(obj.grasp_point))
+            and (is_sheet(obj) or _width_across_fingers(obj) <= self.opening)
+        )
 
     def bring_in(self, grasp_xy: np.ndarray) -> np.ndarray:
         """Where an out-of-reach graspable point (x-y) should be moved to: just inside the workspace."""
         return np.clip(grasp_xy, self.lo[:2] + INSIDE, self.hi[:2] - INSIDE)
+
+
+def _width_across_fingers(obj: SceneObject) -> float:
+    """The width along y (the fingers' closing axis) of the narrowest of ``obj``'s parts under its graspable point
+    (the whole object's when none is under it), as it lies."""
+    parts = geometry.object_parts(obj)
+    point = np.asarray(obj.grasp_point[:2], dtype=float)[None, :]
+    under = [p for p in parts if not np.isnan(p.vertical_interval(point)[1][0])] or parts
+    return min(2 * float(_half_along_y(p)) for p in under)
+
+
+def _half_along_y(part: geometry.Part) -> float:
+    """How far a part reaches along world y from its centre."""
+    if part.kind == "box":
+        return float(np.abs(part.rot[1]) @ part.half)
+    axis = abs(float(part.rot[1, 2]))  # a cylinder: its axis is the local z
+    return axis * float(part.half[2]) + float(part.half[0]) * float(np.sqrt(max(0.0, 1.0 - axis * axis)))
 
 
 # --- macros ------------------------------------------------------------------------------------------
