@@ -77,7 +77,13 @@ def order(programs: Iterable[Program]) -> list[Program]:
         if prog.code not in seen:
             seen.add(prog.code)
             unique.append(prog)
-    return sorted(unique, key=lambda p: (p.doubt is not None, p.late, len(p.objects), tight(p), len(p.steps)))
+    return sorted(unique, key=lambda p: (*precedence(p), tight(p), len(p.steps)))
+
+
+def precedence(prog: Program) -> tuple[bool, int, int]:
+    """What :func:`order` weighs before a program's margins: predicted to fail, its less likely choices, its
+    objects."""
+    return prog.doubt is not None, prog.late, len(prog.objects)
 
 
 def tight(prog: Program) -> bool:

@@ -193,7 +193,7 @@ def test_room_to_line_up_before_the_first_step(cushion_x: float, cushion_y: floa
     on it; a sand cushion too heavy to push (0.5 x 0.5 m) standing where every such lane lines up shuts it out."""
     step = thing("box_1", "box", (1.75, 0.5, 0.06), (0.4, 0.6, 0.12), movable=False)
     sand = thing("sand_cushion", "box", (cushion_x, cushion_y, 0.08), (0.5, 0.5, 0.16), mass=8.0)
-    assert vase_lowering.room_to_line_up(step, [sand]) is room
+    assert vase_lowering.room_to_line_up(step, [step, sand]) is room
 
 
 def test_a_sand_cushion_where_the_robot_lines_up_for_the_steps_makes_the_scene_unsolvable() -> None:

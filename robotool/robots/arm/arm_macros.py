@@ -76,15 +76,7 @@ def _width_across_fingers(obj: SceneObject) -> float:
     parts = geometry.object_parts(obj)
     point = np.asarray(obj.grasp_point[:2], dtype=float)[None, :]
     under = [p for p in parts if not np.isnan(p.vertical_interval(point)[1][0])] or parts
-    return min(2 * float(_half_along_y(p)) for p in under)
-
-
-def _half_along_y(part: geometry.Part) -> float:
-    """How far a part reaches along world y from its centre."""
-    if part.kind == "box":
-        return float(np.abs(part.rot[1]) @ part.half)
-    axis = abs(float(part.rot[1, 2]))  # a cylinder: its axis is the local z
-    return axis * float(part.half[2]) + float(part.half[0]) * float(np.sqrt(max(0.0, 1.0 - axis * axis)))
+    return min(float(hi[1] - lo[1]) for lo, hi in (p.aabb() for p in under))
 
 
 # --- macros ------------------------------------------------------------------------------------------

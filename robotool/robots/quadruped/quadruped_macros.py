@@ -15,7 +15,7 @@ import numpy as np
 
 from robotool.planner.codegen import Direction, Point, Program, Ref
 from robotool.planner.layout import Box, Layout
-from robotool.planner.search import tight
+from robotool.planner.search import precedence, tight
 from robotool.robots.quadruped.predict import (
     detour,
     drift_room,
@@ -265,14 +265,13 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
 
 
 def _leading(programs: list[Program]) -> list[Program]:
-    """The programs not predicted to fail that the search tries first, before it weighs margins: those making the
-    fewest less likely choices with the fewest objects (:func:`robotool.planner.search.order`). A program that needs
-    a third box for its staircase comes after a tight one with two, so a tight two-box staircase walked flank first
-    (its feet 5 mm inside the boxes' sides) is tried before the one the robot walks turned a quarter, unless that one
-    is made too."""
+    """The programs not predicted to fail that the search tries first, before it weighs margins (their
+    :func:`robotool.planner.search.precedence`). A program that needs a third box for its staircase comes after a
+    tight one with two, so a tight two-box staircase walked flank first (its feet 5 mm inside the boxes' sides) is
+    tried before the one the robot walks turned a quarter, unless that one is made too."""
     fine = [p for p in programs if p.doubt is None]
-    first = min(((p.late, len(p.objects)) for p in fine), default=None)
-    return [p for p in fine if (p.late, len(p.objects)) == first]
+    first = min(map(precedence, fine), default=None)
+    return [p for p in fine if precedence(p) == first]
 
 
 def _cleared(quad: Quadruped, tools: bool) -> Iterator[Program]:

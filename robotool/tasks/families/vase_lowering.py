@@ -132,7 +132,7 @@ def build(rng: np.random.Generator) -> Draft:
     )
     goal_height = 0.20 if height > MAX_DROP else 0.05
     blocked = variant == "tool" and not room_to_land(scene[0], scene[2], scene[3])
-    shut_out = variant == "tool" and not room_to_line_up(scene[1], [o for o in scene if o.name == "sand_cushion"])
+    shut_out = variant == "tool" and not room_to_line_up(scene[1], scene)
     if blocked or shut_out:
         variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
     tools = {
@@ -167,24 +167,35 @@ def room_to_land(sofa: SceneObject, step: SceneObject, vase: SceneObject) -> boo
     step farthest from the vase."""
     if abs(step.top - sofa.top) <= PUSH_LEVEL:
         return True
-    limits = template("vase_lowering").limits
-    assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
-    size = np.asarray(limits.body_size[:2])
+    size = np.asarray(_limits().body_size[:2])
     return any(_lands(half, sofa, step, vase) for half in (size / 2, size[::-1] / 2))
 
 
-def room_to_line_up(step: SceneObject, blockers: list[SceneObject]) -> bool:
+def room_to_line_up(step: SceneObject, scene: list[SceneObject]) -> bool:
     """Whether the robot can stand right before ``step``'s face (climbing it along the template's +x, before the
     layout places the scene), its length along the climb or across it (it may turn a quarter on the floor), in some
-    lane where every foot lands on the step, its body clear of every one of ``blockers`` (objects standing on the
-    floor that it can neither push nor climb).
+    lane where every foot lands on the step, its body clear of every object of ``scene`` that it can neither push
+    (fixed, or over the push limit) nor climb (over the step limit).
 
     Nothing is kept in reserve (no margin, no room to walk there): a scene is labelled unsolvable only where no
     program could line up."""
-    limits = template("vase_lowering").limits
-    assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
+    limits = _limits()
+    blockers = [
+        o
+        for o in scene
+        if o is not step
+        and (not o.movable or o.effective_mass > limits.max_push_mass)
+        and o.top > limits.max_step_up
+    ]
     size = limits.body_size[:2]
     return any(_lines_up(step, blockers, length, width) for length, width in (size, size[::-1]))
+
+
+def _limits() -> QuadrupedLimits:
+    """The family's robot limits (its template's)."""
+    limits = template("vase_lowering").limits
+    assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
+    return limits
 
 
 def _lines_up(step: SceneObject, blockers: list[SceneObject], length: float, width: float) -> bool:
