@@ -110,7 +110,6 @@ def test_the_robot_stops_short_of_a_vase_lying_ahead_of_the_steps() -> None:
     assert all(r.success for r in rollouts), failure_reason(rollouts)
 
 
-
 @pytest.mark.slow
 def test_the_vase_is_pushed_until_it_tips_off_and_the_robot_stays_behind_it() -> None:
     """vase_lowering seed 9905: the planner pushed the vase wholly past the sofa's edge (its centre its half size and
@@ -296,7 +295,6 @@ def test_the_staircase_instance_has_a_program_whose_pushes_are_predicted_clear()
     task = generate("sofa_climbing", 1047).task
     programs = list(robot_planner(task).candidates(task, True))
     assert any("push_to_position" in p.code and not (p.doubt or "").startswith("box_1 would run") for p in programs)
-
 
 
 @pytest.mark.parametrize(("mass", "thin"), [(4.0, False), (4.5, True)])
