@@ -15,8 +15,7 @@ Randomizations:
       unsolvable when the vase lies where they lead onto the sofa, so near its edge that the robot cannot stop
       there with every foot on the sofa and its body clear of the vase, its length along the climb or across it
       (it may turn a quarter on the floor first), unless the sofa's top is level with the top step's (within the
-      1.5 cm a push keeps its feet to): then the robot, on the step, pushes the vase out of its way; and when the
-      sand cushion stands where the robot must line up before the first step, in every lane across it;
+      push's 0.04 m): then the robot, on the step, pushes the vase out of its way;
     - 0-3 fixed pieces of furniture away from the scene; the whole scene mirrored, turned by quarter
       turns and shifted on the floor.
 Success conditions:
@@ -52,8 +51,8 @@ CUSHION = (0.5, 0.5, 0.16)
 STEP = (0.4, 0.6)
 SIDE_MARGIN = QUADRUPED.side_margin  # m its body keeps from what it must not touch
 SAME_LEVEL = QUADRUPED.rise  # m: a step top no higher than this above the sofa's does not meet the body
-PUSH_LEVEL = QUADRUPED.rise  # m: a robot standing across the step and the sofa pushes only where their tops differ by
-# no more than this (the push skill keeps its feet's paths this close to the level it stands on)
+PUSH_LEVEL = QUADRUPED.same_surface  # m: a robot on the step pushes what rests on a sofa top no farther than this
+# from the step's (the push rules' same surface)
 
 
 def build(rng: np.random.Generator) -> Draft:
@@ -132,8 +131,7 @@ def build(rng: np.random.Generator) -> Draft:
     )
     goal_height = 0.20 if height > MAX_DROP else 0.05
     blocked = variant == "tool" and not room_to_land(scene[0], scene[2], scene[3])
-    shut_out = variant == "tool" and not room_to_line_up(scene[1], scene)
-    if blocked or shut_out:
+    if blocked:
         variant, decoys = "unsolvable", [*decoys, "box_1", "box_2"]
     tools = {
         "no_tool": [],
@@ -152,7 +150,6 @@ def build(rng: np.random.Generator) -> Draft:
         layout=layout,
         varied=f"sofa {height:.2f} m high, goal height {goal_height:.2f} m; "
         + ("the vase lies where the steps lead onto the sofa; " if blocked else "")
-        + ("the sand cushion stands where the robot lines up for the steps; " if shut_out else "")
         + f"{'decoys: ' + ', '.join(decoys) if decoys else 'no decoys'}",
     )
 
@@ -167,49 +164,10 @@ def room_to_land(sofa: SceneObject, step: SceneObject, vase: SceneObject) -> boo
     step farthest from the vase."""
     if abs(step.top - sofa.top) <= PUSH_LEVEL:
         return True
-    size = np.asarray(_limits().body_size[:2])
-    return any(_lands(half, sofa, step, vase) for half in (size / 2, size[::-1] / 2))
-
-
-def room_to_line_up(step: SceneObject, scene: list[SceneObject]) -> bool:
-    """Whether the robot can stand right before ``step``'s face (climbing it along the template's +x, before the
-    layout places the scene), its length along the climb or across it (it may turn a quarter on the floor), in some
-    lane where every foot lands on the step, its body clear of every object of ``scene`` that it can neither push
-    (fixed, or over the push limit) nor climb (over the step limit).
-
-    Nothing is kept in reserve (no margin, no room to walk there): a scene is labelled unsolvable only where no
-    program could line up."""
-    limits = _limits()
-    blockers = [
-        o
-        for o in scene
-        if o is not step
-        and (not o.movable or o.effective_mass > limits.max_push_mass)
-        and o.top > limits.max_step_up
-    ]
-    size = limits.body_size[:2]
-    return any(_lines_up(step, blockers, length, width) for length, width in (size, size[::-1]))
-
-
-def _limits() -> QuadrupedLimits:
-    """The family's robot limits (its template's)."""
     limits = template("vase_lowering").limits
     assert isinstance(limits, QuadrupedLimits)  # the family's template is a quadruped task
-    return limits
-
-
-def _lines_up(step: SceneObject, blockers: list[SceneObject], length: float, width: float) -> bool:
-    """:func:`room_to_line_up` for a body ``length`` long along the climb and ``width`` across it."""
-    feet = width / 2 - QUADRUPED.foot_radius  # the feet's centres sit a foot's radius inside the body's outline
-    lo_x, lo_y, _, hi_y = footprint(step)
-    lanes = [(lo_y + feet, hi_y - feet)]  # the body's centre lines across the step, as intervals still open
-    for blocker in blockers:
-        b = footprint(blocker)
-        if b[0] >= lo_x or b[2] <= lo_x - length:  # clear of the body right before the face
-            continue
-        shut = (b[1] - width / 2, b[3] + width / 2)  # centre lines whose body meets it
-        lanes = [part for lo, hi in lanes for part in ((lo, min(hi, shut[0])), (max(lo, shut[1]), hi))]
-    return any(lo <= hi for lo, hi in lanes)
+    size = np.asarray(limits.body_size[:2])
+    return any(_lands(half, sofa, step, vase) for half in (size / 2, size[::-1] / 2))
 
 
 def _lands(half: np.ndarray, sofa: SceneObject, step: SceneObject, vase: SceneObject) -> bool:

@@ -215,6 +215,8 @@ LAYOUT_CASES = [
     # a heavy sled stood on and walked into by its wall, taller than the rays' start, rams what the push rules refuse
     ("walk_into_a_sleds_wall_to_ram_a_board_across", "sled_rams_a_board_across_a_gap"),
     ("walk_into_a_sleds_wall_to_ram_a_crate_off", "sled_rams_a_crate_off_a_ledge"),
+    ("line_up_flank_first_against_the_sand_cushion", "sand_cushion_before_the_steps"),  # its feet meet the cushion
+    ("push_the_vase_from_a_step_above_the_sofa", "vase_in_the_steps_lane_below_the_top_step"),  # 3.6 cm: no stance
 ]
 
 CONTROL_CASES = [
@@ -232,6 +234,7 @@ CONTROL_CASES = [
     ("carry_a_heavy_crate_under_a_book", "light_crate_with_a_book_on_a_pallet"),  # 3.8 kg in all: within the limit
     ("walk_onto_the_middle_of_the_mat", "blanket_on_a_mat"),  # the links under the feet lie on the mat
     ("lever_with_the_prop_pushed_short_of_the_toolbox", "lever_prop_pushed_toward_a_toolbox"),  # the room the floor has
+    ("climb_the_first_step_on_a_slant_beside_the_sand_cushion", "sand_cushion_before_the_steps"),  # feet clear of it
 ]
 
 
