@@ -132,7 +132,7 @@ class QuadrupedConfig:
     """m the robot keeps from the far edge of what it walks onto."""
     bridge_overlap: float = 0.15
     """m a bridge rests on each side of a gap."""
-    prop_clearances: tuple[float, ...] = (0.8, 0.5, 0.2)
+    prop_clearances: tuple[float, ...] = (1.2, 0.8, 0.5, 0.2)
     """m a prop pushed out from under a board keeps from the board's side, tried in this order: far enough to be left
     behind by the board's end when friction drags it sideways part of the way, even where the prop, pushed off its
     centre (the body keeps clear of the board), turns and slides part way off the robot's face; then nearer; else

@@ -415,19 +415,28 @@ def _prop_spot(prop: Box, board: Box, direction: np.ndarray, clearance: float) -
 
 def _prop_clearances(quad: Quadruped, props: list[SceneObject], board: Box, direction: np.ndarray) -> list[float]:
     """How far beyond ``board``'s side the props are pushed along ``direction``: :data:`CLEARANCES`, and where each of
-    them would push a prop into something, the most the floor leaves room for (on a 2.5 cm grid, keeping
-    :data:`ROOM_MARGIN` from what stands beyond), down to :data:`MIN_CLEARANCE`."""
+    them would push a prop into something on its way (:func:`_push_blocked`), the most the floor leaves room for (on a
+    2.5 cm grid, keeping :data:`ROOM_MARGIN` from what stands beyond), down to :data:`MIN_CLEARANCE`."""
     clearances = list(CLEARANCES)
     for prop in props:
         p = quad.layout.box(prop.name)
-        if all(quad.layout.collides(p.moved_to(_prop_spot(p, board, direction, c))) for c in CLEARANCES):
+        if all(_push_blocked(quad.layout, p, board, direction, c) for c in CLEARANCES):
             for c in np.arange(min(CLEARANCES), MIN_CLEARANCE - 1e-9, -0.025):
-                spot = _prop_spot(p, board, direction, float(c))
-                room = Box(p.name, spot - p.half - ROOM_MARGIN, spot + p.half + ROOM_MARGIN, p.bottom, p.top)
-                if quad.layout.collides(room) is None:
+                if not _push_blocked(quad.layout, p, board, direction, float(c), ROOM_MARGIN):
                     clearances.append(round(float(c), 3))
                     break
     return clearances
+
+
+def _push_blocked(
+    layout: Layout, prop: Box, board: Box, direction: np.ndarray, clearance: float, margin: float = 0.0
+) -> bool:
+    """Whether something other than ``board`` stands in the footprint that ``prop`` sweeps (grown by ``margin``) as it
+    is pushed out to ``clearance`` beyond the board's side (:func:`_prop_spot`): not only where it ends, since a far
+    push may carry it past what it runs into on the way."""
+    spot = prop.moved_to(_prop_spot(prop, board, direction, clearance))
+    lo, hi = np.minimum(prop.lo, spot.lo) - margin, np.maximum(prop.hi, spot.hi) + margin
+    return layout.collides(Box(prop.name, lo, hi, prop.bottom, prop.top), ignore=[board.name]) is not None
 
 
 def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, board: str) -> Writer:
