@@ -140,7 +140,7 @@ def test_a_chair_propping_a_lever_is_pushed_far_enough_out_to_leave_the_board_be
     first round's best guess now pushes it far enough out to leave the board's end behind in every world."""
     search_macros = solve_module.robot_planner
     monkeypatch.setattr(solve_module, "robot_planner", lambda task: replace(search_macros(task), rounds=1))
-    solution = solve(tasks.generate("cube_lifting", 9302).task, repair=False)
+    solution = solve(tasks.generate("cube_lifting", 9302).task, verify=0, repair=False)
     assert solution.success_rate == 1.0, [c.failure for c in solution.candidates]
 
 
