@@ -52,6 +52,7 @@ from robotool.task.task_model import Task
 STEP_ON_NEAR = 0.01  # m the feet step onto a lever at least this far short of its fulcrum's centre line
 FULCRUM_CLEARANCE = 0.02  # m the feet keep from a lever's fulcrum as they step on, where the load leaves room
 LOAD_CLEARANCE = 0.03  # m the body's rear keeps from the load on the lever's other end as the feet step on
+LEVER_STRIDE = 0.1  # m between stops walking out a lever past its fulcrum: it tips under planted feet, not mid-stride
 OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it: thin
 
 
@@ -381,6 +382,8 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum", fixed_axis=axis)
         w.stance(step_on, board_name)
         lift = f"walk to {board_name}'s far end so it tips and lifts {target.name}"
+        for xy in _strides(step_on, fulcrum.center, end):
+            w.walk(xy, board_name, f"{lift}: a stop, every foot down, where it may tip", along_from=target.name)
         w.walk(end, board_name, lift, along_from=target.name)
         w.stance(end, board_name)
         prog.say(
@@ -389,6 +392,19 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             + f"the lever lifts {target.name}."
         )
         yield prog
+
+
+def _strides(start: np.ndarray, fulcrum: np.ndarray, end: np.ndarray) -> list[np.ndarray]:
+    """The stops on the walk from ``start`` to ``end`` along a lever: level with ``fulcrum``'s centre, where the lever
+    may start to tip, and then evenly, at most :data:`LEVER_STRIDE` apart, up to ``end`` (not included)."""
+    length = float(np.linalg.norm(end - start))
+    if length < 1e-9:
+        return []
+    u = (end - start) / length
+    first = min(max(float((fulcrum - start) @ u), 0.0), length)
+    count = int(np.ceil((length - first) / LEVER_STRIDE - 1e-9))
+    stops = first + np.arange(count) * ((length - first) / max(count, 1))
+    return [start + u * d for d in stops if d > 1e-6]
 
 
 def _step_on_distance(extent: float, fulcrum: Box, load: Box, a: np.ndarray) -> float:
@@ -431,12 +447,13 @@ def _prop_clearances(quad: Quadruped, props: list[SceneObject], board: Box, dire
 def _push_blocked(
     layout: Layout, prop: Box, board: Box, direction: np.ndarray, clearance: float, margin: float = 0.0
 ) -> bool:
-    """Whether something other than ``board`` stands in the footprint that ``prop`` sweeps (grown by ``margin``) as it
-    is pushed out to ``clearance`` beyond the board's side (:func:`_prop_spot`): not only where it ends, since a far
-    push may carry it past what it runs into on the way."""
+    """Whether something other than ``board`` stands in the footprint that ``prop`` sweeps as it is pushed out to
+    ``clearance`` beyond the board's side (:func:`_prop_spot`), not only where it ends (a far push may carry it past
+    what it runs into on the way), or within ``margin`` of where it ends."""
     spot = prop.moved_to(_prop_spot(prop, board, direction, clearance))
-    lo, hi = np.minimum(prop.lo, spot.lo) - margin, np.maximum(prop.hi, spot.hi) + margin
-    return layout.collides(Box(prop.name, lo, hi, prop.bottom, prop.top), ignore=[board.name]) is not None
+    swept = Box(prop.name, np.minimum(prop.lo, spot.lo), np.maximum(prop.hi, spot.hi), prop.bottom, prop.top)
+    room = Box(prop.name, spot.lo - margin, spot.hi + margin, prop.bottom, prop.top)
+    return any(layout.collides(box, ignore=[board.name]) is not None for box in (swept, room))
 
 
 def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, board: str) -> Writer:

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import numpy as np
+import pytest
 from fixtures.paths import FIXTURES
 
 from robotool import tasks
 from robotool.planner.layout import Layout
-from robotool.robots.quadruped.quadruped_macros import candidates
+from robotool.planner.search import order
+from robotool.robots.quadruped.quadruped_macros import LEVER_STRIDE, candidates
+from robotool.tasks.families import generate
+from robotool.verify import failure_reason, prepare_code, run_seeded
 
 
 def test_the_prop_is_pushed_well_clear_of_the_board_or_just_clear() -> None:
     """A board resting on the chair is dragged sideways with it until the chair leaves it behind, so each side's lever
-    program comes twice: with the chair pushed 0.5 m clear of the board's side (where the board's dragged end no longer
-    reaches it), and just clear (0.2 m), for when the far spot is taken."""
+    program comes once for each clearance, the farthest first: with the chair pushed 1.2 m clear of the board's side
+    (where the board's dragged end no longer reaches it, even with the chair turned as it slides along the robot's
+    face), nearer (0.8 m, 0.5 m), and just clear (0.2 m), for when the far spots are taken."""
     task = tasks.load(FIXTURES / "layouts" / "lever_plus_y.yaml")
     board = Layout(task).box("surfboard")
     chair = task.object("chair")
@@ -21,7 +27,7 @@ def test_the_prop_is_pushed_well_clear_of_the_board_or_just_clear() -> None:
         (push,) = [m for m in prog.motions if m.obj == "chair"]
         x = float(push.point.estimate()[0])  # the board runs along y: the chair goes out along x
         clear.append(round(max(board.lo[0] - (x + chair.size[0] / 2), (x - chair.size[0] / 2) - board.hi[0]), 3))
-    assert sorted(clear) == [0.2, 0.2, 0.5, 0.5]
+    assert clear == [1.2, 0.8, 0.5, 0.2] * 2
 
 
 def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_lane() -> None:
@@ -46,3 +52,30 @@ def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_l
         half = (length if turned else width) / 2
         assert y - half >= fulcrum_y + 0.01 - 1e-9  # the feet at least 1 cm short of the fulcrum's centre line
         assert y + half <= cube_face - 0.03 + 1e-9 or y - half >= fulcrum_y + 0.05 + 0.02 - 1e-9  # room kept
+
+
+def test_the_walk_out_along_the_lever_stops_every_stride_from_the_fulcrum_on() -> None:
+    """Past its fulcrum the lever may tip under the robot at any step; the walk to its far end stops level with the
+    fulcrum and then every LEVER_STRIDE, so that the board tips under planted feet."""
+    task = tasks.load(FIXTURES / "layouts" / "lever_plus_y.yaml")  # the lever runs along y, the cube at +y
+    fulcrum_y = task.object("yoga_roller").center[1]
+    for prog in candidates(task, tools=True):
+        (climb,) = [m for m in prog.motions if m.skill == "climb_to_position"]
+        walk_out = prog.motions[prog.motions.index(climb) + 1 :]
+        assert walk_out and all(m.skill == "walk_to_position" and m.point is not None for m in walk_out)
+        ys = [float(m.point.estimate()[1]) for m in walk_out if m.point is not None]
+        assert ys[0] == pytest.approx(fulcrum_y, abs=1e-6)
+        steps = np.diff(ys)
+        assert np.all(steps < 0) and np.all(-steps <= LEVER_STRIDE + 1e-6)  # toward -y, the raised end
+
+
+@pytest.mark.slow
+def test_a_lever_tipping_under_the_walking_robot_no_longer_throws_it() -> None:
+    """cube_lifting 8214: walking out along the lever in one stride, the robot rode the board's tip mid-step and fell
+    (no support under the front feet) in these perturbed worlds; stopping every stride past the fulcrum, it holds."""
+    task = generate("cube_lifting", 8214).task
+    best = order(candidates(task, tools=True))[0]
+    code, rejection, _ = prepare_code(best.code, task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_seeded(task, [(code, [20007, 20008])])
+    assert all(r.success for r in rollouts), failure_reason(rollouts)

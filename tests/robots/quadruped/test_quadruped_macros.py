@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import yaml
 from fixtures.paths import FIXTURES
 
 from robotool import tasks
@@ -14,7 +15,7 @@ from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner, solve
 from robotool.robots.quadruped.predict import detour, push_problem, walk_violation
 from robotool.robots.quadruped.push import sweep_points
-from robotool.robots.quadruped.quadruped_macros import Writer, _push_plans, candidates
+from robotool.robots.quadruped.quadruped_macros import Writer, _push_blocked, _push_plans, candidates
 from robotool.robots.quadruped.quadruped_routes import (
     APPROACH,
     MIN_APPROACH,
@@ -403,6 +404,25 @@ def test_a_prop_whose_usual_push_would_ram_a_heavy_box_is_pushed_only_as_far_as_
         spot = chair.moved_to(push.point.estimate()[:2])
         assert spot.lo[0] - board.hi[0] >= MIN_CLEARANCE - 1e-9  # out from under the board
         assert toolbox.lo[0] - spot.hi[0] >= ROOM_MARGIN - 1e-9  # short of the toolbox
+
+
+def test_a_prop_push_is_blocked_by_what_it_would_run_into_on_its_way_not_by_what_stands_behind_it() -> None:
+    """A push of the chair toward +x far enough to end beyond the toolbox runs into it on the way (an end spot clear
+    of it hid that); a crate 3 cm behind the chair's start, on the side the push leaves, is in nobody's way (room was
+    once read from the whole swept footprint grown by the margin, so it blocked every push)."""
+    task = tasks.load(FIXTURES / "layouts" / "lever_prop_pushed_toward_a_toolbox.yaml")
+    data = yaml.safe_load(task.to_yaml())
+    chair = next(o for o in data["objects"] if o["name"] == "chair")
+    behind = chair["center"][0] - chair["size"][0] / 2 - 0.03 - 0.1
+    data["objects"].append({"name": "crate", "shape": "box", "center": [behind, chair["center"][1], 0.15],
+                            "size": [0.2, 0.4, 0.3], "movable": False})
+    layout = Layout(parse_task(data))
+    box, board, toolbox = (layout.box(n) for n in ("chair", "surfboard", "toolbox"))
+    plus_x = np.array([1.0, 0.0])
+    far = 1.2
+    assert box.moved_to(box.center + plus_x * (board.hi[0] - box.lo[0] + far)).overlap(toolbox) < 0  # ends beyond it
+    assert _push_blocked(layout, box, board, plus_x, far)
+    assert not _push_blocked(layout, box, board, plus_x, 0.05, ROOM_MARGIN)
 
 
 def test_the_robot_lines_up_behind_the_vase_where_the_push_skill_does_clear_of_a_taller_step() -> None:
