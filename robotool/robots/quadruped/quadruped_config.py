@@ -138,8 +138,8 @@ class QuadrupedConfig:
     centre (the body keeps clear of the board), turns and slides part way off the robot's face; then nearer; else
     just clear."""
     prop_min_clearance: float = 0.05
-    """m: where each of ``prop_clearances`` would push a prop into something, it is pushed only as far as the floor
-    leaves room (with ``prop_room_margin`` to spare), keeping at least this much from the board's side."""
+    """m: where each of ``prop_clearances`` would push a prop into something on its way there, it is pushed only as far
+    as the floor leaves room (with ``prop_room_margin`` to spare), keeping at least this much from the board's side."""
     prop_room_margin: float = 0.05
     """m a prop pushed as far as the room allows stops short of what stands beyond it."""
     board_side: float = 0.25
