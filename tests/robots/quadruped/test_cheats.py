@@ -217,6 +217,10 @@ LAYOUT_CASES = [
     ("walk_into_a_sleds_wall_to_ram_a_crate_off", "sled_rams_a_crate_off_a_ledge"),
     ("line_up_flank_first_against_the_sand_cushion", "sand_cushion_before_the_steps"),  # its feet meet the cushion
     ("push_the_vase_from_a_step_above_the_sofa", "vase_in_the_steps_lane_below_the_top_step"),  # 3.6 cm: no stance
+    # a lever used other ways than by the robot's weight past its fulcrum (tried by an adversary against the planner)
+    ("climb_the_lever_from_its_side_past_the_roller", "cube_lifting"),  # the tilted board stands a step too high there
+    ("push_a_light_cube_up_the_propped_lever", "lever_light_cube"),  # no stance behind the cube but on the board
+    ("ram_a_light_cube_up_the_lever_with_the_chair", "lever_light_cube"),  # chair, cube and board: over the limit
 ]
 
 CONTROL_CASES = [
@@ -235,6 +239,7 @@ CONTROL_CASES = [
     ("walk_onto_the_middle_of_the_mat", "blanket_on_a_mat"),  # the links under the feet lie on the mat
     ("lever_with_the_prop_pushed_short_of_the_toolbox", "lever_prop_pushed_toward_a_toolbox"),  # the room the floor has
     ("climb_the_first_step_on_a_slant_beside_the_sand_cushion", "sand_cushion_before_the_steps"),  # feet clear of it
+    ("lever_on_the_light_cube_layout", "lever_light_cube"),  # the planner's lever program
 ]
 
 
