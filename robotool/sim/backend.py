@@ -113,13 +113,16 @@ class BatchedSim(Protocol):
         vec: np.ndarray,
         exclude_body: int | np.ndarray = -1,
         skip_group: int = -1,
+        from_inside: bool = False,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Cast rays (k, nray, 3) from ``pnt`` along ``vec`` in ``worlds`` (k,: each at most once) against their
         current geoms.
 
         Returns the distance in units of ``|vec|`` (inf where nothing is hit) and the geom hit
         (-1 where none), both (k, nray). Geoms of ``exclude_body`` (one body for every ray, or
-        (k, nray): each ray's own; -1: none) and geoms in geom group ``skip_group`` are ignored.
+        (k, nray): each ray's own; -1: none) and geoms in geom group ``skip_group`` are ignored. With
+        ``from_inside``, a ray that starts inside a geom it may hit (not a plane; the last of several in geom order)
+        meets it at distance 0, where ``mj_ray`` would meet it where it leaves it.
         """
 
 

@@ -129,7 +129,9 @@ class MujocoSim:
         self._failed: list[str | None] = [None] * nworld
         self._nthread = nthread or _threads(nworld)
         self._pool = ThreadPoolExecutor(self._nthread - 1) if self._nthread > 1 else None
+        self._warnings = [d.warning.number for d in self.datas]  # views of each world's warning counters
         for w in range(nworld):
+            self._eq_active[w] = self.datas[w].eq_active  # later changed only by set_weld, which keeps both
             self._gather(w)
 
     def _gather(self, w: int) -> None:
@@ -139,19 +141,18 @@ class MujocoSim:
         self._qvel[w] = d.qvel
         self._xpos[w] = d.xpos
         self._xquat[w] = d.xquat
-        self._sensordata[w] = d.sensordata
-        self._eq_active[w] = d.eq_active
+        if self._sensordata.size:
+            self._sensordata[w] = d.sensordata
         if d.ncon:  # the pairs only: the bodies' table is built for every world at once (_touching)
             con = d.contact
             self._touching_geoms[w] = con.geom[con.dist <= TOUCH_DISTANCE]
         else:
             self._touching_geoms[w] = _NO_PAIRS
         if self._failed[w] is None:
-            self._failed[w] = self._failure(d)
+            self._failed[w] = self._failure(d, self._warnings[w])
 
-    def _failure(self, d: mujoco.MjData) -> str | None:
-        counts = d.warning.number
-        if counts[_WARNING_INDEX].any():
+    def _failure(self, d: mujoco.MjData, counts: np.ndarray) -> str | None:
+        if counts.any() and counts[_WARNING_INDEX].any():
             return _WARNINGS[_WARNING_KINDS[int(np.flatnonzero(counts[_WARNING_INDEX])[0])]]
         if d.nefc > self.njmax:
             return f"constraint rows {d.nefc} over njmax {self.njmax}"
@@ -248,9 +249,11 @@ class MujocoSim:
         vec: np.ndarray,
         exclude_body: int | np.ndarray = -1,
         skip_group: int = -1,
+        from_inside: bool = False,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Rays in ``worlds``, as ``mj_ray`` casts them (:mod:`robotool.sim.ray_cast`), all at once; distance inf and
-        geom -1 where nothing is hit. The geoms are read where ``mj_ray`` reads them (each world's ``MjData``)."""
+        geom -1 where nothing is hit (0 and the geom a ray starts inside, ``from_inside``). The geoms are read where
+        ``mj_ray`` reads them (each world's ``MjData``)."""
         worlds = np.asarray(worlds, dtype=int).reshape(-1)
         nray = pnt.shape[1]
         if len(pnt) != len(worlds):
@@ -271,6 +274,7 @@ class MujocoSim:
             np.asarray(pnt, dtype=np.float64),
             np.asarray(vec, dtype=np.float64),
             np.asarray(exclude_body) if per_ray else None,
+            from_inside,
         )
         return np.where(x >= 0, x, np.inf), hit
 

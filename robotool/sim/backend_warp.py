@@ -13,6 +13,7 @@ import mujoco_warp as mjw
 import numpy as np
 import warp as wp
 
+from robotool.sim import ray_cast
 from robotool.sim.backend import (
     BatchState,
     Perturbation,
@@ -73,6 +74,7 @@ class WarpSim:
         self._state = self._read()
         self._contacts: tuple[np.ndarray, ...] | None = None  # the contact list read back for contact_normals
         self._geoms: tuple[np.ndarray, np.ndarray] | None = None  # the geoms' poses read back for geom_poses
+        self._ray_geoms = ray_cast.RayGeoms.of(model)  # for the rays' starts inside geoms (``from_inside``)
 
     def _substeps(self, nstep: int) -> None:
         for _ in range(nstep):
@@ -193,10 +195,13 @@ class WarpSim:
         vec: np.ndarray,
         exclude_body: int | np.ndarray = -1,
         skip_group: int = -1,
+        from_inside: bool = False,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Rays in ``worlds`` with ``mjw.rays`` (cast in every world, the others' from the origin down, and read back
         for ``worlds``); distance inf and geom -1 where nothing is hit. Rays that leave out bodies of their own
-        (``exclude_body`` (k, nray)) are cast once per body left out."""
+        (``exclude_body`` (k, nray)) are cast once per body left out. With ``from_inside``, the rays' starts are
+        tested against the geoms (:func:`~robotool.sim.ray_cast.inside`, on the CPU) and those that start inside
+        one meet it at distance 0."""
         worlds = np.asarray(worlds, dtype=int).reshape(-1)
         nray = pnt.shape[1]
         if len(pnt) != len(worlds):
@@ -216,7 +221,17 @@ class WarpSim:
                 d_body, g_body = (a[worlds] for a in self._rays(start, direction, int(body), skip_group))
                 d[mine], g[mine] = d_body[mine], g_body[mine]
         miss = d < 0
-        return np.where(miss, np.inf, d), np.where(miss, -1, g)
+        dist, geom = np.where(miss, np.inf, d), np.where(miss, -1, g)
+        if from_inside:
+            candidates = self._ray_geoms.eligible(geom_groups(skip_group), -1)
+            xpos, xmat = self.geom_poses(worlds)
+            rows = worlds[:, None]
+            left_out = np.broadcast_to(np.asarray(exclude_body), pnt.shape[:2])
+            within = ray_cast.inside(
+                self._ray_geoms, candidates, xpos[rows, candidates], xmat[rows, candidates], pnt, left_out
+            )
+            dist[within >= 0], geom[within >= 0] = 0.0, within[within >= 0]
+        return dist, geom
 
     def _rays(
         self, start: np.ndarray, vec: np.ndarray, exclude_body: int, skip_group: int

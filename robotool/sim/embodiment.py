@@ -148,13 +148,16 @@ def copy_state(state: Any, into: Any = None) -> Any:
     return out
 
 
+_CONTAINERS = (np.ndarray, list, dict)  # what a copy copies (anything else is shared)
+
+
 def _copied(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.copy()
     if isinstance(value, list):
-        return [_copied(v) for v in value]
+        return [_copied(v) if isinstance(v, _CONTAINERS) else v for v in value]
     if isinstance(value, dict):
-        return {k: _copied(v) for k, v in value.items()}
+        return {k: _copied(v) if isinstance(v, _CONTAINERS) else v for k, v in value.items()}
     return value
 
 

@@ -80,10 +80,13 @@ def cast(
     pnt: np.ndarray,
     vec: np.ndarray,
     exclude: np.ndarray | None = None,
+    from_inside: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rays ``pnt + x * vec`` (w, n, 3) against geoms ``index`` (k,) posed at ``xpos`` (w, k, 3) and ``xmat``
     (w, k, 9), world by world: the least distance x >= 0 (-1 where nothing is hit) and the geom (-1), (w, n).
     ``exclude`` (w, n), when given, is a body each ray leaves out (-1: none), as if its geoms were not in ``index``.
+    With ``from_inside``, a ray that starts inside one of the geoms meets it at its start (distance 0; the geom
+    :func:`inside` finds), not where it leaves it (``mj_ray``'s answer).
 
     A capsule, cylinder or box is tested only against the rays that meet its bounding sphere (``mj_ray``'s own first
     rejection)."""
@@ -102,6 +105,7 @@ def cast(
         pnt,
         vec,
         np.full(shape, -1) if exclude is None else exclude,
+        from_inside,
     )
     return x, np.where(hit >= 0, index[np.maximum(hit, 0)], -1)
 

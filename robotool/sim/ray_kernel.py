@@ -254,16 +254,19 @@ def _cast(
     pnt: Floats3,
     vec: Floats3,
     exclude: Ints,
+    from_inside: Int,
     dist: Floats,
     hit: Ints,
 ):
-    """One thread per ray, world-major (``exclude``, ``dist`` and ``hit`` flat over worlds and rays)."""
+    """One thread per ray, world-major (``exclude``, ``dist`` and ``hit`` flat over worlds and rays); with
+    ``from_inside`` 1, a ray that starts inside a geom meets it there (distance 0)."""
     i = wp.tid()
     w = i // pnt.shape[1]
     start = _row(pnt, w, i % pnt.shape[1])
     direction = _row(vec, w, i % pnt.shape[1])
     best = MISS
     found = Int(-1)
+    holder = Int(-1)  # the last geom the ray starts inside
     ngeom = kind.shape[0]
     for c in range(ngeom):
         if body[c] == exclude[i]:
@@ -271,11 +274,13 @@ def _cast(
         pos = _row(xpos, w, c)
         half = Vec3(size[c, 0], size[c, 1], size[c, 2])
         t = kind[c]
+        m = (w * ngeom + c) * 9
+        if from_inside != 0 and _holds(t, _local(pos, xmat, m, start), half):
+            holder = Int(c)
         x = MISS
         if t == SPHERE:
             x = _sphere_hit(pos, half[0] * half[0], start, direction)
         elif not _bounded(t) or _sphere_hit(pos, bound[c], start, direction) >= Float(0.0):
-            m = (w * ngeom + c) * 9
             p = _local(pos, xmat, m, start)
             v = _local(Vec3(), xmat, m, direction)
             if t == PLANE:
@@ -291,6 +296,9 @@ def _cast(
         if x >= Float(0.0) and (found < 0 or x < best):
             best = x
             found = Int(c)
+    if holder >= 0:
+        best = Float(0.0)
+        found = holder
     dist[i] = best
     hit[i] = found
 
@@ -305,17 +313,19 @@ def cast(
     pnt: np.ndarray,
     vec: np.ndarray,
     exclude: np.ndarray,
+    from_inside: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rays ``pnt + x * vec`` (w, n, 3) against k geoms (their ``kind``, ``size`` (k, 3), squared bounding radius
     ``bound`` and ``body``) posed at ``xpos`` (w, k, 3) and ``xmat`` (w, k, 9), each ray leaving out the body
     ``exclude`` (w, n) (-1: none): the least distance x >= 0 (-1 where nothing is hit) and the hit geom's position
-    among the k (-1), (w, n)."""
+    among the k (-1), (w, n). With ``from_inside``, a ray that starts inside one of the geoms (the last of several,
+    as :func:`inside` finds it) meets it at distance 0."""
     _check_shapes(kind, size, body, xpos, xmat, pnt, exclude, bound=bound, vec=vec)
     shape = pnt.shape[:2]
     dist, hit = np.empty(shape), np.empty(shape, dtype=np.int32)
     if dist.size:
         geoms = (_ints(kind), _floats(size), _floats(bound), _ints(body))
-        rays = (_floats(pnt), _floats(vec), _ints(exclude))
+        rays = (_floats(pnt), _floats(vec), _ints(exclude), int(from_inside))
         launch_on_cpu(_cast, dist.size, *geoms, *_poses(xpos, xmat), *rays, dist.reshape(-1), hit.reshape(-1))
     return dist, hit.astype(int)
 

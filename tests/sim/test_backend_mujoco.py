@@ -282,6 +282,28 @@ def test_a_point_inside_two_geoms_reads_the_later_one_unless_their_body_is_left_
     assert ray_cast.inside(geoms, solid, xpos, xmat, pnt, left_out).tolist() == [[-1, -1]]
 
 
+def test_a_ray_cast_from_inside_reads_the_geom_its_start_lies_in_and_mj_ray_s_answer_elsewhere() -> None:
+    """With ``from_inside``, a ray whose start lies in a geom meets the last such geom (as :func:`ray_cast.inside`
+    finds it) at distance 0, its body left out or not as the ray's own; every other ray reads what the plain cast
+    reads (``mj_ray``'s answer), in every world at once."""
+    model = _every_shape()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    geoms = ray_cast.RayGeoms.of(model)
+    index = geoms.eligible(np.ones(ray_cast.NGROUP), -1)
+    rng = np.random.default_rng(7)
+    starts = data.geom_xpos[rng.integers(0, model.ngeom, (2, 60))] + rng.normal(0.0, 0.15, (2, 60, 3))
+    vec = rng.normal(size=(2, 60, 3))
+    exclude = np.where(rng.random((2, 60)) < 0.3, model.geom_bodyid[rng.integers(0, model.ngeom, (2, 60))], -1)
+    xpos, xmat = np.stack([data.geom_xpos[index]] * 2), np.stack([data.geom_xmat[index]] * 2)
+    plain = ray_cast.cast(geoms, index, xpos, xmat, starts, vec, exclude)
+    fused = ray_cast.cast(geoms, index, xpos, xmat, starts, vec, exclude, from_inside=True)
+    within = ray_cast.inside(geoms, index, xpos, xmat, starts, exclude)
+    assert 10 < (within >= 0).sum() < within.size - 10  # both kinds of ray are tried
+    np.testing.assert_array_equal(fused[0], np.where(within >= 0, 0.0, plain[0]))
+    np.testing.assert_array_equal(fused[1], np.where(within >= 0, within, plain[1]))
+
+
 def test_the_compiled_ray_tests_refuse_arrays_they_would_read_past() -> None:
     """The kernels index their arrays unchecked: a per-ray array shaped for fewer rays, or a view that is not
     contiguous, is refused before the launch instead of being read past its end."""
@@ -337,7 +359,7 @@ def test_a_replayed_launch_reads_its_own_arrays_and_refuses_the_wrong_kind() -> 
         assert (hit >= 0).any() and (hit < 0).any()
     ints, floats = np.zeros(1, dtype=np.int32), np.zeros(1)
     geom_args = (ints, np.zeros((1, 3)), floats, ints)
-    rays = (np.zeros((1, 1, 3)), np.zeros((1, 1, 3)), ints, floats, ints)
+    rays = (np.zeros((1, 1, 3)), np.zeros((1, 1, 3)), ints, 0, floats, ints)
     with pytest.raises(ValueError, match="argument 4 must be a 3-d float64 array, not 2-d float64"):
         launch_on_cpu(ray_kernel._cast, 1, *geom_args, np.zeros((1, 3)), floats, *rays)
     with pytest.raises(ValueError, match="argument 0 must be a 1-d int32 array, not 1-d int64"):

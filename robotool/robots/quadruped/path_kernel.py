@@ -80,16 +80,20 @@ def _follow(
     start = paths[p, n]
     current = start
     skip = Int(0)
+    changed = -run  # the last sample whose level differs from the one before it (or is NaN)
+    if wp.isnan(start):
+        changed = Int(-1)
     for k in range(n):
         h = paths[p, k]
         low = current
         high = current
-        for j in range(k - run, k):  # the levels over the last ``run`` samples (the start level before the first)
-            recent = start
-            if j >= 0:
-                recent = out[p, j, 3]
-            low = _fmin(low, recent)
-            high = _fmax(high, recent)
+        if changed > k - run:  # the last ``run`` levels differ (the start level before the first): read them
+            for j in range(k - run, k):
+                recent = start
+                if j >= 0:
+                    recent = out[p, j, 3]
+                low = _fmin(low, recent)
+                high = _fmax(high, recent)
         found = Int(0)
         value = Float(0.0)
         if skip > 0:  # striding over a gap
@@ -107,8 +111,9 @@ def _follow(
                 current = high
                 back = Int(-1)
                 for j in range(k, n):
-                    if back < 0 and paths[p, j] >= current - max_step_up:
+                    if paths[p, j] >= current - max_step_up:
                         back = Int(j - k)
+                        break
                 if back >= 0:  # the surface comes back: a gap
                     entered = Float(0.0)
                     if k == 0:
@@ -138,6 +143,11 @@ def _follow(
             finding[p, 1] = Float(found)
             finding[p, 2] = value
             return
+        before = start
+        if k > 0:
+            before = out[p, k - 1, 3]
+        if current != before:  # (true where either is NaN)
+            changed = k
         out[p, k, 3] = current
 
 

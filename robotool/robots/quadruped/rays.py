@@ -11,7 +11,6 @@ from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import SceneFacts
 from robotool.sim.backend import BatchedSim
-from robotool.sim.ray_cast import inside
 
 
 class Rays:
@@ -70,26 +69,13 @@ class Rays:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
         ``exclude`` (one for all rays, or (k, nray): each ray's own) left out: surface heights (0 where nothing is hit)
-        and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller than the rays' start) meets it
-        where it leaves it, at its bottom: it reads that geom at the ray's start instead, something at least that
-        high."""
+        and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller than the rays' start) would meet
+        it where it leaves it, at its bottom: it reads that geom at the ray's start instead (``from_inside``),
+        something at least that high."""
         pnt = np.empty((*xy.shape[:2], 3))
         pnt[..., :2] = xy
         pnt[..., 2] = start
         vec = np.zeros(pnt.shape)
         vec[..., 2] = -1.0
-        dist, geom = self.sim.rays(worlds, pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP)
-        z = np.where(np.isfinite(dist), start - dist, 0.0)
-        within = self._inside(worlds, pnt, exclude)
-        rows, cols = np.nonzero(within >= 0)
-        z[rows, cols], geom[rows, cols] = start[rows, cols], within[rows, cols]
-        return z, geom
-
-    def _inside(self, worlds: np.ndarray, pnt: np.ndarray, exclude: int | np.ndarray) -> np.ndarray:
-        """The geom (k, nray) each ray start ``pnt`` (k, nray, 3) lies inside, body ``exclude`` (one, or each ray's
-        own) left out (-1: none); only solid geoms are tested."""
-        xpos, xmat = self.sim.geom_poses(worlds)
-        solids = self.facts.solids
-        rows = worlds[:, None]
-        left_out = np.broadcast_to(np.asarray(exclude), pnt.shape[:2])
-        return inside(self.facts.ray_geoms, solids, xpos[rows, solids], xmat[rows, solids], pnt, left_out)
+        dist, geom = self.sim.rays(worlds, pnt, vec, exclude_body=exclude, skip_group=ROBOT_GROUP, from_inside=True)
+        return np.where(np.isfinite(dist), start - dist, 0.0), geom

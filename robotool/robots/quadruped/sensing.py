@@ -8,17 +8,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import mujoco
 import numpy as np
 
-from robotool.robots.quadruped.body import LEG_SLACK, ROBOT_GROUP, XY_KP, BodyIds
+from robotool.robots.quadruped.body import LEG_SLACK, XY_KP, BodyIds
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.support import Parts
 from robotool.robots.quadruped.terrain import quarter_turns
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners, world_corners
-from robotool.sim.ray_cast import RayGeoms
 
 
 @dataclass(frozen=True)
@@ -40,8 +38,6 @@ class SceneFacts:
     fragile: np.ndarray  # (nobject,) bool
     not_robot: np.ndarray  # (nbody,) bool: bodies that are not the robot's
     parts: Parts  # the objects' parts that bear weight apart (a cloth's links)
-    ray_geoms: RayGeoms  # the geoms' shapes, as the rays read them
-    solids: np.ndarray  # the geoms a ray may start inside: visible, not the robot's, not a plane
 
     @classmethod
     def of(cls, scene: Scene, limits: QuadrupedLimits) -> SceneFacts:
@@ -49,10 +45,6 @@ class SceneFacts:
         ids = BodyIds.of(model)
         geom_object = scene.body_object[model.geom_bodyid]
         cloth = np.array([o.shape == "cloth" for o in scene.task.objects], dtype=bool)
-        ray_geoms = RayGeoms.of(model)
-        solid = (
-            ray_geoms.visible & (ray_geoms.group != ROBOT_GROUP) & (ray_geoms.type != int(mujoco.mjtGeom.mjGEOM_PLANE))
-        )
         return cls(
             ids=ids,
             half=np.array(limits.body_size[:2]) / 2,
@@ -68,8 +60,6 @@ class SceneFacts:
             fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
             not_robot=~scene.robot_body,
             parts=Parts.of(scene),
-            ray_geoms=ray_geoms,
-            solids=np.flatnonzero(solid),
         )
 
 
