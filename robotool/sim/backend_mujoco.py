@@ -161,10 +161,12 @@ class MujocoSim:
         return None
 
     def _run(self, worlds: np.ndarray, nstep: int) -> None:
-        for w in worlds:
+        mocap = self.mocap_pos.size > 0
+        for w in worlds.tolist():
             m, d = self.models[w], self.datas[w]
             d.ctrl[:] = self.ctrl[w]
-            d.mocap_pos[:] = self.mocap_pos[w]
+            if mocap:
+                d.mocap_pos[:] = self.mocap_pos[w]
             mujoco.mj_step(m, d, nstep)
             self._gather(w)
 
@@ -282,8 +284,7 @@ class MujocoSim:
         """Every geom's position (nworld, ngeom, 3) and rotation (nworld, ngeom, 9) in the worlds asked for (the
         rest left stale), read once per step."""
         poses = self._poses
-        missing = [int(w) for w in worlds if not poses.fresh[w]]
-        for w in missing:
+        for w in np.asarray(worlds)[~poses.fresh[worlds]].tolist():
             poses.xpos[w] = self.datas[w].geom_xpos
             poses.xmat[w] = self.datas[w].geom_xmat
             poses.fresh[w] = True

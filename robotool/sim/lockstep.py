@@ -312,7 +312,7 @@ class _Run:
         if world.ended:  # settling after its program: the goal is read now, with the error
             world.error = world.error or reason
             if not world.finished:
-                self._read_goal(i, state)
+                self._read_goals([i], state)
         else:
             self._end(i, state, reason)
         if call is not None:  # after the end, which marks a pending call as the program's error
@@ -334,32 +334,33 @@ class _Run:
         if settle and state.failed[i] is None:
             world.settle_until = float(state.time[i]) + SETTLE_AFTER
         else:
-            self._read_goal(i, state)
+            self._read_goals([i], state)
 
     def _finish_settled(self, state: BatchState) -> None:
         """Read the goal of every ended world that has settled (or whose physics failed while settling)."""
-        for i, world in enumerate(self.worlds):
-            if (
-                world.ended
-                and not world.finished
-                and (
-                    state.time[i] >= world.settle_until - self.scene.model.opt.timestep / 2
-                    or state.failed[i] is not None
-                )
-            ):
-                self._read_goal(i, state)
+        settled = [
+            i
+            for i, world in enumerate(self.worlds)
+            if world.ended
+            and not world.finished
+            and (state.time[i] >= world.settle_until - self.scene.model.opt.timestep / 2 or state.failed[i] is not None)
+        ]
+        if settled:
+            self._read_goals(settled, state)
 
-    def _read_goal(self, i: int, state: BatchState) -> None:
-        world = self.worlds[i]
-        world.finished = True
-        world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
-        world.conditions = {k: bool(v[i]) for k, v in self.goal.conditions(state).items()}
-        for name, held in self.controller.robot_conditions().items():
-            world.conditions[name] = held[i]
-        seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in goal_events(self.goal, i)]
-        world.events = sorted(world.events + seen, key=lambda e: e.time)
-        if state.failed[i] is not None and world.error is None:
-            world.error = f"simulation failed: {state.failed[i]}"
+    def _read_goals(self, worlds: list[int], state: BatchState) -> None:
+        """Read the goal in ``worlds`` (their runs are over): its conditions, the robot's and the goal's events."""
+        conditions: dict[str, np.ndarray | list[bool]] = {**self.goal.conditions(state)}
+        conditions.update(self.controller.robot_conditions())
+        for i in worlds:
+            world = self.worlds[i]
+            world.finished = True
+            world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
+            world.conditions = {k: bool(v[i]) for k, v in conditions.items()}
+            seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in goal_events(self.goal, i)]
+            world.events = sorted(world.events + seen, key=lambda e: e.time)
+            if state.failed[i] is not None and world.error is None:
+                world.error = f"simulation failed: {state.failed[i]}"
 
     # -- physics bookkeeping -------------------------------------------------------------------
 

@@ -19,9 +19,8 @@ from robotool.robots.quadruped.push import (
     Leg,
     face_turn,
     first_clear_sweep,
-    lateral_offsets,
     legs,
-    push_pose,
+    push_tries,
     route,
     routes,
     turned_feet_drop,
@@ -210,27 +209,23 @@ class Plans:
         """
         centres = feet(self.senses.state, self.senses.facts.ids)[w]
         floor = float(centres[:, 2].min() - FOOT_RADIUS)
-        width = hi[1 - leg.axis] - lo[1 - leg.axis]
         half, limits = self.senses.half_now(w), self._limits(w)
-        offsets = lateral_offsets(width, 2 * half[1 - leg.axis])
-        poses = [push_pose(lo, hi, leg, half, float(o)) for o in offsets]
+        tries = push_tries(lo, hi, leg, half, self.config.staging)
 
         def heights(xy: np.ndarray) -> np.ndarray:
             z, objects = self.rays.heights(w, xy, floor + self.config.ray_height)
             return np.where(objects == index, floor, z)
 
-        tries = [(start, end, staging) for staging in (self.config.staging, 0.0) for start, end in poses]
-        sweeps = [(start - (end - start) / np.linalg.norm(end - start) * staging, end) for start, end, staging in tries]
-        clear, drop = first_clear_sweep(heights, sweeps, limits, floor)
+        clear, drop = first_clear_sweep(heights, [(behind, end) for _, end, _, behind in tries], limits, floor)
         if clear is not None:
-            start, end, staging = tries[clear]
+            start, end, staging, _ = tries[clear]
             face = face_turn(start, end, lo, hi) if self.referee.loaded(w, index) else 0.0
             if face and turned_feet_drop(heights, start, end, limits, face, floor) is not None:
                 face = 0.0
             return (start, end, staging, face), ""
         if drop is None:
             return None, ""
-        start, end, _ = tries[drop[0]]  # the first drop found: under the pose nearest straight-on
+        start, end, _, _ = tries[drop[0]]  # the first drop found: under the pose nearest straight-on
         return None, f": pushing from [{start[0]:.2f}, {start[1]:.2f}] to [{end[0]:.2f}, {end[1]:.2f}], {drop[1]}"
 
     def _check(self, w: int, here: np.ndarray, path: list[np.ndarray]) -> tuple[Finding, int] | None:

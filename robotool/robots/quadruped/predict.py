@@ -23,7 +23,7 @@ from robotool.robots.quadruped.push import (
     first_clear_sweep,
     lateral_offsets,
     legs,
-    push_pose,
+    push_tries,
     route,
 )
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
@@ -350,20 +350,16 @@ def _choose_push_pose(
     layout: Layout, name: str, box: Box, leg: Leg, limits: QuadrupedLimits, floor: float
 ) -> Pose | None:
     """:func:`_push_pose`, read from the layout."""
-    half = np.asarray(limits.body_size[:2]) / 2
-    offsets = lateral_offsets(float(box.hi[1 - leg.axis] - box.lo[1 - leg.axis]), 2 * float(half[1 - leg.axis]))
-    poses = [push_pose(box.lo, box.hi, leg, half, float(o)) for o in offsets]
+    tries = push_tries(box.lo, box.hi, leg, np.asarray(limits.body_size[:2]) / 2, QUADRUPED.staging)
 
     def heights(xy: np.ndarray) -> np.ndarray:
         return layout.heights(xy, exclude=[name])
 
-    tries = [
-        (start, end, start - (end - start) / np.linalg.norm(end - start) * staging)
-        for staging in (QUADRUPED.staging, 0.0)
-        for start, end in poses
-    ]
-    clear, _ = first_clear_sweep(heights, [(behind, end) for _, end, behind in tries], limits, floor)
-    return None if clear is None else tries[clear]
+    clear, _ = first_clear_sweep(heights, [(behind, end) for _, end, _, behind in tries], limits, floor)
+    if clear is None:
+        return None
+    start, end, _, behind = tries[clear]
+    return start, end, behind
 
 
 def _obstacles(layout: Layout, name: str, floor: float) -> tuple[np.ndarray, np.ndarray]:

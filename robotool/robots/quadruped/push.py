@@ -92,22 +92,40 @@ def lateral_offsets(object_width: float, robot_width: float) -> np.ndarray:
     return both[1:] if both.size > 1 else both
 
 
-def push_pose(
-    lo: np.ndarray, hi: np.ndarray, leg: Leg, half: np.ndarray, offset: float
+def push_poses(
+    lo: np.ndarray, hi: np.ndarray, leg: Leg, half: np.ndarray, offsets: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Robot centres (x-y) at the start and end of ``leg`` for an object with x-y bounds ``lo``-``hi``.
+    """Robot centres (x-y) at the start and end (each (n, 2)) of ``leg`` for an object with x-y bounds ``lo``-``hi``.
 
-    ``half`` is the robot's x-y half size; ``offset`` shifts the robot along the object's face.
+    ``half`` is the robot's x-y half size; each of ``offsets`` (n,) shifts the robot along the object's face.
     """
     a, b = leg.axis, 1 - leg.axis
     center = (lo + hi) / 2
     sign = np.sign(leg.target - center[a])
-    start = np.zeros(2)
-    start[a] = (lo[a] - half[a] - GAP) if sign > 0 else (hi[a] + half[a] + GAP)
-    start[b] = center[b] + offset
+    start = np.zeros((len(offsets), 2))
+    start[:, a] = (lo[a] - half[a] - GAP) if sign > 0 else (hi[a] + half[a] + GAP)
+    start[:, b] = center[b] + np.asarray(offsets, dtype=float)
     end = start.copy()
-    end[a] += leg.target - center[a] + sign * GAP
+    end[:, a] += leg.target - center[a] + sign * GAP
     return start, end
+
+
+PushTry = tuple[np.ndarray, np.ndarray, float, np.ndarray]  # a leg's start, end, staging distance and staging point
+
+
+def push_tries(lo: np.ndarray, hi: np.ndarray, leg: Leg, half: np.ndarray, staging: float) -> list[PushTry]:
+    """The ways to line up for ``leg`` of a push of an object with x-y bounds ``lo``-``hi`` (``half``: the robot's x-y
+    half size), in the order they are tried: at each of the :func:`lateral_offsets` along its face (nearest straight-on
+    first) ``staging`` behind the start, then at each from the start itself. Each is the start and end (robot
+    centres), how far behind the start the robot lines up and where (its sweep runs from there to the end)."""
+    b = 1 - leg.axis
+    start, end = push_poses(lo, hi, leg, half, lateral_offsets(float(hi[b] - lo[b]), 2 * float(half[b])))
+    along = (end - start) / np.linalg.norm(end - start, axis=1, keepdims=True)
+    return [
+        (s, e, distance, behind)
+        for distance in (staging, 0.0)
+        for s, e, behind in zip(start, end, start - along * distance, strict=True)
+    ]
 
 
 def face_turn(start: np.ndarray, end: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:

@@ -235,8 +235,8 @@ class Referee:
         touched &= facts.movable & ~facts.cloth & mask[:, None]
         pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
         pushed &= mask[:, None]
-        for w in np.flatnonzero(pushed.any(axis=1)):  # what the pushed object moves by touching it moves with it
-            pushed[w] |= state.touching[w, scene.object_body[m.pushing[w]]][scene.object_body]
+        rows = np.flatnonzero(pushed.any(axis=1))  # what the pushed object moves by touching it moves with it
+        pushed[rows] |= state.touching[rows, scene.object_body[m.pushing[rows]]][:, scene.object_body]
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
         moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~facts.cloth & ~s.pressed

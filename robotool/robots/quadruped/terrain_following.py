@@ -99,7 +99,7 @@ class TerrainFollowing:
     def gather(self, table: np.ndarray, index: np.ndarray) -> np.ndarray:
         """``table`` (k, 4, samples) at ``index`` (k, 5) for every foot -> (k, 4, 5) (NaN out of range)."""
         ok = (index >= 0) & (index < self.samples)
-        out = np.take_along_axis(table, clamp(index, 0, self.samples - 1)[:, None, :].repeat(4, axis=1), axis=2)
+        out = np.take_along_axis(table, clamp(index, 0, self.samples - 1)[:, None, :], axis=2)
         return np.where(ok[:, None, :], out, np.nan)
 
     def local(
@@ -217,7 +217,7 @@ class TerrainFollowing:
         hold_len = round(config.hold_behind / SPACING)
         span = np.arange(-hold_len - RADIUS_SAMPLES, round(config.lift_ahead / SPACING) + 1)
         window = index[:, 1, None] + span[None, :]  # around each foot's centre
-        values = np.take_along_axis(s.level[worlds], clamp(window, 0, samples - 1)[:, None, :].repeat(4, axis=1), 2)
+        values = np.take_along_axis(s.level[worlds], clamp(window, 0, samples - 1)[:, None, :], 2)
         last = np.round((s.stop[worlds] - s.scan_t0[worlds] + config.back) / SPACING)  # the move's end (the foot's)
         values = np.where(((window >= 0) & (window < samples) & (window <= last[:, None]))[:, None, :], values, np.nan)
         values = np.where(np.isnan(values), -np.inf, values)

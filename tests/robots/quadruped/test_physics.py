@@ -144,14 +144,15 @@ def test_a_robot_whose_centre_of_mass_leaves_its_support_falls_and_may_not_move_
 def test_goals_are_read_after_the_world_settled(monkeypatch: pytest.MonkeyPatch) -> None:
     read_at: list[float] = []
     ended_at: list[float] = []
-    original = runner._Run._read_goal
+    original = runner._Run._read_goals
 
-    def read_goal(self: Any, i: int, state: Any) -> None:
-        read_at.append(float(state.time[i] - self.t0[i]))
-        ended_at.append(self.worlds[i].calls[-1].ended)
-        original(self, i, state)
+    def read_goals(self: Any, worlds: list[int], state: Any) -> None:
+        for i in worlds:
+            read_at.append(float(state.time[i] - self.t0[i]))
+            ended_at.append(self.worlds[i].calls[-1].ended)
+        original(self, worlds, state)
 
-    monkeypatch.setattr(runner._Run, "_read_goal", read_goal)
+    monkeypatch.setattr(runner._Run, "_read_goals", read_goals)
     sim.run_programs(tasks.load("sofa_climbing"), [lambda robot: robot.walk_to_position([0.3, 0.0, 0.0])])
     assert read_at[0] >= ended_at[0] + runner.SETTLE_AFTER - 1e-6
 

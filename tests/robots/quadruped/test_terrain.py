@@ -18,7 +18,7 @@ from robotool.robots.quadruped.push import (
     face_turn,
     first_clear_sweep,
     legs,
-    push_pose,
+    push_poses,
     route,
     routes,
     rule_violation,
@@ -184,9 +184,11 @@ def test_push_legs_go_shorter_axis_first_and_skip_tiny_ones() -> None:
 
 def test_push_pose_stands_behind_the_object_and_ends_where_its_face_lands() -> None:
     half = np.array([0.325, 0.15])
-    start, end = push_pose(np.array([0.8, -0.3]), np.array([1.2, 0.3]), Leg(0, 1.95), half, 0.0)
-    assert start == pytest.approx([0.8 - 0.325 - 0.03, 0.0])
-    assert end[0] - start[0] == pytest.approx(0.95 + 0.03)
+    start, end = push_poses(np.array([0.8, -0.3]), np.array([1.2, 0.3]), Leg(0, 1.95), half, np.array([0.0, 0.1]))
+    assert start[0] == pytest.approx([0.8 - 0.325 - 0.03, 0.0])
+    assert start[1] == pytest.approx([0.8 - 0.325 - 0.03, 0.1])  # shifted along the face
+    assert end[:, 0] - start[:, 0] == pytest.approx([0.95 + 0.03] * 2)
+    assert end[:, 1] == pytest.approx(start[:, 1])
 
 
 @pytest.mark.parametrize(("overlap", "clear"), [(0.005, False), (-0.005, False), (-SIDE_MARGIN - 0.005, True)])
