@@ -132,10 +132,17 @@ class TerrainFollowing:
         s, config, samples, behind = self.state, self.config, self.samples, self.behind
         bottom = centres[:, :, 2] - FOOT_RADIUS
         ahead = clamp(length - travel, 0.0, config.scan_ahead) + LOOKAHEAD
-        sample = np.minimum(-config.back + np.arange(samples) * SPACING, ahead[:, None])  # (k, samples)
+        along = -config.back + np.arange(samples) * SPACING
+        sample = np.minimum(along, ahead[:, None])  # (k, samples)
         points = centres[:, :, None, :2] + sample[:, None, :, None] * u[:, None, None, :]
-        z, objects = self.rays.cast(worlds, points.reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height)
-        z, objects = z.reshape(points.shape[:3]), objects.reshape(points.shape[:3])
+        read = min(samples, int(np.count_nonzero(along < ahead.max())) + 1)  # the samples after repeat the last
+        z, objects = self.rays.cast(
+            worlds, points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
+        )
+        z, objects = (
+            np.concatenate([a, np.repeat(a[:, :, -1:], samples - read, axis=2)], axis=2)
+            for a in (z.reshape(*points.shape[:2], read), objects.reshape(*points.shape[:2], read))
+        )
         under = z[:, :, behind - RADIUS_SAMPLES : behind + RADIUS_SAMPLES + 1]
         actual = np.minimum(bottom + RISE, np.nanmax(under, axis=2))
         now = self.indices(worlds, travel)[:, 1]
