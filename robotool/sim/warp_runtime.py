@@ -6,7 +6,7 @@ import functools
 import os
 import sys
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -73,6 +73,7 @@ class _Replay:
     expected: list[tuple[int, np.dtype] | None]  # each argument's (ndim, dtype) when it is an array
     structs: list[Any]  # each array argument's C struct (None for the others)
     dim: int = -1  # the launch's number of threads, set when it changes
+    written: list[Any] = field(default_factory=list)  # each argument as last written (a scalar, or shape and strides)
 
     @classmethod
     def record(cls, kernel: Any, dim: int, args: tuple[np.ndarray | int, ...]) -> _Replay:
@@ -88,14 +89,17 @@ class _Replay:
         for i, struct in enumerate(structs):
             if struct is not None:
                 launch.set_param_at_index_from_ctype(i, struct)
-        return cls(launch, expected, structs)
+        return cls(launch, expected, structs, written=[None] * len(expected))
 
     def run(self, dim: int, args: tuple[np.ndarray | int, ...]) -> None:
         if len(args) != len(self.expected):
             raise TypeError(f"the kernel takes {len(self.expected)} arguments, not {len(args)}")
+        written = self.written
         for i, (value, expected) in enumerate(zip(args, self.expected, strict=True)):
             if expected is None:
-                self.launch.set_param_at_index(i, value)
+                if written[i] is None or written[i] != value:  # (Warp packs a scalar at some cost: only anew)
+                    self.launch.set_param_at_index(i, value)
+                    written[i] = value
                 continue
             if not isinstance(value, np.ndarray) or (value.ndim, value.dtype) != expected:
                 got = f"{value.ndim}-d {value.dtype}" if isinstance(value, np.ndarray) else type(value).__name__
@@ -103,8 +107,11 @@ class _Replay:
             _check_layout(value)
             struct = self.structs[i]
             struct.data = value.ctypes.data
-            struct.shape[: value.ndim] = value.shape
-            struct.strides[: value.ndim] = value.strides
+            layout = (value.shape, value.strides)
+            if written[i] != layout:
+                struct.shape[: value.ndim] = value.shape
+                struct.strides[: value.ndim] = value.strides
+                written[i] = layout
         if dim != self.dim:
             self.launch.set_dim(dim)
             self.dim = dim
