@@ -38,6 +38,8 @@ class Rays:
         model = self.sim.scene.model
         start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
         z, geom = self._cast_from(worlds, xy, start, exclude)
+        if not self.facts.cloth_crossings:  # no cloth in the scene
+            return z, self._objects(geom)
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
         for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: every ray on any link at once
@@ -55,13 +57,16 @@ class Rays:
             )
             z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
             through = self._on_cloth(geom)
-        objects = np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
         lying = cloth_top - z <= self.limits.max_step_up  # False where no cloth was met (NaN)
-        return np.where(lying, cloth_top, z), objects
+        return np.where(lying, cloth_top, z), self._objects(geom)
+
+    def _objects(self, geom: np.ndarray) -> np.ndarray:
+        """The object each ray's hit geom (-1: none) belongs to (-1: none, or not an object's)."""
+        return np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
 
     def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
         """Whether each ray's hit geom (-1: none) belongs to a cloth."""
-        objects = np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
+        objects = self._objects(geom)
         return (objects >= 0) & self.facts.cloth[np.maximum(objects, 0)]
 
     def _cast_from(
