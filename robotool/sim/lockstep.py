@@ -379,10 +379,12 @@ class _Run:
         np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
         self.touched |= touched & alive[:, None]
         self._mark_held(state, alive)
-        for i in map(int, np.flatnonzero(alive & self.running())):
-            if state.failed[i] is not None:
+        failed = np.array([f is not None for f in state.failed])
+        over_time = state.time - self.t0 > self.max_sim_time
+        for i in map(int, np.flatnonzero(alive & self.running() & (failed | over_time))):
+            if failed[i]:
                 self._end(i, state, f"simulation failed: {state.failed[i]}")
-            elif state.time[i] - self.t0[i] > self.max_sim_time:
+            else:
                 self._end(i, state, f"simulated time over the {self.max_sim_time} s cap")
 
     def _mark_held(self, state: BatchState, worlds: np.ndarray) -> None:
