@@ -249,8 +249,9 @@ class Grasp:
         bodies = np.asarray(self.scene.object_body)[carried]
         mass = self.sim.body_mass[w, bodies]
         model = self.scene.model
-        com = [state.xpos[w, b] + _rotation(state.xquat[w, b]) @ model.body_ipos[b] for b in bodies]
-        centre = np.average(np.array(com), axis=0, weights=mass) if mass.sum() > 0 else state.xpos[w, bodies[0]]
+        com = np.array([state.xpos[w, b] + _rotation(state.xquat[w, b]) @ model.body_ipos[b] for b in bodies])
+        total = mass.sum()
+        centre = (com * mass[:, None]).sum(axis=0) / total if total > 0 else state.xpos[w, bodies[0]]  # (np.average's)
         weight = float(mass.sum()) * GRAVITY
         lever = centre[:2] - (state.xpos[w, self.parts.gripper] + hold.centre)[:2]
         need_depth, need_width = hold.need(weight, lever, self.config.grip_friction * self.config.grip_force)
