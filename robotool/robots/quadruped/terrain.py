@@ -120,8 +120,11 @@ def foot_support(heights: np.ndarray) -> np.ndarray:
     A slit narrower than the foot carries it; a gap reads :data:`FOOT_RADIUS` narrower on each side.
     """
     padded = np.pad(heights, ((0, 0), (RADIUS_SAMPLES, RADIUS_SAMPLES)), mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * RADIUS_SAMPLES + 1, axis=1)
-    return windows.max(axis=2)
+    n = heights.shape[1]
+    support = padded[:, :n].copy()
+    for k in range(1, 2 * RADIUS_SAMPLES + 1):  # the window's samples one shift at a time (a NaN carries, as in max)
+        np.maximum(support, padded[:, k : k + n], out=support)
+    return support
 
 
 def scan_paths(
