@@ -135,7 +135,9 @@ class TerrainFollowing:
         along = -config.back + np.arange(samples) * SPACING
         sample = np.minimum(along, ahead[:, None])  # (k, samples)
         points = centres[:, :, None, :2] + sample[:, None, :, None] * u[:, None, None, :]
-        read = min(samples, int(np.count_nonzero(along < ahead.max())) + 1)  # the samples after repeat the last
+        read = samples  # the samples past every world's reach repeat its last: those are read once
+        if np.isfinite(ahead).all():
+            read = min(samples, int(np.count_nonzero(along < ahead.max())) + 1)
         z, objects = self.rays.cast(
             worlds, points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
         )
