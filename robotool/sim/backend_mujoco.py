@@ -124,7 +124,6 @@ class MujocoSim:
         self._touching_geoms: list[np.ndarray] = [_NO_PAIRS] * nworld  # geom pairs within touching distance
         self._geom_body = model.geom_bodyid.copy()
         self._ray_geoms = ray_cast.RayGeoms.of(model)
-        self._eligible: dict[tuple[int, int], np.ndarray] = {}  # (exclude_body, skip_group) -> geoms rays may hit
         self._poses = _GeomPoses.empty(nworld, model.ngeom)
         self._failed: list[str | None] = [None] * nworld
         self._nthread = nthread or _threads(nworld)
@@ -263,10 +262,7 @@ class MujocoSim:
         if not nray or not worlds.size:
             return np.full((len(worlds), nray), np.inf), np.full((len(worlds), nray), -1, dtype=int)
         per_ray = np.ndim(exclude_body) > 0
-        key = (-1 if per_ray else int(exclude_body), skip_group)
-        if key not in self._eligible:
-            self._eligible[key] = self._ray_geoms.eligible(geom_groups(skip_group), key[0])
-        index = self._eligible[key]
+        index = self._ray_geoms.eligible(geom_groups(skip_group), -1 if per_ray else int(exclude_body))
         xpos, xmat = self.geom_poses(worlds)
         x, hit = ray_cast.cast(
             self._ray_geoms,

@@ -12,7 +12,7 @@ scenes and on every primitive shape), at a small fraction of the cost of one cal
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -45,6 +45,7 @@ class RayGeoms:
     group: np.ndarray  # (ngeom,) clipped to [0, NGROUP - 1]
     visible: np.ndarray  # (ngeom,) bool
     bound: np.ndarray  # (ngeom,) the squared radius of the bounding sphere a ray must meet first (0: none tested)
+    _eligible: dict[tuple[bytes, int], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def of(cls, model: mujoco.MjModel) -> RayGeoms:
@@ -62,13 +63,18 @@ class RayGeoms:
         )
 
     def eligible(self, groups: np.ndarray, exclude_body: int) -> np.ndarray:
-        """Indices of the geoms a ray may hit (``groups``: 1 where a group is included)."""
-        keep = self.visible & (self.body != exclude_body) & (np.asarray(groups)[self.group] != 0)
-        index = np.flatnonzero(keep)
-        odd = sorted({int(t) for t in self.type[index]} - _SUPPORTED)
-        if odd:
-            names = ", ".join(mujoco.mjtGeom(t).name for t in odd)
-            raise UnsupportedGeom(f"rays cannot be cast against geoms of type {names}")
+        """Indices of the geoms a ray may hit (``groups``: 1 where a group is included), found once per ``groups`` and
+        ``exclude_body`` (read-only)."""
+        groups = np.asarray(groups)
+        key = (groups.tobytes(), int(exclude_body))
+        index = self._eligible.get(key)
+        if index is None:
+            index = np.flatnonzero(self.visible & (self.body != exclude_body) & (groups[self.group] != 0))
+            odd = sorted({int(t) for t in self.type[index]} - _SUPPORTED)
+            if odd:
+                names = ", ".join(mujoco.mjtGeom(t).name for t in odd)
+                raise UnsupportedGeom(f"rays cannot be cast against geoms of type {names}")
+            self._eligible[key] = index
         return index
 
 

@@ -453,7 +453,7 @@ def _push_blocked(
     spot = prop.moved_to(_prop_spot(prop, board, direction, clearance))
     swept = Box(prop.name, np.minimum(prop.lo, spot.lo), np.maximum(prop.hi, spot.hi), prop.bottom, prop.top)
     room = Box(prop.name, spot.lo - margin, spot.hi + margin, prop.bottom, prop.top)
-    return any(layout.collides(box, ignore=[board.name]) is not None for box in (swept, room))
+    return any(layout.collides(box, ignore=[board.name]) is not None for box in ((swept, room) if margin else (swept,)))
 
 
 def _turned_lengthwise(w: Writer, bbox: Box, a: np.ndarray, out: np.ndarray, board: str) -> Writer:

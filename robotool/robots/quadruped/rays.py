@@ -35,11 +35,11 @@ class Rays:
         the object returned; the height is the cloth's where that solid lies no deeper under it than a step the
         legs climb (a cloth lying on a surface, or bunched up on it, is stepped onto), else the solid's (over a gap
         the feet would sink to it)."""
-        model = self.sim.scene.model
         start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
         z, geom = self._cast_from(worlds, xy, start, exclude)
         if not self.facts.cloth_crossings:  # no cloth in the scene
             return z, self._objects(geom)
+        model = self.sim.scene.model
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
         for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: every ray on any link at once
