@@ -8,7 +8,7 @@ simulator's :mod:`.quadruped_controller` (the composition of :mod:`.plans`, :mod
 :mod:`.push` and :mod:`.support`, the one terrain model of
 its legs (:mod:`.terrain`, read by the controller, the planner and the key concepts),
 :mod:`.quadruped_goals` (``robot_on``), the planner's
-:mod:`.quadruped_macros` and :mod:`.quadruped_routes` with their walk and push prediction
+:mod:`.quadruped_macros`, :mod:`.quadruped_routes` and :mod:`.quadruped_writer` with their walk and push prediction
 (:mod:`.predict`), and the tunables of all of them in :mod:`.quadruped_config`.
 """
 

@@ -38,6 +38,8 @@ LANE = 0.05  # m a pushed object keeps from the side of another that it is pushe
 DETOUR_CHECKS = 150  # walks predicted at most when looking for a way around
 ON_LEVEL = QUADRUPED.same_surface  # m from the level it starts on that a way around's turns keep every foot
 LEG_COST = 0.3  # m: what one more push leg counts for, against distance, when a push is routed around something
+OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it
+OFF_CENTRE_COST = 1.0  # m: what a routed push leg lined up further off than that counts for, beyond its length
 REMEMBERED = 20_000  # predictions kept of each kind (the same walks and pushes recur across a task's programs)
 Pose = tuple[np.ndarray, np.ndarray, np.ndarray]  # a push leg's start and end poses and its staging point
 _walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
@@ -125,6 +127,8 @@ def _walk_violation(
         offsets = (-width, width, *np.linspace(-width, width, BELLY_LINES + 2)[1:-1], -flank, flank)
         across = np.stack([points + k * lateral for k in offsets])
         heights = layout.heights(across.reshape(-1, 2), skip).reshape(len(offsets), -1)
+        body = heights[2:]  # under the torso and at its flanks: read only where the body passes (a slanted band reaches
+        body[~_swept(across[2:], here, delta, half + SIDE_MARGIN)] = -np.inf  # past the body's start and end)
         feet, under, sides = heights[:2].max(axis=0), heights[2:-2].max(axis=0), heights[-2:].max(axis=0)
         if (rise := under - feet).max() > BRUSH:
             return (
@@ -138,6 +142,21 @@ def _walk_violation(
             )
         here = goal
     return None
+
+
+def _swept(points: np.ndarray, start: np.ndarray, delta: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Which of ``points`` (..., 2) an axis-aligned box of half size ``half`` covers as its centre moves from
+    ``start`` by ``delta``: those within ``half`` of the centre on both axes at some point of the move."""
+    rel = points - start
+    lo, hi = np.zeros(rel.shape[:-1]), np.ones(rel.shape[:-1])
+    for k in (0, 1):
+        if abs(delta[k]) < 1e-12:
+            inside = np.abs(rel[..., k]) <= half[k] + 1e-9
+            lo, hi = np.where(inside, lo, 1.0), np.where(inside, hi, 0.0)
+            continue
+        a, b = (rel[..., k] - half[k] - 1e-9) / delta[k], (rel[..., k] + half[k] + 1e-9) / delta[k]
+        lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
+    return lo <= hi
 
 
 def _fragile_footing(
@@ -408,21 +427,24 @@ def drift_room(layout: Layout, name: str, targets: Sequence[np.ndarray], floor: 
 
 
 def push_route(
-    layout: Layout, name: str, goal: np.ndarray, limits: QuadrupedLimits, floor: float
+    layout: Layout, name: str, goal: np.ndarray, limits: QuadrupedLimits, floor: float, turns: bool = False
 ) -> list[np.ndarray] | None:
     """Targets of successive one-axis pushes that bring ``name`` to ``goal`` (x-y) around what stands in the way,
-    the shortest found (each extra leg counts :data:`LEG_COST`), or None.
+    the shortest found (each extra leg counts :data:`LEG_COST`, and one the robot can only push lined up well off the
+    object's centre line, which turns it, :data:`OFF_CENTRE_COST`), or None.
 
     The object's centre moves on lanes clear of the other objects' sides (their boxes grown by the object's half size
     and :data:`LANE`); a leg is kept when the object's swept footprint meets no other object and passes them with
     room to drift (:func:`_drift_room`: so a goal beside something is come at across its side), and the robot's, from
     where it lines up behind the object to the end of the push, meets nothing above the floor at one of the
-    offsets along the face that the push skill may take. Boxes only: the prediction of each push
+    offsets along the face that the push skill may take. With ``turns``, the robot may push each leg with its body
+    turned a quarter either way (it turns in place between legs). Boxes only: the prediction of each push
     (:func:`push_problem`) is the judge of the route found.
     """
     box = layout.box(name)
     goal = np.asarray(goal, dtype=float)
-    robot = np.asarray(limits.body_size[:2]) / 2
+    body = np.asarray(limits.body_size[:2]) / 2
+    bodies = (body, body[::-1]) if turns else (body,)
     lo, hi = _obstacles(layout, name, floor)
     lanes = [
         sorted(
@@ -434,22 +456,29 @@ def push_route(
     def clear(rect_lo: np.ndarray, rect_hi: np.ndarray) -> bool:
         return not np.any(_gaps(rect_lo, rect_hi, lo, hi) < -CONTACT / 4)
 
-    def leg_ok(a: int, frm: np.ndarray, to: np.ndarray) -> bool:
+    def leg_cost(a: int, frm: np.ndarray, to: np.ndarray) -> float | None:
+        """None where the leg is not kept, else what it counts for beyond its length (:data:`OFF_CENTRE_COST` where
+        the robot must line up further off the object's centre line than :data:`OFF_CENTRE`)."""
         if not clear(np.minimum(frm, to) - box.half, np.maximum(frm, to) + box.half):
-            return False
+            return None
         if not _drift_room(box.half, frm, to, lo, hi, np.array_equal(frm, box.center), np.array_equal(to, goal)):
-            return False
+            return None
         sign = np.sign(to[a] - frm[a])
-        back = box.half[a] + GAP + robot[a]
-        for offset in lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a])):
-            start, end = frm.copy(), to.copy()
-            start[a] -= sign * (back + QUADRUPED.staging)
-            end[a] -= sign * back
-            start[1 - a] += offset
-            end[1 - a] += offset
-            if clear(np.minimum(start, end) - robot, np.maximum(start, end) + robot):
-                return True
-        return False
+        least = np.inf  # the least offset a clear line-up takes, as a share of the object's half width across
+        for robot in bodies:
+            back = box.half[a] + GAP + robot[a]
+            for offset in lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a])):
+                start, end = frm.copy(), to.copy()
+                start[a] -= sign * (back + QUADRUPED.staging)
+                end[a] -= sign * back
+                start[1 - a] += offset
+                end[1 - a] += offset
+                if clear(np.minimum(start, end) - robot, np.maximum(start, end) + robot):
+                    least = min(least, abs(float(offset)) / float(box.half[1 - a]))
+                    break  # (the offsets come nearest the centre line first)
+        if least == np.inf:
+            return None
+        return OFF_CENTRE_COST if least > OFF_CENTRE else 0.0
 
     nodes = [(i, j) for i in range(len(lanes[0])) for j in range(len(lanes[1]))]
     at = {n: np.array([lanes[0][n[0]], lanes[1][n[1]]]) for n in nodes}
@@ -474,7 +503,10 @@ def push_route(
                 if nxt == node:
                     continue
                 step = cost + abs(lanes[a][k] - lanes[a][node[a]]) + LEG_COST
-                if step < best.get(nxt, np.inf) and leg_ok(a, at[node], at[nxt]):
+                if step >= best.get(nxt, np.inf) or (extra := leg_cost(a, at[node], at[nxt])) is None:
+                    continue
+                step += extra
+                if step < best.get(nxt, np.inf):
                     best[nxt] = step
                     previous[nxt] = node
                     heapq.heappush(frontier, (step, nxt))

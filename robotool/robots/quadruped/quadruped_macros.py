@@ -1,6 +1,7 @@
 """Quadruped macros: walk or climb onto a surface (directly, over a pushed bridge, up pushed steps: the routes are
 in :mod:`.quadruped_routes`), push an object to a placement (against another object's side, across a gap, out of the
-way, beside an edge), stand on a lever's far end, push an object off an edge onto a soft landing.
+way, beside an edge), stand on a lever's far end, push an object off an edge onto a soft landing; written into
+programs by :mod:`.quadruped_writer`.
 
 Each route is predicted with :func:`robotool.robots.quadruped.predict.walk_violation` on the planned layout; a
 program whose walk is predicted to break a limit keeps that as its ``doubt`` and is tried late.
@@ -9,24 +10,18 @@ program whose walk is predicted to break a limit keeps that as its ``doubt`` and
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import replace
 
 import numpy as np
 
-from robotool.planner.codegen import Direction, Point, Program, Ref
+from robotool.planner.codegen import Point, Program
 from robotool.planner.layout import Box, Layout
 from robotool.planner.search import precedence, tight
 from robotool.robots.quadruped.predict import (
     detour,
-    drift_room,
-    off_centre,
-    push_problem,
-    push_route,
     push_staging,
     turn_violation,
     walk_violation,
 )
-from robotool.robots.quadruped.push import legs
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
     DIRECTIONS,
@@ -35,208 +30,19 @@ from robotool.robots.quadruped.quadruped_routes import (
     ROOM_MARGIN,
     SIDE,
     TIP_PAST,
-    PushStep,
     Quadruped,
-    Route,
     routes_onto,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import foot_offsets
-from robotool.sim.backend import MASS_NOISE
+from robotool.robots.quadruped.quadruped_writer import Writer
 from robotool.task.concepts import surface_under
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
-
-# --- writing routes into programs ---------------------------------------------------------------------
 
 STEP_ON_NEAR = 0.01  # m the feet step onto a lever at least this far short of its fulcrum's centre line
 FULCRUM_CLEARANCE = 0.02  # m the feet keep from a lever's fulcrum as they step on, where the load leaves room
 LOAD_CLEARANCE = 0.03  # m the body's rear keeps from the load on the lever's other end as the feet step on
 LEVER_STRIDE = 0.1  # m between stops walking out a lever past its fulcrum: it tips under planted feet, not mid-stride
-OFF_CENTRE = 0.5  # a push lined up further off the object's centre line (share of its half width) turns it: thin
-
-
-def _push_plans(
-    layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float
-) -> Iterator[list[np.ndarray]]:
-    """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
-    along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
-    (:func:`robotool.planner.layout.push_route`), a push along one axis too."""
-    center = layout.box(name).center
-    yield [xy]
-    parts = legs(center, xy)
-    for first in parts if len(parts) == 2 else []:
-        corner = center.copy()
-        corner[first.axis] = first.target
-        yield [corner, xy]
-    around = push_route(layout, name, xy, limits, floor)
-    if around is not None and len(around) > 2:
-        yield around
-
-
-class Writer:
-    """Writes pushes and walks into a program, querying positions when they run."""
-
-    def __init__(self, quad: Quadruped, prog: Program):
-        self.quad, self.prog = quad, prog
-        self.layout = quad.layout
-        self.here = quad.start
-        self.level = quad.floor
-        self.surface = quad.floor_name
-        self.refs: dict[str, Ref] = {}
-        self.directions: dict[tuple[str, str], Direction] = {}  # (from, toward) query variables -> direction
-
-    def position(self, name: str) -> Ref:
-        """Query where ``name`` is now (once per placement)."""
-        if name not in self.refs:
-            box = self.layout.box(name)
-            self.refs[name] = self.prog.query("get_position", name, (*box.center, 0.0))
-        return self.refs[name]
-
-    def push(self, name: str, xy: np.ndarray, why: str) -> None:
-        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine that leaves it room to drift
-        (:func:`~.predict.drift_room`), else the first predicted fine, else the straight way, its problem kept as the
-        program's doubt: in one skill call, or one axis at a time, or routed around what stands in the way; before
-        each push whose own way to where the robot lines up is predicted blocked, the robot walks there around what
-        stands in the way."""
-        xy = np.asarray(xy, dtype=float)
-        predicted = None
-        for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level):
-            found = self._predict_pushes(name, plan)
-            if found[1] is None and drift_room(self.layout, name, plan, self.level):
-                predicted = found
-                break
-            if predicted is None or (predicted[1] is not None and found[1] is None):
-                predicted = found
-        assert predicted is not None
-        steps, problem = predicted
-        off = off_centre(self.layout, name, [target for _, target, _ in steps], self.quad.limits, self.level)
-        if off > OFF_CENTRE:
-            self.prog.thin.append(f"the push of {name} lines up {off:.0%} of its half width off its centre: it turns")
-        for path, target, end in steps:
-            for via in path:
-                self.walk(via, self.surface, f"walk to where the push of {name} lines up")
-            ref = self.position(name)
-            start = self.layout.box(name).center
-            self.prog.motion(
-                "push_to_position",
-                obj=name,
-                point=Point.at(ref, (*(target - start), 0.0)),
-                intent=f"push {name} {why}",
-                explanation=f"centre to [{target[0]:.3f}, {target[1]:.3f}]",
-            )
-            self.here = end
-            self.layout = self.layout.with_moved(name, target)
-            self.refs.pop(name, None)
-        self.doubt(problem)
-        mass, limit = self.quad.task.object(name).effective_mass, self.quad.limits.max_push_mass
-        heavy = f"{name}'s {mass:.2f} kg is within {MASS_NOISE:.0%} of the {limit:g} kg push limit"
-        if mass * (1 + MASS_NOISE) > limit and heavy not in self.prog.thin:  # perturbed worlds scale masses so
-            self.prog.thin.append(heavy)
-        self.prog.use(name)
-
-    def _predict_pushes(self, name: str, targets: list[np.ndarray]) -> tuple[list[PushStep], str | None]:
-        """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is: for each, the walk
-        to where it lines up when the skill's own way there is blocked (else none), the target and where the robot
-        ends; and the first problem predicted."""
-        layout, here, limits = self.layout, self.here, self.quad.limits
-        steps: list[PushStep] = []
-        first = None
-        for xy in targets:
-            problem, end = push_problem(layout, name, xy, limits, self.level, here)
-            path: list[np.ndarray] = []
-            staging = push_staging(layout, name, xy, limits, self.level) if problem else None
-            if problem and problem.kind == "approach" and staging is not None:
-                way = detour(layout, here, staging, limits)
-                if walk_violation(layout, here, way, limits) is None:
-                    path = way
-                    problem, end = push_problem(layout, name, xy, limits, self.level, staging)
-            steps.append((path, xy, end))
-            first = first or (str(problem) if problem else None)
-            layout, here = layout.with_moved(name, xy), end
-        return steps, first
-
-    def doubt(self, problem: str | None) -> None:
-        """Keep the first predicted problem as the program's doubt."""
-        if problem and not self.prog.doubt:
-            self.prog.doubt = problem
-
-    def walk(
-        self, xy: np.ndarray, surface: str, intent: str, along_from: str | None = None, fixed_axis: int | None = None
-    ) -> None:
-        """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object.
-        With ``along_from``, a movable surface's point is placed along the line from that object's centre through
-        the surface's as they lie when the walk runs (a lever that turned about its load keeps the robot on it);
-        with ``fixed_axis``, the point's coordinate on that axis is the planned number (a spot placed by something
-        fixed, such as a lever's fulcrum), the others follow the surface."""
-        height = 0.0 if surface == "ground" else self.layout.box(surface).top
-        if surface == "ground" or not self.quad.task.object(surface).movable:
-            point = Point.at(None, (*xy, height))
-        elif along_from is not None:
-            point = self._along(xy, surface, along_from)
-        else:  # a movable surface may not be quite where it was pushed to
-            point = Point.at(self.position(surface), (*(xy - self.layout.box(surface).center), 0.0))
-            if fixed_axis is not None:
-                point = point.with_axis(fixed_axis, None, float(xy[fixed_axis]))
-        skill = "climb_to_position" if height > self.level + 0.015 else "walk_to_position"
-        self.prog.motion(skill, point=point, objects=[] if surface == "ground" else [surface], intent=intent)
-        self.level = max(height, self.level) if skill == "climb_to_position" else height
-        self.here = np.asarray(xy, dtype=float)
-        self.surface = surface
-
-    def _along(self, xy: np.ndarray, surface: str, start: str) -> Point:
-        """``xy`` on ``surface`` as a distance along the direction from ``start``'s centre to ``surface``'s, read when
-        the program runs, from ``surface``'s centre (what lies off that line stays a fixed offset)."""
-        ref, origin = self.position(surface), self.position(start)
-        key = (origin.var, ref.var)
-        if key not in self.directions:
-            self.directions[key] = self.prog.direction(origin, ref)
-        direction = self.directions[key]
-        offset = np.asarray(xy, dtype=float) - self.layout.box(surface).center
-        distance = float(offset @ np.array(direction.value))
-        across = offset - distance * np.array(direction.value)
-        return replace(Point.at(ref, (*across, 0.0)), along=(direction, distance))
-
-    def around(self, xy: np.ndarray) -> None:
-        """Walk on the floor around what stands between the robot and ``xy`` (:func:`detour`), up to the last turn
-        before it."""
-        for via in detour(self.layout, self.here, xy, self.quad.limits)[:-1]:
-            self.walk(via, self.quad.floor_name, "walk around what stands in the way")
-
-    def floor_walk(self, xy: np.ndarray, intent: str) -> None:
-        """Walk on the floor to ``xy`` around what stands in the way; a walk still predicted to break a limit is
-        kept as the program's doubt."""
-        self.around(xy)
-        self.doubt(walk_violation(self.layout, self.here, [xy], self.quad.limits))
-        self.walk(xy, self.quad.floor_name, intent)
-
-    def route(self, route: Route) -> None:
-        """Write a whole route; record a predicted violation of its walk as the program's doubt."""
-        self.prog.late += route.late
-        self.prog.slack = min(self.prog.slack, route.slack)
-        for name, role in route.uses:
-            self.prog.use(name, role)
-        for name, xy, why in route.pushes:
-            self.push(name, xy, why)
-        first, surface = route.waypoints[0]
-        if surface == self.quad.floor_name:
-            self.around(first)
-        self.doubt(walk_violation(self.layout, self.here, [xy for xy, _ in route.waypoints], self.quad.limits))
-        for xy, surface in route.waypoints:
-            self.walk(xy, surface, f"walk onto {surface}" if surface != "ground" else "walk into position")
-        self.stance(*route.waypoints[-1])
-        self.prog.say(route.words)
-
-    def stance(self, xy: np.ndarray, surface: str) -> None:
-        """Keep how far the feet standing at ``xy`` on ``surface`` are from its top's edges as the program's slack
-        when it is the least yet; feet beyond them are its doubt (the body does not fit there as it is turned)."""
-        if surface == "ground":
-            return
-        box = self.layout.box(surface)
-        slack = float((box.half - np.abs(xy + foot_offsets(self.quad.limits) - box.center)).min())
-        self.prog.slack = min(self.prog.slack, slack)
-        if slack < 0:
-            self.doubt(f"a foot would stand off {surface}'s top: the body does not fit there as it is turned")
 
 
 # --- goals ----------------------------------------------------------------------------------------------
@@ -292,11 +98,11 @@ def _cleared(quad: Quadruped, tools: bool) -> Iterator[Program]:
             opening = quad.program()
             opening.use(obj.name, "obstacle: it stands in the way; push it aside first")
             w = Writer(quad, opening)
-            w.push(obj.name, spot, "out of the way")
+            w.push(obj.name, spot, "out of the way", turns=True)
             if opening.doubt is not None:
                 continue
             opening.say(f"Push {obj.name} out of the way.")
-            after = quad.after(w.layout, w.here, [obj.name])
+            after = w.quad.after(w.layout, w.here, [obj.name])
             after.opening = opening
             fine = [p for p in _programs(after, tools) if p.doubt is None]
             yield from fine
@@ -520,13 +326,13 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 w = Writer(quad, prog)
                 for name, spot in pushes:
                     prog.use(name, f"tool: a soft landing for {target.name}")
-                    w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall")
+                    w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall", turns=True)
                 w.route(route)
                 behind = push_staging(w.layout, target.name, dest, w.quad.limits, support.top)
                 if behind is None:
-                    behind = tbox.center - direction * (tbox.half[axis] + quad.extent(direction) + 0.05)
+                    behind = tbox.center - direction * (tbox.half[axis] + w.quad.extent(direction) + 0.05)
                     w.doubt(f"no clear place on {support_name} to push {target.name} from")
-                for via in detour(w.layout, w.here, behind, quad.limits)[:-1]:
+                for via in detour(w.layout, w.here, behind, w.quad.limits)[:-1]:
                     w.walk(via, support_name, f"walk around what stands on {support_name}")
                 w.walk(behind, support_name, f"walk behind {target.name}")
                 ref = w.position(target.name)
@@ -546,11 +352,12 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
 
 
 def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quadruped:
-    """``quad`` as the scene will be after ``pushes`` (object, x-y centre) are made, the robot where the last ends:
-    the way onto a surface is planned around what they moved (a cushion pushed beside a sofa stands in the way)."""
+    """``quad`` as the scene will be after ``pushes`` (object, x-y centre) are made, the robot where the last ends
+    and lying as it then does: the way onto a surface is planned around what they moved (a cushion pushed beside a
+    sofa stands in the way)."""
     if not pushes:
         return quad
-    w = Writer(quad, Program())  # only its layout and end are read
+    w = Writer(quad, Program())  # only its layout, end and body are read
     for name, spot in pushes:
-        w.push(name, spot, "")
-    return quad.after(w.layout, w.here, [name for name, _ in pushes])
+        w.push(name, spot, "", turns=True)
+    return w.quad.after(w.layout, w.here, [name for name, _ in pushes])

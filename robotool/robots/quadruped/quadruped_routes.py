@@ -37,7 +37,6 @@ SIDE = QUADRUPED.board_side
 TIP_PAST = QUADRUPED.tip_past
 MAX_STEPS = QUADRUPED.max_steps
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
-PushStep = tuple[list[np.ndarray], np.ndarray, np.ndarray]  # walk to where a push lines up, its target, where it ends
 
 
 @dataclass
@@ -83,6 +82,11 @@ class Quadruped:
         if self.heading:
             prog.turn(self.heading, f"turn so that the body's length lies along {'xy'[self.heading // 90 % 2]}")
         return prog
+
+    def quarter_turned(self) -> Quadruped:
+        """The same robot where it stands, in the same scene, once it has turned in place a quarter (to heading 90
+        from 0, back to 0 from 90)."""
+        return Quadruped(self.task, heading=90 - self.heading).after(self.layout, self.start, self.placed)
 
     def pushable(self, obj: SceneObject, level: float) -> bool:
         """Whether the robot may push ``obj`` from a surface at height ``level``."""

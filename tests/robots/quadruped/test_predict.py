@@ -214,3 +214,27 @@ def test_a_way_round_never_stops_half_on_a_step() -> None:
     assert len(way) > 1 and walk_violation(layout, start, way, task.limits) is None
     for turn in way[:-1]:
         assert np.all(layout.heights(turn + foot_offsets(task.limits)) < 0.04), turn
+
+
+def _crate_task() -> Task:
+    """A fixed 0.16 m crate (x 0.5-1.0, y -0.25 to 0.25) just ahead (+x) of the robot, which stands 1 cm behind it."""
+    return parse_task({
+        "format": 1, "name": "crate_ahead", "instruction": "Stand on the crate.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [0.165, 0.0]},
+        "objects": [{"name": "crate", "shape": "box", "center": [0.75, 0.0, 0.08], "size": [0.5, 0.5, 0.16],
+                     "movable": False}],
+        "goal": {"robot_on": "crate"},
+    })
+
+
+def test_a_slanted_walk_away_from_what_the_body_stands_against_is_not_read_as_running_into_it() -> None:
+    """The body keeps its heading as it walks, so a slanted walk sweeps the body's box along the way, not a box
+    turned along it: walking off mostly -x and a little +y from 1 cm behind a crate passes nothing (the band turned
+    along the walk reached 4 cm into the crate behind the body's start), while a slanted walk that does cut the
+    crate's corner is still read as running into it."""
+    task = _crate_task()
+    layout, here = Layout(task), np.array([0.165, 0.0])
+    assert walk_violation(layout, here, [np.array([-0.4, 0.1])], task.limits) is None
+    assert walk_violation(layout, here, [np.array([-0.4, -0.1])], task.limits) is None
+    problem = walk_violation(layout, np.array([0.3, 0.6]), [np.array([1.3, -0.6])], task.limits)
+    assert problem is not None

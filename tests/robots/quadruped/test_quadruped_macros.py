@@ -13,9 +13,10 @@ from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
 from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner, solve
-from robotool.robots.quadruped.predict import detour, push_problem, walk_violation
+from robotool.robots.quadruped.predict import OFF_CENTRE, detour, off_centre, push_problem, push_route, walk_violation
 from robotool.robots.quadruped.push import sweep_points
-from robotool.robots.quadruped.quadruped_macros import Writer, _push_blocked, _push_plans, candidates
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
+from robotool.robots.quadruped.quadruped_macros import _push_blocked, candidates
 from robotool.robots.quadruped.quadruped_routes import (
     APPROACH,
     MIN_APPROACH,
@@ -28,6 +29,7 @@ from robotool.robots.quadruped.quadruped_routes import (
     _landing,
     _lined_up,
 )
+from robotool.robots.quadruped.quadruped_writer import Writer, _push_plans
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
@@ -475,3 +477,67 @@ def test_a_landing_is_never_pulled_back_onto_another_surface_as_high() -> None:
     route = Route(waypoints=[(np.array([0.0, 1.8]), "stage_b")])
     (stop, surface), = _landing(quad, "stage_b", route).waypoints
     assert surface == "stage_b" and stop[1] - quad.half.min() > 1.1, stop  # over stage_b (it starts at y 1.1)
+
+
+def _push_task(others: list[dict[str, object]], robot: list[float]) -> Task:
+    """A quadruped scene with a 1 kg box ``box_a`` (0.4 m) at the origin to push and the ``others`` (fixed)."""
+    return parse_task({
+        "format": 1, "name": "push_test", "instruction": "Stand on the block.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": robot},
+        "objects": [
+            _box("box_a", [0.0, 0.0, 0.1], [0.4, 0.4, 0.2], mass=1.0),
+            _box("block", [3.0, 3.0, 0.2], [0.6, 0.6, 0.4], movable=False),
+            *[{**o, "movable": False} for o in others],
+        ],
+        "goal": {"robot_on": "block"},
+    })
+
+
+def test_a_routed_push_takes_a_leg_more_rather_than_line_up_well_off_the_centre_line() -> None:
+    """A post stands where the robot lines up straight behind box_a to push it -y: the one straight leg lines up 62 %
+    of the box's half width off its centre line (the push turns the box). The route first pushes the box a few
+    centimetres -x, out of the post's lane, so that every leg lines up within half the half width, and brings it
+    back at the end."""
+    task = _push_task([_box("post", [0.31, 0.625, 0.4], [0.2, 0.55, 0.8])], [0.0, 1.5])
+    layout, goal, limits = Layout(task), np.array([0.0, -1.5]), task.limits
+    assert off_centre(layout, "box_a", [goal], limits, 0.0) > OFF_CENTRE
+    route = push_route(layout, "box_a", goal, limits, 0.0)
+    assert route is not None and len(route) > 1 and np.allclose(route[-1], goal)
+    assert off_centre(layout, "box_a", route, limits, 0.0) <= OFF_CENTRE
+
+
+def _corridor_task() -> Task:
+    """Two fixed walls 0.4 m apart along y (x 0.2-0.6 and -0.6 to -0.2, y 0.3-1.2) and two blocks 5 cm beside box_a
+    (x 0.25-0.65 and -0.65 to -0.25, y -0.3 to 0.3): box_a can go only -y, and behind its +y face there is room for
+    the body only turned a quarter (0.3 m wide), not as it starts (0.65 m)."""
+    sides = ((1, 1.0), (2, -1.0))
+    walls = [_box(f"wall_{i}", [sign * 0.4, 0.75, 0.4], [0.4, 0.9, 0.8]) for i, sign in sides]
+    blocks = [_box(f"side_{i}", [sign * 0.45, 0.0, 0.4], [0.4, 0.6, 0.8]) for i, sign in sides]
+    return _push_task([*walls, *blocks], [0.0, 2.0])
+
+
+def test_a_push_that_only_the_turned_body_can_line_up_for_is_made_after_a_quarter_turn() -> None:
+    task = _corridor_task()
+    goal = np.array([0.0, -1.0])
+    plain = Writer(Quadruped(task), Program())
+    plain.push("box_a", goal, "down")
+    assert plain.prog.doubt is not None and "no clear place to stand" in plain.prog.doubt
+    writer = Writer(Quadruped(task), Program())
+    writer.push("box_a", goal, "down", turns=True)
+    assert writer.prog.doubt is None and writer.quad.heading == 90
+    code = writer.prog.code
+    assert code.index("turn_to_heading(90)") < code.index("push_to_position('box_a'")
+
+
+def test_a_push_made_after_a_quarter_turn_holds_in_the_simulator() -> None:
+    """The turned push of the corridor scene, run: the robot turns where it stands, walks into the corridor and
+    pushes box_a to its target in every world."""
+    task = _corridor_task()
+    writer = Writer(Quadruped(task), Program())
+    writer.push("box_a", np.array([0.0, -1.0]), "down", turns=True)
+    code, rejection, _ = prepare_code(writer.prog.code + "where = get_position('box_a')\n", task)
+    assert rejection is None and code is not None
+    (rollouts,) = run_codes(task, [code], worlds=2, seed=3)
+    for rollout in rollouts:
+        assert all(call.outcome == "done" for call in rollout.calls), failure_reason([rollout])
+        assert np.linalg.norm(np.array(rollout.calls[-1].result[:2]) - [0.0, -1.0]) <= QUADRUPED.push_tolerance

@@ -1,0 +1,282 @@
+"""Writing the quadruped macros' pushes and walks into programs (:class:`Writer`): each push the way predicted best
+(:func:`_push_plans`), with the walks to where it lines up and, where only the turned body fits there, a quarter
+turn in place; walks and climbs anchored to the objects they go onto, queried when the program runs."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from robotool.planner.codegen import Direction, Point, Program, Ref
+from robotool.planner.layout import Layout
+from robotool.robots.quadruped.predict import (
+    OFF_CENTRE,
+    PushBlock,
+    detour,
+    drift_room,
+    off_centre,
+    push_problem,
+    push_route,
+    push_staging,
+    turn_violation,
+    walk_violation,
+)
+from robotool.robots.quadruped.push import legs
+from robotool.robots.quadruped.quadruped_routes import Quadruped, Route
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.terrain import foot_offsets
+from robotool.sim.backend import MASS_NOISE
+
+
+def _push_plans(
+    layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float, turns: bool = False
+) -> Iterator[list[np.ndarray]]:
+    """Ways to push ``name`` to ``xy``, as the targets of successive pushes: straight (one skill call, which pushes
+    along the shorter axis first), one axis at a time in either order, then routed around what stands in the way
+    (:func:`~.predict.push_route`; with ``turns``, legs the robot pushes turned a quarter too)."""
+    center = layout.box(name).center
+    yield [xy]
+    parts = legs(center, xy)
+    for first in parts if len(parts) == 2 else []:
+        corner = center.copy()
+        corner[first.axis] = first.target
+        yield [corner, xy]
+    around = push_route(layout, name, xy, limits, floor, turns)
+    if around is not None and len(around) > 2:
+        yield around
+
+
+@dataclass
+class PushStep:
+    """One push of a planned sequence: the walk to where it lines up (waypoints on the floor), the heading the robot
+    turns to in place at the end of that walk (None: no turn) and its walk on from there, the push's target and
+    where the robot ends."""
+
+    path: list[np.ndarray]
+    target: np.ndarray
+    end: np.ndarray
+    heading: int | None = None
+    then: list[np.ndarray] | None = None
+
+
+class Writer:
+    """Writes pushes and walks into a program, querying positions when they run."""
+
+    def __init__(self, quad: Quadruped, prog: Program):
+        self.quad, self.prog = quad, prog
+        self.layout = quad.layout
+        self.here = quad.start
+        self.level = quad.floor
+        self.surface = quad.floor_name
+        self.refs: dict[str, Ref] = {}
+        self.directions: dict[tuple[str, str], Direction] = {}  # (from, toward) query variables -> direction
+
+    def position(self, name: str) -> Ref:
+        """Query where ``name`` is now (once per placement)."""
+        if name not in self.refs:
+            box = self.layout.box(name)
+            self.refs[name] = self.prog.query("get_position", name, (*box.center, 0.0))
+        return self.refs[name]
+
+    def push(self, name: str, xy: np.ndarray, why: str, turns: bool = False) -> None:
+        """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine that leaves it room to drift
+        (:func:`~.predict.drift_room`) and lines up near its centre line (:data:`~.predict.OFF_CENTRE`), else the first
+        predicted fine with room to drift, else the first predicted fine, else the straight way, its problem kept as
+        the program's doubt: in one skill call, or one axis at a time, or routed around what stands in the way; before
+        each push whose own way to where the robot lines up is predicted blocked, the robot walks there around what
+        stands in the way. With ``turns``, when no way is predicted fine and lined up near the centre line as the body
+        lies, the robot may also turn a quarter in place before a push that the turned body makes better
+        (:meth:`_turned_push`); the writer's ``quad`` then lies as the body does after the last push."""
+        xy = np.asarray(xy, dtype=float)
+        predicted, rank = None, (True, True, True)  # (a problem, no room to drift, off the centre line)
+        for turning in (False, True) if turns else (False,):
+            if turning and not rank[0] and not rank[2]:
+                break
+            for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level, turning):
+                found = self._predict_pushes(name, plan, turning)
+                key = (True, True, True)
+                if found[1] is None:
+                    key = (False, not drift_room(self.layout, name, plan, self.level), found[2] > OFF_CENTRE)
+                if predicted is None or key < rank:
+                    predicted, rank = found, key
+                if rank == (False, False, False):
+                    break
+        assert predicted is not None
+        steps, problem, off = predicted
+        for step in steps:
+            for via in step.path:
+                self.walk(via, self.surface, f"walk to where the push of {name} lines up")
+            if step.heading is not None:
+                self.prog.turn(step.heading, f"turn so that the body fits where the push of {name} lines up")
+                self.quad = self.quad.quarter_turned().after(self.layout, self.here, [])
+                for via in step.then or []:
+                    self.walk(via, self.surface, f"walk to where the push of {name} lines up")
+            ref = self.position(name)
+            start = self.layout.box(name).center
+            self.prog.motion(
+                "push_to_position",
+                obj=name,
+                point=Point.at(ref, (*(step.target - start), 0.0)),
+                intent=f"push {name} {why}",
+                explanation=f"centre to [{step.target[0]:.3f}, {step.target[1]:.3f}]",
+            )
+            self.here = step.end
+            self.layout = self.layout.with_moved(name, step.target)
+            self.refs.pop(name, None)
+        if off > OFF_CENTRE:
+            self.prog.thin.append(f"the push of {name} lines up {off:.0%} of its half width off its centre: it turns")
+        self.doubt(problem)
+        mass, limit = self.quad.task.object(name).effective_mass, self.quad.limits.max_push_mass
+        heavy = f"{name}'s {mass:.2f} kg is within {MASS_NOISE:.0%} of the {limit:g} kg push limit"
+        if mass * (1 + MASS_NOISE) > limit and heavy not in self.prog.thin:  # perturbed worlds scale masses so
+            self.prog.thin.append(heavy)
+        self.prog.use(name)
+
+    def _predict_pushes(
+        self, name: str, targets: list[np.ndarray], turns: bool = False
+    ) -> tuple[list[PushStep], str | None, float]:
+        """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is (:meth:`_lined_up`);
+        with ``turns``, a push predicted to fail, or to line up well off the object's centre line, as the body lies
+        is made turned a quarter where that is predicted fine and lines up nearer (:meth:`_turned_push`). The steps,
+        the first problem predicted and how far off the centre line the pushes line up, at most
+        (:func:`~.predict.off_centre`)."""
+        layout, here, quad = self.layout, self.here, self.quad
+        steps: list[PushStep] = []
+        first, worst = None, 0.0
+        for xy in targets:
+            step, problem = self._lined_up(layout, quad, here, name, xy)
+            off = off_centre(layout, name, [xy], quad.limits, self.level)
+            if turns and (problem is not None or off > OFF_CENTRE):
+                turned = quad.quarter_turned()
+                turned_off = off_centre(layout, name, [xy], turned.limits, self.level)
+                if (problem is not None or turned_off < off) and (
+                    turning := self._turned_push(layout, quad, here, name, xy)
+                ):
+                    step, problem, quad, off = turning, None, turned, turned_off
+            steps.append(step)
+            first, worst = first or (str(problem) if problem else None), max(worst, off)
+            layout, here = layout.with_moved(name, xy), step.end
+        return steps, first, worst
+
+    def _lined_up(
+        self, layout: Layout, quad: Quadruped, here: np.ndarray, name: str, xy: np.ndarray
+    ) -> tuple[PushStep, PushBlock | None]:
+        """A push of ``name`` to ``xy`` by ``quad`` from ``here`` as predicted, with the walk to where it lines up
+        when the skill's own way there is blocked (else none), and its problem (None: predicted fine)."""
+        limits = quad.limits
+        problem, end = push_problem(layout, name, xy, limits, self.level, here)
+        path: list[np.ndarray] = []
+        staging = push_staging(layout, name, xy, limits, self.level) if problem else None
+        if problem and problem.kind == "approach" and staging is not None:
+            way = detour(layout, here, staging, limits)
+            if walk_violation(layout, here, way, limits) is None:
+                path = way
+                problem, end = push_problem(layout, name, xy, limits, self.level, staging)
+        return PushStep(path, xy, end), problem
+
+    def _turned_push(
+        self, layout: Layout, quad: Quadruped, here: np.ndarray, name: str, xy: np.ndarray
+    ) -> PushStep | None:
+        """A push of ``name`` to ``xy`` that ``quad`` makes after turning a quarter in place: where it stands
+        (``here``), else where the turned push lines up, the first spot where the turn and the walks to and from it
+        are predicted fine and so is the push (None: nowhere)."""
+        turned = quad.quarter_turned()
+        staging = push_staging(layout, name, xy, turned.limits, self.level)
+        if staging is None:
+            return None
+        limits = self.quad.task.limits
+        assert isinstance(limits, QuadrupedLimits)
+        for spot in (here, staging):
+            path = detour(layout, here, spot, quad.limits) if spot is staging else []
+            if path and walk_violation(layout, here, path, quad.limits) is not None:
+                continue
+            if turn_violation(layout, spot, limits, 90) is not None:
+                continue
+            step, problem = self._lined_up(layout, turned, spot, name, xy)
+            if problem is None:
+                return PushStep(path, xy, step.end, heading=turned.heading, then=step.path)
+        return None
+
+    def doubt(self, problem: str | None) -> None:
+        """Keep the first predicted problem as the program's doubt."""
+        if problem and not self.prog.doubt:
+            self.prog.doubt = problem
+
+    def walk(
+        self, xy: np.ndarray, surface: str, intent: str, along_from: str | None = None, fixed_axis: int | None = None
+    ) -> None:
+        """Walk (or climb, when the surface is higher) to ``xy`` on ``surface``, anchored to it when it is an object.
+        With ``along_from``, a movable surface's point is placed along the line from that object's centre through
+        the surface's as they lie when the walk runs (a lever that turned about its load keeps the robot on it);
+        with ``fixed_axis``, the point's coordinate on that axis is the planned number (a spot placed by something
+        fixed, such as a lever's fulcrum), the others follow the surface."""
+        height = 0.0 if surface == "ground" else self.layout.box(surface).top
+        if surface == "ground" or not self.quad.task.object(surface).movable:
+            point = Point.at(None, (*xy, height))
+        elif along_from is not None:
+            point = self._along(xy, surface, along_from)
+        else:  # a movable surface may not be quite where it was pushed to
+            point = Point.at(self.position(surface), (*(xy - self.layout.box(surface).center), 0.0))
+            if fixed_axis is not None:
+                point = point.with_axis(fixed_axis, None, float(xy[fixed_axis]))
+        skill = "climb_to_position" if height > self.level + 0.015 else "walk_to_position"
+        self.prog.motion(skill, point=point, objects=[] if surface == "ground" else [surface], intent=intent)
+        self.level = max(height, self.level) if skill == "climb_to_position" else height
+        self.here = np.asarray(xy, dtype=float)
+        self.surface = surface
+
+    def _along(self, xy: np.ndarray, surface: str, start: str) -> Point:
+        """``xy`` on ``surface`` as a distance along the direction from ``start``'s centre to ``surface``'s, read when
+        the program runs, from ``surface``'s centre (what lies off that line stays a fixed offset)."""
+        ref, origin = self.position(surface), self.position(start)
+        key = (origin.var, ref.var)
+        if key not in self.directions:
+            self.directions[key] = self.prog.direction(origin, ref)
+        direction = self.directions[key]
+        offset = np.asarray(xy, dtype=float) - self.layout.box(surface).center
+        distance = float(offset @ np.array(direction.value))
+        across = offset - distance * np.array(direction.value)
+        return replace(Point.at(ref, (*across, 0.0)), along=(direction, distance))
+
+    def around(self, xy: np.ndarray) -> None:
+        """Walk on the floor around what stands between the robot and ``xy`` (:func:`detour`), up to the last turn
+        before it."""
+        for via in detour(self.layout, self.here, xy, self.quad.limits)[:-1]:
+            self.walk(via, self.quad.floor_name, "walk around what stands in the way")
+
+    def floor_walk(self, xy: np.ndarray, intent: str) -> None:
+        """Walk on the floor to ``xy`` around what stands in the way; a walk still predicted to break a limit is
+        kept as the program's doubt."""
+        self.around(xy)
+        self.doubt(walk_violation(self.layout, self.here, [xy], self.quad.limits))
+        self.walk(xy, self.quad.floor_name, intent)
+
+    def route(self, route: Route) -> None:
+        """Write a whole route; record a predicted violation of its walk as the program's doubt."""
+        self.prog.late += route.late
+        self.prog.slack = min(self.prog.slack, route.slack)
+        for name, role in route.uses:
+            self.prog.use(name, role)
+        for name, xy, why in route.pushes:
+            self.push(name, xy, why)
+        first, surface = route.waypoints[0]
+        if surface == self.quad.floor_name:
+            self.around(first)
+        self.doubt(walk_violation(self.layout, self.here, [xy for xy, _ in route.waypoints], self.quad.limits))
+        for xy, surface in route.waypoints:
+            self.walk(xy, surface, f"walk onto {surface}" if surface != "ground" else "walk into position")
+        self.stance(*route.waypoints[-1])
+        self.prog.say(route.words)
+
+    def stance(self, xy: np.ndarray, surface: str) -> None:
+        """Keep how far the feet standing at ``xy`` on ``surface`` are from its top's edges as the program's slack
+        when it is the least yet; feet beyond them are its doubt (the body does not fit there as it is turned)."""
+        if surface == "ground":
+            return
+        box = self.layout.box(surface)
+        slack = float((box.half - np.abs(xy + foot_offsets(self.quad.limits) - box.center)).min())
+        self.prog.slack = min(self.prog.slack, slack)
+        if slack < 0:
+            self.doubt(f"a foot would stand off {surface}'s top: the body does not fit there as it is turned")
