@@ -67,12 +67,14 @@ def _moved(layout: Layout) -> tuple[tuple[str, bytes], ...]:
     return tuple(sorted((name, xy.tobytes()) for name, xy in layout.moved.items()))
 
 
-def turn_violation(layout: Layout, start: np.ndarray, limits: QuadrupedLimits, heading: float) -> str | None:
+def turn_violation(
+    layout: Layout, start: np.ndarray, limits: QuadrupedLimits, heading: float, margin: float = QUADRUPED.side_margin
+) -> str | None:
     """Predict whether a turn in place at ``start`` from heading 0 to ``heading`` (degrees) breaks a rule, as the
     simulator checks it (:meth:`.plans.Plans.turn`): a foot's arc leaving the level under the feet, or anything in
-    the body's sweep above it; the problem in words, or None."""
+    the body's sweep (grown by ``margin``) above it; the problem in words, or None."""
     here = np.asarray(start, dtype=float)
-    arcs, sweep = turn_sweep(limits, 0.0, float(np.radians(heading)), QUADRUPED.side_margin)
+    arcs, sweep = turn_sweep(limits, 0.0, float(np.radians(heading)), margin)
     levels = layout.heights(here + foot_offsets(limits))
     if np.any(layout.heights((here + sweep).reshape(-1, 2)) > levels.max() + RISE):
         return "something stands in the body's way as the robot turns"
@@ -165,7 +167,24 @@ def _fragile_footing(
     """The first fragile object a foot would stand on along the walk, in words (the robot's weight breaks it), or
     None: a fragile object is no footing, however low."""
     fragile = [o.name for o in layout.task.objects if o.fragile is not None and o.name not in skip]
-    if not fragile:
+    found = _footing(layout, start, goals, limits, skip, fragile)
+    if found is None:
+        return None
+    name, (x, y) = found
+    return f"a foot would stand on {name}, which is fragile, at [{x:.2f}, {y:.2f}]"
+
+
+def _footing(
+    layout: Layout,
+    start: np.ndarray,
+    goals: list[np.ndarray],
+    limits: QuadrupedLimits,
+    skip: list[str],
+    names: list[str],
+) -> tuple[str, np.ndarray] | None:
+    """The first of ``names`` a foot would stand on along the walk from ``start`` through ``goals``, and where (None:
+    none)."""
+    if not names:
         return None
     rim = FOOT_RADIUS * np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
     here = np.asarray(start, dtype=float)
@@ -175,12 +194,10 @@ def _fragile_footing(
         direction = delta / length if length > 1e-6 else np.array([1.0, 0.0])
         points = (foot_paths(here + foot_offsets(limits), direction, length)[:, :, None, :] + rim).reshape(-1, 2)
         surface = layout.heights(points, skip)
-        for name in fragile:
-            top = layout.top_of(name, points)
-            on = np.flatnonzero(np.isclose(top, surface, atol=1e-6))
+        for name in names:
+            on = np.flatnonzero(np.isclose(layout.top_of(name, points), surface, atol=1e-6))
             if on.size:
-                x, y = points[on[0]]
-                return f"a foot would stand on {name}, which is fragile, at [{x:.2f}, {y:.2f}]"
+                return name, points[on[0]]
         here = goal
     return None
 
@@ -197,7 +214,21 @@ def detour(
     longer than it is, so a way with room is taken unless it is much longer."""
     skip = list(exclude)
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
-    if walk_violation(layout, start, [goal], limits, skip) is None:
+    offsets = foot_offsets(limits)
+    movable = {o.name for o in layout.task.objects if o.movable and o.shape != "cloth"}
+    loose = [  # movable objects not under the feet where the walk starts or ends: no footing on the way
+        name
+        for name in sorted(movable)
+        if name not in skip and all(np.isnan(layout.top_of(name, end + offsets)).all() for end in (start, goal))
+    ]
+
+    def fine(a: np.ndarray, b: np.ndarray) -> bool:
+        return (
+            walk_violation(layout, a, [b], limits, skip) is None
+            and _footing(layout, a, [b], limits, skip, loose) is None
+        )
+
+    if fine(start, goal):
         return [goal]
     half = np.asarray(limits.body_size[:2]) / 2
     boxes = layout.boxes(skip)
@@ -205,12 +236,10 @@ def detour(
     for box in boxes:
         lo, hi = box.lo - half - 0.1, box.hi + half + 0.1
         points += [np.array([x, y]) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]
-    offsets = foot_offsets(limits)
     level = float(layout.heights(start + offsets, skip).max())
     feet = layout.heights((np.array(points[2:])[:, None, :] + offsets).reshape(-1, 2), skip).reshape(-1, len(offsets))
     points = points[:2] + [p for p, f in zip(points[2:], feet, strict=True) if np.all(np.abs(f - level) <= ON_LEVEL)]
     room = half + QUADRUPED.detour_slack
-    movable = {o.name for o in layout.task.objects if o.movable and o.shape != "cloth"}
     passed = [
         box
         for box in boxes
@@ -220,7 +249,7 @@ def detour(
     def extra_cost(a: np.ndarray, b: np.ndarray) -> float | None:
         """None where the stretch from ``a`` to ``b`` is predicted to break a limit, else what it costs beyond its
         length."""
-        if walk_violation(layout, a, [b], limits, skip) is not None:
+        if not fine(a, b):
             return None
         tight = any(crosses(a, b, box.lo - room, box.hi + room) for box in passed)
         return QUADRUPED.detour_tight_cost if tight else 0.0

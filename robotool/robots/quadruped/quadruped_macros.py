@@ -31,10 +31,11 @@ from robotool.robots.quadruped.quadruped_routes import (
     SIDE,
     TIP_PAST,
     Quadruped,
+    Route,
     routes_onto,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.quadruped_writer import Writer
+from robotool.robots.quadruped.quadruped_writer import Writer, turn_spots
 from robotool.task.concepts import surface_under
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
@@ -320,13 +321,18 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                 if quad.layout.collides(cbox.moved_to(spot), ignore=[target.name]) is not None:
                     continue
                 pushes.append((cushion.name, spot))
-            for route in routes_onto(_after_pushes(quad, pushes), support_name, tools):
+            for walker, route in _ways_after_pushes(quad, pushes, support_name, tools):
                 prog = quad.program()
                 prog.use(target.name, "target")
                 w = Writer(quad, prog)
                 for name, spot in pushes:
                     prog.use(name, f"tool: a soft landing for {target.name}")
                     w.push(name, spot, f"beside {support_name}'s edge, under where {target.name} will fall", turns=True)
+                if walker.heading != w.quad.heading:
+                    if not np.allclose(walker.start, w.here):
+                        w.walk(walker.start, w.surface, "walk off to where there is room to turn")
+                    prog.turn(walker.heading, f"turn so that the body fits the way onto {support_name}")
+                    w.quad = walker
                 w.route(route)
                 behind = push_staging(w.layout, target.name, dest, w.quad.limits, support.top)
                 if behind is None:
@@ -349,6 +355,27 @@ def _lowerings(quad: Quadruped, target: SceneObject, tools: bool) -> Iterator[Pr
                     + (f" onto {pushes[0][0]}." if pushes else ".")
                 )
                 yield prog
+
+
+def _ways_after_pushes(
+    quad: Quadruped, pushes: list[tuple[str, np.ndarray]], name: str, tools: bool
+) -> Iterator[tuple[Quadruped, Route]]:
+    """The routes onto ``name`` once ``pushes`` are made (:func:`_after_pushes`), each with the robot as it walks the
+    route: as it lies after the pushes, and, where every such route is predicted to break a limit, turned a quarter
+    in place where the pushes leave it (where that turn is predicted fine): a cushion pushed into place by the turned
+    body, the steps climbed as the body started."""
+    after = _after_pushes(quad, pushes)
+    fine = False
+    for route in routes_onto(after, name, tools):
+        trial = Writer(after, Program())  # only its doubt is read
+        trial.route(route)
+        fine |= trial.prog.doubt is None
+        yield after, route
+    spots = [] if fine else turn_spots(after.layout, after.start, after)
+    if spots:
+        turned = after.quarter_turned().after(after.layout, spots[0], [])
+        for route in routes_onto(turned, name, tools):
+            yield turned, route
 
 
 def _after_pushes(quad: Quadruped, pushes: list[tuple[str, np.ndarray]]) -> Quadruped:

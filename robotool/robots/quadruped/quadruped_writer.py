@@ -24,7 +24,8 @@ from robotool.robots.quadruped.predict import (
     walk_violation,
 )
 from robotool.robots.quadruped.push import legs
-from robotool.robots.quadruped.quadruped_routes import Quadruped, Route
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
+from robotool.robots.quadruped.quadruped_routes import DIRECTIONS, Quadruped, Route
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.sim.backend import MASS_NOISE
@@ -46,6 +47,30 @@ def _push_plans(
     around = push_route(layout, name, xy, limits, floor, turns)
     if around is not None and len(around) > 2:
         yield around
+
+
+TURN_STEPS = (0.1, 0.2, 0.3)  # m the robot walks off along an axis, at most, to find room to turn in place
+TURN_ROOM = QUADRUPED.push_tolerance  # m a turn between pushes keeps clear (a pushed object ends up to this far off)
+
+
+def turn_spots(layout: Layout, here: np.ndarray, quad: Quadruped) -> list[np.ndarray]:
+    """Where ``quad``, standing at ``here``, may turn a quarter in place: there, and a short straight walk off along
+    each axis (:data:`TURN_STEPS`), nearest first; each walk and turn predicted fine."""
+    offsets = [d * k for k in TURN_STEPS for d in DIRECTIONS]
+    spots = [here, *(here + offset for offset in offsets)]
+    return [
+        spot
+        for spot in spots
+        if (spot is here or walk_violation(layout, here, [spot], quad.limits) is None) and _turns_at(layout, spot, quad)
+    ]
+
+
+def _turns_at(layout: Layout, spot: np.ndarray, quad: Quadruped) -> bool:
+    """Whether a quarter turn in place at ``spot`` is predicted fine, :data:`TURN_ROOM` clear of what stands around
+    (the sweep is the same either way round)."""
+    limits = quad.task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    return turn_violation(layout, spot, limits, 90, TURN_ROOM) is None
 
 
 @dataclass
@@ -179,21 +204,19 @@ class Writer:
     def _turned_push(
         self, layout: Layout, quad: Quadruped, here: np.ndarray, name: str, xy: np.ndarray
     ) -> PushStep | None:
-        """A push of ``name`` to ``xy`` that ``quad`` makes after turning a quarter in place: where it stands
-        (``here``), else where the turned push lines up, the first spot where the turn and the walks to and from it
-        are predicted fine and so is the push (None: nowhere)."""
+        """A push of ``name`` to ``xy`` that ``quad`` makes after turning a quarter in place: where it stands or a
+        short walk off (:func:`turn_spots`), else where the turned push lines up, the first spot where the turn and
+        the walks to and from it are predicted fine and so is the push (None: nowhere)."""
         turned = quad.quarter_turned()
         staging = push_staging(layout, name, xy, turned.limits, self.level)
         if staging is None:
             return None
-        limits = self.quad.task.limits
-        assert isinstance(limits, QuadrupedLimits)
-        for spot in (here, staging):
-            path = detour(layout, here, spot, quad.limits) if spot is staging else []
-            if path and walk_violation(layout, here, path, quad.limits) is not None:
-                continue
-            if turn_violation(layout, spot, limits, 90) is not None:
-                continue
+        ways = [(spot, [spot] if spot is not here else []) for spot in turn_spots(layout, here, quad)]
+        if not np.allclose(staging, here):
+            way = detour(layout, here, staging, quad.limits)
+            if walk_violation(layout, here, way, quad.limits) is None and _turns_at(layout, staging, quad):
+                ways.append((staging, way))
+        for spot, path in ways:
             step, problem = self._lined_up(layout, turned, spot, name, xy)
             if problem is None:
                 return PushStep(path, xy, step.end, heading=turned.heading, then=step.path)

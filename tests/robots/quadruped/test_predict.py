@@ -238,3 +238,30 @@ def test_a_slanted_walk_away_from_what_the_body_stands_against_is_not_read_as_ru
     assert walk_violation(layout, here, [np.array([-0.4, -0.1])], task.limits) is None
     problem = walk_violation(layout, np.array([0.3, 0.6]), [np.array([1.3, -0.6])], task.limits)
     assert problem is not None
+
+
+def _low_box_task(movable: bool) -> Task:
+    """A 0.1 m box (0.4 m along x, 2 m across) between the robot at x = -1 and x = 1: fixed, or movable (2 kg)."""
+    return parse_task({
+        "format": 1, "name": "low_box", "instruction": "Stand on the box.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [-1.0, 0.0]},
+        "objects": [{"name": "box", "shape": "box", "center": [0.0, 0.0, 0.05], "size": [0.4, 2.0, 0.1],
+                     "movable": movable, "mass": 2.0}],
+        "goal": {"robot_on": "box"},
+    })
+
+
+def test_a_way_round_steps_over_a_low_fixed_box_but_never_onto_a_movable_one() -> None:
+    """The feet can step up 0.1 m, so walking over the box is within the limits; a fixed box is walked over, but a
+    movable one is no footing on the way (a leg pressing its side shoves it along): the way goes round its end."""
+    start, goal = np.array([-1.0, 0.0]), np.array([1.0, 0.0])
+    fixed = _low_box_task(movable=False)
+    straight = detour(Layout(fixed), start, goal, fixed.limits)
+    assert len(straight) == 1 and np.allclose(straight[0], goal)
+    loose = _low_box_task(movable=True)
+    layout = Layout(loose)
+    assert walk_violation(layout, start, [goal], loose.limits) is None  # the limits alone allow it
+    way = detour(layout, start, goal, loose.limits)
+    assert len(way) > 1 and np.allclose(way[-1], goal)
+    feet = [p + foot_offsets(loose.limits) for a, b in itertools.pairwise([start, *way]) for p in np.linspace(a, b, 50)]
+    assert np.isnan(layout.top_of("box", np.concatenate(feet))).all()

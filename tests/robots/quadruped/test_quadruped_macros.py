@@ -13,7 +13,15 @@ from robotool.planner.codegen import Program
 from robotool.planner.layout import Layout
 from robotool.planner.search import order, tight
 from robotool.planner.solve import robot_planner, solve
-from robotool.robots.quadruped.predict import OFF_CENTRE, detour, off_centre, push_problem, push_route, walk_violation
+from robotool.robots.quadruped.predict import (
+    OFF_CENTRE,
+    detour,
+    off_centre,
+    push_problem,
+    push_route,
+    turn_violation,
+    walk_violation,
+)
 from robotool.robots.quadruped.push import sweep_points
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_macros import _push_blocked, candidates
@@ -29,7 +37,7 @@ from robotool.robots.quadruped.quadruped_routes import (
     _landing,
     _lined_up,
 )
-from robotool.robots.quadruped.quadruped_writer import Writer, _push_plans
+from robotool.robots.quadruped.quadruped_writer import TURN_ROOM, Writer, _push_plans, turn_spots
 from robotool.robots.quadruped.terrain import foot_offsets
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
@@ -541,3 +549,30 @@ def test_a_push_made_after_a_quarter_turn_holds_in_the_simulator() -> None:
     for rollout in rollouts:
         assert all(call.outcome == "done" for call in rollout.calls), failure_reason([rollout])
         assert np.linalg.norm(np.array(rollout.calls[-1].result[:2]) - [0.0, -1.0]) <= QUADRUPED.push_tolerance
+
+
+def test_the_robot_walks_off_to_turn_where_it_stands_too_near_something() -> None:
+    """Standing 5 cm beside a wall, the body's turn would sweep into it: the spots where it may turn are a short walk
+    off, each with room to spare for a pushed object that ends a few centimetres off its target."""
+    task = _push_task([_box("wall", [-2.0, 0.3, 0.4], [2.0, 0.2, 0.8])], [-2.0, 0.0])
+    layout, here = Layout(task), np.array([-2.0, 0.0])  # the body's +y side 5 cm from the wall's
+    spots = turn_spots(layout, here, Quadruped(task))
+    assert spots and not any(spot is here for spot in spots)
+    for spot in spots:
+        assert turn_violation(layout, spot, task.limits, 90, TURN_ROOM) is None
+        assert walk_violation(layout, here, [spot], task.limits) is None
+    assert turn_violation(layout, here, task.limits, 90) is not None
+
+
+@pytest.mark.slow  # the candidates of a crowded vase_lowering instance: about 6 s
+def test_a_cushion_pushed_by_the_turned_body_is_followed_by_a_turn_back_for_the_climb() -> None:
+    """A heavy sand cushion stands by the steps: the soft cushion can be routed beside the sofa only by the body turned
+    a quarter, and the steps climbed only as the body started (turned, the sand cushion blocks every lane up them).
+    The program that turns back between the last push and the climb is predicted fine."""
+    task = generate("vase_lowering", 7031).task
+    fine = [p for p in candidates(task, True) if p.doubt is None]
+    assert fine
+    code = order(fine)[0].code
+    last_push = code.rindex("push_to_position('soft_cushion'")
+    assert code.startswith("turn_to_heading(90)") and last_push < code.index("turn_to_heading(0)")
+    assert code.index("turn_to_heading(0)") < code.index("climb_to_position")
