@@ -416,8 +416,9 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
         d, xy = combo[k]
         obj = chain[k]
         if xy is not None:
-            lined = _lined_up(layout.box(obj.name).center, xy, d)
-            if lined is not None:
+            box = layout.box(obj.name)
+            lined = _lined_up(box.center, xy, d)
+            if lined is not None and layout.collides(box.moved_to(lined), ignore=[obj.name]) is None:  # a free spot
                 route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
             layout = layout.with_moved(obj.name, xy)
             route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))

@@ -36,6 +36,7 @@ from robotool.robots.quadruped.quadruped_routes import (
     _direct,
     _landing,
     _lined_up,
+    routes_onto,
 )
 from robotool.robots.quadruped.quadruped_writer import TURN_ROOM, Writer, _push_plans, turn_spots
 from robotool.robots.quadruped.terrain import foot_offsets
@@ -576,3 +577,16 @@ def test_a_cushion_pushed_by_the_turned_body_is_followed_by_a_turn_back_for_the_
     last_push = code.rindex("push_to_position('soft_cushion'")
     assert code.startswith("turn_to_heading(90)") and last_push < code.index("turn_to_heading(0)")
     assert code.index("turn_to_heading(0)") < code.index("climb_to_position")
+
+
+@pytest.mark.parametrize("seed", [7012, 8374])
+def test_a_staircase_link_is_not_lined_up_on_a_spot_something_else_stands_on(seed: int) -> None:
+    """box_1 is to stand against box_2's side; lined up across the climb first, it would be pushed onto the spot where
+    a heavy box (over the push limit) stands: no route of the staircase pushes an object where another one stands."""
+    task = generate("sofa_climbing", seed).task
+    quad = Quadruped(task)
+    for route in routes_onto(quad, "sofa", tools=True):
+        layout = quad.layout
+        for name, xy, _ in route.pushes:
+            assert layout.collides(layout.box(name).moved_to(xy), ignore=[name]) is None, (name, xy)
+            layout = layout.with_moved(name, xy)
