@@ -25,6 +25,7 @@ from robotool.robots.quadruped.push import (
     legs,
     push_tries,
     route,
+    sweep_points,
 )
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -366,6 +367,20 @@ def off_centre(
                 worst = max(worst, abs(float(pose[0][across] - box.center[across])) / float(box.half[across]))
             layout, box = _after_leg(layout, name, box, leg)
     return worst
+
+
+def push_room(layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float, margin: float) -> bool:
+    """Whether each leg of a push of ``name`` to ``xy``, lined up as the skill lines up (:func:`_push_pose`), keeps
+    ``margin`` beyond the body's outline clear of what stands above the floor, from where it lines up to where it
+    ends (True where no leg lines up: that is the push's problem, not its room)."""
+    box = layout.box(name)
+    grown = np.asarray(limits.body_size[:2]) / 2 + margin
+    for leg in legs(box.center, np.asarray(xy, dtype=float)):
+        pose = _push_pose(layout, name, box, leg, limits, floor)
+        if pose is not None and np.any(layout.heights(sweep_points(pose[2], pose[1], grown), [name]) > floor + RISE):
+            return False
+        layout, box = _after_leg(layout, name, box, leg)
+    return True
 
 
 def push_staging(

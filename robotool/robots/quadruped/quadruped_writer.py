@@ -18,6 +18,7 @@ from robotool.robots.quadruped.predict import (
     drift_room,
     off_centre,
     push_problem,
+    push_room,
     push_route,
     push_staging,
     turn_violation,
@@ -51,6 +52,7 @@ def _push_plans(
 
 TURN_STEPS = (0.1, 0.2, 0.3)  # m the robot walks off along an axis, at most, to find room to turn in place
 TURN_ROOM = QUADRUPED.push_tolerance  # m a turn between pushes keeps clear (a pushed object ends up to this far off)
+PUSH_ROOM = QUADRUPED.push_tolerance  # m of room a push's line-up keeps, or the program is thin (for the same reason)
 
 
 def turn_spots(layout: Layout, here: np.ndarray, quad: Quadruped) -> list[np.ndarray]:
@@ -115,21 +117,22 @@ class Writer:
         lies, the robot may also turn a quarter in place before a push that the turned body makes better
         (:meth:`_turned_push`); the writer's ``quad`` then lies as the body does after the last push."""
         xy = np.asarray(xy, dtype=float)
-        predicted, rank = None, (True, True, True)  # (a problem, no room to drift, off the centre line)
+        predicted, rank = None, (True, True, True, True)  # a problem, no room to drift, off the centre line, cramped
         for turning in (False, True) if turns else (False,):
             if turning and not rank[0] and not rank[2]:
                 break
             for plan in _push_plans(self.layout, name, xy, self.quad.limits, self.level, turning):
                 found = self._predict_pushes(name, plan, turning)
-                key = (True, True, True)
+                key = (True, True, True, True)
                 if found[1] is None:
-                    key = (False, not drift_room(self.layout, name, plan, self.level), found[2] > OFF_CENTRE)
+                    drifts = not drift_room(self.layout, name, plan, self.level)
+                    key = (False, drifts, found[2] > OFF_CENTRE, found[3])
                 if predicted is None or key < rank:
                     predicted, rank = found, key
-                if rank == (False, False, False):
+                if not any(rank):
                     break
         assert predicted is not None
-        steps, problem, off = predicted
+        steps, problem, off, cramped = predicted
         for step in steps:
             for via in step.path:
                 self.walk(via, self.surface, f"walk to where the push of {name} lines up")
@@ -152,6 +155,11 @@ class Writer:
             self.refs.pop(name, None)
         if off > OFF_CENTRE:
             self.prog.thin.append(f"the push of {name} lines up {off:.0%} of its half width off its centre: it turns")
+        if cramped and problem is None:
+            self.prog.thin.append(
+                f"a push of {name} lines up with under {PUSH_ROOM * 100:.0f} cm of room: an object pushed before may "
+                "end up that far off its target"
+            )
         self.doubt(problem)
         mass, limit = self.quad.task.object(name).effective_mass, self.quad.limits.max_push_mass
         heavy = f"{name}'s {mass:.2f} kg is within {MASS_NOISE:.0%} of the {limit:g} kg push limit"
@@ -161,15 +169,16 @@ class Writer:
 
     def _predict_pushes(
         self, name: str, targets: list[np.ndarray], turns: bool = False
-    ) -> tuple[list[PushStep], str | None, float]:
+    ) -> tuple[list[PushStep], str | None, float, bool]:
         """Pushes of ``name`` through ``targets`` in turn, as predicted from where the robot is (:meth:`_lined_up`);
         with ``turns``, a push predicted to fail, or to line up well off the object's centre line, as the body lies
         is made turned a quarter where that is predicted fine and lines up nearer (:meth:`_turned_push`). The steps,
-        the first problem predicted and how far off the centre line the pushes line up, at most
-        (:func:`~.predict.off_centre`)."""
+        the first problem predicted, how far off the centre line the pushes line up, at most
+        (:func:`~.predict.off_centre`), and whether one lines up with less than :data:`PUSH_ROOM` of room
+        (:func:`~.predict.push_room`)."""
         layout, here, quad = self.layout, self.here, self.quad
         steps: list[PushStep] = []
-        first, worst = None, 0.0
+        first, worst, cramped = None, 0.0, False
         for xy in targets:
             step, problem = self._lined_up(layout, quad, here, name, xy)
             off = off_centre(layout, name, [xy], quad.limits, self.level)
@@ -182,8 +191,9 @@ class Writer:
                     step, problem, quad, off = turning, None, turned, turned_off
             steps.append(step)
             first, worst = first or (str(problem) if problem else None), max(worst, off)
+            cramped = cramped or not push_room(layout, name, xy, quad.limits, self.level, PUSH_ROOM)
             layout, here = layout.with_moved(name, xy), step.end
-        return steps, first, worst
+        return steps, first, worst, cramped
 
     def _lined_up(
         self, layout: Layout, quad: Quadruped, here: np.ndarray, name: str, xy: np.ndarray

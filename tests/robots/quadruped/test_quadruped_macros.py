@@ -590,3 +590,16 @@ def test_a_staircase_link_is_not_lined_up_on_a_spot_something_else_stands_on(see
         for name, xy, _ in route.pushes:
             assert layout.collides(layout.box(name).moved_to(xy), ignore=[name]) is None, (name, xy)
             layout = layout.with_moved(name, xy)
+
+
+@pytest.mark.parametrize(("room", "cramped"), [(0.04, True), (0.08, False)])
+def test_a_push_lined_up_with_little_room_is_thin(room: float, cramped: bool) -> None:
+    """A post stands ``room`` beside where the robot lines up behind box_a to push it -y. A pushed object ends up to
+    the push tolerance (6 cm) off its target, so a line-up with less room than that may find none in a perturbed
+    world: the program is thin (tried after those with room); with more room it is not."""
+    post = _box("post", [0.325 + room + 0.1, 0.55, 0.4], [0.2, 0.7, 0.8])
+    task = _push_task([post], [0.0, 1.5])
+    writer = Writer(Quadruped(task), Program())
+    writer.push("box_a", np.array([0.0, -1.0]), "down")
+    assert writer.prog.doubt is None
+    assert any("of room" in note for note in writer.prog.thin) == cramped
