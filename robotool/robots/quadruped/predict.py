@@ -372,12 +372,15 @@ def off_centre(
 def push_room(layout: Layout, name: str, xy: np.ndarray, limits: QuadrupedLimits, floor: float, margin: float) -> bool:
     """Whether each leg of a push of ``name`` to ``xy``, lined up as the skill lines up (:func:`_push_pose`), keeps
     ``margin`` beyond the body's outline clear of what stands above the floor, from where it lines up to where it
-    ends (True where no leg lines up: that is the push's problem, not its room)."""
+    ends (True where no leg lines up: that is the push's problem, not its room). What lies over the object (a board
+    that rests on it) goes with it, not counted."""
     box = layout.box(name)
+    over = [b.name for b in layout.boxes([name]) if b.overlap(box) > 0 and b.top > box.top]
     grown = np.asarray(limits.body_size[:2]) / 2 + margin
     for leg in legs(box.center, np.asarray(xy, dtype=float)):
         pose = _push_pose(layout, name, box, leg, limits, floor)
-        if pose is not None and np.any(layout.heights(sweep_points(pose[2], pose[1], grown), [name]) > floor + RISE):
+        swept = sweep_points(pose[2], pose[1], grown) if pose is not None else None
+        if swept is not None and np.any(layout.heights(swept, [name, *over]) > floor + RISE):
             return False
         layout, box = _after_leg(layout, name, box, leg)
     return True
