@@ -109,13 +109,14 @@ class Writer:
 
     def push(self, name: str, xy: np.ndarray, why: str, turns: bool = False) -> None:
         """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine that leaves it room to drift
-        (:func:`~.predict.drift_room`) and lines up near its centre line (:data:`~.predict.OFF_CENTRE`), else the first
-        predicted fine with room to drift, else the first predicted fine, else the straight way, its problem kept as
-        the program's doubt: in one skill call, or one axis at a time, or routed around what stands in the way; before
-        each push whose own way to where the robot lines up is predicted blocked, the robot walks there around what
-        stands in the way. With ``turns``, when no way is predicted fine and lined up near the centre line as the body
-        lies, the robot may also turn a quarter in place before a push that the turned body makes better
-        (:meth:`_turned_push`); the writer's ``quad`` then lies as the body does after the last push."""
+        (:func:`~.predict.drift_room`), lines up near its centre line (:data:`~.predict.OFF_CENTRE`) and with
+        :data:`PUSH_ROOM` of room (:func:`~.predict.push_room`), else the one predicted fine that meets the most of
+        these, in that order, else the straight way, its problem kept as the program's doubt: in one skill call, or
+        one axis at a time, or routed around what stands in the way; before each push whose own way to where the robot
+        lines up is predicted blocked, the robot walks there around what stands in the way. With ``turns``, when no
+        way is predicted fine and lined up near the centre line as the body lies, the robot may also turn a quarter
+        in place before a push that the turned body makes better (:meth:`_turned_push`); the writer's ``quad`` then
+        lies as the body does after the last push."""
         xy = np.asarray(xy, dtype=float)
         predicted, rank = None, (True, True, True, True)  # a problem, no room to drift, off the centre line, cramped
         for turning in (False, True) if turns else (False,):
