@@ -371,9 +371,9 @@ def _ways_after_pushes(
         trial.route(route)
         fine |= trial.prog.doubt is None
         yield after, route
-    spots = [] if fine else turn_spots(after.layout, after.start, after)
-    if spots:
-        turned = after.quarter_turned().after(after.layout, spots[0], [])
+    spot = None if fine else next(turn_spots(after.layout, after.start, after), None)
+    if spot is not None:
+        turned = after.quarter_turned().after(after.layout, spot, [])
         for route in routes_onto(turned, name, tools):
             yield turned, route
 

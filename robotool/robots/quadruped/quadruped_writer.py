@@ -4,8 +4,9 @@ turn in place; walks and climbs anchored to the objects they go onto, queried wh
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -55,16 +56,14 @@ TURN_ROOM = QUADRUPED.push_tolerance  # m a turn between pushes keeps clear (a p
 PUSH_ROOM = QUADRUPED.push_tolerance  # m of room a push's line-up keeps, or the program is thin (for the same reason)
 
 
-def turn_spots(layout: Layout, here: np.ndarray, quad: Quadruped) -> list[np.ndarray]:
+def turn_spots(layout: Layout, here: np.ndarray, quad: Quadruped) -> Iterator[np.ndarray]:
     """Where ``quad``, standing at ``here``, may turn a quarter in place: there, and a short straight walk off along
-    each axis (:data:`TURN_STEPS`), nearest first; each walk and turn predicted fine."""
-    offsets = [d * k for k in TURN_STEPS for d in DIRECTIONS]
-    spots = [here, *(here + offset for offset in offsets)]
-    return [
-        spot
-        for spot in spots
-        if (spot is here or walk_violation(layout, here, [spot], quad.limits) is None) and _turns_at(layout, spot, quad)
-    ]
+    each axis (:data:`TURN_STEPS`), nearest first; each walk and turn predicted fine (read as they are asked for)."""
+    spots = [here, *(here + d * k for k in TURN_STEPS for d in DIRECTIONS)]
+    for spot in spots:
+        walks = spot is here or walk_violation(layout, here, [spot], quad.limits) is None
+        if walks and _turns_at(layout, spot, quad):
+            yield spot
 
 
 def _turns_at(layout: Layout, spot: np.ndarray, quad: Quadruped) -> bool:
@@ -85,7 +84,7 @@ class PushStep:
     target: np.ndarray
     end: np.ndarray
     heading: int | None = None
-    then: list[np.ndarray] | None = None
+    then: list[np.ndarray] = field(default_factory=list)
 
 
 class Writer:
@@ -140,7 +139,7 @@ class Writer:
             if step.heading is not None:
                 self.prog.turn(step.heading, f"turn so that the body fits where the push of {name} lines up")
                 self.quad = self.quad.quarter_turned().after(self.layout, self.here, [])
-                for via in step.then or []:
+                for via in step.then:
                     self.walk(via, self.surface, f"walk to where the push of {name} lines up")
             ref = self.position(name)
             start = self.layout.box(name).center
@@ -187,7 +186,7 @@ class Writer:
                 turned = quad.quarter_turned()
                 turned_off = off_centre(layout, name, [xy], turned.limits, self.level)
                 if (problem is not None or turned_off < off) and (
-                    turning := self._turned_push(layout, quad, here, name, xy)
+                    turning := self._turned_push(layout, quad, turned, here, name, xy)
                 ):
                     step, problem, quad, off = turning, None, turned, turned_off
             steps.append(step)
@@ -213,25 +212,35 @@ class Writer:
         return PushStep(path, xy, end), problem
 
     def _turned_push(
-        self, layout: Layout, quad: Quadruped, here: np.ndarray, name: str, xy: np.ndarray
+        self, layout: Layout, quad: Quadruped, turned: Quadruped, here: np.ndarray, name: str, xy: np.ndarray
     ) -> PushStep | None:
         """A push of ``name`` to ``xy`` that ``quad`` makes after turning a quarter in place: where it stands or a
         short walk off (:func:`turn_spots`), else where the turned push lines up, the first spot where the turn and
-        the walks to and from it are predicted fine and so is the push (None: nowhere)."""
-        turned = quad.quarter_turned()
+        the walks to and from it are predicted fine and so is the push (None: nowhere); ``turned`` is ``quad`` turned
+        a quarter."""
         staging = push_staging(layout, name, xy, turned.limits, self.level)
         if staging is None:
             return None
-        ways = [(spot, [spot] if spot is not here else []) for spot in turn_spots(layout, here, quad)]
-        if not np.allclose(staging, here):
-            way = detour(layout, here, staging, quad.limits)
-            if walk_violation(layout, here, way, quad.limits) is None and _turns_at(layout, staging, quad):
-                ways.append((staging, way))
-        for spot, path in ways:
+        for spot, path in itertools.chain(
+            ((spot, [spot] if spot is not here else []) for spot in turn_spots(layout, here, quad)),
+            self._via_staging(layout, quad, here, staging),
+        ):
             step, problem = self._lined_up(layout, turned, spot, name, xy)
             if problem is None:
                 return PushStep(path, xy, step.end, heading=turned.heading, then=step.path)
         return None
+
+    @staticmethod
+    def _via_staging(
+        layout: Layout, quad: Quadruped, here: np.ndarray, staging: np.ndarray
+    ) -> Iterator[tuple[np.ndarray, list[np.ndarray]]]:
+        """``staging`` and the way there from ``here`` around what stands in the way, where that walk and a quarter
+        turn at ``staging`` are predicted fine (nothing where it is ``here``)."""
+        if np.allclose(staging, here):
+            return
+        way = detour(layout, here, staging, quad.limits)
+        if walk_violation(layout, here, way, quad.limits) is None and _turns_at(layout, staging, quad):
+            yield staging, way
 
     def doubt(self, problem: str | None) -> None:
         """Keep the first predicted problem as the program's doubt."""

@@ -557,7 +557,7 @@ def test_the_robot_walks_off_to_turn_where_it_stands_too_near_something() -> Non
     off, each with room to spare for a pushed object that ends a few centimetres off its target."""
     task = _push_task([_box("wall", [-2.0, 0.3, 0.4], [2.0, 0.2, 0.8])], [-2.0, 0.0])
     layout, here = Layout(task), np.array([-2.0, 0.0])  # the body's +y side 5 cm from the wall's
-    spots = turn_spots(layout, here, Quadruped(task))
+    spots = list(turn_spots(layout, here, Quadruped(task)))
     assert spots and not any(spot is here for spot in spots)
     for spot in spots:
         assert turn_violation(layout, spot, task.limits, 90, TURN_ROOM) is None
