@@ -187,6 +187,7 @@ LAYOUT_CASES = [
     ("walk_through_vase", "vase_lowering"),
     ("walk_flank_grazing_vase", "vase_heavy"),  # a foot brushes the vase's end while the body shoves it
     ("turn_to_sweep_a_heavy_vase_off", "vase_heavy_at_edge"),  # the turning body's sweep meets the vase: refused
+    ("walk_a_slanted_corner_through_a_heavy_vase", "vase_heavy"),  # the body straddles the vase: it stays
     ("wiggle_a_heavy_vase_off", "vase_heavy_at_edge"),  # headings a few degrees off: refused, quarter turns only
     ("ram_vase_with_book", "vase_heavy_with_book"),
     # the vase beside a step taller than the sofa: pushed from a stance with a foot on the step's edge, or walked off
