@@ -81,6 +81,25 @@ def test_a_hook_is_a_handle_and_a_head_at_the_far_end() -> None:
     assert np.allclose(head.center, [0.19, 0.0, 0.01]) and np.allclose(head.half, [0.01, 0.1, 0.01])
 
 
+def test_boxes_not_turned_are_crossed_exactly_as_the_general_crossing_crosses_them() -> None:
+    """A box whose rotation is the identity takes a shorter way through :meth:`PartStack.intervals`; its values are
+    the general crossing's to the last bit, on its sides and corners too (the planner compares heights exactly)."""
+    rng = np.random.default_rng(3)
+    parts = [Part("box", rng.normal(size=3), np.abs(rng.normal(size=3)) + 0.01, np.eye(3)) for _ in range(12)]
+    parts.append(Part("box", np.zeros(3), np.full(3, 0.2), geometry.rotation_matrix((0.0, 0.0, 30.0))))
+    parts.append(Part("cylinder", np.ones(3), np.full(3, 0.3), np.eye(3)))
+    stack = geometry.PartStack.of([[p] for p in parts])
+    assert stack.upright.tolist() == list(range(12))
+    corners = [p.center[:2] + p.half[:2] * (sx, sy) for p in parts[:12] for sx in (-1, 1) for sy in (-1, 1)]
+    xy = np.concatenate([rng.normal(size=(400, 2)), corners])
+    low, high = stack.intervals(xy)
+    every = np.arange(12).repeat(len(xy))
+    general_low, general_high = stack._crossings(every, np.tile(xy, (12, 1)))
+    assert np.array_equal(low[:12].ravel(), general_low, equal_nan=True)
+    assert np.array_equal(high[:12].ravel(), general_high, equal_nan=True)
+    assert np.isfinite(low[:12]).any() and np.isnan(low[:12]).any()
+
+
 def test_surface_height_is_the_highest_top_under_a_point_or_the_ground() -> None:
     low_box = box((0.0, 0.0, 0.1), (1.0, 1.0, 0.2))
     tall_box = box((0.25, 0.0, 0.25), (0.5, 0.5, 0.5))

@@ -62,13 +62,14 @@ class Layout:
     """Load-bearing solids of a scene (cloth excluded), some possibly moved to new x-y centres.
 
     The objects' parts and boxes are built once per task (shared by every layout derived with :meth:`with_moved`),
-    and each layout stacks its solids once per set of excluded names (:class:`geometry.PartStack`), so that the
-    planner's many height queries cost one vectorised pass each."""
+    and each layout stacks its solids once per set of excluded names, and each object alone once per placement
+    (:class:`geometry.PartStack`), so that the planner's many height queries cost one vectorised pass each."""
 
     task: Task
     moved: dict[str, np.ndarray] = field(default_factory=dict)
     _placed: dict[str, tuple[list[geometry.Part], Box]] = field(default_factory=dict, repr=False, compare=False)
     _stacks: dict[frozenset[str], geometry.PartStack] = field(default_factory=dict, repr=False, compare=False)
+    _alone: dict[str, geometry.PartStack] = field(default_factory=dict, repr=False, compare=False)
 
     def box(self, name: str) -> Box:
         box = self._placed_as_in_task(name)[1]
@@ -80,7 +81,8 @@ class Layout:
 
     def with_moved(self, name: str, xy: np.ndarray) -> Layout:
         """A copy with ``name`` moved so that its x-y centre is ``xy``."""
-        return Layout(self.task, {**self.moved, name: np.asarray(xy, dtype=float)}, _placed=self._placed)
+        alone = {other: stack for other, stack in self._alone.items() if other != name}  # placed as here
+        return Layout(self.task, {**self.moved, name: np.asarray(xy, dtype=float)}, _placed=self._placed, _alone=alone)
 
     def solids(self, exclude: Iterable[str] = ()) -> geometry.PartStack:
         """The load-bearing solids but ``exclude``, stacked for height queries."""
@@ -95,9 +97,18 @@ class Layout:
         """Surface height under each point (n, 2)."""
         return geometry.surface_height(np.atleast_2d(xy), self.solids(exclude))
 
+    def tops(self, xy: np.ndarray, exclude: Iterable[str] = ()) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The surface height under each point (n, 2), as :meth:`heights` reads it, and the top of each load-bearing
+        solid but ``exclude`` over them (NaN where it is not, as :meth:`top_of`), from one pass over the solids."""
+        skip = frozenset(exclude)
+        xy = np.atleast_2d(xy)
+        top = self.solids(skip).solid_intervals(xy)[1]
+        names = [o.name for o in self.task.objects if o.shape != "cloth" and o.name not in skip]
+        return geometry.highest_top(top), dict(zip(names, top, strict=True))
+
     def top_of(self, name: str, xy: np.ndarray) -> np.ndarray:
         """The top of object ``name`` alone over each point (n, 2); NaN where it is not."""
-        return geometry.object_interval(self._parts(name), np.atleast_2d(xy))[1]
+        return self._interval(name, np.atleast_2d(xy))[1]
 
     def collides(self, box: Box, ignore: Iterable[str] = (), margin: float = 0.005) -> str | None:
         """The first other object that overlaps ``box``'s x-y footprint (not just touching) somewhere between
@@ -111,10 +122,18 @@ class Layout:
                 continue
             lo, hi = np.maximum(box.lo, other.lo) + margin, np.minimum(box.hi, other.hi) - margin
             grid = np.stack(np.meshgrid(np.linspace(lo[0], hi[0], 6), np.linspace(lo[1], hi[1], 6)), -1).reshape(-1, 2)
-            low, high = geometry.object_interval(self._parts(obj.name), grid)
+            low, high = self._interval(obj.name, grid)
             if np.any((low < box.top - margin) & (high > box.bottom + margin)):
                 return obj.name
         return None
+
+    def _interval(self, name: str, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lowest and highest z of object ``name`` alone along vertical lines through ``xy`` (n, 2); NaN where
+        missed (its parts stacked once per layout)."""
+        if name not in self._alone:
+            self._alone[name] = geometry.PartStack.of([self._parts(name)])
+        low, high = self._alone[name].solid_intervals(xy)
+        return low[0], high[0]
 
     def _parts(self, name: str) -> list[geometry.Part]:
         parts, box = self._placed_as_in_task(name)

@@ -126,6 +126,8 @@ class PartStack:
     """
 
     cylinder: np.ndarray  # (m,) bool: a cylinder (else a box)
+    upright: np.ndarray  # indices of the boxes not turned at all (their rotation the identity)
+    turned: np.ndarray  # indices of the other parts
     center: np.ndarray  # (m, 3)
     half: np.ndarray  # (m, 3)
     rot: np.ndarray  # (m, 3, 3)
@@ -139,8 +141,12 @@ class PartStack:
     def of(cls, solids: list[list[Part]]) -> PartStack:
         parts = [p for solid in solids for p in solid]
         bounds = [p.aabb() for p in parts]
+        cylinder = np.array([p.kind == "cylinder" for p in parts], dtype=bool)
+        upright = ~cylinder & np.array([np.array_equal(p.rot, np.eye(3)) for p in parts], dtype=bool)
         return cls(
-            cylinder=np.array([p.kind == "cylinder" for p in parts], dtype=bool),
+            cylinder=cylinder,
+            upright=np.flatnonzero(upright),
+            turned=np.flatnonzero(~upright),
             center=np.array([p.center for p in parts], dtype=float).reshape(-1, 3),
             half=np.array([p.half for p in parts], dtype=float).reshape(-1, 3),
             rot=np.array([p.rot for p in parts], dtype=float).reshape(-1, 3, 3),
@@ -156,12 +162,24 @@ class PartStack:
     def intervals(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Where vertical lines through ``xy`` (n, 2) cross each part: (z_low, z_high), each (m, n); NaN where
         a line misses a part."""
-        x, y = xy[None, :, 0], xy[None, :, 1]
-        near = (x >= self.lo[:, 0, None]) & (x <= self.hi[:, 0, None]) & (y >= self.lo[:, 1, None])
-        near &= y <= self.hi[:, 1, None]
-        part, point = np.nonzero(near)
-        low, high = np.full(near.shape, np.nan), np.full(near.shape, np.nan)
-        low[part, point], high[part, point] = self._crossings(part, xy[point])
+        low, high = np.full((len(self.center), len(xy)), np.nan), np.full((len(self.center), len(xy)), np.nan)
+        if self.upright.size:  # a box not turned: crossed from its bottom to its top within its x-y sides
+            center, half = self.center[self.upright], self.half[self.upright]
+            inside = np.abs(xy[None, :, 0] - center[:, 0, None]) <= half[:, 0, None]
+            inside &= np.abs(xy[None, :, 1] - center[:, 1, None]) <= half[:, 1, None]
+            o = 0.0 - center[:, 2]  # (the values the general crossing below gives these boxes, in fewer steps)
+            t_lo, t_hi = -half[:, 2] - o, half[:, 2] - o
+            hit = inside & (t_lo <= t_hi)[:, None]
+            low[self.upright] = np.where(hit, t_lo[:, None], np.nan)
+            high[self.upright] = np.where(hit, t_hi[:, None], np.nan)
+        if self.turned.size:
+            turned = self.turned
+            x, y = xy[None, :, 0], xy[None, :, 1]
+            near = (x >= self.lo[turned, 0, None]) & (x <= self.hi[turned, 0, None]) & (y >= self.lo[turned, 1, None])
+            near &= y <= self.hi[turned, 1, None]
+            part, point = np.nonzero(near)
+            if part.size:
+                low[turned[part], point], high[turned[part], point] = self._crossings(turned[part], xy[point])
         return low, high
 
     def _crossings(self, part: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -241,14 +259,19 @@ def surface_height(xy: np.ndarray, solids: list[list[Part]] | PartStack, below: 
     result is the surface a body with its bottom at ``below`` would rest on.
     """
     stack = solids if isinstance(solids, PartStack) else PartStack.of(solids)
-    best = np.full(xy.shape[0], GROUND_Z)
     if not stack.solids:
-        return best
-    _, top = stack.solid_intervals(xy)
+        return np.full(xy.shape[0], GROUND_Z)
+    return highest_top(stack.solid_intervals(xy)[1], below)
+
+
+def highest_top(top: np.ndarray, below: np.ndarray | None = None) -> np.ndarray:
+    """The highest surface under each point, from each solid's top over it (s, n; NaN where it is not): the ground
+    or a top (with ``below``, one at most that high)."""
     ok = ~np.isnan(top)
     if below is not None:
         ok &= top <= below
-    return np.maximum(best, np.where(ok, top, -np.inf).max(axis=0))
+    best = np.full(top.shape[1], GROUND_Z)
+    return np.maximum(best, np.where(ok, top, -np.inf).max(axis=0, initial=-np.inf))
 
 
 @dataclass(frozen=True)

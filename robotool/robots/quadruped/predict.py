@@ -45,6 +45,7 @@ REMEMBERED = 20_000  # predictions kept of each kind (the same walks and pushes 
 Pose = tuple[np.ndarray, np.ndarray, np.ndarray]  # a push leg's start and end poses and its staging point
 _walks: dict[tuple[object, ...], tuple[object, str | None]] = {}  # key -> (the task it was read on, the prediction)
 _poses: dict[tuple[object, ...], tuple[object, Pose | None]] = {}
+_routes: dict[tuple[object, ...], tuple[object, list[np.ndarray] | None]] = {}
 T = TypeVar("T")
 
 
@@ -194,9 +195,10 @@ def _footing(
         length = float(np.linalg.norm(delta))
         direction = delta / length if length > 1e-6 else np.array([1.0, 0.0])
         points = (foot_paths(here + foot_offsets(limits), direction, length)[:, :, None, :] + rim).reshape(-1, 2)
-        surface = layout.heights(points, skip)
+        surface, tops = layout.tops(points, skip)
         for name in names:
-            on = np.flatnonzero(np.isclose(layout.top_of(name, points), surface, atol=1e-6))
+            top = tops[name] if name in tops else layout.top_of(name, points)
+            on = np.flatnonzero(np.isclose(top, surface, atol=1e-6))
             if on.size:
                 return name, points[on[0]]
         here = goal
@@ -488,8 +490,16 @@ def push_route(
     turned a quarter either way (it turns in place between legs). Boxes only: the prediction of each push
     (:func:`push_problem`) is the judge of the route found.
     """
-    box = layout.box(name)
     goal = np.asarray(goal, dtype=float)
+    key = (id(layout.task), _moved(layout), name, goal.tobytes(), limits, floor, turns)
+    route = _remembered(_routes, key, layout, lambda: _push_route(layout, name, goal, limits, floor, turns))
+    return None if route is None else [xy.copy() for xy in route]
+
+
+def _push_route(
+    layout: Layout, name: str, goal: np.ndarray, limits: QuadrupedLimits, floor: float, turns: bool
+) -> list[np.ndarray] | None:
+    box = layout.box(name)
     body = np.asarray(limits.body_size[:2]) / 2
     bodies = (body, body[::-1]) if turns else (body,)
     lo, hi = _obstacles(layout, name, floor)
@@ -514,15 +524,17 @@ def push_route(
         least = np.inf  # the least offset a clear line-up takes, as a share of the object's half width across
         for robot in bodies:
             back = box.half[a] + GAP + robot[a]
-            for offset in lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a])):
-                start, end = frm.copy(), to.copy()
-                start[a] -= sign * (back + QUADRUPED.staging)
-                end[a] -= sign * back
-                start[1 - a] += offset
-                end[1 - a] += offset
-                if clear(np.minimum(start, end) - robot, np.maximum(start, end) + robot):
-                    least = min(least, abs(float(offset)) / float(box.half[1 - a]))
-                    break  # (the offsets come nearest the centre line first)
+            offsets = lateral_offsets(2 * float(box.half[1 - a]), 2 * float(robot[1 - a]))
+            start, end = np.tile(frm, (len(offsets), 1)), np.tile(to, (len(offsets), 1))
+            start[:, a] -= sign * (back + QUADRUPED.staging)
+            end[:, a] -= sign * back
+            start[:, 1 - a] += offsets
+            end[:, 1 - a] += offsets
+            rect_lo, rect_hi = np.minimum(start, end) - robot, np.maximum(start, end) + robot
+            gaps = np.max(np.maximum(lo[None] - rect_hi[:, None], rect_lo[:, None] - hi[None]), axis=2)
+            fits = np.flatnonzero(~np.any(gaps < -CONTACT / 4, axis=1))  # as clear() reads each line-up
+            if fits.size:  # (the offsets come nearest the centre line first)
+                least = min(least, abs(float(offsets[fits[0]])) / float(box.half[1 - a]))
         if least == np.inf:
             return None
         return OFF_CENTRE_COST if least > OFF_CENTRE else 0.0

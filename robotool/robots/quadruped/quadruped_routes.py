@@ -326,14 +326,16 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
     do not already stand against the next."""
     target = quad.task.object(name)
     rise = quad.limits.max_step_up + 0.005
+    top = {o.name: o.top for o in quad.task.objects}
+    highest = top[name] + quad.limits.max_step_up
     steps = [
         o
         for o in quad.task.objects
-        if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < o.top < target.top + quad.limits.max_step_up
+        if o.name != name and o.shape != "cloth" and quad.floor + 0.02 < top[o.name] < highest
     ]
     for count in range(1, MAX_STEPS + 1):
         for chain in itertools.permutations(steps, count):
-            tops = [quad.floor, *(o.top for o in chain), target.top]
+            tops = [quad.floor, *(top[o.name] for o in chain), top[name]]
             if any(
                 b - a > rise or a - b > quad.limits.max_step_down or (abs(b - a) < 0.02 and k < count)
                 for k, (a, b) in enumerate(itertools.pairwise(tops))
