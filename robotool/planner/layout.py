@@ -70,6 +70,9 @@ class Layout:
     _placed: dict[str, tuple[list[geometry.Part], Box]] = field(default_factory=dict, repr=False, compare=False)
     _stacks: dict[frozenset[str], geometry.PartStack] = field(default_factory=dict, repr=False, compare=False)
     _alone: dict[str, geometry.PartStack] = field(default_factory=dict, repr=False, compare=False)
+    _boxes: tuple[list[str], np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = field(
+        default=None, repr=False, compare=False
+    )
 
     def box(self, name: str) -> Box:
         box = self._placed_as_in_task(name)[1]
@@ -114,18 +117,33 @@ class Layout:
         """The first other object that overlaps ``box``'s x-y footprint (not just touching) somewhere between
         ``box``'s bottom and top, or None."""
         skip = {box.name, *ignore}
-        for obj in self.task.objects:
-            if obj.name in skip or obj.shape == "cloth":
+        names, lo, hi, bottom, top = self._solid_boxes()
+        overlap = np.min(np.minimum(box.hi, hi) - np.maximum(box.lo, lo), axis=1)  # as Box.overlap reads each
+        near = (overlap > margin) & (top > box.bottom + margin) & (bottom < box.top - margin)
+        for k in np.flatnonzero(near):
+            if names[k] in skip:
                 continue
-            other = self.box(obj.name)
-            if box.overlap(other) <= margin or other.top <= box.bottom + margin or other.bottom >= box.top - margin:
-                continue
-            lo, hi = np.maximum(box.lo, other.lo) + margin, np.minimum(box.hi, other.hi) - margin
-            grid = np.stack(np.meshgrid(np.linspace(lo[0], hi[0], 6), np.linspace(lo[1], hi[1], 6)), -1).reshape(-1, 2)
-            low, high = self._interval(obj.name, grid)
+            other = self.box(names[k])
+            a, b = np.maximum(box.lo, other.lo) + margin, np.minimum(box.hi, other.hi) - margin  # the overlap
+            grid = np.stack(np.meshgrid(np.linspace(a[0], b[0], 6), np.linspace(a[1], b[1], 6)), -1).reshape(-1, 2)
+            low, high = self._interval(other.name, grid)
             if np.any((low < box.top - margin) & (high > box.bottom + margin)):
-                return obj.name
+                return other.name
         return None
+
+    def _solid_boxes(self) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The names (in the task's order), x-y bounds (k, 2) and bottoms and tops (k,) of the objects but the cloths,
+        as :meth:`box` places them (read once per layout)."""
+        if self._boxes is None:
+            boxes = [self.box(o.name) for o in self.task.objects if o.shape != "cloth"]
+            self._boxes = (
+                [b.name for b in boxes],
+                np.array([b.lo for b in boxes]).reshape(-1, 2),
+                np.array([b.hi for b in boxes]).reshape(-1, 2),
+                np.array([b.bottom for b in boxes]),
+                np.array([b.top for b in boxes]),
+            )
+        return self._boxes
 
     def _interval(self, name: str, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lowest and highest z of object ``name`` alone along vertical lines through ``xy`` (n, 2); NaN where
