@@ -439,8 +439,9 @@ def _obstacles(layout: Layout, name: str, floor: float) -> tuple[np.ndarray, np.
 
 
 def _gaps(rect_lo: np.ndarray, rect_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(k,) how far each box (``lo``, ``hi``) lies from the rectangle (negative: how deep they overlap)."""
-    return np.max(np.maximum(lo - rect_hi, rect_lo - hi), axis=1)
+    """(k,) how far each box (``lo``, ``hi``) lies from the rectangle (negative: how deep they overlap); with
+    rectangles (n, 1, 2), (n, k) for each of them."""
+    return np.max(np.maximum(lo - rect_hi, rect_lo - hi), axis=-1)
 
 
 def _drift_room(
@@ -531,7 +532,7 @@ def _push_route(
             start[:, 1 - a] += offsets
             end[:, 1 - a] += offsets
             rect_lo, rect_hi = np.minimum(start, end) - robot, np.maximum(start, end) + robot
-            gaps = np.max(np.maximum(lo[None] - rect_hi[:, None], rect_lo[:, None] - hi[None]), axis=2)
+            gaps = _gaps(rect_lo[:, None], rect_hi[:, None], lo, hi)
             fits = np.flatnonzero(~np.any(gaps < -CONTACT / 4, axis=1))  # as clear() reads each line-up
             if fits.size:  # (the offsets come nearest the centre line first)
                 least = min(least, abs(float(offsets[fits[0]])) / float(box.half[1 - a]))
