@@ -11,7 +11,9 @@ succeeding everywhere and ranks below one that held in all of them. The first ro
 worlds in the same batch as its planning worlds (most often it holds, and one batch of eight worlds costs much less
 than two of three and five: the controller's tick costs nearly as much for few worlds as for many); those fresh
 rollouts count only if it held in every planning world. When the first round holds nothing, programs the caller
-makes from its failures (the planner's variants of a near miss) join the second round. The search stops at the first
+makes from its failures (the planner's variants of a near miss) join the second round. A program that pushes an
+object some program's push found too heavy on its own in a planning world is not verified (:func:`too_heavy`: a
+seed makes the same world in every batch, so it fails there). The search stops at the first
 round with a program that succeeded in every planning and fresh world (or when the rounds or the time budget run
 out).
 """
@@ -92,6 +94,34 @@ def tight(prog: Program) -> bool:
     return prog.slack < TIGHT or bool(prog.thin)
 
 
+PUSH = "push_to_position"
+
+
+def too_heavy(tried: Iterable[Tried], worlds: int) -> dict[str, int]:
+    """The objects a push was refused for in a planning world because of their own mass (nothing riding on them),
+    each with the first such world (its index among the ``worlds`` planning worlds). A seed makes the same world in
+    every batch, so any program that pushes one of them fails in that world."""
+    heavy: dict[str, int] = {}
+    for item in tried:
+        for k, rollout in enumerate(item.candidate.rollouts[:worlds]):
+            for call in rollout.calls:
+                measured = call.measured
+                refused = call.skill == PUSH and call.outcome == "refused" and bool(call.args)
+                own_mass = measured.get("riders") == 0.0 and measured.get("mass", 0.0) > measured.get("limit", 1e9)
+                if refused and own_mass:
+                    heavy.setdefault(str(call.args[0]), k)
+    return heavy
+
+
+def doomed(program: Program, heavy: dict[str, int]) -> str | None:
+    """Why ``program`` cannot succeed in every planning world, from what earlier programs met (:func:`too_heavy`), or
+    None."""
+    for motion in program.motions:
+        if motion.skill == PUSH and motion.obj in heavy:
+            return f"it pushes {motion.obj}, too heavy to push in planning world {heavy[motion.obj]}"
+    return None
+
+
 FollowUp = Callable[[list[Tried]], list[tuple[Program, Tried]]]
 """Programs made from the first round's failures (each with the failure it came from), verified in the second."""
 
@@ -124,6 +154,11 @@ def search(
         if rounds and time.perf_counter() - started > budget.seconds:
             break
         size = budget.beam if rounds or budget.first is None else budget.first
+        heavy = too_heavy(tried, worlds)
+        queue[taken:] = [(t, p) for t, p in queue[taken:] if doomed(p, heavy) is None]
+        carried = [(p, source) for p, source in carried if doomed(p, heavy) is None]
+        if taken == len(queue) and not carried:
+            break
         tier = queue[taken][0] if taken < len(queue) else None
         own = [p for t, p in queue[taken : taken + size] if t == tier]
         taken += len(own)

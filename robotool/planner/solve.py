@@ -17,7 +17,7 @@ from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
-from robotool.planner.search import Budget, Tried, held, mark_repaired, order, search
+from robotool.planner.search import Budget, Tried, doomed, held, mark_repaired, order, search, too_heavy
 from robotool.robots.registry import SearchMacros
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.signatures.traces import failure_trace
@@ -123,6 +123,14 @@ def solve(
             f"{len(attempts)} failed program(s) re-parameterised from measured evidence and verified "
             f"again; {sum(a.success_rate == 1.0 for a in attempts)} succeeded in every world."
         )
+    heavy = too_heavy(tried, worlds)
+    verified = {t.program.code for t in tried}
+    skipped = [p for p in programs if p.code not in verified and doomed(p, heavy) is not None]
+    if skipped:
+        solution.notes.append(
+            f"{len(skipped)} program(s) not verified: each pushes an object that a push found too heavy to push in "
+            f"a planning world ({', '.join(f'{name} in world {k}' for name, k in heavy.items())})."
+        )
     if not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
     return solution
@@ -171,7 +179,12 @@ def repair_round(
     variants not tried yet in one batch, one that holds in every world then in ``verify`` fresh ones (appended to
     ``tried``)."""
     failures = sorted((t for t in tried if t.candidate.rollouts), key=lambda t: t.candidate.rank_key())[:beam]
-    variants = _variants(task, failures, {t.program.code for t in tried}, 2 * beam, None)
+    heavy = too_heavy(tried, worlds)
+    variants = [
+        (variant, source)
+        for variant, source in _variants(task, failures, {t.program.code for t in tried}, 2 * beam, None)
+        if doomed(variant, heavy) is None
+    ]
     if not variants:
         return
     new, _ = search(

@@ -16,7 +16,7 @@ from robotool.planner import search as search_module
 from robotool.planner import solve
 from robotool.planner.codegen import Point, Program
 from robotool.planner.search import Budget, Tried, order, search, verification_seed
-from robotool.rollout import Rollout
+from robotool.rollout import Rollout, SkillCall
 from robotool.solution import Candidate, StageOutputs, rank
 from robotool.task.task_model import Task
 
@@ -227,3 +227,56 @@ def test_only_near_misses_are_re_parameterised_between_rounds_the_best_first(
         (1.9, 1),
         (1.1, 0),
     ]
+
+
+def _pushing(name: str, x: float) -> Program:
+    prog = Program()
+    prog.motion("push_to_position", obj=name, point=Point.at(None, (x, 0.0, 0.0)), intent=f"push {name}")
+    prog.motion("walk_to_position", point=Point.at(None, (x, 1.0, 0.0)), intent="walk on")
+    return prog
+
+
+class TooHeavyRunner:
+    """Fixture: runs no simulator; a program that pushes ``name`` is refused for its mass (``riders`` riding on it)
+    in world seed 1, every other world succeeds."""
+
+    def __init__(self, name: str, riders: float):
+        self.name, self.riders = name, riders
+
+    def __call__(self, task, runs, *, backend=None):  # the shape of run_seeded
+        out = []
+        for code, seeds in runs:
+            heavy = f"push_to_position('{self.name}'" in code
+            refused = SkillCall(
+                skill="push_to_position",
+                args=[self.name, [0.0, 0.0, 0.0]],
+                outcome="refused",
+                measured={"mass": 5.2, "limit": 5.0, "riders": self.riders},
+            )
+            fails = [heavy and s == 1 for s in seeds]
+            out.append(
+                [
+                    Rollout(world=r, seed=s, success=not f, calls=[refused] if f else [])
+                    for r, (s, f) in enumerate(zip(seeds, fails, strict=True))
+                ]
+            )
+        return out
+
+
+@pytest.mark.parametrize("riders", [0.0, 1.0])
+def test_programs_that_push_an_object_a_planning_world_made_too_heavy_are_not_verified(
+    task, monkeypatch: pytest.MonkeyPatch, riders: float
+) -> None:
+    """A seed makes the same world in every batch: once a push of box_2 alone was refused for its mass in planning
+    world 1, every program that pushes box_2 fails there, and the search verifies the others instead (the planner
+    spent most of a 26 s search on such programs). With something riding on box_2, its own mass is not known: a
+    program that pushes it bare may hold, and is verified."""
+    first, same, other = _pushing("box_2", 1.0), _pushing("box_2", 2.0), _pushing("box_1", 3.0)
+    runner = TooHeavyRunner("box_2", riders)
+    monkeypatch.setattr(search_module, "run_seeded", runner)
+    tried, _ = _search(task, [first, same, other], Budget(beam=1, rounds=4, seconds=float("inf")))
+    verified = [t.program for t in tried]
+    assert verified == ([first, other] if riders == 0.0 else [first, same, other])
+    assert search_module.too_heavy(tried, 3) == ({"box_2": 1} if riders == 0.0 else {})
+    assert search_module.doomed(same, {"box_2": 1}) == "it pushes box_2, too heavy to push in planning world 1"
+    assert search_module.doomed(other, {"box_2": 1}) is None

@@ -72,7 +72,7 @@ def rule_violation(
         riding = f" with {', '.join(riders)} riding on it" if riders else ""
         return (
             f"its mass{riding}, {mass:.1f} kg, exceeds the push limit of {limits.max_push_mass:.1f} kg",
-            {"mass": mass, "limit": limits.max_push_mass},
+            {"mass": mass, "limit": limits.max_push_mass, "riders": float(len(riders))},
         )
     if robot_support_movable is not None:
         return f"the robot stands on {robot_support_movable}, which is movable", {}

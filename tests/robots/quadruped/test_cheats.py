@@ -411,6 +411,8 @@ def test_a_book_lying_on_a_heavy_crate_does_not_hide_it_from_the_push_limit() ->
     for rollout in rollouts:
         assert not rollout.success
         assert "cannot push pallet: its mass with crate" in failure_reason(rollout), failure_reason(rollout)
+        refused = next(c for c in rollout.calls if c.outcome == "refused")
+        assert refused.measured["riders"] >= 1.0  # not the pallet's own mass: the planner must not count it as such
 
 
 @pytest.mark.slow
