@@ -13,9 +13,9 @@ than two of three and five: the controller's tick costs nearly as much for few w
 rollouts count only if it held in every planning world. When the first round holds nothing, programs the caller
 makes from its failures (the planner's variants of a near miss) join the second round. A program that pushes an
 object some program's push found too heavy on its own in a planning world is not verified (:func:`too_heavy`: a
-seed makes the same world in every batch, so it fails there). The search stops at the first
-round with a program that succeeded in every planning and fresh world (or when the rounds or the time budget run
-out).
+seed makes the same world in every batch, so its push is refused there, and a planner's program pushes an object only
+to use it or to clear it away). The search stops at the first round with a program that succeeded in every planning
+and fresh world (or when the rounds or the time budget run out).
 """
 
 from __future__ import annotations
@@ -100,7 +100,8 @@ PUSH = "push_to_position"
 def too_heavy(tried: Iterable[Tried], worlds: int) -> dict[str, int]:
     """The objects a push was refused for in a planning world because of their own mass (nothing riding on them),
     each with the first such world (its index among the ``worlds`` planning worlds). A seed makes the same world in
-    every batch, so any program that pushes one of them fails in that world."""
+    every batch, so any program that pushes one of them is refused that push in that world (and a planner's program
+    pushes an object only to use it or to clear it away: it does not hold)."""
     heavy: dict[str, int] = {}
     for item in tried:
         for k, rollout in enumerate(item.candidate.rollouts[:worlds]):
