@@ -115,12 +115,9 @@ def too_heavy(tried: Iterable[Tried], worlds: int) -> dict[str, int]:
 
 
 def doomed(program: Program, heavy: dict[str, int]) -> str | None:
-    """Why ``program`` cannot succeed in every planning world, from what earlier programs met (:func:`too_heavy`), or
-    None."""
-    for motion in program.motions:
-        if motion.skill == PUSH and motion.obj in heavy:
-            return f"it pushes {motion.obj}, too heavy to push in planning world {heavy[motion.obj]}"
-    return None
+    """The object ``program`` pushes that a planning world made too heavy to push (:func:`too_heavy`), so that it
+    cannot succeed in every planning world, or None."""
+    return next((m.obj for m in program.motions if m.skill == PUSH and m.obj in heavy), None)
 
 
 FollowUp = Callable[[list[Tried]], list[tuple[Program, Tried]]]

@@ -278,5 +278,5 @@ def test_programs_that_push_an_object_a_planning_world_made_too_heavy_are_not_ve
     verified = [t.program for t in tried]
     assert verified == ([first, other] if riders == 0.0 else [first, same, other])
     assert search_module.too_heavy(tried, 3) == ({"box_2": 1} if riders == 0.0 else {})
-    assert search_module.doomed(same, {"box_2": 1}) == "it pushes box_2, too heavy to push in planning world 1"
+    assert search_module.doomed(same, {"box_2": 1}) == "box_2"
     assert search_module.doomed(other, {"box_2": 1}) is None
