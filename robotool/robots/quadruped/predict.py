@@ -197,7 +197,7 @@ def _footing(
         points = (foot_paths(here + foot_offsets(limits), direction, length)[:, :, None, :] + rim).reshape(-1, 2)
         surface, tops = layout.tops(points, skip)
         for name in names:
-            top = tops[name] if name in tops else layout.top_of(name, points)
+            top = tops[name] if name in tops else layout.top_of(name, points)  # (a cloth is in no stack of solids)
             on = np.flatnonzero(np.isclose(top, surface, atol=1e-6))
             if on.size:
                 return name, points[on[0]]
