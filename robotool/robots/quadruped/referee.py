@@ -167,24 +167,29 @@ class Referee:
         the robot): every body whose contacts press up on them (:func:`~.support.bears_up`) is
         the pushed object's or a rider's; what only touches a side, or lies on top, bears none of their weight. Where
         their centres lie does not matter (a crate on the tray of an upright L lies lower than the L's centre). What
-        lies on a rider rides too."""
-        state, owner = self.senses.state, self.scene.body_object
+        lies on a rider rides too. A cloth is limp: each of its links is borne up apart, and one that lies on what the
+        push moves only carries what lies on it along (a crate on a cloth whose far end hangs off the pushed pallet
+        onto the floor rides the pallet); a cloth rides when all its links do."""
+        owner, cloth = self.scene.body_object, self.facts.cloth
         normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
-        carried = [index]
-        riders: list[int] = []
-        robot = self.scene.robot_body
-        while carried:
-            base = carried.pop()
-            touching = state.touching[w][owner == base].any(axis=0)
-            for other in np.unique(owner[touching & (owner >= 0)]):
-                if other == index or other in riders or not self.facts.movable[other]:
-                    continue
-                bearing = self._bearing(normals, other)  # pressing up on it
-                supports = state.touching[w][owner == other].any(axis=0) & ~robot & (owner != other) & bearing
-                if np.all(np.isin(owner[supports], [index, *riders])):  # it rests on what the push moves only
-                    riders.append(int(other))
-                    carried.append(int(other))
-        return riders
+        touching = self.senses.state.touching[w]
+        movable = (owner >= 0) & self.facts.movable[np.maximum(owner, 0)]
+        links = movable & cloth[np.maximum(owner, 0)]
+        moved = owner == index  # the bodies the push moves: the object's, its riders' and the links lying on them
+        grown = True
+        while grown:
+            grown = False
+            near = touching[moved].any(axis=0) & ~moved & movable
+            for part in [
+                *(np.arange(len(owner)) == b for b in np.flatnonzero(near & links)),
+                *(owner == o for o in np.unique(owner[near & ~links])),
+            ]:
+                bearing = bears_up(normals[:, part].sum(axis=1))  # pressing up on it
+                supports = touching[part].any(axis=0) & ~self.scene.robot_body & (owner != owner[part][0]) & bearing
+                if np.all(moved[supports]):  # it rests on what the push moves only
+                    moved |= part
+                    grown = True
+        return [int(o) for o in np.unique(owner[moved]) if o != index and np.all(moved[owner == o])]
 
     # -- rules checked every tick ----------------------------------------------------------------------
 

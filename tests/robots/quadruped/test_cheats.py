@@ -545,16 +545,11 @@ def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed(
     assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: a cloth between a pushed pallet and a 10 kg crate, its far end hanging off the pallet "
-    "onto the floor, is borne up by the floor too, so it is no rider, and the crate lying on it is borne up by the "
-    "cloth, so it is none either: the 2.5 kg pallet is pushed with the crate riding along. A cloth is limp: what bears "
-    "the crate through it is what bears the links under the crate, which the riders rule reads per object, not link",
-)
 def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
-    """Tried this session as an optimiser would (the carry-the-crate program of the book cheat, on a new layout): the
-    crate rides the pallet to the ledge and is climbed onto it, in every world."""
+    """Tried as an optimiser would (the book cheat's program on a new layout): a cloth between the 2.5 kg pallet and a
+    10 kg crate hangs off the pallet onto the floor, so the cloth as a whole is borne up by the floor too. The crate
+    rode the pallet to the ledge unweighed and was climbed onto it, in every world; the links under the crate lie on
+    the pallet only, so it is weighed, and the push is refused."""
     rollouts = sim.run_sessions(
         _scene("crate_on_a_cloth_draped_off_a_pallet"),
         start_sessions([_text("carry_a_heavy_crate_under_a_book")] * 2, "quadruped"),
