@@ -264,16 +264,21 @@ class Referee:
 
     def _stood_on(self, asked: np.ndarray) -> np.ndarray:
         """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a foot stands on: its contacts press the
-        foot up within :data:`~.support.FOOTING_ANGLE` of up. A leg pressing on an object's side, or a foot on the rim
-        of a plate too thin for the legs to notice, does not stand on it (it may drive it along, as a walk must not).
-        Only what moved this tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved
-        nowhere."""
+        foot up within :data:`~.support.FOOTING_ANGLE` of up, and no other part of the robot presses on it otherwise
+        (on a side or a rim). A leg pressing on an object's side, or a foot on the rim of a plate too thin for the legs
+        to notice, does not stand on it (it may drive it along, as a walk must not); nor do the front feet standing on
+        a plate while the rear feet plow it along by its rim (what the robot drives is no ride). Only what moved this
+        tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere."""
         state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
-        on = state.touching[:, feet_ids][:, :, bodies] & asked[:, None, :]  # (nworld, 4, nobject)
+        robot = np.flatnonzero(self.scene.robot_body)
+        foot = np.isin(robot, feet_ids)
+        touch = state.touching[:, robot][:, :, bodies] & asked[:, None, :]  # (nworld, nrobot, nobject)
         out = np.zeros(asked.shape, dtype=bool)
-        for w in np.flatnonzero(on.any(axis=(1, 2))):
-            normals = self.senses.sim.contact_normals(int(w))[bodies][:, feet_ids]  # from each object onto each foot
-            out[w] = (bears_up(normals, FOOTING_ANGLE) & on[w].T).any(axis=1)
+        for w in np.flatnonzero(touch[:, foot].any(axis=(1, 2))):
+            normals = self.senses.sim.contact_normals(int(w))[bodies][:, robot]  # from each object onto each part
+            on = touch[w].T  # (nobject, nrobot)
+            up = bears_up(normals, FOOTING_ANGLE) & on
+            out[w] = up[:, foot].any(axis=1) & ~(on & ~up).any(axis=1)
         return out
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:

@@ -560,6 +560,21 @@ def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
         assert "cannot push pallet: its mass with" in failure_reason(rollout), failure_reason(rollout)
 
 
+def test_a_heavy_plate_plowed_by_the_rear_feet_while_the_front_feet_stand_on_it_is_a_shove() -> None:
+    """Found by an adversarial run: the rear feet plowed an 8.5 kg plate (over the push limit) 0.5 m along by its rim
+    until it bridged a 0.30 m gap, and the robot crossed on it, in every world; the front feet stood on the plate all
+    the while, which excused its travel. What another part of the robot presses on a side or a rim is driven, not
+    stood on."""
+    rollouts = sim.run_sessions(
+        _scene("heavy_deck_plate_over_a_gap"),
+        start_sessions([_text("plow_a_heavy_plate_with_the_rear_feet_standing_on_it_in_front")] * 2, "quadruped"),
+        seed=0,
+    )
+    for rollout in rollouts:
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+        assert "the robot ran into deck_plate" in failure_reason(rollout), failure_reason(rollout)
+
+
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
     vase, read as a step."""
