@@ -98,17 +98,18 @@ PUSH = "push_to_position"
 
 
 def too_heavy(tried: Iterable[Tried], worlds: int) -> dict[str, int]:
-    """The objects a push was refused for in a planning world because of their own mass (nothing riding on them),
-    each with the first such world (its index among the ``worlds`` planning worlds). A seed makes the same world in
-    every batch, so any program that pushes one of them is refused that push in that world (and a planner's program
-    pushes an object only to use it or to clear it away: it does not hold)."""
+    """The objects a push was refused for in a planning world because of their own mass (nothing riding on them or
+    stuck to them), each with the first such world (its index among the ``worlds`` planning worlds). A seed makes the
+    same world in every batch, so any program that pushes one of them is refused that push in that world (and a
+    planner's program pushes an object only to use it or to clear it away: it does not hold)."""
     heavy: dict[str, int] = {}
     for item in tried:
         for k, rollout in enumerate(item.candidate.rollouts[:worlds]):
             for call in rollout.calls:
                 measured = call.measured
                 refused = call.skill == PUSH and call.outcome == "refused" and bool(call.args)
-                own_mass = measured.get("riders") == 0.0 and measured.get("mass", 0.0) > measured.get("limit", 1e9)
+                alone = measured.get("riders") == measured.get("stuck") == 0.0  # nothing rode on it or stuck to it
+                own_mass = alone and measured.get("mass", 0.0) > measured.get("limit", 1e9)
                 if refused and own_mass:
                     heavy.setdefault(str(call.args[0]), k)
     return heavy

@@ -237,11 +237,11 @@ def _pushing(name: str, x: float) -> Program:
 
 
 class TooHeavyRunner:
-    """Fixture: runs no simulator; a program that pushes ``name`` is refused for its mass (``riders`` riding on it)
-    in world seed 1, every other world succeeds."""
+    """Fixture: runs no simulator; a program that pushes ``name`` is refused for its mass (``riders`` riding on it,
+    ``stuck`` stuck to it) in world seed 1, every other world succeeds."""
 
-    def __init__(self, name: str, riders: float):
-        self.name, self.riders = name, riders
+    def __init__(self, name: str, riders: float, stuck: float):
+        self.name, self.riders, self.stuck = name, riders, stuck
 
     def __call__(self, task, runs, *, backend=None):  # the shape of run_seeded
         out = []
@@ -251,7 +251,7 @@ class TooHeavyRunner:
                 skill="push_to_position",
                 args=[self.name, [0.0, 0.0, 0.0]],
                 outcome="refused",
-                measured={"mass": 5.2, "limit": 5.0, "riders": self.riders},
+                measured={"mass": 5.2, "limit": 5.0, "riders": self.riders, "stuck": self.stuck},
             )
             fails = [heavy and s == 1 for s in seeds]
             out.append(
@@ -263,20 +263,21 @@ class TooHeavyRunner:
         return out
 
 
-@pytest.mark.parametrize("riders", [0.0, 1.0])
+@pytest.mark.parametrize(("riders", "stuck"), [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])
 def test_programs_that_push_an_object_a_planning_world_made_too_heavy_are_not_verified(
-    task, monkeypatch: pytest.MonkeyPatch, riders: float
+    task, monkeypatch: pytest.MonkeyPatch, riders: float, stuck: float
 ) -> None:
     """A seed makes the same world in every batch: once a push of box_2 alone was refused for its mass in planning
     world 1, every program that pushes box_2 fails there, and the search verifies the others instead (the planner
-    spent most of a 26 s search on such programs). With something riding on box_2, its own mass is not known: a
-    program that pushes it bare may hold, and is verified."""
+    spent most of a 26 s search on such programs). With something riding on box_2 or stuck to it, its own mass is not
+    known: a program that pushes it bare may hold, and is verified."""
     first, same, other = _pushing("box_2", 1.0), _pushing("box_2", 2.0), _pushing("box_1", 3.0)
-    runner = TooHeavyRunner("box_2", riders)
+    runner = TooHeavyRunner("box_2", riders, stuck)
+    alone = riders == stuck == 0.0
     monkeypatch.setattr(search_module, "run_seeded", runner)
     tried, _ = _search(task, [first, same, other], Budget(beam=1, rounds=4, seconds=float("inf")))
     verified = [t.program for t in tried]
-    assert verified == ([first, other] if riders == 0.0 else [first, same, other])
-    assert search_module.too_heavy(tried, 3) == ({"box_2": 1} if riders == 0.0 else {})
+    assert verified == ([first, other] if alone else [first, same, other])
+    assert search_module.too_heavy(tried, 3) == ({"box_2": 1} if alone else {})
     assert search_module.doomed(same, {"box_2": 1}) == "box_2"
     assert search_module.doomed(other, {"box_2": 1}) is None

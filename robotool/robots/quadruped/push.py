@@ -54,6 +54,7 @@ def rule_violation(
     movable: bool,
     mass: float,
     riders: list[str],
+    stuck: list[str],
     under_robot: bool,
     robot_support_movable: str | None,
     object_support: float,
@@ -62,17 +63,19 @@ def rule_violation(
 ) -> tuple[str, dict[str, float]] | None:
     """The first push rule broken (reason, measured values), or None when the push is allowed.
 
-    ``mass`` is what the push moves: the object's own mass and that of the ``riders`` on it.
+    ``mass`` is what the push moves: the object's own mass and that of the ``riders`` on it and of what is ``stuck``
+    to it (a magnet's weld).
     """
     if not movable:
         return "it is fixed in place", {}
     if under_robot:
         return "the robot is standing on it", {}
     if mass > limits.max_push_mass:
-        riding = f" with {', '.join(riders)} riding on it" if riders else ""
+        along = [f"{', '.join(names)} {how} it" for names, how in ((riders, "riding on"), (stuck, "stuck to")) if names]
         return (
-            f"its mass{riding}, {mass:.1f} kg, exceeds the push limit of {limits.max_push_mass:.1f} kg",
-            {"mass": mass, "limit": limits.max_push_mass, "riders": float(len(riders))},
+            f"its mass{' with ' if along else ''}{' and '.join(along)}, {mass:.1f} kg, exceeds the push limit of "
+            f"{limits.max_push_mass:.1f} kg",
+            {"mass": mass, "limit": limits.max_push_mass, "riders": float(len(riders)), "stuck": float(len(stuck))},
         )
     if robot_support_movable is not None:
         return f"the robot stands on {robot_support_movable}, which is movable", {}

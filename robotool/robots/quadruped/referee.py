@@ -6,8 +6,8 @@ Every tick, in every world, a robot whose centre of mass has stayed outside the 
 with outcome ``fell`` and a reason that says where and which feet lost support, :attr:`RefereeState.failures` marks
 its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object that
 the torso has touched, other than one being pushed, and that has moved more than ``shove`` since (what a foot's
-weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one
-once together they weigh more than the push limit. The move is stopped and refused, naming them, and the world
+weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one,
+or drags along stuck to it, once together they weigh more than the push limit. The move is stopped and refused, naming them, and the world
 fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so does
 standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables
 are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
@@ -39,6 +39,7 @@ from robotool.robots.quadruped.support import (
 )
 from robotool.robots.quadruped.terrain import RISE, rotated
 from robotool.sim.embodiment import SkillEnd
+from robotool.sim.magnets import Magnets
 
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
@@ -90,6 +91,7 @@ class Referee:
         self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
         self.facts, self.scene = senses.facts, senses.scene
         self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state)[:, :, :2])
+        self.magnets = Magnets(self.scene)
 
     def conditions(self) -> dict[str, list[bool]]:
         """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
@@ -135,12 +137,13 @@ class Referee:
         obj_lo, obj_hi = senses.bounds3(w, index)
         centre_obj = (obj_lo + obj_hi) / 2
         below, _ = self.rays.heights(w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
-        riders = self._riders(w, index)
-        mass = float(sum(senses.mass(w, o) for o in [index, *riders]))
+        riders, stuck = self._carried(w, index)
+        mass = float(sum(senses.mass(w, o) for o in [index, *riders, *stuck]))
         return rule_violation(
             movable=bool(self.facts.movable[index]),
             mass=round(mass, 3),
             riders=[names[o] for o in riders],
+            stuck=[names[o] for o in stuck],
             under_robot=bool(np.isin(index, on)),
             robot_support_movable=movable,
             object_support=float(below[0]),
@@ -162,23 +165,35 @@ class Referee:
         """(nbody,) the bodies that press up on object ``index`` (``normals``: a world's contact normals)."""
         return bears_up(normals[:, self.scene.body_object == index].sum(axis=1))
 
-    def _riders(self, w: int, index: int) -> list[int]:
-        """Movable objects that ride on object ``index`` in world ``w``, recursively: borne up by nothing else (but
-        the robot): every body whose contacts press up on them (:func:`~.support.bears_up`) is
-        the pushed object's or a rider's; what only touches a side, or lies on top, bears none of their weight. Where
-        their centres lie does not matter (a crate on the tray of an upright L lies lower than the L's centre). What
-        lies on a rider rides too. A cloth is limp: each of its links is borne up apart, and one that lies on what the
-        push moves only carries what lies on it along (a crate on a cloth whose far end hangs off the pushed pallet
-        onto the floor rides the pallet); a cloth rides when all its links do."""
+    def _carried(self, w: int, index: int) -> tuple[list[int], list[int]]:
+        """The movable objects a push of object ``index`` in world ``w`` carries along: those that ride on it and
+        those stuck to it (a magnet's weld), recursively, each list without the other's.
+
+        Riders are borne up by nothing else (but the robot): every body whose contacts press up on them
+        (:func:`~.support.bears_up`) is the pushed object's or a rider's; what only touches a side, or lies on top,
+        bears none of their weight. Where their centres lie does not matter (a crate on the tray of an upright L lies
+        lower than the L's centre). What lies on a rider rides too, and what is stuck to what the push moves goes
+        with it, whatever bears it up (a slab under a pushed magnetic block is dragged along). A cloth is limp: each
+        of its links is borne up apart, and one that lies on what the push moves only carries what lies on it along
+        (a crate on a cloth whose far end hangs off the pushed pallet onto the floor rides the pallet); a cloth rides
+        when all its links do."""
         owner, cloth = self.scene.body_object, self.facts.cloth
         normals = self.senses.sim.contact_normals(w)  # (nbody, nbody, 3) from one body onto another
         touching = self.senses.state.touching[w]
         movable = (owner >= 0) & self.facts.movable[np.maximum(owner, 0)]
         links = movable & cloth[np.maximum(owner, 0)]
+        welds = [(b1, b2) for eq, b1, b2 in self.magnets.pairs if self.senses.state.eq_active[w, eq]]
         moved = owner == index  # the bodies the push moves: the object's, its riders' and the links lying on them
+        stuck = np.zeros(len(owner), dtype=bool)
         grown = True
         while grown:
             grown = False
+            for b1, b2 in welds:
+                if moved[b1] != moved[b2]:
+                    other = owner == owner[b2 if moved[b1] else b1]
+                    moved |= other
+                    stuck |= other
+                    grown = True
             near = touching[moved].any(axis=0) & ~moved & movable
             for part in [
                 *(np.arange(len(owner)) == b for b in np.flatnonzero(near & links)),
@@ -189,7 +204,8 @@ class Referee:
                 if np.all(moved[supports]):  # it rests on what the push moves only
                     moved |= part
                     grown = True
-        return [int(o) for o in np.unique(owner[moved]) if o != index and np.all(moved[owner == o])]
+        along = [int(o) for o in np.unique(owner[moved]) if o != index and np.all(moved[owner == o])]
+        return [o for o in along if not stuck[owner == o].any()], [o for o in along if stuck[owner == o].any()]
 
     # -- rules checked every tick ----------------------------------------------------------------------
 
@@ -370,7 +386,7 @@ class Referee:
         front = np.einsum("ki,ki->k", np.abs(u), extent) / 2  # from the pushed object's centre to its front face
         ahead = np.einsum("koi,ki->ko", centres[worlds] - centres[worlds, index][:, None], u) > front[:, None]
         pressed = self._pressed_by(worlds, index)
-        rammed = pressed & ahead
+        rammed = pressed & (ahead | self._stuck_to(worlds, index, pressed))
         for k in np.flatnonzero((pressed & ~ahead).any(axis=1)):  # the normals only where they can add a rammed one
             rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
         s.carried[worlds] += np.where(rammed, np.linalg.norm(shift[worlds], axis=2), 0.0)
@@ -388,6 +404,18 @@ class Referee:
             )
             measured = {"mass": round(float(mass[k]), 3), "limit": self.limits.max_push_mass}
             moves.refuse(w, reason, measured, ends)
+
+    def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
+        """(k, nobject) the ``pressed`` objects stuck (a magnet's weld), directly or through others stuck, to object
+        ``index[i]`` or to another pressed object in world ``worlds[i]``: they go wherever it is pushed."""
+        owner = self.scene.body_object
+        out = np.zeros(pressed.shape, dtype=bool)
+        for eq, b1, b2 in self.magnets.pairs:
+            active = self.senses.state.eq_active[worlds, eq]
+            out[active, owner[b1]] = out[active, owner[b2]] = True
+        group = pressed.copy()
+        group[np.arange(len(worlds)), index] = True
+        return out & group
 
     def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``

@@ -575,6 +575,26 @@ def test_a_heavy_plate_plowed_by_the_rear_feet_while_the_front_feet_stand_on_it_
         assert "the robot ran into deck_plate" in failure_reason(rollout), failure_reason(rollout)
 
 
+@pytest.mark.parametrize(
+    ("program", "reason"),
+    [
+        ("push_a_magnet_stuck_to_a_heavy_slab", "pushing magnet_block rammed lead_slab"),
+        ("push_a_magnet_stuck_to_a_heavy_slab_once_stuck", "its mass with lead_slab stuck to it"),
+    ],
+)
+def test_a_heavy_slab_stuck_to_a_pushed_magnet_is_weighed(program: str, reason: str) -> None:
+    """Found by an adversarial run: pushing a 2 kg magnetic block dragged the 20 kg magnetic slab it lay on, stuck to
+    it, off a platform, in every world (the slab bears the block up, so it is no rider, and lies behind its face, so it
+    was not rammed). What is stuck to a pushed object goes with it: weighed when the push starts (the magnets stuck
+    after a step) and rammed when it sticks during the push (they stick at the first tick)."""
+    rollouts = sim.run_sessions(
+        _scene("magnetic_block_on_a_heavy_slab"), start_sessions([_text(program)] * 2, "quadruped"), seed=0
+    )
+    for rollout in rollouts:
+        assert not rollout.success
+        assert reason in failure_reason(rollout), failure_reason(rollout)
+
+
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
     vase, read as a step."""
