@@ -7,10 +7,10 @@ with outcome ``fell`` and a reason that says where and which feet lost support, 
 its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object that
 the torso has touched, other than one being pushed, and that has moved more than ``shove`` since (what a foot's
 weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one,
-or drags along stuck to it, once together they weigh more than the push limit. The move is stopped and refused, naming them, and the world
-fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so does
-standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables
-are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+or drags along stuck to it, once together they weigh more than the push limit. The move is stopped and refused,
+naming them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a
+step) breaks it, and so does standing on a movable object that rests on it: the move is refused, naming it, and the
+world fails. (The tunables are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
