@@ -36,6 +36,7 @@ ROOM_MARGIN = QUADRUPED.prop_room_margin
 SIDE = QUADRUPED.board_side
 TIP_PAST = QUADRUPED.tip_past
 MAX_STEPS = QUADRUPED.max_steps
+MOVED_AWAY = 0.02  # m: a placement nearer than this to where a link stands is where it stands
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
 
 
@@ -349,8 +350,9 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
 def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
     """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
     each placed against where the next link will stand, nearest the target first; placements that would overlap
-    something, or whose steps cannot carry the feet, are left out. A link placed against a link that is itself
-    pushed into place continues that link's climb in a straight line."""
+    something, or whose steps cannot carry the feet, are left out. A link that already stands against the next is
+    also pushed elsewhere along it (where the one before it finds room to continue the climb straight on). A link
+    placed against a link that is itself pushed into place continues that link's climb in a straight line."""
 
     def place(k: int, layout: Layout, combo: list[Placement]) -> Iterator[list[Placement]]:
         if k < 0:
@@ -358,13 +360,15 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
             return
         obj, nxt = chain[k], chain[k + 1]
         box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
-        if box.touches(nxt_box):
+        standing = box.touches(nxt_box)
+        if standing:
             yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo])
-            return
         if not quad.pushable(obj, quad.floor):
             return
         straight = [combo[0][0]] if combo and combo[0][1] is not None else list(DIRECTIONS)
         for direction, xy in _sides(quad, layout, obj, nxt, straight):
+            if standing and float(np.abs(xy - box.center).max()) < MOVED_AWAY:
+                continue  # where it stands already
             if layout.collides(box.moved_to(xy)) is None:
                 yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo])
 
