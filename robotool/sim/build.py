@@ -7,8 +7,8 @@ face on its -x side, on a slide joint with the button's spring (``stiffness``, N
 defaults in :mod:`robotool.task.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
 after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
-A sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper) collides with the ground and the
-robot only; it meets each other movable object through a carrier geom of its own, in place only while
+A sheet (a box at most :data:`SHEET_THICKNESS` thick and light, like paper: :func:`is_sheet`) collides with the
+ground and the robot only; it meets each other movable object through a carrier geom of its own, in place only while
 the object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object.
 Cloth is built as hinged links (:func:`robotool.sim.cloth.add_cloth`).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
@@ -38,7 +38,9 @@ DEFAULT_FRICTION = 0.5
 # cubes within about a degree when the servo shoves it sideways with ~40 N (tests/robots/arm/test_grasp.py).
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
 WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
-SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate
+SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate ...
+SHEET_AREAL_DENSITY = 1.0  # kg/m^2: ... unless it weighs more than this per square metre of its face (heavy card is
+# about 0.5; a 3 mm box of the default density 0.9; a 3 mm steel plate 23)
 SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
 SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
 SHEET_CARRIER_LIFT = 0.002  # m a carrier stands above its sheet, so what rests on it rests on it alone
@@ -49,9 +51,15 @@ BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideway
 
 
 def is_sheet(obj: SceneObject) -> bool:
-    """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick, like paper): it cannot push
-    or lift anything with its edge. (Cloth is built as hinged links that drape; see :mod:`robotool.sim.cloth`.)"""
-    return obj.shape == "box" and min(obj.size) <= SHEET_THICKNESS
+    """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick and at most
+    :data:`SHEET_AREAL_DENSITY` per square metre of its face, like paper or card): it cannot push or lift anything
+    with its edge, and the gripper pinches a fold of it. A heavier thin box is a rigid plate (a 3 mm steel plate
+    weighs 23 kg per square metre: no gripper pinches it). (Cloth is built as hinged links that drape; see
+    :mod:`robotool.sim.cloth`.)"""
+    if obj.shape != "box":
+        return False
+    thickness, *face = sorted(obj.size)
+    return thickness <= SHEET_THICKNESS and obj.effective_mass <= SHEET_AREAL_DENSITY * face[0] * face[1]
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:

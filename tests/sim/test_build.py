@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from robotool import sim
+from robotool.sim.build import is_sheet
 from robotool.task.task_file import parse_task
 
 
@@ -109,3 +110,20 @@ def test_a_non_finite_control_fails_only_its_world(sim_scene) -> None:
     failed = simulator.state().failed
     assert failed[0] is not None and "non-finite control" in failed[0]
     assert failed[1] is None
+
+
+@pytest.mark.parametrize(
+    ("size", "mass", "sheet"),
+    [
+        ((0.6, 0.4, 0.0005), 0.05, True),  # the built-in strip of paper
+        ((0.3, 0.3, 0.003), None, True),  # 3 mm at the default density: 0.9 kg per square metre
+        ((0.3, 0.3, 0.003), 2.1, False),  # a steel plate, 23 kg per square metre: rigid
+        ((0.3, 0.003, 0.3), 2.1, False),  # the same standing on edge
+        ((0.3, 0.3, 0.004), 0.01, False),  # thicker than a sheet
+    ],
+)
+def test_a_sheet_is_thin_and_light(size: tuple[float, float, float], mass: float | None, sheet: bool) -> None:
+    """A rigid steel plate 3 mm thin was pinched like paper by fingertips resting on it (an adversarial run)."""
+    obj = {"name": "plate", "shape": "box", "center": [0.3, 0.0, size[2] / 2], "size": list(size)}
+    task = _task([obj if mass is None else {**obj, "mass": mass}])
+    assert is_sheet(task.objects[0]) is sheet

@@ -73,6 +73,7 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_sliver_grasp_milk", "milk_reaching", "held nothing"),  # a 4 mm pinch at the workspace edge held the carton
     ("arm_topple_cube_stack", "button_pressing:196", "goal not reached: button_pressed"),  # lands unpressed
     ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
+    ("arm_pinch_a_steel_plate", "arm_steel_plate_lying_flat", "wider than their"),  # 3 mm thin: read as paper
 ]
 
 
