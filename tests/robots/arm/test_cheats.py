@@ -111,6 +111,22 @@ def test_a_crate_resting_on_a_held_plank_loads_the_grip(run_texts: Any) -> None:
         assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: the grip is checked against the held object's weight and its torque (and what is "
+    "welded to it), not against the load a held tool meets: raking a 9 kg jug in with the hammer's head puts 91-109 N "
+    "and 14-18 N m on the weld that stands for a 16 mm friction grip (the honest hammer and stick programs peak at 7 N "
+    "and 1.9 N m, against the 0.96 N m the rule grants a static load across the pads). Both backends hold the weld's "
+    "constraint force (MuJoCo's efc_force, mujoco-warp's efc.force); the grip's twisting capacity that the honest "
+    "stick push stays within is not settled",
+)
+def test_a_heavy_jug_raked_in_by_a_held_hammer_overloads_the_grip(run_texts: Any) -> None:
+    """Found by an adversarial run (every world of seeds 0 and 1 succeeded)."""
+    code = (CHEATS / "arm_rake_a_heavy_milk_with_the_hammer.py").read_text()
+    for rollout in run_texts(_task("arm_heavy_milk_beyond_reach"), [code] * 2, seed=0):
+        assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+
+
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
 
 
