@@ -406,16 +406,17 @@ class Referee:
             moves.refuse(w, reason, measured, ends)
 
     def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
-        """(k, nobject) the ``pressed`` objects stuck (a magnet's weld), directly or through others stuck, to object
-        ``index[i]`` or to another pressed object in world ``worlds[i]``: they go wherever it is pushed."""
+        """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
+        object in world ``worlds[i]``: they go wherever it is pushed."""
         owner = self.scene.body_object
+        group = pressed.copy()
+        group[np.arange(len(worlds)), index] = True
         out = np.zeros(pressed.shape, dtype=bool)
         for eq, b1, b2 in self.magnets.pairs:
             active = self.senses.state.eq_active[worlds, eq]
-            out[active, owner[b1]] = out[active, owner[b2]] = True
-        group = pressed.copy()
-        group[np.arange(len(worlds)), index] = True
-        return out & group
+            out[:, owner[b2]] |= active & group[:, owner[b1]]
+            out[:, owner[b1]] |= active & group[:, owner[b2]]
+        return out & pressed
 
     def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
