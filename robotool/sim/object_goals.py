@@ -1,7 +1,9 @@
 """The object goal kinds that any robot may be given, as named sub-conditions: ``lifted`` and ``lowered``.
 
 Object extents come from the state: every object carries the corners of its parts in its body
-frame, placed each tick by its body pose. A fragile object's falls are followed every control tick:
+frame, placed each tick by its body pose; an object's bottom is read from its parts' own shapes (a box's lowest
+corner, a cylinder's lowest rim point: :class:`Underside`), not from the corners of a cylinder's bounding box, which
+a rolled cylinder turns below its round side. A fragile object's falls are followed every control tick:
 a fall starts where it was last resting (touching something other than the robot, nearly still) and
 lasts until it rests again; it breaks once it touches something hard (not soft, not the robot) with
 its centre more than ``max_drop`` below where it rested. A soft object it glances off on the way, or
@@ -11,12 +13,15 @@ read. The first breaking fall of each world is kept as a ``broke`` event.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.task import geometry
+from robotool.task.scene import SceneObject
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 
@@ -36,6 +41,44 @@ def world_corners(state: BatchState, body: int, local: np.ndarray) -> np.ndarray
     return state.xpos[:, body, None, :] + np.einsum("wij,kj->wki", state.xmat(body), local)
 
 
+@dataclass(frozen=True)
+class Underside:
+    """What an object's lowest point is read from, in its body frame: its box parts' corners and its cylinder
+    parts' centres, unit axes, radii and half-lengths."""
+
+    corners: np.ndarray  # (k, 3)
+    centres: np.ndarray  # (m, 3)
+    axes: np.ndarray  # (m, 3)
+    radius: np.ndarray  # (m,)
+    half_length: np.ndarray  # (m,)
+
+    @classmethod
+    def of(cls, obj: SceneObject) -> Underside:
+        rot, centre = geometry.rotation_matrix(obj.rpy), np.asarray(obj.center)
+        parts = geometry.object_parts(obj)
+        boxes = [p for p in parts if p.kind == "box"]
+        cylinders = [p for p in parts if p.kind == "cylinder"]
+        return cls(
+            corners=(np.vstack([p.corners() for p in boxes]) - centre) @ rot if boxes else np.zeros((0, 3)),
+            centres=np.array([(p.center - centre) @ rot for p in cylinders]).reshape(-1, 3),
+            axes=np.array([p.rot[:, 2] @ rot for p in cylinders]).reshape(-1, 3),
+            radius=np.array([p.half[0] for p in cylinders]),
+            half_length=np.array([p.half[2] for p in cylinders]),
+        )
+
+    def bottom(self, state: BatchState, body: int) -> np.ndarray:
+        """(nworld,) the height of the object's lowest point in each world: a cylinder whose axis makes an angle
+        with the vertical whose cosine is c reaches ``half_length * |c| + radius * sqrt(1 - c^2)`` below its centre."""
+        lowest = world_corners(state, body, self.corners)[:, :, 2].min(axis=1, initial=np.inf)
+        if not len(self.radius):
+            return lowest
+        frame = state.xmat(body)  # (nworld, 3, 3)
+        centre_z = state.xpos[:, body, None, 2] + np.einsum("wj,kj->wk", frame[:, 2, :], self.centres)
+        c = np.einsum("wj,kj->wk", frame[:, 2, :], self.axes)  # (nworld, m): each axis's vertical part
+        reach = self.half_length * np.abs(c) + self.radius * np.sqrt(np.maximum(0.0, 1.0 - c * c))
+        return np.minimum(lowest, (centre_z - reach).min(axis=1))
+
+
 class LiftedGoal:
     """``lifted: {object, height}``: the object's bottom is at least ``height`` above its start."""
 
@@ -44,7 +87,7 @@ class LiftedGoal:
         assert goal is not None
         self.name, self.height = goal.object, goal.height
         index = scene.object_index(self.name)
-        self.body, self.local = scene.object_body[index], local_corners(scene)[index]
+        self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
         self.start: np.ndarray | None = None
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
@@ -52,7 +95,7 @@ class LiftedGoal:
             self.start = self._bottom(state)
 
     def _bottom(self, state: BatchState) -> np.ndarray:
-        return world_corners(state, self.body, self.local)[:, :, 2].min(axis=1)
+        return self.underside.bottom(state, self.body)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         start = self.start if self.start is not None else self._bottom(state)
@@ -118,7 +161,7 @@ class LoweredGoal:
         assert goal is not None
         self.name, self.height = goal.object, goal.height
         index = scene.object_index(self.name)
-        self.body, self.local = scene.object_body[index], local_corners(scene)[index]
+        self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
         fragile = scene.task.objects[index].fragile
         self.falls = FallTracker(scene, index, fragile.max_drop) if fragile else None
 
@@ -127,7 +170,7 @@ class LoweredGoal:
             self.falls.update(state, active)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        bottom = world_corners(state, self.body, self.local)[:, :, 2].min(axis=1)
+        bottom = self.underside.bottom(state, self.body)
         out = {f"{self.name}_lowered": bottom <= self.height}
         if self.falls is not None:
             broken = self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)

@@ -595,6 +595,19 @@ def test_a_heavy_slab_stuck_to_a_pushed_magnet_is_weighed(program: str, reason: 
         assert reason in failure_reason(rollout), failure_reason(rollout)
 
 
+def test_a_jar_rolled_against_a_wall_on_a_platform_is_not_lowered() -> None:
+    """Found by an adversarial run: a jar rolled along a platform into a wall stayed on it, its underside 8 cm up (the
+    goal asks for 6 cm), but its bottom was read from the corners of the box around it, which a roll of about 35
+    degrees past a quarter turn brings down to 2 cm, in every world. A cylinder's bottom is read from its round side."""
+    rollouts = sim.run_sessions(
+        _scene("glass_jar_rolled_against_a_wall"),
+        start_sessions([_text("roll_the_jar_against_the_wall")] * 2, "quadruped"),
+        seed=0,
+    )
+    for rollout in rollouts:
+        assert rollout.conditions["glass_jar_lowered"] is False and not rollout.success
+
+
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
     vase, read as a step."""
