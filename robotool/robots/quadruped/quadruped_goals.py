@@ -7,6 +7,7 @@ import numpy as np
 from robotool.robots.quadruped.body import BodyIds
 from robotool.robots.quadruped.support import (
     Parts,
+    bears_up,
     centre_of_mass,
     feet,
     feet_touching,
@@ -29,11 +30,12 @@ class RobotOnGoal:
 
     Its centre of mass lies over the support of the feet whose weight reaches ``obj`` (at least three of them), and
     every foot touches something (none hangs over a gap). A foot's weight reaches ``obj`` when it stands on ``obj``
-    (it touches ``obj`` with its centre over ``obj``'s top, within :data:`EDGE_REACH` of its edges: a foot pressing
-    on a side face, from the floor beside it, carries nothing), or when it stands over ``obj``'s footprint on a
-    movable object (not fragile) that rests on ``obj``, directly or through others (a board lying on a sofa), as the
-    judge traces weight elsewhere (:func:`resting_on`, :func:`pass_weight`). ``obj``'s top and footprint are those
-    of the face that looks up now (a wall box turned on its side has its top where it stands).
+    (it touches ``obj`` with its centre over ``obj``'s top, within :data:`EDGE_REACH` of its edges, and ``obj``
+    presses it up: a foot pressing on a side face, from the floor beside it, carries nothing), or when it stands over
+    ``obj``'s footprint on a movable object (not fragile) that rests on ``obj``, directly or through others (a board
+    lying on a sofa), as the judge traces weight elsewhere (:func:`resting_on`, :func:`pass_weight`). ``obj``'s top
+    and footprint are those of the face that looks up now (a wall box turned on its side has its top where it
+    stands).
     """
 
     def __init__(self, scene: Scene, sim: BatchedSim):
@@ -57,11 +59,22 @@ class RobotOnGoal:
         foot_xyz = feet(state, self.ids)
         height, footprint = self._in_target_frame(state, foot_xyz)
         above = height >= -EDGE_REACH  # not beside or under its top (nor in an L's crook)
-        on_top = feet_touching(state, self.ids, self.target) & self._over(footprint, EDGE_REACH) & above
+        on_top = self._borne_up(state) & self._over(footprint, EDGE_REACH) & above
         on_target = on_top | (self._through_carriers(state) & self._over(footprint, 0.0) & above)
         weight = supported(centre_of_mass(state, self.ids), foot_xyz, on_target)
         standing = np.all(feet_touching(state, self.ids, self.not_robot), axis=1)
         return {f"robot_weight_on_{self.name}": weight, "robot_feet_all_supported": standing}
+
+    def _borne_up(self, state: BatchState) -> np.ndarray:
+        """(nworld, 4) whether the target presses each foot up (its contacts with the foot, summed, within
+        :data:`~.support.BEARING_ANGLE` of up): a foot on the floor pressing on its side carries nothing onto it,
+        however its outline is read (the feet beside a low disc lie inside the square around it)."""
+        touching = feet_touching(state, self.ids, self.target)
+        out = np.zeros(touching.shape, dtype=bool)
+        for w in np.flatnonzero(touching.any(axis=1)):
+            normals = self.sim.contact_normals(int(w))[self.target][:, self.ids.feet].sum(axis=0)  # onto each foot
+            out[w] = touching[w] & bears_up(normals)
+        return out
 
     def _through_carriers(self, state: BatchState) -> np.ndarray:
         """(nworld, 4) whether each foot stands on carriers that pass its weight to the target (a cloth's link passes

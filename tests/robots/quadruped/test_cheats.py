@@ -245,6 +245,7 @@ CONTROL_CASES = [
     ("lever_with_the_prop_pushed_short_of_the_toolbox", "lever_prop_pushed_toward_a_toolbox"),  # the room the floor has
     ("climb_the_first_step_on_a_slant_beside_the_sand_cushion", "sand_cushion_before_the_steps"),  # feet clear of it
     ("lever_on_the_light_cube_layout", "lever_light_cube"),  # the planner's lever program
+    ("straddle_a_low_disc", "low_disc_wider_than_the_stance"),  # the disc carries the stance: its top presses it up
 ]
 
 
@@ -593,6 +594,20 @@ def test_a_heavy_slab_stuck_to_a_pushed_magnet_is_weighed(program: str, reason: 
     for rollout in rollouts:
         assert not rollout.success
         assert reason in failure_reason(rollout), failure_reason(rollout)
+
+
+def test_feet_on_the_floor_beside_a_low_disc_do_not_stand_on_it() -> None:
+    """Found by an adversarial run: the feet of a walk over a low disc narrower than the stance stood on the floor, in
+    the corners of the square around the disc, pressing on its side, and the goal read them as standing on its top
+    (that square) in every world. A foot stands on the target only where the target presses it up."""
+    rollouts = sim.run_sessions(
+        _scene("low_disc_narrower_than_the_stance"),
+        start_sessions([_text("straddle_a_low_disc")] * 2, "quadruped"),
+        seed=0,
+    )
+    for rollout in rollouts:
+        assert rollout.conditions["robot_has_not_fallen"] and "disc" in rollout.touched
+        assert rollout.conditions["robot_weight_on_disc"] is False and not rollout.success
 
 
 def test_a_jar_rolled_against_a_wall_on_a_platform_is_not_lowered() -> None:
