@@ -134,9 +134,8 @@ class Referee:
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
         movable = next((names[o] for o in on if self.facts.movable[o]), None)
-        obj_lo, obj_hi = senses.bounds3(w, index)
-        centre_obj = (obj_lo + obj_hi) / 2
-        below, _ = self.rays.heights(w, centre_obj[None, :2], obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
+        _, obj_hi = senses.bounds3(w, index)
+        below, _ = self.rays.heights(w, self._under(w, index), obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
         riders, stuck = self._carried(w, index)
         mass = float(sum(senses.mass(w, o) for o in [index, *riders, *stuck]))
         return rule_violation(
@@ -146,10 +145,21 @@ class Referee:
             stuck=[names[o] for o in stuck],
             under_robot=bool(np.isin(index, on)),
             robot_support_movable=movable,
-            object_support=float(below[0]),
+            object_support=float(below.max()),
             robot_support=float(z.max()),
             limits=self.limits,
         )
+
+    def _under(self, w: int, index: int) -> np.ndarray:
+        """(n, 2) where object ``index`` rests in world ``w``, as the push rules read its support: under each of its
+        parts' centres (an L's handle lies on a shelf while its head sticks out over the floor, and the centre of the
+        box around it lies in its crook, in the air), or under its centre for a cloth (its links drape)."""
+        geoms = np.flatnonzero(self.facts.geom_object == index)
+        if self.facts.cloth[index] or len(geoms) < 2:
+            lo, hi = self.senses.bounds3(w, index)
+            return ((lo + hi) / 2)[None, :2]
+        xpos, _ = self.senses.sim.geom_poses(np.array([w]))
+        return xpos[w, geoms, :2]
 
     def loaded(self, w: int, index: int) -> bool:
         """Whether another object lies on object ``index`` in world ``w``, borne up by it at least in part (a board's

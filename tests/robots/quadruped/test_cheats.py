@@ -623,6 +623,20 @@ def test_a_jar_rolled_against_a_wall_on_a_platform_is_not_lowered() -> None:
         assert rollout.conditions["glass_jar_lowered"] is False and not rollout.success
 
 
+def test_a_hook_lying_on_a_high_shelf_rests_on_the_shelf() -> None:
+    """Found by an adversarial run: the robot on the floor pushed an L-shaped hook off a 0.25 m shelf by its head,
+    which stuck out over the edge, in every world; the push rules read the hook's support under the centre of the box
+    around it, which lies in its crook, over the floor. The support is read under each of its parts."""
+    rollouts = sim.run_sessions(
+        _scene("hook_lying_on_a_high_shelf"),
+        start_sessions([_text("push_a_hook_off_a_high_shelf_from_the_floor")] * 2, "quadruped"),
+        seed=0,
+    )
+    for rollout in rollouts:
+        assert not rollout.success
+        assert "cannot push hook: it rests at height 0.25 m" in failure_reason(rollout), failure_reason(rollout)
+
+
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
     """vase_lowering seed 1098 (the vase lies where the steps lead onto the sofa): a rear foot stood on the 0.10 m
     vase, read as a step."""
