@@ -30,7 +30,8 @@ MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it
 SUPPORT_SHARE = 0.9  # of an object's base over a sheet, with its centre, for it to come to rest on the sheet
 LEAVE_SHARE = 0.5  # an object resting on a sheet leaves it when less of its base than this is over it
-BASE_SAMPLES = 9  # points along each side of an object's base (a grid; a disc for an upright cylinder)
+BASE_SAMPLES = 9  # points along each side of a face of an object (a grid; a disc on a cylinder's ends)
+BASE_DEPTH = 0.003  # m: an object's surface points this near its lowest are its base, where it stands
 GAINED = 1e-3  # of an object's base: more than this came over the sheet during a tick
 
 
@@ -52,12 +53,11 @@ class Sheets:
         self.scene = scene
         self.half = {s: np.asarray(task.objects[s].size[:2]) / 2 for s, _, _ in self.links}
         self.thickness = {s: min(task.objects[s].size) for s, _, _ in self.links}
-        self.depth = {i: task.objects[i].center[2] - task.objects[i].bottom for _, i, _ in self.links}
         self.placed = {
             g: model.geom_pos[g] + (0.0 if o else SHEET_CARRIER_DROP) * np.array([0.0, 0.0, 1.0])
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
-        self.base = {i: base_points(task.objects[i]) for _, i, _ in self.links}
+        self.surface = {i: surface_points(task.objects[i]) for _, i, _ in self.links}
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
         self.share = np.zeros(self.on.shape)  # (nworld, nlink): share of the object's base over its sheet
         self.slid_under = np.zeros_like(self.on)  # the sheet got under the object, not the other way round
@@ -78,12 +78,15 @@ class Sheets:
             rot = state.xmat(bodies[s])  # (nworld, 3, 3)
             local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
             centre_over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
-            base = xpos[:, i, None, :] + np.einsum("wij,pj->wpi", state.xmat(bodies[i]), self.base[i])
-            base_local = np.einsum("wji,wpj->wpi", rot, base - xpos[:, s, None, :])
-            share = np.all(np.abs(base_local[:, :, :2]) <= self.half[s], axis=2).mean(axis=1)
+            surface = xpos[:, i, None, :] + np.einsum("wij,pj->wpi", state.xmat(bodies[i]), self.surface[i])
+            bottom = surface[:, :, 2].min(axis=1)
+            base = surface[:, :, 2] <= bottom[:, None] + BASE_DEPTH  # (nworld, npoint): where it stands, as it lies
+            surface_local = np.einsum("wji,wpj->wpi", rot, surface - xpos[:, s, None, :])
+            over = np.all(np.abs(surface_local[:, :, :2]) <= self.half[s], axis=2)
+            share = (over & base).sum(axis=1) / base.sum(axis=1)
             top = xpos[:, s, 2] + self.thickness[s] / 2
             flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
-            resting = flat & (xpos[:, i, 2] - self.depth[i] < top + LIFTED)
+            resting = flat & (bottom < top + LIFTED)
             before = np.where(first, 0.0, self.share[:, k])
             gained = resting & (share > before + GAINED)  # more of its base came over the sheet this tick ...
             # ... because the sheet moved under it (at least as far as it did), or it stood over the sheet at the start
@@ -103,17 +106,27 @@ class Sheets:
                     sim.set_geom_pos(worlds, geom, self.placed[geom] - np.array([0.0, 0.0, drop]))
 
 
-def base_points(obj: SceneObject) -> np.ndarray:
-    """Points spread over an object's base in its body frame (n, 3): a disc for an upright cylinder, else a grid
-    over the bounds of its parts' lowest corners."""
-    rot = geometry.rotation_matrix(obj.rpy)
-    corners = (np.vstack([p.corners() for p in geometry.object_parts(obj)]) - np.asarray(obj.center)) @ rot
-    bottom = corners[:, 2].min()
-    low = corners[corners[:, 2] < bottom + 1e-6]
-    (x0, y0), (x1, y1) = low[:, :2].min(axis=0), low[:, :2].max(axis=0)
-    gx, gy = np.meshgrid(np.linspace(x0, x1, BASE_SAMPLES), np.linspace(y0, y1, BASE_SAMPLES))
-    grid = np.column_stack([gx.ravel(), gy.ravel()])
-    if obj.shape == "cylinder" and obj.axis == "z":
-        radius = max(x1 - x0, y1 - y0) / 2
-        grid = grid[np.hypot(*(grid - [(x0 + x1) / 2, (y0 + y1) / 2]).T) <= radius + 1e-9]
-    return np.column_stack([grid, np.full(len(grid), bottom)])
+def surface_points(obj: SceneObject) -> np.ndarray:
+    """Points spread over an object's surface in its body frame (n, 3): a grid of :data:`BASE_SAMPLES` a side on each
+    face of a box part; a cylinder part's end discs and rings along its side. Those lowest as the object lies now are
+    its base (:data:`BASE_DEPTH`), whichever way it was placed (a cube given a roll stands on a side) or has tipped."""
+    rot, centre = geometry.rotation_matrix(obj.rpy), np.asarray(obj.center)
+    t = np.linspace(-1.0, 1.0, BASE_SAMPLES)
+    a, b = (g.ravel() for g in np.meshgrid(t, t))
+    disc = np.column_stack([a, b])[np.hypot(a, b) <= 1.0 + 1e-9]
+    around = np.linspace(0.0, 2 * np.pi, 4 * BASE_SAMPLES, endpoint=False)
+    points = []
+    for part in geometry.object_parts(obj):
+        if part.kind == "box":  # (part frame, in half sizes) each face: one axis at -1 or 1, the others on the grid
+            faces = [
+                np.insert(np.column_stack([a, b]), axis, side, axis=1) for axis in range(3) for side in (-1.0, 1.0)
+            ]
+            local = np.vstack(faces) * part.half
+        else:  # a cylinder: its axis is the part's z, radius half[0], half-length half[2]
+            r, h = part.half[0], part.half[2]
+            ends = [np.column_stack([disc * r, np.full(len(disc), side * h)]) for side in (-1.0, 1.0)]
+            ring = np.column_stack([np.cos(around) * r, np.sin(around) * r])
+            side = [np.column_stack([ring, np.full(len(ring), z * h)]) for z in t]
+            local = np.vstack([*ends, *side])
+        points.append((part.center + local @ part.rot.T - centre) @ rot)
+    return np.vstack(points)

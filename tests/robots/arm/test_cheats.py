@@ -74,6 +74,7 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_topple_cube_stack", "button_pressing:196", "goal not reached: button_pressed"),  # lands unpressed
     ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
     ("arm_pinch_a_steel_plate", "arm_steel_plate_lying_flat", "wider than their"),  # 3 mm thin: read as paper
+    ("arm_nudge_a_rolled_cube_half_onto_a_ribbon", "arm_rolled_cube_beside_a_narrow_ribbon", "clamped"),  # its side
 ]
 
 
