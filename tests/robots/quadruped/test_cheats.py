@@ -561,36 +561,36 @@ def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
         assert "cannot push pallet: its mass with" in failure_reason(rollout), failure_reason(rollout)
 
 
-def test_a_heavy_plate_plowed_by_the_rear_feet_while_the_front_feet_stand_on_it_is_a_shove() -> None:
-    """Found by an adversarial run: the rear feet plowed an 8.5 kg plate (over the push limit) 0.5 m along by its rim
-    until it bridged a 0.30 m gap, and the robot crossed on it, in every world; the front feet stood on the plate all
-    the while, which excused its travel. What another part of the robot presses on a side or a rim is driven, not
-    stood on."""
-    rollouts = sim.run_sessions(
-        _scene("heavy_deck_plate_over_a_gap"),
-        start_sessions([_text("plow_a_heavy_plate_with_the_rear_feet_standing_on_it_in_front")] * 2, "quadruped"),
-        seed=0,
-    )
-    for rollout in rollouts:
-        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
-        assert "the robot ran into deck_plate" in failure_reason(rollout), failure_reason(rollout)
+REASONED_CASES = [  # (program, layout, what the refusal must say): found by adversarial runs, each a success before
+    # the rear feet plowed an 8.5 kg plate 0.5 m along by its rim until it bridged a 0.30 m gap while the front feet
+    # stood on it, which excused its travel: what another part of the robot presses on a side or a rim is driven
+    (
+        "plow_a_heavy_plate_with_the_rear_feet_standing_on_it_in_front",
+        "heavy_deck_plate_over_a_gap",
+        "the robot ran into deck_plate",
+    ),
+    # pushing a 2 kg magnetic block dragged the 20 kg slab it lay on, stuck to it, off a platform (the slab bears the
+    # block up, so it is no rider, and lies behind its face): rammed when they stick during the push (at the first
+    # tick) and weighed when the push starts (stuck after a step)
+    ("push_a_magnet_stuck_to_a_heavy_slab", "magnetic_block_on_a_heavy_slab", "pushing magnet_block rammed lead_slab"),
+    (
+        "push_a_magnet_stuck_to_a_heavy_slab_once_stuck",
+        "magnetic_block_on_a_heavy_slab",
+        "its mass with lead_slab stuck to it",
+    ),
+    # the robot on the floor pushed an L-shaped hook off a 0.25 m shelf by its head sticking out over the edge: its
+    # support was read under the centre of the box around it, in its crook, over the floor
+    (
+        "push_a_hook_off_a_high_shelf_from_the_floor",
+        "hook_lying_on_a_high_shelf",
+        "cannot push hook: it rests at height 0.25 m",
+    ),
+]
 
 
-@pytest.mark.parametrize(
-    ("program", "reason"),
-    [
-        ("push_a_magnet_stuck_to_a_heavy_slab", "pushing magnet_block rammed lead_slab"),
-        ("push_a_magnet_stuck_to_a_heavy_slab_once_stuck", "its mass with lead_slab stuck to it"),
-    ],
-)
-def test_a_heavy_slab_stuck_to_a_pushed_magnet_is_weighed(program: str, reason: str) -> None:
-    """Found by an adversarial run: pushing a 2 kg magnetic block dragged the 20 kg magnetic slab it lay on, stuck to
-    it, off a platform, in every world (the slab bears the block up, so it is no rider, and lies behind its face, so it
-    was not rammed). What is stuck to a pushed object goes with it: weighed when the push starts (the magnets stuck
-    after a step) and rammed when it sticks during the push (they stick at the first tick)."""
-    rollouts = sim.run_sessions(
-        _scene("magnetic_block_on_a_heavy_slab"), start_sessions([_text(program)] * 2, "quadruped"), seed=0
-    )
+@pytest.mark.parametrize(("program", "scene", "reason"), REASONED_CASES)
+def test_cheat_fails_in_every_world_for_the_reason_it_names(program: str, scene: str, reason: str) -> None:
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 2, "quadruped"), seed=0)
     for rollout in rollouts:
         assert not rollout.success
         assert reason in failure_reason(rollout), failure_reason(rollout)
@@ -621,20 +621,6 @@ def test_a_jar_rolled_against_a_wall_on_a_platform_is_not_lowered() -> None:
     )
     for rollout in rollouts:
         assert rollout.conditions["glass_jar_lowered"] is False and not rollout.success
-
-
-def test_a_hook_lying_on_a_high_shelf_rests_on_the_shelf() -> None:
-    """Found by an adversarial run: the robot on the floor pushed an L-shaped hook off a 0.25 m shelf by its head,
-    which stuck out over the edge, in every world; the push rules read the hook's support under the centre of the box
-    around it, which lies in its crook, over the floor. The support is read under each of its parts."""
-    rollouts = sim.run_sessions(
-        _scene("hook_lying_on_a_high_shelf"),
-        start_sessions([_text("push_a_hook_off_a_high_shelf_from_the_floor")] * 2, "quadruped"),
-        seed=0,
-    )
-    for rollout in rollouts:
-        assert not rollout.success
-        assert "cannot push hook: it rests at height 0.25 m" in failure_reason(rollout), failure_reason(rollout)
 
 
 def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
