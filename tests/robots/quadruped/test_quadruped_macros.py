@@ -309,6 +309,20 @@ def test_the_staircase_instance_has_a_program_whose_pushes_are_predicted_clear()
     assert any("push_to_position" in p.code and not (p.doubt or "").startswith("box_1 would run") for p in programs)
 
 
+def test_a_top_step_standing_where_the_low_step_finds_no_room_behind_it_is_moved_along_the_target() -> None:
+    """sofa_climbing 9637, turned a quarter: a heavy box of books stands where the low box would go straight behind the
+    top step, which already stands against the sofa; kept there, every staircase turns on the top step, which the body
+    fits with 5 mm to spare (it held in 2 of 3 worlds). The top step is also pushed along the sofa, where the low box
+    continues the climb straight on, with the stance's full slack."""
+    task = tasks.load(FIXTURES / "layouts" / "staircase_top_step_crowded_along_y.yaml")
+    programs = list(robot_planner(task).candidates(task, True))
+    fine = [p for p in programs if p.doubt is None]
+    kept = [p.slack for p in fine if "push_to_position('box_2'" not in p.code]
+    moved = [p.slack for p in fine if "push_to_position('box_2'" in p.code]
+    assert kept and max(kept) < 0.01
+    assert moved and max(moved) >= QUADRUPED.stance_slack - 1e-9
+
+
 @pytest.mark.parametrize(("mass", "thin"), [(4.0, False), (4.5, True)])
 def test_a_push_of_an_object_within_the_mass_noise_of_the_push_limit_is_tight(mass: float, thin: bool) -> None:
     """Perturbed worlds scale masses by up to 15 %: a 4.5 kg box may weigh 5.2 kg, over the 5 kg push limit, so every
