@@ -342,38 +342,44 @@ def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
                 for k, (a, b) in enumerate(itertools.pairwise(tops))
             ):  # the last link may be level with the target
                 continue
-            for route in _place_chain(quad, [*chain, target]):
+            routes = list(_place_chain(quad, [*chain, target], move_standing=False))
+            if max((r.slack for r in routes), default=-np.inf) < STANCE_SLACK:  # only thin stances as they stand
+                routes += _place_chain(quad, [*chain, target], move_standing=True)
+            for route in routes:
                 route.late = int(tops[-1] < tops[-2])
                 yield route
 
 
-def _place_chain(quad: Quadruped, chain: list[SceneObject]) -> Iterator[Route]:
+def _place_chain(quad: Quadruped, chain: list[SceneObject], move_standing: bool) -> list[Route]:
     """Placements of the chain's movable links against the next one's sides (centred or flush with either end),
     each placed against where the next link will stand, nearest the target first; placements that would overlap
     something, or whose steps cannot carry the feet, are left out. A link that already stands against the next is
-    also pushed elsewhere along it (where the one before it finds room to continue the climb straight on). A link
-    placed against a link that is itself pushed into place continues that link's climb in a straight line."""
+    left there, or with ``move_standing`` pushed elsewhere along it (where the one before it finds room to continue
+    the climb straight on: only such placements then). A link placed against a link that is itself pushed into place
+    continues that link's climb in a straight line."""
 
-    def place(k: int, layout: Layout, combo: list[Placement]) -> Iterator[list[Placement]]:
+    def place(k: int, layout: Layout, combo: list[Placement], moved: bool) -> Iterator[list[Placement]]:
         if k < 0:
-            yield combo
+            if moved or not move_standing:
+                yield combo
             return
         obj, nxt = chain[k], chain[k + 1]
         box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
         standing = box.touches(nxt_box)
         if standing:
-            yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo])
-        if not quad.pushable(obj, quad.floor):
+            yield from place(k - 1, layout, [(_axis_direction(nxt_box.center - box.center), None), *combo], moved)
+        if not quad.pushable(obj, quad.floor) or (standing and not move_standing):
             return
         straight = [combo[0][0]] if combo and combo[0][1] is not None else list(DIRECTIONS)
         for direction, xy in _sides(quad, layout, obj, nxt, straight):
             if standing and float(np.abs(xy - box.center).max()) < MOVED_AWAY:
                 continue  # where it stands already
             if layout.collides(box.moved_to(xy)) is None:
-                yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo])
+                yield from place(k - 1, layout.with_moved(obj.name, xy), [(direction, xy), *combo], moved or standing)
 
-    routes = [r for combo in place(len(chain) - 2, quad.layout, []) if (r := _chain_route(quad, chain, combo))]
-    yield from sorted(routes, key=lambda r: _pushed_distance(quad.layout, r))
+    combos = place(len(chain) - 2, quad.layout, [], False)
+    routes = [r for combo in combos if (r := _chain_route(quad, chain, combo))]
+    return sorted(routes, key=lambda r: _pushed_distance(quad.layout, r))
 
 
 def _pushed_distance(layout: Layout, route: Route) -> float:
