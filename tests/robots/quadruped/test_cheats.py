@@ -585,6 +585,11 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
         "hook_lying_on_a_high_shelf",
         "cannot push hook: it rests at height 0.25 m",
     ),
+    (  # the same turned a quarter: tried as an optimiser would, a success before the fix too
+        "push_a_turned_hook_off_a_high_shelf_from_the_floor",
+        "hook_lying_on_a_high_shelf_turned",
+        "cannot push hook: it rests at height 0.25 m",
+    ),
 ]
 
 
