@@ -324,7 +324,8 @@ def _gap(quad: Quadruped, d: np.ndarray, line: float, target: Box) -> tuple[floa
 
 def _staircases(quad: Quadruped, name: str) -> Iterator[Route]:
     """Climb objects onto ``name`` (each rise within the limit, a step down onto it allowed), pushing those that
-    do not already stand against the next."""
+    do not already stand against the next; those that do are also pushed along it when every staircase left as it
+    stands keeps the feet under :data:`STANCE_SLACK` from an edge."""
     target = quad.task.object(name)
     rise = quad.limits.max_step_up + 0.005
     top = {o.name: o.top for o in quad.task.objects}

@@ -154,12 +154,11 @@ class Referee:
         """(n, 2) where object ``index`` rests in world ``w``, as the push rules read its support: under each of its
         parts' centres (an L's handle lies on a shelf while its head sticks out over the floor, and the centre of the
         box around it lies in its crook, in the air), or under its centre for a cloth (its links drape)."""
-        geoms = np.flatnonzero(self.facts.geom_object == index)
-        if self.facts.cloth[index] or len(geoms) < 2:
+        if self.facts.cloth[index]:
             lo, hi = self.senses.bounds3(w, index)
             return ((lo + hi) / 2)[None, :2]
         xpos, _ = self.senses.sim.geom_poses(np.array([w]))
-        return xpos[w, geoms, :2]
+        return xpos[w, self.facts.geom_object == index, :2]
 
     def loaded(self, w: int, index: int) -> bool:
         """Whether another object lies on object ``index`` in world ``w``, borne up by it at least in part (a board's
