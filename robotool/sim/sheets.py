@@ -78,11 +78,13 @@ class Sheets:
             rot = state.xmat(bodies[s])  # (nworld, 3, 3)
             local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
             centre_over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
-            surface = xpos[:, i, None, :] + np.einsum("wij,pj->wpi", state.xmat(bodies[i]), self.surface[i])
-            bottom = surface[:, :, 2].min(axis=1)
-            base = surface[:, :, 2] <= bottom[:, None] + BASE_DEPTH  # (nworld, npoint): where it stands, as it lies
-            surface_local = np.einsum("wji,wpj->wpi", rot, surface - xpos[:, s, None, :])
-            over = np.all(np.abs(surface_local[:, :, :2]) <= self.half[s], axis=2)
+            turn = state.xmat(bodies[i])  # (nworld, 3, 3): the object's frame in the world
+            heights = xpos[:, i, None, 2] + turn[:, 2, :] @ self.surface[i].T  # (nworld, npoint)
+            bottom = heights.min(axis=1)
+            base = heights <= bottom[:, None] + BASE_DEPTH  # (nworld, npoint): where it stands, as it lies
+            in_sheet = rot[:, :, :2].transpose(0, 2, 1) @ turn  # (nworld, 2, 3): the object's axes in the sheet's x-y
+            across = local[:, None, :2] + self.surface[i] @ in_sheet.transpose(0, 2, 1)  # its points in the sheet
+            over = np.all(np.abs(across) <= self.half[s], axis=2)
             share = (over & base).sum(axis=1) / base.sum(axis=1)
             top = xpos[:, s, 2] + self.thickness[s] / 2
             flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
