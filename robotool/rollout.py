@@ -13,7 +13,7 @@ from robotool.vocabulary import SkillOutcome
 EventKind = Literal[
     "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
 ]
-GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between", "weak_grip"]
+GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between", "weak_grip", "slipped"]
 
 DISTANCES: frozenset[str] = frozenset({"gap", "step", "drop", "distance", "remaining", "outside_workspace"})
 """Keys of :attr:`SkillCall.measured` whose values are distances in metres: a gap, step or drop at a refusal,
@@ -81,6 +81,8 @@ class Event(BaseModel):
                 text += f" (target {target} -> {clamped})"
         elif self.kind == "grasped":
             text = f"holds {self.object}"
+        elif self.kind == "grasp_failed" and self.cause == "slipped":
+            text = self._slipped()
         elif self.kind == "grasp_failed":
             text = f"held nothing: {self._grasp_failure()}"
         elif self.kind == "pushed_out":
@@ -125,6 +127,24 @@ class Event(BaseModel):
         return (
             f"the fingers closed on nothing; the nearest graspable point ({obj}'s) is "
             f"{m.get('nearest', 0.0):.3f} m from the gripper centre"
+        )
+
+    def _slipped(self) -> str:
+        """Which load made a held object slip out of the grip, against what the grip holds."""
+        m, obj = self.measured, self.object
+        loads = {
+            "force": f"{m.get('force', 0.0):.1f} N on the pads, more than {m.get('margin', 0.0):g} times the "
+            f"{m.get('most_force', 0.0):.0f} N the grip holds",
+            "twist": f"{m.get('twist', 0.0):.2f} N m about the fingers' closing axis, more than "
+            f"{m.get('margin', 0.0):g} times the {m.get('most_twist', 0.0):.2f} N m its "
+            f"{1000 * m.get('depth', 0.0):.0f} mm deep grip holds",
+            "tilt": f"{m.get('tilt', 0.0):.2f} N m across the fingers, more than {m.get('margin', 0.0):g} times the "
+            f"{m.get('most_tilt', 0.0):.2f} N m its {1000 * m.get('width', 0.0):.0f} mm wide grip holds",
+        }
+        worst = max(loads, key=lambda k: m.get(k, 0.0) / max(m.get(f"most_{k}", 0.0), 1e-9))
+        return (
+            f"{obj} slipped out of the grip: for {m.get('for', 0.0):.1f} s its load ({obj}'s weight, what it carries "
+            f"and what it met) put {loads[worst]}"
         )
 
     def _weak_grip(self) -> str:

@@ -97,6 +97,11 @@ class BatchedSim(Protocol):
     def set_geom_pos(self, worlds: np.ndarray, geom: int, pos: np.ndarray) -> None:
         """Move geom ``geom`` to ``pos`` in its body's frame in ``worlds``."""
 
+    def weld_load(self, worlds: np.ndarray, eq: int) -> np.ndarray:
+        """(k, 6) the load weld ``eq`` carries in ``worlds`` after the last step: the force (N) and the torque (N m,
+        about the origin of the weld's second body) that the second body puts on the first, in world axes, from the
+        weld's constraint force; zeros where the weld is off."""
+
     def contact_normals(self, world: int) -> np.ndarray:
         """(nbody, nbody, 3) after the last step in ``world``: for each pair of bodies that touch (geoms within
         :data:`TOUCH_DISTANCE`), the sum of their contacts' unit normals pointing from the first body to the second
@@ -232,6 +237,15 @@ def weld_relpose(xpos: np.ndarray, xquat: np.ndarray, body1: int, body2: int) ->
     mujoco.mju_mulQuat(data[6:10], inv, xquat[body2])
     data[10] = 1.0  # torquescale
     return data
+
+
+def weld_load_from_rows(rows: np.ndarray, xquat2: np.ndarray) -> np.ndarray:
+    """The load (force, torque; see :meth:`BatchedSim.weld_load`) from a weld's six constraint-force rows (k, 6) and
+    the orientation (k, 4) of its second body: the rows hold the force in world axes, then twice the torque in the
+    second body's frame (its rotation error is a quaternion's vector part, half the angle; torquescale 1)."""
+    rows = np.asarray(rows, dtype=float).reshape(-1, 6)
+    torque = np.einsum("kij,kj->ki", quat_to_mat(np.asarray(xquat2, dtype=float).reshape(-1, 4)), rows[:, 3:]) / 2
+    return np.concatenate([rows[:, :3], torque], axis=1)
 
 
 def geom_groups(skip_group: int) -> np.ndarray:

@@ -28,6 +28,7 @@ from robotool.sim.backend import (
     Perturbation,
     geom_groups,
     normals_from_contacts,
+    weld_load_from_rows,
     weld_relpose,
 )
 from robotool.sim.compiled_scene import Scene
@@ -235,6 +236,18 @@ class MujocoSim:
         """Move geom ``geom`` in its body's frame, in each world's model copy."""
         for w in np.asarray(worlds, dtype=int).reshape(-1):
             self.models[w].geom_pos[geom] = pos
+
+    def weld_load(self, worlds: np.ndarray, eq: int) -> np.ndarray:
+        """The load weld ``eq`` carries in ``worlds`` (:meth:`BatchedSim.weld_load`), from each world's constraint
+        rows."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        rows = np.zeros((len(worlds), 6))
+        for k, w in enumerate(worlds.tolist()):
+            d = self.datas[w]
+            mine = np.flatnonzero((d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY) & (d.efc_id == eq))
+            if mine.size == 6:
+                rows[k] = d.efc_force[mine]
+        return weld_load_from_rows(rows, self._xquat[worlds, self.scene.model.eq_obj2id[eq]])
 
     def contact_normals(self, world: int) -> np.ndarray:
         """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from its

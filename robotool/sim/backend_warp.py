@@ -20,6 +20,7 @@ from robotool.sim.backend import (
     geom_groups,
     normals_from_contacts,
     touching_from_contacts,
+    weld_load_from_rows,
     weld_relpose,
 )
 from robotool.sim.compiled_scene import Scene
@@ -159,6 +160,21 @@ class WarpSim:
         self._geom_pos[np.asarray(worlds, dtype=int).reshape(-1), geom] = pos
         with wp.ScopedDevice(self.device):
             self.m.geom_pos.assign(self._geom_pos.astype(np.float32))
+
+    def weld_load(self, worlds: np.ndarray, eq: int) -> np.ndarray:
+        """The load weld ``eq`` carries in ``worlds`` (:meth:`BatchedSim.weld_load`), from the batch's constraint
+        rows read back."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        efc = self.d.efc
+        kind, owner, force = efc.type.numpy()[worlds], efc.id.numpy()[worlds], efc.force.numpy()[worlds]
+        nefc = self.d.nefc.numpy()[worlds]
+        rows = np.zeros((len(worlds), 6))
+        for k in range(len(worlds)):
+            n = min(int(nefc[k]), kind.shape[1])
+            mine = np.flatnonzero((kind[k, :n] == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)) & (owner[k, :n] == eq))
+            if mine.size == 6:
+                rows[k] = force[k, mine]
+        return weld_load_from_rows(rows, self._state.xquat[worlds, self.scene.model.eq_obj2id[eq]])
 
     def contact_normals(self, world: int) -> np.ndarray:
         """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from the

@@ -56,6 +56,13 @@ class ArmConfig:
     0.71 N m across the pads' 16 mm, 45 N."""
     grip_friction: float = 1.0
     """The pads hold by friction this many times the squeeze."""
+    slip_margin: float = 1.5
+    """How far the load a held object puts on the grip while held (its weight, what it carries, what it meets, as the
+    grasp weld measures it) may exceed what the grip holds, the static rule's capacities: the rigid weld passes on load
+    peaks that pads ride out by giving a little. Honest tool use peaks at 1.2 (the hammer held by its handle end
+    pulling a carton in); a tool jammed on the table or raking in a load several times its own weight goes past it."""
+    slip_time: float = 0.2
+    """s: a grip loaded past ``slip_margin`` for this long slips and lets go."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
     pinch at its edge."""

@@ -115,6 +115,7 @@ class GraspState:
     hold_edge: np.ndarray  # (nworld,) m
     hold_width: np.ndarray  # (nworld,) m
     hold_centre: np.ndarray  # (nworld, 3) m
+    overloaded_since: np.ndarray  # (nworld,) s: since when the grip's load has stayed past slip_margin (nan: not)
     let_go: list[list[Event]]  # grips that gave way, told at the next skill end
 
     @classmethod
@@ -124,6 +125,7 @@ class GraspState:
             hold_edge=np.zeros(nworld),
             hold_width=np.zeros(nworld),
             hold_centre=np.zeros((nworld, 3)),
+            overloaded_since=np.full(nworld, np.nan),
             let_go=[[] for _ in range(nworld)],
         )
 
@@ -200,6 +202,7 @@ class Grasp:
                     hold.width,
                 )
                 self.state.hold_centre[w] = hold.centre
+                self.state.overloaded_since[w] = np.nan
                 self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), True)
                 return SkillEnd(
                     w,
@@ -271,7 +274,8 @@ class Grasp:
         }
 
     def check_holds(self, state: BatchState, mask: np.ndarray) -> None:
-        """Let go of a held object whose grip can no longer carry its load (more was joined to it)."""
+        """Let go of a held object whose grip can no longer carry its load: more was joined to it, or the load the
+        grasp weld carries has stayed past what the grip holds (:meth:`_overload`) for ``slip_time``."""
         eqs = self.parts.grasp_eq[self.parts.grasp_eq >= 0]
         if not eqs.size:
             return
@@ -283,12 +287,50 @@ class Grasp:
                 self.state.hold_depth[w], self.state.hold_edge[w], self.state.hold_width[w], self.state.hold_centre[w]
             )
             weak = self._weak(state, int(w), i, hold)
+            cause: GraspFailure = "weak_grip"
+            if not weak:
+                weak, cause = self._overload(state, int(w), i, hold), "slipped"
             if weak:
                 self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), False)
+                self.state.overloaded_since[w] = np.nan
                 name = self.scene.object_names[i]
                 self.state.let_go[w].append(
-                    Event(kind="grasp_failed", object=name, limit="grasp", cause="weak_grip", measured=weak)
+                    Event(kind="grasp_failed", object=name, limit="grasp", cause=cause, measured=weak)
                 )
+
+    def _overload(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
+        """The measures of a grip on object ``i`` whose load has stayed past ``slip_margin`` times what it holds for
+        ``slip_time`` (empty while it holds). The load is what the grasp weld carries, taken about the pads' patch: the
+        force (the squeeze's friction on both pads holds ``2 grip``), the twist about the closing axis (``grip``
+        times the grip's depth across the pads) and the tilt about the other two axes (``grip`` times the width
+        between the pads), as :meth:`_weak` holds a static load; a sheet's fold bends, so it carries force only."""
+        eq = int(self.parts.grasp_eq[i])
+        load = self.sim.weld_load(np.array([w]), eq)[0]
+        force, torque = load[:3], load[3:]
+        patch = state.xpos[w, self.parts.gripper] + hold.centre
+        torque = torque + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, force)
+        grip = self.config.grip_friction * self.config.grip_force
+        measured = {
+            "force": float(np.linalg.norm(force)),
+            "most_force": 2 * grip,
+            "twist": 0.0 if self.parts.sheet[i] else float(abs(torque[1])),
+            "most_twist": grip * hold.depth,
+            "tilt": 0.0 if self.parts.sheet[i] else float(np.hypot(torque[0], torque[2])),
+            "most_tilt": grip * hold.width,
+            "depth": hold.depth,
+            "width": hold.width,
+            "margin": self.config.slip_margin,
+        }
+        ratio = max(measured[k] / max(measured[f"most_{k}"], 1e-9) for k in ("force", "twist", "tilt"))
+        now, since = float(state.time[w]), float(self.state.overloaded_since[w])
+        if ratio <= self.config.slip_margin:
+            self.state.overloaded_since[w] = np.nan
+            return {}
+        if np.isnan(since):
+            self.state.overloaded_since[w] = since = now
+        if now - since < self.config.slip_time - 1e-9:
+            return {}
+        return measured | {"for": now - since}
 
     def _resting_under(self, state: BatchState, w: int, grip: Grip) -> list[set[int]]:
         """For each finger, the graspable objects its tip rests on (under its footprint, just below it).

@@ -98,34 +98,25 @@ def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, 
             assert not any(c.outcome == "stalled" for c in rollout.calls), [c for c in rollout.calls]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: the grip's load counts what is welded to the held object, not what rests on it, so a "
-    "2 kg crate lying on a light plank held 0.21 m away is lifted with it; counting riders whenever they touch also "
-    "refused honest drags (a can riding paper pulled along the table), and counting them only once the held object "
-    "leaves its support did not yet tell the two apart: the grip's share of the load needs contact forces",
-)
 def test_a_crate_resting_on_a_held_plank_loads_the_grip(run_texts: Any) -> None:
-    """Found by an adversarial run (every world of seeds 11 and 2 succeeded)."""
+    """Found by an adversarial run (every world of seeds 11 and 2 succeeded): a 2 kg crate lying on a light plank held
+    0.21 m away was lifted with it, as the grip's load counted what is welded to the held object, not what rests on
+    it. The grip's load is now what its weld carries: the plank slips out of it."""
     code = (CHEATS / "arm_lift_a_plank_under_a_crate.py").read_text()
     for rollout in run_texts(_task("arm_crate_on_a_plank"), [code] * 2, seed=11):
         assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+        assert "plank slipped out of the grip" in world_failure(rollout), world_failure(rollout)
+        assert "about the fingers' closing axis" in world_failure(rollout), world_failure(rollout)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: the grip is checked against the held object's weight and its torque (and what is "
-    "welded to it), not against the load a held tool meets: raking a 9 kg jug in with the hammer's head puts 91-109 N "
-    "and 14-18 N m on the weld that stands for a 16 mm friction grip (the honest hammer and stick programs peak at 7 N "
-    "and 1.9 N m, against the 0.96 N m the rule grants a static load across the pads). Both backends hold the weld's "
-    "constraint force (MuJoCo's efc_force, mujoco-warp's efc.force); the grip's twisting capacity that the honest "
-    "stick push stays within is not settled",
-)
 def test_a_heavy_jug_raked_in_by_a_held_hammer_overloads_the_grip(run_texts: Any) -> None:
-    """Found by an adversarial run (every world of seeds 0 and 1 succeeded)."""
+    """Found by an adversarial run (every world of seeds 0 and 1 succeeded): raking a 9 kg jug in with the head of a
+    hammer held by its handle end put 91-109 N and 14-18 N m on the weld that stands for a 16 mm friction grip, which
+    was checked against the hammer's own weight only. The hammer now slips out of the grip."""
     code = (CHEATS / "arm_rake_a_heavy_milk_with_the_hammer.py").read_text()
     for rollout in run_texts(_task("arm_heavy_milk_beyond_reach"), [code] * 2, seed=0):
         assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+        assert "hammer slipped out of the grip" in world_failure(rollout), world_failure(rollout)
 
 
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
