@@ -143,8 +143,8 @@ class Event(BaseModel):
         }
         worst = max(loads, key=lambda k: m.get(k, 0.0) / max(m.get(f"most_{k}", 0.0), 1e-9))
         return (
-            f"{obj} slipped out of the grip: for {m.get('for', 0.0):.1f} s its load ({obj}'s weight, what it carries "
-            f"and what it met) put {loads[worst]}"
+            f"{obj} slipped out of the grip: its load ({obj}'s weight, what it carries and what it met) put "
+            f"{loads[worst]}, past that for {m.get('for', 0.0):.1f} s in all"
         )
 
     def _weak_grip(self) -> str:

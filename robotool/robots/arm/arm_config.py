@@ -61,8 +61,11 @@ class ArmConfig:
     grasp weld measures it) may exceed what the grip holds, the static rule's capacities: the rigid weld passes on load
     peaks that pads ride out by giving a little. Honest tool use peaks at 1.2 (the hammer held by its handle end
     pulling a carton in); a tool jammed on the table or raking in a load several times its own weight goes past it."""
-    slip_time: float = 0.2
-    """s: a grip loaded past ``slip_margin`` for this long slips and lets go."""
+    slip_time: float = 0.3
+    """s: a grip loaded past ``slip_margin`` for this long in all while it holds (three 0.1 s ticks) slips and lets go
+    (slip adds up: a load that keeps coming back in short bursts slips it as a steady one does). The planner's tool
+    pulls go past the margin for one tick at most (a tool's head landing on the table), a stick tipping a carton over
+    by its top edge for two."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
     pinch at its edge."""
