@@ -78,6 +78,9 @@ class ArmConfig:
     """m above a grasp point to approach from."""
     slide_lift: float = 0.004
     """m a held object is lifted off the table while it pushes things."""
+    path_clearance: float = 0.02
+    """m: a hook pulled within this of an object it is not pulling slides over it (a perturbed world shifts objects by
+    up to 1 cm and turns them; a hook lowered onto one and dragged presses on it and overloads the grip)."""
     tool_gap: float = 0.03
     """m between a tool's face and an object before a push or pull."""
     inside_margin: float = 0.06

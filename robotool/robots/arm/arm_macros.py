@@ -6,6 +6,7 @@ them into programs for a task, with parameters from the scene's geometry and the
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from robotool.task.task_model import Task
 CLEAR = ARM.approach_height
 SLIDE = ARM.slide_lift
 GAP = ARM.tool_gap
+PATH_CLEARANCE = ARM.path_clearance
 INSIDE = ARM.inside_margin
 CARRY = ARM.carry_clearance
 PRESS = ARM.press_depth
@@ -186,8 +188,23 @@ def free_table_spot(arm: Arm, box: Box) -> np.ndarray:
     return best
 
 
-def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, lateral: str) -> bool:
-    """Reach the hook's head behind the target and pull it into the workspace. False if it cannot."""
+@dataclass(frozen=True)
+class HookWay:
+    """Where a hook pull goes: the gripper's x-y offset from the target's centre where the head is lowered (``pre``),
+    the pull's direction and length, the target's offset along the head (``lateral``), and how high the hook slides
+    over the other objects in its way (``over``: the highest top among them, 0 where the way is clear)."""
+
+    pre: np.ndarray
+    pull: np.ndarray
+    pull_by: float
+    lateral: float
+    over: float
+
+
+def hook_way(arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -> HookWay | None:
+    """The pull with the target ``lateral`` of the way along the head from the handle (0: as near it as fits, 1: as
+    far), or None when the head cannot reach behind the target, the pull leaves the workspace, or what is in the
+    hook's way stands so high that the head would pass over the target's lower half."""
     handle, head = geometry.object_parts(hook)
     axis = _flat(handle.rot[:, 0])
     reach = axis * np.sign((head.center - handle.center)[:2] @ axis)  # from the handle to the head
@@ -195,7 +212,7 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
     goal_xy = arm.bring_in(np.asarray(target.grasp_point[:2]))
     want = goal_xy - np.asarray(target.grasp_point[:2])
     if np.linalg.norm(want) < 1e-6 or _flat(want) @ pull < 0.7:
-        return False
+        return None
     side = _flat((head.center - handle.center)[:2] - ((head.center - handle.center)[:2] @ axis) * axis)
     g0 = np.asarray(hook.grasp_point)
     face = head.center[:2] + pull * hook.thickness / 2  # the head's inner face, which meets the target
@@ -207,14 +224,41 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
     near = handle_side + hook.thickness / 2 + t_side + 0.01
     far = head_far - t_side - 0.005
     if near > far:
-        return False
-    s = near if lateral == "near" else (near + far) / 2
+        return None
+    s = near + lateral * (far - near)
     pull_by = float(want @ pull) + GAP
     pre = -pull * (t_along + GAP + face_along) - side * s
     g_pre = box.center + pre
     if not (arm.inside(g_pre) and arm.inside(g_pre + pull * pull_by)):
+        return None
+    over = _in_the_way(arm, hook, target, g_pre - g0[:2], pull * pull_by)
+    if over + SLIDE > Box.of(target).bottom + (Box.of(target).top - Box.of(target).bottom) / 2:
+        return None  # over what is in its way, the head would pass above the target's middle
+    return HookWay(pre, pull, pull_by, float(s), over)
+
+
+def _in_the_way(arm: Arm, hook: SceneObject, target: SceneObject, shift: np.ndarray, pull: np.ndarray) -> float:
+    """The highest top of the objects but ``target`` that ``hook``, lowered where it is moved by ``shift`` (x-y) and
+    pulled along ``pull``, would come within ``PATH_CLEARANCE`` of (0 where none is): lowered onto one and dragged,
+    the hook would press on it with the arm's full force."""
+    over = 0.0
+    for part in geometry.object_parts(hook):
+        lo, hi = (b[:2] + shift for b in part.aabb())
+        swept = Box(hook.name, np.minimum(lo, lo + pull), np.maximum(hi, hi + pull), 0.0, 0.0)
+        for o in arm.task.objects:
+            box = Box.of(o)
+            if o is not hook and o is not target and box.top > SLIDE and swept.overlap(box) > -PATH_CLEARANCE:
+                over = max(over, box.top)
+    return over
+
+
+def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -> bool:
+    """Reach the hook's head behind the target and pull it into the workspace. False if it cannot."""
+    way = hook_way(arm, hook, target, lateral)
+    if way is None:
         return False
-    t, carry, low = pick_and_lift(
+    pre, pull, pull_by, s = way.pre, way.pull, way.pull_by, way.lateral
+    t, carry, table = pick_and_lift(
         prog, arm, hook, target, f"tool: a hook whose head reaches behind {target.name} to pull it in"
     )
     above = Point.at(t, (*pre, 0)).with_axis(2, None, carry)
@@ -225,8 +269,10 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
         intent=f"carry {hook.name}'s head over the far side of {target.name}",
         explanation=f"head's inner face {GAP} m beyond {target.name}, {target.name} {s:.3f} m along the head",
     )
+    low = table + way.over
     down = above.with_axis(2, None, low)
-    prog.motion("move_to_position", point=down, objects=[hook.name], intent=f"lower {hook.name}'s head to the table")
+    where = f"over what lies in its way ({way.over:.3f} m high)" if way.over > 0 else "to the table"
+    prog.motion("move_to_position", point=down, objects=[hook.name], intent=f"lower {hook.name}'s head {where}")
     end = down.shifted((*(pull * pull_by), 0))
     prog.motion(
         "move_to_position",
@@ -488,7 +534,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
         return
     tool_objects = [o for o in task.objects if o is not target and arm.graspable(o)]
     for hook in (o for o in tool_objects if o.shape == "hook"):
-        for lateral in ("near", "middle"):
+        for lateral in (0.0, 0.5):
             prog = Program()
             if hook_pull(prog, arm, hook, target, lateral):
                 _finish(prog, arm, target)
