@@ -133,18 +133,21 @@ class Event(BaseModel):
         """Which load made a held object slip out of the grip, against what the grip holds."""
         m, obj = self.measured, self.object
         loads = {
-            "force": f"{m.get('force', 0.0):.1f} N on the pads, more than {m.get('margin', 0.0):g} times the "
-            f"{m.get('most_force', 0.0):.0f} N the grip holds",
-            "twist": f"{m.get('twist', 0.0):.2f} N m about the fingers' closing axis, more than "
-            f"{m.get('margin', 0.0):g} times the {m.get('most_twist', 0.0):.2f} N m its "
-            f"{1000 * m.get('depth', 0.0):.0f} mm deep grip holds",
-            "tilt": f"{m.get('tilt', 0.0):.2f} N m across the fingers, more than {m.get('margin', 0.0):g} times the "
-            f"{m.get('most_tilt', 0.0):.2f} N m its {1000 * m.get('width', 0.0):.0f} mm wide grip holds",
+            "force": f"{m.get('force', 0.0):.1f} N on the pads, more than the {m.get('most_force', 0.0):.0f} N their "
+            "friction holds",
+            "twist": f"{m.get('twist', 0.0):.2f} N m about the fingers' closing axis, more than the "
+            f"{m.get('most_twist', 0.0):.2f} N m its {1000 * m.get('depth', 0.0):.0f} mm deep grip holds",
+            "tilt": f"{m.get('tilt', 0.0):.2f} N m across the fingers, more than the {m.get('most_tilt', 0.0):.2f} N m "
+            f"its {1000 * m.get('width', 0.0):.0f} mm wide grip holds",
         }
-        worst = max(loads, key=lambda k: m.get(k, 0.0) / max(m.get(f"most_{k}", 0.0), 1e-9))
+        worst = (
+            "force"  # it slid out at once
+            if m.get("for", 0.0) == 0.0
+            else max(("twist", "tilt"), key=lambda k: m.get(k, 0.0) / max(m.get(f"most_{k}", 0.0), 1e-9))
+        )
         return (
             f"{obj} slipped out of the grip: its load ({obj}'s weight, what it carries and what it met) put "
-            f"{loads[worst]}, past that for {m.get('for', 0.0):.1f} s in all"
+            f"{loads[worst]}" + ("" if worst == "force" else f", past that for {m.get('for', 0.0):.1f} s in all")
         )
 
     def _weak_grip(self) -> str:

@@ -82,8 +82,8 @@ class SkillController(ABC):
 
     The contract: :meth:`start`, :meth:`tick` and :meth:`query` run the skills; :meth:`world_states` names the
     dataclasses that hold all the controller's per-world state (world index first), which :meth:`snapshot` copies
-    and :meth:`restore` puts back (the runner's undo of a batched tick that raised); :meth:`robot_conditions` is an
-    optional hook with a default (no conditions on the robot itself).
+    and :meth:`restore` puts back (the runner's undo of a batched tick that raised); :meth:`robot_conditions` and
+    :meth:`overloaded` are optional hooks with defaults (no conditions on the robot itself, nothing overloaded).
     """
 
     @abstractmethod
@@ -125,6 +125,12 @@ class SkillController(ABC):
         """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``);
         none by default (a robot that cannot fall)."""
         return {}
+
+    def overloaded(self, state: BatchState) -> np.ndarray:
+        """(nworld,) bool: the worlds in which ``state`` has the robot bear more than its contacts hold (a grip pushed
+        past its friction, which lets go at the next tick): what the world shows there did not happen, so goal memory
+        skips it (a button pressed only by a tool the grip could not have held). None by default; read only."""
+        return np.zeros(len(state.time), dtype=bool)
 
 
 @dataclass(frozen=True)

@@ -369,7 +369,7 @@ class _Run:
         alive = self.alive()
         self.magnets.update(self.sim, state, alive)
         self.sheets.update(self.sim, state, alive)
-        self.goal.update(state, alive)
+        self.goal.update(state, alive & ~self.controller.overloaded(state))
         scene = self.scene
         owner = scene.body_object
         robot_contact = state.touching[:, scene.robot_body, :].any(axis=1)  # (nworld, nbody)

@@ -57,14 +57,15 @@ class ArmConfig:
     grip_friction: float = 1.0
     """The pads hold by friction this many times the squeeze."""
     slip_margin: float = 1.5
-    """How far the load a held object puts on the grip while held (its weight, what it carries, what it meets, as the
-    grasp weld measures it) may exceed what the grip holds, the static rule's capacities: the rigid weld passes on load
-    peaks that pads ride out by giving a little. Honest tool use peaks at 1.2 (the hammer held by its handle end
-    pulling a carton in); a tool jammed on the table or raking in a load several times its own weight goes past it."""
+    """How many times the static rule's couples (``grip_force`` across the grip's depth and width) the pads hold
+    against a twist or tilt while an object is held: the static rule is kept on the safe side, and a pad's torsional
+    friction over its whole patch holds about half as much again (about 1.5 N m for 16 mm pads). The hammer held by its
+    handle end pulling a carton in loads its grip to 1.25 times the static couple; raking in a load several times its
+    own weight goes past this. The force is held up to the pads' friction, ``2 grip_friction grip_force``, exactly."""
     slip_time: float = 0.3
-    """s: a grip loaded past ``slip_margin`` for this long in all while it holds (three 0.1 s ticks) slips and lets go
+    """s: a grip loaded past what it holds for this long in all while it holds (three 0.1 s ticks) slips and lets go
     (slip adds up: a load that keeps coming back in short bursts slips it as a steady one does). The planner's tool
-    pulls go past the margin for one tick at most (a tool's head landing on the table), a stick tipping a carton over
+    pulls go past it for one tick at most (a tool's head landing on the table), a stick tipping a carton over
     by its top edge for two."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
@@ -78,9 +79,6 @@ class ArmConfig:
     """m above a grasp point to approach from."""
     slide_lift: float = 0.004
     """m a held object is lifted off the table while it pushes things."""
-    path_clearance: float = 0.02
-    """m: a hook pulled within this of an object it is not pulling slides over it (a perturbed world shifts objects by
-    up to 1 cm and turns them; a hook lowered onto one and dragged presses on it and overloads the grip)."""
     tool_gap: float = 0.03
     """m between a tool's face and an object before a push or pull."""
     inside_margin: float = 0.06

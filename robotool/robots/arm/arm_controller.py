@@ -90,6 +90,10 @@ class ArmController(SkillController):
         """The motion's and the grasp's per-world state."""
         return (self.state, self.grasp.state)
 
+    def overloaded(self, state: BatchState) -> np.ndarray:
+        """The worlds where a held object loads the grip past its pads' friction (:meth:`Grasp.past_friction`)."""
+        return self.grasp.past_friction(state)
+
     # -- motion skills -------------------------------------------------------------------------
 
     def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:

@@ -299,35 +299,57 @@ class Grasp:
                 )
 
     def _overload(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
-        """The measures of a grip on object ``i`` whose load has been past ``slip_margin`` times what it holds for
-        ``slip_time`` in all since the grasp (empty while it holds: a peak is ridden out, but slip adds up, so a load
-        that keeps coming back in bursts slips the grip as a steady one does). The load is what the grasp weld
-        carries, taken about the pads' patch: the force (the squeeze's friction on both pads holds ``2 grip``), the
-        twist about the closing axis (``grip`` times the grip's depth across the pads) and the tilt about the other
-        two axes (``grip`` times the width between the pads), as :meth:`_weak` holds a static load; a sheet's fold
-        bends, so it carries force only."""
-        eq = int(self.parts.grasp_eq[i])
-        load = self.sim.weld_load(np.array([w]), eq)[0]
-        force, torque = load[:3], load[3:]
-        patch = state.xpos[w, self.parts.gripper] + hold.centre
-        torque = torque + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, force)
+        """The measures of a grip on object ``i`` that cannot hold its load (empty while it holds). The load is what
+        the grasp weld carries, taken about the pads' patch: the force, which the squeeze's friction on both pads holds
+        up to ``2 grip`` (past it, the object slides out at once); the twist about the closing axis and the tilt about
+        the other two, which the pads hold up to ``slip_margin`` times the static rule's couples (``grip`` times the
+        grip's depth across the pads, ``grip`` times the width between them, as :meth:`_weak` holds a static load),
+        and past which the object turns in the grip until it has been past them for ``slip_time`` in all since the
+        grasp (a peak as a tool lands is ridden out, but slip adds up: a load that keeps coming back in bursts slips
+        the grip as a steady one does). A sheet's fold bends, so it carries force only."""
+        force, torque = self._load(state, w, i, hold.centre)
         grip = self.config.grip_friction * self.config.grip_force
+        margin = self.config.slip_margin
         measured = {
             "force": float(np.linalg.norm(force)),
             "most_force": 2 * grip,
             "twist": 0.0 if self.parts.sheet[i] else float(abs(torque[1])),
-            "most_twist": grip * hold.depth,
+            "most_twist": margin * grip * hold.depth,
             "tilt": 0.0 if self.parts.sheet[i] else float(np.hypot(torque[0], torque[2])),
-            "most_tilt": grip * hold.width,
+            "most_tilt": margin * grip * hold.width,
             "depth": hold.depth,
             "width": hold.width,
-            "margin": self.config.slip_margin,
         }
-        ratio = max(measured[k] / max(measured[f"most_{k}"], 1e-9) for k in ("force", "twist", "tilt"))
-        if ratio > self.config.slip_margin:  # each tick past it slips the grip a little, for good
-            self.state.overloaded_for[w] += self.scene.control_dt
+        if measured["force"] > measured["most_force"]:
+            return measured | {"for": 0.0}  # past the pads' friction: it slides out at once
+        if max(measured[k] / max(measured[f"most_{k}"], 1e-9) for k in ("twist", "tilt")) > 1.0:
+            self.state.overloaded_for[w] += self.scene.control_dt  # each tick past it turns it in the grip, for good
         over = float(self.state.overloaded_for[w])
         return measured | {"for": over} if over >= self.config.slip_time - 1e-9 else {}
+
+    def _load(self, state: BatchState, w: int, i: int, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The force and the torque about the pads' patch (``centre``, from the gripper centre) that held object ``i``
+        puts on the grip in world ``w``, from its grasp weld's load."""
+        eq = int(self.parts.grasp_eq[i])
+        load = self.sim.weld_load(np.array([w]), eq)[0]
+        patch = state.xpos[w, self.parts.gripper] + centre
+        return load[:3], load[3:] + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, load[:3])
+
+    def past_friction(self, state: BatchState) -> np.ndarray:
+        """(nworld,) bool: the worlds where a held object pushes or pulls on the grip harder than both pads' friction
+        holds (read only: :meth:`check_holds` lets go of it at the next tick)."""
+        out = np.zeros(self.sim.nworld, dtype=bool)
+        eqs = self.parts.grasp_eq[self.parts.grasp_eq >= 0]
+        if not eqs.size:
+            return out
+        objects = np.flatnonzero(self.parts.grasp_eq >= 0)
+        active = state.eq_active[:, eqs]
+        most = 2 * self.config.grip_friction * self.config.grip_force
+        for w in np.flatnonzero(active.any(axis=1)).tolist():
+            i = int(objects[np.argmax(active[w])])
+            force, _ = self._load(state, w, i, self.state.hold_centre[w])
+            out[w] = float(np.linalg.norm(force)) > most
+        return out
 
     def _resting_under(self, state: BatchState, w: int, grip: Grip) -> list[set[int]]:
         """For each finger, the graspable objects its tip rests on (under its footprint, just below it).

@@ -24,7 +24,7 @@ from robotool.task.task_model import Task
 CLEAR = ARM.approach_height
 SLIDE = ARM.slide_lift
 GAP = ARM.tool_gap
-PATH_CLEARANCE = ARM.path_clearance
+HOOK_LATERALS = (0.0, 0.5, 0.25, 0.75)  # where the target may sit along a hook's head, 0 nearest its handle
 INSIDE = ARM.inside_margin
 CARRY = ARM.carry_clearance
 PRESS = ARM.press_depth
@@ -191,20 +191,19 @@ def free_table_spot(arm: Arm, box: Box) -> np.ndarray:
 @dataclass(frozen=True)
 class HookWay:
     """Where a hook pull goes: the gripper's x-y offset from the target's centre where the head is lowered (``pre``),
-    the pull's direction and length, the target's offset along the head (``lateral``), and how high the hook slides
-    over the other objects in its way (``over``: the highest top among them, 0 where the way is clear)."""
+    the pull's direction and length, the target's offset along the head (``lateral``), and how far from every other
+    object the hook lands (``clearance``, m; below 0 where it lands on one)."""
 
     pre: np.ndarray
     pull: np.ndarray
     pull_by: float
     lateral: float
-    over: float
+    clearance: float
 
 
 def hook_way(arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -> HookWay | None:
     """The pull with the target ``lateral`` of the way along the head from the handle (0: as near it as fits, 1: as
-    far), or None when the head cannot reach behind the target, the pull leaves the workspace, or what is in the
-    hook's way stands so high that the head would pass over the target's lower half."""
+    far), or None when the head cannot reach behind the target or the pull leaves the workspace."""
     handle, head = geometry.object_parts(hook)
     axis = _flat(handle.rot[:, 0])
     reach = axis * np.sign((head.center - handle.center)[:2] @ axis)  # from the handle to the head
@@ -231,25 +230,20 @@ def hook_way(arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -
     g_pre = box.center + pre
     if not (arm.inside(g_pre) and arm.inside(g_pre + pull * pull_by)):
         return None
-    over = _in_the_way(arm, hook, target, g_pre - g0[:2], pull * pull_by)
-    if over + SLIDE > Box.of(target).bottom + (Box.of(target).top - Box.of(target).bottom) / 2:
-        return None  # over what is in its way, the head would pass above the target's middle
-    return HookWay(pre, pull, pull_by, float(s), over)
+    return HookWay(pre, pull, pull_by, float(s), _landing_clearance(arm, hook, target, g_pre - g0[:2]))
 
 
-def _in_the_way(arm: Arm, hook: SceneObject, target: SceneObject, shift: np.ndarray, pull: np.ndarray) -> float:
-    """The highest top of the objects but ``target`` that ``hook``, lowered where it is moved by ``shift`` (x-y) and
-    pulled along ``pull``, would come within ``PATH_CLEARANCE`` of (0 where none is): lowered onto one and dragged,
-    the hook would press on it with the arm's full force."""
-    over = 0.0
+def _landing_clearance(arm: Arm, hook: SceneObject, target: SceneObject, shift: np.ndarray) -> float:
+    """How far ``hook``, lowered where it is moved by ``shift`` (x-y), lands from every object but ``target`` that
+    stands higher than it slides (m, below 0 where it lands on one): lowered onto one and dragged, it would press on it
+    with the arm's full force."""
+    boxes = [Box.of(o) for o in arm.task.objects if o is not hook and o is not target]
+    clearance = np.inf
     for part in geometry.object_parts(hook):
         lo, hi = (b[:2] + shift for b in part.aabb())
-        swept = Box(hook.name, np.minimum(lo, lo + pull), np.maximum(hi, hi + pull), 0.0, 0.0)
-        for o in arm.task.objects:
-            box = Box.of(o)
-            if o is not hook and o is not target and box.top > SLIDE and swept.overlap(box) > -PATH_CLEARANCE:
-                over = max(over, box.top)
-    return over
+        landing = Box(hook.name, lo, hi, 0.0, 0.0)
+        clearance = min([clearance, *(-landing.overlap(box) for box in boxes if box.top > SLIDE)])
+    return float(clearance)
 
 
 def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -> bool:
@@ -258,7 +252,7 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
     if way is None:
         return False
     pre, pull, pull_by, s = way.pre, way.pull, way.pull_by, way.lateral
-    t, carry, table = pick_and_lift(
+    t, carry, low = pick_and_lift(
         prog, arm, hook, target, f"tool: a hook whose head reaches behind {target.name} to pull it in"
     )
     above = Point.at(t, (*pre, 0)).with_axis(2, None, carry)
@@ -269,10 +263,8 @@ def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, l
         intent=f"carry {hook.name}'s head over the far side of {target.name}",
         explanation=f"head's inner face {GAP} m beyond {target.name}, {target.name} {s:.3f} m along the head",
     )
-    low = table + way.over
     down = above.with_axis(2, None, low)
-    where = f"over what lies in its way ({way.over:.3f} m high)" if way.over > 0 else "to the table"
-    prog.motion("move_to_position", point=down, objects=[hook.name], intent=f"lower {hook.name}'s head {where}")
+    prog.motion("move_to_position", point=down, objects=[hook.name], intent=f"lower {hook.name}'s head to the table")
     end = down.shifted((*(pull * pull_by), 0))
     prog.motion(
         "move_to_position",
@@ -534,7 +526,12 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
         return
     tool_objects = [o for o in task.objects if o is not target and arm.graspable(o)]
     for hook in (o for o in tool_objects if o.shape == "hook"):
-        for lateral in (0.0, 0.5):
+        ways = [
+            (w.clearance, -k, lateral)
+            for k, lateral in enumerate(HOOK_LATERALS)
+            if (w := hook_way(arm, hook, target, lateral))
+        ]
+        for _, _, lateral in sorted(ways, reverse=True)[:2]:  # the two that land furthest from the other objects
             prog = Program()
             if hook_pull(prog, arm, hook, target, lateral):
                 _finish(prog, arm, target)

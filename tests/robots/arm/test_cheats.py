@@ -75,6 +75,8 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
     ("arm_pinch_a_steel_plate", "arm_steel_plate_lying_flat", "wider than their"),  # 3 mm thin: read as paper
     ("arm_nudge_a_rolled_cube_half_onto_a_ribbon", "arm_rolled_cube_beside_a_narrow_ribbon", "clamped"),  # its side
+    # 141 N pushed through a friction grip that holds 120 N: the press the weld passed on is not counted either
+    ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "the 120 N their friction holds"),
 ]
 
 
@@ -117,6 +119,16 @@ def test_a_heavy_jug_raked_in_by_a_held_hammer_overloads_the_grip(run_texts: Any
     for rollout in run_texts(_task("arm_heavy_milk_beyond_reach"), [code] * 2, seed=0):
         assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
         assert "hammer slipped out of the grip" in world_failure(rollout), world_failure(rollout)
+
+
+def test_the_slat_presses_a_button_its_grip_can_push(run_texts: Any) -> None:
+    """The control for the stiff button: the same program presses the same button on a 9000 N/m spring (90 N for the
+    centimetre, within the 120 N the pads' friction holds), so its failure above is the grip, not the program."""
+    data = _task("arm_stiff_button_facing_down").model_dump(mode="json", exclude_defaults=True)
+    next(o for o in data["objects"] if o["name"] == "button")["stiffness"] = 9000.0
+    code = (CHEATS / "arm_drive_a_slat_into_a_stiff_button.py").read_text()
+    for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
+        assert rollout.success, world_failure(rollout)
 
 
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()

@@ -6,11 +6,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
 import pytest
-from fixtures.reference import program
+from fixtures.reference import REFERENCE, program
 
 from robotool import sim, tasks
 from robotool.eval.failure_classes import TaskFacts, classify, tools_used
+from robotool.robots.arm.arm_controller import ArmController
 from robotool.task.task_file import parse_task
 from robotool.verify import world_failure
 
@@ -294,3 +296,17 @@ def test_a_grip_lets_go_when_more_is_joined_to_it_than_it_can_carry() -> None:
     slip = _grasp_events(r)[1]
     assert slip.cause == "weak_grip" and slip.measured["joined"] == 1 and slip.measured["weight"] > 29
     assert not r.success and "needs" in world_failure(r) and "cube and 1 joined to it" in world_failure(r)
+
+
+def test_goal_memory_skips_states_in_which_the_grip_is_past_its_friction(
+    sim_scene: Any, run_texts: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A press seen only in states where a held tool pushes harder than the pads' friction holds did not happen (a real
+    grip slides first): the reference program's press, with every state marked so, does not count, and counts when
+    the arm reads the states itself (the held cube pushes the button with a few newtons)."""
+    scene, code = sim_scene("button_pressing"), program(REFERENCE["button_pressing"])
+    (honest,) = run_texts(scene, [code], seed=1)
+    assert honest.success
+    monkeypatch.setattr(ArmController, "overloaded", lambda self, state: np.ones(len(state.time), dtype=bool))
+    (skipped,) = run_texts(scene, [code], seed=1)
+    assert not skipped.success and skipped.conditions["button_pressed"] is False
