@@ -13,6 +13,7 @@ from fixtures.paths import REPO
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.codegen import Point, Program
+from robotool.robots.arm import arm_macros
 from robotool.signatures.models import PlanStep, StepParameters
 from robotool.solution import Solution
 from robotool.task.task_file import parse_task
@@ -211,3 +212,17 @@ def test_a_tool_wider_across_the_fingers_than_their_opening_is_not_planned_with(
     assert not Arm(along_y).graspable(along_y.object("cane"))
     assert all("cane" not in p.objects for p in candidates(along_y, tools=True))
     assert Arm(along_x).graspable(along_x.object("cane"))
+
+
+def test_a_hook_lands_where_it_is_clearest_of_the_other_objects() -> None:
+    """On milk_reaching 8436 the hook's first two places along its head (the target nearest the handle, and in the
+    middle) land it on the lock and on the stuffed toy; pressed down there and dragged, it slipped out of the grip in
+    a fresh world. The places tried are now the two clearest, a quarter of the way along the head first."""
+    task = tasks.generate("milk_reaching", 8436).task
+    arm = arm_macros.Arm(task)
+    hook, milk = task.object("hammer"), task.object("milk")
+    clearance = {k: arm_macros.hook_way(arm, hook, milk, k).clearance for k in arm_macros.HOOK_LATERALS}  # type: ignore[union-attr]
+    assert clearance[0.0] < 0 and clearance[0.5] < 0  # on the lock, on the toy
+    chosen = arm_macros.hook_laterals(arm, hook, milk)
+    assert chosen[0] == 0.25 and clearance[0.25] > 0.01
+    assert clearance[chosen[1]] == max(v for k, v in clearance.items() if k != 0.25)

@@ -246,6 +246,17 @@ def _landing_clearance(arm: Arm, hook: SceneObject, target: SceneObject, shift: 
     return float(clearance)
 
 
+def hook_laterals(arm: Arm, hook: SceneObject, target: SceneObject) -> list[float]:
+    """The two places along the head (``HOOK_LATERALS``) where the hook lands furthest from the other objects, the
+    clearest first (ties in the order of ``HOOK_LATERALS``)."""
+    ways = [
+        (way.clearance, -k, lateral)
+        for k, lateral in enumerate(HOOK_LATERALS)
+        if (way := hook_way(arm, hook, target, lateral))
+    ]
+    return [lateral for _, _, lateral in sorted(ways, reverse=True)[:2]]
+
+
 def hook_pull(prog: Program, arm: Arm, hook: SceneObject, target: SceneObject, lateral: float) -> bool:
     """Reach the hook's head behind the target and pull it into the workspace. False if it cannot."""
     way = hook_way(arm, hook, target, lateral)
@@ -526,12 +537,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
         return
     tool_objects = [o for o in task.objects if o is not target and arm.graspable(o)]
     for hook in (o for o in tool_objects if o.shape == "hook"):
-        ways = [
-            (w.clearance, -k, lateral)
-            for k, lateral in enumerate(HOOK_LATERALS)
-            if (w := hook_way(arm, hook, target, lateral))
-        ]
-        for _, _, lateral in sorted(ways, reverse=True)[:2]:  # the two that land furthest from the other objects
+        for lateral in hook_laterals(arm, hook, target):
             prog = Program()
             if hook_pull(prog, arm, hook, target, lateral):
                 _finish(prog, arm, target)
