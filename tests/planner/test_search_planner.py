@@ -206,7 +206,8 @@ def test_a_tool_wider_across_the_fingers_than_their_opening_is_not_planned_with(
     cannot be held at it (the simulator says the fingers rest on top of it). The planner made hook programs with it
     anyway, each failing at the grasp; now it counts only what fits between the fingers as a tool. The same cane
     turned along x is still planned with."""
-    from robotool.robots.arm.arm_macros import Arm, candidates
+    from robotool.robots.arm.arm_candidates import candidates
+    from robotool.robots.arm.arm_macros import Arm
 
     along_y, along_x = _cane_task(-90.0), _cane_task(0.0)
     assert not Arm(along_y).graspable(along_y.object("cane"))

@@ -3,7 +3,8 @@
 Everything the rest of robotool knows about it is the :data:`ROBOT` record below; its parts are the modules
 of this package: :mod:`.arm_skills` (limits and skills), :mod:`.arm_description`,
 :mod:`.arm_concepts`, :mod:`.arm_body` (simulator model), :mod:`.arm_controller` and :mod:`.arm_grasp` (skill
-controller), :mod:`.arm_goals` (``grasped``), :mod:`.arm_macros` (planner) and :mod:`.arm_config` (the tunables).
+controller), :mod:`.arm_goals` (``grasped``), :mod:`.arm_macros` and :mod:`.arm_candidates` (planner) and
+:mod:`.arm_config` (the tunables).
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ def _goal_trackers() -> Mapping[str, GoalTrackerFactory]:
 
 
 def _planner() -> SearchMacros:
-    from robotool.robots.arm.arm_macros import candidates  # the planner loads on first use
+    from robotool.robots.arm.arm_candidates import candidates  # the planner loads on first use
 
     return SearchMacros(candidates=candidates, beam=8, rounds=4, seconds=60.0)
 
