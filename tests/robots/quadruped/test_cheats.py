@@ -546,6 +546,25 @@ def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed(
     assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: a push weighs the pushed object and what rests on nothing but what the push moves, not "
+    "the load pressing on it, so a 3 kg chair under a lever's raised end that carries a 30 kg sandbag (about 145 N on "
+    "the chair, held up by the fixed roller too) is pushed out as 3 kg and the cube rises; the torso pressed on it "
+    "with 71-114 N (median) where an honest chair push takes 9-28 N: weighing a push by the load on it, or the robot's "
+    "push force, needs contact forces from both backends (as the weld load has them)",
+)
+def test_a_chair_pinned_under_a_loaded_lever_end_is_weighed_with_its_load() -> None:
+    """Found by an adversarial run this session: every world of seeds 0-3 lifted the cube (0.15 m)."""
+    rollouts = sim.run_sessions(
+        _scene("lever_with_a_sandbag_on_its_raised_end"),
+        start_sessions([_text("push_out_a_chair_pinned_under_a_loaded_lever")] * 2, "quadruped"),
+        seed=0,
+    )
+    for rollout in rollouts:
+        assert not rollout.success, failure_reason(rollout)
+
+
 def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
     """Tried as an optimiser would (the book cheat's program on a new layout): a cloth between the 2.5 kg pallet and a
     10 kg crate hangs off the pallet onto the floor, so the cloth as a whole is borne up by the floor too. The crate
