@@ -115,7 +115,7 @@ class GraspState:
     hold_edge: np.ndarray  # (nworld,) m
     hold_width: np.ndarray  # (nworld,) m
     hold_centre: np.ndarray  # (nworld, 3) m
-    overloaded_for: np.ndarray  # (nworld,) s the grip's load has been past slip_margin since the grasp
+    overloaded_for: np.ndarray  # (nworld,) s the grip's twist or tilt has been past what it holds since the grasp
     let_go: list[list[Event]]  # grips that gave way, told at the next skill end
 
     @classmethod
@@ -275,14 +275,8 @@ class Grasp:
 
     def check_holds(self, state: BatchState, mask: np.ndarray) -> None:
         """Let go of a held object whose grip can no longer carry its load: more was joined to it, or the load the
-        grasp weld carries has stayed past what the grip holds (:meth:`_overload`) for ``slip_time``."""
-        eqs = self.parts.grasp_eq[self.parts.grasp_eq >= 0]
-        if not eqs.size:
-            return
-        objects = np.flatnonzero(self.parts.grasp_eq >= 0)
-        active = state.eq_active[:, eqs]
-        for w in np.flatnonzero(mask & active.any(axis=1)).tolist():
-            i = int(objects[np.argmax(active[w])])
+        grasp weld carries is past what the grip holds (:meth:`_overload`)."""
+        for w, i in self._held(state, mask):
             hold = Hold(
                 self.state.hold_depth[w], self.state.hold_edge[w], self.state.hold_width[w], self.state.hold_centre[w]
             )
@@ -339,17 +333,19 @@ class Grasp:
         """(nworld,) bool: the worlds where a held object pushes or pulls on the grip harder than both pads' friction
         holds (read only: :meth:`check_holds` lets go of it at the next tick)."""
         out = np.zeros(self.sim.nworld, dtype=bool)
-        eqs = self.parts.grasp_eq[self.parts.grasp_eq >= 0]
-        if not eqs.size:
-            return out
-        objects = np.flatnonzero(self.parts.grasp_eq >= 0)
-        active = state.eq_active[:, eqs]
         most = 2 * self.config.grip_friction * self.config.grip_force
-        for w in np.flatnonzero(active.any(axis=1)).tolist():
-            i = int(objects[np.argmax(active[w])])
+        for w, i in self._held(state, np.ones(self.sim.nworld, dtype=bool)):
             force, _ = self._load(state, w, i, self.state.hold_centre[w])
             out[w] = float(np.linalg.norm(force)) > most
         return out
+
+    def _held(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, int]]:
+        """(world, object) for each world in ``mask`` whose gripper holds an object (its grasp weld is on)."""
+        objects = np.flatnonzero(self.parts.grasp_eq >= 0)
+        if not objects.size:
+            return []
+        active = state.eq_active[:, self.parts.grasp_eq[objects]]
+        return [(w, int(objects[np.argmax(active[w])])) for w in np.flatnonzero(mask & active.any(axis=1)).tolist()]
 
     def _resting_under(self, state: BatchState, w: int, grip: Grip) -> list[set[int]]:
         """For each finger, the graspable objects its tip rests on (under its footprint, just below it).
