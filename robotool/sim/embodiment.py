@@ -127,9 +127,9 @@ class SkillController(ABC):
         return {}
 
     def overloaded(self, state: BatchState) -> np.ndarray:
-        """(nworld,) bool: the worlds in which ``state`` has the robot bear more than its contacts hold (a grip pushed
-        past its friction, which lets go at the next tick): what the world shows there did not happen, so goal memory
-        skips it (a button pressed only by a tool the grip could not have held). None by default; read only."""
+        """(nworld,) bool: the worlds in which ``state`` has the robot bear more than its contacts hold (a grip loaded
+        past what its friction holds, which slips): what the world shows there did not happen, so goal memory skips it
+        (a button pressed only by a tool the grip could not have held). None by default; read only."""
         return np.zeros(len(state.time), dtype=bool)
 
 

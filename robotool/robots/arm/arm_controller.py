@@ -91,8 +91,8 @@ class ArmController(SkillController):
         return (self.state, self.grasp.state)
 
     def overloaded(self, state: BatchState) -> np.ndarray:
-        """The worlds where a held object loads the grip past its pads' friction (:meth:`Grasp.past_friction`)."""
-        return self.grasp.past_friction(state)
+        """The worlds where a held object loads the grip past what it holds (:meth:`Grasp.past_capacity`)."""
+        return self.grasp.past_capacity(state)
 
     # -- motion skills -------------------------------------------------------------------------
 

@@ -277,9 +277,7 @@ class Grasp:
         """Let go of a held object whose grip can no longer carry its load: more was joined to it, or the load the
         grasp weld carries is past what the grip holds (:meth:`_overload`)."""
         for w, i in self._held(state, mask):
-            hold = Hold(
-                self.state.hold_depth[w], self.state.hold_edge[w], self.state.hold_width[w], self.state.hold_centre[w]
-            )
+            hold = self._hold(w)
             weak = self._weak(state, int(w), i, hold)
             cause: GraspFailure = "weak_grip"
             if not weak:
@@ -293,18 +291,34 @@ class Grasp:
                 )
 
     def _overload(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
-        """The measures of a grip on object ``i`` that cannot hold its load (empty while it holds). The load is what
-        the grasp weld carries, taken about the pads' patch: the force, which the squeeze's friction on both pads holds
-        up to ``2 grip`` (past it, the object slides out at once); the twist about the closing axis and the tilt about
-        the other two, which the pads hold up to ``slip_margin`` times the static rule's couples (``grip`` times the
-        grip's depth across the pads, ``grip`` times the width between them, as :meth:`_weak` holds a static load),
-        and past which the object turns in the grip until it has been past them for ``slip_time`` in all since the
-        grasp (a peak as a tool lands is ridden out, but slip adds up: a load that keeps coming back in bursts slips
-        the grip as a steady one does). A sheet's fold bends, so it carries force only."""
-        force, torque = self._load(state, w, i, hold.centre)
+        """The measures of a grip on object ``i`` that cannot hold its load (empty while it holds): its force past
+        what it holds (:meth:`_measure`) slides the object out at once; its twist or tilt past what it holds turns the
+        object in the grip, until it has been past it for ``slip_time`` in all since the grasp (a peak as a tool lands
+        is ridden out, but slip adds up: a load that keeps coming back in bursts slips the grip as a steady one
+        does)."""
+        measured = self._measure(state, w, i, hold)
+        if measured["force"] > measured["most_force"]:
+            return measured | {"for": 0.0}  # past the pads' friction: it slides out at once
+        if _past(measured, ("twist", "tilt")):
+            self.state.overloaded_for[w] += self.scene.control_dt  # each tick past it turns it in the grip, for good
+        over = float(self.state.overloaded_for[w])
+        return measured | {"for": over} if over >= self.config.slip_time - 1e-9 else {}
+
+    def _measure(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
+        """What held object ``i`` loads its grip with in world ``w`` and what the grip holds. The load is what the
+        grasp weld carries, taken about the pads' patch: the force, which the squeeze's friction on both pads holds up
+        to ``2 grip``; the twist about the closing axis and the tilt about the other two, which the pads hold up to
+        ``slip_margin`` times the static rule's couples (``grip`` times the grip's depth across the pads, ``grip``
+        times the width between them, as :meth:`_weak` holds a static load). A sheet's fold bends, so it carries
+        force only."""
+        eq = int(self.parts.grasp_eq[i])
+        load = self.sim.weld_load(np.array([w]), eq)[0]
+        force = load[:3]
+        patch = state.xpos[w, self.parts.gripper] + hold.centre
+        torque = load[3:] + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, force)
         grip = self.config.grip_friction * self.config.grip_force
         margin = self.config.slip_margin
-        measured = {
+        return {
             "force": float(np.linalg.norm(force)),
             "most_force": 2 * grip,
             "twist": 0.0 if self.parts.sheet[i] else float(abs(torque[1])),
@@ -314,30 +328,19 @@ class Grasp:
             "depth": hold.depth,
             "width": hold.width,
         }
-        if measured["force"] > measured["most_force"]:
-            return measured | {"for": 0.0}  # past the pads' friction: it slides out at once
-        if max(measured[k] / max(measured[f"most_{k}"], 1e-9) for k in ("twist", "tilt")) > 1.0:
-            self.state.overloaded_for[w] += self.scene.control_dt  # each tick past it turns it in the grip, for good
-        over = float(self.state.overloaded_for[w])
-        return measured | {"for": over} if over >= self.config.slip_time - 1e-9 else {}
 
-    def _load(self, state: BatchState, w: int, i: int, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The force and the torque about the pads' patch (``centre``, from the gripper centre) that held object ``i``
-        puts on the grip in world ``w``, from its grasp weld's load."""
-        eq = int(self.parts.grasp_eq[i])
-        load = self.sim.weld_load(np.array([w]), eq)[0]
-        patch = state.xpos[w, self.parts.gripper] + centre
-        return load[:3], load[3:] + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, load[:3])
-
-    def past_friction(self, state: BatchState) -> np.ndarray:
-        """(nworld,) bool: the worlds where a held object pushes or pulls on the grip harder than both pads' friction
-        holds (read only: :meth:`check_holds` lets go of it at the next tick)."""
+    def past_capacity(self, state: BatchState) -> np.ndarray:
+        """(nworld,) bool: the worlds where a held object loads the grip past what it holds (its force, twist or
+        tilt; read only: :meth:`check_holds` lets go of it, at once or as the slip adds up)."""
         out = np.zeros(self.sim.nworld, dtype=bool)
-        most = 2 * self.config.grip_friction * self.config.grip_force
         for w, i in self._held(state, np.ones(self.sim.nworld, dtype=bool)):
-            force, _ = self._load(state, w, i, self.state.hold_centre[w])
-            out[w] = float(np.linalg.norm(force)) > most
+            out[w] = _past(self._measure(state, w, i, self._hold(w)), ("force", "twist", "tilt"))
         return out
+
+    def _hold(self, w: int) -> Hold:
+        """The grip on the object held in world ``w``, as measured when it closed."""
+        s = self.state
+        return Hold(s.hold_depth[w], s.hold_edge[w], s.hold_width[w], s.hold_centre[w])
 
     def _held(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, int]]:
         """(world, object) for each world in ``mask`` whose gripper holds an object (its grasp weld is on)."""
@@ -420,6 +423,11 @@ class Grasp:
         points = graspable_points(self.scene, state)[w, candidates]
         dist = np.linalg.norm(points - state.xpos[w, self.parts.gripper], axis=1)
         return int(candidates[np.argmin(dist)]), {"nearest": float(dist.min())}
+
+
+def _past(measured: dict[str, float], loads: tuple[str, ...]) -> bool:
+    """Whether any of ``loads`` is past what the grip holds of it (``most_<load>``)."""
+    return any(measured[k] > measured[f"most_{k}"] for k in loads)
 
 
 def _geom_pose(scene: Scene, state: BatchState, w: int, geom: int) -> tuple[np.ndarray, np.ndarray]:

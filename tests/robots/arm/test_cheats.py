@@ -27,6 +27,7 @@ from typing import Any
 
 import pytest
 from fixtures.paths import FIXTURES
+from fixtures.reference import program
 
 from robotool import tasks
 from robotool.rollout import Rollout
@@ -77,6 +78,8 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_nudge_a_rolled_cube_half_onto_a_ribbon", "arm_rolled_cube_beside_a_narrow_ribbon", "clamped"),  # its side
     # 141 N pushed through a friction grip that holds 120 N: the press the weld passed on is not counted either
     ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "the 120 N their friction holds"),
+    # the press was seen at a tick where the stick twisted in the grip past what it holds, before it slipped out
+    ("arm_jab_a_stick_up_into_a_stiff_button", "arm_stiff_button_facing_down_over_a_post", "closing axis"),
 ]
 
 
@@ -129,6 +132,20 @@ def test_the_slat_presses_a_button_its_grip_can_push(run_texts: Any) -> None:
     code = (CHEATS / "arm_drive_a_slat_into_a_stiff_button.py").read_text()
     for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
         assert rollout.success, world_failure(rollout)
+
+
+@pytest.mark.parametrize(("stiffness", "pressed"), [(2000.0, False), (300.0, True)])
+def test_a_stick_pressed_up_slowly_presses_a_button_its_grip_can_push(
+    run_texts: Any, stiffness: float, pressed: bool
+) -> None:
+    """The controls for the jabbed stick: pressed up in 4 mm steps, it presses the same button on a 300 N/m spring
+    (3 N, about 0.5 N m on the grip) and not the 2000 N/m one (it slips out of the grip: only the jab pressed it)."""
+    data = _task("arm_stiff_button_facing_down_over_a_post").model_dump(mode="json", exclude_defaults=True)
+    next(o for o in data["objects"] if o["name"] == "button")["stiffness"] = stiffness
+    code = program("press_up_slowly_with_a_stick")
+    for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
+        assert rollout.success == pressed, world_failure(rollout)
+        assert pressed or "stick slipped out of the grip" in world_failure(rollout)
 
 
 SLIVER_CHAIN = (CHEATS / "arm_sliver_grasp_chain.py").read_text()
