@@ -137,8 +137,6 @@ class Grasp:
     def __init__(self, sim: BatchedSim, parts: ArmParts, limits: ArmLimits, config: ArmConfig):
         self.sim, self.parts, self.limits, self.config, self.scene = sim, parts, limits, config, sim.scene
         self.state = GraspState.empty(sim.nworld)
-        self._measured_of: BatchState | None = None  # the state whose held loads :meth:`past_capacity` measured
-        self._measured: dict[int, dict[str, float]] = {}
 
     def carried(self, state: BatchState, w: int) -> np.ndarray:
         """Objects the gripper carries in world ``w``: held, or joined to what it carries by an active weld."""
@@ -298,8 +296,7 @@ class Grasp:
         object in the grip, until it has been past it for ``slip_time`` in all since the grasp (a peak as a tool lands
         is ridden out, but slip adds up: a load that keeps coming back in bursts slips the grip as a steady one
         does)."""
-        measured = self._measured.get(w) if self._measured_of is state else None
-        measured = measured if measured is not None else self._measure(state, w, i, hold)
+        measured = self._measure(state, w, i, hold)
         if measured["force"] > measured["most_force"]:
             return measured | {"for": 0.0}  # past the pads' friction: it slides out at once
         if _past(measured, ("twist", "tilt")):
@@ -336,10 +333,8 @@ class Grasp:
         """(nworld,) bool: the worlds where a held object loads the grip past what it holds (its force, twist or
         tilt; read only: :meth:`check_holds` lets go of it, at once or as the slip adds up)."""
         out = np.zeros(self.sim.nworld, dtype=bool)
-        self._measured_of, self._measured = state, {}  # the tick that follows reads the same state's loads
         for w, i in self._held(state, np.ones(self.sim.nworld, dtype=bool)):
-            self._measured[w] = measured = self._measure(state, w, i, self._hold(w))
-            out[w] = _past(measured, ("force", "twist", "tilt"))
+            out[w] = _past(self._measure(state, w, i, self._hold(w)), ("force", "twist", "tilt"))
         return out
 
     def _hold(self, w: int) -> Hold:
