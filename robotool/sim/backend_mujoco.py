@@ -46,6 +46,12 @@ _WARNINGS = {
     mujoco.mjtWarning.mjWARN_CNSTRFULL: "constraint buffer full",
     mujoco.mjtWarning.mjWARN_CONTACTFULL: "contact buffer full",
 }
+_EQUALITY_ROWS = {  # constraint rows of an active equality of each kind (others: searched for)
+    int(mujoco.mjtEq.mjEQ_CONNECT): 3,
+    int(mujoco.mjtEq.mjEQ_WELD): 6,
+    int(mujoco.mjtEq.mjEQ_JOINT): 1,
+    int(mujoco.mjtEq.mjEQ_TENDON): 1,
+}
 CHUNKS_PER_THREAD = 4  # worlds are handed out in this many chunks per thread, taken as threads free up
 _WARNING_KINDS = list(_WARNINGS)
 _WARNING_INDEX = np.array([int(k) for k in _WARNING_KINDS])
@@ -122,6 +128,7 @@ class MujocoSim:
         self._xquat = np.zeros((nworld, model.nbody, 4))
         self._sensordata = np.zeros((nworld, model.nsensordata))
         self._eq_active = np.zeros((nworld, model.neq), dtype=bool)
+        self._eq_rows = np.array([_EQUALITY_ROWS.get(int(t), -1) for t in model.eq_type], dtype=int)
         self._touching_geoms: list[np.ndarray] = [_NO_PAIRS] * nworld  # geom pairs within touching distance
         self._geom_body = model.geom_bodyid.copy()
         self._ray_geoms = ray_cast.RayGeoms.of(model)
@@ -239,12 +246,22 @@ class MujocoSim:
 
     def weld_load(self, worlds: np.ndarray, eq: int) -> np.ndarray:
         """The load weld ``eq`` carries in ``worlds`` (:meth:`BatchedSim.weld_load`), from each world's constraint
-        rows."""
+        rows: the equalities' rows come first, in order, so its rows follow those of the active equalities before it
+        (checked against the rows' owner; searched for where that fails)."""
         worlds = np.asarray(worlds, dtype=int).reshape(-1)
         rows = np.zeros((len(worlds), 6))
+        before = self._eq_rows[:eq]
+        counted = bool((before >= 0).all())
+        equality = mujoco.mjtConstraint.mjCNSTR_EQUALITY
         for k, w in enumerate(worlds.tolist()):
+            if not self._eq_active[w, eq]:
+                continue
             d = self.datas[w]
-            mine = np.flatnonzero((d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY) & (d.efc_id == eq))
+            start = int(before @ self._eq_active[w, :eq]) if counted else -1
+            if 0 <= start <= d.nefc - 6 and d.efc_id[start] == eq and d.efc_type[start] == equality:
+                rows[k] = d.efc_force[start : start + 6]
+                continue
+            mine = np.flatnonzero((d.efc_type == equality) & (d.efc_id == eq))
             if mine.size == 6:
                 rows[k] = d.efc_force[mine]
         return weld_load_from_rows(rows, self._xquat[worlds, self.scene.model.eq_obj2id[eq]])

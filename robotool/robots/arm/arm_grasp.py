@@ -276,12 +276,16 @@ class Grasp:
     def check_holds(self, state: BatchState, mask: np.ndarray) -> None:
         """Let go of a held object whose grip can no longer carry its load: more was joined to it, or the load the
         grasp weld carries is past what the grip holds (:meth:`_overload`)."""
-        for w, i in self._held(state, mask):
+        held = self._held(state, mask)
+        if not held:
+            return
+        loads = self._loads(state, held)
+        for (w, i), load in zip(held, loads, strict=True):
             hold = self._hold(w)
-            weak = self._weak(state, int(w), i, hold)
+            weak = self._weak(state, w, i, hold)
             cause: GraspFailure = "weak_grip"
             if not weak:
-                weak, cause = self._overload(state, int(w), i, hold), "slipped"
+                weak, cause = self._overload(w, load, hold), "slipped"
             if weak:
                 self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), False)
                 self.state.overloaded_for[w] = 0.0
@@ -290,51 +294,67 @@ class Grasp:
                     Event(kind="grasp_failed", object=name, limit="grasp", cause=cause, measured=weak)
                 )
 
-    def _overload(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
-        """The measures of a grip on object ``i`` that cannot hold its load (empty while it holds): its force past
-        what it holds (:meth:`_measure`) slides the object out at once; its twist or tilt past what it holds turns the
+    def _overload(self, w: int, load: np.ndarray, hold: Hold) -> dict[str, float]:
+        """The measures of a grip in world ``w`` that cannot hold its ``load`` (:meth:`_loads`; empty while it holds):
+        its force past what it holds slides the object out at once; its twist or tilt past what it holds turns the
         object in the grip, until it has been past it for ``slip_time`` in all since the grasp (a peak as a tool lands
         is ridden out, but slip adds up: a load that keeps coming back in bursts slips the grip as a steady one
         does)."""
-        measured = self._measure(state, w, i, hold)
-        if measured["force"] > measured["most_force"]:
-            return measured | {"for": 0.0}  # past the pads' friction: it slides out at once
-        if _past(measured, ("twist", "tilt")):
-            self.state.overloaded_for[w] += self.scene.control_dt  # each tick past it turns it in the grip, for good
-        over = float(self.state.overloaded_for[w])
-        return measured | {"for": over} if over >= self.config.slip_time - 1e-9 else {}
-
-    def _measure(self, state: BatchState, w: int, i: int, hold: Hold) -> dict[str, float]:
-        """What held object ``i`` loads its grip with in world ``w`` and what the grip holds. The load is what the
-        grasp weld carries, taken about the pads' patch: the force, which the squeeze's friction on both pads holds up
-        to ``2 grip``; the twist about the closing axis and the tilt about the other two, which the pads hold up to
-        ``slip_margin`` times the static rule's couples (``grip`` times the grip's depth across the pads, ``grip``
-        times the width between them, as :meth:`_weak` holds a static load). A sheet's fold bends, so it carries
-        force only."""
-        eq = int(self.parts.grasp_eq[i])
-        load = self.sim.weld_load(np.array([w]), eq)[0]
-        force = load[:3]
-        patch = state.xpos[w, self.parts.gripper] + hold.centre
-        torque = load[3:] + np.cross(state.xpos[w, self.scene.model.eq_obj2id[eq]] - patch, force)
-        grip = self.config.grip_friction * self.config.grip_force
-        margin = self.config.slip_margin
-        return {
-            "force": float(np.linalg.norm(force)),
-            "most_force": 2 * grip,
-            "twist": 0.0 if self.parts.sheet[i] else float(abs(torque[1])),
-            "most_twist": margin * grip * hold.depth,
-            "tilt": 0.0 if self.parts.sheet[i] else float(np.hypot(torque[0], torque[2])),
-            "most_tilt": margin * grip * hold.width,
+        past = load[:3] > load[3:]
+        if past[0]:
+            over = 0.0  # past the pads' friction: it slides out at once
+        else:
+            if past[1:].any():
+                self.state.overloaded_for[w] += self.scene.control_dt  # each tick past it turns it in the grip
+            over = float(self.state.overloaded_for[w])
+            if over < self.config.slip_time - 1e-9:
+                return {}
+        names = ("force", "twist", "tilt", "most_force", "most_twist", "most_tilt")
+        return dict(zip(names, map(float, load), strict=True)) | {
             "depth": hold.depth,
             "width": hold.width,
+            "for": over,
         }
+
+    def _loads(self, state: BatchState, held: list[tuple[int, int]]) -> np.ndarray:
+        """(k, 6) for each (world, object) in ``held``: what the object loads its grip with, then what the grip
+        holds of it. The load is what the grasp weld carries, taken about the pads' patch: the force, which the
+        squeeze's friction on both pads holds up to ``2 grip``; the twist about the closing axis and the tilt about
+        the other two, which the pads hold up to ``slip_margin`` times the static rule's couples (``grip`` times the
+        grip's depth across the pads, ``grip`` times the width between them, as :meth:`_weak` holds a static load). A
+        sheet's fold bends, so it carries force only."""
+        worlds = np.array([w for w, _ in held])
+        objects = np.array([i for _, i in held])
+        eqs = self.parts.grasp_eq[objects]
+        load = np.zeros((len(held), 6))
+        for eq in np.unique(eqs):
+            load[eqs == eq] = self.sim.weld_load(worlds[eqs == eq], int(eq))
+        force = load[:, :3]
+        patch = state.xpos[worlds, self.parts.gripper] + self.state.hold_centre[worlds]
+        body = state.xpos[worlds, self.scene.model.eq_obj2id[eqs]]
+        torque = load[:, 3:] + np.cross(body - patch, force)
+        limp = self.parts.sheet[objects]
+        grip = self.config.grip_friction * self.config.grip_force
+        couple = self.config.slip_margin * grip
+        return np.column_stack(
+            [
+                np.linalg.norm(force, axis=1),
+                np.where(limp, 0.0, np.abs(torque[:, 1])),
+                np.where(limp, 0.0, np.hypot(torque[:, 0], torque[:, 2])),
+                np.full(len(held), 2 * grip),
+                couple * self.state.hold_depth[worlds],
+                couple * self.state.hold_width[worlds],
+            ]
+        )
 
     def past_capacity(self, state: BatchState) -> np.ndarray:
         """(nworld,) bool: the worlds where a held object loads the grip past what it holds (its force, twist or
         tilt; read only: :meth:`check_holds` lets go of it, at once or as the slip adds up)."""
         out = np.zeros(self.sim.nworld, dtype=bool)
-        for w, i in self._held(state, np.ones(self.sim.nworld, dtype=bool)):
-            out[w] = _past(self._measure(state, w, i, self._hold(w)), ("force", "twist", "tilt"))
+        held = self._held(state, np.ones(self.sim.nworld, dtype=bool))
+        if held:
+            loads = self._loads(state, held)
+            out[[w for w, _ in held]] = (loads[:, :3] > loads[:, 3:]).any(axis=1)
         return out
 
     def _hold(self, w: int) -> Hold:
@@ -423,11 +443,6 @@ class Grasp:
         points = graspable_points(self.scene, state)[w, candidates]
         dist = np.linalg.norm(points - state.xpos[w, self.parts.gripper], axis=1)
         return int(candidates[np.argmin(dist)]), {"nearest": float(dist.min())}
-
-
-def _past(measured: dict[str, float], loads: tuple[str, ...]) -> bool:
-    """Whether any of ``loads`` is past what the grip holds of it (``most_<load>``)."""
-    return any(measured[k] > measured[f"most_{k}"] for k in loads)
 
 
 def _geom_pose(scene: Scene, state: BatchState, w: int, geom: int) -> tuple[np.ndarray, np.ndarray]:
