@@ -141,8 +141,8 @@ class Event(BaseModel):
             f"its {1000 * m.get('width', 0.0):.0f} mm wide grip holds",
         }
         worst = (
-            "force"  # it slid out at once
-            if m.get("for", 0.0) == 0.0
+            "force"  # past the pads' friction it slid out at once
+            if m.get("force", 0.0) > m.get("most_force", np.inf)
             else max(("twist", "tilt"), key=lambda k: m.get(k, 0.0) / max(m.get(f"most_{k}", 0.0), 1e-9))
         )
         return (
