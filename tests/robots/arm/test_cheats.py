@@ -80,6 +80,8 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "the 120 N their friction holds"),
     # the press was seen at a tick where the stick twisted in the grip past what it holds, before it slipped out
     ("arm_jab_a_stick_up_into_a_stiff_button", "arm_stiff_button_facing_down_over_a_post", "closing axis"),
+    # the jug raked in 4 cm steps, re-grasping between them: it stays beyond reach
+    ("arm_rake_a_heavy_milk_in_regrasped_steps", "arm_heavy_milk_beyond_reach", "clamped 0.1"),
 ]
 
 
