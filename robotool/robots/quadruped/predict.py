@@ -29,7 +29,15 @@ from robotool.robots.quadruped.push import (
 )
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.terrain import FOOT_RADIUS, RISE, check_walk, foot_offsets, foot_paths, turn_sweep
+from robotool.robots.quadruped.terrain import (
+    FOOT_RADIUS,
+    RISE,
+    SPACING,
+    check_walk,
+    foot_offsets,
+    foot_paths,
+    turn_sweep,
+)
 
 SAMPLE = 0.02  # m between terrain samples along a walk
 BRUSH = 0.03  # m: something this much higher than the surface under the feet, at the flanks or between the feet,
@@ -114,6 +122,8 @@ def _walk_violation(
         return finding.describe()
     if (fragile := _fragile_footing(layout, start, goals, limits, skip)) is not None:
         return fragile
+    if (straddle := _straddle(layout, start, goals, limits, skip)) is not None:
+        return straddle
     half = np.asarray(limits.body_size[:2]) / 2
     here = np.asarray(start, dtype=float)
     for goal in goals:
@@ -161,6 +171,40 @@ def _swept(points: np.ndarray, start: np.ndarray, delta: np.ndarray, half: np.nd
         a, b = (rel[..., k] - half[k] - 1e-9) / delta[k], (rel[..., k] + half[k] + 1e-9) / delta[k]
         lo, hi = np.maximum(lo, np.minimum(a, b)), np.minimum(hi, np.maximum(a, b))
     return lo <= hi
+
+
+def _straddle(
+    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
+) -> str | None:
+    """Where a walk along the body's length from ``start`` through ``goals`` first has a left foot and the right foot
+    beside it over surfaces more than a step up apart, in words, or None: a body resting on surfaces that far apart
+    rolls toward the lower side (it walked along a step's edge, its left feet on the step, and fell). A gap the feet
+    stride (at most ``max_gap``) counts as the surface around it. On a walk across the body the left and right feet
+    lead and trail, a step apart as they climb, and are not compared; nor are front and rear feet."""
+    offsets = foot_offsets(limits)
+    across = int(np.argmin(limits.body_size[:2]))  # the feet of a pair differ only in their offset on this axis
+    pairs = [(a, b) for a in range(4) for b in range(a + 1, 4) if np.isclose(offsets[a], offsets[b])[1 - across]]
+    stride = int(np.ceil((limits.max_gap / 2 + FOOT_RADIUS) / SPACING))
+    here = np.asarray(start, dtype=float)
+    for goal in goals:
+        delta = goal - here
+        length = float(np.linalg.norm(delta))
+        if length > 1e-6 and abs(delta[across]) <= abs(delta[1 - across]):
+            paths = foot_paths(here + offsets, delta / length, length)
+            heights = layout.heights(paths.reshape(-1, 2), skip).reshape(paths.shape[:2])
+            padded = np.pad(heights, ((0, 0), (stride, stride)), mode="edge")
+            footing = np.lib.stride_tricks.sliding_window_view(padded, 2 * stride + 1, axis=1).max(axis=2)
+            apart = np.stack([np.abs(footing[a] - footing[b]) for a, b in pairs])
+            if apart.max() > limits.max_step_up:
+                k, i = np.unravel_index(int(np.argmax(apart)), apart.shape)
+                x, y = (paths[pairs[k][0], i] + paths[pairs[k][1], i]) / 2
+                return (
+                    f"the left and right feet would stand on surfaces {float(apart[k, i]):.2f} m apart (a step up is "
+                    f"at most {limits.max_step_up:g} m), at [{x:.2f}, {y:.2f}] on the way to "
+                    f"[{goal[0]:.2f}, {goal[1]:.2f}]"
+                )
+        here = goal
+    return None
 
 
 def _fragile_footing(

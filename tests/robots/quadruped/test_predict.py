@@ -265,3 +265,33 @@ def test_a_way_round_steps_over_a_low_fixed_box_but_never_onto_a_movable_one() -
     assert len(way) > 1 and np.allclose(way[-1], goal)
     feet = [p + foot_offsets(loose.limits) for a, b in itertools.pairwise([start, *way]) for p in np.linspace(a, b, 50)]
     assert np.isnan(layout.top_of("box", np.concatenate(feet))).all()
+
+
+def _steps_beside_task() -> Task:
+    """Fixed steps of 0.12 m (x 0.5-0.9) and 0.24 m (x 0.9-1.3) from y 0.05 to 0.65, beside the robot's way along x
+    (vase_lowering 9839: its straight climb onto a low sofa ran along the steps)."""
+    return parse_task({
+        "format": 1, "name": "steps_beside", "instruction": "Stand on the mat.", "category": "sequential_tool_use",
+        "robot": {"type": "quadruped", "position": [0.0, 0.0]},
+        "objects": [
+            {"name": "step_1", "shape": "box", "center": [0.7, 0.35, 0.06], "size": [0.4, 0.6, 0.12], "movable": False},
+            {"name": "step_2", "shape": "box", "center": [1.1, 0.35, 0.12], "size": [0.4, 0.6, 0.24], "movable": False},
+            {"name": "mat", "shape": "box", "center": [2.2, 0.0, 0.02], "size": [0.6, 0.6, 0.04], "movable": False},
+        ],
+        "goal": {"robot_on": "mat"},
+    })
+
+
+def test_a_walk_with_the_left_feet_up_the_steps_and_the_right_ones_on_the_floor_is_predicted_to_roll() -> None:
+    """Each foot's path stays within the step limits (up 0.12 m twice, then down 0.24 m), but the left feet stand
+    0.24 m above the right ones beside them: the robot climbing straight onto vase_lowering 9839's sofa this way fell in
+    every world. A lane 0.25 m further from the steps keeps every foot on the floor; walked across the body (flank
+    first), the feet beside each other lead and trail, and that walk is read by the feet's own limits only."""
+    task = _steps_beside_task()
+    layout = Layout(task)
+    problem = walk_violation(layout, np.array([0.0, 0.0]), [np.array([2.2, 0.0])], task.limits)
+    assert problem is not None and problem.startswith("the left and right feet would stand on surfaces 0.24 m apart")
+    assert walk_violation(layout, np.array([0.0, -0.25]), [np.array([2.2, -0.25])], task.limits) is None
+    turned = task.limits.model_copy(update={"body_size": (0.3, 0.65, 0.3)})  # the body turned a quarter
+    found = walk_violation(layout, np.array([0.0, -0.2]), [np.array([2.2, -0.2])], turned)
+    assert found is None or "left and right" not in found
