@@ -212,10 +212,22 @@ class GoalTracker(Protocol):
     """Follows one goal in every world."""
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
-        """Observe the state of the ``active`` worlds after a control tick."""
+        """Observe the state of the ``active`` worlds after a control tick (or a physics step, where watched)."""
+
+    def watched(self, state: BatchState) -> np.ndarray:
+        """(nworld,) bool: the worlds whose next control interval must be seen at every physics step (:meth:`update`
+        after each), because what the goal reads may happen and be over between two ticks there."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         """Named sub-conditions now, each (nworld,) bool."""
+
+
+class ReadAtTicks:
+    """For a :class:`GoalTracker` that reads the world at control ticks only: no world is ever watched."""
+
+    def watched(self, state: BatchState) -> np.ndarray:
+        """No world: what this goal reads lasts from one tick to the next."""
+        return np.zeros(len(state.time), dtype=bool)
 
 
 GoalTrackerFactory = Callable[["Scene", "BatchedSim"], GoalTracker]

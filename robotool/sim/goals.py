@@ -15,13 +15,14 @@ import numpy as np
 from robotool import robots
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.embodiment import GoalTracker
+from robotool.sim.embodiment import GoalTracker, ReadAtTicks
 from robotool.sim.object_goals import LiftedGoal, LoweredGoal
 from robotool.task.scene import PRESS_TRAVEL
 
 
-class PressedGoal:
-    """``pressed: button``: its face travelled at least 1 cm at some time."""
+class PressedGoal(ReadAtTicks):
+    """``pressed: button``: its face travelled at least 1 cm at some time (read at ticks: a press between two ticks is
+    missed, never invented)."""
 
     def __init__(self, scene: Scene):
         self.name = scene.task.goal.object

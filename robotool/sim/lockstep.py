@@ -191,7 +191,7 @@ class _Run:
             w.session.resume(None)
         self._collect(state, list(range(nworld)))
         while self.alive().any():
-            self.sim.step(self.scene.control_substeps, self.alive())
+            self._step(state)
             state = self.sim.state()
             if self.recorder is not None:
                 self.recorder.capture(state, self.sim.mocap_pos)
@@ -203,6 +203,22 @@ class _Run:
             resumed = self._finish_skills(state, ends)
             self._collect(state, resumed)
         return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
+
+    def _step(self, state: BatchState) -> None:
+        """One control interval of physics in the alive worlds. The worlds the goal watches at ``state`` (a fragile
+        object falling far enough to break) are stepped one physics step at a time, the goal updated after each: the
+        same physics (the controls hold through the interval), with nothing the goal reads left unseen between
+        ticks."""
+        alive, substeps = self.alive(), self.scene.control_substeps
+        watched = alive & self.goal.watched(state)
+        self.sim.step(substeps, alive & ~watched)
+        if not watched.any():
+            return
+        for _ in range(substeps - 1):
+            self.sim.step(1, watched)
+            inside = self.sim.state()
+            self.goal.update(inside, watched & ~self.controller.overloaded(inside))
+        self.sim.step(1, watched)
 
     def _tick(self, state: BatchState) -> list[SkillEnd]:
         """The controller's tick in the alive worlds. If it raises, the controller's per-world state, the controls

@@ -8,7 +8,9 @@ a fall starts where it was last resting (touching something other than the robot
 lasts until it rests again; it breaks once it touches something hard (not soft, not the robot) with
 its centre more than ``max_drop`` below where it rested. A soft object it glances off on the way, or
 a wall it grazes, does not end the fall, and neither does the tick at which contacts happen to be
-read. The first breaking fall of each world is kept as a ``broke`` event.
+read: once a fall could pass ``max_drop`` before the next tick, every physics step of that interval is read, so a
+hard strike that begins and ends between two ticks breaks it too. The first breaking fall of each world is kept as a
+``broke`` event.
 """
 
 from __future__ import annotations
@@ -20,10 +22,12 @@ import numpy as np
 from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import ReadAtTicks
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
+FALL_ACCELERATION = 2 * 9.81  # m/s^2: the most a falling object is taken to gain downward speed by (gravity, twice)
 
 
 def local_corners(scene: Scene) -> list[np.ndarray]:
@@ -79,7 +83,7 @@ class Underside:
         return np.minimum(lowest, (centre_z - reach).min(axis=1))
 
 
-class LiftedGoal:
+class LiftedGoal(ReadAtTicks):
     """``lifted: {object, height}``: the object's bottom is at least ``height`` above its start."""
 
     def __init__(self, scene: Scene):
@@ -142,6 +146,16 @@ class FallTracker:
         resting = active & touch.any(axis=1) & (speed < RESTING_SPEED)
         self.rest_height = np.where(resting, height, self.rest_height)
 
+    def watched(self, state: BatchState) -> np.ndarray:
+        """(nworld,) the unbroken worlds where the object could fall past ``max_drop`` before the next tick: its fall
+        so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it."""
+        if self.rest_height is None or self.broken is None:
+            return np.zeros(len(state.time), dtype=bool)
+        dt = self.scene.control_dt
+        fall = self.rest_height - state.xpos[:, self.body, 2]
+        sinking = np.maximum(-state.qvel[:, self._dof()[2]], 0.0)
+        return ~self.broken & (fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop)
+
     def _names(self, objects: np.ndarray) -> str:
         """What a fall landed on: object names, or the ground for the world's own bodies."""
         names = sorted({self.scene.task.objects[k].name if k >= 0 else "the ground" for k in objects.tolist()})
@@ -168,6 +182,10 @@ class LoweredGoal:
     def update(self, state: BatchState, active: np.ndarray) -> None:
         if self.falls is not None:
             self.falls.update(state, active)
+
+    def watched(self, state: BatchState) -> np.ndarray:
+        """Where the fragile object's fall could break it before the next tick (:meth:`FallTracker.watched`)."""
+        return self.falls.watched(state) if self.falls is not None else np.zeros(len(state.time), dtype=bool)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         bottom = self.underside.bottom(state, self.body)

@@ -8,9 +8,10 @@ from robotool.robots.arm.arm_body import GRIPPER_BODY, graspable_points, held_ob
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import ReadAtTicks
 
 
-class GraspedGoal:
+class GraspedGoal(ReadAtTicks):
     """``grasped: obj``: the gripper holds ``obj`` and its graspable point is still at the gripper."""
 
     def __init__(self, scene: Scene):

@@ -18,6 +18,7 @@ from robotool.robots.quadruped.support import (
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.sim.embodiment import ReadAtTicks
 from robotool.sim.object_goals import local_corners
 
 EDGE_REACH = FOOT_RADIUS / 2
@@ -25,7 +26,7 @@ EDGE_REACH = FOOT_RADIUS / 2
 degrees); a foot against a side face has its centre a whole radius out."""
 
 
-class RobotOnGoal:
+class RobotOnGoal(ReadAtTicks):
     """``robot_on: obj``: the robot's weight rests on ``obj``.
 
     Its centre of mass lies over the support of the feet whose weight reaches ``obj`` (at least three of them), and

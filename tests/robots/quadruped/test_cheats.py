@@ -673,11 +673,12 @@ def test_a_scene_solved_by_pushing_the_vase_from_a_step_level_with_the_sofa_is_l
 def test_a_fall_does_not_end_at_a_glancing_touch() -> None:
     """The vase, pushed off the 0.34 m sofa into the slot between it and the cushion, glances off the cushion's edge
     and grazes the sofa's side on its way down: read at the control ticks it was never clear of everything at once,
-    yet it struck the hard floor more than 0.3 m below where it lay. Where the push leaves the cushion varies: in
-    some of these six worlds it leaves a slot the vase falls through, in the rest it catches the vase, as it should."""
+    yet it struck something hard more than 0.3 m below where it lay (read at every physics step of such a fall, the
+    sofa's side it grazes, 0.31 m down, before the floor). Where the push leaves the cushion varies: in some of these
+    six worlds it leaves a slot the vase falls through, in the rest it catches the vase, as it should."""
     code = (CHEATS / "vase_into_slot_beside_cushion.py").read_text()
     rollouts = sim.run_sessions(_scene("vase_lowering"), start_sessions([code] * 6, "quadruped"), seed=0)
-    falls = [e for r in rollouts for e in r.events if e.kind == "broke" and "the ground" in (e.detail or "")]
+    falls = [e for r in rollouts for e in r.events if e.kind == "broke" and e.detail in ("the ground", "sofa")]
     assert falls and all(e.measured["fall"] > 0.3 for e in falls), falls
     for rollout in rollouts:
         assert rollout.conditions["glass_vase_lowered"]
@@ -820,3 +821,17 @@ def test_a_vase_pushed_to_just_short_of_the_sofas_edge_is_not_lowered() -> None:
         assert not rollout.success and not rollout.conditions["glass_vase_lowered"], rollout.conditions
         assert rollout.conditions["glass_vase_unbroken"] and rollout.conditions["robot_has_not_fallen"]
     assert all(r.success for r in tipped), [failure_reason(r) for r in tipped]
+
+
+def test_a_vase_striking_a_hard_ledge_between_two_ticks_breaks() -> None:
+    """An adversarial run: the vase pushed off a 0.58 m sofa strikes a fixed ledge 0.34-0.41 m below where it rested
+    and bounces on onto the cushion. The strike began and ended between two control ticks, where contacts were read
+    only at the ticks: a success in every world. Each physics step of a fall that can pass the vase's max_drop is now
+    read, and the vase breaks on the ledge."""
+    scene = _scene("vase_ledge_before_the_cushion")
+    sessions = start_sessions([_text("push_the_vase_off_over_a_ledge")] * 2, "quadruped")
+    rollouts = sim.run_sessions(scene, sessions, seed=0)  # both worlds strike the ledge (in some, the vase clears it)
+    for rollout in rollouts:
+        broke = [e for e in rollout.events if e.kind == "broke"]
+        assert not rollout.success and not rollout.conditions["glass_vase_unbroken"], rollout.conditions
+        assert len(broke) == 1 and broke[0].detail == "ledge" and broke[0].measured["fall"] > 0.3, broke
