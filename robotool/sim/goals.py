@@ -3,7 +3,8 @@
 A :class:`GoalTracker` is updated every control tick (so "at any time" goals such as ``pressed`` can
 remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. The object goals any
 robot may be given live here (``pressed``) and in :mod:`robotool.sim.object_goals` (``lifted``, ``lowered``); a
-robot's own goal kinds (``RobotType.sim.goal_trackers``) are trackers in its package.
+robot's own goal kinds (``RobotType.sim.goal_trackers``) are trackers in its package. Whatever the goal, every fragile
+object in the scene must end unbroken (:class:`WithFragiles`).
 """
 
 from __future__ import annotations
@@ -13,10 +14,11 @@ from collections.abc import Callable
 import numpy as np
 
 from robotool import robots
+from robotool.rollout import Event
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.embodiment import GoalTracker, ReadAtTicks
-from robotool.sim.object_goals import LiftedGoal, LoweredGoal
+from robotool.sim.embodiment import GoalTracker, ReadAtTicks, goal_events
+from robotool.sim.object_goals import FallTracker, LiftedGoal, LoweredGoal
 from robotool.task.scene import PRESS_TRAVEL
 
 
@@ -47,9 +49,42 @@ OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
 """Trackers of the goal kinds about objects, which any robot may support."""
 
 
+class WithFragiles:
+    """A goal, and every other fragile object in the scene unbroken at the end (``<name>_unbroken``): a fragile object
+    knocked off a table on the way to the goal broke, whatever the goal asked for."""
+
+    def __init__(self, goal: GoalTracker, falls: list[FallTracker]):
+        self.goal, self.falls = goal, falls
+
+    def update(self, state: BatchState, active: np.ndarray) -> None:
+        self.goal.update(state, active)
+        for falls in self.falls:
+            falls.update(state, active)
+
+    def watched(self, state: BatchState) -> np.ndarray:
+        return np.logical_or.reduce([self.goal.watched(state), *(f.watched(state) for f in self.falls)])
+
+    def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
+        nworld = len(state.time)
+        return {**self.goal.conditions(state), **{f"{f.name}_unbroken": f.unbroken(nworld) for f in self.falls}}
+
+    def events(self, world: int) -> list[Event]:
+        """The goal's events and each other fragile object's ``broke`` event in one world."""
+        return [*goal_events(self.goal, world), *(e for f in self.falls for e in f.events(world))]
+
+
 def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
-    """The tracker for the scene's goal kind: an object goal's, or one of the robot's own (run by ``sim``)."""
+    """The tracker for the scene's goal kind (an object goal's, or one of the robot's own, run by ``sim``), with every
+    fragile object the goal does not already follow kept unbroken (:class:`WithFragiles`)."""
     kind = scene.task.goal.kind
     if kind in OBJECT_GOALS:
-        return OBJECT_GOALS[kind](scene)
-    return robots.get(scene.task.embodiment).sim.goal_trackers()[kind](scene, sim)
+        goal = OBJECT_GOALS[kind](scene)
+    else:
+        goal = robots.get(scene.task.embodiment).sim.goal_trackers()[kind](scene, sim)
+    followed = scene.task.goal.object if kind == "lowered" else None  # a lowered goal follows its own object's falls
+    falls = [
+        FallTracker(scene, index, obj.fragile.max_drop)
+        for index, obj in enumerate(scene.task.objects)
+        if obj.fragile is not None and obj.name != followed
+    ]
+    return WithFragiles(goal, falls) if falls else goal

@@ -146,6 +146,15 @@ class FallTracker:
         resting = active & touch.any(axis=1) & (speed < RESTING_SPEED)
         self.rest_height = np.where(resting, height, self.rest_height)
 
+    def unbroken(self, nworld: int) -> np.ndarray:
+        """(nworld,) bool: the worlds in which it has not broken."""
+        return ~self.broken if self.broken is not None else np.ones(nworld, dtype=bool)
+
+    def events(self, world: int) -> list[Event]:
+        """The world's ``broke`` event, if it broke (time in the simulator's clock)."""
+        event = self.breaks.get(world)
+        return [] if event is None else [event]
+
     def watched(self, state: BatchState) -> np.ndarray:
         """(nworld,) the unbroken worlds where the object could fall past ``max_drop`` before the next tick: its fall
         so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it."""
@@ -191,11 +200,9 @@ class LoweredGoal:
         bottom = self.underside.bottom(state, self.body)
         out = {f"{self.name}_lowered": bottom <= self.height}
         if self.falls is not None:
-            broken = self.falls.broken if self.falls.broken is not None else np.zeros(bottom.shape, dtype=bool)
-            out[f"{self.name}_unbroken"] = ~broken
+            out[f"{self.name}_unbroken"] = self.falls.unbroken(len(bottom))
         return out
 
     def events(self, world: int) -> list[Event]:
         """The world's ``broke`` event, if its fragile object broke (time in the simulator's clock)."""
-        event = self.falls.breaks.get(world) if self.falls is not None else None
-        return [] if event is None else [event]
+        return self.falls.events(world) if self.falls is not None else []

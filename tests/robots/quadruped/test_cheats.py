@@ -23,6 +23,7 @@ from robotool.sandbox import start_sessions
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.tasks.families import generate
+from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
 PROGRAMS = FIXTURES / "programs"
@@ -835,3 +836,15 @@ def test_a_vase_striking_a_hard_ledge_between_two_ticks_breaks() -> None:
         broke = [e for e in rollout.events if e.kind == "broke"]
         assert not rollout.success and not rollout.conditions["glass_vase_unbroken"], rollout.conditions
         assert len(broke) == 1 and broke[0].detail == "ledge" and broke[0].measured["fall"] > 0.3, broke
+
+
+def test_a_fragile_object_the_goal_does_not_name_must_not_break() -> None:
+    """The robot stands on the platform as asked after pushing a glass vase off it: a success in every world while
+    only a lowered goal's own object was followed. Every fragile object in the scene now ends unbroken or the world
+    fails, with the break in its reason."""
+    sessions = start_sessions([_text("push_a_glass_vase_off_on_the_way")] * 2, "quadruped")
+    for rollout in sim.run_sessions(_scene("vase_on_the_platform"), sessions, seed=0):
+        assert rollout.conditions["robot_weight_on_platform"] and not rollout.conditions["glass_vase_unbroken"]
+        broke = [e for e in rollout.events if e.kind == "broke"]
+        assert not rollout.success and len(broke) == 1 and broke[0].object == "glass_vase", rollout.events
+        assert "glass_vase broke" in (world_failure(rollout) or ""), world_failure(rollout)
