@@ -205,20 +205,20 @@ class _Run:
         return [self._rollout(i, w, seeds[i]) for i, w in enumerate(self.worlds)]
 
     def _step(self, state: BatchState) -> None:
-        """One control interval of physics in the alive worlds. The worlds the goal watches at ``state`` (a fragile
-        object falling far enough to break) are stepped one physics step at a time, the goal updated after each: the
-        same physics (the controls hold through the interval), with nothing the goal reads left unseen between
-        ticks."""
+        """One control interval of physics in the alive worlds. Where the goal watches a world at ``state`` (a fragile
+        object falling far enough to break), the interval is stepped one physics step at a time (every alive world:
+        a batch may step all its worlds together) and the goal is updated after each in the watched worlds: the same
+        physics (the controls hold through the interval), with nothing the goal reads left unseen between ticks."""
         alive, substeps = self.alive(), self.scene.control_substeps
         watched = alive & self.goal.watched(state)
-        self.sim.step(substeps, alive & ~watched)
         if not watched.any():
+            self.sim.step(substeps, alive)
             return
-        for _ in range(substeps - 1):
-            self.sim.step(1, watched)
-            inside = self.sim.state()
-            self.goal.update(inside, watched & ~self.controller.overloaded(inside))
-        self.sim.step(1, watched)
+        for k in range(substeps):
+            self.sim.step(1, alive)
+            if k < substeps - 1:  # (the interval's last state is the tick's, which the goal reads in _observe)
+                inside = self.sim.state()
+                self.goal.update(inside, watched & ~self.controller.overloaded(inside))
 
     def _tick(self, state: BatchState) -> list[SkillEnd]:
         """The controller's tick in the alive worlds. If it raises, the controller's per-world state, the controls
