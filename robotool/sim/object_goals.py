@@ -4,7 +4,8 @@ Object extents come from the state: every object carries the corners of its part
 frame, placed each tick by its body pose; an object's bottom is read from its parts' own shapes (a box's lowest
 corner, a cylinder's lowest rim point: :class:`Underside`), not from the corners of a cylinder's bounding box, which
 a rolled cylinder turns below its round side. A fragile object's falls are followed every control tick:
-a fall starts where it was last resting (touching something other than the robot, nearly still) and
+a fall starts where it was last resting (touching something, the robot too, nearly still; or held in the robot's
+grip, at any speed) or from the highest point it rose to since (a tossed object falls from the top of its flight), and
 lasts until it rests again; it breaks once it touches something hard (not soft, not the robot) with
 its centre more than ``max_drop`` below where it rested. A soft object it glances off on the way, or
 a wall it grazes, does not end the fall, and neither does the tick at which contacts happen to be
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from robotool.rollout import Event
@@ -27,6 +29,7 @@ from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
+WELD, BODY = int(mujoco.mjtEq.mjEQ_WELD), int(mujoco.mjtObj.mjOBJ_BODY)
 FALL_ACCELERATION = 2 * 9.81  # m/s^2: the most a falling object is taken to gain downward speed by (gravity, twice)
 
 
@@ -118,6 +121,12 @@ class FallTracker:
         soft = np.array([o.soft for o in scene.task.objects])
         owner = scene.body_object[self.others]
         self.hard = (owner < 0) | ~soft[np.maximum(owner, 0)]  # per body in ``others``: the ground or not soft
+        self.robot = np.flatnonzero(scene.robot_body)
+        model = scene.model
+        ends = np.stack([model.eq_obj1id, model.eq_obj2id], axis=1)
+        mine, robots = np.isin(ends, self.bodies), scene.robot_body[ends]
+        bodies = (model.eq_type == WELD) & (model.eq_objtype == BODY)
+        self.grips = np.flatnonzero(bodies & (mine & robots[:, ::-1]).any(axis=1))  # welds to the robot: its grip
         self.rest_height: np.ndarray | None = None
         self.broken: np.ndarray | None = None
         self.breaks: dict[int, Event] = {}
@@ -130,6 +139,7 @@ class FallTracker:
             self.rest_height = height.copy()
             self.broken = np.zeros(height.shape, dtype=bool)
         assert self.broken is not None
+        self.rest_height = np.where(active, np.maximum(self.rest_height, height), self.rest_height)  # from the top
         fall = self.rest_height - height  # read before this tick's rest: a landing that stops dead still fell
         hard = touch & self.hard
         struck = active & hard.any(axis=1) & (fall > self.max_drop) & ~self.broken
@@ -143,7 +153,9 @@ class FallTracker:
                 detail=self._names(self.scene.body_object[self.others[hard[w]]]),
             )
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
-        resting = active & touch.any(axis=1) & (speed < RESTING_SPEED)
+        held = state.eq_active[:, self.grips].any(axis=1)  # in the robot's grip: it moves with the hand
+        borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
+        resting = active & (held | (borne & (speed < RESTING_SPEED)))
         self.rest_height = np.where(resting, height, self.rest_height)
 
     def unbroken(self, nworld: int) -> np.ndarray:

@@ -38,6 +38,7 @@ from robotool.tasks.families._common import footprint
 from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
+PROGRAMS = FIXTURES / "programs"
 LAYOUTS = FIXTURES / "layouts"
 UNSOLVABLE_MILK_SEED = 64  # an unsolvable instance of the milk family (its carton stood at 0.60 m, in tipping reach)
 
@@ -82,6 +83,10 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_jab_a_stick_up_into_a_stiff_button", "arm_stiff_button_facing_down_over_a_post", "closing axis"),
     # the jug raked in 4 cm steps, re-grasping between them: it stays beyond reach
     ("arm_rake_a_heavy_milk_in_regrasped_steps", "arm_heavy_milk_beyond_reach", "clamped 0.1"),
+    # let go 0.40 m above the floor: its fall was measured from the stool it last rested on, not from the hand
+    ("arm_drop_the_vase_from_high", "arm_vase_on_a_stool", "vase broke: it fell 0.4"),
+    # the glass dropped on the way to lifting the cube: not the goal's object, but broken
+    ("arm_drop_the_glass_then_lift_the_cube", "arm_cube_and_a_wine_glass", "glass broke: it fell 0.3"),
 ]
 
 
@@ -296,3 +301,12 @@ def test_two_cubes_pushed_loose_do_not_press_a_button_labelled_unsolvable(run_te
         assert not rollout.success and rollout.error is None and rollout.conditions == {"button_pressed": False}
         reason = world_failure(rollout)
         assert reason.startswith("goal not reached: button_pressed") and "magnetic_cube" in reason, reason
+
+
+def test_a_vase_carried_down_from_a_shelf_and_let_go_just_above_the_floor_is_unbroken(run_texts: Any) -> None:
+    """The control of the drops above (an adversarial run): a fall is measured from where the hand let go, so the
+    vase carried from a 0.30 m shelf to 2 mm above the floor drops a few millimetres (it was read as a 0.30 m fall
+    from the shelf, where it last rested on something other than the robot, and broke in every world)."""
+    program = (PROGRAMS / "arm_carry_the_vase_down_from_a_shelf.py").read_text()
+    rollouts: list[Rollout] = run_texts(_task("arm_vase_on_a_shelf"), [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
