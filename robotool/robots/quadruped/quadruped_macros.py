@@ -172,7 +172,9 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             out = _prop_spot(p, bbox, -side * lat, clearance)
             prog.use(prop.name, f"obstacle: props up {board_name}'s far end; push it out of the way")
             along = (p.center - bbox.center) @ a + quad.extent(a)  # beside it, toward the end, clear of the board
-            w.floor_walk(bbox.center + lat * side * beside + a * along, f"walk beside {prop.name}")
+            near_prop = bbox.center + lat * side * beside + a * along
+            if w.quad.stands_clear(w.layout, near_prop):  # (else the push routes to where it lines up by itself)
+                w.floor_walk(near_prop, f"walk beside {prop.name}")
             w.push(prop.name, out, "out from under the board")
         if across:
             w = _turned_lengthwise(w, bbox, a, lat * side, board_name)
@@ -181,9 +183,14 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         step_on = fulcrum.center - a * _step_on_distance(walker.extent(a), fulcrum, quad.layout.box(target.name), a)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
         end = bbox.center + a * (float(np.abs(a) @ bbox.half) - walker.extent(a) - INSET)
-        for xy in (w.here + lat * (side * beside - (w.here - bbox.center) @ lat), step_on + lat * side * beside):
-            if np.linalg.norm(xy - w.here) > 1e-6:  # (after a turn the robot stands in that lane already)
-                w.floor_walk(xy, "walk beside the board")
+        into_lane = w.here + lat * (side * beside - (w.here - bbox.center) @ lat)
+        lane_end = step_on + lat * side * beside
+        # (after a turn the robot stands in that lane already; where something stands there, the walk to the lane's
+        # end goes around it)
+        if np.linalg.norm(into_lane - w.here) > 1e-6 and w.quad.stands_clear(w.layout, into_lane):
+            w.floor_walk(into_lane, "walk beside the board")
+        if np.linalg.norm(lane_end - w.here) > 1e-6:
+            w.floor_walk(lane_end, "walk beside the board")
         # beside the fulcrum, which stays where it is, though the prop's push may have dragged the board along: the
         # climb runs straight on from the lane, clear of the fulcrum's end sticking out beside a dragged board
         w.walk(step_on, board_name, f"step onto {board_name} next to the fulcrum", fixed_axis=axis)

@@ -111,6 +111,11 @@ class Quadruped:
         """Half length of the body along direction ``u``."""
         return float(np.abs(u) @ self.half)
 
+    def stands_clear(self, layout: Layout, xy: np.ndarray) -> bool:
+        """Whether the body standing at ``xy`` on the robot's floor has nothing higher than the floor under its
+        outline (and its side margin)."""
+        return _highest_under(self, layout, xy) <= self.floor + RISE
+
     def room(self, box: Box) -> np.ndarray:
         """How far (x, y) the body's centre may stand off ``box``'s centre with the body on its top, ``INSET`` from
         its edges (0 where it does not fit)."""

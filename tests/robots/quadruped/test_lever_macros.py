@@ -79,3 +79,20 @@ def test_a_lever_tipping_under_the_walking_robot_no_longer_throws_it() -> None:
     assert rejection is None and code is not None
     (rollouts,) = run_seeded(task, [(code, [20007, 20008])])
     assert all(r.success for r in rollouts), failure_reason(rollouts)
+
+
+def test_a_lane_beside_the_board_blocked_by_a_heavy_box_is_walked_around() -> None:
+    """cube_lifting 8009: an 11.3 kg toolbox stands 0.43 m beyond the chair's side, where the lane beside the board
+    (0.25 m from it) runs: every lever program walked into the toolbox on its way to push the chair out (a step up of
+    0.25 m under a foot, predicted) or pushed the chair into the toolbox, and the planner failed in every world. The
+    robot now goes around what stands in the lane to where the push lines up, and back out the same way."""
+    task = generate("cube_lifting", 8009).task
+    fine = [p for p in candidates(task, True) if p.doubt is None]
+    assert fine
+    layout = Layout(task)
+    toolbox = layout.box("toolbox")
+    for prog in fine:
+        for motion in prog.motions:
+            if motion.skill == "walk_to_position":
+                xy = motion.point.estimate()[:2]
+                assert np.any(np.abs(xy - toolbox.center) > toolbox.half + np.array(task.limits.body_size[:2]) / 2)
