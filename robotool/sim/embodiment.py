@@ -211,8 +211,10 @@ class Embodiment(Protocol):
 class GoalTracker(Protocol):
     """Follows one goal in every world."""
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        """Observe the state of the ``active`` worlds after a control tick (or a physics step, where watched)."""
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
+        """Observe the state of the ``active`` worlds after a control tick (or a physics step, where watched).
+        ``credited`` (within ``active``): the worlds whose state may count toward the goal, not those where the robot
+        bears more than its contacts hold (what they show did not happen); what breaks counts in every active world."""
 
     def watched(self, state: BatchState) -> np.ndarray:
         """(nworld,) bool: the worlds whose next control interval must be seen at every physics step (:meth:`update`

@@ -32,8 +32,8 @@ class PressedGoal(ReadAtTicks):
         self.adr = model.sensor_adr[model.sensor(f"{self.name}__travel").id]
         self.max_travel: np.ndarray | None = None
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        travel = np.where(active, state.sensordata[:, self.adr], -np.inf)
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
+        travel = np.where(credited, state.sensordata[:, self.adr], -np.inf)
         self.max_travel = travel if self.max_travel is None else np.maximum(self.max_travel, travel)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
@@ -56,8 +56,8 @@ class WithFragiles:
     def __init__(self, goal: GoalTracker, falls: list[FallTracker]):
         self.goal, self.falls = goal, falls
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
-        self.goal.update(state, active)
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
+        self.goal.update(state, active, credited)
         for falls in self.falls:
             falls.update(state, active)
 

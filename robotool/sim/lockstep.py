@@ -218,7 +218,7 @@ class _Run:
             self.sim.step(1, alive)
             if k < substeps - 1:  # (the interval's last state is the tick's, which the goal reads in _observe)
                 inside = self.sim.state()
-                self.goal.update(inside, watched & ~self.controller.overloaded(inside))
+                self.goal.update(inside, watched, watched & ~self.controller.overloaded(inside))
 
     def _tick(self, state: BatchState) -> list[SkillEnd]:
         """The controller's tick in the alive worlds. If it raises, the controller's per-world state, the controls
@@ -385,7 +385,7 @@ class _Run:
         alive = self.alive()
         self.magnets.update(self.sim, state, alive)
         self.sheets.update(self.sim, state, alive)
-        self.goal.update(state, alive & ~self.controller.overloaded(state))
+        self.goal.update(state, alive, alive & ~self.controller.overloaded(state))
         scene = self.scene
         owner = scene.body_object
         robot_contact = state.touching[:, scene.robot_body, :].any(axis=1)  # (nworld, nbody)

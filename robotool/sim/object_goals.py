@@ -97,7 +97,7 @@ class LiftedGoal(ReadAtTicks):
         self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
         self.start: np.ndarray | None = None
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         if self.start is None:
             self.start = self._bottom(state)
 
@@ -200,7 +200,7 @@ class LoweredGoal:
         fragile = scene.task.objects[index].fragile
         self.falls = FallTracker(scene, index, fragile.max_drop) if fragile else None
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         if self.falls is not None:
             self.falls.update(state, active)
 

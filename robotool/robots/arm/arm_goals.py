@@ -21,7 +21,7 @@ class GraspedGoal(ReadAtTicks):
         assert isinstance(limits, ArmLimits)  # the arm's tasks carry the arm's limits
         self.radius = limits.grasp_radius
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:

@@ -53,7 +53,7 @@ class RobotOnGoal(ReadAtTicks):
         self.carrier = np.array([o.movable and o.fragile is None for o in objects], dtype=bool)[self.parts.owner]
         self.nobject = len(objects)
 
-    def update(self, state: BatchState, active: np.ndarray) -> None:
+    def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
