@@ -15,6 +15,7 @@ from typing import Literal, TypeVar, cast
 import numpy as np
 
 from robotool.planner.layout import CONTACT, Box, Layout
+from robotool.robots.quadruped.footing import footing, fragile_footing, straddle
 from robotool.robots.quadruped.push import (
     GAP,
     SIDE_MARGIN,
@@ -32,10 +33,8 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import (
     FOOT_RADIUS,
     RISE,
-    SPACING,
     check_walk,
     foot_offsets,
-    foot_paths,
     turn_sweep,
 )
 
@@ -120,10 +119,10 @@ def _walk_violation(
     finding = check_walk(lambda xy: layout.heights(xy, skip), np.asarray(start, dtype=float), goals, limits)
     if finding is not None:
         return finding.describe()
-    if (fragile := _fragile_footing(layout, start, goals, limits, skip)) is not None:
+    if (fragile := fragile_footing(layout, start, goals, limits, skip)) is not None:
         return fragile
-    if (straddle := _straddle(layout, start, goals, limits, skip)) is not None:
-        return straddle
+    if (apart := straddle(layout, start, goals, limits, skip)) is not None:
+        return apart
     half = np.asarray(limits.body_size[:2]) / 2
     here = np.asarray(start, dtype=float)
     for goal in goals:
@@ -173,82 +172,6 @@ def _swept(points: np.ndarray, start: np.ndarray, delta: np.ndarray, half: np.nd
     return lo <= hi
 
 
-def _straddle(
-    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
-) -> str | None:
-    """Where a walk along the body's length from ``start`` through ``goals`` first has a left foot and the right foot
-    beside it over surfaces more than a step up apart, in words, or None: a body resting on surfaces that far apart
-    rolls toward the lower side (it walked along a step's edge, its left feet on the step, and fell). A gap the feet
-    stride (at most ``max_gap``) counts as the surface around it. On a walk across the body the left and right feet
-    lead and trail, a step apart as they climb, and are not compared; nor are front and rear feet."""
-    offsets = foot_offsets(limits)
-    across = int(np.argmin(limits.body_size[:2]))  # the feet of a pair differ only in their offset on this axis
-    pairs = [(a, b) for a in range(4) for b in range(a + 1, 4) if np.isclose(offsets[a], offsets[b])[1 - across]]
-    stride = int(np.ceil((limits.max_gap / 2 + FOOT_RADIUS) / SPACING))
-    here = np.asarray(start, dtype=float)
-    for goal in goals:
-        delta = goal - here
-        length = float(np.linalg.norm(delta))
-        if length > 1e-6 and abs(delta[across]) <= abs(delta[1 - across]):
-            paths = foot_paths(here + offsets, delta / length, length)
-            heights = layout.heights(paths.reshape(-1, 2), skip).reshape(paths.shape[:2])
-            padded = np.pad(heights, ((0, 0), (stride, stride)), mode="edge")
-            footing = np.lib.stride_tricks.sliding_window_view(padded, 2 * stride + 1, axis=1).max(axis=2)
-            apart = np.stack([np.abs(footing[a] - footing[b]) for a, b in pairs])
-            if apart.max() > limits.max_step_up:
-                k, i = np.unravel_index(int(np.argmax(apart)), apart.shape)
-                x, y = (paths[pairs[k][0], i] + paths[pairs[k][1], i]) / 2
-                return (
-                    f"the left and right feet would stand on surfaces {float(apart[k, i]):.2f} m apart (a step up is "
-                    f"at most {limits.max_step_up:g} m), at [{x:.2f}, {y:.2f}] on the way to "
-                    f"[{goal[0]:.2f}, {goal[1]:.2f}]"
-                )
-        here = goal
-    return None
-
-
-def _fragile_footing(
-    layout: Layout, start: np.ndarray, goals: list[np.ndarray], limits: QuadrupedLimits, skip: list[str]
-) -> str | None:
-    """The first fragile object a foot would stand on along the walk, in words (the robot's weight breaks it), or
-    None: a fragile object is no footing, however low."""
-    fragile = [o.name for o in layout.task.objects if o.fragile is not None and o.name not in skip]
-    found = _footing(layout, start, goals, limits, skip, fragile)
-    if found is None:
-        return None
-    name, (x, y) = found
-    return f"a foot would stand on {name}, which is fragile, at [{x:.2f}, {y:.2f}]"
-
-
-def _footing(
-    layout: Layout,
-    start: np.ndarray,
-    goals: list[np.ndarray],
-    limits: QuadrupedLimits,
-    skip: list[str],
-    names: list[str],
-) -> tuple[str, np.ndarray] | None:
-    """The first of ``names`` a foot would stand on along the walk from ``start`` through ``goals``, and where (None:
-    none)."""
-    if not names:
-        return None
-    rim = FOOT_RADIUS * np.array([[0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
-    here = np.asarray(start, dtype=float)
-    for goal in goals:
-        delta = goal - here
-        length = float(np.linalg.norm(delta))
-        direction = delta / length if length > 1e-6 else np.array([1.0, 0.0])
-        points = (foot_paths(here + foot_offsets(limits), direction, length)[:, :, None, :] + rim).reshape(-1, 2)
-        surface, tops = layout.tops(points, skip)
-        for name in names:
-            top = tops[name] if name in tops else layout.top_of(name, points)  # (a cloth is in no stack of solids)
-            on = np.flatnonzero(np.isclose(top, surface, atol=1e-6))
-            if on.size:
-                return name, points[on[0]]
-        here = goal
-    return None
-
-
 def detour(
     layout: Layout, start: np.ndarray, goal: np.ndarray, limits: QuadrupedLimits, exclude: Iterable[str] = ()
 ) -> list[np.ndarray]:
@@ -272,7 +195,7 @@ def detour(
     def fine(a: np.ndarray, b: np.ndarray) -> bool:
         return (
             walk_violation(layout, a, [b], limits, skip) is None
-            and _footing(layout, a, [b], limits, skip, loose) is None
+            and footing(layout, a, [b], limits, skip, loose) is None
         )
 
     if fine(start, goal):
