@@ -85,6 +85,6 @@ def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
     falls = [
         FallTracker(scene, index, obj.fragile.max_drop)
         for index, obj in enumerate(scene.task.objects)
-        if obj.fragile is not None and obj.name != followed
+        if obj.fragile is not None and obj.movable and obj.name != followed  # (a fixed object does not fall)
     ]
     return WithFragiles(goal, falls) if falls else goal
