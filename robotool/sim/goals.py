@@ -50,8 +50,8 @@ OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
 
 
 class WithFragiles:
-    """A goal, and every other fragile object in the scene unbroken at the end (``<name>_unbroken``): a fragile object
-    knocked off a table on the way to the goal broke, whatever the goal asked for."""
+    """A goal, and every fragile object in the scene unbroken at the end (``<name>_unbroken``): the vase a ``lowered``
+    goal names, and one knocked off a table on the way to any goal."""
 
     def __init__(self, goal: GoalTracker, falls: list[FallTracker]):
         self.goal, self.falls = goal, falls
@@ -75,16 +75,15 @@ class WithFragiles:
 
 def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
     """The tracker for the scene's goal kind (an object goal's, or one of the robot's own, run by ``sim``), with every
-    fragile object the goal does not already follow kept unbroken (:class:`WithFragiles`)."""
+    fragile object kept unbroken (:class:`WithFragiles`)."""
     kind = scene.task.goal.kind
     if kind in OBJECT_GOALS:
         goal = OBJECT_GOALS[kind](scene)
     else:
         goal = robots.get(scene.task.embodiment).sim.goal_trackers()[kind](scene, sim)
-    followed = scene.task.goal.object if kind == "lowered" else None  # a lowered goal follows its own object's falls
     falls = [
         FallTracker(scene, index, obj.fragile.max_drop)
         for index, obj in enumerate(scene.task.objects)
-        if obj.fragile is not None and obj.movable and obj.name != followed  # (a fixed object does not fall)
+        if obj.fragile is not None and obj.movable  # (a fixed object does not fall)
     ]
     return WithFragiles(goal, falls) if falls else goal

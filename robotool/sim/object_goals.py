@@ -188,8 +188,9 @@ class FallTracker:
         return np.arange(adr, adr + 3)
 
 
-class LoweredGoal:
-    """``lowered: {object, height}``: bottom at most ``height`` above the ground; unbroken if fragile."""
+class LoweredGoal(ReadAtTicks):
+    """``lowered: {object, height}``: bottom at most ``height`` above the ground (a fragile object must also end
+    unbroken, as every fragile object must: :class:`robotool.sim.goals.WithFragiles`)."""
 
     def __init__(self, scene: Scene):
         goal = scene.task.goal.lowered
@@ -197,24 +198,9 @@ class LoweredGoal:
         self.name, self.height = goal.object, goal.height
         index = scene.object_index(self.name)
         self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
-        fragile = scene.task.objects[index].fragile
-        self.falls = FallTracker(scene, index, fragile.max_drop) if fragile else None
 
     def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
-        if self.falls is not None:
-            self.falls.update(state, active)
-
-    def watched(self, state: BatchState) -> np.ndarray:
-        """Where the fragile object's fall could break it before the next tick (:meth:`FallTracker.watched`)."""
-        return self.falls.watched(state) if self.falls is not None else np.zeros(len(state.time), dtype=bool)
+        """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        bottom = self.underside.bottom(state, self.body)
-        out = {f"{self.name}_lowered": bottom <= self.height}
-        if self.falls is not None:
-            out[f"{self.name}_unbroken"] = self.falls.unbroken(len(bottom))
-        return out
-
-    def events(self, world: int) -> list[Event]:
-        """The world's ``broke`` event, if its fragile object broke (time in the simulator's clock)."""
-        return self.falls.events(world) if self.falls is not None else []
+        return {f"{self.name}_lowered": self.underside.bottom(state, self.body) <= self.height}

@@ -238,12 +238,12 @@ def test_a_fall_read_at_every_physics_step_is_the_same_physics(sim_scene: Any, m
     """The runner steps the worlds the goal watches (a fragile object falling far enough to break) one physics step at
     a time: with its world watched at every tick, the reference program's world moves exactly as in steps of a whole
     control interval, and ends the same."""
-    from robotool.sim.object_goals import LoweredGoal
+    from robotool.sim.goals import WithFragiles
     from robotool.sim.recorder import StateRecorder
 
     def tracks(watch_all: bool) -> tuple[list[Rollout], list[np.ndarray]]:
         if watch_all:
-            monkeypatch.setattr(LoweredGoal, "watched", lambda self, state: np.ones(len(state.time), dtype=bool))
+            monkeypatch.setattr(WithFragiles, "watched", lambda self, state: np.ones(len(state.time), dtype=bool))
         recorder = StateRecorder([0])
         rollouts = sim.run_sessions(
             sim_scene("vase_lowering"), start_sessions([program("vase_lowering")], "quadruped"), seed=0,
