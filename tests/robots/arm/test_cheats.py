@@ -87,6 +87,8 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drop_the_vase_from_high", "arm_vase_on_a_stool", "vase broke: it fell 0.4"),
     # the glass dropped on the way to lifting the cube: not the goal's object, but broken
     ("arm_drop_the_glass_then_lift_the_cube", "arm_cube_and_a_wine_glass", "glass broke: it fell 0.3"),
+    # shoved off a stool past a 0.05 m max_drop, touching the fingers as it went
+    ("arm_shove_the_brittle_vase_off_the_stool", "arm_brittle_vase_on_a_stool", "vase broke: it fell 0.0"),
 ]
 
 
@@ -309,4 +311,12 @@ def test_a_vase_carried_down_from_a_shelf_and_let_go_just_above_the_floor_is_unb
     from the shelf, where it last rested on something other than the robot, and broke in every world)."""
     program = (PROGRAMS / "arm_carry_the_vase_down_from_a_shelf.py").read_text()
     rollouts: list[Rollout] = run_texts(_task("arm_vase_on_a_shelf"), [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_brittle_vase_eased_off_its_stool_along_the_fingers_is_unbroken(run_texts: Any) -> None:
+    """The control of the shove above: the fingers follow the vase down from the 0.08 m stool, so it never falls
+    freely past its 0.05 m max_drop (about 8 mm); a touch of the robot at rest speed carries it, as any support does."""
+    program = (PROGRAMS / "arm_ease_the_brittle_vase_down_along_the_fingers.py").read_text()
+    rollouts: list[Rollout] = run_texts(_task("arm_brittle_vase_on_a_stool"), [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
