@@ -147,6 +147,7 @@ class Program:
     late: int = 0  # how many less likely choices it makes (tried after programs with fewer)
     slack: float = float("inf")  # m its tightest stance keeps from an edge it must stay within (less: tried later)
     thin: list[str] = field(default_factory=list)  # other margins it leaves too thin for some perturbed worlds
+    calls: list[int] = field(default_factory=list)  # the line of each skill call (queries too), in the order they run
     _count: int = 0
 
     def use(self, name: str, role: str | None = None) -> None:
@@ -165,6 +166,7 @@ class Program:
         self._count += 1
         ref = Ref(f"p{self._count}", obj, skill, (float(value[0]), float(value[1]), float(value[2])))
         self.lines.append(f"{ref.var} = {skill}({obj!r})")
+        self.calls.append(len(self.lines) - 1)
         return ref
 
     def direction(self, start: Ref, end: Ref) -> Direction:
@@ -189,6 +191,7 @@ class Program:
     ) -> None:
         """Call a motion skill; record its plan step and, for a position, its parameters."""
         self.lines.append(_call(skill, obj, point))
+        self.calls.append(len(self.lines) - 1)
         names = list(dict.fromkeys([*([obj] if obj else []), *objects]))
         self.steps.append(PlanStep(skill=skill, objects=names, intent=intent))
         self.motions.append(Motion(len(self.lines) - 1, skill, obj, point, len(self.steps), explanation or intent))
@@ -198,6 +201,7 @@ class Program:
     def turn(self, heading: int, intent: str) -> None:
         """Turn in place to ``heading`` (degrees); a plan step without parameters."""
         self.lines.append(f"turn_to_heading({heading})")
+        self.calls.append(len(self.lines) - 1)
         self.steps.append(PlanStep(skill="turn_to_heading", objects=[], intent=intent))
         self.motions.append(Motion(len(self.lines) - 1, "turn_to_heading", None, None, len(self.steps), intent))
         self.say(f"Turn in place to a heading of {heading} degrees.")
@@ -212,6 +216,7 @@ class Program:
         copy = replace(
             self,
             lines=list(self.lines),
+            calls=list(self.calls),
             motions=list(self.motions),
             sentences=[*self.sentences, why],
             parameters=[
@@ -227,6 +232,20 @@ class Program:
     def code(self) -> str:
         """The program text."""
         return "\n".join(self.lines) + "\n"
+
+    def reaching_call(self, k: int, *, whole: bool) -> str | None:
+        """The program text up to its ``k``-th skill call (from 0; None past its last), and that call: ``whole``, or
+        as far as its object (whole when it has none). A program whose text starts with it makes the same calls as this
+        one before that call, with the same arguments, in a world made from the same seed, and then that call (or the
+        same skill on the same object, its target perhaps another)."""
+        if not 0 <= k < len(self.calls):
+            return None
+        line = self.calls[k]
+        before = "".join(f"{text}\n" for text in self.lines[:line])
+        motion = next((m for m in self.motions if m.line == line), None)
+        if not whole and motion is not None and motion.obj is not None:
+            return before + f"{motion.skill}({motion.obj!r}"
+        return before + self.lines[line] + "\n"
 
     @property
     def abstract_plan(self) -> str:

@@ -20,8 +20,7 @@ and fresh world (or when the rounds or the time budget run out).
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 from robotool.planner.codegen import Program
@@ -38,10 +37,55 @@ class Budget:
 
     beam: int  # programs per round (one simulator batch)
     rounds: int  # rounds at most
-    seconds: float  # no new round starts after this much time
+    work: float  # world-seconds to simulate at most: a round starts only when it is likely to end within them (Pace)
     first: int | None = None  # programs in the first round (default: beam)
     verify: int = 0  # fresh worlds a program that held in every planning world must also hold in
     doubted_rounds: int | None = None  # rounds at most while every program run was doubted and none succeeded anywhere
+
+
+TICK_WEIGHT = 3.0
+"""A batch's controller ticks, made for all its worlds at once for as long as its longest world runs, cost about as
+much as the physics of this many worlds (measured on the quadruped's planning batches of 5 to 15 worlds)."""
+
+
+def work(results: Sequence[Sequence[Rollout]]) -> float:
+    """What simulating one batch cost, in world-seconds: the simulated seconds of its worlds, summed, and its longest
+    world's :data:`TICK_WEIGHT` times more (proportional to the batch's time on any one machine, within about 10 %)."""
+    times = [rollout.sim_time for rollouts in results for rollout in rollouts]
+    return sum(times) + TICK_WEIGHT * max(times, default=0.0)
+
+
+@dataclass
+class Pace:
+    """What a planning run has simulated and its costliest round so far, in world-seconds (:func:`work`): a round
+    starts only when what was simulated plus the costliest round fits in ``budget`` (a round costs about as much as
+    the rounds before it), so that the run ends near its budget rather than a round past it. Counted in simulated
+    time, not on a clock, so that a task plans the same way on a busy machine as on an idle one."""
+
+    budget: float
+    spent: float = 0.0
+    costliest: float = 0.0
+    ran_out: bool = False  # a round did not start for want of budget
+    _round: float = 0.0
+
+    def fits(self) -> bool:
+        """Whether one more round is likely to end within the budget (when not, :attr:`ran_out` is set)."""
+        self.ran_out |= self.spent + self.costliest > self.budget
+        return not self.ran_out
+
+    def begin(self) -> None:
+        """A round begins."""
+        self._round = 0.0
+
+    def charge(self, results: Sequence[Sequence[Rollout]]) -> None:
+        """Count one simulated batch toward the round and the run."""
+        cost = work(results)
+        self.spent += cost
+        self._round += cost
+
+    def ended(self) -> None:
+        """The round begun last ended."""
+        self.costliest = max(self.costliest, self._round)
 
 
 VERIFY_OFFSET = 10_000  # verification world seeds start this far from the planning seed
@@ -115,6 +159,31 @@ def too_heavy(tried: Iterable[Tried], worlds: int) -> dict[str, int]:
     return heavy
 
 
+def failed_prefixes(tried: Iterable[Tried], worlds: int) -> set[str]:
+    """The texts of tried programs up to the first call that did not end done in a planning world they failed, and
+    that call (:meth:`~robotool.planner.codegen.Program.reaching_call`): whole, or as far as its object where it was
+    refused. A program that starts with one comes to that call in that world in the same state, and makes it again
+    there (a skill refuses from the state it starts in, whatever its target: the same skill on the same object is
+    likely refused again); it is likely to fail that world the same way."""
+    prefixes = set()
+    for item in tried:
+        for rollout in item.candidate.rollouts[:worlds]:
+            failed = next((call for call in enumerate(rollout.calls) if call[1].outcome != "done"), None)
+            if rollout.success or failed is None:
+                continue
+            prefix = item.program.reaching_call(failed[0], whole=failed[1].outcome != "refused")
+            if prefix is not None:
+                prefixes.add(prefix)
+    return prefixes
+
+
+def repeats(program: Program, prefixes: set[str]) -> bool:
+    """Whether ``program`` starts as a tried program did up to a call that failed in a planning world
+    (:func:`failed_prefixes`): it is verified after those as likely to hold by prediction that do not."""
+    code = program.code
+    return any(code.startswith(prefix) for prefix in prefixes)
+
+
 def doomed(program: Program, heavy: dict[str, int]) -> str | None:
     """The object ``program`` pushes that a planning world made too heavy to push (:func:`too_heavy`), so that it
     cannot succeed in every planning world, or None."""
@@ -136,25 +205,29 @@ def search(
     budget: Budget,
     start: int = 0,
     follow_up: FollowUp | None = None,
+    pace: Pace | None = None,
 ) -> tuple[list[Tried], int]:
     """Verify programs in rounds, tier by tier (a round never mixes tiers; each tier already ordered).
 
     Candidates are numbered from ``start``. When nothing held in the first round (the best guess, when the budget
     runs it alone), ``follow_up`` may make programs from its failures: they join the second round after its own
     programs (as candidates ``repaired_from`` their sources), or make a round of their own when no program is left.
-    Returns what was tried and how many rounds ran."""
-    started = time.perf_counter()
+    ``pace`` counts what a planning run that searches more than once simulates (default: this search's own, from
+    ``budget.work``). Returns what was tried and how many rounds ran."""
+    pace = pace or Pace(budget.work)
     tried: list[Tried] = []
     rounds = 0
     queue = [(k, p) for k, tier in enumerate(tiers) for p in tier]
     taken = 0  # programs of the queue verified so far
     carried: list[tuple[Program, Tried]] = []
     while rounds < budget.rounds and (taken < len(queue) or carried):
-        if rounds and time.perf_counter() - started > budget.seconds:
+        if not pace.fits():
             break
+        pace.begin()
         size = budget.beam if rounds or budget.first is None else budget.first
-        heavy = too_heavy(tried, worlds)
-        queue[taken:] = [(t, p) for t, p in queue[taken:] if doomed(p, heavy) is None]
+        heavy, prefixes = too_heavy(tried, worlds), failed_prefixes(tried, worlds)
+        left = [(t, p) for t, p in queue[taken:] if doomed(p, heavy) is None]
+        queue[taken:] = sorted(left, key=lambda tp: (tp[0], precedence(tp[1]), repeats(tp[1], prefixes)))
         carried = [(p, source) for p, source in carried if doomed(p, heavy) is None]
         if taken == len(queue) and not carried:
             break
@@ -180,6 +253,7 @@ def search(
         ahead = bool(budget.verify) and not rounds and bool(codes)  # the best guess's fresh worlds, in this batch
         runs = [(code, [*planning, *fresh] if ahead and k == 0 else planning) for k, code in enumerate(codes)]
         results = run_seeded(task, runs, backend=backend)
+        pace.charge(results)
         for item, rollouts in zip(runnable, results, strict=True):
             item.candidate.rollouts = rollouts[:worlds]
             item.candidate.failure = failure_reason(item.candidate.rollouts)
@@ -191,9 +265,11 @@ def search(
                 seed=fresh.start,
                 backend=backend,
                 ran={runnable[0].candidate.index: results[0][worlds:]} if ahead else {},
+                pace=pace,
             )
         tried += batch
         rounds += 1
+        pace.ended()
         if any(held(t.candidate) for t in batch) or _hopeless(tried, rounds, budget):
             break
         if follow_up is not None and rounds == 1:
@@ -225,11 +301,13 @@ def confirm(
     worlds: int,
     seed: int,
     backend: BackendName | None,
+    pace: Pace,
     ran: dict[int, list[Rollout]] | None = None,
 ) -> None:
     """Run the candidates that held in every world, in order, in ``worlds`` fresh worlds from ``seed`` until one
-    holds in all of them too; the fresh rollouts join each one's own (and its failure reason is updated). ``ran``:
-    fresh rollouts already run, by candidate index (their seeds these same ones), used instead of running again."""
+    holds in all of them too; the fresh rollouts join each one's own (and its failure reason is updated), and ``pace``
+    counts their runs. ``ran``: fresh rollouts already run, by candidate index (their seeds these same ones), used
+    instead of running again."""
     for candidate in candidates:
         if not held(candidate):
             continue
@@ -237,6 +315,7 @@ def confirm(
         fresh = (ran or {}).get(candidate.index)
         if fresh is None:
             fresh = run_seeded(task, [(candidate.code, range(seed, seed + worlds))], backend=backend)[0]
+            pace.charge([fresh])
         planned = len(candidate.rollouts)  # the fresh worlds are numbered after the planning ones (seeds say which)
         candidate.rollouts += [r.model_copy(update={"world": planned + k}) for k, r in enumerate(fresh)]
         candidate.failure = failure_reason(candidate.rollouts)

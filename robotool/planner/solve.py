@@ -17,7 +17,7 @@ from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
-from robotool.planner.search import Budget, Tried, doomed, held, mark_repaired, order, search, too_heavy
+from robotool.planner.search import Budget, Pace, Tried, doomed, held, mark_repaired, order, search, too_heavy
 from robotool.robots.registry import SearchMacros
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.signatures.traces import failure_trace
@@ -54,11 +54,12 @@ def solve(
     :mod:`robotool.planner.reparameterise`)."""
     started = time.perf_counter()
     planner = robot_planner(task)
+    pace = Pace(planner.work)
     fresh = worlds + 2 if verify is None else verify
     budget = Budget(
         beam=planner.beam,
         rounds=planner.rounds,
-        seconds=planner.seconds,
+        work=planner.work,
         first=planner.first,
         verify=fresh,
         doubted_rounds=planner.doubted_rounds,
@@ -87,6 +88,7 @@ def solve(
             backend=backend,
             budget=budget,
             follow_up=(lambda batch: near_miss_repairs(task, batch, budget.beam)) if repair else None,
+            pace=pace,
         )
         if repair and not any(held(t.candidate) for t in tried):
             repair_round(
@@ -98,6 +100,7 @@ def solve(
                 seed=seed,
                 backend=backend,
                 beam=budget.beam,
+                pace=pace,
             )
     verified_at = time.perf_counter()
     repairs = repair_record(tried)
@@ -130,6 +133,12 @@ def solve(
         solution.notes.append(
             f"{len(skipped)} program(s) not verified: each pushes an object that a push found too heavy to push in "
             f"a planning world ({', '.join(f'{name} in world {k}' for name, k in heavy.items())})."
+        )
+    unverified = len(programs) - len(verified & {p.code for p in programs}) - len(skipped)
+    if unverified and pace.ran_out:
+        solution.notes.append(
+            f"The search stopped at its budget of {planner.work:g} simulated world-seconds with {unverified} "
+            "program(s) not verified."
         )
     if not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
@@ -174,10 +183,11 @@ def repair_round(
     seed: int,
     backend: BackendName | None,
     beam: int,
+    pace: Pace,
 ) -> None:
     """Re-parameterise the best ``beam`` failures from their measured evidence and verify up to ``2 * beam``
     variants not tried yet in one batch, one that holds in every world then in ``verify`` fresh ones (appended to
-    ``tried``)."""
+    ``tried``); not when ``pace`` says the batch would not end within the planning run's budget."""
     failures = sorted((t for t in tried if t.candidate.rollouts), key=lambda t: t.candidate.rank_key())[:beam]
     heavy = too_heavy(tried, worlds)
     variants = [
@@ -185,7 +195,7 @@ def repair_round(
         for variant, source in _variants(task, failures, {t.program.code for t in tried}, 2 * beam, None)
         if doomed(variant, heavy) is None
     ]
-    if not variants:
+    if not variants or not pace.fits():
         return
     new, _ = search(
         task,
@@ -194,8 +204,9 @@ def repair_round(
         worlds=worlds,
         seed=seed,
         backend=backend,
-        budget=Budget(beam=len(variants), rounds=1, seconds=float("inf"), verify=verify),
+        budget=Budget(beam=len(variants), rounds=1, work=float("inf"), verify=verify),
         start=len(tried),
+        pace=pace,
     )
     for made, (_, source) in zip(new, variants, strict=True):
         mark_repaired(made.candidate, source.candidate)

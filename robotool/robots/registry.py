@@ -59,8 +59,10 @@ class SearchMacros:
     """Programs per round (one simulator batch)."""
     rounds: int
     """Rounds at most."""
-    seconds: float
-    """No new round starts after this much time."""
+    work: float
+    """World-seconds to simulate at most (the simulated seconds of every world run, and of each batch's longest
+    world :data:`~robotool.planner.search.TICK_WEIGHT` times more): a round starts only when it is likely to end
+    within them."""
     first: int | None = None
     """Programs in the first round (default ``beam``)."""
     doubted_rounds: int | None = None

@@ -75,7 +75,7 @@ def test_a_program_that_held_in_the_planning_worlds_but_fails_a_fresh_one_does_n
     fresh = verification_seed(0, 3)
     runner = ScriptedRunner({first.code: {fresh + 1}})  # the first fails only in the second fresh world
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, seconds=float("inf"), verify=5))
+    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, work=float("inf"), verify=5))
     assert rounds == 2 and [t.program for t in tried] == [first, second]
     a, b = (t.candidate for t in tried)
     assert len(a.rollouts) == len(b.rollouts) == 8
@@ -90,7 +90,7 @@ def test_the_fresh_worlds_run_ahead_for_a_best_guess_that_fails_a_planning_world
     first, second = _program(1.0), _program(2.0)
     runner = ScriptedRunner({first.code: {1}})  # the best guess fails planning world seed 1, holds in every fresh one
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, seconds=float("inf"), verify=5))
+    tried, rounds = _search(task, [first, second], Budget(beam=1, rounds=4, work=float("inf"), verify=5))
     a, b = (t.candidate for t in tried)
     assert rounds == 2 and [r.seed for r in a.rollouts] == [0, 1, 2]  # planning worlds only: it did not hold
     assert a.success_rate == pytest.approx(2 / 3) and not any("fresh" in note for note in a.notes)
@@ -104,7 +104,7 @@ def test_verification_runs_in_more_worlds_than_planning_with_seeds_planning_neve
     runner = ScriptedRunner({})
     monkeypatch.setattr(search_module, "run_seeded", runner)
     seed = 7
-    tried, _ = _search(task, [_program(1.0)], Budget(beam=3, rounds=1, seconds=float("inf"), verify=5), seed=seed)
+    tried, _ = _search(task, [_program(1.0)], Budget(beam=3, rounds=1, work=float("inf"), verify=5), seed=seed)
     ((batch),) = runner.calls  # the best guess runs in its fresh worlds in the same batch as its planning ones
     ((_, seeds),) = batch
     planning, verifying = seeds[:3], seeds[3:]
@@ -119,7 +119,7 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
     programs = [_program(float(x)) for x in range(1, 5)]
     runner = ScriptedRunner({p.code: {0} for p in programs})  # every program fails world 0: no early stop
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    _search(task, programs, Budget(beam=3, rounds=2, seconds=float("inf"), first=1, verify=5))
+    _search(task, programs, Budget(beam=3, rounds=2, work=float("inf"), first=1, verify=5))
     assert [len(batch) for batch in runner.calls] == [1, 3]
     assert [len(seeds) for _, seeds in runner.calls[0]] == [3 + 5]  # the best guess's fresh worlds ran ahead
 
@@ -168,7 +168,7 @@ def test_a_search_whose_programs_are_all_doubted_and_all_fail_stops_after_its_do
     programs = [(_doubted if doubted else _program)(float(x)) for x in range(1, 11)]
     runner = ScriptedRunner({p.code: fails for p in programs})
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    budget = Budget(beam=3, rounds=4, seconds=float("inf"), first=1, verify=5, doubted_rounds=2)
+    budget = Budget(beam=3, rounds=4, work=float("inf"), first=1, verify=5, doubted_rounds=2)
     tried, ran = _search(task, programs, budget)
     assert ran == rounds and len(tried) == 1 + 3 * (rounds - 1)
 
@@ -189,7 +189,7 @@ def test_variants_of_a_near_miss_join_the_next_round_after_its_own_programs(
         return [(variant, t) for t in batch if t.program is first]
 
     def run(programs: list[Program]) -> tuple[list[Tried], int]:
-        budget = Budget(beam=3, rounds=4, seconds=float("inf"), first=1, verify=5)
+        budget = Budget(beam=3, rounds=4, work=float("inf"), first=1, verify=5)
         stages = lambda p: StageOutputs()  # noqa: E731
         return search(task, [programs], stages, worlds=3, seed=0, backend=None, budget=budget, follow_up=follow_up)
 
@@ -270,14 +270,16 @@ def test_programs_that_push_an_object_a_planning_world_made_too_heavy_are_not_ve
     """A seed makes the same world in every batch: once a push of box_2 alone was refused for its mass in planning
     world 1, every program that pushes box_2 fails there, and the search verifies the others instead (the planner
     spent most of a 26 s search on such programs). With something riding on box_2 or stuck to it, its own mass is not
-    known: a program that pushes it bare may hold, and is verified."""
+    known: a program that pushes it bare may hold, and is not skipped (only verified after the others, as one that
+    repeats a refused push)."""
     first, same, other = _pushing("box_2", 1.0), _pushing("box_2", 2.0), _pushing("box_1", 3.0)
     runner = TooHeavyRunner("box_2", riders, stuck)
     alone = riders == stuck == 0.0
     monkeypatch.setattr(search_module, "run_seeded", runner)
-    tried, _ = _search(task, [first, same, other], Budget(beam=1, rounds=4, seconds=float("inf")))
+    tried, _ = _search(task, [first, same, other], Budget(beam=1, rounds=4, work=float("inf")))
     verified = [t.program for t in tried]
-    assert verified == ([first, other] if alone else [first, same, other])
+    assert verified == [first, other]
     assert search_module.too_heavy(tried, 3) == ({"box_2": 1} if alone else {})
+    assert search_module.repeats(same, search_module.failed_prefixes(tried, 3))
     assert search_module.doomed(same, {"box_2": 1}) == "box_2"
     assert search_module.doomed(other, {"box_2": 1}) is None

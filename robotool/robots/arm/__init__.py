@@ -47,7 +47,7 @@ def _goal_trackers() -> Mapping[str, GoalTrackerFactory]:
 def _planner() -> SearchMacros:
     from robotool.robots.arm.arm_candidates import candidates  # the planner loads on first use
 
-    return SearchMacros(candidates=candidates, beam=8, rounds=4, seconds=60.0)
+    return SearchMacros(candidates=candidates, beam=8, rounds=4, work=6000.0)
 
 
 def _check_robot(task: Task) -> list[Problem]:

@@ -50,7 +50,7 @@ def _goal_trackers() -> Mapping[str, GoalTrackerFactory]:
 def _planner() -> SearchMacros:
     from robotool.robots.quadruped.quadruped_macros import candidates  # the planner loads on first use
 
-    return SearchMacros(candidates=candidates, beam=3, rounds=4, seconds=90.0, first=1, doubted_rounds=2)
+    return SearchMacros(candidates=candidates, beam=3, rounds=4, work=1800.0, first=1, doubted_rounds=2)
 
 
 def _start_xy(task: Task) -> tuple[float, float]:
