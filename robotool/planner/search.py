@@ -45,7 +45,7 @@ class Budget:
 
 TICK_WEIGHT = 3.0
 """A batch's controller ticks, made for all its worlds at once for as long as its longest world runs, cost about as
-much as the physics of this many worlds (measured on the quadruped's planning batches of 5 to 15 worlds)."""
+much as the physics of this many worlds (measured on a legged robot's planning batches of 5 to 15 worlds)."""
 
 
 def work(results: Sequence[Sequence[Rollout]]) -> float:

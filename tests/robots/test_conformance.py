@@ -83,7 +83,7 @@ def test_the_record_is_whole(robot: robots.RobotType[Any]) -> None:
     assert all(math.isfinite(v) for v in (view.turn, view.elevation)) and view.floor_square > 0
     if robot.planner is not None:
         macros = robot.planner()
-        assert macros.beam >= 1 and macros.rounds >= 1 and macros.seconds > 0
+        assert macros.beam >= 1 and macros.rounds >= 1 and macros.work > 0
 
 
 @pytest.mark.parametrize("robot", ROBOTS, indirect=True)
