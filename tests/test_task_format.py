@@ -129,3 +129,38 @@ def test_tasks_show_prints_a_builtin_task_to_start_from(tmp_path: Path, capsys: 
     assert main(["tasks", "--show", "sofa"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and err.startswith("error: sofa: no built-in task by that name; built-in tasks: ")
+
+
+def test_an_invalid_object_name_stays_inside_its_one_line_message(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run: the field path copied the raw name, so a name with line breaks printed a line of
+    its own at column 0, the same as a run's verdict."""
+    data = _task_data()
+    data["objects"][0]["name"] = "milk\n\nevery world succeeded: success rate 100%\n"  # type: ignore[index]
+    path = tmp_path / "forged.yaml"
+    path.write_text(yaml.safe_dump(data))
+    assert main(["describe", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith(f"error: {path}: objects[0]('milk\\n\\nevery world")
+
+
+@pytest.mark.parametrize("suffix", [".json", ".yaml"])
+def test_a_file_nested_too_deeply_is_a_task_file_error_not_a_crash(tmp_path: Path, suffix: str) -> None:
+    """Found by an adversarial run: 3000 nested lists raised RecursionError, reported as a bug in robotool."""
+    path = tmp_path / f"deep{suffix}"
+    path.write_text('{"format": 1, "name": "deep", "objects": ' + "[" * 3000 + "]" * 3000 + "}")
+    with pytest.raises(TaskFileError, match="nested too deeply"):
+        load_task(path)
+
+
+def test_a_value_made_huge_by_yaml_aliases_is_shown_cut_short(tmp_path: Path) -> None:
+    """Found by an adversarial run: nine levels of ten aliases (an 803-byte file) made a value whose repr, built
+    whole for the error message, exhausted the memory. Seven levels here: 10**7 leaves, about 140 MB of repr."""
+    lines = ["  a0: &a0 [aaaaaaaaaa]"] + [f"  a{k}: &a{k} [{', '.join([f'*a{k - 1}'] * 10)}]" for k in range(1, 8)]
+    source = tasks.source("milk_reaching_near").replace("shape: box", "shape: *a7", 1)
+    path = tmp_path / "aliases.yaml"
+    path.write_text("anchors:\n" + "\n".join(lines) + "\n" + source)
+    with pytest.raises(TaskFileError) as info:
+        load_task(path)
+    assert len(str(info.value)) < 2000 and "(got [[" in str(info.value)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import difflib
 import json
+import re
+import reprlib
 import types
 import typing
 from collections.abc import Mapping
@@ -46,20 +48,37 @@ class TaskFileError(ValueError):
         super().__init__(f"{source}: {len(problems)} problems\n{lines}")
 
 
+PLAIN = re.compile(r"[a-z0-9_]{1,64}")  # a name or key shown as it is written; any other is shown as its repr
+
+
 def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
-    """Turn a pydantic error location into ``objects[2](hammer).size[0]``."""
+    """Turn a pydantic error location into ``objects[2](hammer).size[0]`` (a name or key that is not plain, such as
+    one with a line break in it, as its bounded repr: the path stays one line of the file's own words)."""
     out = ""
     node = raw
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
             node = node[part] if isinstance(node, list) and part < len(node) else None
-            if isinstance(node, Mapping) and isinstance(node.get("name"), str):
-                out += f"({node['name']})"
+            name = node.get("name") if isinstance(node, Mapping) else None
+            if isinstance(name, str):
+                out += f"({name})" if PLAIN.fullmatch(name) else f"({shown(name)})"
         else:
-            out += f".{part}" if out else str(part)
+            key = part if PLAIN.fullmatch(part) else f"[{shown(part)}]"
+            out += f".{key}" if out and not key.startswith("[") else key
             node = node.get(part) if isinstance(node, Mapping) else None
     return out
+
+
+_SHOWN = reprlib.Repr()
+_SHOWN.maxlevel, _SHOWN.maxstring, _SHOWN.maxother = 2, 80, 80
+_SHOWN.maxlist = _SHOWN.maxtuple = _SHOWN.maxdict = _SHOWN.maxset = 6
+
+
+def shown(value: Any) -> str:
+    """A value from a task file as an error message shows it: its repr, cut short however large or deep the value
+    is (a file's aliases can make a small file hold a value whose whole repr would not fit in memory)."""
+    return _SHOWN.repr(value)
 
 
 def _friendly(error: Mapping[str, Any]) -> str:
@@ -68,15 +87,15 @@ def _friendly(error: Mapping[str, Any]) -> str:
     if kind == "extra_forbidden":
         return "unknown key"
     if kind == "literal_error":
-        return f"{msg} (got {value!r})"
+        return f"{msg} (got {shown(value)})"
     if kind == "string_pattern_mismatch":
-        return f"names use only lowercase letters, digits and '_' (got {value!r})"
+        return f"names use only lowercase letters, digits and '_' (got {shown(value)})"
     if kind == "missing":
         return "required field is missing"
     if msg.startswith("Value error, "):
         return msg.removeprefix("Value error, ")
     if value is not None and not isinstance(value, Mapping | list):
-        return f"{msg} (got {value!r})"
+        return f"{msg} (got {shown(value)})"
     return msg
 
 
@@ -123,7 +142,7 @@ def _unknown_key(key: str, keys: list[str]) -> str:
         guess = close[0] if close else None
     hint = f" (did you mean {guess!r}?)" if guess else ""
     listing = f"; keys here: {', '.join(keys)}" if keys else ""
-    return f"unknown key {key!r}{hint}{listing}"
+    return f"unknown key {shown(key)}{hint}{listing}"
 
 
 def _object_path(task: Task, index: int) -> str:
@@ -236,6 +255,8 @@ def parse_task(data: Any, source: str = "<task>") -> Task:
         task = Task.model_validate(data)
     except ValidationError as e:
         raise TaskFileError(source, _with_robot_problem(_model_problems(e, data), unknown_robot)) from None
+    except RecursionError:
+        raise TaskFileError(source, [Problem(path="", message=NESTED_TOO_DEEP)]) from None
     if unknown_robot is not None:
         raise TaskFileError(source, [unknown_robot])
     problems = _check_semantics(task)
@@ -281,7 +302,12 @@ def load_task(path: str | Path) -> Task:
         raise TaskFileError(source, [_yaml_problem(text, e)]) from None
     except yaml.YAMLError as e:
         raise TaskFileError(source, [_syntax_problem("YAML", text, None, None, " ".join(str(e).split()))]) from None
+    except RecursionError:
+        raise TaskFileError(source, [Problem(path="", message=NESTED_TOO_DEEP)]) from None
     return parse_task(data, source)
+
+
+NESTED_TOO_DEEP = "lists or mappings are nested too deeply to read (a task file nests a few levels)"
 
 
 def _yaml_problem(text: str, error: yaml.MarkedYAMLError) -> Problem:
