@@ -40,8 +40,14 @@ class TaskInstance(BaseModel):
 
 
 def builtin(name_or_path: str) -> TaskInstance:
-    """A built-in task by name, or a task file by path (TaskFileError when neither)."""
+    """A built-in task by name, or a task file by path (TaskFileError when neither; EvalError for a file whose task
+    takes the name of a built-in task it is not: tables, the paper's included, and pictures know a task by name)."""
     task = tasks.load(name_or_path)
+    if name_or_path not in tasks.names() and task.name in tasks.names() and task != tasks.load(task.name):
+        raise EvalError(
+            f"{name_or_path} names its task {task.name!r}, the name of a built-in task that it is not: rename it (the "
+            "tables and pictures know a task by its name)"
+        )
     return TaskInstance(name=task.name, task=task, needs_tool=needs_tool(task), tools=BUILTIN_TOOLS.get(name_or_path))
 
 
@@ -72,6 +78,22 @@ def generated(family: str, seed: int) -> TaskInstance | None:
     )
 
 
+def _distinct(chosen: list[TaskInstance], notes: list[str]) -> list[TaskInstance]:
+    """The tasks given, each once (a task given twice is noted); EvalError for two different tasks of one name, which
+    the tables and pictures would take for one."""
+    by_name: dict[str, TaskInstance] = {}
+    for instance in chosen:
+        seen = by_name.setdefault(instance.name, instance)
+        if seen.task != instance.task:
+            raise EvalError(
+                f"two different tasks are named {instance.name!r}: rename one (the tables and pictures know a task by "
+                "its name)"
+            )
+    if len(by_name) < len(chosen):
+        notes.append(f"{len(chosen) - len(by_name)} task(s) given more than once, evaluated once")
+    return list(by_name.values())
+
+
 def parse_seeds(text: str) -> tuple[int, ...]:
     """``"A-B"`` (inclusive), ``"A"`` or ``"A,B,C"`` -> seeds; ValueError with a readable message."""
     seeds: list[int] = []
@@ -98,7 +120,7 @@ def select(
     """
     notes: list[str] = []
     everything = task_names is None and family_names is None and seeds is None
-    chosen = [builtin(name) for name in (builtin_names() if everything else task_names or [])]
+    chosen = _distinct([builtin(name) for name in (builtin_names() if everything else task_names or [])], notes)
     if everything or family_names is not None or seeds is not None:
         available = families()
         if available is None:

@@ -109,6 +109,26 @@ def test_select_defaults_and_families() -> None:
         select(None, ["juggling"], None)
 
 
+def test_two_different_tasks_of_one_name_are_refused_and_one_given_twice_runs_once(tmp_path: Path) -> None:
+    """Found by an adversarial run: a task file named like a built-in task (milk_reaching_near renamed
+    milk_reaching) was pooled with it in one column of the paper's table, and its scene picture was written over
+    the other's."""
+    renamed = tmp_path / "renamed.yaml"
+    renamed.write_text(tasks.source("milk_reaching_near").replace("name: milk_reaching_near", "name: milk_reaching"))
+    with pytest.raises(EvalError, match="names its task 'milk_reaching', the name of a built-in task that it is not"):
+        select([str(renamed)], None, None)
+    other = tmp_path / "other.yaml"
+    other.write_text(tasks.source("milk_reaching_near").replace("name: milk_reaching_near", "name: my_milk"))
+    moved = tmp_path / "moved.yaml"
+    moved.write_text(tasks.source("milk_reaching").replace("name: milk_reaching", "name: my_milk"))
+    with pytest.raises(EvalError, match="two different tasks are named 'my_milk'"):
+        select([str(other), str(moved)], None, None)
+    copy = tmp_path / "copy.yaml"
+    copy.write_text(tasks.source("milk_reaching"))  # the built-in task itself, from a file: the same task
+    chosen, notes = select(["milk_reaching", str(copy)], None, None)
+    assert [i.name for i in chosen] == ["milk_reaching"] and notes == ["1 task(s) given more than once, evaluated once"]
+
+
 def test_journal_cuts_a_torn_line_and_never_duplicates(tmp_path: Path) -> None:
     journal = Journal(tmp_path)
     assert journal.append(RECORDS[0]) and not journal.append(RECORDS[0])
