@@ -128,6 +128,12 @@ def model_text(text: str) -> str:
     return _PROMPT_MARKERS.sub(lambda m: " ".join(m.group()), one_line(capped(text, MODEL_CHARS)))
 
 
+def prompt_block(text: str) -> str:
+    """For a prompt, a block of lines (a task's description): controls escaped (newlines and tabs kept), the
+    adapters' field markers broken up, so that no text of a task file opens a field of its own."""
+    return _PROMPT_MARKERS.sub(lambda m: " ".join(m.group()), terminal_safe(text))
+
+
 def html_text(text: str) -> str:
     """For an HTML page (text or an attribute value): controls escaped (newlines and tabs kept, inside ``<pre>``
     they lay out code), ``& < > " '`` as entities, capped."""

@@ -19,7 +19,7 @@ from pydantic import BaseModel
 
 from robotool.program.compiled import DemoSource
 from robotool.program.lm_program import Proposer
-from robotool.safe_text import json_text
+from robotool.safe_text import json_text, prompt_block
 from robotool.solution import Solution
 from robotool.task.describe import describe
 from robotool.vocabulary import BackendName
@@ -56,7 +56,7 @@ def stage_demos(program: Proposer, example: dspy.Example, solution: Solution) ->
     """One demonstration per stage predictor of ``program`` from a verified solution (none for the Repair
     stage: a solution shows no failed program and its fix)."""
     stages = solution.stages
-    description = describe(example.task)
+    description = prompt_block(describe(example.task))  # as the program reads it (lm_program)
     concepts = (stages.key_concepts or []) if program.analyze is not None else []
     steps = (stages.steps or []) if program.plan is not None else []
     parameters = (stages.parameters or []) if program.calculate is not None else []

@@ -40,6 +40,7 @@ from robotool.program.lm import DEFAULT_FORMAT_RETRIES
 from robotool.program.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
 from robotool.program.methods import STAGES_BY_METHOD, MethodStages, method_stages
 from robotool.program.repair_rounds import RepairBudget, propose_repair, repair_rounds
+from robotool.safe_text import prompt_block
 from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
@@ -146,7 +147,7 @@ class Proposer(dspy.Module):
         Raises :class:`~robotool.errors.LMUnavailableError` when the model cannot be used at all.
         """
         started = time.perf_counter()
-        description = describe(task)
+        description = prompt_block(describe(task))
         settings = self._call_settings()
         shared = StageOutputs()
         notes: list[str] = list(self.compiled_notes)
@@ -195,7 +196,7 @@ class Proposer(dspy.Module):
         return propose_repair(
             self.repair,
             task,
-            describe(task),
+            prompt_block(describe(task)),
             source,
             index,
             settings=settings,
