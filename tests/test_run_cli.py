@@ -148,3 +148,18 @@ def test_missing_program_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_pa
     status, out, err = run_cli(capsys, "milk_reaching_near", str(missing))
     assert status == 2 and not out
     assert err.strip() == f"error: program file not found: {missing}"
+
+
+def test_a_long_output_is_shown_cut_with_how_much_is_left_out() -> None:
+    """Found by an adversarial run: a program's output was cut at 500 characters with no mark, ending mid-word as if
+    that were all it printed."""
+    from rich.console import Console
+
+    from robotool.cli.summary import print_trace
+    from robotool.rollout import Rollout
+
+    console = Console(record=True, width=1000)
+    printed = "x" * 499 + "WARNING: the rest is here"
+    print_trace(Rollout(world=0, seed=0, success=True, output=printed), console)
+    shown = console.export_text()
+    assert "x" * 100 in shown and "… (24 more characters, in the JSON report)" in shown

@@ -17,7 +17,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.text import Text
 
-from robotool.safe_text import one_line
+from robotool.safe_text import capped, one_line
 
 EXIT_INTERNAL_ERROR = 70
 TRACEBACK_PREFIX = "robotool-internal-error"
@@ -42,7 +42,7 @@ def write_traceback(error: BaseException, prog: str, folder: Path | None = None)
 def report_internal_error(errors: Console, error: BaseException, prog: str, folder: Path | None = None) -> int:
     """Say in one line that ``error`` is a bug in robotool and where its traceback went; the exit status."""
     path = write_traceback(error, prog, folder)
-    what = one_line(f"{type(error).__name__}: {error}")[:300]
+    what = capped(one_line(f"{type(error).__name__}: {error}"), 300)
     errors.print(
         Text.assemble(
             ("internal error:", "bold red"),

@@ -13,7 +13,7 @@ from rich.text import Text
 
 from robotool.execute import RunReport
 from robotool.rollout import Rollout, notable_distances
-from robotool.safe_text import console_markup, console_plain, mask_addresses, terminal_safe
+from robotool.safe_text import CUT, console_markup, console_plain, mask_addresses, terminal_safe
 from robotool.sandbox import layers_in_use
 from robotool.solution import Solution
 from robotool.verify import world_failure
@@ -175,7 +175,18 @@ def print_trace(rollout: Rollout, console: Console) -> None:
     if rollout.error:
         console.print(_framed("[red]error[/]", rollout.error))
     if rollout.output:
-        console.print(_framed("printed by the program", rollout.output.strip()[:500]))
+        console.print(_framed("printed by the program", output_shown(rollout.output.strip())))
+
+
+OUTPUT_SHOWN = 500  # characters of a program's output a summary shows
+
+
+def output_shown(text: str) -> str:
+    """The first :data:`OUTPUT_SHOWN` characters of what a program printed, a cut marked with how much is left out
+    (the run's JSON report keeps all of it)."""
+    if len(text) <= OUTPUT_SHOWN:
+        return text
+    return f"{text[:OUTPUT_SHOWN]}{CUT} ({len(text) - OUTPUT_SHOWN} more characters, in the JSON report)"
 
 
 def print_run(report: RunReport, console: Console, *, traces: int = 3) -> None:

@@ -40,7 +40,7 @@ from robotool.program.lm import DEFAULT_FORMAT_RETRIES
 from robotool.program.lm_calls import CallSettings, Cancelled, PromptLog, StageFailed, call_stage, run_concurrently
 from robotool.program.methods import STAGES_BY_METHOD, MethodStages, method_stages
 from robotool.program.repair_rounds import RepairBudget, propose_repair, repair_rounds
-from robotool.safe_text import prompt_block
+from robotool.safe_text import capped, prompt_block
 from robotool.sandbox import ProgramRejected, extract
 from robotool.signatures import Analyze, Calculate, Code, Plan, Repair, scene_context
 from robotool.solution import Candidate, CandidateFailure, LMCall, Proposal, RepairAttempt, Solution, StageOutputs
@@ -172,7 +172,7 @@ class Proposer(dspy.Module):
                 raise
             except Exception as e:  # a fault in the Analyzer leaves the candidates to run without it
                 notes.append(
-                    f"the Analyzer failed ({type(e).__name__}: {' '.join(str(e).split())[:300]}); the "
+                    f"the Analyzer failed ({type(e).__name__}: {capped(' '.join(str(e).split()), 300)}); the "
                     "candidates ran without key concepts"
                 )
         lm_started = time.perf_counter()
@@ -291,7 +291,7 @@ class Proposer(dspy.Module):
         except (RobotoolError, Cancelled):
             raise
         except Exception as e:  # a fault in this candidate's stage must not end the others
-            reason = f"{type(e).__name__}: {' '.join(str(e).split())[:300]}"
+            reason = f"{type(e).__name__}: {capped(' '.join(str(e).split()), 300)}"
             candidate.failure = CandidateFailure(stage=stage, kind="fault", reason=reason)
         return candidate
 

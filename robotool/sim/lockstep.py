@@ -36,6 +36,7 @@ from robotool.program_session import (
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
+from robotool.safe_text import capped
 from robotool.sim.backend import BatchedSim, BatchState, Perturbation
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.build import build, embodiment_for
@@ -324,7 +325,7 @@ class _Run:
         found = InternalError.of(error, f"the {self.robot.name} controller, {where}, world {i}")
         logger.error("%s", found, exc_info=error)
         world.internal_error = world.internal_error or found
-        reason = " ".join(f"internal error: controller error {where}: {found.reason}".split())[:500]
+        reason = capped(" ".join(f"internal error: controller error {where}: {found.reason}".split()), 500)
         if world.ended:  # settling after its program: the goal is read now, with the error
             world.error = world.error or reason
             if not world.finished:
