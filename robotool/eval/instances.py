@@ -40,14 +40,8 @@ class TaskInstance(BaseModel):
 
 
 def builtin(name_or_path: str) -> TaskInstance:
-    """A built-in task by name, or a task file by path (TaskFileError when neither; EvalError for a file whose task
-    takes the name of a built-in task it is not: tables, the paper's included, and pictures know a task by name)."""
+    """A built-in task by name, or a task file by path (TaskFileError when neither)."""
     task = tasks.load(name_or_path)
-    if name_or_path not in tasks.names() and task.name in tasks.names() and task != tasks.load(task.name):
-        raise EvalError(
-            f"{name_or_path} names its task {task.name!r}, the name of a built-in task that it is not: rename it (the "
-            "tables and pictures know a task by its name)"
-        )
     return TaskInstance(name=task.name, task=task, needs_tool=needs_tool(task), tools=BUILTIN_TOOLS.get(name_or_path))
 
 
@@ -76,6 +70,16 @@ def generated(family: str, seed: int) -> TaskInstance | None:
         needs_tool=bool(instance.needs_tool),
         tools=frozenset(instance.tools),
     )
+
+
+def _edited_copy(given: str, instance: TaskInstance) -> str | None:
+    """The note for a task file given by path that holds a task named like a built-in task that it is not (an
+    edited copy: the tables show it under that name), or None."""
+    if given in tasks.names() or instance.name not in tasks.names() or instance.task == tasks.load(instance.name):
+        return None
+    where = ", beside the paper's published numbers" if instance.name in PAPER_TASKS else ""
+    copy = f"{given} is an edited copy of the built-in task {instance.name!r}"
+    return f"{copy}: its runs are shown under that name{where}"
 
 
 def _distinct(chosen: list[TaskInstance], notes: list[str]) -> list[TaskInstance]:
@@ -120,7 +124,10 @@ def select(
     """
     notes: list[str] = []
     everything = task_names is None and family_names is None and seeds is None
-    chosen = _distinct([builtin(name) for name in (builtin_names() if everything else task_names or [])], notes)
+    given = builtin_names() if everything else list(task_names or [])
+    chosen = [builtin(name) for name in given]
+    notes += [note for name, i in zip(given, chosen, strict=True) if (note := _edited_copy(name, i)) is not None]
+    chosen = _distinct(chosen, notes)
     if everything or family_names is not None or seeds is not None:
         available = families()
         if available is None:

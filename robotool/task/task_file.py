@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import difflib
 import json
-import re
 import reprlib
 import types
 import typing
@@ -48,12 +47,14 @@ class TaskFileError(ValueError):
         super().__init__(f"{source}: {len(problems)} problems\n{lines}")
 
 
-PLAIN = re.compile(r"[a-z0-9_]{1,64}")  # a name or key shown as it is written; any other is shown as its repr
+def _plain(text: str) -> bool:
+    """Whether a name or key is shown in a field path as it is written (printable, short); any other, such as one
+    with a line break or a control character in it, is shown as its bounded repr, so the path stays one line."""
+    return text.isprintable() and 0 < len(text) <= 64
 
 
 def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
-    """Turn a pydantic error location into ``objects[2](hammer).size[0]`` (a name or key that is not plain, such as
-    one with a line break in it, as its bounded repr: the path stays one line of the file's own words)."""
+    """Turn a pydantic error location into ``objects[2](hammer).size[0]``."""
     out = ""
     node = raw
     for part in loc:
@@ -62,9 +63,9 @@ def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
             node = node[part] if isinstance(node, list) and part < len(node) else None
             name = node.get("name") if isinstance(node, Mapping) else None
             if isinstance(name, str):
-                out += f"({name})" if PLAIN.fullmatch(name) else f"({shown(name)})"
+                out += f"({name})" if _plain(name) else f"({shown(name)})"
         else:
-            key = part if PLAIN.fullmatch(part) else f"[{shown(part)}]"
+            key = part if _plain(part) else f"[{shown(part)}]"
             out += f".{key}" if out and not key.startswith("[") else key
             node = node.get(part) if isinstance(node, Mapping) else None
     return out

@@ -112,11 +112,16 @@ def test_select_defaults_and_families() -> None:
 def test_two_different_tasks_of_one_name_are_refused_and_one_given_twice_runs_once(tmp_path: Path) -> None:
     """Found by an adversarial run: a task file named like a built-in task (milk_reaching_near renamed
     milk_reaching) was pooled with it in one column of the paper's table, and its scene picture was written over
-    the other's."""
+    the other's. Alone, an edited copy of a built-in task runs under its name, and the notes say so."""
     renamed = tmp_path / "renamed.yaml"
     renamed.write_text(tasks.source("milk_reaching_near").replace("name: milk_reaching_near", "name: milk_reaching"))
-    with pytest.raises(EvalError, match="names its task 'milk_reaching', the name of a built-in task that it is not"):
-        select([str(renamed)], None, None)
+    with pytest.raises(EvalError, match="two different tasks are named 'milk_reaching'"):
+        select([str(renamed), "milk_reaching"], None, None)
+    _, notes = select([str(renamed)], None, None)
+    assert notes == [
+        f"{renamed} is an edited copy of the built-in task 'milk_reaching': its runs are shown under that name, "
+        "beside the paper's published numbers"
+    ]
     other = tmp_path / "other.yaml"
     other.write_text(tasks.source("milk_reaching_near").replace("name: milk_reaching_near", "name: my_milk"))
     moved = tmp_path / "moved.yaml"
