@@ -14,8 +14,10 @@ rollouts count only if it held in every planning world. When the first round hol
 makes from its failures (the planner's variants of a near miss) join the second round. A program that pushes an
 object some program's push found too heavy on its own in a planning world is not verified (:func:`too_heavy`: a
 seed makes the same world in every batch, so its push is refused there, and a planner's program pushes an object only
-to use it or to clear it away). The search stops at the first round with a program that succeeded in every planning
-and fresh world (or when the rounds or the time budget run out).
+to use it or to clear it away). A program that starts as a tried one did up to a call that failed in a planning world
+(:func:`repeats`) is verified after the programs as likely by prediction that do not. The search stops at the first
+round with a program that succeeded in every planning and fresh world (or when the rounds run out, or the next round
+would not fit the budget of simulated world-seconds: :class:`Pace`).
 """
 
 from __future__ import annotations
