@@ -60,13 +60,13 @@ class RefereeState:
     crushes: list[str | None]  # the first fragile object the robot stood on
     outside: np.ndarray  # (nworld,) ticks the centre of mass has been outside the support
     lost_support: np.ndarray  # (nworld,) object: where and how it last left its support
-    bumped: np.ndarray  # (nworld, nobject, 2) where each object's centre was when the torso first touched it (NaN:
+    bumped: np.ndarray  # (nworld, nobject, 3) where each object's centre was when the torso first touched it (NaN:
     # untouched, or pushed since)
     pressed: np.ndarray  # (nworld, nobject) touched without a break, and without a walk, since a push of it (it may
     # slide on after the push ended)
     carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, from push to
     # push until the robot pushes it itself
-    last_centres: np.ndarray  # (nworld, nobject, 2) where each object was at the last tick
+    last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
 
     @classmethod
     def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
@@ -77,7 +77,7 @@ class RefereeState:
             crushes=[None] * nworld,
             outside=np.zeros(nworld, dtype=int),
             lost_support=np.full(nworld, None, dtype=object),
-            bumped=np.full((nworld, nobject, 2), np.nan),
+            bumped=np.full((nworld, nobject, 3), np.nan),
             pressed=np.zeros((nworld, nobject), dtype=bool),
             carried=np.zeros((nworld, nobject)),
             last_centres=centres,
@@ -90,7 +90,7 @@ class Referee:
     def __init__(self, senses: Senses, rays: Rays, limits: QuadrupedLimits, config: QuadrupedConfig):
         self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
         self.facts, self.scene = senses.facts, senses.scene
-        self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state)[:, :, :2])
+        self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state))
         self.magnets = Magnets(self.scene)
 
     def conditions(self) -> dict[str, list[bool]]:
@@ -115,11 +115,11 @@ class Referee:
         """Check the rules in the worlds in ``mask`` after a tick: end the skills of robots that fell, stop and
         refuse the moves that shoved, rammed or crushed something."""
         ends = self._falls(mask, moves)
-        centres = self.senses.centers(self.senses.state)[:, :, :2]
+        centres = self.senses.centers(self.senses.state)
         shift = centres - self.state.last_centres  # each object's travel since the last tick
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
-        self._shoves(ends, mask, centres, shift, moves)
-        self._rams(ends, mask, centres, shift, moves)
+        self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso that lifts what lies on it shoves it too
+        self._rams(ends, mask, centres[:, :, :2], shift[:, :, :2], moves)
         if self.facts.fragile.any():
             self._crushes(ends, mask, moves)
         return ends
@@ -256,8 +256,8 @@ class Referee:
         pressing on its side stands on nothing) or that the torso touches too (a sled stood on and walked into by its
         wall is driven, not stood on), is remembered where it is;
         while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
-        they are split between steps onto it); once it lies more than ``shove`` from that place, it was shoved
-        (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
+        they are split between steps onto it); once it lies more than ``shove`` from that place, in any direction (a
+        torso that rises under what lies on its back lifts it), it was shoved (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
         limit, and what it moved may slide or tip on after the robot stops). The world fails (:meth:`conditions`)
         and a move in progress there is stopped and refused, naming the object."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
