@@ -257,9 +257,10 @@ class Referee:
         wall is driven, not stood on), is remembered where it is;
         while a push presses it or a foot stands on it, that place moves along with it (so shoves add up, however
         they are split between steps onto it); once it lies more than ``shove`` from that place, in any direction (a
-        torso that rises under what lies on its back lifts it), it was shoved (a walk or a climb is no push: it would move things the push rules refuse, such as objects over the push
-        limit, and what it moved may slide or tip on after the robot stops). The world fails (:meth:`conditions`)
-        and a move in progress there is stopped and refused, naming the object."""
+        torso that rises under what lies on its back lifts it), it was shoved (a walk or a climb is no push: it would
+        move things the push rules refuse, such as objects over the push limit, and what it moved may slide or tip on
+        after the robot stops). The world fails (:meth:`conditions`) and a move in progress there is stopped and
+        refused, naming the object."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
         touched = state.touching[:, scene.robot_body][:, :, scene.object_body].any(axis=1)  # by the torso or a leg
         touched &= facts.movable & ~facts.cloth & mask[:, None]
