@@ -68,7 +68,7 @@ class Pace:
     spent: float = 0.0
     costliest: float = 0.0
     ran_out: bool = False  # a round did not start for want of budget
-    _round: float = 0.0
+    _began: float = 0.0  # what was simulated when the round under way began
 
     def fits(self) -> bool:
         """Whether one more round is likely to end within the budget (when not, :attr:`ran_out` is set)."""
@@ -77,17 +77,15 @@ class Pace:
 
     def begin(self) -> None:
         """A round begins."""
-        self._round = 0.0
+        self._began = self.spent
 
     def charge(self, results: Sequence[Sequence[Rollout]]) -> None:
-        """Count one simulated batch toward the round and the run."""
-        cost = work(results)
-        self.spent += cost
-        self._round += cost
+        """Count one simulated batch toward the run (and the round under way)."""
+        self.spent += work(results)
 
     def ended(self) -> None:
         """The round begun last ended."""
-        self.costliest = max(self.costliest, self._round)
+        self.costliest = max(self.costliest, self.spent - self._began)
 
 
 VERIFY_OFFSET = 10_000  # verification world seeds start this far from the planning seed
@@ -170,10 +168,10 @@ def failed_prefixes(tried: Iterable[Tried], worlds: int) -> set[str]:
     prefixes = set()
     for item in tried:
         for rollout in item.candidate.rollouts[:worlds]:
-            failed = next((call for call in enumerate(rollout.calls) if call[1].outcome != "done"), None)
+            failed = next((k for k, call in enumerate(rollout.calls) if call.outcome != "done"), None)
             if rollout.success or failed is None:
                 continue
-            prefix = item.program.reaching_call(failed[0], whole=failed[1].outcome != "refused")
+            prefix = item.program.reaching_call(failed, whole=rollout.calls[failed].outcome != "refused")
             if prefix is not None:
                 prefixes.add(prefix)
     return prefixes
