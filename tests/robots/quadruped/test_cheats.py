@@ -613,6 +613,7 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
     # a walk of 1 cm under a plank lying on two posts raised the torso and lifted the plank off them with the back: only
     # an object's travel in x-y was read as a shove
     ("lift_a_plank_with_the_back", "plank_on_posts_over_the_robot", "the robot ran into cube and moved it"),
+    ("lift_a_plank_with_the_back_by_turning", "plank_on_posts_over_the_robot", "cube stands in the body's way"),
 ]
 
 
