@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import codeop
+import contextlib
 import itertools
 import re
 import warnings
@@ -11,8 +12,9 @@ from dataclasses import dataclass
 
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
 
-_FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w+-]*)[^\n]*$", re.MULTILINE)
-_PYTHON_TAGS = frozenset({"python", "python3", "py", ""})
+_FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w.+-]*)[^\n]*$", re.MULTILINE)
+_PYTHON_TAG = re.compile(r"(?:python|py)(?:\d+(?:\.\d+)*)?|ipython\d*|", re.IGNORECASE)
+"""The tags of a Python (or untagged) code block: python, Python3, py3, python3.11, ipython ..."""
 _IMPORTS = {"np": "import numpy as np", "math": "import math"}
 
 
@@ -42,10 +44,16 @@ def extract_program(text: str) -> str:
 def extract(text: str) -> Extraction:
     """The Python program in an LM answer, with a count of the answer's lines left out of it.
 
-    Extraction chooses a block, never cuts one. Reasoning (``<think>...</think>``) is never code. Of
-    several Python (or untagged) Markdown code blocks, the one a line just before it marks as final
-    ("Final program:") is taken, else the last one that is more than names (an unclosed last block runs to
-    the end); blocks are never joined, and :attr:`Extraction.chosen` says which was taken. Without a block,
+    Extraction chooses a block, never cuts one. Reasoning (``<think>...</think>`` and the other forms
+    :func:`without_reasoning` knows) is never code. Of several Python (or untagged) Markdown code blocks
+    (an unclosed last block runs to the end), the programs are those that parse and do more than name or
+    display values (an output listing is none); a program whose lines all lie in another is a quote of it (a
+    snippet explained after the whole program). One program left is taken; of several, the last one a line
+    just before it marks as final ("Final program:", "Here is the corrected code:") is taken; otherwise which
+    one is meant is not clear (a draft and a correction, a program and a usage example, two options) and
+    :class:`ProgramRejected` says so, to be asked again. A Python block that does not parse, and an untagged one
+    that looks like code, is meant as a program: its syntax error is raised, never passed over for another
+    block. Blocks are never joined, and :attr:`Extraction.chosen` says which was taken. Without a block,
     the program is the reply with prose before and after it left out; when a line that looks like code
     would be left out too, the program does not parse as a whole and its syntax error is raised.
     Normalizes Windows and old Mac line endings, a BOM, non-breaking spaces and tab indentation (a tab is
@@ -59,6 +67,7 @@ def extract(text: str) -> Extraction:
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
     text = "\n".join(_expand_indent_tabs(line) for line in text.split("\n"))
     text = without_reasoning(text)
+    text, lone_fence = _without_a_lone_fence(text)
     blocks = _fenced_blocks(text)
     chosen = None
     if blocks:
@@ -68,24 +77,39 @@ def extract(text: str) -> Extraction:
             chosen = f"the reply held {len(blocks)} code blocks; block {index + 1} ({why}) was used, not joined"
         fence_lines = blocks[index].fence_lines
     else:
-        code, fence_lines = _unfenced_program(text).strip("\n"), 0
+        code, fence_lines = _unfenced_program(text).strip("\n"), lone_fence
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)
     if not _has_action(tree):
-        raise ProgramRejected(None, "text", "no Python program found in the answer (only prose or names)")
+        raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]
     dropped = _non_blank(text) - _non_blank(code) - fence_lines
     return Extraction(code="\n".join([*missing, code]) + "\n", dropped_lines=max(dropped, 0), chosen=chosen)
 
 
-_REASONING = re.compile(r"<(think|thinking|reasoning)>.*?(?:</\1>|\Z)", re.DOTALL | re.IGNORECASE)
-_REASONING_END = re.compile(r"^.*?</(?:think|thinking|reasoning)>", re.DOTALL | re.IGNORECASE)
+_THOUGHT = r"think|thinking|reasoning|thought|seed:think"
+_REASONING = re.compile(
+    rf"<({_THOUGHT})>.*?(?:</\1>|\Z)|\[THINK\].*?(?:\[/THINK\]|\Z)|◁({_THOUGHT})▷.*?(?:◁/\2▷|\Z)",
+    re.DOTALL | re.IGNORECASE,
+)
+_REASONING_END = re.compile(rf"^.*?(?:</(?:{_THOUGHT})>|\[/THINK\]|◁/(?:{_THOUGHT})▷)", re.DOTALL | re.IGNORECASE)
+_CHANNEL = "<|channel|>"
+_FINAL_CHANNEL = re.compile(
+    r"<\|channel\|>\s*final\s*(?:<\|constrain\|>\S*\s*)?<\|message\|>(.*?)(?=<\|(?:end|return|start|call)\|>|\Z)",
+    re.DOTALL,
+)
 
 
 def without_reasoning(text: str) -> str:
-    """``text`` without the model's reasoning: ``<think>...</think>`` spans (an unclosed one runs to the end),
-    and everything before a closing tag whose opening tag the server left out."""
+    """``text`` without the model's reasoning: ``<think>...</think>`` spans and their other spellings
+    (``<thinking>``, ``<reasoning>``, ``<seed:think>``, ``[THINK]...[/THINK]``, ``◁think▷...◁/think▷``; an unclosed
+    one runs to the end), everything before a closing tag whose opening tag the server left out, and, in a reply in
+    channels (``<|channel|>analysis<|message|>...``), everything but its last final channel's message (none when
+    it has none: the answer has not begun)."""
+    if _CHANNEL in text:
+        finals = _FINAL_CHANNEL.findall(text)
+        text = finals[-1] if finals else ""
     text = _REASONING.sub("", text)
     return _REASONING_END.sub("", text, count=1)
 
@@ -101,6 +125,18 @@ class _Block:
     fence_lines: int
     label: str
     """The last non-blank line of text before the block's opening fence."""
+    tagged: bool
+    """Whether its fence names Python (else it has no tag)."""
+
+
+def _without_a_lone_fence(text: str) -> tuple[str, int]:
+    """``text`` without its fence line, and 1, when it has only one fence and it names no language: a stray closing
+    fence after an unfenced program (its opening was left out) or an opening one never closed, around no block;
+    else ``text`` as it is, and 0."""
+    fences = list(_FENCE.finditer(text))
+    if len(fences) != 1 or fences[0].group(2):
+        return text, 0
+    return text[: fences[0].start()] + text[fences[0].end() + 1 :], 1
 
 
 def _fenced_blocks(text: str) -> list[_Block]:
@@ -115,32 +151,83 @@ def _fenced_blocks(text: str) -> list[_Block]:
         while j < len(fences) and not (fences[j].group(1)[0] == opening.group(1)[0] and not fences[j].group(2)):
             j += 1
         end = fences[j].start() if j < len(fences) else len(text)
-        if opening.group(2).lower() in _PYTHON_TAGS:
+        if _PYTHON_TAG.fullmatch(opening.group(2)):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
             label = before[-1].strip() if before else ""
-            blocks.append(_Block(text[opening.end() + 1 : end].strip("\n"), 1 + (j < len(fences)), label))
+            code = text[opening.end() + 1 : end].strip("\n")
+            blocks.append(_Block(code, 1 + (j < len(fences)), label, tagged=bool(opening.group(2))))
         previous_end = fences[j].end() if j < len(fences) else len(text)
         i = j + 1
     return blocks
 
 
-_FINAL = re.compile(r"\b(final|corrected|fixed|revised|complete)\b", re.IGNORECASE)
+_FINAL = re.compile(
+    r"\b(?:final|corrected|fixed|revised|complete|full|whole|updated|improved)\s+(?:python\s+)?"
+    r"(?:program|code|version|script|solution|answer)\b",
+    re.IGNORECASE,
+)
+_NEGATION = re.compile(r"\b(?:not|never|no)\b|n't\b", re.IGNORECASE)
+
+
+def _marked_final(label: str) -> bool:
+    """Whether a label says the block after it is the final program ("Final program:", "Here is the corrected
+    code:"), not only names a word ("To complete the task", "What was fixed:", "This draft is not the final
+    version:")."""
+    found = _FINAL.search(label)
+    return found is not None and not _NEGATION.search(label[: found.start()])
 
 
 def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
-    """The index of the block to run and why: the last one marked final, else the last that is more than
-    names (an output listing is not a program), else the last."""
-    marked = [k for k, block in enumerate(blocks) if _FINAL.search(block.label)]
+    """The index of the block to run and why (see :func:`extract`); raises :class:`ProgramRejected` when a block
+    meant as a program does not parse, or several different programs leave it unclear which one is meant."""
+    programs: list[int] = []
+    for k, block in enumerate(blocks):
+        try:
+            tree = _quiet_parse(block.code)
+        except (SyntaxError, ValueError, RecursionError, MemoryError):
+            if block.tagged or any(_CODE_LINE.match(line) for line in block.code.split("\n")):
+                return k, "it does not parse"  # parse_program raises its syntax error
+            continue  # an untagged listing of text
+        if _has_action(tree):
+            programs.append(k)
+    if not programs:
+        return len(blocks) - 1, "the last"
+    lines = {k: _statement_lines(blocks[k].code) for k in programs}
+    whole = [k for k in programs if not any(j != k and _quotes(lines[k], k, lines[j], j) for j in programs)]
+    if len(whole) == 1:
+        return whole[0], "the only program; the other blocks quote it or are no programs"
+    marked = [k for k in whole if _marked_final(blocks[k].label)]
     if marked:
         return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
-    for k in range(len(blocks) - 1, -1, -1):
-        try:
-            tree = _quiet_parse(blocks[k].code)
-        except (SyntaxError, ValueError, RecursionError, MemoryError):
-            return k, "the last"
-        if _has_action(tree):
-            return k, "the last" if k == len(blocks) - 1 else "the last that is a program"
-    return len(blocks) - 1, "the last"
+    numbers = ", ".join(str(k + 1) for k in whole)
+    raise ProgramRejected(
+        None,
+        "blocks",
+        f"the reply holds {len(whole)} different programs (code blocks {numbers}) and does not say which one is "
+        "meant; give exactly one program, in one code block",
+    )
+
+
+def _statement_lines(code: str) -> list[str]:
+    """A block's lines as code, one by one: each line that parses alone as written by ``ast.unparse`` (comments,
+    spacing and quotes do not matter), any other (the head of a compound statement) stripped; none for a blank or
+    comment line."""
+    lines = []
+    for line in code.split("\n"):
+        text = line.strip()
+        with contextlib.suppress(SyntaxError, ValueError, RecursionError, MemoryError):
+            text = ast.unparse(_quiet_parse(text))
+        if text:
+            lines.append(text)
+    return lines
+
+
+def _quotes(lines: list[str], k: int, other: list[str], j: int) -> bool:
+    """Whether block ``k`` (its ``lines``) quotes block ``j`` (``other``): every line of it is one of the other's,
+    and it is shorter (of two equal blocks, the earlier quotes the later)."""
+    if not set(lines) <= set(other):
+        return False
+    return len(lines) < len(other) or (len(lines) == len(other) and k < j)
 
 
 _CODE_LINE = re.compile(
@@ -246,7 +333,21 @@ def _has_action(tree: ast.Module) -> bool:
 
 
 def _names_a_value(statement: ast.stmt) -> bool:
-    return isinstance(statement, ast.Expr) and isinstance(statement.value, ast.Name | ast.Constant)
+    return isinstance(statement, ast.Expr) and _displays_a_value(statement.value)
+
+
+def _displays_a_value(node: ast.expr) -> bool:
+    """A name, a constant, or a literal display of them (``[0.35, 0.0, -0.1]``, ``{"code": "..."}``): what an
+    output listing or a value given in place of a program parses as."""
+    if isinstance(node, ast.Name | ast.Constant):
+        return True
+    if isinstance(node, ast.UnaryOp):
+        return _displays_a_value(node.operand)
+    if isinstance(node, ast.List | ast.Tuple | ast.Set):
+        return all(_displays_a_value(e) for e in node.elts)
+    if isinstance(node, ast.Dict):
+        return all(_displays_a_value(e) for e in [*node.values, *(k for k in node.keys if k is not None)])
+    return False
 
 
 def _expand_indent_tabs(line: str) -> str:

@@ -24,20 +24,19 @@ def test_fenced_block_inside_prose(tag: str) -> None:
     assert extract_program(answer) == PROGRAM
 
 
-def test_of_several_python_blocks_the_last_is_taken_never_joined_and_other_languages_skipped() -> None:
+def test_of_several_different_programs_none_marked_none_is_guessed_the_reply_is_asked_again() -> None:
     answer = (
         'Draft:\n```python\nopen_gripper()\n```\nThe scene as JSON:\n```json\n{"milk": 1}\n```\n'
         "Better:\n~~~py\nclose_gripper()\n~~~\n"
     )
-    extraction = extract(answer)
-    assert extraction.code == "close_gripper()\n"
-    assert "2 code blocks; block 2 (the last) was used, not joined" in extraction.note
+    with pytest.raises(ProgramRejected, match=r"2 different programs \(code blocks 1, 2\).*give exactly one program"):
+        extract(answer)
 
 
 def test_the_block_marked_final_is_taken_even_before_a_later_one() -> None:
     answer = (
         "Final program:\n```python\nopen_gripper()\nclose_gripper()\n```\n"
-        "For comparison, the naive version:\n```python\nclose_gripper()\n```\n"
+        "For comparison, the naive version:\n```python\nmove_to_position([0.3, 0.0, 0.1])\n```\n"
     )
     extraction = extract(answer)
     assert extraction.code == "open_gripper()\nclose_gripper()\n"
@@ -46,7 +45,96 @@ def test_the_block_marked_final_is_taken_even_before_a_later_one() -> None:
 
 def test_an_output_listing_after_the_program_is_not_taken_for_it() -> None:
     extraction = extract(f"```python\n{PROGRAM}```\nOutput:\n```\nDone\n```\n")
-    assert extraction.code == PROGRAM and "the last that is a program" in extraction.note
+    assert extraction.code == PROGRAM and "block 1 (the only program" in extraction.note
+
+
+# Found by an adversarial run: each of these ran a block the model did not mean, or guessed between programs.
+QUOTING_REPLIES = {
+    "snippets explained after the whole program": (
+        f"Here is the program:\n```python\n{PROGRAM}```\nExplanation:\n1. It reads the centre:\n"
+        '```python\np = np.array(get_center("milk"))\n```\n2. Then it moves:\n```python\nmove_to_position(p)\n```\n'
+    ),
+    "a snippet first, under a label naming a marker word": (
+        "To complete the task, the robot first reads the milk:\n```python\np = np.array(get_center('milk'))\n```\n"
+        f"Here is the whole program:\n```python\n{PROGRAM}```\n"
+    ),
+    "a fixed line with its own comment, then the full program": (
+        f"What was fixed:\n```python\nmove_to_position(p)  # was missing\n```\nFull program:\n```python\n{PROGRAM}```"
+    ),
+    "output listings that parse as values": (
+        f"```python\n{PROGRAM}```\nIt prints:\n```\n[0.35, 0.0, 0.12]\n```\nthen\n```\n-0.38\n```\n"
+        "and\n```\n(1, {'a': -2})\n```\n"
+    ),
+    "an output listing of text": f"```python\n{PROGRAM}```\nWhen run, it prints:\n```\nMoving to the milk\ndone\n```\n",
+    "the final block tagged py3": f"Draft:\n```python\nmove_to_position(p)\n```\nFinal:\n```py3\n{PROGRAM}```\n",
+    "a stray closing fence after an unfenced program": f"{PROGRAM}```\n\nThis program grasps the milk.\n",
+}
+
+
+@pytest.mark.parametrize("answer", QUOTING_REPLIES.values(), ids=QUOTING_REPLIES.keys())
+def test_blocks_that_quote_the_program_or_show_its_output_leave_the_program(answer: str) -> None:
+    assert extract(answer).code == PROGRAM
+
+
+OTHER = "p = get_graspable_point('milk')\nopen_gripper()\nmove_to_position([p[0] - 0.1, p[1], p[2]])\nclose_gripper()\n"
+AMBIGUOUS_REPLIES = {
+    "a usage example after the program": (
+        f"```python\n{PROGRAM}```\nYou can reuse it, e.g.:\n```python\ngrasp('box')\n```"
+    ),
+    "two options and a recommendation in prose": (
+        f"Option A (direct):\n```python\n{PROGRAM}```\nOption B:\n```python\n{OTHER}```\nI recommend option A."
+    ),
+    "a draft under a negated marker, then another program": (
+        f"This first draft is not the final program:\n```python\n{OTHER}```\nOn reflection:\n```python\n{PROGRAM}```"
+    ),
+    "a draft tagged python, the correction tagged python3.11": (
+        f"```python\n{OTHER}```\nWait, that approaches from the side.\n```python3.11\n{PROGRAM}```"
+    ),
+}
+
+
+@pytest.mark.parametrize("answer", AMBIGUOUS_REPLIES.values(), ids=AMBIGUOUS_REPLIES.keys())
+def test_several_different_programs_are_asked_again_never_guessed(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(answer)
+
+
+def test_a_later_python_block_that_does_not_parse_is_its_syntax_error_not_the_earlier_draft() -> None:
+    answer = f"First try:\n```python\n{OTHER}```\nFinal program:\n```python\nopen_gripper(\nmove_to_position(p)\n```"
+    with pytest.raises(ProgramRejected, match="syntax error"):
+        extract(answer)
+
+
+@pytest.mark.parametrize(
+    "answer",
+    ['{"code": "open_gripper()"}', '["p = get_center(\'milk\')", "move_to_position(p)"]', "(-0.38, [1, 2])"],
+    ids=["a JSON object", "a list of lines", "a tuple of values"],
+)
+def test_a_value_given_in_place_of_a_program_is_no_program(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="no Python program found"):
+        extract(f"```python\n{answer}\n```")
+
+
+REASONING_FORMS = {
+    "[THINK] (Magistral)": "[THINK]\nDraft:\n```python\nclose_gripper()\n```\nNo, open first.[/THINK]\n",
+    "<seed:think>": "<seed:think>\n```python\nclose_gripper()\n```\n</seed:think>\n",
+    "◁think▷ (Kimi)": "◁think▷\n```python\nclose_gripper()\n```\n◁/think▷\n",
+    "channels (gpt-oss)": (
+        "<|channel|>analysis<|message|>Let me draft:\n```python\nclose_gripper()\n```\nNeed to open first.<|end|>"
+        "<|start|>assistant<|channel|>final<|message|>"
+    ),
+}
+
+
+@pytest.mark.parametrize("reasoning", REASONING_FORMS.values(), ids=REASONING_FORMS.keys())
+def test_a_draft_in_any_spelling_of_reasoning_is_never_code(reasoning: str) -> None:
+    extraction = extract(reasoning + PROGRAM)
+    assert extraction.code == PROGRAM and extraction.chosen is None
+
+
+def test_a_reply_in_channels_without_a_final_channel_has_no_answer_yet() -> None:
+    with pytest.raises(ProgramRejected, match="no Python program found"):
+        extract(f"<|channel|>analysis<|message|>Draft:\n```python\n{PROGRAM}```<|end|>")
 
 
 def test_a_draft_inside_reasoning_is_never_code() -> None:
