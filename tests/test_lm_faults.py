@@ -88,6 +88,76 @@ def test_a_reply_cut_off_at_the_token_limit_is_sent_back_as_such_and_the_user_is
     assert f"the reply before was rejected: your reply was cut off at {tokens} tokens" in notes
 
 
+def _completion(message: dict, finish_reason: str | None, **choice: object) -> str:
+    """A raw chat-completion body with one choice, as some providers send it (a test fixture)."""
+    body = {"id": "x", "object": "chat.completion", "created": 0, "model": "standin"}
+    body["choices"] = [
+        {"index": 0, "finish_reason": finish_reason, "message": {"role": "assistant", **message}, **choice}
+    ]
+    return json.dumps(body)
+
+
+# Found by an adversarial run: a provider's error in a 200 was read as an empty reply, and a cut or errored reply ran.
+PROVIDER_FAULTS = {
+    "an error object (vLLM)": (
+        json.dumps({"object": "error", "message": "The model is overloaded", "type": "ServiceUnavailableError"}),
+        "not a chat completion (it says: The model is overloaded)",
+    ),
+    "a detail object": (json.dumps({"detail": "Internal Server Error"}), "(it says: Internal Server Error)"),
+    "a choice that ended in the provider's error (OpenRouter)": (
+        _completion({"content": "[[ ## code ## ]]\nopen_gripper()\n"}, "error", error={"message": "Provider down"}),
+        "ended in the provider's error (finish_reason 'error': Provider down)",
+    ),
+}
+
+
+@pytest.mark.parametrize(("body", "expected"), PROVIDER_FAULTS.values(), ids=PROVIDER_FAULTS.keys())
+def test_a_providers_error_in_a_200_is_a_transport_fault_never_an_answer(body: str, expected: str) -> None:
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(body=body, content_type="application/json")])
+    with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
+        _solve(server, num_retries=1)
+    assert raised.value.kind == "not_a_reply" and expected in str(raised.value), str(raised.value)
+
+
+UNFINISHED = {  # the reply's text holds a whole program, but the reply did not end as a finished answer
+    "cut at max_tokens": ("max_tokens", {}, "cut off"),
+    "stopped by a content filter": ("content_filter", {}, "stopped by the provider's content filter"),
+    "a tool called instead": ("tool_calls", {"tool_calls": []}, "called a tool (finish_reason 'tool_calls')"),
+    "an unknown reason": ("paused", {}, "ended with finish_reason 'paused', not as a finished answer"),
+}
+
+
+@pytest.mark.parametrize(("reason", "extra", "expected"), UNFINISHED.values(), ids=UNFINISHED.keys())
+def test_a_reply_that_did_not_finish_is_asked_again_with_why(reason: str, extra: dict, expected: str) -> None:
+    script = arm_script([GRASP_DIRECTLY])
+    body = _completion({"content": script["coder"][0], **extra}, reason)
+    rules = stage_rules(script, coder=[Rule(body=body, content_type="application/json", times=1)])
+    with StandinServer(Script(rules=rules)) as server:
+        solution = _solve(server)
+        second = server.requests[-1]["messages"][-1]["content"]
+    assert solution.success and expected in second, second
+
+
+def test_a_reply_with_no_text_is_empty_never_the_repr_of_what_it_held() -> None:
+    program = json.dumps({"code": GRASP_DIRECTLY})
+    shapes = [
+        _completion(
+            {
+                "content": None,
+                "tool_calls": [{"id": "c", "type": "function", "function": {"name": "code", "arguments": program}}],
+            },
+            "stop",
+        ),
+        _completion({"content": "", "reasoning_content": f"```python\n{GRASP_DIRECTLY}```"}, "stop"),
+    ]
+    for body in shapes:
+        rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(body=body, content_type="application/json")])
+        with StandinServer(Script(rules=rules)) as server:
+            solution = _solve(server, format_retries=0)
+        assert not solution.success
+        assert "the reply was empty (no answer text)" in str(solution.candidates[0].failure)
+
+
 def test_cli_gateway_page_is_one_line_and_exit_2(capsys) -> None:
     with StandinServer(Script(rules=[Rule(body=GATEWAY_PAGE)])) as server:
         code = main(["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"])

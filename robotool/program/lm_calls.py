@@ -39,6 +39,7 @@ from pydantic import ValidationError
 
 from robotool.errors import LMUnavailableError
 from robotool.program.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
+from robotool.program.reply_checks import not_a_completion, repeated_fields, unfinished
 from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
@@ -347,17 +348,17 @@ def _ask(
         fault = None
         try:
             outputs = predictor(signature=signature, config=config, lm=single, **kwargs)
-            fault = _not_a_completion(single)
+            fault = not_a_completion(single)
             if fault is None:
-                cut = _cut_off(single)
-                return (None, cut) if cut else (outputs, None)
+                problem = unfinished(single) or repeated_fields(_last_reply(recorder), signature)
+                return (None, problem) if problem else (outputs, None)
         except AdapterParseError as e:
-            fault = _not_a_completion(single)
+            fault = not_a_completion(single)
             if fault is None:
-                cut = _cut_off(single)
-                if cut:
-                    return None, cut
-                reply = recorder.requests[-1].reply if recorder.requests else None
+                problem = unfinished(single) or repeated_fields(_last_reply(recorder), signature)
+                if problem:
+                    return None, problem
+                reply = _last_reply(recorder) if recorder.requests else e.lm_response
                 outputs, failure, salvage_note = _salvaged(e, reply, signature, settings.adapter, salvage)
                 if salvage_note is not None:
                     notes.notes.append(salvage_note)
@@ -381,17 +382,9 @@ _TRANSIENT = frozenset({"retries_exhausted", "unreachable"})
 """Kinds of :func:`~robotool.program.lm.unavailable` errors that a later request may not meet."""
 
 
-class _NotACompletion(LMError):
-    """A 200 reply that is not a chat completion (no choices)."""
-
-
-def _not_a_completion(lm: dspy.LM) -> _NotACompletion | None:
-    """The fault of the last reply ``lm`` got, when it was no chat completion at all (an empty choice list)."""
-    response = lm.history[-1].get("response") if lm.history else None
-    body = getattr(response, "provider_data", None)
-    if isinstance(body, dict) and "choices" in body and not body["choices"]:
-        return _NotACompletion("the reply (HTTP 200) held no choices: it is not a chat completion")
-    return None
+def _last_reply(recorder: _Recorder) -> str | None:
+    """The text of the last reply recorded (None when it held none, such as a tool call alone)."""
+    return recorder.requests[-1].reply if recorder.requests else None
 
 
 def _is_gateway_page(error: LMError) -> bool:
@@ -419,17 +412,6 @@ def _retry_delay(fault: LMError, attempt: int) -> float:
     return float(min(2**attempt, 60))
 
 
-def _cut_off(lm: dspy.LM) -> str | None:
-    """What was wrong with the last reply ``lm`` got when it was cut off at the token limit, else None."""
-    response = lm.history[-1].get("response") if lm.history else None
-    if getattr(response, "finish_reason", None) != "length":
-        return None
-    usage = getattr(response, "usage", None)
-    tokens = getattr(usage, "output_tokens", None) or lm.kwargs.get("max_tokens")
-    at = f" at {tokens} tokens" if tokens else ""
-    return f"your reply was cut off{at} (the token limit); give the whole answer, more briefly (or raise --max-tokens)"
-
-
 def _with_feedback(signature: type[dspy.Signature]) -> type[dspy.Signature]:
     """The stage's signature with the rejected reply and its problem as extra inputs."""
     return signature.append(
@@ -453,10 +435,11 @@ def _salvaged(
     salvage: Salvage | None,
 ) -> tuple[dspy.Prediction | None, str | None, str | None]:
     """From a ``reply`` the adapter rejected: (outputs, None, a note on how they were read), or
-    (None, what was wrong with it, None). The adapter's error may hold only part of the reply."""
-    text = without_reasoning(reply if reply is not None else error.lm_response or "")
+    (None, what was wrong with it, None). ``reply`` is the reply's text as recorded (the adapter's error may hold
+    only part of it, or the repr of a reply with no text at all, which is never read as an answer)."""
+    text = without_reasoning(reply or "")
     if not text.strip():
-        return None, "the reply was empty", None
+        return None, "the reply was empty (no answer text)", None
     problem = parse_problem(error, signature, adapter)
     json_asked = isinstance(adapter, dspy.JSONAdapter)
     other: dspy.Adapter = dspy.ChatAdapter() if json_asked else dspy.JSONAdapter()

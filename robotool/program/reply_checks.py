@@ -1,0 +1,117 @@
+"""What an HTTP 200 reply says about itself before its text is read as an answer.
+
+A body that is not a chat completion (no choices: a provider's error object such as ``{"object": "error", ...}`` or
+``{"detail": ...}``), or a choice that ended in the provider's own error (``finish_reason: "error"``, a choice-level
+``error``), is a transport fault: its text, whole or cut, is never an answer. A choice that ended for any reason but
+a finished answer (cut off at the token limit, stopped by a content filter, a tool called instead of an answer, a
+reason this module does not know) is what was wrong with the reply, to be asked again. A reply in field markers that
+gives one field twice (a draft, then "Corrected:" and the field again) does not say which value is meant. Reasons
+are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import dspy
+from dspy.utils.exceptions import LMError
+
+from robotool.sandbox.extract import without_reasoning
+
+FINISHED = frozenset({"stop", "eos", "eos_token", "end_turn", "stop_sequence", "end"})
+"""Finish reasons of an answer the model finished (a missing reason is taken as finished: many servers omit it)."""
+CUT_OFF = frozenset({"length", "max_tokens", "max_output_tokens", "model_length"})
+FILTERED = frozenset({"content_filter", "safety", "recitation", "blocklist", "prohibited_content"})
+TOOL_CALLED = frozenset({"tool_calls", "tool_call", "function_call", "tool_use"})
+PROVIDER_FAILED = frozenset({"error", "abort", "aborted", "cancelled", "canceled"})
+
+
+class NotACompletion(LMError):
+    """A 200 reply that is not a chat completion (no choices), or whose choice ended in the provider's error."""
+
+
+def _last_response(lm: dspy.LM) -> Any:
+    return lm.history[-1].get("response") if lm.history else None
+
+
+def _body(response: Any) -> dict[str, Any] | None:
+    body = getattr(response, "provider_data", None)
+    return body if isinstance(body, dict) else None
+
+
+def _first_choice(body: dict[str, Any] | None) -> dict[str, Any] | None:
+    choices = body.get("choices") if body is not None else None
+    first = choices[0] if isinstance(choices, list) and choices else None
+    return first if isinstance(first, dict) else None
+
+
+def _said(value: object, limit: int = 160) -> str:
+    """A provider's message as one bounded line."""
+    text = " ".join(str(value).split())
+    return text[:limit] + ("..." if len(text) > limit else "")
+
+
+def not_a_completion(lm: dspy.LM) -> NotACompletion | None:
+    """The fault of the last reply ``lm`` got when it was no chat completion, or ended in the provider's error."""
+    body = _body(_last_response(lm))
+    if body is None:
+        return None
+    if "choices" in body and not body["choices"]:
+        return NotACompletion("the reply (HTTP 200) held no choices: it is not a chat completion")
+    if not isinstance(body.get("choices"), list):
+        said = next((body[k] for k in ("message", "detail", "error") if body.get(k)), None)
+        detail = f" (it says: {_said(said)})" if said is not None else ""
+        return NotACompletion(f"the reply (HTTP 200) holds no choices: it is not a chat completion{detail}")
+    choice = _first_choice(body) or {}
+    reason = str(choice.get("finish_reason") or "").lower()
+    if reason in PROVIDER_FAILED or choice.get("error"):
+        error = choice.get("error")
+        said = error.get("message", error) if isinstance(error, dict) else error
+        detail = f": {_said(said)}" if said else ""
+        return NotACompletion(
+            f"the reply (HTTP 200) ended in the provider's error (finish_reason {reason or 'none'!r}{detail}); "
+            "its text is not an answer"
+        )
+    return None
+
+
+def finish_reason(lm: dspy.LM) -> str | None:
+    """Why the last reply ``lm`` got ended, as the provider said it (lower case), or None when it did not say."""
+    response = _last_response(lm)
+    choice = _first_choice(_body(response))
+    reason = choice.get("finish_reason") if choice is not None else getattr(response, "finish_reason", None)
+    return str(reason).lower() if reason else None
+
+
+def unfinished(lm: dspy.LM) -> str | None:
+    """What was wrong with the last reply ``lm`` got when it ended as no finished answer, else None."""
+    reason = finish_reason(lm)
+    if reason is None or reason in FINISHED:
+        return None
+    if reason in CUT_OFF:
+        usage = getattr(_last_response(lm), "usage", None)
+        tokens = getattr(usage, "output_tokens", None) or lm.kwargs.get("max_tokens")
+        at = f" at {tokens} tokens" if tokens else ""
+        return (
+            f"your reply was cut off{at} (the token limit); give the whole answer, more briefly (or raise --max-tokens)"
+        )
+    if reason in FILTERED:
+        return f"your reply was stopped by the provider's content filter (finish_reason {reason!r})"
+    if reason in TOOL_CALLED:
+        return f"your reply called a tool (finish_reason {reason!r}) instead of answering; answer in the text"
+    return f"your reply ended with finish_reason {reason!r}, not as a finished answer; give the whole answer"
+
+
+def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str | None:
+    """What was wrong with ``reply`` when it gives an output field's ``[[ ## name ## ]]`` header more than once (the
+    adapter would read the first), else None; reasoning is left out first."""
+    text = without_reasoning(reply or "")
+    counts = {
+        name: len(re.findall(rf"^[ \t]*\[\[ ## {re.escape(name)} ## \]\][ \t]*$", text, re.MULTILINE))
+        for name in signature.output_fields
+    }
+    twice = [f"{name} ({n} times)" for name, n in counts.items() if n > 1]
+    if not twice:
+        return None
+    return f"the reply gives the field(s) {', '.join(twice)}; it is not clear which is meant: give each field once"
