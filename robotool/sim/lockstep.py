@@ -1,17 +1,17 @@
 """The lockstep runner: N programs in N perturbed worlds of one task, stepped together.
 
-Each program runs until it calls a motion skill or ends; query skills are answered at once from the
-current state; the batch then steps, one control tick at a time, until the pending motion skills
-finish (done, stalled, timeout, refused, fell), and the programs whose skill finished are resumed. The
-runner resumes every such world first and only then waits on each (so sandboxed programs run in
-parallel). A program that errors or ends is finished for its world only; its world then runs on for
-``SETTLE_AFTER`` simulated seconds with the robot holding still (what rocks or tips comes to rest, a
-falling object lands) before the goal is read. Skill arguments are checked on this side of the sandbox,
-positions against the scene's box (:func:`scene_box`). An exception inside the skill controller is a bug in
-robotool: it is logged with its traceback and ends the world it happened in as an internal error (the rollout's
-``internal_error``, kept apart from the program's failures), never the batch: when the batched control tick
-raises, the controller's per-world state is put back as it was before the tick and the worlds are ticked one by one.
-Each world yields a :class:`~robotool.rollout.Rollout`.
+Each program runs until it calls a motion skill or ends; query skills are answered at once from the current state; the
+batch then steps, one control tick at a time, until the pending motion skills finish (done, stalled, timeout, refused,
+fell), and the programs whose skill finished are resumed. The runner resumes every such world first and only then waits
+on each (so sandboxed programs run in parallel). A program that errors or ends is finished for its world only; its
+world then runs on with the robot holding still for at least ``SETTLE_AFTER`` simulated seconds and until every object
+lies still (what rocks, rolls or tips comes to rest, a falling object lands) before the goal is read; a world still
+moving ``SETTLE_LONGEST`` seconds after its program ended fails, naming what moves (a goal is never read from a world
+in motion). Skill arguments are checked on this side of the sandbox, positions against the scene's box
+(:func:`scene_box`). An exception inside the skill controller is a bug in robotool: it is logged with its traceback and
+ends the world it happened in as an internal error (the rollout's ``internal_error``, kept apart from the program's
+failures), never the batch: when the batched control tick raises, the controller's per-world state is put back as it
+was before the tick and the worlds are ticked one by one. Each world yields a :class:`~robotool.rollout.Rollout`.
 """
 
 from __future__ import annotations
@@ -57,7 +57,9 @@ from robotool.task.task_model import Task
 from robotool.vocabulary import BackendName
 
 SETTLE_TIME = 0.3  # s of physics before the programs start
-SETTLE_AFTER = 1.0  # s of physics after a program ends, before its goal is read
+SETTLE_AFTER = 1.0  # s of physics after a program ends, at least, before its goal is read
+SETTLE_LONGEST = 5.0  # s after a program ends by which every object must lie still, or its world fails
+STILL_SPEED = 0.02  # m/s: an object whose bodies all move slower than this lies still
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
@@ -193,11 +195,11 @@ class _Run:
         self._collect(state, list(range(nworld)))
         while self.alive().any():
             self._step(state)
-            state = self.sim.state()
+            previous, state = state, self.sim.state()
             if self.recorder is not None:
                 self.recorder.capture(state, self.sim.mocap_pos)
             self._observe(state)
-            self._finish_settled(state)
+            self._finish_settled(state, previous)
             ends = self._tick(state)
             if ends:  # a finished skill may have changed the state (a grasp weld): programs see the new one
                 state = self.sim.state()
@@ -353,15 +355,29 @@ class _Run:
         else:
             self._read_goals([i], state)
 
-    def _finish_settled(self, state: BatchState) -> None:
-        """Read the goal of every ended world that has settled (or whose physics failed while settling)."""
-        settled = [
-            i
-            for i, world in enumerate(self.worlds)
-            if world.ended
-            and not world.finished
-            and (state.time[i] >= world.settle_until - self.scene.model.opt.timestep / 2 or state.failed[i] is not None)
-        ]
+    def _finish_settled(self, state: BatchState, previous: BatchState) -> None:
+        """Read the goal of every ended world that has settled (``SETTLE_AFTER`` past its end and every object still
+        since ``previous``, the state a control tick before), or whose physics failed while settling; fail those
+        still moving ``SETTLE_LONGEST`` past their end."""
+        objects = np.flatnonzero(self.scene.body_object >= 0)
+        travel = np.linalg.norm(state.xpos[:, objects] - previous.xpos[:, objects], axis=2)  # (nworld, nbody)
+        speed = travel / np.maximum(state.time - previous.time, 1e-9)[:, None]
+        half_step = self.scene.model.opt.timestep / 2
+        settled = []
+        for i, world in enumerate(self.worlds):
+            if not world.ended or world.finished:
+                continue
+            since_end = float(state.time[i]) - (world.settle_until - SETTLE_AFTER)
+            if state.failed[i] is not None or (since_end >= SETTLE_AFTER - half_step and speed[i].max() < STILL_SPEED):
+                settled.append(i)
+            elif since_end >= SETTLE_LONGEST - half_step:
+                body = int(objects[np.argmax(speed[i])])
+                moving = self.scene.object_names[self.scene.body_object[body]]
+                world.error = world.error or (
+                    f"the world did not come to rest: {moving} still moved at {speed[i].max():.2f} m/s "
+                    f"{SETTLE_LONGEST:.0f} s after the program ended (a goal is read only once everything lies still)"
+                )
+                settled.append(i)
         if settled:
             self._read_goals(settled, state)
 

@@ -64,8 +64,9 @@ class RefereeState:
     # untouched, or pushed since)
     pressed: np.ndarray  # (nworld, nobject) touched without a break, and without a walk, since a push of it (it may
     # slide on after the push ended)
-    carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, from push to
-    # push until the robot pushes it itself
+    carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, or after,
+    # until it came to rest, from push to push until the robot pushes it itself
+    rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
 
     @classmethod
@@ -80,6 +81,7 @@ class RefereeState:
             bumped=np.full((nworld, nobject, 3), np.nan),
             pressed=np.zeros((nworld, nobject), dtype=bool),
             carried=np.zeros((nworld, nobject)),
+            rammed_by=np.full((nworld, nobject), -1),
             last_centres=centres,
         )
 
@@ -110,6 +112,7 @@ class Referee:
         """A push of object ``index`` starts in world ``w``: it is no longer shoved or rammed."""
         self.state.bumped[w, index] = np.nan
         self.state.carried[w, index] = 0.0
+        self.state.rammed_by[w, index] = -1
 
     def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
         """Check the rules in the worlds in ``mask`` after a tick: end the skills of robots that fell, stop and
@@ -380,18 +383,33 @@ class Referee:
         the push (:meth:`_pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
         rammed, books lying on it or not). What rides on it is checked when the push starts; what it drags by
         friction, pressing down on it, is not rammed.
-        The travel of each rammed object adds up from push to push until the robot pushes it itself. Once the pushed
-        object and the rammed objects that travelled more than ``shove`` weigh more than the push limit, the robot
-        shoved them (a light object used as a ram moves no more than the robot may push): the world fails
-        (:meth:`conditions`) and the push is stopped and refused, naming them."""
-        s, senses, names, m = self.state, self.senses, self.scene.object_names, moves.state
+        The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does
+        what it travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box
+        rolls on: the push set it moving). Once the pushed object and the objects it rammed that travelled more than
+        ``shove`` weigh more than the push limit, the robot shoved them (a light object used as a ram moves no more
+        than the robot may push): the world fails (:meth:`conditions`) and a move in progress is stopped and refused,
+        naming them."""
+        s, m = self.state, moves.state
+        step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick
+        s.rammed_by[mask[:, None] & (step <= STILL)] = -1  # at rest: what moves it later is not this ram
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
-        if not worlds.size:
-            return
-        index, u = m.pushing[worlds], m.u[worlds]
+        if worlds.size:
+            index = m.pushing[worlds]
+            rammed = self._rammed(worlds, index, centres, m.u[worlds])
+            s.rammed_by[worlds] = np.where(rammed, index[:, None], s.rammed_by[worlds])
+        travelling = (s.rammed_by >= 0) & mask[:, None]
+        s.carried += np.where(travelling, step, 0.0)
+        moved = travelling & (s.carried > self.config.shove)
+        candidates = np.flatnonzero(moved.any(axis=1))
+        if candidates.size:
+            self._weigh_rams(ends, candidates, moved[candidates], moves)
+
+    def _rammed(self, worlds: np.ndarray, index: np.ndarray, centres: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """(k, nobject) the objects that the push of object ``index[i]`` along ``u[i]`` rams in world ``worlds[i]``
+        this tick (see :meth:`_rams`)."""
         extent = np.zeros((len(worlds), 2))
         for o in np.unique(index):  # the pushed objects' x-y extents
-            lo, hi = senses.boxes(int(o))
+            lo, hi = self.senses.boxes(int(o))
             extent[index == o] = (hi - lo)[worlds[index == o], :2]
         front = np.einsum("ki,ki->k", np.abs(u), extent) / 2  # from the pushed object's centre to its front face
         ahead = np.einsum("koi,ki->ko", centres[worlds] - centres[worlds, index][:, None], u) > front[:, None]
@@ -399,21 +417,25 @@ class Referee:
         rammed = pressed & (ahead | self._stuck_to(worlds, index, pressed))
         for k in np.flatnonzero((pressed & ~ahead).any(axis=1)):  # the normals only where they can add a rammed one
             rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
-        s.carried[worlds] += np.where(rammed, np.linalg.norm(shift[worlds], axis=2), 0.0)
-        moved = rammed & (s.carried[worlds] > self.config.shove)
-        masses = senses.masses(worlds)
-        mass = masses[np.arange(len(worlds)), index] + np.where(moved, masses, 0.0).sum(axis=1)
-        for k in np.flatnonzero(mass > self.limits.max_push_mass):
-            w = int(worlds[k])
-            if s.shoves[w] is not None or senses.state.failed[w] is not None:
-                continue
-            s.shoves[w] = reason = (
-                f"pushing {names[index[k]]} rammed "
-                f"{', '.join(names[o] for o in np.flatnonzero(moved[k]))}: {mass[k]:.1f} kg in all, over the "
-                f"push limit of {self.limits.max_push_mass:.1f} kg (a push moves only what the robot may push)"
-            )
-            measured = {"mass": round(float(mass[k]), 3), "limit": self.limits.max_push_mass}
-            moves.refuse(w, reason, measured, ends)
+        return rammed
+
+    def _weigh_rams(self, ends: list[SkillEnd], worlds: np.ndarray, moved: np.ndarray, moves: MoveRunner) -> None:
+        """Fail the ``worlds`` where a pushed object and the objects its push rammed and ``moved`` (k, nobject) weigh
+        more than the push limit; stop and refuse the move in progress there."""
+        s, names, limit = self.state, self.scene.object_names, self.limits.max_push_mass
+        masses = self.senses.masses(worlds)
+        for k, w in enumerate(worlds.tolist()):
+            for pusher in np.unique(s.rammed_by[w, moved[k]]).tolist():
+                group = moved[k] & (s.rammed_by[w] == pusher)
+                mass = float(masses[k, pusher] + masses[k, group].sum())
+                if mass <= limit or s.shoves[w] is not None or self.senses.state.failed[w] is not None:
+                    continue
+                s.shoves[w] = reason = (
+                    f"pushing {names[pusher]} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "
+                    f"{mass:.1f} kg in all, over the push limit of {limit:.1f} kg (a push moves only what the robot "
+                    "may push)"
+                )
+                moves.refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends)
 
     def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
         """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed

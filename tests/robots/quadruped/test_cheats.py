@@ -614,6 +614,9 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
     # an object's travel in x-y was read as a shove
     ("lift_a_plank_with_the_back", "plank_on_posts_over_the_robot", "the robot ran into cube and moved it"),
     ("lift_a_plank_with_the_back_by_turning", "plank_on_posts_over_the_robot", "cube stands in the body's way"),
+    # a 7 cm push of a light box tapped a drum twice the push limit, which rolled on off a platform: a ram's travel is
+    # added up until what it set moving comes to rest
+    ("tap_a_heavy_drum_to_roll_it_off_a_platform", "drum_beside_a_light_box_on_a_platform", "pushing box rammed drum"),
 ]
 
 
@@ -623,6 +626,29 @@ def test_cheat_fails_in_every_world_for_the_reason_it_names(program: str, scene:
     for rollout in rollouts:
         assert not rollout.success
         assert reason in failure_reason(rollout), failure_reason(rollout)
+
+
+def test_a_goal_is_read_once_everything_lies_still() -> None:
+    """Found by an adversarial run: a vase pushed rolling off a 1.0 m table, the program ended at once, was read as
+    lowered while in mid-air, 1 s after the end, before it struck the floor. The goal is read once every object lies
+    still: the vase breaks first, and a world whose vase rolls on for good does not come to rest."""
+    program = _text("roll_a_vase_off_a_high_table_and_end")
+    rollouts = sim.run_sessions(_scene("vase_lying_on_a_high_table"), start_sessions([program] * 2, "quadruped"))
+    for rollout in rollouts:
+        assert not rollout.success and not rollout.conditions["glass_vase_unbroken"], rollout.conditions
+        assert "did not come to rest: glass_vase still moved" in str(rollout.error), rollout.error
+
+
+def test_a_magnet_lets_go_of_more_than_it_holds() -> None:
+    """Found by an adversarial run: a magnet weld of unbounded strength held a board by its 2 cm end face to the side
+    of a magnetic cabinet, a bridge the robot walked over across a gap. It lets go under the robot: the walk moves the
+    board (refused) or the robot falls with it."""
+    program = _text("walk_over_a_board_stuck_by_its_end_to_a_magnet")
+    scene = _scene("magnetic_board_beside_a_magnetic_cabinet")
+    for rollout in sim.run_sessions(scene, start_sessions([program] * 2, "quadruped")):
+        assert not rollout.success
+        reason = failure_reason(rollout)
+        assert "the robot ran into board and moved it" in reason or "fell at" in reason, reason
 
 
 def test_feet_on_the_floor_beside_a_low_disc_do_not_stand_on_it() -> None:
