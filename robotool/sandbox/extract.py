@@ -192,42 +192,54 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
             programs.append(k)
     if not programs:
         return len(blocks) - 1, "the last"
-    lines = {k: _statement_lines(blocks[k].code) for k in programs}
-    whole = [k for k in programs if not any(j != k and _quotes(lines[k], k, lines[j], j) for j in programs)]
+    whole = _whole_programs(blocks, programs)
     if len(whole) == 1:
         return whole[0], "the only program; the other blocks quote it or are no programs"
     marked = [k for k in whole if _marked_final(blocks[k].label)]
     if marked:
         return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
-    numbers = ", ".join(str(k + 1) for k in whole)
+    several = (
+        f"more than {MOST_PROGRAMS} different programs"
+        if len(whole) > MOST_PROGRAMS
+        else f"{len(whole)} different programs (code blocks {', '.join(str(k + 1) for k in whole)})"
+    )
     raise ProgramRejected(
         None,
         "blocks",
-        f"the reply holds {len(whole)} different programs (code blocks {numbers}) and does not say which one is "
-        "meant; give exactly one program, in one code block",
+        f"the reply holds {several} and does not say which one is meant; give exactly one program, in one code block",
     )
 
 
-def _statement_lines(code: str) -> list[str]:
+MOST_PROGRAMS = 8
+"""Different programs in one reply past which they are not told apart (each more costs a pass over the blocks)."""
+
+
+def _whole_programs(blocks: list[_Block], programs: list[int]) -> list[int]:
+    """The ``programs`` (block indices, in order) that quote no other: a block quotes another when every line of it is
+    one of the other's and it has fewer lines (of two equal blocks, the earlier quotes the later). Past
+    :data:`MOST_PROGRAMS`, those found so far."""
+    lines = {k: _statement_lines(blocks[k].code) for k in programs}
+    whole: list[int] = []
+    for k in sorted(programs, key=lambda k: (-len(lines[k]), -k)):  # a block can only quote one before it here
+        if not any(lines[k] <= lines[j] for j in whole):
+            whole.append(k)
+            if len(whole) > MOST_PROGRAMS:
+                break
+    return sorted(whole)
+
+
+def _statement_lines(code: str) -> set[str]:
     """A block's lines as code, one by one: each line that parses alone as written by ``ast.unparse`` (comments,
     spacing and quotes do not matter), any other (the head of a compound statement) stripped; none for a blank or
     comment line."""
-    lines = []
+    lines = set()
     for line in code.split("\n"):
         text = line.strip()
         with contextlib.suppress(SyntaxError, ValueError, RecursionError, MemoryError):
             text = ast.unparse(_quiet_parse(text))
         if text:
-            lines.append(text)
+            lines.add(text)
     return lines
-
-
-def _quotes(lines: list[str], k: int, other: list[str], j: int) -> bool:
-    """Whether block ``k`` (its ``lines``) quotes block ``j`` (``other``): every line of it is one of the other's,
-    and it is shorter (of two equal blocks, the earlier quotes the later)."""
-    if not set(lines) <= set(other):
-        return False
-    return len(lines) < len(other) or (len(lines) == len(other) and k < j)
 
 
 _CODE_LINE = re.compile(

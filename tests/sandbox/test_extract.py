@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import time
 
 import pytest
 
@@ -97,6 +98,14 @@ AMBIGUOUS_REPLIES = {
 def test_several_different_programs_are_asked_again_never_guessed(answer: str) -> None:
     with pytest.raises(ProgramRejected, match="2 different programs"):
         extract(answer)
+
+
+def test_a_reply_of_thousands_of_different_programs_is_refused_in_linear_time() -> None:
+    answer = "".join(f"```python\nopen_gripper({k})\n```\n" for k in range(3000))
+    started = time.process_time()
+    with pytest.raises(ProgramRejected, match="more than 8 different programs"):
+        extract(answer)
+    assert time.process_time() - started < CPU_LIMIT_S / 10
 
 
 def test_a_later_python_block_that_does_not_parse_is_its_syntax_error_not_the_earlier_draft() -> None:
