@@ -73,6 +73,30 @@ class Underside:
             half_length=np.array([p.half[2] for p in cylinders]),
         )
 
+    @classmethod
+    def of_body(cls, model: mujoco.MjModel, body: int) -> Underside:
+        """Read from the box and cylinder geoms of one ``body`` of a compiled model (a cloth's link)."""
+        boxes, cylinders = [], []
+        for g in np.flatnonzero(model.geom_bodyid == body):
+            rot = model.geom(g).quat
+            frame = np.zeros(9)
+            mujoco.mju_quat2Mat(frame, rot)
+            part = (model.geom_pos[g], frame.reshape(3, 3), model.geom_size[g])
+            if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
+                boxes.append(part)
+            elif model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+                cylinders.append(part)
+        signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+        return cls(
+            corners=np.vstack([pos + (signs * size) @ rot.T for pos, rot, size in boxes])
+            if boxes
+            else np.zeros((0, 3)),
+            centres=np.array([pos for pos, _, _ in cylinders]).reshape(-1, 3),
+            axes=np.array([rot[:, 2] for _, rot, _ in cylinders]).reshape(-1, 3),
+            radius=np.array([size[0] for _, _, size in cylinders]),
+            half_length=np.array([size[1] for _, _, size in cylinders]),
+        )
+
     def bottom(self, state: BatchState, body: int) -> np.ndarray:
         """(nworld,) the height of the object's lowest point in each world: a cylinder whose axis makes an angle
         with the vertical whose cosine is c reaches ``half_length * |c| + radius * sqrt(1 - c^2)`` below its centre."""
@@ -86,6 +110,26 @@ class Underside:
         return np.minimum(lowest, (centre_z - reach).min(axis=1))
 
 
+@dataclass(frozen=True)
+class ObjectBottom:
+    """An object's lowest point over all its bodies: one for a rigid object (read from its parts), each link of a
+    cloth (read from the link's own geom, where that link lies: a cloth hanging over a table's edge is not one rigid
+    box placed at its first link)."""
+
+    parts: tuple[tuple[int, Underside], ...]
+
+    @classmethod
+    def of(cls, scene: Scene, index: int) -> ObjectBottom:
+        bodies = np.flatnonzero(scene.body_object == index)
+        if len(bodies) == 1:
+            return cls(((int(bodies[0]), Underside.of(scene.task.objects[index])),))
+        return cls(tuple((int(b), Underside.of_body(scene.model, int(b))) for b in bodies))
+
+    def height(self, state: BatchState) -> np.ndarray:
+        """(nworld,) the height of the object's lowest point in each world."""
+        return np.min([underside.bottom(state, body) for body, underside in self.parts], axis=0)
+
+
 class LiftedGoal(ReadAtTicks):
     """``lifted: {object, height}``: the object's bottom is at least ``height`` above its start."""
 
@@ -93,8 +137,7 @@ class LiftedGoal(ReadAtTicks):
         goal = scene.task.goal.lifted
         assert goal is not None
         self.name, self.height = goal.object, goal.height
-        index = scene.object_index(self.name)
-        self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
+        self.bottom = ObjectBottom.of(scene, scene.object_index(self.name))
         self.start: np.ndarray | None = None
 
     def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
@@ -102,7 +145,7 @@ class LiftedGoal(ReadAtTicks):
             self.start = self._bottom(state)
 
     def _bottom(self, state: BatchState) -> np.ndarray:
-        return self.underside.bottom(state, self.body)
+        return self.bottom.height(state)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         start = self.start if self.start is not None else self._bottom(state)
@@ -196,11 +239,10 @@ class LoweredGoal(ReadAtTicks):
         goal = scene.task.goal.lowered
         assert goal is not None
         self.name, self.height = goal.object, goal.height
-        index = scene.object_index(self.name)
-        self.body, self.underside = scene.object_body[index], Underside.of(scene.task.objects[index])
+        self.bottom = ObjectBottom.of(scene, scene.object_index(self.name))
 
     def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         """Nothing to remember: the goal holds at the end."""
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
-        return {f"{self.name}_lowered": self.underside.bottom(state, self.body) <= self.height}
+        return {f"{self.name}_lowered": self.bottom.height(state) <= self.height}

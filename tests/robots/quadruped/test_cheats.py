@@ -651,6 +651,44 @@ def test_a_magnet_lets_go_of_more_than_it_holds() -> None:
         assert "the robot ran into board and moved it" in reason or "fell at" in reason, reason
 
 
+def test_a_cloth_is_read_where_each_of_its_links_lies() -> None:
+    """Found by an adversarial run: a blanket on a high table, one end hanging over the edge, read as lowered with no
+    program at all: its bottom was one rigid box placed at its first link, which hangs. The same blanket lying on the
+    floor is lowered."""
+    idle = "walk_to_position([-1.2, 0.6, 0.0])\n"
+    layout = LAYOUTS / "blanket_hanging_over_a_table_edge.yaml"
+    for rollout in sim.run_sessions(_scene(layout.stem), start_sessions([idle] * 2, "quadruped")):
+        assert not rollout.conditions["blanket_lowered"]
+    data = tasks.load(layout).model_dump(mode="json", exclude_defaults=True)
+    blanket = next(o for o in data["objects"] if o["name"] == "blanket")
+    blanket["center"] = [-0.4, 0.0, 0.002]  # on the floor beside the table
+    on_floor = sim.build(parse_task(data))
+    for rollout in sim.run_sessions(on_floor, start_sessions([idle] * 2, "quadruped")):
+        assert rollout.conditions["blanket_lowered"]
+
+
+OPEN_PUSH_LOOPHOLES = [  # (program, layout): found by an adversarial run, each a success in every world
+    # a board pushed with its raised end on a 20 kg bar rolls the bar off a ledge: the board presses the bar down, the
+    # bar lies behind its front face, and nothing else touches it
+    ("push_a_board_that_rolls_a_heavy_bar_off_a_ledge", "steel_bar_under_a_tilted_board_on_a_ledge"),
+    # a pushed pallet drags a 20 kg crate whose front edge rests on a loose roller (as on the fixed strip above)
+    ("drag_a_heavy_crate_half_on_a_roller", "crate_on_a_pallet_and_a_roller"),
+]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="an open loophole: a push weighs what it rams ahead and what rides on nothing but what it moves, so an "
+    "object it presses down on (a bar under a board's raised end) or drags while something loose also bears it up (a "
+    "crate's edge on a roller) moves however heavy: weighing what a push moves by the force it takes needs contact "
+    "forces from both backends",
+)
+@pytest.mark.parametrize(("program", "scene"), OPEN_PUSH_LOOPHOLES)
+def test_what_a_push_moves_by_pressing_down_or_dragging_is_weighed(program: str, scene: str) -> None:
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 3, "quadruped"), seed=0)
+    assert not any(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+
+
 def test_feet_on_the_floor_beside_a_low_disc_do_not_stand_on_it() -> None:
     """Found by an adversarial run: the feet of a walk over a low disc narrower than the stance stood on the floor, in
     the corners of the square around the disc, pressing on its side, and the goal read them as standing on its top
