@@ -104,6 +104,24 @@ PROVIDER_FAULTS = {
         "not a chat completion (it says: The model is overloaded)",
     ),
     "a detail object": (json.dumps({"detail": "Internal Server Error"}), "(it says: Internal Server Error)"),
+    "a null choice": (json.dumps({"object": "chat.completion", "choices": [None]}), "its choice holds no message"),
+    "a stream's chunk": (
+        json.dumps({"object": "chat.completion.chunk", "choices": [{"index": 0, "delta": {"content": "x"}}]}),
+        "it is one chunk of a stream",
+    ),
+    "two choices where one was asked for": (
+        json.dumps(
+            {
+                "object": "chat.completion",
+                "choices": [
+                    {"index": k, "finish_reason": "stop", "message": {"role": "assistant", "content": "x"}}
+                    for k in range(2)
+                ],
+            }
+        ),
+        "carries 2 choices",
+    ),
+    "content that is no text": (_completion({"content": {"code": "x"}}, "stop"), "its message's content is a dict"),
     "a choice that ended in the provider's error (OpenRouter)": (
         _completion({"content": "[[ ## code ## ]]\nopen_gripper()\n"}, "error", error={"message": "Provider down"}),
         "ended in the provider's error (finish_reason 'error': Provider down)",
@@ -138,6 +156,17 @@ def test_a_reply_that_did_not_finish_is_asked_again_with_why(reason: str, extra:
     assert solution.success and expected in second, second
 
 
+def test_a_reply_with_no_text_is_asked_again() -> None:
+    tool_call = {"id": "c", "type": "function", "function": {"name": "code", "arguments": "{}"}}
+    body = _completion({"content": None, "tool_calls": [tool_call]}, "stop")
+    script = arm_script([GRASP_DIRECTLY])
+    rules = stage_rules(script, coder=[Rule(body=body, content_type="application/json", times=1)])
+    with StandinServer(Script(rules=rules)) as server:
+        solution = _solve(server)
+        second = server.requests[-1]["messages"][-1]["content"]
+    assert solution.success and "the reply was empty" in second
+
+
 def test_a_reply_with_no_text_is_empty_never_the_repr_of_what_it_held() -> None:
     program = json.dumps({"code": GRASP_DIRECTLY})
     shapes = [
@@ -155,7 +184,7 @@ def test_a_reply_with_no_text_is_empty_never_the_repr_of_what_it_held() -> None:
         with StandinServer(Script(rules=rules)) as server:
             solution = _solve(server, format_retries=0)
         assert not solution.success
-        assert "the reply was empty (no answer text)" in str(solution.candidates[0].failure)
+        assert "the reply was empty" in str(solution.candidates[0].failure)
 
 
 def test_cli_gateway_page_is_one_line_and_exit_2(capsys) -> None:

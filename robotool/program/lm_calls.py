@@ -311,9 +311,10 @@ def call_stage(
             return StageResult(outputs, calls, [*repaired, *notes.notes])
         assert failure is not None
         problem = failure
-        reply = recorder.requests[-1].reply if recorder.requests else None
-        if reply is None:  # the request itself failed: asking again would fail the same way
+        last = recorder.requests[-1] if recorder.requests else None
+        if last is None or last.error is not None:  # the request itself failed: asking again would fail the same way
             break
+        reply = last.reply or ""  # a reply with no text at all (a tool call alone) is asked again too
         rejected = (reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]", problem)
     tried = f"{len({c.attempt for c in calls})} attempt(s)"
     raise StageFailed(f"{problem} ({tried})" if calls else problem, calls)
@@ -368,7 +369,7 @@ def _ask(
             if mapped is not None and (mapped.kind not in _TRANSIENT or not is_retryable_lm_error(e)):
                 settings.cancelled.set()
                 raise mapped from None
-            if mapped is None and not _is_gateway_page(e):
+            if mapped is None and not _unreadable_body(e):
                 return None, f"the LM request failed: {_one_line((e.message or str(e)).splitlines()[0])}"
             fault = e
         if recorder.requests and fault is not None:
@@ -387,9 +388,13 @@ def _last_reply(recorder: _Recorder) -> str | None:
     return recorder.requests[-1].reply if recorder.requests else None
 
 
-def _is_gateway_page(error: LMError) -> bool:
-    """Whether ``error`` is a 200 reply whose body is not a chat completion (an HTML page, garbage)."""
-    return isinstance(error, LMProviderError) and "is not JSON" in str(error)
+def _unreadable_body(error: LMError) -> bool:
+    """Whether ``error`` is a 200 reply whose body is not one chat completion (an HTML page, garbage, several
+    choices where one was asked for)."""
+    said = str(error)
+    return (isinstance(error, LMProviderError) and "is not JSON" in said) or re.search(
+        r"carries \d+ choices", said
+    ) is not None
 
 
 def _not_a_reply(fault: LMError, lm: dspy.LM) -> LMUnavailableError:
@@ -439,7 +444,8 @@ def _salvaged(
     only part of it, or the repr of a reply with no text at all, which is never read as an answer)."""
     text = without_reasoning(reply or "")
     if not text.strip():
-        return None, "the reply was empty (no answer text)", None
+        only_reasoning = bool((reply or "").strip())
+        return None, "the reply held only reasoning, no answer" if only_reasoning else "the reply was empty", None
     problem = parse_problem(error, signature, adapter)
     json_asked = isinstance(adapter, dspy.JSONAdapter)
     other: dspy.Adapter = dspy.ChatAdapter() if json_asked else dspy.JSONAdapter()

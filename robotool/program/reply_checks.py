@@ -63,6 +63,9 @@ def not_a_completion(lm: dspy.LM) -> NotACompletion | None:
         said = next((body[k] for k in ("message", "detail", "error") if body.get(k)), None)
         detail = f" (it says: {_said(said)})" if said is not None else ""
         return NotACompletion(f"the reply (HTTP 200) holds no choices: it is not a chat completion{detail}")
+    shape = _not_one_message(body)
+    if shape is not None:
+        return NotACompletion(f"the reply (HTTP 200) is not a chat completion: {shape}")
     choice = _first_choice(body) or {}
     reason = str(choice.get("finish_reason") or "").lower()
     if reason in PROVIDER_FAILED or choice.get("error"):
@@ -73,6 +76,24 @@ def not_a_completion(lm: dspy.LM) -> NotACompletion | None:
             f"the reply (HTTP 200) ended in the provider's error (finish_reason {reason or 'none'!r}{detail}); "
             "its text is not an answer"
         )
+    return None
+
+
+def _not_one_message(body: dict[str, Any]) -> str | None:
+    """What is wrong with a body's choices, when it is not one message (a stream's chunk, a null or empty choice, two
+    choices where one was asked for, content that is no text)."""
+    choices = body["choices"]
+    if body.get("object") == "chat.completion.chunk" or any(isinstance(c, dict) and "delta" in c for c in choices):
+        return "it is one chunk of a stream"
+    if len(choices) > 1:
+        return f"it holds {len(choices)} choices where one was asked for"
+    choice = choices[0]
+    message = choice.get("message") if isinstance(choice, dict) else None
+    if not isinstance(message, dict):
+        return "its choice holds no message"
+    content = message.get("content")
+    if content is not None and not isinstance(content, str | list):
+        return f"its message's content is a {type(content).__name__}, not text"
     return None
 
 
@@ -104,14 +125,20 @@ def unfinished(lm: dspy.LM) -> str | None:
 
 
 def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str | None:
-    """What was wrong with ``reply`` when it gives an output field's ``[[ ## name ## ]]`` header more than once (the
-    adapter would read the first), else None; reasoning is left out first."""
+    """What was wrong with ``reply`` when it gives an output field more than once (the adapter would read the first,
+    or the last): its ``[[ ## name ## ]]`` header on more than one line (bold, with words after it or code on its
+    line too), its ``"name":`` key in more than one JSON object, or more code after ``[[ ## completed ## ]]`` (a
+    correction after the end); else None. Reasoning is left out first."""
     text = without_reasoning(reply or "")
-    counts = {
-        name: len(re.findall(rf"^[ \t]*\[\[ ## {re.escape(name)} ## \]\][ \t]*$", text, re.MULTILINE))
-        for name in signature.output_fields
-    }
-    twice = [f"{name} ({n} times)" for name, n in counts.items() if n > 1]
-    if not twice:
-        return None
-    return f"the reply gives the field(s) {', '.join(twice)}; it is not clear which is meant: give each field once"
+    twice = []
+    for name in signature.output_fields:
+        headers = len(re.findall(rf"^.*\[\[ ## {re.escape(name)} ## \]\]", text, re.MULTILINE))
+        keys = len(re.findall(rf'"{re.escape(name)}"\s*:', text))
+        if max(headers, keys) > 1:
+            twice.append(f"{name} ({max(headers, keys)} times)")
+    if twice:
+        return f"the reply gives the field(s) {', '.join(twice)}; it is not clear which is meant: give each field once"
+    _, completed, after = text.partition("[[ ## completed ## ]]")
+    if completed and re.search(r"^[ \t]*(?:```|~~~|\[\[ ## )", after, re.MULTILINE):
+        return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
+    return None

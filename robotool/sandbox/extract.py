@@ -8,6 +8,7 @@ import contextlib
 import itertools
 import re
 import warnings
+from collections import Counter
 from dataclasses import dataclass
 
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
@@ -94,6 +95,16 @@ _REASONING = re.compile(
     re.DOTALL | re.IGNORECASE,
 )
 _REASONING_END = re.compile(rf"^.*?(?:</(?:{_THOUGHT})>|\[/THINK\]|◁/(?:{_THOUGHT})▷)", re.DOTALL | re.IGNORECASE)
+_THOUGHT_TOKENS = re.compile(
+    r"<\|begin_of_thought\|>.*?(?:<\|end_of_thought\|>|\Z)|<\|(?:begin|end)_of_solution\|>", re.DOTALL
+)
+_ANSWER_AFTER = [  # (how a reply opens its reasoning, what opens its answer): the answer is what follows the last
+    (re.compile(r"\A\s*Here is my thought process:", re.IGNORECASE), re.compile(r"^\s*Here is my response:", re.M)),
+    (re.compile(r"\A\s*Here are my reasoning steps:", re.IGNORECASE), re.compile(r"\[BEGIN FINAL RESPONSE\]")),
+    (re.compile(r"\A\s*analysis"), re.compile(r"assistantfinal")),  # channels whose special tokens were stripped
+]
+_FINAL_RESPONSE_END = "[END FINAL RESPONSE]"
+_END_OF_TURN = re.compile(r"<\|im_end\|>|<\|eot_id\|>|<\|endoftext\|>|<\|end_of_text\|>|<end_of_turn>|</s>")
 _CHANNEL = "<|channel|>"
 _FINAL_CHANNEL = re.compile(
     r"<\|channel\|>\s*final\s*(?:<\|constrain\|>\S*\s*)?<\|message\|>(.*?)(?=<\|(?:end|return|start|call)\|>|\Z)",
@@ -103,13 +114,23 @@ _FINAL_CHANNEL = re.compile(
 
 def without_reasoning(text: str) -> str:
     """``text`` without the model's reasoning: ``<think>...</think>`` spans and their other spellings
-    (``<thinking>``, ``<reasoning>``, ``<seed:think>``, ``[THINK]...[/THINK]``, ``◁think▷...◁/think▷``; an unclosed
-    one runs to the end), everything before a closing tag whose opening tag the server left out, and, in a reply in
-    channels (``<|channel|>analysis<|message|>...``), everything but its last final channel's message (none when
-    it has none: the answer has not begun)."""
+    (``<thinking>``, ``<reasoning>``, ``<seed:think>``, ``[THINK]...[/THINK]``, ``◁think▷...◁/think▷``,
+    ``<|begin_of_thought|>...``; an unclosed one runs to the end), everything before a closing tag whose opening tag
+    the server left out; in a reply in channels (``<|channel|>analysis<|message|>...``), everything but its last final
+    channel's message (none when it has none: the answer has not begun); in a reply that opens with its reasoning in
+    words ("Here is my thought process:", "Here are my reasoning steps:", a stripped ``analysis`` channel), all
+    but what follows the last opening of its answer ("Here is my response:", ``[BEGIN FINAL RESPONSE]``,
+    ``assistantfinal``); and everything after the model's end of turn (``<|im_end|>``, ``<|eot_id|>``: a turn it
+    went on to invent is no answer)."""
     if _CHANNEL in text:
         finals = _FINAL_CHANNEL.findall(text)
         text = finals[-1] if finals else ""
+    text = _END_OF_TURN.split(text, maxsplit=1)[0]  # what follows the model's end of turn is no answer of its own
+    for opening, answer in _ANSWER_AFTER:
+        if opening.search(text):
+            starts = list(answer.finditer(text))
+            text = text[starts[-1].end() :].split(_FINAL_RESPONSE_END)[0] if starts else ""
+    text = _THOUGHT_TOKENS.sub("", text)
     text = _REASONING.sub("", text)
     return _REASONING_END.sub("", text, count=1)
 
@@ -151,6 +172,7 @@ def _fenced_blocks(text: str) -> list[_Block]:
         while j < len(fences) and not (fences[j].group(1)[0] == opening.group(1)[0] and not fences[j].group(2)):
             j += 1
         end = fences[j].start() if j < len(fences) else len(text)
+        _check_fence(opening)
         if _PYTHON_TAG.fullmatch(opening.group(2)):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
             label = before[-1].strip() if before else ""
@@ -161,20 +183,50 @@ def _fenced_blocks(text: str) -> list[_Block]:
     return blocks
 
 
+_DIFF_TAGS = frozenset({"diff", "patch", "udiff"})
+_CALL = re.compile(r"[A-Za-z_][\w.]*\s*\(")
+
+
+def _check_fence(opening: re.Match[str]) -> None:
+    """Refuse a block that gives a change rather than a program (a diff), or whose opening fence line holds code
+    after its tag (that code would be read as the block's info string and left out)."""
+    if opening.group(2).lower() in _DIFF_TAGS:
+        raise ProgramRejected(
+            None,
+            "blocks",
+            "the reply gives a change as a diff; give the whole program, changes made, in one code block",
+        )
+    rest = opening.group(0).strip()[len(opening.group(1)) :].strip()[len(opening.group(2)) :].strip()
+    if _CALL.match(rest):
+        raise ProgramRejected(
+            None,
+            "blocks",
+            f"a code block's opening fence line holds code after its tag ({rest[:40]!r}); start the code on the next "
+            "line",
+        )
+
+
 _FINAL = re.compile(
     r"\b(?:final|corrected|fixed|revised|complete|full|whole|updated|improved)\s+(?:python\s+)?"
     r"(?:program|code|version|script|solution|answer)\b",
     re.IGNORECASE,
 )
-_NEGATION = re.compile(r"\b(?:not|never|no)\b|n't\b", re.IGNORECASE)
+_NOT_FINAL = re.compile(
+    r"\b(?:not|never|no|wrong|incorrect|buggy|broken|original|old|older|previous|earlier|initial|first|draft)\b|n't\b",
+    re.IGNORECASE,
+)
 
 
 def _marked_final(label: str) -> bool:
     """Whether a label says the block after it is the final program ("Final program:", "Here is the corrected
-    code:"), not only names a word ("To complete the task", "What was fixed:", "This draft is not the final
-    version:")."""
+    code:"), not only names a word ("To complete the task", "What was fixed:") or takes it back in the marker's
+    sentence or after it ("This draft is not the final version:", "The original full program:", "The final version?
+    No, it is wrong:")."""
     found = _FINAL.search(label)
-    return found is not None and not _NEGATION.search(label[: found.start()])
+    if found is None:
+        return False
+    sentence = max(label.rfind(end, 0, found.start()) for end in ".!?") + 1  # where the marker's sentence begins
+    return _NOT_FINAL.search(label[sentence:]) is None
 
 
 def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
@@ -216,29 +268,34 @@ MOST_PROGRAMS = 8
 
 def _whole_programs(blocks: list[_Block], programs: list[int]) -> list[int]:
     """The ``programs`` (block indices, in order) that quote no other: a block quotes another when every line of it is
-    one of the other's and it has fewer lines (of two equal blocks, the earlier quotes the later). Past
-    :data:`MOST_PROGRAMS`, those found so far."""
+    one of the other's (as often) and it has at most half as many (a snippet explained; a correction that only leaves
+    lines out, or the program again with lines added, is another program), or the same lines in the same order (of
+    two equal blocks, the earlier quotes the later). Past :data:`MOST_PROGRAMS`, those found so far."""
     lines = {k: _statement_lines(blocks[k].code) for k in programs}
+    counts = {k: Counter(lines[k]) for k in programs}
     whole: list[int] = []
     for k in sorted(programs, key=lambda k: (-len(lines[k]), -k)):  # a block can only quote one before it here
-        if not any(lines[k] <= lines[j] for j in whole):
+        quoted = (
+            lines[k] == lines[j] or (counts[k] <= counts[j] and 2 * len(lines[k]) <= len(lines[j])) for j in whole
+        )
+        if not any(quoted):
             whole.append(k)
             if len(whole) > MOST_PROGRAMS:
                 break
     return sorted(whole)
 
 
-def _statement_lines(code: str) -> set[str]:
+def _statement_lines(code: str) -> list[str]:
     """A block's lines as code, one by one: each line that parses alone as written by ``ast.unparse`` (comments,
     spacing and quotes do not matter), any other (the head of a compound statement) stripped; none for a blank or
     comment line."""
-    lines = set()
+    lines = []
     for line in code.split("\n"):
         text = line.strip()
         with contextlib.suppress(SyntaxError, ValueError, RecursionError, MemoryError):
             text = ast.unparse(_quiet_parse(text))
         if text:
-            lines.add(text)
+            lines.append(text)
     return lines
 
 
@@ -248,7 +305,9 @@ _CODE_LINE = re.compile(
       | (?:for|while|if|elif|else|def|class|try|except|finally|with)\b.*:\s*(?:\#.*)?$  # a compound statement
       | (?:import|from)\s+[\w.]+(?:\s+import\b.*)?\s*$                       # an import
       | (?:print|exec)\s+["'\w(]                                             # a Python 2 statement
-      | (?:return|pass|break|continue|raise)\b
+      | (?:return|pass|break|continue|raise|assert|del|global|nonlocal)\b
+      | @[A-Za-z_]                                                             # a decorator
+      | \(                                                                     # a parenthesised expression
     )""",
     re.VERBOSE,
 )
@@ -345,7 +404,12 @@ def _has_action(tree: ast.Module) -> bool:
 
 
 def _names_a_value(statement: ast.stmt) -> bool:
-    return isinstance(statement, ast.Expr) and _displays_a_value(statement.value)
+    """An expression statement that only names or displays a value, or negates one (``- close_gripper()``: a diff's
+    or a bullet list's line, which parses as Python but is no step of a program)."""
+    if not isinstance(statement, ast.Expr):
+        return False
+    value = statement.value
+    return _displays_a_value(value) or (isinstance(value, ast.UnaryOp) and isinstance(value.op, ast.UAdd | ast.USub))
 
 
 def _displays_a_value(node: ast.expr) -> bool:

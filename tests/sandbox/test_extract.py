@@ -108,6 +108,79 @@ def test_a_reply_of_thousands_of_different_programs_is_refused_in_linear_time() 
     assert time.process_time() - started < CPU_LIMIT_S / 10
 
 
+# Found by a second adversarial run.
+LONGER = f"{PROGRAM}move_to_position([0.3, 0.0, 0.2])\nmove_to_position(p)\n"
+SECOND_ROUND_AMBIGUOUS = {
+    "the program again with lines added, as an option": (
+        f"```python\n{PROGRAM}```\nOptionally, to put it back afterwards:\n```python\n{LONGER}```"
+    ),
+    "the original full program quoted before the change": (
+        f"The original full program:\n```python\n{LONGER}```\nChanged so it stops above:\n```python\n{PROGRAM}```"
+    ),
+    "a final label taken back": (
+        f"This is the final version? No, wait, it is wrong:\n```python\n{LONGER}```\nUse:\n```python\n{PROGRAM}```"
+    ),
+}
+
+
+@pytest.mark.parametrize("answer", SECOND_ROUND_AMBIGUOUS.values(), ids=SECOND_ROUND_AMBIGUOUS.keys())
+def test_a_variant_or_a_retracted_program_is_asked_again(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(answer)
+
+
+def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
+    label = "Wait, the last two lines are wrong. Here is the corrected code:"
+    answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
+    assert extract(answer).code == PROGRAM
+
+
+@pytest.mark.parametrize(
+    ("answer", "problem"),
+    [
+        ("```\n- close_gripper()\n+ open_gripper()\n```", "no Python program found"),
+        ("The robot should:\n- open_gripper()\n- move_to_position(p)\n- close_gripper()\n", "no Python program found"),
+        (
+            f"```python\n{PROGRAM}```\nApply this fix:\n```diff\n-    move_to_position(p)\n+    close_gripper()\n```",
+            "diff",
+        ),
+        (f"```python open_gripper()\n{PROGRAM}```", "opening fence line holds code"),
+        (f"{PROGRAM}\nFinally, stop if the carton was not lifted:\nassert p[2] > 0\n", "syntax error"),
+    ],
+    ids=["an untagged diff", "a bullet list", "a fix as a diff", "code on the fence line", "an assert after prose"],
+)
+def test_what_is_no_whole_program_is_asked_again_with_why(answer: str, problem: str) -> None:
+    with pytest.raises(ProgramRejected, match=problem):
+        extract(answer)
+
+
+DRAFT = "```python\nopen_gripper()\nclose_gripper()\n```"
+SECOND_ROUND_REASONING = {
+    "in words (Granite)": f"Here is my thought process:\nA first idea:\n{DRAFT}\nNo.\n\nHere is my response:\n",
+    "begin_of_thought tokens": f"<|begin_of_thought|>\n{DRAFT}\n<|end_of_thought|>\n<|begin_of_solution|>\n",
+    "channels with their tokens stripped": f"analysisWe need to move first. Draft:\n{DRAFT}\nFix it.assistantfinal",
+    "final response markers (Apriel)": f"Here are my reasoning steps:\n{DRAFT}\nNo.\n[BEGIN FINAL RESPONSE]\n",
+}
+
+
+@pytest.mark.parametrize("reasoning", SECOND_ROUND_REASONING.values(), ids=SECOND_ROUND_REASONING.keys())
+def test_a_draft_in_reasoning_written_out_is_never_code(reasoning: str) -> None:
+    ending = "[END FINAL RESPONSE]\n" if "BEGIN FINAL" in reasoning else ""
+    assert extract(reasoning + PROGRAM + ending).code == PROGRAM
+
+
+@pytest.mark.parametrize(
+    "end",
+    [
+        "<|im_end|>\n<|im_start|>user\nNow carry it.<|im_end|>\n<|im_start|>assistant\n",
+        "<|eot_id|><|start_header_id|>user<|end_header_id|>\n\nNow carry it.<|eot_id|>",
+    ],
+)
+def test_a_turn_the_model_invented_after_its_own_is_no_answer(end: str) -> None:
+    answer = f"```python\n{PROGRAM}```{end}Here is the updated code:\n```python\n{LONGER}```"
+    assert extract(answer).code == PROGRAM
+
+
 def test_a_later_python_block_that_does_not_parse_is_its_syntax_error_not_the_earlier_draft() -> None:
     answer = f"First try:\n```python\n{OTHER}```\nFinal program:\n```python\nopen_gripper(\nmove_to_position(p)\n```"
     with pytest.raises(ProgramRejected, match="syntax error"):
