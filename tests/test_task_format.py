@@ -164,3 +164,28 @@ def test_a_value_made_huge_by_yaml_aliases_is_shown_cut_short(tmp_path: Path) ->
     with pytest.raises(TaskFileError) as info:
         load_task(path)
     assert len(str(info.value)) < 2000 and "(got [[" in str(info.value)
+
+
+# Found by an adversarial run: a sheet passes through everything but the ground and the robot (what lies on it rests
+# on it by rule), so paper laid on a 0.6 m shelf fell through it and met a `lowered` goal with no program; a magnetic
+# sheet held by one end lifted a crate stuck to it, and pushed a button, as a rigid plate would.
+SHELF = {"name": "shelf", "shape": "box", "center": [0.3, 0.0, 0.3], "size": [0.2, 0.2, 0.6], "movable": False}
+PAPER = {"name": "paper", "shape": "box", "center": [0.3, 0.0, 0.6005], "size": [0.1, 0.1, 0.001], "mass": 0.004}
+
+
+@pytest.mark.parametrize(
+    ("paper", "problem"),
+    [
+        (PAPER, "objects[1](paper).center: a sheet lies on the ground, not 0.600 m above it"),
+        ({**PAPER, "center": [0.0, 0.3, 0.0005], "magnetic": True}, "objects[1](paper).magnetic: a sheet is limp"),
+    ],
+    ids=["on a shelf", "magnetic"],
+)
+def test_a_sheet_off_the_ground_or_magnetic_is_refused(paper: dict, problem: str) -> None:
+    data = {"format": 1, "name": "t", "category": "no_tool", "instruction": "x", "robot": {"type": "arm"}}
+    data["objects"] = [SHELF, paper]
+    data["goal"] = {"lowered": {"object": "paper", "height": 0.01}}
+    with pytest.raises(TaskFileError, match=re.escape(problem)):
+        parse_task(data)
+    card = {**paper, "size": [0.1, 0.1, 0.004]}  # a plate, not a sheet: it rests on the shelf and may be magnetic
+    parse_task({**data, "objects": [SHELF, {**card, "center": [*paper["center"][:2], paper["center"][2] + 0.0015]}]})

@@ -7,9 +7,10 @@ face on its -x side, on a slide joint with the button's spring (``stiffness``, N
 defaults in :mod:`robotool.task.scene`), whose travel is the sensor ``<name>__travel``; it counts as pressed
 after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
-A sheet (a box at most :data:`SHEET_THICKNESS` thick and light, like paper: :func:`is_sheet`) collides with the
-ground and the robot only; it meets each other movable object through a carrier geom of its own, in place only while
-the object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object.
+A sheet (a thin, light box, like paper: :attr:`~robotool.task.scene.SceneObject.is_sheet`) collides with the ground
+and the robot only; it meets each other movable object through a carrier geom of its own, in place only while the
+object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object. A task file lays a
+sheet on the ground, never magnetic (:mod:`robotool.task.task_file`).
 Cloth is built as hinged links (:func:`robotool.sim.cloth.add_cloth`).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 """
@@ -38,9 +39,6 @@ DEFAULT_FRICTION = 0.5
 # cubes within about a degree when the servo shoves it sideways with ~40 N (tests/robots/arm/test_grasp.py).
 WELD_SOLREF = (2 * TIMESTEP, 1.0)
 WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
-SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate ...
-SHEET_AREAL_DENSITY = 1.0  # kg/m^2: ... unless it weighs more than this per square metre of its face (heavy card is
-# about 0.5; a 3 mm box of the default density 0.9; a 3 mm steel plate 23)
 SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
 SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
 SHEET_CARRIER_LIFT = 0.002  # m a carrier stands above its sheet, so what rests on it rests on it alone
@@ -48,18 +46,6 @@ DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
 BUTTON_GUIDE_FRICTION = 1.0  # N: the face's guide resists sliding, so a sideways shove does not press it
-
-
-def is_sheet(obj: SceneObject) -> bool:
-    """Whether ``obj`` is a sheet (a box at most :data:`SHEET_THICKNESS` thick and at most
-    :data:`SHEET_AREAL_DENSITY` per square metre of its face, like paper or card): it cannot push or lift anything
-    with its edge, and the gripper pinches a fold of it. A heavier thin box is a rigid plate (a 3 mm steel plate
-    weighs 23 kg per square metre: no gripper pinches it). (Cloth is built as hinged links that drape; see
-    :mod:`robotool.sim.cloth`.)"""
-    if obj.shape != "box":
-        return False
-    thickness, *face = sorted(obj.size)
-    return thickness <= SHEET_THICKNESS and obj.effective_mass <= SHEET_AREAL_DENSITY * face[0] * face[1]
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:
@@ -104,7 +90,7 @@ def _add_object(spec: mujoco.MjSpec, obj: SceneObject) -> None:
     if obj.movable:
         body.add_freejoint(name=f"{obj.name}__free")
         attrs["density"] = obj.effective_mass / sum(_part_volume(p) for p in parts)
-    if is_sheet(obj):  # touches the ground and the robot; other objects only through its carriers
+    if obj.is_sheet:  # touches the ground and the robot; other objects only through its carriers
         attrs |= {"contype": SHEET_BIT, "conaffinity": GROUND_BIT}
     for k, part in enumerate(parts):
         _add_part(body, part, center, rot, name=object_geom_name(obj.name, k), **attrs)
@@ -203,11 +189,11 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
     the sheet at the start and dropped :data:`SHEET_CARRIER_DROP` below it otherwise;
     :mod:`robotool.sim.sheets` moves it while the world runs.
     """
-    for sheet in (o for o in task.objects if is_sheet(o) and o.movable):
+    for sheet in (o for o in task.objects if o.is_sheet and o.movable):
         body = spec.body(sheet.name)
         (part,) = geometry.object_parts(sheet)
         centre, rot = np.asarray(sheet.center, dtype=float), geometry.rotation_matrix(sheet.rpy)
-        for obj in (o for o in task.objects if o.movable and not is_sheet(o) and o.shape != "cloth"):
+        for obj in (o for o in task.objects if o.movable and not o.is_sheet and o.shape != "cloth"):
             mu = max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
             carrier = _add_part(
                 body,

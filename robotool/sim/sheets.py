@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import SHEET_CARRIER_DROP, is_sheet, rests_on_sheet, sheet_carrier_name
+from robotool.sim.build import SHEET_CARRIER_DROP, rests_on_sheet, sheet_carrier_name
 from robotool.sim.compiled_scene import Scene
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
@@ -44,7 +44,7 @@ class Sheets:
         on = []
         for s, sheet in enumerate(task.objects):
             for i, obj in enumerate(task.objects):
-                if not (is_sheet(sheet) and sheet.movable) or i == s:
+                if not (sheet.is_sheet and sheet.movable) or i == s:
                     continue
                 geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, sheet_carrier_name(sheet.name, obj.name))
                 if geom >= 0:

@@ -13,6 +13,9 @@ DEFAULT_DENSITY = 300.0  # kg/m^3, for movable objects without a mass
 PRESS_TRAVEL = 0.01  # m: a button counts as pressed after its face travelled this far
 DEFAULT_BUTTON_STIFFNESS = 300.0  # N/m: 3 N at the press travel, like a real push button
 DEFAULT_BUTTON_TRAVEL = 0.02  # m the face can be pushed in
+SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not a rigid plate ...
+SHEET_AREAL_DENSITY = 1.0  # kg/m^2: ... unless it weighs more than this per square metre of its face (heavy card is
+# about 0.5; a 3 mm box of the default density 0.9; a 3 mm steel plate 23)
 
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
 PositiveLength = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -108,6 +111,17 @@ class SceneObject(StrictModel):
     def effective_mass(self) -> float:
         """The mass in kg: as given, or from the default density."""
         return self.mass if self.mass is not None else DEFAULT_DENSITY * self.volume
+
+    @property
+    def is_sheet(self) -> bool:
+        """Whether it is a sheet (a box at most :data:`SHEET_THICKNESS` thick and at most :data:`SHEET_AREAL_DENSITY`
+        per square metre of its face, like paper or card): it cannot push or lift anything with its edge, and the
+        gripper pinches a fold of it. A heavier thin box is a rigid plate (a 3 mm steel plate weighs 23 kg per square
+        metre: no gripper pinches it). (Cloth is built as hinged links that drape.)"""
+        if self.shape != "box":
+            return False
+        thickness, *face = sorted(self.size)
+        return thickness <= SHEET_THICKNESS and self.effective_mass <= SHEET_AREAL_DENSITY * face[0] * face[1]
 
     @property
     def grasp_point(self) -> tuple[float, float, float]:

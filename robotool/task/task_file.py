@@ -243,7 +243,37 @@ def _check_geometry(task: Task) -> list[Problem]:
                     message=f"floats {contact.gap:.3f} m above the surface below it",
                 )
             )
+    problems += _sheet_problems(task)
     problems += robots.get(task.robot.type).rules.check_start(task)
+    return problems
+
+
+def _sheet_problems(task: Task) -> list[Problem]:
+    """A sheet (paper, card: :attr:`~robotool.task.scene.SceneObject.is_sheet`) lies on the ground, where the
+    simulator lets it rest (it passes through other objects: what lies on it rests on it by rule), and is never
+    magnetic (a magnet's hold would make it a rigid plate: held by one end, it would carry or push what it is stuck
+    to)."""
+    problems = []
+    for i, obj in enumerate(task.objects):
+        if not obj.is_sheet:
+            continue
+        advice = "make it thicker or heavier than a sheet (a plate) to"
+        if obj.bottom > RESTING_TOLERANCE:
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, i)}.center",
+                    message=f"a sheet lies on the ground, not {obj.bottom:.3f} m above it (it would pass through what "
+                    f"is under it); {advice} lay it on another object",
+                )
+            )
+        if obj.magnetic:
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, i)}.magnetic",
+                    message=f"a sheet is limp and cannot be magnetic (a magnet's hold would make it rigid); {advice} "
+                    "make it magnetic",
+                )
+            )
     return problems
 
 

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from robotool import sim
-from robotool.sim.build import is_sheet
 from robotool.task.task_file import parse_task
 
 
@@ -126,4 +125,4 @@ def test_a_sheet_is_thin_and_light(size: tuple[float, float, float], mass: float
     """A rigid steel plate 3 mm thin was pinched like paper by fingertips resting on it (an adversarial run)."""
     obj = {"name": "plate", "shape": "box", "center": [0.3, 0.0, size[2] / 2], "size": list(size)}
     task = _task([obj if mass is None else {**obj, "mass": mass}])
-    assert is_sheet(task.objects[0]) is sheet
+    assert task.objects[0].is_sheet is sheet

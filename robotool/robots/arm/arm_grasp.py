@@ -31,7 +31,6 @@ from robotool.robots.arm.arm_config import ARM, ArmConfig
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import is_sheet
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import SkillEnd
 
@@ -102,7 +101,7 @@ class ArmParts:
                 np.flatnonzero(scene.body_object[model.geom_bodyid] == i) for i in range(len(scene.object_names))
             ),
             movable=np.array([o.movable for o in objects]),
-            sheet=np.array([is_sheet(o) for o in objects]),
+            sheet=np.array([o.is_sheet for o in objects]),
         )
 
 

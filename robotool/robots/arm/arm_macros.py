@@ -13,7 +13,6 @@ from robotool.planner.codegen import Point, Program, Ref
 from robotool.planner.layout import Box
 from robotool.robots.arm.arm_config import ARM
 from robotool.robots.arm.arm_skills import ArmLimits
-from robotool.sim.build import is_sheet
 from robotool.task import geometry
 from robotool.task.concepts import press_point
 from robotool.task.scene import SceneObject
@@ -63,7 +62,7 @@ class Arm:
             obj.movable
             and obj.shape not in ("cloth", "button")
             and self.inside(np.asarray(obj.grasp_point))
-            and (is_sheet(obj) or _width_across_fingers(obj) <= self.opening)
+            and (obj.is_sheet or _width_across_fingers(obj) <= self.opening)
         )
 
     def bring_in(self, grasp_xy: np.ndarray) -> np.ndarray:
