@@ -17,6 +17,7 @@ from typing import Any
 import dspy
 from dspy.utils.exceptions import LMError
 
+from robotool.safe_text import capped
 from robotool.sandbox.extract import without_reasoning
 
 FINISHED = frozenset({"stop", "eos", "eos_token", "end_turn", "stop_sequence", "end"})
@@ -46,10 +47,9 @@ def _first_choice(body: dict[str, Any] | None) -> dict[str, Any] | None:
     return first if isinstance(first, dict) else None
 
 
-def _said(value: object, limit: int = 160) -> str:
+def _said(value: object) -> str:
     """A provider's message as one bounded line."""
-    text = " ".join(str(value).split())
-    return text[:limit] + ("..." if len(text) > limit else "")
+    return capped(" ".join(str(value).split()), 160)
 
 
 def not_a_completion(lm: dspy.LM) -> NotACompletion | None:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
 
-_FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w.+-]*)[^\n]*$", re.MULTILINE)
+_FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w.+-]*)([^\n]*)$", re.MULTILINE)  # fence, tag, the rest
 _PYTHON_TAG = re.compile(r"(?:python|py)(?:\d+(?:\.\d+)*)?|ipython\d*|", re.IGNORECASE)
 """The tags of a Python (or untagged) code block: python, Python3, py3, python3.11, ipython ..."""
 _IMPORTS = {"np": "import numpy as np", "math": "import math"}
@@ -196,7 +196,7 @@ def _check_fence(opening: re.Match[str]) -> None:
             "blocks",
             "the reply gives a change as a diff; give the whole program, changes made, in one code block",
         )
-    rest = opening.group(0).strip()[len(opening.group(1)) :].strip()[len(opening.group(2)) :].strip()
+    rest = opening.group(3).strip()
     if _CALL.match(rest):
         raise ProgramRejected(
             None,

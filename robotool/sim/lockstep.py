@@ -359,6 +359,8 @@ class _Run:
         """Read the goal of every ended world that has settled (``SETTLE_AFTER`` past its end and every object still
         since ``previous``, the state a control tick before), or whose physics failed while settling; fail those
         still moving ``SETTLE_LONGEST`` past their end."""
+        if not any(world.ended and not world.finished for world in self.worlds):
+            return  # no world settles: nothing to read in the step loop
         objects = np.flatnonzero(self.scene.body_object >= 0)
         travel = np.linalg.norm(state.xpos[:, objects] - previous.xpos[:, objects], axis=2)  # (nworld, nbody)
         speed = travel / np.maximum(state.time - previous.time, 1e-9)[:, None]

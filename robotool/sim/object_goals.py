@@ -61,8 +61,27 @@ class Underside:
 
     @classmethod
     def of(cls, obj: SceneObject) -> Underside:
-        rot, centre = geometry.rotation_matrix(obj.rpy), np.asarray(obj.center)
-        parts = geometry.object_parts(obj)
+        """Read from a task object's parts, in the frame of its body (its centre and rotation)."""
+        return cls.of_parts(geometry.object_parts(obj), np.asarray(obj.center), geometry.rotation_matrix(obj.rpy))
+
+    @classmethod
+    def of_body(cls, model: mujoco.MjModel, body: int) -> Underside:
+        """Read from the box and cylinder geoms of one ``body`` of a compiled model (a cloth's link), in its frame."""
+        parts = []
+        for g in np.flatnonzero(model.geom_bodyid == body):
+            frame = np.zeros(9)
+            mujoco.mju_quat2Mat(frame, model.geom_quat[g])
+            size = model.geom_size[g]
+            if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
+                parts.append(geometry.Part("box", model.geom_pos[g], size.copy(), frame.reshape(3, 3)))
+            elif model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:  # MuJoCo's size: radius, half-length
+                half = np.array([size[0], size[0], size[1]])
+                parts.append(geometry.Part("cylinder", model.geom_pos[g], half, frame.reshape(3, 3)))
+        return cls.of_parts(parts, np.zeros(3), np.eye(3))
+
+    @classmethod
+    def of_parts(cls, parts: list[geometry.Part], centre: np.ndarray, rot: np.ndarray) -> Underside:
+        """Read from ``parts`` given in the world, in the frame whose origin is ``centre`` and rotation ``rot``."""
         boxes = [p for p in parts if p.kind == "box"]
         cylinders = [p for p in parts if p.kind == "cylinder"]
         return cls(
@@ -71,30 +90,6 @@ class Underside:
             axes=np.array([p.rot[:, 2] @ rot for p in cylinders]).reshape(-1, 3),
             radius=np.array([p.half[0] for p in cylinders]),
             half_length=np.array([p.half[2] for p in cylinders]),
-        )
-
-    @classmethod
-    def of_body(cls, model: mujoco.MjModel, body: int) -> Underside:
-        """Read from the box and cylinder geoms of one ``body`` of a compiled model (a cloth's link)."""
-        boxes, cylinders = [], []
-        for g in np.flatnonzero(model.geom_bodyid == body):
-            rot = model.geom(g).quat
-            frame = np.zeros(9)
-            mujoco.mju_quat2Mat(frame, rot)
-            part = (model.geom_pos[g], frame.reshape(3, 3), model.geom_size[g])
-            if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX:
-                boxes.append(part)
-            elif model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER:
-                cylinders.append(part)
-        signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
-        return cls(
-            corners=np.vstack([pos + (signs * size) @ rot.T for pos, rot, size in boxes])
-            if boxes
-            else np.zeros((0, 3)),
-            centres=np.array([pos for pos, _, _ in cylinders]).reshape(-1, 3),
-            axes=np.array([rot[:, 2] for _, rot, _ in cylinders]).reshape(-1, 3),
-            radius=np.array([size[0] for _, _, size in cylinders]),
-            half_length=np.array([size[1] for _, _, size in cylinders]),
         )
 
     def bottom(self, state: BatchState, body: int) -> np.ndarray:
