@@ -617,6 +617,7 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
     # a 7 cm push of a light box tapped a drum twice the push limit, which rolled on off a platform: a ram's travel is
     # added up until what it set moving comes to rest
     ("tap_a_heavy_drum_to_roll_it_off_a_platform", "drum_beside_a_light_box_on_a_platform", "pushing box rammed drum"),
+    ("tap_a_heavy_drum_in_two_small_pushes", "drum_beside_a_light_box_on_a_platform", "pushing box rammed drum"),
 ]
 
 
