@@ -98,3 +98,19 @@ def test_goal_text_comes_from_the_goal_model() -> None:
         == "The bottom of glass_vase is at most 0.2 m above the ground at the end, unbroken."
     )
     assert tasks.load("milk_reaching").goal.sentence() == "The gripper holds milk at the end."
+
+
+def test_a_verb_imports_only_its_own_module() -> None:
+    """``robotool run`` does not wait for the optimiser's imports (DSPy): the other verbs are listed by name and help
+    line, from :mod:`robotool.cli.verbs`, without importing their modules."""
+    probe = (
+        "import sys\n"
+        "from robotool.cli.dispatch import build_parser\n"
+        "from robotool.cli.verbs import VERBS\n"
+        "parser = build_parser(['run'])\n"
+        "verbs = next(a for a in parser._actions if a.dest == 'verb')\n"
+        "assert list(verbs.choices) == list(VERBS), list(verbs.choices)\n"
+        "print(sorted(m for m in sys.modules if m.endswith(('_command', '_commands'))))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "['robotool.cli.run_command']"

@@ -32,6 +32,7 @@ from robotool.cli.options import (
     positive_int,
     print_error,
 )
+from robotool.cli.verbs import add_verb
 from robotool.errors import RobotoolError
 from robotool.eval.config import DEFAULT_WORKERS, EvalConfig, EvalError, RunsNotAttempted, Settings
 from robotool.eval.executor_choice import EXECUTORS, make_executor
@@ -217,9 +218,7 @@ def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int
 
 def register(verbs: Verbs) -> None:
     """Add ``eval`` to the ``robotool`` verbs."""
-    p = verbs.add_parser(
-        "eval", help="the offline evaluator (same as python -m robotool.eval)", description=DESCRIPTION
-    )
+    p = add_verb(verbs, "eval", description=DESCRIPTION)
     add_arguments(p)
     set_command(p, cmd_eval)
 

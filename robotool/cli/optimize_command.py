@@ -32,6 +32,7 @@ from robotool.cli.options import (
     positive_int,
     print_error,
 )
+from robotool.cli.verbs import add_verb
 from robotool.errors import LMUnavailableError, RobotoolError
 from robotool.optimize.data import DatasetError, check_families
 from robotool.optimize.run import OPTIMIZERS, OptimizeError, OptimizerBudget, OptimizeResult, OptimizeSettings, optimize
@@ -190,11 +191,7 @@ def cmd_optimize(args: argparse.Namespace, console: Console, errors: Console) ->
 
 def register(verbs: Verbs) -> None:
     """Add ``optimize`` to the ``robotool`` verbs."""
-    p = verbs.add_parser(
-        "optimize",
-        help="compile the program's prompts (same as python -m robotool.optimize)",
-        description=DESCRIPTION,
-    )
+    p = add_verb(verbs, "optimize", description=DESCRIPTION)
     add_arguments(p)
     set_command(p, cmd_optimize)
 

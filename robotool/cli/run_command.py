@@ -19,6 +19,7 @@ from robotool.cli.outputs import (
     write_page,
     write_world_videos,
 )
+from robotool.cli.verbs import add_verb
 from robotool.safe_text import json_text
 from robotool.sandbox.validate import ProgramRejected
 
@@ -72,7 +73,7 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
 
 def register(verbs: Verbs) -> None:
     """Add ``run`` to the ``robotool`` verbs."""
-    p = verbs.add_parser("run", help="run a skill program file against a task and report what happened")
+    p = add_verb(verbs, "run")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
     p.add_argument(
         "program",

@@ -31,6 +31,7 @@ from robotool.cli.outputs import (
     write_file,
     write_page,
 )
+from robotool.cli.verbs import add_verb
 from robotool.program.lm import DEFAULT_FORMAT_RETRIES
 from robotool.program.methods import STAGES_BY_METHOD
 from robotool.safe_text import json_text
@@ -143,7 +144,7 @@ def _lm_program(args: argparse.Namespace) -> RoboTool | None:
 
 def register(verbs: Verbs) -> None:
     """Add ``solve`` to the ``robotool`` verbs."""
-    p = verbs.add_parser("solve", help="write a skill program for a task (language model or search planner)")
+    p = add_verb(verbs, "solve")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
     p.add_argument(
         "--planner",

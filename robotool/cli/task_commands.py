@@ -12,6 +12,7 @@ from robotool import tasks
 from robotool.cli.command import UsageError, set_command
 from robotool.cli.options import TASK_HELP, Verbs, output_file, positive_int, seed
 from robotool.cli.outputs import write_file
+from robotool.cli.verbs import add_verb
 from robotool.safe_text import console_plain
 from robotool.task.concepts import needs_tool
 from robotool.task.describe import describe
@@ -82,16 +83,16 @@ def cmd_render(args: argparse.Namespace, console: Console, errors: Console) -> i
 
 def register(verbs: Verbs) -> None:
     """Add ``tasks``, ``describe`` and ``render`` to the ``robotool`` verbs."""
-    p = verbs.add_parser("tasks", help="list the built-in tasks, print one, or write a generated one")
+    p = add_verb(verbs, "tasks")
     p.add_argument("--show", metavar="NAME", help="print this built-in task's YAML (a start for a new task file)")
     p.add_argument("--family", help="write an instance of this procedural family instead of listing")
     p.add_argument("--seed", type=seed, help="the instance's seed (with --family; default: 0)")
     p.add_argument("--out", type=output_file, help="the YAML file to write (with --family; default: print it)")
     set_command(p, cmd_tasks)
-    p = verbs.add_parser("describe", help="print the scene description the language model reads")
+    p = add_verb(verbs, "describe")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
     set_command(p, cmd_describe)
-    p = verbs.add_parser("render", help="draw a task's scene, labelled, to a PNG (headless)")
+    p = add_verb(verbs, "render")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
     p.add_argument("--out", type=output_file, required=True, help="the PNG file to write")
     p.add_argument("--width", type=positive_int, default=960, help="picture width in pixels")
