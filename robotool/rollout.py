@@ -92,6 +92,12 @@ class Event(BaseModel):
             )
         elif self.kind == "fell":
             text = "the robot fell" + (f": {self.detail}" if self.detail else "")
+        elif self.kind == "broke" and "strike_speed" in m:
+            text = (
+                f"{self.object} broke: {self.detail or 'something hard'} met it at {m['strike_speed']:.2f} m/s "
+                f"(faster than {m.get('max_speed', 0.0):.2f} m/s, the speed a fall of {m.get('max_drop', 0.0):.2f} m "
+                "lands at, breaks it)"
+            )
         elif self.kind == "broke":
             text = (
                 f"{self.object} broke: it fell {m.get('fall', 0.0):.2f} m"

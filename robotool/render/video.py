@@ -72,7 +72,10 @@ def end_lines(rollout: Rollout, *, goal_missed: bool = True) -> list[CaptionLine
         lines.append(CaptionLine(f"world failed: {rollout.error}", RED))
     unmet = [name for name, ok in rollout.conditions.items() if not ok]
     for broke in (e for e in rollout.events if e.kind == "broke"):
-        lines.append(CaptionLine(f"{broke.object} broke in a fall of {broke.measured.get('fall', 0.0):.2f} m", RED))
+        m = broke.measured
+        fall = f"in a fall of {m.get('fall', 0.0):.2f} m"
+        how = f"struck at {m['strike_speed']:.1f} m/s" if "strike_speed" in m else fall
+        lines.append(CaptionLine(f"{broke.object} broke {how}", RED))
     if goal_missed:
         lines.append(CaptionLine("goal not reached" + (": " + ", ".join(unmet) + " false" if unmet else ""), RED))
     return lines

@@ -7,7 +7,8 @@ a rolled cylinder turns below its round side. A fragile object's falls are follo
 a fall starts where it was last resting (touching something, the robot too, nearly still; or held in the robot's
 grip, at any speed) or from the highest point it rose to since (a tossed object falls from the top of its flight), and
 lasts until it rests again; it breaks once it touches something hard (not soft, not the robot) with
-its centre more than ``max_drop`` below where it rested. A soft object it glances off on the way, or
+its centre more than ``max_drop`` below where it rested, or once the robot or a movable object that is not soft comes
+to touch it faster than such a fall lands (:mod:`robotool.sim.strikes`). A soft object it glances off on the way, or
 a wall it grazes, does not end the fall, and neither does the tick at which contacts happen to be
 read: once a fall could pass ``max_drop`` before the next tick, every physics step of that interval is read, so a
 hard strike that begins and ends between two ticks breaks it too. The first breaking fall of each world is kept as a
@@ -25,6 +26,7 @@ from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import ReadAtTicks
+from robotool.sim.strikes import StrikeWatch
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
@@ -169,6 +171,7 @@ class FallTracker:
         self.broken: np.ndarray | None = None
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
+        self.strikes = StrikeWatch(scene, index, max_drop)
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         touch = np.any(state.touching[:, self.bodies][:, :, self.others], axis=1)  # (nworld, len(others))
@@ -189,6 +192,17 @@ class FallTracker:
                 object=self.name,
                 measured={"fall": float(fall[w]), "max_drop": self.max_drop},
                 detail=self._names(self.scene.body_object[self.others[hard[w]]]),
+            )
+        speed, strikers = self.strikes.update(state, active)
+        for w in map(int, np.flatnonzero(active & (speed > self.strikes.limit) & ~self.broken)):
+            self.broken[w] = True
+            names = sorted({self.strikes.names[k] for k in np.flatnonzero(strikers[w]).tolist()})
+            self.breaks[w] = Event(
+                kind="broke",
+                time=float(state.time[w]),
+                object=self.name,
+                measured={"strike_speed": float(speed[w]), "max_speed": self.strikes.limit, "max_drop": self.max_drop},
+                detail=" and ".join(names),
             )
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
         held = state.eq_active[:, self.grips].any(axis=1)  # in the robot's grip: it moves with the hand

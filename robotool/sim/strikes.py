@@ -1,0 +1,63 @@
+"""Strikes on a fragile object: something moving meeting it faster than a fall of its ``max_drop`` would land.
+
+A fall (:class:`~robotool.sim.object_goals.FallTracker`) is the object's own: its centre dropping onto a surface that
+is not soft, other than the robot. That misses glass struck by what moves: a dish dropped onto the gripper's palm, a
+block dropped onto a dish lying still. So a fragile object also breaks when the robot or a movable object that is not
+soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at. The speed is
+that of the two bodies' centres relative to each other (the object's own velocity; the other body's from its travel
+since the reading before), read before they touched (the larger of the last reading before and the first one
+touching). What does not move (the ground, a fixed object) is left to the fall rule, which reads a fall as the
+documented drop of the object's centre, not the speed of a part of it that swings down. A fragile object's fall past
+``max_drop`` makes the goal read every physics step, so a landing on the robot is read at the step it happens; a
+striker is read at control ticks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robotool.sim.backend import BatchState
+from robotool.sim.compiled_scene import Scene
+
+GRAVITY = 9.81  # m/s^2
+
+
+class StrikeWatch:
+    """The strikes on one fragile object in every world: :meth:`update` says how fast things came to touch it."""
+
+    def __init__(self, scene: Scene, index: int, max_drop: float):
+        objects = scene.task.objects
+        owner = scene.body_object
+        moving = np.array([o.movable and not o.soft for o in objects])
+        striker = scene.robot_body | ((owner >= 0) & (owner != index) & moving[np.maximum(owner, 0)])
+        self.strikers = np.flatnonzero(striker)  # the robot's bodies and the other movable objects' that are not soft
+        self.mine = np.flatnonzero(owner == index)
+        self.body = int(scene.object_body[index])
+        self.dof = int(scene.model.body_dofadr[self.body])  # its free joint's linear velocity, in the world frame
+        self.limit = float(np.sqrt(2 * GRAVITY * max_drop))
+        self.names = ["the robot" if scene.robot_body[b] else objects[owner[b]].name for b in self.strikers.tolist()]
+        self._time: np.ndarray | None = None
+        self._xpos = np.zeros(0)
+        self._touch = np.zeros(0, dtype=bool)
+        self._speed = np.zeros(0)
+
+    def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none), and
+        (nworld, nstriker) which bodies came to touch the object then."""
+        xpos = state.xpos[:, self.strikers]
+        touch = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
+        if self._time is None:
+            self._time, self._xpos, self._touch = state.time.copy(), xpos, touch
+            self._speed = np.zeros(touch.shape)
+        dt = state.time - self._time
+        moving = (xpos - self._xpos) / np.where(dt > 0, dt, np.inf)[:, None, None]  # (nworld, nstriker, 3)
+        own = state.qvel[:, None, self.dof : self.dof + 3]
+        speed = np.linalg.norm(own - moving, axis=2)  # (nworld, nstriker)
+        new = active[:, None] & touch & ~self._touch
+        struck = np.where(new, np.maximum(speed, self._speed), 0.0).max(axis=1, initial=0.0)
+        keep = active[:, None]
+        self._time = np.where(active, state.time, self._time)
+        self._xpos = np.where(keep[:, :, None], xpos, self._xpos)
+        self._touch = np.where(keep, touch, self._touch)
+        self._speed = np.where(keep, speed, self._speed)
+        return struck, new

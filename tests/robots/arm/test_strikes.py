@@ -1,0 +1,58 @@
+"""Glass struck by what moves (found by an adversarial run): a fragile object breaks when the robot or a movable object
+that is not soft comes to touch it faster than a fall of its ``max_drop`` lands, not only in a fall of its own onto
+what does not move; and a gentle touch leaves it whole."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from fixtures.paths import FIXTURES
+
+from robotool import tasks
+from robotool.rollout import Rollout
+from robotool.verify import world_failure
+
+CHEATS = FIXTURES / "cheats"
+LAYOUTS = FIXTURES / "layouts"
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "striker"),
+    [
+        # a dish that slid off a shelf fell about 0.22 m (max_drop 0.10 m) onto the gripper's palm: whole, since a fall
+        # onto the robot was not read as onto something hard
+        ("arm_catch_a_sliding_glass_dish_on_the_palm", "arm_glass_dish_sliding_off_a_tilted_shelf", "the robot"),
+        # a 3 kg block let go 0.43 m above a dish lying on the floor: whole, since only its own falls were judged
+        ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_iron_block_on_a_stool_beside_a_glass_dish", "block"),
+    ],
+)
+def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: str, layout: str, striker: str) -> None:
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    rollouts: list[Rollout] = run_texts(task, [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
+    for rollout in rollouts:
+        assert not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.detail == striker and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+        assert f"{striker} met it at" in world_failure(rollout), world_failure(rollout)
+
+
+def test_a_block_set_down_gently_on_the_glass_dish_leaves_it_whole(run_texts: Any) -> None:
+    """The control: the same block carried over the dish and lowered onto it at the arm's pace, then let go."""
+    program = (
+        'g = get_graspable_point("block")\n'
+        "open_gripper()\n"
+        "move_to_position([g[0], g[1], g[2] + 0.05])\n"
+        "move_to_position(g)\n"
+        "close_gripper()\n"
+        "move_to_position([g[0], g[1], 0.48])\n"
+        'd = get_center("dish")\n'
+        "move_to_position([d[0], d[1], 0.48])\n"
+        "move_to_position([d[0], d[1], g[2] - get_center('block')[2] + 0.036])\n"
+        "open_gripper()\n"
+        "move_to_position([d[0], d[1], 0.2])\n"
+    )
+    task = tasks.load(LAYOUTS / "arm_iron_block_on_a_stool_beside_a_glass_dish.yaml")
+    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+    assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
