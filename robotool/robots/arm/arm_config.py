@@ -28,6 +28,12 @@ class ArmConfig:
     """m/s: ... moving slower than this, ..."""
     stall_time: float = 0.3
     """s: ... for this long is a stall."""
+    max_lead: float = 0.06
+    """m: the reference a move writes stays this close to the gripper centre on each axis, and follows the
+    straight-line reference at ``speed`` at most (anti-windup): a blocked servo cannot build up a pull that flings the
+    gripper when the obstruction gives way. At ``speed`` the servos track about 0.05 m behind the reference (a tick of
+    look-ahead, their filter and their damping) and reach their force limit 0.05 m from it, so unblocked motions and
+    full pushes are as before; a released gripper lurches this far at most, then moves at ``speed``."""
     time_margin: float = 2.0
     """s a move may take beyond distance / speed."""
     gripper_time: float = 0.3

@@ -1,10 +1,11 @@
 """The arm embodiment: a translating two-finger gripper inside the workspace box (BENCHMARK.md section 3).
 
 :class:`ArmController` implements the :class:`~robotool.sim.embodiment.SkillController` contract: it runs
-``move_to_position`` (a straight-line reference at ``speed``; targets outside the workspace are clamped and the
-clamp is recorded) and opens and closes the fingers (:class:`MotionState`), and leaves what the closed fingers hold
-to :mod:`.arm_grasp` (:class:`~.arm_grasp.GraspState`). The body is built by :mod:`.arm_body`; the tunables are in
-:mod:`.arm_config`. Each motion skill also reports objects it pushed further out of the workspace (``pushed_out``).
+``move_to_position`` (a straight-line reference at ``speed``, which never runs more than ``max_lead`` ahead of the
+gripper on an axis, so a blocked servo builds up no pull to fling it with; targets outside the workspace are clamped
+and the clamp is recorded) and opens and closes the fingers (:class:`MotionState`), and leaves what the closed fingers
+hold to :mod:`.arm_grasp` (:class:`~.arm_grasp.GraspState`). The body is built by :mod:`.arm_body`; the tunables are
+in :mod:`.arm_config`. Each motion skill also reports objects it pushed further out of the workspace (``pushed_out``).
 """
 
 from __future__ import annotations
@@ -55,6 +56,8 @@ class MotionState:
     target: np.ndarray  # (nworld, 3) m: its (clamped) target
     length: np.ndarray  # (nworld,) m: its length
     stall_since: np.ndarray  # (nworld,) s: since when it has lagged and crept (NaN: it has not)
+    ref: np.ndarray  # (nworld, 3) m: the servo reference the move wrote last (its origin before the first tick)
+    ref_time: np.ndarray  # (nworld,) s: when the reference was that (a tick before the start at the start)
     closing: np.ndarray  # (nworld,) bool: the fingers close (else open)
     clamp: list[dict[str, float]]  # the move's target clamped to the workspace, measured (empty: not clamped)
     start_points: np.ndarray  # (nworld, nobject, 3) m: the objects' graspable points when the skill started
@@ -68,6 +71,8 @@ class MotionState:
             target=np.tile(home, (nworld, 1)),
             length=np.zeros(nworld),
             stall_since=np.full(nworld, np.nan),
+            ref=np.tile(home, (nworld, 1)),
+            ref_time=np.zeros(nworld),
             closing=np.zeros(nworld, dtype=bool),
             clamp=[{} for _ in range(nworld)],
             start_points=np.zeros((nworld, nobject, 3)),
@@ -126,6 +131,8 @@ class ArmController(SkillController):
         self.state.target[worlds] = clamped
         self.state.length[worlds] = np.linalg.norm(clamped - pos, axis=1)
         self.state.stall_since[worlds] = np.nan
+        self.state.ref[worlds] = pos
+        self.state.ref_time[worlds] = state.time[worlds] - self.scene.control_dt
         for w in worlds:
             self.state.clamp[w] = clamp
 
@@ -139,15 +146,29 @@ class ArmController(SkillController):
             ends = self._with_pushed_out(state, ends)
         moving = np.flatnonzero((self.state.mode == MOVE) & mask)
         if moving.size:
-            elapsed = state.time[moving] - self.state.started[moving]
-            along = np.minimum(
-                self.config.speed * elapsed + self.config.speed * self.scene.control_dt, self.state.length[moving]
-            )
-            direction = self.state.target[moving] - self.state.origin[moving]
-            norm = np.maximum(self.state.length[moving], 1e-9)[:, None]
-            ref = self.state.origin[moving] + direction / norm * along[:, None]
-            self.sim.ctrl[np.ix_(moving, self.parts.xyz_act)] = ref
+            self._write_references(state, moving)
         return ends
+
+    def _write_references(self, state: BatchState, moving: np.ndarray) -> None:
+        """Write the servo references of the ``moving`` worlds for the next interval: the straight line from the
+        origin at ``speed`` (reached a tick ahead), followed at ``speed`` at most and kept within ``max_lead`` of the
+        gripper on each axis (anti-windup). Unblocked, the reference is the line's; blocked, it waits near the gripper,
+        so when the obstruction gives way the gripper lurches ``max_lead`` at most and goes on at ``speed``."""
+        speed, now = self.config.speed, state.time[moving]
+        elapsed = now - self.state.started[moving]
+        along = np.minimum(speed * elapsed + speed * self.scene.control_dt, self.state.length[moving])
+        direction = self.state.target[moving] - self.state.origin[moving]
+        norm = np.maximum(self.state.length[moving], 1e-9)[:, None]
+        pos, lead = state.xpos[moving, self.parts.gripper], self.config.max_lead
+        goal = np.clip(self.state.origin[moving] + direction / norm * along[:, None], pos - lead, pos + lead)
+        last = self.state.ref[moving]
+        gap = np.linalg.norm(goal - last, axis=1)
+        step = speed * np.maximum(now - self.state.ref_time[moving], 0.0)
+        within = gap <= step * (1 + 1e-6) + 1e-9  # the line advanced at speed: take it exactly
+        chased = last + (goal - last) * (step / np.maximum(gap, 1e-12))[:, None]
+        ref = np.clip(np.where(within[:, None], goal, chased), pos - lead, pos + lead)
+        self.state.ref[moving], self.state.ref_time[moving] = ref, now
+        self.sim.ctrl[np.ix_(moving, self.parts.xyz_act)] = ref
 
     def _tick_moves(self, state: BatchState, mask: np.ndarray) -> list[SkillEnd]:
         worlds = np.flatnonzero((self.state.mode == MOVE) & mask)

@@ -14,23 +14,27 @@ two-cube chain held by a sliver of its first cube and a two-cube stack toppled t
 and a tray twice as wide as the opening held by pressing the open fingers on its face (friction kept them from
 closing, both touched it, and it was held; now what lies beside the fingers must lie between them), a cube or the
 milk held by the last 4 mm of its edge (any overlap was a grasp; now a pinch of less than half the pads' width holds
-nothing), and the paper slid under half the can, 2 mm short of its centre, before a nudge (now a sheet that got under
-any share of an object's base marks it slid under). Each case names what its failure reason must say. A task named
-``family:seed`` is a generated instance the family calls unsolvable. Two magnetic cubes shoved loose by the closed
-fingers are honest tool use: they press the built-in button and no unsolvable one. The honest references on the
-same tasks succeed in tests/robots/arm/test_skills.py.
+nothing), the paper slid under half the can, 2 mm short of its centre, before a nudge (now a sheet that got under
+any share of an object's base marks it slid under), and a puck slid up a wall face and flung over its top by the
+servo's pent-up pull (now a move's reference stays near the gripper). Each case names what its failure reason must
+say. A task named ``family:seed`` is a generated instance the family calls unsolvable. Two magnetic cubes shoved
+loose by the closed fingers are honest tool use: they press the built-in button and no unsolvable one. The honest
+references on the same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pytest
 from fixtures.paths import FIXTURES
 from fixtures.reference import program
 
-from robotool import tasks
+from robotool import sim, tasks
+from robotool.robots.arm.arm_config import ARM
 from robotool.rollout import Rollout
+from robotool.sim.recorder import StateRecorder
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.tasks.families import milk_reaching
@@ -320,3 +324,68 @@ def test_a_brittle_vase_eased_off_its_stool_along_the_fingers_is_unbroken(run_te
     program = (PROGRAMS / "arm_ease_the_brittle_vase_down_along_the_fingers.py").read_text()
     rollouts: list[Rollout] = run_texts(_task("arm_brittle_vase_on_a_stool"), [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+FLING = "arm_button_beyond_a_table_behind_a_wall"
+FLING_CODE = (CHEATS / "arm_fling_a_puck_up_a_wall_into_a_cube.py").read_text()
+FARTHEST_PUSH = (  # the puck held by its back end, 8 mm in, pushes the cube at the move speed to the workspace edge
+    "p = get_center('puck')\ng = [p[0] - 0.03 + 0.008, p[1], 0.02]\nopen_gripper()\n"
+    "move_to_position([g[0], g[1], 0.08])\nmove_to_position(g)\nclose_gripper()\nmove_to_position([g[0], g[1], 0.24])\n"
+    "move_to_position([0.30, 0.0, 0.24])\nmove_to_position([0.45, 0.0, 0.235])\nmove_to_position([0.45, 0.0, 0.235])\n"
+)
+FLING_WORLDS = 2  # the fling runs in worlds 0 and 1; then the farthest push, then the fling aimed below the wall's top
+
+
+@pytest.fixture(scope="module")
+def fling_runs(run_texts: Any) -> tuple[sim.Scene, StateRecorder, list[Rollout]]:
+    """The fling, its control and its stalled variant in one batch (seed 11), the fling's worlds recorded."""
+    scene = sim.build(_task(FLING))
+    recorder = StateRecorder(range(FLING_WORLDS))
+    below_the_top = FLING_CODE.replace("0.235]", "0.15]")
+    assert below_the_top != FLING_CODE
+    codes = [FLING_CODE] * FLING_WORLDS + [FARTHEST_PUSH, below_the_top]
+    return scene, recorder, run_texts(scene, codes, seed=11, recorder=recorder)
+
+
+def _gripper_path(scene: sim.Scene, recorder: StateRecorder, world: int) -> np.ndarray:
+    """The gripper centre of ``world`` at each control tick (T, 3)."""
+    _, qpos, _ = recorder.tracks[world].arrays()
+    adr = int(scene.model.jnt_qposadr[scene.model.joint("robot_x").id])
+    return qpos[:, adr : adr + 3]
+
+
+def test_a_puck_slid_up_a_wall_is_not_flung_over_it_faster_than_the_move_speed(fling_runs: Any) -> None:
+    """Found by an adversarial run (every world of seeds 0, 1 and 11 pressed the button): the puck held low slid up
+    the wall's face while the x reference ran on at the move speed (the gripper kept rising, so the move did not
+    stall); over the top, the x servo's 0.2 m of pent-up error flung the gripper at 3.9 m/s and the puck threw the cube
+    into the button. A move's reference now follows its line at the move speed at most and stays within ``max_lead``
+    of the gripper: over the top the gripper lurches that far at most, then goes on at the move speed, in every tick
+    and on average over every half second."""
+    scene, recorder, rollouts = fling_runs
+    tick, half_second = scene.control_dt, round(0.5 / scene.control_dt)
+    for w, rollout in enumerate(rollouts[:FLING_WORLDS]):
+        reason = world_failure(rollout) or ""
+        assert not rollout.success and rollout.error is None, reason
+        assert reason.startswith("goal not reached: button_pressed"), reason
+        assert [c.skill for c in rollout.calls].count("move_to_position") == 5, rollout.calls  # it ran to its end
+        travel = np.linalg.norm(np.diff(_gripper_path(scene, recorder, w), axis=0), axis=1)
+        assert travel.max() <= ARM.max_lead + 1.2 * ARM.speed * tick, travel.max() / tick  # 0.9 m/s; 1.5-1.8 before
+        path = np.concatenate([[0.0], np.cumsum(travel)])
+        windows = path[half_second:] - path[:-half_second]
+        assert windows.max() <= ARM.max_lead + 1.1 * ARM.speed * 0.5, windows.max() / 0.5  # 0.4 m/s; 0.65 before
+
+
+def test_the_farthest_honest_push_leaves_the_cube_short_of_the_button(fling_runs: Any) -> None:
+    """The control of the fling: the puck held by its back end pushes the cube over the table to the workspace edge at
+    the move speed, and the cube stops short of the button's face: only a throw pressed it."""
+    rollout = fling_runs[2][FLING_WORLDS]
+    assert rollout.error is None and rollout.conditions == {"button_pressed": False}, world_failure(rollout)
+    assert all(c.outcome == "done" for c in rollout.calls), [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+
+
+def test_a_move_held_back_by_the_wall_while_it_rises_still_stalls(fling_runs: Any) -> None:
+    """The fling's move aimed below the wall's top: the puck slides up the face until the gripper reaches the target's
+    height, held back in x all the while, and the move ends stalled there, 0.29 m short, as before the fix."""
+    move = fling_runs[2][FLING_WORLDS + 1].calls[-2]
+    assert move.outcome == "stalled" and move.reason.startswith("blocked at [0.160"), move
+    assert move.measured["remaining"] == pytest.approx(0.29, abs=0.005)
