@@ -8,11 +8,13 @@ over it (an object half on the sheet is held back by the table as much as the sh
 the sheet's carrier geom for that object is in place (:func:`robotool.sim.build.make_spec`), so the object
 rides on the sheet by friction, until its support leaves the sheet (less than :data:`LEAVE_SHARE` of its base
 over it, or its centre off it), it is lifted off, or the sheet itself is lifted off the table (held up by an
-edge, it droops and carries nothing); otherwise the carrier lies far below. A sheet slid (or laid) under a
-standing object got there, not the object: once the sheet moving more than the object brought more of the
-object's base over it (any share, not only its centre), no nudge makes the object rest on the sheet until its
-base has left the sheet entirely, whatever order the slides and nudges came in. :meth:`Sheets.update` applies
-this rule after every control tick, per world.
+edge, it droops and carries nothing: :data:`RAISED`); otherwise the carrier lies far below. A sheet pinned down
+(an object standing partly on it, not riding it, presses it with more than :data:`PIN_FORCE` of friction: a crate
+with a corner on it) carries nothing either: it does not slide out from under that load, so what else lies on it
+stays. A sheet slid (or laid) under a standing object got there, not the object: once the sheet moving more than
+the object brought more of the object's base over it (any share, not only its centre), no nudge makes the object
+rest on the sheet until its base has left the sheet entirely, whatever order the slides and nudges came in.
+:meth:`Sheets.update` applies this rule after every control tick, per world.
 """
 
 from __future__ import annotations
@@ -28,6 +30,9 @@ from robotool.task.scene import SceneObject
 
 MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it
+RAISED = 0.002  # m: a sheet whose underside is held this high above the ground droops and carries nothing
+PIN_FORCE = 10.0  # N of friction from what stands partly on a sheet (not riding it) that pins the sheet down
+GRAVITY = 9.81  # m/s^2
 SUPPORT_SHARE = 0.9  # of an object's base over a sheet, with its centre, for it to come to rest on the sheet
 LEAVE_SHARE = 0.5  # an object resting on a sheet leaves it when less of its base than this is over it
 BASE_SAMPLES = 9  # points along each side of a face of an object (a grid; a disc on a cylinder's ends)
@@ -58,6 +63,10 @@ class Sheets:
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
         self.surface = {i: surface_points(task.objects[i]) for _, i, _ in self.links}
+        friction = [model.geom_friction[model.body_geomadr[b], 0] for b in scene.object_body]
+        self.pin_weight = np.array(  # N of friction per share of the object's base on the sheet, in each pair
+            [max(friction[s], friction[i]) * task.objects[i].effective_mass * GRAVITY for s, i, _ in self.links]
+        )
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
         self.share = np.zeros(self.on.shape)  # (nworld, nlink): share of the object's base over its sheet
         self.slid_under = np.zeros_like(self.on)  # the sheet got under the object, not the other way round
@@ -74,21 +83,11 @@ class Sheets:
         moved = step > MOVED
         first = self.previous is None
         self.previous = xpos.copy()
+        measured = [self._measure(k, xpos, state) for k in range(len(self.links))]
+        pinned = self._pinned([np.where(resting, share, 0.0) for _, share, resting in measured], len(xpos))
         for k, (s, i, geom) in enumerate(self.links):
-            rot = state.xmat(bodies[s])  # (nworld, 3, 3)
-            local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
-            centre_over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
-            turn = state.xmat(bodies[i])  # (nworld, 3, 3): the object's frame in the world
-            heights = xpos[:, i, None, 2] + turn[:, 2, :] @ self.surface[i].T  # (nworld, npoint)
-            bottom = heights.min(axis=1)
-            base = heights <= bottom[:, None] + BASE_DEPTH  # (nworld, npoint): where it stands, as it lies
-            in_sheet = rot[:, :, :2].transpose(0, 2, 1) @ turn  # (nworld, 2, 3): the object's axes in the sheet's x-y
-            across = local[:, None, :2] + self.surface[i] @ in_sheet.transpose(0, 2, 1)  # its points in the sheet
-            over = np.all(np.abs(across) <= self.half[s], axis=2)
-            share = (over & base).sum(axis=1) / base.sum(axis=1)
-            top = xpos[:, s, 2] + self.thickness[s] / 2
-            flat = top - self.thickness[s] < LIFTED  # a sheet held up by an edge droops: it carries nothing
-            resting = flat & (bottom < top + LIFTED)
+            centre_over, share, resting = measured[k]
+            resting = resting & ~pinned[:, s]
             before = np.where(first, 0.0, self.share[:, k])
             gained = resting & (share > before + GAINED)  # more of its base came over the sheet this tick ...
             # ... because the sheet moved under it (at least as far as it did), or it stood over the sheet at the start
@@ -106,6 +105,34 @@ class Sheets:
                     self.on[worlds, k] = on
                     drop = 0.0 if on else SHEET_CARRIER_DROP
                     sim.set_geom_pos(worlds, geom, self.placed[geom] - np.array([0.0, 0.0, drop]))
+
+    def _measure(self, k: int, xpos: np.ndarray, state: BatchState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pair ``k`` as it lies, (nworld,) each: whether the object's centre is over the sheet, the share of its base
+        over the sheet, and whether it rests there (on the sheet's top, the sheet flat on the ground)."""
+        s, i, _ = self.links[k]
+        bodies = self.scene.object_body
+        rot = state.xmat(bodies[s])  # (nworld, 3, 3)
+        local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
+        centre_over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
+        turn = state.xmat(bodies[i])  # (nworld, 3, 3): the object's frame in the world
+        heights = xpos[:, i, None, 2] + turn[:, 2, :] @ self.surface[i].T  # (nworld, npoint)
+        bottom = heights.min(axis=1)
+        base = heights <= bottom[:, None] + BASE_DEPTH  # (nworld, npoint): where it stands, as it lies
+        in_sheet = rot[:, :, :2].transpose(0, 2, 1) @ turn  # (nworld, 2, 3): the object's axes in the sheet's x-y
+        across = local[:, None, :2] + self.surface[i] @ in_sheet.transpose(0, 2, 1)  # its points in the sheet
+        over = np.all(np.abs(across) <= self.half[s], axis=2)
+        share = (over & base).sum(axis=1) / base.sum(axis=1)
+        top = xpos[:, s, 2] + self.thickness[s] / 2
+        flat = top - self.thickness[s] < RAISED  # a sheet held up by an edge droops: it carries nothing
+        return centre_over, share, flat & (bottom < top + LIFTED)
+
+    def _pinned(self, shares: list[np.ndarray], nworld: int) -> np.ndarray:
+        """(nworld, nobject): the sheets pinned down by what stands partly on them, not riding them (``shares``: per
+        pair, the share of the object's base resting on the sheet)."""
+        pinned = np.zeros((nworld, len(self.scene.task.objects)), dtype=bool)
+        for k, (s, _, _) in enumerate(self.links):
+            pinned[:, s] |= ~self.on[:, k] & (shares[k] * self.pin_weight[k] > PIN_FORCE)
+        return pinned
 
 
 def surface_points(obj: SceneObject) -> np.ndarray:

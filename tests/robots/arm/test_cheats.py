@@ -73,6 +73,10 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_lay_paper_over_can", "can_grasping", "clamped 0.2"),  # the same, the paper lifted over the can, laid down
     ("arm_slide_paper_half_under_can_then_nudge", "can_grasping", "clamped 0.2"),  # slid short of its centre
     ("arm_chopstick_nudge_over_paper", "can_grasping:74", "clamped 0.2"),
+    # paper pinched by its edge and held 9 mm up dragged the can over a 6 mm rail (a held sheet drooped only past 1 cm)
+    ("arm_drag_a_can_over_a_kerb_on_raised_paper", "arm_can_beyond_a_kerb_on_paper", "clamped 0.3"),
+    # paper pulled out from under a 60 kg crate standing partly on it brought the can on its far end
+    ("arm_drag_paper_from_under_a_heavy_crate", "arm_can_on_paper_pinned_by_a_heavy_crate", "clamped 0.3"),
     ("arm_degenerate_calls", "milk_reaching", "clamped"),
     ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
     ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
@@ -389,3 +393,15 @@ def test_a_move_held_back_by_the_wall_while_it_rises_still_stalls(fling_runs: An
     move = fling_runs[2][FLING_WORLDS + 1].calls[-2]
     assert move.outcome == "stalled" and move.reason.startswith("blocked at [0.160"), move
     assert move.measured["remaining"] == pytest.approx(0.29, abs=0.005)
+
+
+def test_paper_under_a_light_box_standing_partly_on_it_still_brings_the_can(run_texts: Any) -> None:
+    """The control of the pinned paper: the same pull with a 0.5 kg box where the 60 kg crate stood (about 2 N of
+    friction on the paper, under the 10 N that pins it) brings the can within reach."""
+    task = _task("arm_can_on_paper_pinned_by_a_heavy_crate")
+    light = task.model_copy(
+        update={"objects": [o.model_copy(update={"mass": 0.5}) if o.name == "crate" else o for o in task.objects]}
+    )
+    program = (CHEATS / "arm_drag_paper_from_under_a_heavy_crate.py").read_text()
+    rollouts: list[Rollout] = run_texts(light, [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
