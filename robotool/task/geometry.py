@@ -310,27 +310,60 @@ def resting_contact(
     return Contact(gap=gap, penetration=penetration, into=into if penetration > 0 else "")
 
 
+CYLINDER_SIDES = 128  # a cylinder's overlaps are found as those of the prism of this many sides around it
+
+
 def overlap_depth(a: Part, b: Part) -> float:
-    """Penetration depth of two parts' oriented bounding boxes (<= 0 when they do not overlap)."""
-    axes = [a.rot[:, i] for i in range(3)] + [b.rot[:, i] for i in range(3)]
-    for i in range(3):
-        for j in range(3):
-            cross = np.cross(a.rot[:, i], b.rot[:, j])
-            norm = np.linalg.norm(cross)
-            if norm > 1e-9:
-                axes.append(cross / norm)
-    depth = np.inf
-    delta = b.center - a.center
-    for axis in axes:
-        ra = np.sum(np.abs(a.rot.T @ axis) * a.half)
-        rb = np.sum(np.abs(b.rot.T @ axis) * b.half)
-        depth = min(depth, ra + rb - abs(float(delta @ axis)))
-    return float(depth)
+    """Penetration depth of two parts: how far one must move to clear the other (<= 0 when they do not overlap)."""
+    return penetration(a, b)[0]
+
+
+def penetration(a: Part, b: Part) -> tuple[float, np.ndarray]:
+    """Penetration depth of two parts and the direction (a unit vector) along which they separate soonest.
+
+    The depth is the least, over directions, of how far the parts' projections overlap (the separating-axis test):
+    exact for boxes (their face normals and the cross products of their edges), and for a cylinder its true
+    projection tried on the directions of the prism of :data:`CYLINDER_SIDES` sides circumscribing it, so a cylinder
+    standing beside a box's corner or under a tilted board is not taken for its bounding box; the depth found exceeds
+    the true one by at most 0.031 % of the cylinder's radius (of each, for two). A depth <= 0: they do not overlap.
+    """
+    normals_a, edges_a = _directions(a)
+    normals_b, edges_b = _directions(b)
+    cross = np.cross(edges_a[:, None, :], edges_b[None, :, :]).reshape(-1, 3)
+    norm = np.linalg.norm(cross, axis=1)
+    axes = np.concatenate([normals_a, normals_b, cross[norm > 1e-9] / norm[norm > 1e-9, None]])
+    overlap = _radius(a, axes) + _radius(b, axes) - np.abs(axes @ (b.center - a.center))
+    best = int(np.argmin(overlap))
+    return float(overlap[best]), axes[best]
+
+
+def _directions(part: Part) -> tuple[np.ndarray, np.ndarray]:
+    """A part's face normals and edge directions (k, 3): a box's axes; for a cylinder its axis and the radial
+    directions of the prism around it (its side faces' normals, and, as the sides are even, its rims' edges)."""
+    if part.kind == "box":
+        return part.rot.T, part.rot.T
+    angle = np.arange(CYLINDER_SIDES // 2) * (2 * np.pi / CYLINDER_SIDES)
+    radial = np.outer(np.cos(angle), part.rot[:, 0]) + np.outer(np.sin(angle), part.rot[:, 1])
+    both = np.vstack([part.rot[:, 2], radial])
+    return both, both
+
+
+def _radius(part: Part, axes: np.ndarray) -> np.ndarray:
+    """Half the length of the part's projection on each unit axis (k, 3)."""
+    if part.kind == "box":
+        return np.abs(axes @ part.rot) @ part.half
+    along = np.abs(axes @ part.rot[:, 2])
+    return part.half[0] * np.sqrt(np.clip(1.0 - along**2, 0.0, None)) + part.half[2] * along
 
 
 def solids_overlap(a: list[Part], b: list[Part]) -> float:
-    """Largest bounding-box penetration between any part of ``a`` and any part of ``b``."""
-    return max(overlap_depth(pa, pb) for pa in a for pb in b)
+    """Largest penetration depth between any part of ``a`` and any part of ``b`` (<= 0: they do not overlap)."""
+    return solids_penetration(a, b)[0]
+
+
+def solids_penetration(a: list[Part], b: list[Part]) -> tuple[float, np.ndarray]:
+    """The deepest :func:`penetration` between a part of ``a`` and a part of ``b``: its depth and direction."""
+    return max((penetration(pa, pb) for pa in a for pb in b), key=lambda found: found[0])
 
 
 def height_profile(

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 from pydantic import BaseModel, ValidationError
 
@@ -24,7 +25,8 @@ from robotool.task.task_model import Task
 from robotool.task.task_problem import Problem
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
-OVERLAP_TOLERANCE = 0.001  # m: fixed objects may touch, not interpenetrate
+OVERLAP_TOLERANCE = 0.001  # m: solid objects may touch, not interpenetrate
+RESTING_SLOPE = 45.0  # degrees: an overlap whose way out is at most this far from vertical is a resting one
 GRASP_POINT_TOLERANCE = 0.005  # m: how far outside its object a graspable point may lie
 KEY_SYNONYMS = {  # words people write for a key, and the key the format uses
     "rotation": "rpy", "orientation": "rpy", "euler": "rpy", "position": "center", "pos": "center",
@@ -204,18 +206,7 @@ def _check_semantics(task: Task) -> list[Problem]:
 def _check_geometry(task: Task) -> list[Problem]:
     parts = {o.name: geometry.object_parts(o) for o in task.objects}
     problems: list[Problem] = []
-    fixed = [i for i, o in enumerate(task.objects) if not o.movable]
-    for a_pos, i in enumerate(fixed):
-        for j in fixed[a_pos + 1 :]:
-            a, b = task.objects[i], task.objects[j]
-            depth = geometry.solids_overlap(parts[a.name], parts[b.name])
-            if depth > OVERLAP_TOLERANCE:
-                problems.append(
-                    Problem(
-                        path=_object_path(task, j),
-                        message=f"fixed objects {a.name!r} and {b.name!r} overlap by {depth:.3f} m",
-                    )
-                )
+    sunk: set[frozenset[str]] = set()  # pairs already reported as one sunk into the other
     for i, obj in enumerate(task.objects):
         if obj.graspable_point is not None:
             off = geometry.distance_to_parts(parts[obj.name], obj.graspable_point)
@@ -230,6 +221,7 @@ def _check_geometry(task: Task) -> list[Problem]:
         others = {n: p for n, p in parts.items() if n != obj.name}
         contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
         if contact.penetration > RESTING_TOLERANCE:
+            sunk.add(frozenset((obj.name, contact.into)))
             problems.append(
                 Problem(
                     path=f"{_object_path(task, i)}.center",
@@ -243,8 +235,40 @@ def _check_geometry(task: Task) -> list[Problem]:
                     message=f"floats {contact.gap:.3f} m above the surface below it",
                 )
             )
+    problems += _overlap_problems(task, parts, sunk)
     problems += _sheet_problems(task)
     problems += robots.get(task.robot.type).rules.check_start(task)
+    return problems
+
+
+def _overlap_problems(task: Task, parts: dict[str, list[geometry.Part]], sunk: set[frozenset[str]]) -> list[Problem]:
+    """Solid objects may touch but not interpenetrate at the start, whichever of them is movable: the simulator
+    would push them apart in the first step (a weight placed 1.5 cm inside a button's face pressed it with no
+    program). Two exceptions: a movable object resting on another (it is the higher of the two, and the overlap's way
+    out is at most :data:`RESTING_SLOPE` from vertical) may sink into it by the resting check's
+    :data:`RESTING_TOLERANCE`, and a sheet (:attr:`~robotool.task.scene.SceneObject.is_sheet`) lies through what is
+    on it (the simulator lets it pass through every object but the ground and the robot)."""
+    problems = []
+    solid = [i for i, o in enumerate(task.objects) if not o.is_sheet]
+    vertical = np.cos(np.radians(RESTING_SLOPE))
+    for a_pos, i in enumerate(solid):
+        for j in solid[a_pos + 1 :]:
+            a, b = task.objects[i], task.objects[j]
+            if frozenset((a.name, b.name)) in sunk:
+                continue
+            depth, direction = geometry.solids_penetration(parts[a.name], parts[b.name])
+            higher = a if a.center[2] > b.center[2] else b if b.center[2] > a.center[2] else None
+            resting = higher is not None and higher.movable and abs(direction[2]) >= vertical
+            if depth <= (RESTING_TOLERANCE if resting else OVERLAP_TOLERANCE):
+                continue
+            at = i if a.movable and not b.movable else j  # the one to move: a movable one beside a fixed one
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, at)}.center",
+                    message=f"{a.name!r} and {b.name!r} overlap by {depth:.3f} m: objects may touch but not "
+                    "interpenetrate (the simulator would push them apart at the start); move one of them apart",
+                )
+            )
     return problems
 
 

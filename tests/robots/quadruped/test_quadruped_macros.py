@@ -440,8 +440,8 @@ def test_a_prop_push_is_blocked_by_what_it_would_run_into_on_its_way_not_by_what
     data = yaml.safe_load(task.to_yaml())
     chair = next(o for o in data["objects"] if o["name"] == "chair")
     behind = chair["center"][0] - chair["size"][0] / 2 - 0.03 - 0.1
-    data["objects"].append({"name": "crate", "shape": "box", "center": [behind, chair["center"][1], 0.15],
-                            "size": [0.2, 0.4, 0.3], "movable": False})
+    data["objects"].append({"name": "crate", "shape": "box", "center": [behind, chair["center"][1], 0.075],
+                            "size": [0.2, 0.4, 0.15], "movable": False})  # under the tilted board
     layout = Layout(parse_task(data))
     box, board, toolbox = (layout.box(n) for n in ("chair", "surfboard", "toolbox"))
     plus_x = np.array([1.0, 0.0])
