@@ -116,6 +116,7 @@ class MujocoSim:
             perturbation.apply_to_model(scene, m, w, friction=m.geom_friction, mass=m.body_mass, inertia=m.body_inertia)
             m.body_subtreemass[:] = subtree_masses(m.body_mass, m.body_parentid)
             d.qpos[:] = qpos0[w]
+            d.act[:] = scene.initial_act
             mujoco.mj_forward(m, d)
         model = scene.model
         self.body_mass = np.array([m.body_mass for m in self.models]).reshape(nworld, model.nbody)

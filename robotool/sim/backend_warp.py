@@ -48,6 +48,7 @@ class WarpSim:
         self.device = device or ("cuda" if wp.get_cuda_device_count() else "cpu")
         model = scene.model
         mjd = mujoco.MjData(model)
+        mjd.act[:] = scene.initial_act  # every world's, as put_data copies it
         mujoco.mj_forward(model, mjd)
         with wp.ScopedDevice(self.device):
             self.m = mjw.put_model(model, batch_sizes=dict.fromkeys(_BATCHED, nworld))

@@ -10,6 +10,8 @@ import numpy as np
 
 from robotool.task.task_model import Task
 
+START_KEY = "start"  # the model's keyframe that holds the actuators' activations at the start, where it has one
+
 
 @dataclass(frozen=True)
 class Scene:
@@ -36,6 +38,13 @@ class Scene:
     def control_dt(self) -> float:
         """Seconds between control ticks (read once: the model's timestep does not change)."""
         return self.control_substeps * self.model.opt.timestep
+
+    @cached_property
+    def initial_act(self) -> np.ndarray:
+        """Each actuator activation at the start (na,): the :data:`START_KEY` keyframe's, where the embodiment adds
+        one (filtered servos that start holding their first reference, not pulled from 0 towards it), else 0."""
+        key = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_KEY, START_KEY)
+        return self.model.key_act[key].copy() if key >= 0 else np.zeros(self.model.na)
 
     def object_index(self, name: str) -> int:
         """Index of a task object by name (KeyError listing the objects otherwise)."""

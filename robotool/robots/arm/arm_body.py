@@ -3,9 +3,12 @@ elements, and what is read from it (the held object, the objects' graspable poin
 
 The gripper body ``robot_gripper`` rides on three slide joints whose coordinates are the gripper
 centre in the world (``ref`` = home, so ``qpos`` is absolute); position servos with force limits
-drive them, so a blocked motion really stalls. The joint ranges are the workspace. The palm above the centre and
-the two fingers collide; the fingers close along the world y axis on position servos until they meet something or
-close fully. One weld ``robot_grasp__<object>`` per movable object stands for a grasp (:mod:`.arm_grasp`).
+drive them, so a blocked motion really stalls. The servos follow a low-passed reference (their activation), which
+starts at home (the model's start keyframe, :attr:`~robotool.sim.compiled_scene.Scene.initial_act`): from MuJoCo's
+0 it pulled the gripper 0.12 m down towards the origin and back at up to 3.9 m/s before a program started. The joint
+ranges are the workspace. The palm above the centre and the two fingers collide; the fingers close along the world y
+axis on position servos until they meet something or close fully. One weld ``robot_grasp__<object>`` per movable
+object stands for a grasp (:mod:`.arm_grasp`).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from robotool.robots.arm.arm_config import ARM
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.sim.backend import BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF
-from robotool.sim.compiled_scene import Scene
+from robotool.sim.compiled_scene import START_KEY, Scene
 from robotool.task.task_model import Task
 
 GRIPPER_BODY = "robot_gripper"
@@ -105,6 +108,7 @@ def add_body(spec: mujoco.MjSpec, task: Task, limits: ArmLimits) -> None:
         act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
         act.ctrlrange = [0, finger_open(limits)]
     spec.add_exclude(bodyname1="robot_finger_left", bodyname2="robot_finger_right")
+    _add_start_key(spec)
     for obj in task.objects:
         if obj.movable and obj.shape != "cloth":
             spec.add_equality(
@@ -117,6 +121,17 @@ def add_body(spec: mujoco.MjSpec, task: Task, limits: ArmLimits) -> None:
                 solref=WELD_SOLREF,
                 solimp=WELD_SOLIMP,
             )
+
+
+def _add_start_key(spec: mujoco.MjSpec) -> None:
+    """The start keyframe: the x/y/z servos' filtered references at home, every other activation at 0 (its ``qpos``
+    is left to ``qpos0``). Added after the last actuator: the keyframe lists every actuator state of the model."""
+    home = {f"robot_{axis}": ARM.home[k] for k, axis in enumerate(AXES)}
+    act: list[float] = []
+    for actuator in spec.actuators:
+        if actuator.dyntype != mujoco.mjtDyn.mjDYN_NONE:
+            act += [home.get(actuator.name, 0.0)] * max(actuator.actdim, 1)
+    spec.add_key(name=START_KEY, act=act)
 
 
 def held_objects(scene: Scene, state: BatchState) -> np.ndarray:
