@@ -2,24 +2,29 @@
 
 :func:`robotool.sim.build.make_spec` adds an inactive weld ``magnet__<a>__<b>`` for every pair of
 magnetic objects; :meth:`Magnets.update` activates it, at the current relative pose, in every world
-where the two bodies touch. A magnet holds a bounded load: a weld whose constraint force or torque passes
-:data:`HOLD_FORCE` or :data:`HOLD_TORQUE` lets go, and that pair attaches again only after the two have come apart
-(a board stuck by its end face to a cabinet's side does not carry a robot across a gap).
+where the two bodies touch. A magnet holds a bounded load, read where the two meet (the face of the smaller of the
+two faces that face each other, :func:`join_face`): a force up to :data:`HOLD_FORCE`; a couple that peels the face
+off about one of its edges up to :data:`HOLD_FORCE` times the face's half width across that edge (the pull of the
+whole face at its far edge), and a twist about its normal up to :data:`HOLD_TORQUE`. Past any of these the weld lets
+go, and that pair attaches again only after the two have come apart: a board stuck by its 2 cm end face to a
+cabinet's side holds a couple of 2 N m, so it does not carry a robot across a gap as a cantilever.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
+from robotool.task import geometry
 
 HOLD_FORCE = 200.0
 """N a magnet pair holds (about 20 kg hanging): three times the most the button task's cubes carry when the paper's
 program drives the chain into the next cube's centre (61 N, sideways), forty times the reference program's."""
 HOLD_TORQUE = 20.0
-"""N m a magnet pair holds against twisting or peeling (about the second body's origin): ten times the most the button
-task's cubes carry (1.9 N m in the paper's program)."""
+"""N m a magnet pair holds against twisting about the normal of the face where they meet."""
 
 
 class Magnets:
@@ -32,6 +37,7 @@ class Magnets:
             for eq in range(model.neq)
             if model.equality(eq).name.startswith("magnet__")
         ]
+        self.boxes = {int(b): _body_box(scene, int(b)) for _, b1, b2 in self.pairs for b in (b1, b2)}
         self._let_go: np.ndarray | None = None  # (nworld, neq): released, not attached again until apart
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
@@ -46,13 +52,79 @@ class Magnets:
             self._let_go[:, eq] &= touching
             held = np.flatnonzero(active & state.eq_active[:, eq])
             if held.size:
-                load = sim.weld_load(held, eq)
-                over = (np.linalg.norm(load[:, :3], axis=1) > HOLD_FORCE) | (
-                    np.linalg.norm(load[:, 3:], axis=1) > HOLD_TORQUE
-                )
+                face = join_face(state, held, (b1, self.boxes[b1]), (b2, self.boxes[b2]))
+                over = face.overloaded(sim.weld_load(held, eq), state.xpos[held, b2])
                 if over.any():
                     sim.set_weld(held[over], eq, False)
                     self._let_go[held[over], eq] = True
             worlds = np.flatnonzero(active & ~state.eq_active[:, eq] & touching & ~self._let_go[:, eq])
             if worlds.size:
                 sim.set_weld(worlds, eq, True)
+
+
+Box = tuple[np.ndarray, np.ndarray]  # a box in a body's frame: its centre and half sizes
+
+
+def _body_box(scene: Scene, body: int) -> Box:
+    """The box (centre, half sizes) around a magnetic object's parts, in its body's frame."""
+    obj = scene.task.objects[int(scene.body_object[body])]
+    rot = geometry.rotation_matrix(obj.rpy)
+    corners = (np.vstack([p.corners() for p in geometry.object_parts(obj)]) - np.asarray(obj.center)) @ rot
+    low, high = corners.min(axis=0), corners.max(axis=0)
+    return (low + high) / 2, (high - low) / 2
+
+
+@dataclass(frozen=True)
+class JoinFace:
+    """Where two magnetic bodies meet, per world (k of them): the centre (k, 3) of the smaller of the faces that face
+    each other, its two in-plane unit axes (k, 2, 3) with their half lengths (k, 2), and its unit normal (k, 3)."""
+
+    centre: np.ndarray
+    axes: np.ndarray
+    half: np.ndarray
+    normal: np.ndarray
+
+    def overloaded(self, load: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        """(k,) whether a weld load (k, 6: force, then torque about ``origin`` (k, 3), as
+        :meth:`~robotool.sim.backend.BatchedSim.weld_load` gives it) is more than the magnet holds."""
+        force = load[:, :3]
+        couple = load[:, 3:] + np.cross(origin - self.centre, force)  # about the face's centre
+        peel = np.abs(np.einsum("kij,kj->ki", self.axes, couple))  # (k, 2): about each in-plane axis
+        twist = np.abs(np.einsum("kj,kj->k", self.normal, couple))
+        return (
+            (np.linalg.norm(force, axis=1) > HOLD_FORCE)
+            | (peel > HOLD_FORCE * self.half[:, ::-1]).any(axis=1)  # about one axis it pivots across the other
+            | (twist > HOLD_TORQUE)
+        )
+
+
+def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, Box], two: tuple[int, Box]) -> JoinFace:
+    """The face where two touching bodies meet in ``worlds`` (each ``(body, (centre, half sizes))``, its box in the
+    body's frame): of each box, the face the other box lies beyond (least inside its plane); the smaller of the two."""
+    first, second = _facing(state, worlds, one, two), _facing(state, worlds, two, one)
+    mine = first.half.prod(axis=1) <= second.half.prod(axis=1)
+    return JoinFace(
+        centre=np.where(mine[:, None], first.centre, second.centre),
+        axes=np.where(mine[:, None, None], first.axes, second.axes),
+        half=np.where(mine[:, None], first.half, second.half),
+        normal=np.where(mine[:, None], first.normal, second.normal),
+    )
+
+
+def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, Box], two: tuple[int, Box]) -> JoinFace:
+    """The face of the first box that the second lies beyond: of its six, the one whose plane the second box reaches
+    least far inside (about 0 for the face they touch on)."""
+    (body, (centre, half)), (other, (other_centre, other_half)) = one, two
+    rot, other_rot = state.xmat(body)[worlds], state.xmat(other)[worlds]  # (k, 3, 3): axes as columns
+    origin = state.xpos[worlds, body] + rot @ centre
+    other_origin = state.xpos[worlds, other] + other_rot @ other_centre
+    local = np.einsum("kji,kj->ki", rot, other_origin - origin)  # (k, 3): the other's centre on this box's axes
+    reach = np.abs(np.swapaxes(rot, 1, 2) @ other_rot) @ other_half  # (k, 3): its half extent along each axis
+    gaps = np.concatenate([local - reach - half, -local - reach - half], axis=1)  # (k, 6): beyond +x..+z, -x..-z
+    face = np.argmax(gaps, axis=1)
+    axis, side = face % 3, np.where(face < 3, 1.0, -1.0)
+    k = np.arange(len(worlds))
+    normal = rot[k, :, axis] * side[:, None]
+    others = np.stack([(axis + 1) % 3, (axis + 2) % 3], axis=1)  # (k, 2)
+    axes = np.stack([rot[k, :, others[:, 0]], rot[k, :, others[:, 1]]], axis=1)  # (k, 2, 3)
+    return JoinFace(origin + normal * half[axis][:, None], axes, half[others], normal)
