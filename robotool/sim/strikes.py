@@ -4,19 +4,19 @@ A fall (:class:`~robotool.sim.object_goals.FallTracker`) is the object's own: it
 is not soft, other than the robot. That misses glass struck by what moves: a dish dropped onto the gripper's palm, a
 block dropped onto a dish lying still. So a fragile object also breaks when the robot or a movable object that is not
 soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at. The speed is
-that of the two bodies' centres relative to each other (the object's own velocity; the other body's from its travel
-since the reading before), read before they touched (the larger of the last reading before and the first one
-touching). What does not move (the ground, a fixed object) is left to the fall rule, which reads a fall as the
-documented drop of the object's centre, not the speed of a part of it that swings down. A fragile object's fall past
-``max_drop`` makes the goal read every physics step, so a landing on the robot is read at the step it happens; a
-striker is read at control ticks.
+the other body's, where the object's centre is (its travel and turn since the reading before: the tip of a swung stick
+strikes faster than its middle moves), relative to the object's centre, read before they touched (the larger of the
+last reading before and the first one touching). What does not move (the ground, a fixed object) is left to the fall
+rule, which reads a fall as the documented drop of the object's centre, not the speed of a part of it that swings
+down. A fragile object's fall past ``max_drop`` makes the goal read every physics step, so a landing on the robot is
+read at the step it happens; a striker is read at control ticks.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from robotool.sim.backend import BatchState
+from robotool.sim.backend import BatchState, quat_to_mat
 from robotool.sim.compiled_scene import Scene
 
 GRAVITY = 9.81  # m/s^2
@@ -38,6 +38,7 @@ class StrikeWatch:
         self.names = ["the robot" if scene.robot_body[b] else objects[owner[b]].name for b in self.strikers.tolist()]
         self._time: np.ndarray | None = None
         self._xpos = np.zeros(0)
+        self._xmat = np.zeros(0)
         self._touch = np.zeros(0, dtype=bool)
         self._speed = np.zeros(0)
 
@@ -45,12 +46,15 @@ class StrikeWatch:
         """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none), and
         (nworld, nstriker) which bodies came to touch the object then."""
         xpos = state.xpos[:, self.strikers]
+        xmat = quat_to_mat(state.xquat[:, self.strikers].reshape(-1, 4)).reshape(*xpos.shape, 3)
         touch = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
         if self._time is None:
-            self._time, self._xpos, self._touch = state.time.copy(), xpos, touch
+            self._time, self._xpos, self._xmat, self._touch = state.time.copy(), xpos, xmat, touch
             self._speed = np.zeros(touch.shape)
-        dt = state.time - self._time
-        moving = (xpos - self._xpos) / np.where(dt > 0, dt, np.inf)[:, None, None]  # (nworld, nstriker, 3)
+        rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
+        spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
+        centre = state.xpos[:, None, self.body]
+        moving = (xpos - self._xpos) * rate + np.cross(spin, centre - xpos)  # where the object's centre is
         own = state.qvel[:, None, self.dof : self.dof + 3]
         speed = np.linalg.norm(own - moving, axis=2)  # (nworld, nstriker)
         new = active[:, None] & touch & ~self._touch
@@ -58,6 +62,19 @@ class StrikeWatch:
         keep = active[:, None]
         self._time = np.where(active, state.time, self._time)
         self._xpos = np.where(keep[:, :, None], xpos, self._xpos)
+        self._xmat = np.where(keep[:, :, None, None], xmat, self._xmat)
         self._touch = np.where(keep, touch, self._touch)
         self._speed = np.where(keep, speed, self._speed)
         return struck, new
+
+
+def _turn(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """The rotation vectors (..., 3) in world axes that turn frames ``before`` into ``after`` (..., 3, 3): axis times
+    angle, from the relative rotation's skew part."""
+    rel = after @ np.swapaxes(before, -1, -2)
+    skew = np.stack(
+        [rel[..., 2, 1] - rel[..., 1, 2], rel[..., 0, 2] - rel[..., 2, 0], rel[..., 1, 0] - rel[..., 0, 1]], -1
+    )
+    sine = np.linalg.norm(skew, axis=-1) / 2
+    angle = np.arctan2(sine, (np.trace(rel, axis1=-2, axis2=-1) - 1) / 2)
+    return skew / 2 * np.where(sine > 1e-12, angle / np.maximum(sine, 1e-12), 1.0)[..., None]

@@ -25,6 +25,8 @@ LAYOUTS = FIXTURES / "layouts"
         ("arm_catch_a_sliding_glass_dish_on_the_palm", "arm_glass_dish_sliding_off_a_tilted_shelf", "the robot"),
         # a 3 kg block let go 0.43 m above a dish lying on the floor: whole, since only its own falls were judged
         ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_iron_block_on_a_stool_beside_a_glass_dish", "block"),
+        # a stick pushed near its pivot swept its far end into a dish pinned by a wall: the stick's centre hardly moved
+        ("arm_swing_a_stick_into_a_walled_glass_dish", "arm_stick_beside_a_walled_glass_dish", "stick"),
     ],
 )
 def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: str, layout: str, striker: str) -> None:
