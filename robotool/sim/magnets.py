@@ -62,10 +62,10 @@ class Magnets:
                 sim.set_weld(worlds, eq, True)
 
 
-Box = tuple[np.ndarray, np.ndarray]  # a box in a body's frame: its centre and half sizes
+BodyBox = tuple[np.ndarray, np.ndarray]  # a box in a body's frame: its centre and half sizes
 
 
-def _body_box(scene: Scene, body: int) -> Box:
+def _body_box(scene: Scene, body: int) -> BodyBox:
     """The box (centre, half sizes) around a magnetic object's parts, in its body's frame."""
     obj = scene.task.objects[int(scene.body_object[body])]
     rot = geometry.rotation_matrix(obj.rpy)
@@ -98,7 +98,7 @@ class JoinFace:
         )
 
 
-def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, Box], two: tuple[int, Box]) -> JoinFace:
+def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
     """The face where two touching bodies meet in ``worlds`` (each ``(body, (centre, half sizes))``, its box in the
     body's frame): of each box, the face the other box lies beyond (least inside its plane); the smaller of the two."""
     first, second = _facing(state, worlds, one, two), _facing(state, worlds, two, one)
@@ -111,7 +111,7 @@ def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, Box], two: 
     )
 
 
-def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, Box], two: tuple[int, Box]) -> JoinFace:
+def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
     """The face of the first box that the second lies beyond: of its six, the one whose plane the second box reaches
     least far inside (about 0 for the face they touch on)."""
     (body, (centre, half)), (other, (other_centre, other_half)) = one, two

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import gc
 import time
 
 import pytest
@@ -102,10 +103,11 @@ def test_several_different_programs_are_asked_again_never_guessed(answer: str) -
 
 def test_a_reply_of_thousands_of_different_programs_is_refused_in_linear_time() -> None:
     answer = "".join(f"```python\nopen_gripper({k})\n```\n" for k in range(3000))
-    started = time.process_time()
+    gc.collect()  # (the collection of earlier tests' garbage is not the extractor's time)
+    started = time.thread_time()  # this thread's CPU time: not a pool thread's left from an earlier test in the worker
     with pytest.raises(ProgramRejected, match="more than 8 different programs"):
         extract(answer)
-    assert time.process_time() - started < CPU_LIMIT_S / 10
+    assert time.thread_time() - started < CPU_LIMIT_S / 10
 
 
 # Found by a second adversarial run.
