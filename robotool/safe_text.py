@@ -28,7 +28,11 @@ from dataclasses import dataclass
 from pydantic import BaseModel
 from rich.markup import escape as rich_escape
 
-_UNICODE_CONTROLS = r"\u00ad\u061c\u180e\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff\ufff9-\ufffb\U000e0000-\U000e007f"
+_UNICODE_CONTROLS = (  # Unicode's format characters (Cf) and its default-ignorable code points: text that shows nothing
+    r"\u00ad\u034f\u0600-\u0605\u061c\u06dd\u070f\u0890\u0891\u08e2\u115f\u1160\u17b4\u17b5\u180b-\u180f"
+    r"\u200b-\u200f\u2028-\u202e\u2060-\u206f\u3164\ufe00-\ufe0f\ufeff\uffa0\ufff0-\ufffb\U000110bd\U000110cd"
+    r"\U00013430-\U0001343f\U0001bca0-\U0001bca3\U0001d173-\U0001d17a\U000e0000-\U000e0fff"
+)
 _CONTROLS = re.compile(rf"[\x00-\x08\x0b-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 _CONTROLS_AND_BREAKS = re.compile(rf"[\x00-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 

@@ -12,6 +12,7 @@ import html
 import json
 import re
 import time
+import unicodedata
 from html.parser import HTMLParser
 from io import StringIO
 from pathlib import Path
@@ -306,3 +307,34 @@ def test_a_markdown_list_item_stays_one_plain_item(text: str) -> None:
         "bullet_list_close",
     ]  # fmt: skip
     assert tokens[3].content.replace("\\", "") == text
+
+
+def test_every_format_and_default_ignorable_character_is_shown_escaped() -> None:
+    """Found by an adversarial run: ``get_center("milk\\U000E0100")`` (a variation selector, invisible) was shown as
+    ``get_center('milk')`` beside "no object named 'milk'" in the console and the HTML page: only the tag characters up
+    to U+E007F were escaped. Every format character (Unicode's Cf) and the default-ignorable ones that show nothing
+    are now shown as escapes in every sink."""
+    format_characters = [chr(c) for c in range(0x110000) if unicodedata.category(chr(c)) == "Cf"]
+    invisible = ["\u034f", "\u115f", "\u17b4", "\u180b", "\u3164", "\ufe0f", "\uffa0", "\ufff0", "\U000e0100"]
+    for char in format_characters + invisible:
+        for sink in (one_line, console_markup, markdown_text):
+            assert char not in sink(f"milk{char}"), (hex(ord(char)), sink.__name__)
+
+
+def test_a_program_naming_an_object_with_an_invisible_character_is_shown_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same through the command line: the console and the page show the escape; and a name in a script the plan's
+    font lacks draws without the host's warning (which quoted its source path)."""
+    program = tmp_path / "P.py"
+    program.write_text('c = get_center("milk\\U000E0100")\n')
+    page = tmp_path / "page.html"
+    status = main(["run", "milk_reaching_near", str(program), "--html", str(page), "--backend", "mujoco"])
+    out, err = capsys.readouterr()
+    assert status == 1 and "\U000e0100" not in out + err + page.read_text()
+    assert "milk\\U000e0100" in out and "milk\\U000e0100" in html.unescape(page.read_text())
+    plan, program = tmp_path / "plan.png", tmp_path / "Q.py"
+    program.write_text('push_to_position("\\u4e2d", [1.0, 1.0])\n')
+    main(["run", "sofa_climbing", str(program), "--plan", str(plan), "--backend", "mujoco"])
+    out, err = capsys.readouterr()
+    assert plan.is_file() and "Glyph" not in err and "top_view.py" not in err, err

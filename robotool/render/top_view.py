@@ -12,7 +12,9 @@ that ended ``done``). Labels never overlap: each is moved, by as little as it ta
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import contextlib
+import warnings
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import mujoco
@@ -147,8 +149,9 @@ def plan_figure(task: Task, rollout: Rollout, *, scene: Scene | None = None, tra
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
-    _declutter(canvas, ax)
+    with _without_glyph_warnings():
+        fig.tight_layout()
+        _declutter(canvas, ax)
     return fig
 
 
@@ -336,5 +339,15 @@ def write_plan(
     """Write the plan of ``rollout`` as a PNG at ``path``."""
     fig = plan_figure(task, rollout, scene=scene, track=track)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    with _without_glyph_warnings():
+        fig.savefig(path)
     return path
+
+
+@contextlib.contextmanager
+def _without_glyph_warnings() -> Iterator[None]:
+    """Matplotlib's warning that a label's character is missing from the font (a program may name an object in any
+    script): the picture shows a box for it; the warning quoted the host's source path to the user."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Glyph \d+ .*missing from font", category=UserWarning)
+        yield
