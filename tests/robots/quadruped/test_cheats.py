@@ -66,26 +66,6 @@ def _text(program: str) -> str:
     return (folder / f"{name}.py").read_text()
 
 
-@functools.cache
-def _scene_batch(scene: str, programs: tuple[str, ...], worlds: int, seed: int) -> dict[str, list[Rollout]]:
-    """Each of ``programs`` in ``worlds`` perturbed worlds of its own on ``scene``, all in one batch (a program's worlds
-    are judged alone; the batch shares the runner's ticks, most of a few worlds' cost)."""
-    texts = [_text(program) for program in programs for _ in range(worlds)]
-    rollouts = sim.run_sessions(_scene(scene), start_sessions(texts, "quadruped"), seed=seed)
-    return {program: rollouts[k * worlds : (k + 1) * worlds] for k, program in enumerate(programs)}
-
-
-def _on_scene(cases: list[tuple[str, ...]], program: str, scene: str, worlds: int, seed: int) -> list[Rollout]:
-    """``program``'s rollouts from the batch of every program that ``cases`` runs on ``scene``."""
-    programs = tuple(dict.fromkeys(case[0] for case in cases if case[1] == scene))
-    return _scene_batch(scene, programs, worlds, seed)[program]
-
-
-def _by_scene(cases: list[tuple[str, ...]], corpus: str) -> list[Any]:
-    """``cases`` as parameters, those on one scene in one xdist group (one worker runs their batch once)."""
-    return [pytest.param(*case, marks=pytest.mark.xdist_group(f"{corpus}:{case[1]}")) for case in cases]
-
-
 def failure_reason(rollout: Rollout) -> str:
     """Why a world failed: the first motion that did not end as planned, else the goal's unmet conditions."""
     for call in rollout.calls:
@@ -140,9 +120,9 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize(("program", "scene"), _by_scene(CASES, "cheats"))
+@pytest.mark.parametrize(("program", "scene"), CASES)
 def test_cheat_fails_in_every_world_with_a_reason(program: str, scene: str) -> None:
-    rollouts = _on_scene(CASES, program, scene, worlds=3, seed=11)
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 3, "quadruped"), seed=11)
     for rollout in rollouts:
         reason = failure_reason(rollout)
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
@@ -270,20 +250,20 @@ CONTROL_CASES = [
 ]
 
 
-@pytest.mark.parametrize(("program", "scene"), _by_scene(LAYOUT_CASES, "layouts"))
+@pytest.mark.parametrize(("program", "scene"), LAYOUT_CASES)
 def test_cheat_fails_on_unseen_layouts_in_every_world_with_a_reason(program: str, scene: str) -> None:
     """Each program runs to its end or to a refused argument: it fails because the world said no, not because
     it could not run."""
-    rollouts = _on_scene(LAYOUT_CASES, program, scene, worlds=2, seed=11)
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 2, "quadruped"), seed=11)
     for rollout in rollouts:
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert failure_reason(rollout) or rollout.error, rollout
         assert rollout.error is None or "position" in rollout.error, rollout.error
 
 
-@pytest.mark.parametrize(("program", "scene"), _by_scene(CONTROL_CASES, "controls"))
-def test_honest_programs_succeed_on_the_same_layouts(program: str, scene: str) -> None:
-    rollouts = _on_scene(CONTROL_CASES, program, scene, worlds=2, seed=11)
+@pytest.mark.parametrize(("program", "scene"), CONTROL_CASES)
+def test_honest_programs_succeed_on_the_same_layouts(run_texts: Any, program: str, scene: str) -> None:
+    rollouts = run_texts(_scene(scene), [_text(program)] * 2, seed=11)
     assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
 
 
@@ -641,9 +621,9 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
 ]
 
 
-@pytest.mark.parametrize(("program", "scene", "reason"), _by_scene(REASONED_CASES, "reasoned"))
+@pytest.mark.parametrize(("program", "scene", "reason"), REASONED_CASES)
 def test_cheat_fails_in_every_world_for_the_reason_it_names(program: str, scene: str, reason: str) -> None:
-    rollouts = _on_scene(REASONED_CASES, program, scene, worlds=2, seed=0)
+    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 2, "quadruped"), seed=0)
     for rollout in rollouts:
         assert not rollout.success
         assert reason in failure_reason(rollout), failure_reason(rollout)
