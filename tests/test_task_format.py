@@ -295,3 +295,39 @@ def test_a_board_tilted_across_a_lying_roller_touches_it() -> None:
     assert abs(geometry.solids_overlap(roller, board)) < 1e-4
     box_of_roller = [geometry.Part("box", p.center, p.half[[0, 0, 2]], p.rot) for p in roller]
     assert geometry.solids_overlap(box_of_roller, board) > 0.004
+
+
+def test_only_objects_near_each_other_are_tested_for_overlap(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The overlap rule tests a pair exactly only when the spheres around them meet: a file listing hundreds of objects
+    apart (a review found 3 s for 250, quadratic in the file) costs no exact test, and a pair that does overlap is
+    still found."""
+    from robotool.task import geometry
+
+    calls = []
+    exact = geometry.solids_penetration
+    monkeypatch.setattr(geometry, "solids_penetration", lambda a, b: calls.append(1) or exact(a, b))
+    objects = [
+        {
+            "name": f"box_{k}",
+            "shape": "box",
+            "center": [1 + 0.3 * (k % 10), 1 + 0.3 * (k // 10), 0.05],
+            "size": [0.1, 0.1, 0.1],
+            "mass": 0.5,
+        }
+        for k in range(100)
+    ]
+    data = {
+        "format": 1,
+        "name": "many",
+        "category": "no_tool",
+        "instruction": "Stand on box_0.",
+        "robot": {"type": "quadruped", "position": [0, 0]},
+        "objects": objects,
+        "goal": {"robot_on": "box_0"},
+    }
+    parse_task(data)
+    assert calls == []
+    objects[1]["center"] = [1.05, 1.0, 0.05]  # 5 cm into box_0
+    with pytest.raises(TaskFileError, match=re.escape("'box_0' and 'box_1' overlap by 0.050 m")):
+        parse_task(data)
+    assert len(calls) == 1

@@ -251,25 +251,35 @@ def _overlap_problems(task: Task, parts: dict[str, list[geometry.Part]], sunk: s
     problems = []
     solid = [i for i, o in enumerate(task.objects) if not o.is_sheet]
     vertical = np.cos(np.radians(RESTING_SLOPE))
-    for a_pos, i in enumerate(solid):
-        for j in solid[a_pos + 1 :]:
-            a, b = task.objects[i], task.objects[j]
-            if frozenset((a.name, b.name)) in sunk:
-                continue
-            depth, direction = geometry.solids_penetration(parts[a.name], parts[b.name])
-            higher = a if a.center[2] > b.center[2] else b if b.center[2] > a.center[2] else None
-            resting = higher is not None and higher.movable and abs(direction[2]) >= vertical
-            if depth <= (RESTING_TOLERANCE if resting else OVERLAP_TOLERANCE):
-                continue
-            at = i if a.movable and not b.movable else j  # the one to move: a movable one beside a fixed one
-            problems.append(
-                Problem(
-                    path=f"{_object_path(task, at)}.center",
-                    message=f"{a.name!r} and {b.name!r} overlap by {depth:.3f} m: objects may touch but not "
-                    "interpenetrate (the simulator would push them apart at the start); move one of them apart",
-                )
+    for i, j in _near_pairs(task, parts, solid):
+        a, b = task.objects[i], task.objects[j]
+        if frozenset((a.name, b.name)) in sunk:
+            continue
+        depth, direction = geometry.solids_penetration(parts[a.name], parts[b.name])
+        higher = a if a.center[2] > b.center[2] else b if b.center[2] > a.center[2] else None
+        resting = higher is not None and higher.movable and abs(direction[2]) >= vertical
+        if depth <= (RESTING_TOLERANCE if resting else OVERLAP_TOLERANCE):
+            continue
+        at = i if a.movable and not b.movable else j  # the one to move: a movable one beside a fixed one
+        problems.append(
+            Problem(
+                path=f"{_object_path(task, at)}.center",
+                message=f"{a.name!r} and {b.name!r} overlap by {depth:.3f} m: objects may touch but not "
+                "interpenetrate (the simulator would push them apart at the start); move one of them apart",
             )
+        )
     return problems
+
+
+def _near_pairs(task: Task, parts: dict[str, list[geometry.Part]], indices: list[int]) -> list[tuple[int, int]]:
+    """The pairs (i < j) of ``indices`` whose spheres around their parts' corners meet: only those can overlap (the
+    exact test is about 0.1 ms a pair; a file of 250 objects took 3 s over every pair, quadratic in what it lists)."""
+    corners = [np.vstack([p.corners() for p in parts[task.objects[i].name]]) for i in indices]
+    centre = np.array([c.mean(axis=0) for c in corners]).reshape(-1, 3)
+    radius = np.array([np.linalg.norm(c - m, axis=1).max() for c, m in zip(corners, centre, strict=True)])
+    apart = np.linalg.norm(centre[:, None] - centre[None, :], axis=2) > radius[:, None] + radius[None, :]
+    near = np.argwhere(np.triu(~apart, k=1))
+    return [(indices[a], indices[b]) for a, b in near.tolist()]
 
 
 def _sheet_problems(task: Task) -> list[Problem]:
