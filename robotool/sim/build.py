@@ -194,7 +194,7 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
         (part,) = geometry.object_parts(sheet)
         centre, rot = np.asarray(sheet.center, dtype=float), geometry.rotation_matrix(sheet.rpy)
         for obj in (o for o in task.objects if o.movable and not o.is_sheet and o.shape != "cloth"):
-            mu = max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
+            mu = sheet_friction(sheet, obj)
             carrier = _add_part(
                 body,
                 part,
@@ -215,6 +215,11 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
                     condim=3,
                     friction=[mu, mu, 0.005, 0.0001, 0.0001],
                 )
+
+
+def sheet_friction(sheet: SceneObject, obj: SceneObject) -> float:
+    """The friction between a sheet and an object on it (its carrier's contact pair): the larger of the two's."""
+    return max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
 
 
 def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:

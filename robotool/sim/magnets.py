@@ -18,7 +18,7 @@ import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.task import geometry
+from robotool.sim.object_goals import local_corners
 
 HOLD_FORCE = 200.0
 """N a magnet pair holds (about 20 kg hanging): three times the most the button task's cubes carry when the paper's
@@ -37,7 +37,8 @@ class Magnets:
             for eq in range(model.neq)
             if model.equality(eq).name.startswith("magnet__")
         ]
-        self.boxes = {int(b): _body_box(scene, int(b)) for _, b1, b2 in self.pairs for b in (b1, b2)}
+        corners = local_corners(scene)  # each object's parts' corners in its body frame
+        self.boxes = {int(b): _box(corners[int(scene.body_object[b])]) for _, b1, b2 in self.pairs for b in (b1, b2)}
         self._let_go: np.ndarray | None = None  # (nworld, neq): released, not attached again until apart
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
@@ -65,11 +66,8 @@ class Magnets:
 BodyBox = tuple[np.ndarray, np.ndarray]  # a box in a body's frame: its centre and half sizes
 
 
-def _body_box(scene: Scene, body: int) -> BodyBox:
-    """The box (centre, half sizes) around a magnetic object's parts, in its body's frame."""
-    obj = scene.task.objects[int(scene.body_object[body])]
-    rot = geometry.rotation_matrix(obj.rpy)
-    corners = (np.vstack([p.corners() for p in geometry.object_parts(obj)]) - np.asarray(obj.center)) @ rot
+def _box(corners: np.ndarray) -> BodyBox:
+    """The box (centre, half sizes) around ``corners`` (k, 3) in a body's frame."""
     low, high = corners.min(axis=0), corners.max(axis=0)
     return (low + high) / 2, (high - low) / 2
 

@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import SHEET_CARRIER_DROP, rests_on_sheet, sheet_carrier_name
+from robotool.sim.build import SHEET_CARRIER_DROP, rests_on_sheet, sheet_carrier_name, sheet_friction
 from robotool.sim.compiled_scene import Scene
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
@@ -63,9 +63,11 @@ class Sheets:
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
         self.surface = {i: surface_points(task.objects[i]) for _, i, _ in self.links}
-        friction = [model.geom_friction[model.body_geomadr[b], 0] for b in scene.object_body]
         self.pin_weight = np.array(  # N of friction per share of the object's base on the sheet, in each pair
-            [max(friction[s], friction[i]) * task.objects[i].effective_mass * GRAVITY for s, i, _ in self.links]
+            [
+                sheet_friction(task.objects[s], task.objects[i]) * task.objects[i].effective_mass * GRAVITY
+                for s, i, _ in self.links
+            ]
         )
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
         self.share = np.zeros(self.on.shape)  # (nworld, nlink): share of the object's base over its sheet
