@@ -220,14 +220,16 @@ class FallTracker:
         return [] if event is None else [event]
 
     def watched(self, state: BatchState) -> np.ndarray:
-        """(nworld,) the unbroken worlds where the object could fall past ``max_drop`` before the next tick: its fall
-        so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it."""
+        """(nworld,) the unbroken worlds where the object could fall past ``max_drop`` before the next tick (its fall
+        so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it), or
+        be struck too fast (:meth:`~robotool.sim.strikes.StrikeWatch.watched`)."""
         if self.rest_height is None or self.broken is None:
             return np.zeros(len(state.time), dtype=bool)
         dt = self.scene.control_dt
         fall = self.rest_height - state.xpos[:, self.body, 2]
         sinking = np.maximum(-state.qvel[:, self._dof()[2]], 0.0)
-        return ~self.broken & (fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop)
+        falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
+        return ~self.broken & (falling | self.strikes.watched(state, dt))
 
     def _names(self, objects: np.ndarray) -> str:
         """What a fall landed on: object names, or the ground for the world's own bodies."""

@@ -9,7 +9,9 @@ strikes faster than its middle moves), relative to the object's centre, read bef
 last reading before and the first one touching). What does not move (the ground, a fixed object) is left to the fall
 rule, which reads a fall as the documented drop of the object's centre, not the speed of a part of it that swings
 down. A fragile object's fall past ``max_drop`` makes the goal read every physics step, so a landing on the robot is
-read at the step it happens; a striker is read at control ticks.
+read at the step it happens; so does a striker that could meet the object faster than the limit before the next tick
+(:meth:`StrikeWatch.watched`): read only at ticks, a block let go a little above a dish lands between two readings,
+each slower than the landing.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from robotool.sim.backend import BatchState, quat_to_mat
 from robotool.sim.compiled_scene import Scene
 
 GRAVITY = 9.81  # m/s^2
+GAIN = 2 * GRAVITY  # m/s^2: the most a striker is taken to gain on the object in a control interval (a fall, a shove)
 
 
 class StrikeWatch:
@@ -35,6 +38,8 @@ class StrikeWatch:
         self.body = int(scene.object_body[index])
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint's linear velocity, in the world frame
         self.limit = float(np.sqrt(2 * GRAVITY * max_drop))
+        radius = body_radii(scene)
+        self.striker_radius, self.mine_radius = radius[self.strikers], radius[self.mine]
         self.names = ["the robot" if scene.robot_body[b] else objects[owner[b]].name for b in self.strikers.tolist()]
         self._time: np.ndarray | None = None
         self._xpos = np.zeros(0)
@@ -66,6 +71,28 @@ class StrikeWatch:
         self._touch = np.where(keep, touch, self._touch)
         self._speed = np.where(keep, speed, self._speed)
         return struck, new
+
+    def watched(self, state: BatchState, dt: float) -> np.ndarray:
+        """(nworld,) the worlds where a striker not touching the object could meet it faster than the limit within
+        ``dt``: its last speed plus :data:`GAIN` over ``dt`` passes the limit, and its bounding sphere is that fast
+        for ``dt`` away from the object's (or nearer)."""
+        if self._time is None:
+            return np.zeros(len(state.time), dtype=bool)
+        reach = self._speed + GAIN * dt  # (nworld, nstriker): the fastest it could meet the object by the next tick
+        apart = state.xpos[:, self.strikers, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
+        gap = np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]
+        near = gap.min(axis=2) < reach * dt
+        return np.any(near & (reach > self.limit) & ~self._touch, axis=1)
+
+
+def body_radii(scene: Scene) -> np.ndarray:
+    """(nbody,) each body's bounding radius about its origin: the farthest reach of its geoms' bounding spheres (0 for
+    a body without geoms, and for a plane, which strikes nothing)."""
+    model = scene.model
+    reach = np.linalg.norm(model.geom_pos, axis=1) + model.geom_rbound
+    radius = np.zeros(model.nbody)
+    np.maximum.at(radius, model.geom_bodyid, np.where(model.geom_rbound > 0, reach, 0.0))
+    return radius
 
 
 def _turn(before: np.ndarray, after: np.ndarray) -> np.ndarray:
