@@ -205,7 +205,7 @@ class FallTracker:
                 detail=" and ".join(names),
             )
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
-        held = state.eq_active[:, self.grips].any(axis=1)  # in the robot's grip: it moves with the hand
+        held = self._held(state)
         borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
         resting = active & (held | (borne & (speed < RESTING_SPEED)))
         self.rest_height = np.where(resting, height, self.rest_height)
@@ -229,7 +229,11 @@ class FallTracker:
         fall = self.rest_height - state.xpos[:, self.body, 2]
         sinking = np.maximum(-state.qvel[:, self._dof()[2]], 0.0)
         falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
-        return ~self.broken & (falling | self.strikes.watched(state, dt))
+        return ~self.broken & (falling | self.strikes.watched(state, dt, self._held(state)))
+
+    def _held(self, state: BatchState) -> np.ndarray:
+        """(nworld,) whether it is in the robot's grip, where it moves with the hand."""
+        return np.asarray(state.eq_active[:, self.grips].any(axis=1))
 
     def _names(self, objects: np.ndarray) -> str:
         """What a fall landed on: object names, or the ground for the world's own bodies."""

@@ -35,6 +35,7 @@ class StrikeWatch:
         striker = scene.robot_body | ((owner >= 0) & (owner != index) & moving[np.maximum(owner, 0)])
         self.strikers = np.flatnonzero(striker)  # the robot's bodies and the other movable objects' that are not soft
         self.mine = np.flatnonzero(owner == index)
+        self.robot = scene.robot_body[self.strikers]  # which strikers are the robot's
         self.body = int(scene.object_body[index])
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint's linear velocity, in the world frame
         self.limit = float(np.sqrt(2 * GRAVITY * max_drop))
@@ -72,17 +73,19 @@ class StrikeWatch:
         self._speed = np.where(keep, speed, self._speed)
         return struck, new
 
-    def watched(self, state: BatchState, dt: float) -> np.ndarray:
+    def watched(self, state: BatchState, dt: float, held: np.ndarray) -> np.ndarray:
         """(nworld,) the worlds where a striker not touching the object could meet it faster than the limit within
-        ``dt``: its last speed plus :data:`GAIN` over ``dt`` passes the limit, and its bounding sphere is that fast
-        for ``dt`` away from the object's (or nearer)."""
+        ``dt``: its last speed plus :data:`GAIN` over ``dt`` passes the limit, and its bounding sphere lies within
+        what that start and gain cover in ``dt`` of the object's. The robot is left out where it ``held`` (nworld,)
+        the object (in its grip, the object moves with the hand)."""
         if self._time is None:
             return np.zeros(len(state.time), dtype=bool)
         reach = self._speed + GAIN * dt  # (nworld, nstriker): the fastest it could meet the object by the next tick
+        cover = self._speed * dt + GAIN * dt**2 / 2  # and the farthest it could come
         apart = state.xpos[:, self.strikers, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
         gap = np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]
-        near = gap.min(axis=2) < reach * dt
-        return np.any(near & (reach > self.limit) & ~self._touch, axis=1)
+        could = (gap.min(axis=2) < cover) & (reach > self.limit) & ~self._touch
+        return np.any(could & ~(held[:, None] & self.robot[None, :]), axis=1)
 
 
 def body_radii(scene: Scene) -> np.ndarray:
