@@ -227,3 +227,17 @@ def test_a_hook_lands_where_it_is_clearest_of_the_other_objects() -> None:
     chosen = arm_macros.hook_laterals(arm, hook, milk)
     assert chosen[0] == 0.25 and clearance[0.25] > 0.01
     assert clearance[chosen[1]] == max(v for k, v in clearance.items() if k != 0.25)
+
+
+def test_a_press_clamped_at_the_workspace_edge_is_tried_after_one_that_presses_the_whole_way() -> None:
+    """button_pressing 11102: a one-magnet chain reaches the button's face only at the workspace edge (the press is
+    clamped there and fails in about one perturbed world in eight); the four-magnet chain that presses the whole way
+    comes first."""
+    from robotool.planner.search import order
+    from robotool.robots.arm.arm_candidates import candidates
+
+    programs = order(list(candidates(tasks.generate("button_pressing", 11102).task, True)))
+    thin = [bool(p.thin) for p in programs]
+    assert thin[0] is False and True in thin, thin
+    assert thin == sorted(thin), thin  # every clamped press after every whole one
+    assert any("past its face at the workspace edge" in note for p in programs for note in p.thin)

@@ -380,6 +380,7 @@ def press_face(button: SceneObject) -> tuple[np.ndarray, np.ndarray]:
 def press_direct(prog: Program, arm: Arm, button: SceneObject, drop: float) -> bool:
     """Push the button's face with the gripper itself, ``drop`` below the face centre."""
     face, n = press_face(button)
+    _mind_the_edge(prog, arm, button, face[:2], n)
     prog.use(button.name, "target")
     b = prog.query("get_center", button.name, button.center)
     rel = face - np.asarray(button.center)
@@ -406,6 +407,7 @@ def press_with(
     press_xy = face[:2] - n * tip + n * PRESS
     if not arm.inside(face[:2] - n * tip + n * 0.012):
         return False
+    _mind_the_edge(prog, arm, button, face[:2] - n * tip, n)
     prog.use(button.name, "target")
     b = prog.query("get_center", button.name, button.center)
     rel = face - np.asarray(button.center)
@@ -442,6 +444,16 @@ def press_with(
     )
     prog.say(f"Press {button.name} with the far end of {', '.join(names)} held in the gripper.")
     return True
+
+
+def _mind_the_edge(prog: Program, arm: Arm, button: SceneObject, contact: np.ndarray, n: np.ndarray) -> None:
+    """A press whose gripper meets the face at ``contact`` (x-y) and cannot go the whole :data:`PRESS` past it inside
+    the workspace (clamped at its edge, it pushes the face in by less, which perturbed worlds undo) is a less likely
+    choice: tried after presses that go the whole way, with another tool or more of a chain."""
+    deepest = max((t for t in np.linspace(0.0, PRESS, 31) if arm.inside(contact + n * t)), default=0.0)
+    if deepest < PRESS - 1e-6:
+        prog.late += 1
+        prog.thin.append(f"{button.name} pressed {deepest:.3f} m past its face at the workspace edge, not {PRESS}")
 
 
 def tip_reach(holder: SceneObject, held: list[SceneObject], n: np.ndarray) -> float:
