@@ -2,12 +2,14 @@
 
 :func:`robotool.sim.build.make_spec` adds an inactive weld ``magnet__<a>__<b>`` for every pair of
 magnetic objects; :meth:`Magnets.update` activates it, at the current relative pose, in every world
-where the two bodies touch. A magnet holds a bounded load, read where the two meet (the face of the smaller of the
-two faces that face each other, :func:`join_face`): a force up to :data:`HOLD_FORCE`; a couple that peels the face
-off about one of its edges up to :data:`HOLD_FORCE` times the face's half width across that edge (the pull of the
-whole face at its far edge), and a twist about its normal up to :data:`HOLD_TORQUE`. Past any of these the weld lets
-go, and that pair attaches again only after the two have come apart: a board stuck by its 2 cm end face to a
-cabinet's side holds a couple of 2 N m, so it does not carry a robot across a gap as a cantilever.
+where the two bodies touch. A magnet holds a bounded load, read where the two meet (the patch where the smaller of the
+two faces that face each other overlaps the other body, :func:`join_face`): a force up to :data:`HOLD_FORCE`; a couple
+that peels the patch off about one of its edges up to :data:`HOLD_FORCE` times the patch's half width across that edge
+(the pull of the whole patch at its far edge), and a twist about its normal up to :data:`HOLD_FORCE` times its
+smaller half width (as if that pull held by friction at the patch's edge). Past any of these the weld lets go, and that
+pair attaches again only after the two have come apart: a board stuck by its 2 cm end face to a cabinet's side holds a
+couple of 2 N m, so it does not carry a robot across a gap as a cantilever, and a bar held across a 3 cm post by a
+3 cm square patch holds 3 N m of twist, not the 9 N m of a cantilevered 3.5 kg bar turned so that its load twists it.
 """
 
 from __future__ import annotations
@@ -23,8 +25,6 @@ from robotool.sim.object_goals import local_corners
 HOLD_FORCE = 200.0
 """N a magnet pair holds (about 20 kg hanging): three times the most the button task's cubes carry when the paper's
 program drives the chain into the next cube's centre (61 N, sideways), forty times the reference program's."""
-HOLD_TORQUE = 20.0
-"""N m a magnet pair holds against twisting about the normal of the face where they meet."""
 
 
 class Magnets:
@@ -74,8 +74,9 @@ def _box(corners: np.ndarray) -> BodyBox:
 
 @dataclass(frozen=True)
 class JoinFace:
-    """Where two magnetic bodies meet, per world (k of them): the centre (k, 3) of the smaller of the faces that face
-    each other, its two in-plane unit axes (k, 2, 3) with their half lengths (k, 2), and its unit normal (k, 3)."""
+    """Where two magnetic bodies meet, per world (k of them): the centre (k, 3) of the patch where the smaller of the
+    faces that face each other overlaps the other body, its two in-plane unit axes (k, 2, 3) with their half lengths
+    (k, 2), and its unit normal (k, 3)."""
 
     centre: np.ndarray
     axes: np.ndarray
@@ -92,13 +93,14 @@ class JoinFace:
         return (
             (np.linalg.norm(force, axis=1) > HOLD_FORCE)
             | (peel > HOLD_FORCE * self.half[:, ::-1]).any(axis=1)  # about one axis it pivots across the other
-            | (twist > HOLD_TORQUE)
+            | (twist > HOLD_FORCE * self.half.min(axis=1))
         )
 
 
 def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
-    """The face where two touching bodies meet in ``worlds`` (each ``(body, (centre, half sizes))``, its box in the
-    body's frame): of each box, the face the other box lies beyond (least inside its plane); the smaller of the two."""
+    """The patch where two touching bodies meet in ``worlds`` (each ``(body, (centre, half sizes))``, its box in the
+    body's frame): of each box, the face the other box lies beyond (least inside its plane), where the other box's
+    extent covers it; of the two, the smaller."""
     first, second = _facing(state, worlds, one, two), _facing(state, worlds, two, one)
     mine = first.half.prod(axis=1) <= second.half.prod(axis=1)
     return JoinFace(
@@ -110,8 +112,8 @@ def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], t
 
 
 def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
-    """The face of the first box that the second lies beyond: of its six, the one whose plane the second box reaches
-    least far inside (about 0 for the face they touch on)."""
+    """The face of the first box that the second lies beyond (of its six, the one whose plane the second box reaches
+    least far inside: about 0 for the face they touch on), cut to the part of it the second box's extent covers."""
     (body, (centre, half)), (other, (other_centre, other_half)) = one, two
     rot, other_rot = state.xmat(body)[worlds], state.xmat(other)[worlds]  # (k, 3, 3): axes as columns
     origin = state.xpos[worlds, body] + rot @ centre
@@ -125,4 +127,7 @@ def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two
     normal = rot[k, :, axis] * side[:, None]
     others = np.stack([(axis + 1) % 3, (axis + 2) % 3], axis=1)  # (k, 2)
     axes = np.stack([rot[k, :, others[:, 0]], rot[k, :, others[:, 1]]], axis=1)  # (k, 2, 3)
-    return JoinFace(origin + normal * half[axis][:, None], axes, half[others], normal)
+    along, extent = np.take_along_axis(local, others, 1), np.take_along_axis(reach, others, 1)  # (k, 2) in-plane
+    low, high = np.maximum(-half[others], along - extent), np.minimum(half[others], along + extent)
+    middle = np.einsum("ki,kij->kj", (low + high) / 2, axes)
+    return JoinFace(origin + normal * half[axis][:, None] + middle, axes, np.maximum(high - low, 0.0) / 2, normal)

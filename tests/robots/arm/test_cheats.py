@@ -97,6 +97,9 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drop_the_glass_then_lift_the_cube", "arm_cube_and_a_wine_glass", "glass broke: it fell 0.3"),
     # shoved off a stool past a 0.05 m max_drop, touching the fingers as it went
     ("arm_shove_the_brittle_vase_off_the_stool", "arm_brittle_vase_on_a_stool", "vase broke: it fell 0.0"),
+    # a 3.5 kg bar hung by a 3 cm square magnet patch on a post's side, its weight twisting the patch by 9 N m: a magnet
+    # held 20 N m of twist whatever its patch
+    ("arm_hang_a_steel_bar_on_a_post_by_its_side", "arm_steel_bar_beside_a_magnetic_post", "goal not reached: bar_lift"),
 ]
 
 
