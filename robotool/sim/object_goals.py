@@ -193,10 +193,10 @@ class FallTracker:
                 measured={"fall": float(fall[w]), "max_drop": self.max_drop},
                 detail=self._names(self.scene.body_object[self.others[hard[w]]]),
             )
-        speed, strikers = self.strikes.update(state, active)
+        speed, strikers, through = self.strikes.update(state, active)
         for w in map(int, np.flatnonzero(active & (speed > self.strikes.limit) & ~self.broken)):
             self.broken[w] = True
-            names = sorted({self.strikes.names[k] for k in np.flatnonzero(strikers[w]).tolist()})
+            names = sorted({self.strikes.name(k, int(through[w, k])) for k in np.flatnonzero(strikers[w]).tolist()})
             self.breaks[w] = Event(
                 kind="broke",
                 time=float(state.time[w]),

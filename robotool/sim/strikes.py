@@ -36,6 +36,7 @@ class StrikeWatch:
         self.strikers = np.flatnonzero(striker)  # the robot's bodies and the other movable objects' that are not soft
         self.mine = np.flatnonzero(owner == index)
         self.robot = scene.robot_body[self.strikers]  # which strikers are the robot's
+        self.loose = ~self.robot  # the movable objects among them, which may rest on it and pass a blow on
         self.body = int(scene.object_body[index])
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint's linear velocity, in the world frame
         self.limit = float(np.sqrt(2 * GRAVITY * max_drop))
@@ -45,33 +46,55 @@ class StrikeWatch:
         self._time: np.ndarray | None = None
         self._xpos = np.zeros(0)
         self._xmat = np.zeros(0)
-        self._touch = np.zeros(0, dtype=bool)
+        self._touch = np.zeros(0, dtype=bool)  # (nworld, nstriker): touching it, directly or through what rests on it
+        self._direct = np.zeros(0, dtype=bool)  # touching it directly
+        self._pairs = np.zeros(0, dtype=bool)  # (nworld, nstriker, nstriker): which strikers touch each other
+        self._carried = np.zeros(0, dtype=bool)  # (nworld, nstriker): resting on it
         self._speed = np.zeros(0)
 
-    def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none), and
-        (nworld, nstriker) which bodies came to touch the object then."""
+    def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none),
+        (nworld, nstriker) which bodies came to touch the object then, directly or through a movable object resting on
+        it (touching it, its centre above the object's: a lid on a jar passes on the blow of what lands on it), and
+        through which striker each did (-1: directly)."""
         xpos = state.xpos[:, self.strikers]
         xmat = quat_to_mat(state.xquat[:, self.strikers].reshape(-1, 4)).reshape(*xpos.shape, 3)
-        touch = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
+        direct = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
+        pairs = np.asarray(state.touching[:, self.strikers][:, :, self.strikers])  # [w, s, c]: s touches c
+        carried = direct & self.loose & self._above(state)
+        onto = pairs & carried[:, None, :]  # s touches c, which rests on the object
         if self._time is None:
-            self._time, self._xpos, self._xmat, self._touch = state.time.copy(), xpos, xmat, touch
-            self._speed = np.zeros(touch.shape)
+            self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
+            self._direct, self._pairs, self._carried = direct, pairs, carried
+            self._touch, self._speed = direct, np.zeros(direct.shape)
         rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
         spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
         centre = state.xpos[:, None, self.body]
         moving = (xpos - self._xpos) * rate + np.cross(spin, centre - xpos)  # where the object's centre is
         own = state.qvel[:, None, self.dof : self.dof + 3]
         speed = np.linalg.norm(own - moving, axis=2)  # (nworld, nstriker)
-        new = active[:, None] & touch & ~self._touch
+        fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
+        via = fresh.any(axis=2) & ~direct
+        new = active[:, None] & ((direct & ~self._direct) | via)
         struck = np.where(new, np.maximum(speed, self._speed), 0.0).max(axis=1, initial=0.0)
         keep = active[:, None]
         self._time = np.where(active, state.time, self._time)
         self._xpos = np.where(keep[:, :, None], xpos, self._xpos)
         self._xmat = np.where(keep[:, :, None, None], xmat, self._xmat)
-        self._touch = np.where(keep, touch, self._touch)
+        self._direct = np.where(keep, direct, self._direct)
+        self._pairs = np.where(keep[:, :, None], pairs, self._pairs)
+        self._carried = np.where(keep, carried, self._carried)
+        self._touch = np.where(keep, direct | onto.any(axis=2), self._touch)
         self._speed = np.where(keep, speed, self._speed)
-        return struck, new
+        return struck, new, np.where(via, np.argmax(fresh, axis=2), -1)
+
+    def name(self, striker: int, through: int) -> str:
+        """Who struck: a striker's name, and what it struck through (-1: nothing)."""
+        return self.names[striker] + (f" through {self.names[through]}" if through >= 0 else "")
+
+    def _above(self, state: BatchState) -> np.ndarray:
+        """(nworld, nstriker) whether each striker's centre lies above the object's."""
+        return np.asarray(state.xpos[:, self.strikers, 2] > state.xpos[:, None, self.body, 2])
 
     def watched(self, state: BatchState, dt: float, held: np.ndarray) -> np.ndarray:
         """(nworld,) the worlds where a striker not touching the object could meet it faster than the limit within
@@ -82,9 +105,13 @@ class StrikeWatch:
             return np.zeros(len(state.time), dtype=bool)
         reach = self._speed + GAIN * dt  # (nworld, nstriker): the fastest it could meet the object by the next tick
         cover = self._speed * dt + GAIN * dt**2 / 2  # and the farthest it could come
-        apart = state.xpos[:, self.strikers, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
-        gap = np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]
-        could = (gap.min(axis=2) < cover) & (reach > self.limit) & ~self._touch
+        xpos = state.xpos[:, self.strikers]
+        apart = xpos[:, :, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
+        gap = (np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]).min(axis=2)
+        radii = self.striker_radius[:, None] + self.striker_radius[None, :]
+        between = np.linalg.norm(xpos[:, :, None] - xpos[:, None, :], axis=3) - radii  # [w, s, c]: striker to striker
+        between = np.where(self._carried[:, None, :], between, np.inf).min(axis=2)  # to what rests on the object
+        could = (np.minimum(gap, between) < cover) & (reach > self.limit) & ~self._touch
         return np.any(could & ~(held[:, None] & self.robot[None, :]), axis=1)
 
 

@@ -1,6 +1,6 @@
-"""Glass struck by what moves (found by an adversarial run): a fragile object breaks when the robot or a movable object
-that is not soft comes to touch it faster than a fall of its ``max_drop`` lands, not only in a fall of its own onto
-what does not move; and a gentle touch leaves it whole."""
+"""Glass struck by what moves (found by adversarial runs): a fragile object breaks when the robot or a movable object
+that is not soft comes to touch it (or what rests on it) faster than a fall of its ``max_drop`` lands, not only in a
+fall of its own onto what does not move; and a gentle touch leaves it whole."""
 
 from __future__ import annotations
 
@@ -27,6 +27,12 @@ LAYOUTS = FIXTURES / "layouts"
         ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_iron_block_on_a_stool_beside_a_glass_dish", "block"),
         # a stick pushed near its pivot swept its far end into a dish pinned by a wall: the stick's centre hardly moved
         ("arm_swing_a_stick_into_a_walled_glass_dish", "arm_stick_beside_a_walled_glass_dish", "stick"),
+        # a 3 kg block let go 0.29 m above a lid resting on a jar: only a new touch of the jar itself was a strike
+        (
+            "arm_drop_an_iron_block_onto_a_lid_on_a_glass_jar",
+            "arm_iron_block_above_a_lidded_glass_jar",
+            "block through lid",
+        ),
     ],
 )
 def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: str, layout: str, striker: str) -> None:
@@ -55,6 +61,27 @@ def test_a_block_set_down_gently_on_the_glass_dish_leaves_it_whole(run_texts: An
         "move_to_position([d[0], d[1], 0.2])\n"
     )
     task = tasks.load(LAYOUTS / "arm_iron_block_on_a_stool_beside_a_glass_dish.yaml")
+    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+    assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
+
+
+def test_a_block_set_down_gently_on_the_lid_of_a_glass_jar_leaves_it_whole(run_texts: Any) -> None:
+    """The control: the block lowered onto the jar's lid at the arm's pace, then let go."""
+    program = (
+        'g = get_graspable_point("block")\n'
+        "open_gripper()\n"
+        "move_to_position([g[0], g[1], g[2] + 0.05])\n"
+        "move_to_position(g)\n"
+        "close_gripper()\n"
+        "move_to_position([g[0], g[1], 0.48])\n"
+        'd = get_center("lid")\n'
+        "move_to_position([d[0], d[1], 0.48])\n"
+        "move_to_position([d[0], d[1], g[2] - get_center('block')[2] + 0.13 + 0.025 + 0.004])\n"
+        "open_gripper()\n"
+        "move_to_position([d[0], d[1], 0.45])\n"
+    )
+    task = tasks.load(LAYOUTS / "arm_iron_block_above_a_lidded_glass_jar.yaml")
     rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
     assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
