@@ -5,7 +5,8 @@ batch then steps, one control tick at a time, until the pending motion skills fi
 fell), and the programs whose skill finished are resumed. The runner resumes every such world first and only then waits
 on each (so sandboxed programs run in parallel). A program that errors or ends is finished for its world only; its
 world then runs on with the robot holding still for at least ``SETTLE_AFTER`` simulated seconds and until every object
-lies still (what rocks, rolls or tips comes to rest, a falling object lands) before the goal is read; a world still
+lies still and is not speeding up (what rocks, rolls or tips comes to rest, a falling object lands, a bottle that
+starts to roll down a gentle slope rolls on) before the goal is read; a world still
 moving ``SETTLE_LONGEST`` seconds after its program ended fails, naming what moves (a goal is never read from a world
 in motion). Skill arguments are checked on this side of the sandbox, positions against the scene's box
 (:func:`scene_box`). An exception inside the skill controller is a bug in robotool: it is logged with its traceback and
@@ -60,6 +61,8 @@ SETTLE_TIME = 0.3  # s of physics before the programs start
 SETTLE_AFTER = 1.0  # s of physics after a program ends, at least, before its goal is read
 SETTLE_LONGEST = 5.0  # s after a program ends by which every object must lie still, or its world fails
 STILL_SPEED = 0.02  # m/s: an object whose bodies all move slower than this lies still
+SPEEDING_UP = 0.0005  # m: a body that moved this much farther in the later half of its settling than in the earlier
+# half is speeding up (a bottle starting to roll down a gentle slope), however slowly it moves: not lying still
 MAX_SIM_TIME = 120.0  # s of simulated time a whole rollout may take
 MAX_SKILL_CALLS = 200  # skill calls (queries included) a whole rollout may make
 MOVED = 0.01  # m: an object displaced this much counts as touched
@@ -78,12 +81,24 @@ class _World:
     pending_args: tuple[Any, ...] = ()
     ended: bool = False
     settle_until: float = np.inf  # simulated time when the ended world's goal is read
+    settling: list[np.ndarray] = field(default_factory=list)  # the objects' bodies' positions at each settling tick
     finished: bool = False
     error: str | None = None
     internal_error: InternalError | None = None
     output: str = ""
     conditions: dict[str, bool] = field(default_factory=dict)
     sim_time: float = 0.0
+
+
+def _speeding_up(positions: list[np.ndarray]) -> bool:
+    """Whether a body moved :data:`SPEEDING_UP` farther in the later half of ``positions`` (its bodies' positions
+    (nbody, 3) at each tick) than in the earlier half."""
+    half = (len(positions) - 1) // 2
+    if half < 1:
+        return False
+    later = np.linalg.norm(positions[-1] - positions[-1 - half], axis=1)
+    earlier = np.linalg.norm(positions[-1 - half] - positions[-1 - 2 * half], axis=1)
+    return bool(np.any(later > earlier + SPEEDING_UP))
 
 
 def trusted_sessions(task: Task, programs: Sequence[TrustedProgram]) -> list[TrustedSession]:
@@ -357,8 +372,8 @@ class _Run:
 
     def _finish_settled(self, state: BatchState, previous: BatchState) -> None:
         """Read the goal of every ended world that has settled (``SETTLE_AFTER`` past its end and every object still
-        since ``previous``, the state a control tick before), or whose physics failed while settling; fail those
-        still moving ``SETTLE_LONGEST`` past their end."""
+        since ``previous``, the state a control tick before, and not speeding up over its settling), or whose physics
+        failed while settling; fail those still moving ``SETTLE_LONGEST`` past their end."""
         if not any(world.ended and not world.finished for world in self.worlds):
             return  # no world settles: nothing to read in the step loop
         objects = np.flatnonzero(self.scene.body_object >= 0)
@@ -370,7 +385,9 @@ class _Run:
             if not world.ended or world.finished:
                 continue
             since_end = float(state.time[i]) - (world.settle_until - SETTLE_AFTER)
-            if state.failed[i] is not None or (since_end >= SETTLE_AFTER - half_step and speed[i].max() < STILL_SPEED):
+            world.settling.append(state.xpos[i, objects])
+            still = speed[i].max() < STILL_SPEED and not _speeding_up(world.settling)
+            if state.failed[i] is not None or (since_end >= SETTLE_AFTER - half_step and still):
                 settled.append(i)
             elif since_end >= SETTLE_LONGEST - half_step:
                 body = int(objects[np.argmax(speed[i])])

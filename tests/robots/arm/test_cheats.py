@@ -99,7 +99,7 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_shove_the_brittle_vase_off_the_stool", "arm_brittle_vase_on_a_stool", "vase broke: it fell 0.0"),
     # a 3.5 kg bar hung by a 3 cm square magnet patch on a post's side, its weight twisting the patch by 9 N m: a magnet
     # held 20 N m of twist whatever its patch
-    ("arm_hang_a_steel_bar_on_a_post_by_its_side", "arm_steel_bar_beside_a_magnetic_post", "goal not reached: bar_lift"),
+    ("arm_hang_a_steel_bar_on_a_post_by_its_side", "arm_steel_bar_beside_a_magnetic_post", "not reached: bar_lifted"),
 ]
 
 
@@ -408,3 +408,15 @@ def test_paper_under_a_light_box_standing_partly_on_it_still_brings_the_can(run_
     program = (CHEATS / "arm_drag_paper_from_under_a_heavy_crate.py").read_text()
     rollouts: list[Rollout] = run_texts(light, [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_bottle_set_down_on_a_gentle_slope_is_not_read_while_it_starts_to_roll(run_texts: Any) -> None:
+    """Found by an adversarial run: a bottle set down across a shelf sloping 2.3 degrees rolled at about 0.01 m/s when
+    the goal was read (1 s after the end; read as still under 0.02 m/s) and rolled off 4.5 s later. A world whose
+    objects speed up is not still: it runs on, and the bottle never comes to rest on the shelf."""
+    task = _task("arm_bottle_beside_a_gently_sloping_shelf")
+    program = (CHEATS / "arm_set_a_bottle_on_a_gently_sloping_shelf.py").read_text()
+    rollouts: list[Rollout] = run_texts(task, [program] * 2)
+    for rollout in rollouts:
+        assert not rollout.success
+        assert "did not come to rest: bottle still moved" in str(rollout.error), rollout.error
