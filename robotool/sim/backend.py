@@ -75,7 +75,7 @@ class BatchedSim(Protocol):
     """``nworld`` copies of one scene stepped together.
 
     ``ctrl`` (nworld, nu) and ``mocap_pos`` (nworld, nmocap, 3) are buffers the controllers write;
-    the backend applies them before each step. ``body_mass`` is read-only.
+    the backend applies them before each step. ``body_mass`` and ``friction_scale`` are read-only.
     """
 
     scene: Scene
@@ -84,6 +84,8 @@ class BatchedSim(Protocol):
     mocap_pos: np.ndarray
     body_mass: np.ndarray
     """(nworld, nbody) each world's body masses, perturbations included (kg)."""
+    friction_scale: np.ndarray
+    """(nworld,) how much each world's perturbation scales every surface's friction."""
 
     def state(self) -> BatchState:
         """The state after the last :meth:`step`."""

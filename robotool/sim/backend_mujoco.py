@@ -120,6 +120,7 @@ class MujocoSim:
             mujoco.mj_forward(m, d)
         model = scene.model
         self.body_mass = np.array([m.body_mass for m in self.models]).reshape(nworld, model.nbody)
+        self.friction_scale = np.array(perturbation.friction_scale, dtype=float)
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.array([d.mocap_pos for d in self.datas]).reshape(nworld, model.nmocap, 3)
         self._time = np.zeros(nworld)

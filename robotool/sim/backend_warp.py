@@ -65,6 +65,7 @@ class WarpSim:
             self.m.body_mass.assign(mass)
             self.m.body_inertia.assign(inertia)
             self.body_mass = mass.astype(float)
+            self.friction_scale = np.array(perturbation.friction_scale, dtype=float)
             self.d.qpos.assign(perturbation.initial_qpos(scene).astype(np.float32))
             mjw.forward(self.m, self.d)
         self._eq_data = self.m.eq_data.numpy().copy()

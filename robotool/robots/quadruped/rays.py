@@ -1,6 +1,6 @@
-"""Downward rays for the quadruped controller: surface heights and the objects that carry them, in many worlds at
-once through the simulator's batched ray cast (:meth:`~robotool.sim.backend.BatchedSim.rays`); a cloth carries no
-load over a gap, so rays see through it to what carries it."""
+"""Downward rays for the quadruped controller: surface heights and the geoms and objects that carry them, in many
+worlds at once through the simulator's batched ray cast (:meth:`~robotool.sim.backend.BatchedSim.rays`); a cloth
+carries no load over a gap, so rays see through it to what carries it."""
 
 from __future__ import annotations
 
@@ -28,17 +28,26 @@ class Rays:
         self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
     ) -> tuple[np.ndarray, np.ndarray]:
         """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: surface heights
-        and the objects that carry them (-1: ground or nothing); the robot is never hit.
+        and the objects that carry them (-1: ground or nothing); the robot is never hit (see :meth:`surface`)."""
+        z, _, geom = self.surface(worlds, xy, top, exclude)
+        return z, self.objects_of(geom)
+
+    def surface(
+        self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: the heights the feet
+        stand at, the heights of the solids that carry them and those solids' geoms (-1: nothing); the robot is
+        never hit.
 
         A cloth is limp: it carries no load over a gap, whichever way it lies. A ray that meets a cloth's link is
         cast again from just above the point it met, that link left out, until it meets something solid, which is
-        the object returned; the height is the cloth's where that solid lies no deeper under it than a step the
+        the geom returned; the feet's height is the cloth's where that solid lies no deeper under it than a step the
         legs climb (a cloth lying on a surface, or bunched up on it, is stepped onto), else the solid's (over a gap
         the feet would sink to it)."""
         start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
         z, geom = self._cast_from(worlds, xy, start, exclude)
         if not self.facts.cloth_crossings:  # no cloth in the scene
-            return z, self._objects(geom)
+            return z, z, geom
         model = self.sim.scene.model
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
@@ -58,15 +67,15 @@ class Rays:
             z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
             through = self._on_cloth(geom)
         lying = cloth_top - z <= self.limits.max_step_up  # False where no cloth was met (NaN)
-        return np.where(lying, cloth_top, z), self._objects(geom)
+        return np.where(lying, cloth_top, z), z, geom
 
-    def _objects(self, geom: np.ndarray) -> np.ndarray:
+    def objects_of(self, geom: np.ndarray) -> np.ndarray:
         """The object each ray's hit geom (-1: none) belongs to (-1: none, or not an object's)."""
         return np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
 
     def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
         """Whether each ray's hit geom (-1: none) belongs to a cloth."""
-        objects = self._objects(geom)
+        objects = self.objects_of(geom)
         return (objects >= 0) & self.facts.cloth[np.maximum(objects, 0)]
 
     def _cast_from(

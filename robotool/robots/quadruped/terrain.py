@@ -14,6 +14,10 @@ foot by foot: each of the four feet sweeps a straight path, sampled every :data:
   deeper than ``max_step_down`` a ``drop`` finding;
 - anything else (a slope, a small change) is followed.
 
+A slope is footing only as steep as the surface's friction holds (the feet slide down one steeper than
+``atan(friction)``): :func:`steepness` reads it under every sample and :func:`first_steep` finds the first that is
+too steep, a ``slope`` finding (the simulator's check; the planner's and the key concepts' heights carry no friction).
+
 A finding carries its kind, the measured value, the limit, where it starts (x-y) and which foot met it.
 :func:`check_walk` answers whether a walk keeps within the limits (the simulator's and the planner's question);
 :func:`survey_walk` also measures the edges within them (the key concepts' question), and :func:`exceeds` is the one
@@ -48,8 +52,9 @@ class TerrainKind(IntEnum):
 EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
 """The kinds whose edge a foot's centre passes (a step is met face on); for ``np.isin`` over scan codes."""
 
-FindingKind = Literal["step", "gap", "drop"]
-KINDS: tuple[FindingKind, ...] = ("step", "gap", "drop")  # in :class:`TerrainKind` order (its codes 1, 2, 3)
+EdgeKind = Literal["step", "gap", "drop"]
+FindingKind = Literal[EdgeKind, "slope"]
+KINDS: tuple[EdgeKind, ...] = ("step", "gap", "drop")  # in :class:`TerrainKind` order (its codes 1, 2, 3)
 RISE = 0.015  # m: a change smaller than this is the same surface (noise, slopes between samples)
 TOLERANCE = 0.01  # m: measurement slack allowed over a limit (sampling and pose noise)
 SPACING = 0.01  # m between samples along a foot's path
@@ -58,6 +63,10 @@ SLOPE_RUN = 0.15  # m: a surface that rises or falls more than a step within thi
 FOOT_RADIUS = 0.03  # m
 RADIUS_SAMPLES = int(np.ceil(FOOT_RADIUS / SPACING))
 FOOT_NAMES = ("rear-right", "rear-left", "front-right", "front-left")  # the order of :func:`foot_offsets`
+SLOPE_BASE = 0.1  # m: the run a slope is read over along a foot's path (a difference centred on the sample)
+SLOPE_HALF = round(SLOPE_BASE / 2 / SPACING)  # samples on each side of a slope's reading
+SLOPE_TOLERANCE = 1.0  # deg a slope may exceed the steepest its friction holds (sampling and pose noise)
+PLANE_AGREES = 0.02  # the most the four feet's plane may rise along a path (a tangent) unlike the path's own reading
 
 Heights = Callable[[np.ndarray], np.ndarray]
 """Surface heights under x-y points (n, 2) -> (n,)."""
@@ -68,18 +77,19 @@ class Finding:
     """A limit of the legs that a move breaks: what, the measured value, the limit, where and which foot."""
 
     kind: FindingKind
-    measured: float  # m: the step height, gap width or drop depth
-    limit: float  # m
+    measured: float  # m: the step height, gap width or drop depth; deg: a slope
+    limit: float  # m; deg: the steepest slope the surface's friction holds
     where: tuple[float, float]  # x-y where the foot meets it
     foot: str
 
     def describe(self) -> str:
         """The refusal reason, with the measured value, the limit and where."""
-        what = {"step": "step up", "gap": "gap", "drop": "drop"}[self.kind]
-        return (
-            f"{what} of {self.measured:.2f} m exceeds the limit of {self.limit:.2f} m "
-            f"(at [{self.where[0]:.2f}, {self.where[1]:.2f}], under the {self.foot} foot)"
-        )
+        if self.kind == "slope":
+            what = f"slope of {self.measured:.1f} deg exceeds the {self.limit:.1f} deg its surface's friction holds"
+        else:
+            name = {"step": "step up", "gap": "gap", "drop": "drop"}[self.kind]
+            what = f"{name} of {self.measured:.2f} m exceeds the limit of {self.limit:.2f} m"
+        return f"{what} (at [{self.where[0]:.2f}, {self.where[1]:.2f}], under the {self.foot} foot)"
 
 
 @dataclass(frozen=True)
@@ -93,17 +103,17 @@ class PathScan:
     met: np.ndarray  # (P, n, 3) each kind's edge (KINDS order) met at each sample, within its limit or not (0: none)
 
 
-def finding_kind(code: int) -> FindingKind:
+def finding_kind(code: int) -> EdgeKind:
     """The finding a :class:`PathScan` code (not :attr:`TerrainKind.NONE`) stands for."""
     return KINDS[TerrainKind(code) - TerrainKind.STEP]
 
 
-def limit_of(kind: FindingKind, limits: QuadrupedLimits) -> float:
+def limit_of(kind: EdgeKind, limits: QuadrupedLimits) -> float:
     """The limit a finding of ``kind`` is checked against."""
     return {"step": limits.max_step_up, "gap": limits.max_gap, "drop": limits.max_step_down}[kind]
 
 
-def exceeds(kind: FindingKind, measured: float | np.ndarray, limits: QuadrupedLimits) -> Any:
+def exceeds(kind: EdgeKind, measured: float | np.ndarray, limits: QuadrupedLimits) -> Any:
     """Whether a measured step height, gap width or drop depth is beyond the legs' limit (allowing
     :data:`TOLERANCE`); element-wise for arrays."""
     return measured > limit_of(kind, limits) + TOLERANCE
@@ -164,6 +174,51 @@ def _rules(limits: QuadrupedLimits) -> FollowRules:
         run=round(SLOPE_RUN / SPACING),
         codes=(TerrainKind.STEP, TerrainKind.GAP, TerrainKind.DROP),
     )
+
+
+def steepness(heights: np.ndarray, geoms: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The tangent of the surface's slope (k, 4, n) under the samples ``points`` (k, 4, n, 2) of the four feet's
+    straight paths (their first two samples apart), read by rays: heights and hit geoms (k, 4, n). NaN: none read.
+
+    Along each path it is the heights' difference over :data:`SLOPE_BASE` centred on the sample, where that run
+    lies on one geom with no edge in it (no change over :data:`RISE` between samples); where the four feet read
+    slopes on one geom and their heights lie on a plane (within ``RISE / 2``) that rises along each path as the
+    path reads it, that plane's steepest slope (a slope across the path counts too).
+    """
+    n = heights.shape[2]
+    half = SLOPE_HALF
+    along = np.full(heights.shape, np.nan)
+    if n <= 2 * half:
+        return along
+    runs = np.lib.stride_tricks.sliding_window_view(geoms, 2 * half + 1, axis=2)
+    steps = np.lib.stride_tricks.sliding_window_view(np.abs(np.diff(heights, axis=2)), 2 * half, axis=2)
+    read = (runs == runs[..., half : half + 1]).all(axis=3) & (steps.max(axis=3) <= RISE)
+    rise = (heights[:, :, 2 * half :] - heights[:, :, : n - 2 * half]) / (2 * half * SPACING)
+    along[:, :, half : n - half] = np.where(read, rise, np.nan)
+    feet = points[:, :, 0]
+    u = points[:, 0, 1] - points[:, 0, 0]
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    centred = feet - feet.mean(axis=1, keepdims=True)
+    dz = heights - heights.mean(axis=1, keepdims=True)
+    gradient = np.linalg.pinv(centred) @ dz  # (k, 2, n): the plane through the four feet's heights at each sample
+    planar = (
+        (np.abs(dz - centred @ gradient).max(axis=1) <= RISE / 2)
+        & (np.abs(np.einsum("kd,kdn->kn", u, gradient)[:, None, :] - along) <= PLANE_AGREES).all(axis=1)
+        & (geoms == geoms[:, :1]).all(axis=1)
+    )
+    return np.where(planar[:, None, :], np.linalg.norm(gradient, axis=1)[:, None, :], np.abs(along))
+
+
+def first_steep(tangent: np.ndarray, friction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Along paths (..., n) of slopes (tangents, NaN: none) on surfaces of sliding ``friction``: the first sample
+    steeper than its friction holds (``atan(friction)`` and :data:`SLOPE_TOLERANCE`; n where none), that slope and
+    the steepest its friction holds there (deg)."""
+    angle, holds = np.degrees(np.arctan(tangent)), np.degrees(np.arctan(friction))
+    over = np.nan_to_num(angle, nan=-np.inf) > holds + SLOPE_TOLERANCE
+    n = tangent.shape[-1]
+    index = np.where(over.any(axis=-1), over.argmax(axis=-1), n)
+    at = np.minimum(index, n - 1)[..., None]
+    return index, np.take_along_axis(angle, at, -1)[..., 0], np.take_along_axis(holds, at, -1)[..., 0]
 
 
 def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:
@@ -287,7 +342,7 @@ def _reach(kind: FindingKind, stop: int) -> int:
 class WalkSurvey:
     """What the four feet meet on a straight walk: the largest edge of each kind and the first that is too much."""
 
-    largest: dict[FindingKind, float]  # m: the highest step, widest gap and deepest drop met (0 where none)
+    largest: dict[EdgeKind, float]  # m: the highest step, widest gap and deepest drop met (0 where none)
     finding: Finding | None  # the first edge beyond its limit, or None
 
 
@@ -299,7 +354,7 @@ def survey_walk(heights: Heights, start: np.ndarray, goal: np.ndarray, limits: Q
     offsets = foot_offsets(limits)
     delta = goal - here
     length = float(np.linalg.norm(delta))
-    largest: dict[FindingKind, float] = dict.fromkeys(KINDS, 0.0)
+    largest: dict[EdgeKind, float] = dict.fromkeys(KINDS, 0.0)
     if length < 1e-6:
         return WalkSurvey(largest, None)
     points = foot_paths(here + offsets, delta / length, length + LOOKAHEAD)

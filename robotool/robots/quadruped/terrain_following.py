@@ -4,8 +4,10 @@ the legs and the lift that carry the body over what the feet cross.
 When a move starts, and again when the terrain under a foot changed or the stretch read runs out, downward rays
 read the path of each of the four feet from just behind it to :data:`~robotool.robots.quadruped.terrain.LOOKAHEAD`
 past the move's end (at most ``scan_ahead`` at a time), and :mod:`.terrain` checks every foot's path against the
-legs' limits: a finding moves the stopping point to just before it, and once the robot has stopped there the skill
-is refused with the measured value, the limit and where. A cloth is no footing over a gap: the rays see through it
+legs' limits and against the friction of the geoms it crosses (a slope steeper than ``atan(friction)``, in that
+world: the feet are frictionless in the simulation and the x-y servos would hold the body on any slope): a finding
+moves the stopping point to just before it, and once the robot has stopped there the skill is refused with the
+measured value, the limit and where. A cloth is no footing over a gap: the rays see through it
 to what carries it. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell
 whether a foot is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher
 surface (a step up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot
@@ -30,14 +32,17 @@ from robotool.robots.quadruped.terrain import (
     LOOKAHEAD,
     RADIUS_SAMPLES,
     RISE,
+    SLOPE_HALF,
     SPACING,
     Finding,
     TerrainKind,
     clamp,
     finding_kind,
+    first_steep,
     limit_of,
     rotated,
     scan_paths,
+    steepness,
 )
 
 
@@ -138,13 +143,14 @@ class TerrainFollowing:
         read = samples  # the samples past every world's reach repeat its last: those are read once
         if np.isfinite(ahead).all():
             read = min(samples, int(np.count_nonzero(along < ahead.max())) + 1)
-        z, objects = self.rays.cast(
+        read_back = self.rays.surface(
             worlds, points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
         )
-        z, objects = (
+        z, solid, geoms = (
             np.concatenate([a, np.repeat(a[:, :, -1:], samples - read, axis=2)], axis=2)
-            for a in (z.reshape(*points.shape[:2], read), objects.reshape(*points.shape[:2], read))
+            for a in (r.reshape(*points.shape[:2], read) for r in read_back)
         )
+        objects = self.rays.objects_of(geoms)
         under = z[:, :, behind - RADIUS_SAMPLES : behind + RADIUS_SAMPLES + 1]
         actual = np.minimum(bottom + RISE, np.nanmax(under, axis=2))
         now = self.indices(worlds, travel)[:, 1]
@@ -176,13 +182,30 @@ class TerrainFollowing:
         past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
         relevant = (kind != TerrainKind.NONE) & (meets - past <= length[:, None])
         margin = np.where(edges, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
-        stop_at = np.where(relevant, meets - margin, np.inf).min(axis=1)
+        steep, slope, holds = self._steep(worlds, np.where(pushed, z, solid), geoms, points, behind)
+        slope_from = np.maximum(steep - SLOPE_HALF, 0)  # where the run read too steep starts
+        slope_meets = travel[:, None] + np.take_along_axis(sample, np.minimum(slope_from, samples - 1), axis=1)
+        slope_meets = np.where((steep < index) & (slope_meets <= length[:, None]), slope_meets, np.inf)
+        stop_at = np.minimum(
+            np.where(relevant, meets - margin, np.inf).min(axis=1), (slope_meets - config.stop_margin).min(axis=1)
+        )
         limit = np.where(length > travel + config.scan_ahead, travel + config.scan_ahead, length)
         halted = s.halted[worlds]
         s.stop[worlds] = np.where(halted, s.stop[worlds], np.minimum(limit, stop_at))
         for k, w in enumerate(worlds):
             hits = np.flatnonzero(relevant[k])
             if halted[k]:  # refused already: the move ends where it stopped
+                continue
+            foot = int(np.argmin(slope_meets[k]))
+            if np.isfinite(slope_meets[k, foot]) and (not hits.size or slope_meets[k, foot] <= meets[k, hits].min()):
+                where = points[k, foot, slope_from[k, foot]]
+                s.findings[w] = Finding(
+                    "slope",
+                    round(float(slope[k, foot]), 1),
+                    round(float(holds[k, foot]), 1),
+                    (float(where[0]), float(where[1])),
+                    FOOT_NAMES[foot],
+                )
                 continue
             if not hits.size:
                 s.findings[w] = None
@@ -197,6 +220,18 @@ class TerrainFollowing:
                 (float(where[0]), float(where[1])),
                 FOOT_NAMES[foot],
             )
+
+    def _steep(
+        self, worlds: np.ndarray, z: np.ndarray, geoms: np.ndarray, points: np.ndarray, behind: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first sample (k, 4) from under each foot on that is steeper than its surface's friction holds in its
+        world (``samples`` where none), that slope and the steepest the friction holds (deg); the paths' heights (of
+        the solids: a cloth lies on them, or hangs from them), hit geoms and points as :meth:`scan` reads them (a
+        geom's friction as the perturbation scales it)."""
+        friction = self.senses.scene.model.geom_friction[np.maximum(geoms, 0), 0]  # none hit: no slope read
+        friction = friction * self.senses.friction_scale[worlds][:, None, None]
+        steep, slope, holds = first_steep(steepness(z, geoms, points)[:, :, behind:], friction[:, :, behind:])
+        return steep + behind, slope, holds
 
     def lift(
         self,
