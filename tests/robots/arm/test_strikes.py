@@ -45,8 +45,18 @@ def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: st
         assert f"{striker} met it at" in world_failure(rollout), world_failure(rollout)
 
 
-def test_a_block_set_down_gently_on_the_glass_dish_leaves_it_whole(run_texts: Any) -> None:
-    """The control: the same block carried over the dish and lowered onto it at the arm's pace, then let go."""
+@pytest.mark.parametrize(
+    ("layout", "under", "centre"),  # centre: the block's centre's height as it rests on what lies under it
+    [
+        ("arm_iron_block_on_a_stool_beside_a_glass_dish", "dish", 0.036),
+        ("arm_iron_block_above_a_lidded_glass_jar", "lid", 0.159),
+    ],
+)
+def test_a_block_set_down_gently_on_the_glass_leaves_it_whole(
+    run_texts: Any, layout: str, under: str, centre: float
+) -> None:
+    """The controls: the same block carried over the glass (or its lid) and lowered onto it at the arm's pace, then
+    let go."""
     program = (
         'g = get_graspable_point("block")\n'
         "open_gripper()\n"
@@ -54,34 +64,13 @@ def test_a_block_set_down_gently_on_the_glass_dish_leaves_it_whole(run_texts: An
         "move_to_position(g)\n"
         "close_gripper()\n"
         "move_to_position([g[0], g[1], 0.48])\n"
-        'd = get_center("dish")\n'
+        f'd = get_center("{under}")\n'
         "move_to_position([d[0], d[1], 0.48])\n"
-        "move_to_position([d[0], d[1], g[2] - get_center('block')[2] + 0.036])\n"
-        "open_gripper()\n"
-        "move_to_position([d[0], d[1], 0.2])\n"
-    )
-    task = tasks.load(LAYOUTS / "arm_iron_block_on_a_stool_beside_a_glass_dish.yaml")
-    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
-    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
-    assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
-
-
-def test_a_block_set_down_gently_on_the_lid_of_a_glass_jar_leaves_it_whole(run_texts: Any) -> None:
-    """The control: the block lowered onto the jar's lid at the arm's pace, then let go."""
-    program = (
-        'g = get_graspable_point("block")\n'
-        "open_gripper()\n"
-        "move_to_position([g[0], g[1], g[2] + 0.05])\n"
-        "move_to_position(g)\n"
-        "close_gripper()\n"
-        "move_to_position([g[0], g[1], 0.48])\n"
-        'd = get_center("lid")\n'
-        "move_to_position([d[0], d[1], 0.48])\n"
-        "move_to_position([d[0], d[1], g[2] - get_center('block')[2] + 0.13 + 0.025 + 0.004])\n"
+        f"move_to_position([d[0], d[1], g[2] - get_center('block')[2] + {centre}])\n"
         "open_gripper()\n"
         "move_to_position([d[0], d[1], 0.45])\n"
     )
-    task = tasks.load(LAYOUTS / "arm_iron_block_above_a_lidded_glass_jar.yaml")
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
     rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
     assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
