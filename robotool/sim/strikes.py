@@ -3,7 +3,8 @@
 A fall (:class:`~robotool.sim.object_goals.FallTracker`) is the object's own: its centre dropping onto a surface that
 is not soft, other than the robot. That misses glass struck by what moves: a dish dropped onto the gripper's palm, a
 block dropped onto a dish lying still. So a fragile object also breaks when the robot or a movable object that is not
-soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at. The speed is
+soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at, or to touch a
+movable object resting on it (a block dropped onto the lid of a glass jar drives the lid into the jar). The speed is
 the other body's, where the object's centre is (its travel and turn since the reading before: the tip of a swung stick
 strikes faster than its middle moves), relative to the object's centre, read before they touched (the larger of the
 last reading before and the first one touching). What does not move (the ground, a fixed object) is left to the fall
