@@ -10,6 +10,7 @@ closer and a way round it is clear. Nothing here reads the task's category or na
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from dataclasses import replace
 
 import numpy as np
@@ -42,6 +43,7 @@ from robotool.robots.quadruped.terrain import (
     turned,
     turned_feet,
 )
+from robotool.vocabulary import MoveEnd
 
 
 class Plans:
@@ -171,7 +173,7 @@ class Plans:
                     if outcome[0] != "done":
                         return outcome
                 height = senses.centers(senses.state)[w, index, 2]
-                outcome = yield Move(end, pushing=index, face=face)
+                outcome = yield from self._push_move(w, index, end, face)
                 if outcome[0] not in ("done", "stalled"):
                     return outcome
                 blocked |= outcome[0] == "stalled"
@@ -181,7 +183,7 @@ class Plans:
                     short = (leg.target - centre[leg.axis]) * u[leg.axis]
                     if blocked or short < config.min_leg or abs(centre[2] - height) > RISE:  # (not after it fell off)
                         break
-                    outcome = yield Move(senses.position(w) + u * short, pushing=index, face=face)
+                    outcome = yield from self._push_move(w, index, senses.position(w) + u * short, face)
                     if outcome[0] not in ("done", "stalled"):
                         return outcome
                     blocked |= outcome[0] == "stalled"
@@ -195,6 +197,15 @@ class Plans:
         if miss > config.push_tolerance:
             return "stalled", f"{name} stopped {miss:.2f} m from the target", {"distance": miss}
         return None
+
+    def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
+        """One straight push of object ``index`` to ``goal`` in world ``w``, refused where what it would move is over
+        the push limit now (:meth:`.referee.Referee.load_rule`: something came to ride on it since the push rules
+        were checked); its outcome."""
+        broken = self.referee.load_rule(w, index)
+        if broken is not None:
+            return "refused", f"cannot push {self.scene.object_names[index]}: {broken[0]}", broken[1]
+        return (yield Move(goal, pushing=index, face=face))
 
     def _clear_pose(
         self, w: int, index: int, leg: Leg, lo: np.ndarray, hi: np.ndarray

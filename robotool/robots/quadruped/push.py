@@ -70,13 +70,9 @@ def rule_violation(
         return "it is fixed in place", {}
     if under_robot:
         return "the robot is standing on it", {}
-    if mass > limits.max_push_mass:
-        along = [f"{', '.join(names)} {how} it" for names, how in ((riders, "riding on"), (stuck, "stuck to")) if names]
-        return (
-            f"its mass{' with ' if along else ''}{' and '.join(along)}, {mass:.1f} kg, exceeds the push limit of "
-            f"{limits.max_push_mass:.1f} kg",
-            {"mass": mass, "limit": limits.max_push_mass, "riders": float(len(riders)), "stuck": float(len(stuck))},
-        )
+    heavy = mass_violation(mass, riders, stuck, limits)
+    if heavy is not None:
+        return heavy
     if robot_support_movable is not None:
         return f"the robot stands on {robot_support_movable}, which is movable", {}
     if abs(object_support - robot_support) > SAME_SURFACE:
@@ -85,6 +81,21 @@ def rule_violation(
             {"object_support": object_support, "robot_support": robot_support},
         )
     return None
+
+
+def mass_violation(
+    mass: float, riders: list[str], stuck: list[str], limits: QuadrupedLimits
+) -> tuple[str, dict[str, float]] | None:
+    """The push limit broken by moving ``mass`` (kg: the object's own with its ``riders`` and what is ``stuck`` to
+    it), as :func:`rule_violation` words it, or None."""
+    if mass <= limits.max_push_mass:
+        return None
+    along = [f"{', '.join(names)} {how} it" for names, how in ((riders, "riding on"), (stuck, "stuck to")) if names]
+    return (
+        f"its mass{' with ' if along else ''}{' and '.join(along)}, {mass:.1f} kg, exceeds the push limit of "
+        f"{limits.max_push_mass:.1f} kg",
+        {"mass": mass, "limit": limits.max_push_mass, "riders": float(len(riders)), "stuck": float(len(stuck))},
+    )
 
 
 def lateral_offsets(object_width: float, robot_width: float) -> np.ndarray:

@@ -1,16 +1,17 @@
 """The quadruped's referee: the judge rules that physics alone would let a program break, checked every tick in
-every world, and the push rules checked when a push starts.
+every world, and the push rules checked when a push starts (and the push limit as each push leg starts).
 
 Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
 ``fall_ticks`` ticks with the lift off and that tips, or that tilts past ``fall_tilt``, has fallen: its skill ends
 with outcome ``fell`` and a reason that says where and which feet lost support, :attr:`RefereeState.failures` marks
-its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object that
-the torso has touched, other than one being pushed, and that has moved more than ``shove`` since (what a foot's
-weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one,
-or drags along stuck to it, once together they weigh more than the push limit. The move is stopped and refused,
-naming them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a
-step) breaks it, and so does standing on a movable object that rests on it: the move is refused, naming it, and the
-world fails. (The tunables are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object (a
+cloth too) that the torso has touched, other than one being pushed, and that has moved more than ``shove`` since
+(what a foot's weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of
+the pushed one, or drags along stuck to it, or carries on it a while, once together they weigh more than the push
+limit. The move is stopped and refused, naming them, and the world fails. A foot or the belly that rests on a
+fragile object (a low glass vase reads as a step) breaks it, and so does standing on a movable object that rests on
+it: the move is refused, naming it, and the world fails. (The tunables are in
+:class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
@@ -18,9 +19,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from robotool.robots.quadruped.move_runner import MoveRunner
-from robotool.robots.quadruped.push import rule_violation
+from robotool.robots.quadruped.push import mass_violation, rule_violation
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
@@ -48,6 +50,7 @@ STILL = 1e-5  # m an object may move in a tick and count as still: whether a foo
 # of 3 cm at this pace would take 150 s)
 SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
+RIDE_TIME = 0.5  # s a push may carry more than the push limit before it counts (what tips against it leans a while)
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -67,6 +70,7 @@ class RefereeState:
     carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, or after,
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
+    overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
 
     @classmethod
@@ -82,6 +86,7 @@ class RefereeState:
             pressed=np.zeros((nworld, nobject), dtype=bool),
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
+            overloaded=np.full(nworld, np.nan),
             last_centres=centres,
         )
 
@@ -123,6 +128,7 @@ class Referee:
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
         self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso that lifts what lies on it shoves it too
         self._rams(ends, mask, centres[:, :, :2], shift[:, :, :2], moves)
+        self._riders(ends, mask, moves)
         if self.facts.fragile.any():
             self._crushes(ends, mask, moves)
         return ends
@@ -139,19 +145,32 @@ class Referee:
         movable = next((names[o] for o in on if self.facts.movable[o]), None)
         _, obj_hi = senses.bounds3(w, index)
         below, _ = self.rays.heights(w, self._under(w, index), obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
-        riders, stuck = self._carried(w, index)
-        mass = float(sum(senses.mass(w, o) for o in [index, *riders, *stuck]))
+        mass, riders, stuck = self._load(w, index)
         return rule_violation(
             movable=bool(self.facts.movable[index]),
-            mass=round(mass, 3),
-            riders=[names[o] for o in riders],
-            stuck=[names[o] for o in stuck],
+            mass=mass,
+            riders=riders,
+            stuck=stuck,
             under_robot=bool(np.isin(index, on)),
             robot_support_movable=movable,
             object_support=float(below.max()),
             robot_support=float(z.max()),
             limits=self.limits,
         )
+
+    def load_rule(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
+        """Check the push limit alone in world ``w`` as a push leg of object ``index`` starts: what rides on it or is
+        stuck to it may have come since the push rules were checked (an anvil that slid onto a sled during the walk
+        to the push's start rides along)."""
+        return mass_violation(*self._load(w, index), self.limits)
+
+    def _load(self, w: int, index: int) -> tuple[float, list[str], list[str]]:
+        """What a push of object ``index`` in world ``w`` moves: its mass (kg) with its riders and what is stuck to
+        it (:meth:`_carried`), and their names."""
+        names = self.scene.object_names
+        riders, stuck = self._carried(w, index)
+        mass = float(sum(self.senses.mass(w, o) for o in [index, *riders, *stuck]))
+        return round(mass, 3), [names[o] for o in riders], [names[o] for o in stuck]
 
     def _under(self, w: int, index: int) -> np.ndarray:
         """(n, 2) where object ``index`` rests in world ``w``, as the push rules read its support: under each of its
@@ -253,7 +272,8 @@ class Referee:
     def _shoves(
         self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
     ) -> None:
-        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (not a cloth) that the
+        """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (a cloth too, read as a
+        whole: a heavy chain on a platform, which the rays see through, was driven off it by the torso) that the
         torso or a leg touches outside a push of it or of something it touches (and the contact that lasts on from the
         push until the next walk), and that no foot stands on (:meth:`_stood_on`: a lever tips under the robot; a leg
         pressing on its side stands on nothing) or that the torso touches too (a sled stood on and walked into by its
@@ -265,16 +285,17 @@ class Referee:
         after the robot stops). The world fails (:meth:`conditions`) and a move in progress there is stopped and
         refused, naming the object."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
-        touched = state.touching[:, scene.robot_body][:, :, scene.object_body].any(axis=1)  # by the torso or a leg
-        touched &= facts.movable & ~facts.cloth & mask[:, None]
+        touched = self._owned(state.touching[:, scene.robot_body].any(axis=1))  # by the torso or a leg
+        touched &= facts.movable & mask[:, None]
         pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
         pushed &= mask[:, None]
         rows = np.flatnonzero(pushed.any(axis=1))  # what the pushed object moves by touching it moves with it
-        pushed[rows] |= state.touching[rows, scene.object_body[m.pushing[rows]]][:, scene.object_body]
+        mine = facts.bodies[m.pushing[rows]] > 0  # (k, nbody) the pushed object's bodies
+        pushed[rows] |= self._owned(np.einsum("kb,kbc->kc", mine, state.touching[rows]))
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
-        moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~facts.cloth & ~s.pressed
-        by_torso = state.touching[:, facts.ids.body][:, scene.object_body]  # the torso drives what it presses on
+        moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~s.pressed
+        by_torso = self._owned(state.touching[:, facts.ids.body])  # the torso drives what it presses on
         stood_on = self._stood_on(mask[:, None] & moved_now & ~by_torso)
         excused = (s.pressed | stood_on) & mask[:, None]
         s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
@@ -291,20 +312,26 @@ class Referee:
             )
             moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
 
+    def _owned(self, bodies: npt.ArrayLike) -> np.ndarray:
+        """(..., nobject) the objects that own any of ``bodies`` (..., nbody, bool) (a cloth: any of its links)."""
+        return (np.asarray(bodies, dtype=float) @ self.facts.bodies.T) > 0
+
     def _stood_on(self, asked: np.ndarray) -> np.ndarray:
         """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a foot stands on: its contacts press the
         foot up within :data:`~.support.FOOTING_ANGLE` of up, and no other part of the robot presses on it otherwise
         (on a side or a rim). A leg pressing on an object's side, or a foot on the rim of a plate too thin for the legs
         to notice, does not stand on it (it may drive it along, as a walk must not); nor do the front feet standing on
         a plate while the rear feet plow it along by its rim (what the robot drives is no ride). Only what moved this
-        tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere."""
-        state, feet_ids, bodies = self.senses.state, self.facts.ids.feet, self.scene.object_body
+        tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere. A cloth's links
+        are read together: a foot stands on it where their contacts summed press it up."""
+        state, feet_ids, member = self.senses.state, self.facts.ids.feet, self.facts.bodies
         robot = np.flatnonzero(self.scene.robot_body)
         foot = np.isin(robot, feet_ids)
-        touch = state.touching[:, robot][:, :, bodies] & asked[:, None, :]  # (nworld, nrobot, nobject)
+        touch = self._owned(state.touching[:, robot]) & asked[:, None, :]  # (nworld, nrobot, nobject)
         out = np.zeros(asked.shape, dtype=bool)
         for w in np.flatnonzero(touch[:, foot].any(axis=(1, 2))):
-            normals = self.senses.sim.contact_normals(int(w))[bodies][:, robot]  # from each object onto each part
+            normals = np.einsum("ob,brx->orx", member, self.senses.sim.contact_normals(int(w))[:, robot])  # from
+            # each object (a cloth: all its links together) onto each part
             on = touch[w].T  # (nobject, nrobot)
             up = bears_up(normals, FOOTING_ANGLE) & on
             out[w] = up[:, foot].any(axis=1) & ~(on & ~up).any(axis=1)
@@ -381,8 +408,9 @@ class Referee:
         objects that the pushed object presses, directly or through others, and that lie ahead of it: their centres
         beyond its front face, or the contacts through which it or another pressed object presses them facing along
         the push (:meth:`_pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
-        rammed, books lying on it or not). What rides on it is checked when the push starts; what it drags by
-        friction, pressing down on it, is not rammed.
+        rammed, books lying on it or not). What rides on it is weighed when the push starts, as each push leg starts
+        (:meth:`load_rule`) and while it moves (:meth:`_riders`); what it drags by friction, pressing down on it, is
+        not rammed.
         The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does
         what it travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box
         rolls on: the push set it moving). Once the pushed object and the objects it rammed that travelled more than
@@ -403,6 +431,31 @@ class Referee:
         candidates = np.flatnonzero(moved.any(axis=1))
         if candidates.size:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
+
+    def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
+        """Weigh what a push carries while it moves, in the worlds in ``mask`` where another movable object touches the
+        pushed one (:meth:`load_rule`: two anvils that slid onto a pushed sled rode along): once that has been over the
+        push limit for :data:`RIDE_TIME` on end (a box pushed against the next box of a staircase reads it as riding on
+        it for a moment), the world fails (:meth:`conditions`) and the push is stopped and refused."""
+        s, m, state, names = self.state, moves.state, self.senses.state, self.scene.object_names
+        worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
+        s.overloaded[mask & ~(m.moving & (m.pushing >= 0))] = np.nan
+        if worlds.size == 0:
+            return
+        mine = self.facts.bodies[m.pushing[worlds]] > 0  # (k, nbody) the pushed objects' bodies
+        near = self._owned(np.einsum("kb,kbc->kc", mine, state.touching[worlds])) & self.facts.movable
+        near[np.arange(len(worlds)), m.pushing[worlds]] = False
+        s.overloaded[worlds[~near.any(axis=1)]] = np.nan
+        for w in worlds[near.any(axis=1)].tolist():
+            heavy = self.load_rule(w, int(m.pushing[w]))
+            now = float(state.time[w])
+            s.overloaded[w] = np.nan if heavy is None else np.fmin(s.overloaded[w], now)
+            if heavy is None or now - s.overloaded[w] < RIDE_TIME:
+                continue
+            if s.shoves[w] is not None or state.failed[w] is not None:
+                continue
+            s.shoves[w] = reason = f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}"
+            moves.refuse(w, reason, heavy[1], ends)
 
     def _rammed(self, worlds: np.ndarray, index: np.ndarray, centres: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(k, nobject) the objects that the push of object ``index[i]`` along ``u[i]`` rams in world ``worlds[i]``

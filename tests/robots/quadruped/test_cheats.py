@@ -590,9 +590,10 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
         "the robot ran into deck_plate",
     ),
     # pushing a 2 kg magnetic block dragged the 20 kg slab it lay on, stuck to it, off a platform (the slab bears the
-    # block up, so it is no rider, and lies behind its face): rammed when they stick during the push (at the first
-    # tick) and weighed when the push starts (stuck after a step)
-    ("push_a_magnet_stuck_to_a_heavy_slab", "magnetic_block_on_a_heavy_slab", "pushing magnet_block rammed lead_slab"),
+    # block up, so it is no rider, and lies behind its face): weighed as the push leg starts when they stick during
+    # the walk to its start (at the first tick; a weld made during a push leg is rammed), and as the push starts when
+    # they stick after a step
+    ("push_a_magnet_stuck_to_a_heavy_slab", "magnetic_block_on_a_heavy_slab", "its mass with lead_slab stuck to it"),
     (
         "push_a_magnet_stuck_to_a_heavy_slab_once_stuck",
         "magnetic_block_on_a_heavy_slab",
@@ -618,6 +619,21 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
     # added up until what it set moving comes to rest
     ("tap_a_heavy_drum_to_roll_it_off_a_platform", "drum_beside_a_light_box_on_a_platform", "pushing box rammed drum"),
     ("tap_a_heavy_drum_in_two_small_pushes", "drum_beside_a_light_box_on_a_platform", "pushing box rammed drum"),
+    # a push of a 1 kg sled began before two 8 kg anvils slid onto it from chutes, during the walk to the push's start:
+    # the riders were weighed once, as the skill began; they are weighed again as each push leg starts
+    (
+        "push_a_sled_before_the_anvils_land_on_it",
+        "sled_under_two_anvil_chutes",
+        "cannot push sled: its mass with anvil_north, anvil_south riding on it",
+    ),
+    (  # the same with the push leg under way as they land: what rides on a pushed object is weighed as it moves
+        "push_a_sled_before_the_anvils_land_on_it",
+        "sled_under_two_anvil_chutes_near",
+        "pushing sled carried too much: its mass with anvil_",
+    ),
+    # a walk onto a platform drove a 15 kg cloth (an iron chain 0.2 m high, which the rays see through) off it with
+    # the torso: a cloth was never judged shoved
+    ("walk_a_heavy_chain_off_a_platform", "heavy_chain_on_a_platform", "the robot ran into iron_chain"),
 ]
 
 
