@@ -144,7 +144,7 @@ class Plans:
         goal = np.array(target[:2], dtype=float)
         miss, blocked = np.inf, False
         for attempt in range(1 + config.corrections):
-            broken = self.referee.push_rules(w, index)
+            broken = self.referee.pushes.push_rules(w, index)
             if broken is not None:
                 if attempt:  # what it moved changed (it fell off something, something landed on it): no correction
                     break
@@ -200,9 +200,9 @@ class Plans:
 
     def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
         """One straight push of object ``index`` to ``goal`` in world ``w``, refused where what it would move is over
-        the push limit now (:meth:`.referee.Referee.load_rule`: something came to ride on it since the push rules
+        the push limit now (:meth:`.push_rules.PushRules.load_rule`: something came to ride on it since the push rules
         were checked); its outcome."""
-        broken = self.referee.load_rule(w, index)
+        broken = self.referee.pushes.load_rule(w, index)
         if broken is not None:
             return "refused", f"cannot push {self.scene.object_names[index]}: {broken[0]}", broken[1]
         return (yield Move(goal, pushing=index, face=face))
@@ -230,7 +230,7 @@ class Plans:
         clear, drop = first_clear_sweep(heights, [(behind, end) for _, end, _, behind in tries], limits, floor)
         if clear is not None:
             start, end, staging, _ = tries[clear]
-            face = face_turn(start, end, lo, hi) if self.referee.loaded(w, index) else 0.0
+            face = face_turn(start, end, lo, hi) if self.referee.pushes.loaded(w, index) else 0.0
             if face and turned_feet_drop(heights, start, end, limits, face, floor) is not None:
                 face = 0.0
             return (start, end, staging, face), ""

@@ -1,6 +1,6 @@
 """What the quadruped controller's components read from the batched state: the scene's fixed facts (which objects
-are movable, fragile or cloth, the robot's ids and size), each world's friction scale and, from the current state,
-positions, object centres, bounds and masses (computed once per state)."""
+are movable, fragile or cloth, the robot's ids and size) and, from the current state, positions, object centres,
+bounds and masses (computed once per state)."""
 
 from __future__ import annotations
 
@@ -70,7 +70,6 @@ class Senses:
         self.sim, self.facts = sim, facts
         self.scene: Scene = sim.scene
         self.state: BatchState = sim.state()
-        self.friction_scale = sim.friction_scale
         self._memo: tuple[BatchState | None, dict[Any, np.ndarray]] = (None, {})  # see of_state
 
     def position(self, w: int) -> np.ndarray:

@@ -229,7 +229,7 @@ class TerrainFollowing:
         the solids: a cloth lies on them, or hangs from them), hit geoms and points as :meth:`scan` reads them (a
         geom's friction as the perturbation scales it)."""
         friction = self.senses.scene.model.geom_friction[np.maximum(geoms, 0), 0]  # none hit: no slope read
-        friction = friction * self.senses.friction_scale[worlds][:, None, None]
+        friction = friction * self.senses.sim.friction_scale[worlds][:, None, None]
         steep, slope, holds = first_steep(steepness(z, geoms, points)[:, :, behind:], friction[:, :, behind:])
         return steep + behind, slope, holds
 

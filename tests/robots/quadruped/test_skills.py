@@ -222,7 +222,7 @@ def test_what_lies_on_an_object_is_read_from_the_contacts_that_bear_it_up() -> N
     simulator.step(200, np.ones(1, dtype=bool))
     controller = embodiment_for(task).controller(simulator)
     controller.tick(simulator.state())
-    loaded = {name: controller.referee.loaded(0, k) for k, name in enumerate(scene.object_names)}
+    loaded = {name: controller.referee.pushes.loaded(0, k) for k, name in enumerate(scene.object_names)}
     assert loaded == {
         "yoga_roller": True,
         "surfboard": True,
