@@ -37,6 +37,7 @@ SIDE = QUADRUPED.board_side
 TIP_PAST = QUADRUPED.tip_past
 MAX_STEPS = QUADRUPED.max_steps
 MOVED_AWAY = 0.02  # m: a placement nearer than this to where a link stands is where it stands
+STEP_GAP = 0.01  # m a staircase link is placed short of the next (pushed flush, a perturbed overrun rams the next)
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
 
 
@@ -400,7 +401,8 @@ def _pushed_distance(layout: Layout, route: Route) -> float:
 def _sides(
     quad: Quadruped, layout: Layout, obj: SceneObject, nxt: SceneObject, directions: list[np.ndarray]
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-    """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction): centred,
+    """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction; :data:`STEP_GAP`
+    short of it): centred,
     flush with either end, or flush with something else standing by the same face, as long as the feet can stand
     across both."""
     box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
@@ -411,7 +413,7 @@ def _sides(
         axis = int(np.argmax(np.abs(direction)))
         lat = 1 - axis
         slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
-        along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + 0.002)
+        along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + STEP_GAP)
         offsets = [0.0, slide, -slide]
         for other in others:  # flush against something else that stands by the same face
             if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
