@@ -47,8 +47,7 @@ class StrikeWatch:
         self._time: np.ndarray | None = None
         self._xpos = np.zeros(0)
         self._xmat = np.zeros(0)
-        self._touch = np.zeros(0, dtype=bool)  # (nworld, nstriker): touching it, directly or through what rests on it
-        self._direct = np.zeros(0, dtype=bool)  # touching it directly
+        self._direct = np.zeros(0, dtype=bool)  # (nworld, nstriker): touching it directly
         self._pairs = np.zeros(0, dtype=bool)  # (nworld, nstriker, nstriker): which strikers touch each other
         self._carried = np.zeros(0, dtype=bool)  # (nworld, nstriker): resting on it
         self._speed = np.zeros(0)
@@ -67,7 +66,7 @@ class StrikeWatch:
         if self._time is None:
             self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
             self._direct, self._pairs, self._carried = direct, pairs, carried
-            self._touch, self._speed = direct, np.zeros(direct.shape)
+            self._speed = np.zeros(direct.shape)
         rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
         spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
         centre = state.xpos[:, None, self.body]
@@ -85,7 +84,6 @@ class StrikeWatch:
         self._direct = np.where(keep, direct, self._direct)
         self._pairs = np.where(keep[:, :, None], pairs, self._pairs)
         self._carried = np.where(keep, carried, self._carried)
-        self._touch = np.where(keep, direct | onto.any(axis=2), self._touch)
         self._speed = np.where(keep, speed, self._speed)
         return struck, new, np.where(via, np.argmax(fresh, axis=2), -1)
 
@@ -109,10 +107,13 @@ class StrikeWatch:
         xpos = state.xpos[:, self.strikers]
         apart = xpos[:, :, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
         gap = (np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]).min(axis=2)
-        radii = self.striker_radius[:, None] + self.striker_radius[None, :]
-        between = np.linalg.norm(xpos[:, :, None] - xpos[:, None, :], axis=3) - radii  # [w, s, c]: striker to striker
-        between = np.where(self._carried[:, None, :], between, np.inf).min(axis=2)  # to what rests on the object
-        could = (np.minimum(gap, between) < cover) & (reach > self.limit) & ~self._touch
+        touching = self._direct.copy()
+        if self._carried.any():  # near what rests on the object, or touching it, is near it, or touching it
+            radii = self.striker_radius[:, None] + self.striker_radius[None, :]
+            between = np.linalg.norm(xpos[:, :, None] - xpos[:, None, :], axis=3) - radii  # [w, s, c]
+            gap = np.minimum(gap, np.where(self._carried[:, None, :], between, np.inf).min(axis=2))
+            touching |= (self._pairs & self._carried[:, None, :]).any(axis=2)
+        could = (gap < cover) & (reach > self.limit) & ~touching
         return np.any(could & ~(held[:, None] & self.robot[None, :]), axis=1)
 
 
