@@ -55,13 +55,13 @@ class StrikeWatch:
     def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none),
         (nworld, nstriker) which bodies came to touch the object then, directly or through a movable object resting on
-        it (touching it, its centre above the object's: a lid on a jar passes on the blow of what lands on it), and
-        through which striker each did (-1: directly)."""
+        it (touching it or one that does, its centre above the object's: a lid on a jar passes on the blow of what lands
+        on it), and through which striker each did (-1: directly)."""
         xpos = state.xpos[:, self.strikers]
         xmat = quat_to_mat(state.xquat[:, self.strikers].reshape(-1, 4)).reshape(*xpos.shape, 3)
         direct = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
         pairs = np.asarray(state.touching[:, self.strikers][:, :, self.strikers])  # [w, s, c]: s touches c
-        carried = direct & self.loose & self._above(state)
+        carried = self._resting(direct, pairs, self.loose & self._above(state))
         onto = pairs & carried[:, None, :]  # s touches c, which rests on the object
         if self._time is None:
             self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
@@ -74,7 +74,7 @@ class StrikeWatch:
         own = state.qvel[:, None, self.dof : self.dof + 3]
         speed = np.linalg.norm(own - moving, axis=2)  # (nworld, nstriker)
         fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
-        via = fresh.any(axis=2) & ~direct
+        via = fresh.any(axis=2) & ~direct & ~self._touching()  # (what rested on it already does not strike it anew)
         new = active[:, None] & ((direct & ~self._direct) | via)
         struck = np.where(new, np.maximum(speed, self._speed), 0.0).max(axis=1, initial=0.0)
         keep = active[:, None]
@@ -90,6 +90,22 @@ class StrikeWatch:
     def name(self, striker: int, through: int) -> str:
         """Who struck: a striker's name, and what it struck through (-1: nothing)."""
         return self.names[striker] + (f" through {self.names[through]}" if through >= 0 else "")
+
+    def _touching(self) -> np.ndarray:
+        """(nworld, nstriker) which strikers touched the object at the last reading, directly or through what rests
+        on it."""
+        return self._direct | (self._pairs & self._carried[:, None, :]).any(axis=2)
+
+    @staticmethod
+    def _resting(direct: np.ndarray, pairs: np.ndarray, above: np.ndarray) -> np.ndarray:
+        """(nworld, nstriker) the movable objects ``above`` the object that rest on it: touching it, or touching one
+        that does (a board on the lid of a jar passes a blow on as the lid does)."""
+        resting = direct & above
+        while True:
+            more = resting | ((pairs & resting[:, None, :]).any(axis=2) & above)
+            if np.array_equal(more, resting):
+                return resting
+            resting = more
 
     def _above(self, state: BatchState) -> np.ndarray:
         """(nworld, nstriker) whether each striker's centre lies above the object's."""
@@ -107,13 +123,11 @@ class StrikeWatch:
         xpos = state.xpos[:, self.strikers]
         apart = xpos[:, :, None] - state.xpos[:, None, self.mine]  # (nworld, nstriker, nmine, 3)
         gap = (np.linalg.norm(apart, axis=3) - self.striker_radius[:, None] - self.mine_radius[None, :]).min(axis=2)
-        touching = self._direct.copy()
-        if self._carried.any():  # near what rests on the object, or touching it, is near it, or touching it
+        if self._carried.any():  # near what rests on the object is near it
             radii = self.striker_radius[:, None] + self.striker_radius[None, :]
             between = np.linalg.norm(xpos[:, :, None] - xpos[:, None, :], axis=3) - radii  # [w, s, c]
             gap = np.minimum(gap, np.where(self._carried[:, None, :], between, np.inf).min(axis=2))
-            touching |= (self._pairs & self._carried[:, None, :]).any(axis=2)
-        could = (gap < cover) & (reach > self.limit) & ~touching
+        could = (gap < cover) & (reach > self.limit) & ~self._touching()
         return np.any(could & ~(held[:, None] & self.robot[None, :]), axis=1)
 
 

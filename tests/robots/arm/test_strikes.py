@@ -33,6 +33,12 @@ LAYOUTS = FIXTURES / "layouts"
             "arm_iron_block_above_a_lidded_glass_jar",
             "block through lid",
         ),
+        # the same through a board lying on the lid: only what touched the jar itself passed a blow on
+        (
+            "arm_drop_an_iron_block_onto_a_board_on_a_lidded_glass_jar",
+            "arm_iron_block_above_a_glass_jar_under_a_lid_and_a_board",
+            "block through board",
+        ),
     ],
 )
 def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: str, layout: str, striker: str) -> None:
@@ -50,6 +56,7 @@ def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: st
     [
         ("arm_iron_block_on_a_stool_beside_a_glass_dish", "dish", 0.036),
         ("arm_iron_block_above_a_lidded_glass_jar", "lid", 0.159),
+        ("arm_iron_block_above_a_glass_jar_under_a_lid_and_a_board", "board", 0.189),
     ],
 )
 def test_a_block_set_down_gently_on_the_glass_leaves_it_whole(
