@@ -7,16 +7,22 @@ soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of 
 movable object resting on it (a block dropped onto the lid of a glass jar drives the lid into the jar). The speed is
 the other body's, where the object's centre is (its travel and turn since the reading before: the tip of a swung stick
 strikes faster than its middle moves), relative to the object's centre, read before they touched (the larger of the
-last reading before and the first one touching). What does not move (the ground, a fixed object) is left to the fall
-rule, which reads a fall as the documented drop of the object's centre, not the speed of a part of it that swings
-down. A fragile object's fall past ``max_drop`` makes the goal read every physics step, so a landing on the robot is
-read at the step it happens; so does a striker that could meet the object faster than the limit before the next tick
-(:meth:`StrikeWatch.watched`): read only at ticks, a block let go a little above a dish lands between two readings,
-each slower than the landing.
+last reading before and the first one touching). The object itself driven into what does not move breaks the same
+way (found by an adversarial run: a stick shoved a dish sideways into a fixed wall at 2.5 times the limit, and the fall
+rule reads only the drop of its centre): a new touch of a fixed object that is not soft (a wall, a shelf, a stool, a
+button) at more than the limit, the object's own speed (its centre's, as a fall is read) being the speed they meet at.
+The floor (the world's own bodies) is left to the fall rule: it is flat and under everything, so the object comes to it
+only by falling, which the fall rule reads as the documented drop of its centre (counting a landing's speed would
+break a dish pushed off a low step sideways, however small its drop), and nothing drives it sideways into it. A
+fragile object's fall past ``max_drop`` makes the goal read every physics step, so a landing on the robot is read at
+the step it happens; so does a striker that could meet the object faster than the limit before the next tick, and the
+object could meet a fixed object so (:meth:`StrikeWatch.watched`): read only at ticks, a block let go a little above a
+dish lands between two readings, each slower than the landing.
 """
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from robotool.sim.backend import BatchState, quat_to_mat
@@ -44,6 +50,10 @@ class StrikeWatch:
         radius = body_radii(scene)
         self.striker_radius, self.mine_radius = radius[self.strikers], radius[self.mine]
         self.names = ["the robot" if scene.robot_body[b] else objects[owner[b]].name for b in self.strikers.tolist()]
+        self.fixed = FixedBodies(scene, index)
+        self.names += self.fixed.names  # a strike's bodies: the strikers, then the fixed objects
+        mover = scene.robot_body | (scene.model.body_weldid != 0)  # what moves: the robot, movable objects, soft too
+        self.movers = np.flatnonzero(mover & (owner != index))
         self._time: np.ndarray | None = None
         self._xpos = np.zeros(0)
         self._xmat = np.zeros(0)
@@ -51,32 +61,40 @@ class StrikeWatch:
         self._pairs = np.zeros(0, dtype=bool)  # (nworld, nstriker, nstriker): which strikers touch each other
         self._carried = np.zeros(0, dtype=bool)  # (nworld, nstriker): resting on it
         self._speed = np.zeros(0)
+        self._walls = np.zeros(0, dtype=bool)  # (nworld, nfixed): touching a fixed object
+        self._own = np.zeros(0)  # (nworld,): the object's own speed
 
     def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none),
-        (nworld, nstriker) which bodies came to touch the object then, directly or through a movable object resting on
-        it (touching it or one that does, its centre above the object's: a lid on a jar passes on the blow of what lands
-        on it), and through which striker each did (-1: directly)."""
+        (nworld, nstriker + nfixed) which bodies came to touch the object then, directly or through a movable object
+        resting on it (touching it or one that does, its centre above the object's: a lid on a jar passes on the blow of
+        what lands on it), and through which striker each did (-1: directly); a fixed object it came to touch met it at
+        its own speed."""
         xpos = state.xpos[:, self.strikers]
         xmat = quat_to_mat(state.xquat[:, self.strikers].reshape(-1, 4)).reshape(*xpos.shape, 3)
         direct = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
         pairs = np.asarray(state.touching[:, self.strikers][:, :, self.strikers])  # [w, s, c]: s touches c
         carried = self._resting(direct, pairs, self.loose & self._above(state))
         onto = pairs & carried[:, None, :]  # s touches c, which rests on the object
+        walls = self.fixed.touching(state, self.mine)
+        own = state.qvel[:, self.dof : self.dof + 3]
+        own_speed = np.linalg.norm(own, axis=1)
         if self._time is None:
             self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
             self._direct, self._pairs, self._carried = direct, pairs, carried
             self._speed = np.zeros(direct.shape)
+            self._walls, self._own = walls, own_speed
         rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
         spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
         centre = state.xpos[:, None, self.body]
         moving = (xpos - self._xpos) * rate + np.cross(spin, centre - xpos)  # where the object's centre is
-        own = state.qvel[:, None, self.dof : self.dof + 3]
-        speed = np.linalg.norm(own - moving, axis=2)  # (nworld, nstriker)
+        speed = np.linalg.norm(own[:, None] - moving, axis=2)  # (nworld, nstriker)
         fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
         via = fresh.any(axis=2) & ~direct & ~self._touching()  # (what rested on it already does not strike it anew)
         new = active[:, None] & ((direct & ~self._direct) | via)
         struck = np.where(new, np.maximum(speed, self._speed), 0.0).max(axis=1, initial=0.0)
+        met = active[:, None] & walls & ~self._walls  # (nworld, nfixed): a new touch of a fixed object
+        struck = np.maximum(struck, np.where(met.any(axis=1), np.maximum(own_speed, self._own), 0.0))
         keep = active[:, None]
         self._time = np.where(active, state.time, self._time)
         self._xpos = np.where(keep[:, :, None], xpos, self._xpos)
@@ -85,7 +103,10 @@ class StrikeWatch:
         self._pairs = np.where(keep[:, :, None], pairs, self._pairs)
         self._carried = np.where(keep, carried, self._carried)
         self._speed = np.where(keep, speed, self._speed)
-        return struck, new, np.where(via, np.argmax(fresh, axis=2), -1)
+        self._walls = np.where(keep, walls, self._walls)
+        self._own = np.where(active, own_speed, self._own)
+        through = np.where(via, np.argmax(fresh, axis=2), -1)
+        return struck, np.hstack([new, met]), np.hstack([through, np.full(met.shape, -1)])
 
     def name(self, striker: int, through: int) -> str:
         """Who struck: a striker's name, and what it struck through (-1: nothing)."""
@@ -115,9 +136,16 @@ class StrikeWatch:
         """(nworld,) the worlds where a striker not touching the object could meet it faster than the limit within
         ``dt``: its last speed plus :data:`GAIN` over ``dt`` passes the limit, and its bounding sphere lies within
         what that start and gain cover in ``dt`` of the object's. The robot is left out where it ``held`` (nworld,)
-        the object (in its grip, the object moves with the hand)."""
+        the object (in its grip, the object moves with the hand). So are the worlds where the object could meet a
+        fixed object it does not touch faster than the limit (:meth:`_could_meet_fixed`)."""
         if self._time is None:
             return np.zeros(len(state.time), dtype=bool)
+        struck = self._could_strike(state, dt, held)
+        return struck.any(axis=1) | self._could_meet_fixed(state, dt, struck)
+
+    def _could_strike(self, state: BatchState, dt: float, held: np.ndarray) -> np.ndarray:
+        """(nworld, nstriker) the strikers that could meet the object faster than the limit within ``dt``
+        (:meth:`watched`)."""
         reach = self._speed + GAIN * dt  # (nworld, nstriker): the fastest it could meet the object by the next tick
         cover = self._speed * dt + GAIN * dt**2 / 2  # and the farthest it could come
         xpos = state.xpos[:, self.strikers]
@@ -128,7 +156,98 @@ class StrikeWatch:
             between = np.linalg.norm(xpos[:, :, None] - xpos[:, None, :], axis=3) - radii  # [w, s, c]
             gap = np.minimum(gap, np.where(self._carried[:, None, :], between, np.inf).min(axis=2))
         could = (gap < cover) & (reach > self.limit) & ~self._touching()
-        return np.any(could & ~(held[:, None] & self.robot[None, :]), axis=1)
+        return could & ~(held[:, None] & self.robot[None, :])
+
+    def _could_meet_fixed(self, state: BatchState, dt: float, struck: np.ndarray) -> np.ndarray:
+        """(nworld,) the worlds where the object could meet a fixed object it does not touch faster than the limit
+        within ``dt``: its speed plus what it could gain over ``dt`` passes the limit, and the gap between their boxes
+        is within what that start and gain cover. It gains :data:`GAIN` where something that moves touches it or a
+        striker could strike it (``struck``: a shove), else gravity's pull at most (sliding or falling)."""
+        nworld = len(state.time)
+        if not len(self.fixed.names):
+            return np.zeros(nworld, dtype=bool)
+        speed = np.linalg.norm(state.qvel[:, self.dof : self.dof + 3], axis=1)
+        pushed = np.asarray(state.touching[:, self.mine][:, :, self.movers].any(axis=(1, 2))) | struck.any(axis=1)
+        gain = np.where(pushed, GAIN, GRAVITY)
+        fast = speed + gain * dt > self.limit
+        if not fast.any():
+            return fast
+        cover = speed * dt + gain * dt**2 / 2
+        near = (self.fixed.gaps(state, self.mine) < cover[:, None]) & ~self._walls
+        return fast & near.any(axis=1)
+
+
+class FixedBodies:
+    """The bodies of the fixed objects that are not soft (a wall, a shelf, a stool, a button's housing and face), which
+    a fragile object breaks on when driven into them too fast, and the gaps it keeps from them, read from the boxes
+    around their geoms and its own (:func:`box_gaps`). The floor is not among them (see the module's docstring)."""
+
+    def __init__(self, scene: Scene, index: int):
+        objects, owner, model = scene.task.objects, scene.body_object, scene.model
+        still = np.array([not o.movable and not o.soft for o in objects])
+        fixed = (owner >= 0) & (owner != index) & still[np.maximum(owner, 0)]
+        self.bodies = np.flatnonzero(fixed)
+        self.names = [objects[owner[b]].name for b in self.bodies.tolist()]
+        shaped = model.geom_rbound > 0  # (a plane bounds nothing)
+        self.geoms = np.flatnonzero(shaped & fixed[model.geom_bodyid])
+        self.column = np.searchsorted(self.bodies, model.geom_bodyid[self.geoms])  # each geom's fixed body
+        self.mine = np.flatnonzero(shaped & (owner[model.geom_bodyid] == index))
+        self.half = geom_half_sizes(model)
+        self.model = model
+
+    def touching(self, state: BatchState, mine: np.ndarray) -> np.ndarray:
+        """(nworld, nfixed) which fixed bodies touch the object (its bodies ``mine``)."""
+        return np.asarray(state.touching[:, mine][:, :, self.bodies].any(axis=1))
+
+    def gaps(self, state: BatchState, mine: np.ndarray) -> np.ndarray:
+        """(nworld, nfixed) at most how far the object's geoms are from each fixed body's (0 or less: they may
+        touch)."""
+        ours, theirs = self._boxes(state, self.mine), self._boxes(state, self.geoms)
+        gap = box_gaps(*ours, *theirs).min(axis=1)  # (nworld, ngeom of the fixed bodies)
+        out = np.full((len(state.time), len(self.bodies)), np.inf)
+        np.minimum.at(out.T, self.column, gap.T)
+        return out
+
+    def _boxes(self, state: BatchState, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Boxes around ``geoms`` in every world: centres (nworld, k, 3), axes as columns (nworld, k, 3, 3), half
+        sizes (k, 3)."""
+        model = self.model
+        body = model.geom_bodyid[geoms]
+        frame = quat_to_mat(state.xquat[:, body].reshape(-1, 4)).reshape(len(state.time), len(geoms), 3, 3)
+        local = quat_to_mat(model.geom_quat[geoms])
+        centre = state.xpos[:, body] + np.einsum("wkij,kj->wki", frame, model.geom_pos[geoms])
+        return centre, frame @ local, self.half[geoms]
+
+
+def geom_half_sizes(model: mujoco.MjModel) -> np.ndarray:
+    """(ngeom, 3) the half sizes of a box around each geom, in its frame: a box's own, a cylinder's radius and
+    half-length, a capsule's with its caps, a sphere's radius; a cube of its bounding radius for any other shape."""
+    size, kind = model.geom_size, model.geom_type
+    r = size[:, 0]
+    out = np.repeat(model.geom_rbound[:, None], 3, axis=1)
+    geom = mujoco.mjtGeom
+    box, cyl, cap, sphere = (
+        kind == int(t) for t in (geom.mjGEOM_BOX, geom.mjGEOM_CYLINDER, geom.mjGEOM_CAPSULE, geom.mjGEOM_SPHERE)
+    )
+    out[box] = size[box]
+    out[cyl] = np.stack([r, r, size[:, 1]], axis=1)[cyl]
+    out[cap] = np.stack([r, r, size[:, 1] + r], axis=1)[cap]
+    out[sphere] = r[sphere, None]
+    return out
+
+
+def box_gaps(
+    ca: np.ndarray, ra: np.ndarray, ha: np.ndarray, cb: np.ndarray, rb: np.ndarray, hb: np.ndarray
+) -> np.ndarray:
+    """(nworld, na, nb) a lower bound of the distance between each of boxes ``a`` and each of boxes ``b`` (centres
+    (nworld, n, 3), axes as columns (nworld, n, 3, 3), half sizes (n, 3)): the widest gap between their shadows on
+    the six axes of their faces (a separating axis; 0 or less where they may overlap). A box's shadow on an axis never
+    exceeds the box, so no gap read is wider than the true one."""
+    d = cb[:, None] - ca[:, :, None]  # (nworld, na, nb, 3)
+    cos = np.abs(np.einsum("waik,wbij->wabkj", ra, rb))  # [.., k, j]: |a's axis k . b's axis j|
+    on_a = np.abs(np.einsum("wabi,waik->wabk", d, ra)) - ha[None, :, None] - np.einsum("wabkj,bj->wabk", cos, hb)
+    on_b = np.abs(np.einsum("wabi,wbij->wabj", d, rb)) - hb[None, None] - np.einsum("wabkj,ak->wabj", cos, ha)
+    return np.maximum(on_a.max(axis=3), on_b.max(axis=3))
 
 
 def body_radii(scene: Scene) -> np.ndarray:

@@ -94,3 +94,30 @@ def test_a_block_let_go_a_little_above_the_glass_breaks_it(run_texts: Any) -> No
         assert not rollout.success
         (broke,) = [e for e in rollout.events if e.kind == "broke"]
         assert broke.detail == "block" and broke.measured["strike_speed"] > 1.6, broke
+
+
+def test_glass_driven_into_a_fixed_wall_faster_than_its_fall_lands_breaks(run_texts: Any) -> None:
+    """Found by an adversarial run: a stick shoved a dish (max_drop 0.002 m: 0.20 m/s) sideways into a fixed wall at
+    0.50 m/s and it stayed whole, since fixed objects struck nothing and the fall rule reads only its centre's drop.
+    Here a sponge (soft: no striker) shoves a dish (0.14 m/s) into a wall at the arm's pace in every world: the wall,
+    met anew faster than the limit, breaks it."""
+    task = tasks.load(LAYOUTS / "arm_sponge_behind_a_glass_dish_before_a_wall.yaml")
+    program = (CHEATS / "arm_shove_a_glass_dish_into_a_wall_through_a_sponge.py").read_text()
+    rollouts: list[Rollout] = run_texts(task, [program] * 4, seed=11)
+    for rollout in rollouts:
+        assert not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.detail == "wall" and broke.measured["strike_speed"] > 0.2, broke
+        assert "dish broke: wall met it at" in world_failure(rollout), world_failure(rollout)
+
+
+def test_glass_shoved_short_of_a_fixed_wall_stays_whole(run_texts: Any) -> None:
+    """The control: the same push 8 cm shorter: the dish slides about 2 cm towards the wall, read at every physics step
+    as it could reach the wall too fast, and stops about 1 cm short of it."""
+    task = tasks.load(LAYOUTS / "arm_sponge_behind_a_glass_dish_before_a_wall.yaml")
+    program = (CHEATS / "arm_shove_a_glass_dish_into_a_wall_through_a_sponge.py").read_text()
+    program = program.replace("s[1] + 0.08", "s[1] + 0.0")
+    assert "s[1] + 0.0," in program
+    rollouts: list[Rollout] = run_texts(task, [program] * 4, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+    assert "dish" in rollouts[0].touched and not [e for r in rollouts for e in r.events if e.kind == "broke"]
