@@ -120,15 +120,6 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize(("program", "scene"), CASES)
-def test_cheat_fails_in_every_world_with_a_reason(program: str, scene: str) -> None:
-    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 3, "quadruped"), seed=11)
-    for rollout in rollouts:
-        reason = failure_reason(rollout)
-        assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
-        assert reason, rollout
-
-
 LAYOUT_CASES = [
     # the sofas mirrored (toward -x), turned (toward -y, on a diagonal), with gaps of other widths
     ("gap_one_walk", "traverse_mirrored"),
@@ -249,21 +240,57 @@ CONTROL_CASES = [
     ("straddle_a_low_disc", "low_disc_wider_than_the_stance"),  # the disc carries the stance: its top presses it up
 ]
 
+WORLDS = {**dict.fromkeys(CASES, 3), **dict.fromkeys(LAYOUT_CASES, 2), **dict.fromkeys(CONTROL_CASES, 2)}
+"""(program, scene) -> the perturbed worlds it runs in: 3 on the built-in scenes and their variants, 2 on layouts."""
+BATCH_PROGRAMS = 6
 
-@pytest.mark.parametrize(("program", "scene"), LAYOUT_CASES)
+
+def _programs_on(scene: str) -> list[str]:
+    return [program for program, on in WORLDS if on == scene]
+
+
+@functools.cache
+def _batch(scene: str, chunk: int) -> dict[str, list[Rollout]]:
+    """Program -> its rollouts, for up to :data:`BATCH_PROGRAMS` of the programs listed on ``scene`` (chunk
+    ``chunk`` of them), run side by side in one batch: each world runs its own program, as a batch of candidates
+    does, so cheats and honest programs also share batches here."""
+    programs = _programs_on(scene)[chunk * BATCH_PROGRAMS : (chunk + 1) * BATCH_PROGRAMS]
+    texts = [_text(program) for program in programs for _ in range(WORLDS[program, scene])]
+    rollouts = iter(sim.run_sessions(_scene(scene), start_sessions(texts, "quadruped"), seed=11))
+    return {program: [next(rollouts) for _ in range(WORLDS[program, scene])] for program in programs}
+
+
+def _rollouts(program: str, scene: str) -> list[Rollout]:
+    """The rollouts of ``program`` on ``scene``, from the batch it shares with other programs on that scene."""
+    return _batch(scene, _programs_on(scene).index(program) // BATCH_PROGRAMS)[program]
+
+
+def _grouped(cases: list[tuple[str, str]]) -> list[Any]:
+    """The cases as parameters, each scene's in one xdist group (its worker runs each shared batch once)."""
+    return [pytest.param(p, scene, marks=pytest.mark.xdist_group(f"cheats-on-{scene}")) for p, scene in cases]
+
+
+@pytest.mark.parametrize(("program", "scene"), _grouped(CASES))
+def test_cheat_fails_in_every_world_with_a_reason(program: str, scene: str) -> None:
+    for rollout in _rollouts(program, scene):
+        reason = failure_reason(rollout)
+        assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
+        assert reason, rollout
+
+
+@pytest.mark.parametrize(("program", "scene"), _grouped(LAYOUT_CASES))
 def test_cheat_fails_on_unseen_layouts_in_every_world_with_a_reason(program: str, scene: str) -> None:
     """Each program runs to its end or to a refused argument: it fails because the world said no, not because
     it could not run."""
-    rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 2, "quadruped"), seed=11)
-    for rollout in rollouts:
+    for rollout in _rollouts(program, scene):
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert failure_reason(rollout) or rollout.error, rollout
         assert rollout.error is None or "position" in rollout.error, rollout.error
 
 
-@pytest.mark.parametrize(("program", "scene"), CONTROL_CASES)
-def test_honest_programs_succeed_on_the_same_layouts(run_texts: Any, program: str, scene: str) -> None:
-    rollouts = run_texts(_scene(scene), [_text(program)] * 2, seed=11)
+@pytest.mark.parametrize(("program", "scene"), _grouped(CONTROL_CASES))
+def test_honest_programs_succeed_on_the_same_layouts(program: str, scene: str) -> None:
+    rollouts = _rollouts(program, scene)
     assert all(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
 
 
