@@ -22,11 +22,17 @@ from __future__ import annotations
 import html
 import json
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Any
+from urllib.parse import quote
 
 from pydantic import BaseModel
+from rich.console import Console, ConsoleOptions, RenderableType
 from rich.markup import escape as rich_escape
+from rich.segment import Segment
+from rich.status import Status
+from rich.text import Text
 
 _UNICODE_CONTROLS = (  # Unicode's format characters (Cf) and its default-ignorable code points: text that shows nothing
     r"\u00ad\u034f\u0600-\u0605\u061c\u06dd\u070f\u0890\u0891\u08e2\u115f\u1160\u17b4\u17b5\u180b-\u180f"
@@ -144,6 +150,13 @@ def html_text(text: str) -> str:
     return html.escape(terminal_safe(capped(text, HTML_CHARS)), quote=True)
 
 
+def url_path(path: str) -> str:
+    """For a relative path an HTML page links to (``src``, ``href``): percent-encoded, ``/`` kept, so that every
+    character of a file name reaches the browser as itself (a control, a quote or a ``:`` that would read as a
+    scheme stays inert) and still names the file."""
+    return quote(path, safe="/")
+
+
 def json_string(text: str) -> str:
     """One string as JSON: every non-ASCII and control character as a ``\\u`` escape."""
     return json.dumps(text, ensure_ascii=True)
@@ -182,3 +195,43 @@ SINKS: dict[str, Sink] = {
     "json": Sink("JSON files and lines: reports, results, journals, prompt logs", json_string, one_line=True),
 }
 """Every kind of sink by name; tests/test_output_safety.py runs a hostile string through each."""
+
+
+# -- the terminal, whatever text reaches it --------------------------------------------------------
+
+
+class TerminalConsole(Console):
+    """A rich console that shows every character a terminal would act on as a visible escape, whatever reaches it:
+    strings (paths the user typed, ``wrote out.json``), :class:`~rich.text.Text`, tables, status lines. Text that a
+    program or a model controls still goes through :func:`console_markup` or :func:`console_plain` (markup escaped,
+    length capped); this console is what keeps host text that embeds a file name the user gave (the name of an
+    output file can hold an escape sequence) inert. Rich's own styles and cursor moves are kept. A status line's
+    text is shown as it is, never read as markup (a file name with ``[/x]`` in it). Emoji codes stay text."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("emoji", False)
+        super().__init__(*args, **kwargs)
+
+    def render_str(self, text: str, **kwargs: Any) -> Text:
+        return super().render_str(terminal_safe(text), **kwargs)
+
+    def render(self, renderable: RenderableType, options: ConsoleOptions | None = None) -> Iterator[Segment]:
+        for segment in super().render(renderable, options):
+            if segment.control is None and _CONTROLS.search(segment.text):
+                yield Segment(terminal_safe(segment.text), segment.style)
+            else:
+                yield segment
+
+    def status(self, status: RenderableType, **kwargs: Any) -> Status:
+        return _PlainStatus(_plain(status), console=self, **kwargs)
+
+
+def _plain(status: RenderableType) -> RenderableType:
+    return Text(terminal_safe(status)) if isinstance(status, str) else status
+
+
+class _PlainStatus(Status):
+    """A status line whose text, given or updated, is never read as markup."""
+
+    def update(self, status: RenderableType | None = None, **kwargs: Any) -> None:
+        super().update(None if status is None else _plain(status), **kwargs)

@@ -160,10 +160,12 @@ ESCAPERS = {
 }
 
 HOST_TEXT_ONLY = {
-    ("robotool/cli/solve_command.py", "console"): "paths the user typed and the model's name; program and model text "
+    ("robotool/cli/solve_command.py", "console"): "paths the user typed and the model's name (their controls escaped "
+    "by the console itself, a TerminalConsole); program and model text goes through robotool.cli.summary",
+    ("robotool/cli/run_command.py", "console"): "paths the user typed (escaped by the TerminalConsole); program text "
     "goes through robotool.cli.summary",
-    ("robotool/cli/run_command.py", "console"): "paths the user typed; program text goes through robotool.cli.summary",
-    ("robotool/cli/outputs.py", "console"): "paths the user typed and video facts the host measured",
+    ("robotool/cli/outputs.py", "console"): "paths the user typed (escaped by the TerminalConsole) and video facts the "
+    "host measured",
     ("robotool/cli/eval_command.py", "console"): "fixed messages",
     ("robotool/sandbox/worker.py", "json"): "the worker's messages to the host over its socket, not a file",
     ("robotool/sandbox/zygote.py", "json"): "the zygote's control messages, not a file",
@@ -338,3 +340,80 @@ def test_a_program_naming_an_object_with_an_invisible_character_is_shown_so(
     main(["run", "sofa_climbing", str(program), "--plan", str(plan), "--backend", "mujoco"])
     out, err = capsys.readouterr()
     assert plan.is_file() and "Glyph" not in err and "top_view.py" not in err, err
+
+
+# -- output paths: the user's file names reach the terminal and the page inert ---------------------------------------
+
+TITLE = "\x1b]0;PWN\x07\x1b[31mRED"
+"""An OSC that retitles the window and an SGR that paints red, in the name of an output file."""
+
+
+def _no_raw(text: str) -> None:
+    """No raw control in ``text``, and the name shown escaped (the console may wrap a long path anywhere)."""
+    flat = text.replace("\n", "")
+    assert not _RAW.search(flat), repr(text)
+    assert "\\x1b]0;PWN\\x07\\x1b[31mRED" in flat, repr(text)
+
+
+def test_an_output_path_in_an_argument_error_is_escaped(capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by an adversarial run: argparse's error for ``--json "/nonexist<ESC>.../x.json"`` printed ESC and BEL."""
+    from fixtures.reference import program_path
+
+    program = str(program_path("milk_reaching_direct"))
+    with pytest.raises(SystemExit) as ended:
+        main(["run", "milk_reaching_near", program, "--json", f"/nonexistent{TITLE}/x.json"])
+    assert ended.value.code == 2
+    err = capsys.readouterr().err
+    _no_raw(err)
+    assert err.startswith("error: argument --json: cannot write /nonexistent\\x1b]0;PWN") and err.count("\n") == 1
+
+
+def test_whatever_reaches_the_terminal_console_is_escaped() -> None:
+    """Host lines that embed a path (``wrote ...``), styled text and status lines: the console itself escapes them,
+    keeping its own styles and cursor moves; a status line is never read as markup (``[/x]`` raised MarkupError)."""
+    from rich.text import Text
+
+    from robotool.safe_text import TerminalConsole
+
+    plain = TerminalConsole(file=StringIO(), width=300, color_system=None)
+    plain.print(f"wrote p/out{TITLE}.json", markup=False, highlight=False)
+    plain.print(f"wrote [b]p/out{TITLE}.json[/b]")
+    plain.print(Text.assemble(("internal error:", "bold red"), f" see p/{TITLE}/trace.txt"))
+    _no_raw(plain.file.getvalue())  # type: ignore[attr-defined]
+    terminal = TerminalConsole(file=StringIO(), width=300, force_terminal=True, color_system="standard")
+    terminal.print(Text.assemble(("wrote", "red"), f" p/out{TITLE}.json"))
+    with terminal.status(f"writing p/[/x]{TITLE}/page.html") as status:
+        status.update(f"still writing [/y]{TITLE}")
+    shown = terminal.file.getvalue()  # type: ignore[attr-defined]
+    assert "\x1b]" not in shown and "\x07" not in shown and "\x1b[31mRED" not in shown, repr(shown)
+    assert "\x1b[31mwrote" in shown and "p/out\\x1b]0;PWN" in shown  # its own colour kept; the path shown escaped
+    assert "still writing [/y]\\x1b]0;PWN\\x07" in shown  # the status line as written
+
+
+def test_a_run_says_where_it_wrote_with_the_paths_escaped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by an adversarial run: ``robotool run ... --json "p/out<ESC>...json" --plan ...`` printed its ``wrote``
+    lines with the raw escapes."""
+    program = tmp_path / "idle.py"
+    program.write_text("open_gripper()\n")
+    report, plan = tmp_path / f"out{TITLE}.json", tmp_path / f"plan{TITLE}.png"
+    status = main(["run", "milk_reaching_near", str(program), "--json", str(report), "--plan", str(plan)])
+    out, err = capsys.readouterr()
+    assert status == 1 and report.is_file() and plan.is_file(), err
+    _no_raw(out + err)
+    assert f"wrote the report to {tmp_path}/out\\x1b]0;PWN\\x07\\x1b[31mRED.json" in out.replace("\n", "")
+
+
+def test_a_page_links_a_file_of_any_name_percent_encoded() -> None:
+    """Found by an adversarial run: ``<video src=...>`` held the video's file name with raw ESC and BEL (quotes were
+    escaped); a path is percent-encoded, so the browser still finds the file."""
+    from urllib.parse import unquote
+
+    from robotool.report_page.page import _environment
+
+    name = f'v{TITLE}"<a> b:c.mp4'
+    page = _environment().from_string('<video src="{{ src|url }}"></video>').render(src=f"videos/{name}")
+    assert not _RAW.search(page) and '"<a>' not in page
+    assert page == '<video src="videos/v%1B%5D0%3BPWN%07%1B%5B31mRED%22%3Ca%3E%20b%3Ac.mp4"></video>'
+    assert unquote(page.split('"')[1]) == f"videos/{name}"
+    data = _environment().from_string("{{ src|url }}").render(src="data:image/png;base64,AAAA+/==")
+    assert data == "data:image/png;base64,AAAA+/=="  # a data: URI stays whole

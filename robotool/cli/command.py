@@ -26,6 +26,18 @@ class UsageError(ValueError):
     """A mistake in how a command was called; reported in one line with exit status 2."""
 
 
+def check_batch(candidates: int, worlds: int) -> None:
+    """Refuse, before anything starts, ``candidates`` x ``worlds`` programs at once when the sandbox cannot give each
+    its share of memory (:meth:`~robotool.sandbox.limits.SandboxLimits.for_batch`): a :class:`UsageError`."""
+    from robotool.sandbox.limits import BatchTooLarge, SandboxLimits
+
+    try:
+        SandboxLimits().for_batch(candidates * worlds)
+    except BatchTooLarge as e:
+        asked = f"--candidates {candidates} x --worlds {worlds}" if candidates > 1 else f"--worlds {worlds}"
+        raise UsageError(f"{asked}: {e}; ask for fewer") from None
+
+
 class Command(Protocol):
     """A verb: runs with its parsed arguments and two consoles (output, errors); returns the exit status."""
 

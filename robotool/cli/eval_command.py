@@ -16,11 +16,15 @@ from pathlib import Path
 
 from rich.console import Console
 
-from robotool.cli.command import UsageError, run_line, set_command
+from robotool.cli.command import UsageError, check_batch, run_line, set_command
 from robotool.cli.internal_error import report_internal_error
 from robotool.cli.options import (
     EXIT_INTERRUPTED,
     EXIT_USAGE,
+    MAX_PROCESSES,
+    MAX_RUNS,
+    MAX_THREADS,
+    MAX_WORLDS,
     Parser,
     Verbs,
     add_candidate_options,
@@ -99,7 +103,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="evaluate a --program on instances it was trained on (refused by default; warned about)",
     )
-    p.add_argument("--runs", type=positive_int, default=1, help="runs per task and method (the paper: 10)")
+    p.add_argument("--runs", type=positive_int(MAX_RUNS), default=1, help="runs per task and method (the paper: 10)")
     add_lm_options(
         p,
         temperature_help="sampling temperature of every LM call (above 0 for runs that differ; default: the "
@@ -107,10 +111,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_candidate_options(p)
     add_world_options(p, seed_help="base seed of the perturbed worlds")
-    p.add_argument("--workers", type=positive_int, default=DEFAULT_WORKERS, help="LM runs in flight at once")
+    p.add_argument(
+        "--workers", type=positive_int(MAX_THREADS), default=DEFAULT_WORKERS, help="LM runs in flight at once"
+    )
     p.add_argument(
         "--processes",
-        type=positive_int,
+        type=positive_int(MAX_PROCESSES),
         default=cores(),
         help="LM-free runs (pure simulation) in flight at once with --executor local and the mujoco backend, "
         "each in a process of its own (default: one per core, here %(default)s)",
@@ -143,7 +149,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--videos",
-        type=count,
+        type=count(MAX_WORLDS),
         default=0,
         metavar="N",
         help="film the first N failed worlds of each task and method (MP4s under videos/, shown in report.html)",
@@ -190,6 +196,7 @@ def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int
 
     if args.executor == "ray" and args.log_prompts is not None:  # the file would be written on the workers
         raise UsageError("--log-prompts writes a file on this machine, so it needs --executor local")
+    check_batch(args.candidates, args.worlds)
     folder: Path | None = None  # where an internal error's traceback goes, once known
     try:
         config = config_from(args)

@@ -16,11 +16,13 @@ from rich.console import Console
 from rich.table import Table
 
 from robotool import tasks
-from robotool.cli.command import run_line, set_command
+from robotool.cli.command import check_batch, run_line, set_command
 from robotool.cli.internal_error import report_internal_error
 from robotool.cli.options import (
     EXIT_INTERRUPTED,
     EXIT_USAGE,
+    MAX_CANDIDATES,
+    MAX_THREADS,
     Parser,
     Verbs,
     add_lm_options,
@@ -41,6 +43,13 @@ from robotool.safe_text import console_plain
 from robotool.version import version
 
 EXIT_LM_UNAVAILABLE = 3
+MAX_EXAMPLES = 1000
+"""Training or validation examples (each is generated, checked solvable and verified in simulation)."""
+MAX_METRIC_CALLS = 100_000
+MAX_STEPS = 1000
+"""mipro's trials, simba's steps."""
+MAX_DEMOS = 100
+"""Demonstrations per stage (each goes into every prompt of its stage)."""
 
 
 DESCRIPTION = (
@@ -73,8 +82,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="task families to draw examples from "
         "(default: all); the paper's six built-in tasks are never training examples",
     )
-    p.add_argument("--train", type=positive_int, default=6, help="training examples")
-    p.add_argument("--val", type=count, default=4, help="validation examples (scored before and after)")
+    p.add_argument("--train", type=positive_int(MAX_EXAMPLES), default=6, help="training examples")
+    p.add_argument("--val", type=count(MAX_EXAMPLES), default=4, help="validation examples (scored before and after)")
     p.add_argument("--method", choices=list(STAGES_BY_METHOD), default="robotool", help="which stages the program has")
     lm = add_lm_options(p, temperature_help="sampling temperature of the stages' calls", log_prompts=False)
     lm.add_argument("--reflection-lm", help="model that proposes instructions (gepa, mipro, simba; default: --lm)")
@@ -82,14 +91,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_world_options(
         p, worlds_help="perturbed worlds per verification", seed_help="seed of the perturbed worlds and the optimiser"
     )
-    p.add_argument("--threads", type=positive_int, default=4, help="metric calls in flight at once")
+    p.add_argument("--threads", type=positive_int(MAX_THREADS), default=4, help="metric calls in flight at once")
     budget = p.add_argument_group("budget")
     budget.add_argument("--auto", choices=["light", "medium", "heavy"], help="gepa, mipro: DSPy's budget preset")
-    budget.add_argument("--max-metric-calls", type=positive_int, help="gepa: metric calls (default: 60)")
-    budget.add_argument("--trials", type=positive_int, default=6, help="mipro: trials")
-    budget.add_argument("--candidates", type=positive_int, default=3, help="mipro, simba: instruction candidates")
-    budget.add_argument("--steps", type=positive_int, default=4, help="simba: steps")
-    budget.add_argument("--demos", type=count, default=2, help="demonstrations per stage")
+    budget.add_argument(
+        "--max-metric-calls", type=positive_int(MAX_METRIC_CALLS), help="gepa: metric calls (default: 60)"
+    )
+    budget.add_argument("--trials", type=positive_int(MAX_STEPS), default=6, help="mipro: trials")
+    budget.add_argument(
+        "--candidates", type=positive_int(MAX_CANDIDATES), default=3, help="mipro, simba: instruction candidates"
+    )
+    budget.add_argument("--steps", type=positive_int(MAX_STEPS), default=4, help="simba: steps")
+    budget.add_argument("--demos", type=count(MAX_DEMOS), default=2, help="demonstrations per stage")
 
 
 def settings_from(args: argparse.Namespace) -> OptimizeSettings:
@@ -149,6 +162,7 @@ def cmd_optimize(args: argparse.Namespace, console: Console, errors: Console) ->
     from robotool.program.compiled import CompiledProgramError
     from robotool.program.lm import LMConfigError, make_lm
 
+    check_batch(1, args.worlds)
     log = Path(args.log or args.out.with_name(f"{args.out.stem}-log"))
     try:
         settings = settings_from(args)

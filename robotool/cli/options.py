@@ -12,6 +12,7 @@ import math
 import os
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
 
@@ -20,7 +21,7 @@ from rich.text import Text
 
 from robotool.errors import RobotoolWarning
 from robotool.program.lm import DEFAULT_TIMEOUT
-from robotool.safe_text import console_plain, one_line
+from robotool.safe_text import TerminalConsole, capped, console_plain, one_line
 from robotool.vocabulary import BACKENDS, BackendName
 
 if TYPE_CHECKING:
@@ -74,37 +75,68 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_USAGE, f"error: {message} (see {self.prog} --help)\n")
+        """The message on one line, its control characters escaped (it quotes the argument, e.g. a path)."""
+        self.exit(EXIT_USAGE, f"error: {one_line(message)} (see {one_line(self.prog)} --help)\n")
 
 
 Verbs: TypeAlias = "argparse._SubParsersAction[Parser]"
 """A parser's verbs (what ``add_subparsers`` returns): each command module registers its own."""
 
 
-def _whole_number(text: str, minimum: int, expected: str) -> int:
-    """``text`` as a whole number of at least ``minimum``; the argument error says it ``expected`` one."""
+MAX_WORLDS = 1000
+"""Perturbed worlds per candidate: each world's program runs in a sandboxed worker of its own, all at once."""
+MAX_CANDIDATES = 100
+"""Candidate programs per solve or run (each is verified in every world: K x R workers at once)."""
+MAX_REPAIRS = 100
+"""Repair rounds, and times a stage is asked again after a reply that does not parse."""
+MAX_RUNS = 1000
+"""Runs per task and method of an evaluation (the paper: 10)."""
+MAX_THREADS = 256
+"""Threads that keep language-model calls in flight at once."""
+MAX_PROCESSES = 1024
+"""Processes that simulate at once (one per core is the default)."""
+MAX_SEED = 2**63 - 1
+"""The largest seed: seeds are added to and hashed, and a number of thousands of digits is a mistake."""
+SHOWN_CHARS = 40
+"""How much of an argument that is not a number an error quotes."""
+
+
+def _whole_number(text: str, minimum: int, maximum: int, expected: str) -> int:
+    """``text`` as a whole number from ``minimum`` to ``maximum``; the argument error says it ``expected`` one (and
+    the bound it broke)."""
     try:
         value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+    except ValueError:  # also a number of more digits than Python converts
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {capped(text, SHOWN_CHARS)!r}") from None
     if value < minimum:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {value}")
+    if value > maximum:
+        raise argparse.ArgumentTypeError(f"expected {expected} of at most {maximum}, got {capped(text, SHOWN_CHARS)}")
     return value
 
 
-def positive_int(text: str) -> int:
-    """An argument that must be a whole number of at least 1."""
-    return _whole_number(text, 1, "a positive integer")
+def positive_int(maximum: int) -> Callable[[str], int]:
+    """An argument that must be a whole number from 1 to ``maximum`` (every count has a bound: a count far beyond
+    any real use would hang the command or exhaust the machine's memory before it said anything)."""
+
+    def positive(text: str) -> int:
+        return _whole_number(text, 1, maximum, "a positive integer")
+
+    return positive
+
+
+def count(maximum: int) -> Callable[[str], int]:
+    """A count that may be zero: a whole number from 0 to ``maximum``."""
+
+    def whole(text: str) -> int:
+        return _whole_number(text, 0, maximum, "a whole number >= 0")
+
+    return whole
 
 
 def seed(text: str) -> int:
-    """A seed: a whole number of at least 0."""
-    return _whole_number(text, 0, "a seed (a whole number >= 0)")
-
-
-def count(text: str) -> int:
-    """A count that may be zero: a whole number of at least 0."""
-    return _whole_number(text, 0, "a whole number >= 0")
+    """A seed: a whole number from 0 to :data:`MAX_SEED`."""
+    return _whole_number(text, 0, MAX_SEED, "a seed (a whole number >= 0)")
 
 
 def seconds(text: str) -> float:
@@ -206,7 +238,7 @@ def add_world_options(
 ) -> argparse._ArgumentGroup:
     """The simulated worlds' options every command that runs programs takes: how many, which simulator, the seed."""
     group = parser.add_argument_group("worlds")
-    group.add_argument("--worlds", type=positive_int, default=worlds, help=worlds_help)
+    group.add_argument("--worlds", type=positive_int(MAX_WORLDS), default=worlds, help=worlds_help)
     group.add_argument("--backend", choices=BACKENDS, help=BACKEND_HELP)
     group.add_argument("--seed", type=seed, default=0, help=seed_help)
     return group
@@ -215,19 +247,22 @@ def add_world_options(
 def add_candidate_options(parser: argparse.ArgumentParser) -> argparse._ArgumentGroup:
     """How many programs the LM path proposes (K) and how many repair rounds it may run."""
     group = parser.add_argument_group("candidates")
-    group.add_argument("--candidates", type=positive_int, default=1, help="candidate programs to sample (K)")
-    group.add_argument("--repair", type=count, default=0, metavar="N", help=REPAIR_HELP)
+    group.add_argument(
+        "--candidates", type=positive_int(MAX_CANDIDATES), default=1, help="candidate programs to sample (K)"
+    )
+    group.add_argument("--repair", type=count(MAX_REPAIRS), default=0, metavar="N", help=REPAIR_HELP)
     return group
 
 
 def make_console(*, stderr: bool = False) -> Console:
     """A console for output; when it is not a terminal (and ``COLUMNS`` is not set), tables keep
-    :data:`CAPTURED_WIDTH` columns instead of rich's 80. Emoji codes stay text (``:white_check_mark:`` in a program's
-    string must not paint a tick in the host's tables; :func:`robotool.safe_text.console_markup` leaves them)."""
+    :data:`CAPTURED_WIDTH` columns instead of rich's 80. A :class:`~robotool.safe_text.TerminalConsole`: whatever
+    reaches it (an output path the user typed included) shows its control characters as escapes, and emoji codes stay
+    text (``:white_check_mark:`` in a program's string must not paint a tick in the host's tables)."""
     stream = sys.stderr if stderr else sys.stdout
     if stream.isatty() or os.environ.get("COLUMNS"):
-        return Console(stderr=stderr, emoji=False)
-    return Console(stderr=stderr, width=CAPTURED_WIDTH, emoji=False)
+        return TerminalConsole(stderr=stderr)
+    return TerminalConsole(stderr=stderr, width=CAPTURED_WIDTH)
 
 
 def warnings_in_one_line() -> None:

@@ -4,12 +4,13 @@ happened."""
 from __future__ import annotations
 
 import argparse
+import codecs
 from pathlib import Path
 
 from rich.console import Console
 
 from robotool import tasks
-from robotool.cli.command import UsageError, set_command
+from robotool.cli.command import UsageError, check_batch, set_command
 from robotool.cli.options import DEFAULT_WORLDS, TASK_HELP, Verbs, add_world_options, output_file
 from robotool.cli.outputs import (
     add_html_option,
@@ -21,8 +22,12 @@ from robotool.cli.outputs import (
 )
 from robotool.cli.verbs import add_verb
 from robotool.safe_text import json_text
-from robotool.sandbox.validate import ProgramRejected
+from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected
+from robotool.task.task_file import read_at_most
 
+MAX_PROGRAM_BYTES = 4 * MAX_PROGRAM_CHARS + len(codecs.BOM_UTF8)
+"""The most bytes a program file of :data:`~robotool.sandbox.validate.MAX_PROGRAM_CHARS` characters can take (the
+sandbox counts the characters)."""
 RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
 
@@ -32,9 +37,13 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
     from robotool.cli.summary import print_run, print_run_verdict
     from robotool.execute import run
 
+    check_batch(1, args.worlds)
     task = tasks.load(args.task)
     try:
-        code = args.program.read_text(encoding="utf-8-sig")  # as Python reads source: a BOM is allowed
+        data = read_at_most(args.program, MAX_PROGRAM_BYTES)  # /dev/zero is not read whole
+        if len(data) > MAX_PROGRAM_BYTES:
+            raise UsageError(f"{args.program}: program is longer than {MAX_PROGRAM_CHARS} characters")
+        code = data.decode("utf-8-sig")  # as Python reads source: a BOM is allowed
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeDecodeError) as e:

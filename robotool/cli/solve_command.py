@@ -11,8 +11,9 @@ from typing import TYPE_CHECKING
 from rich.console import Console
 
 from robotool import tasks
-from robotool.cli.command import UsageError, set_command
+from robotool.cli.command import UsageError, check_batch, set_command
 from robotool.cli.options import (
+    MAX_REPAIRS,
     TASK_HELP,
     Verbs,
     add_candidate_options,
@@ -41,6 +42,8 @@ if TYPE_CHECKING:
 
     from robotool.program.lm_program import RoboTool
 
+MAX_TOKENS = 1_000_000
+"""The largest token limit of an LM reply that ``--max-tokens`` accepts (far above any model's)."""
 WAIT_LINE_EVERY = 30
 """Seconds between the lines that tell a console that is not a terminal a reply is still awaited."""
 
@@ -50,6 +53,7 @@ def cmd_solve(args: argparse.Namespace, console: Console, errors: Console) -> in
     from robotool.cli.summary import print_solution, print_solution_verdict
     from robotool.program.lm import HOW_TO_CONFIGURE
 
+    check_batch(args.candidates if args.planner == "lm" else 1, args.worlds)
     task = tasks.load(args.task)
     check_video_args(args, folder=True)
     program = _lm_program(args)
@@ -153,10 +157,10 @@ def register(verbs: Verbs) -> None:
         help="lm: the RoboTool program (falls back to search without a model); search: LM-free planner",
     )
     lm = add_lm_options(p)
-    lm.add_argument("--max-tokens", type=positive_int, help="token limit of each LM reply")
+    lm.add_argument("--max-tokens", type=positive_int(MAX_TOKENS), help="token limit of each LM reply")
     lm.add_argument(
         "--format-retries",
-        type=count,
+        type=count(MAX_REPAIRS),
         default=DEFAULT_FORMAT_RETRIES,
         metavar="N",
         help="times a stage is asked again, shown what was wrong, after a reply that does not parse",

@@ -17,6 +17,9 @@ from robotool.safe_text import console_plain
 from robotool.task.concepts import needs_tool
 from robotool.task.describe import describe
 
+MAX_PIXELS = 16384
+"""The widest and tallest picture ``render`` accepts; the renderer's own limit (smaller) is checked when it draws."""
+
 
 def cmd_tasks(args: argparse.Namespace, console: Console, errors: Console) -> int:
     """List the built-in tasks, print one's YAML (``--show``), or write one generated instance of a family."""
@@ -95,6 +98,6 @@ def register(verbs: Verbs) -> None:
     p = add_verb(verbs, "render")
     p.add_argument("task", metavar="TASK_OR_FILE", help=TASK_HELP)
     p.add_argument("--out", type=output_file, required=True, help="the PNG file to write")
-    p.add_argument("--width", type=positive_int, default=960, help="picture width in pixels")
-    p.add_argument("--height", type=positive_int, default=540, help="picture height in pixels")
+    p.add_argument("--width", type=positive_int(MAX_PIXELS), default=960, help="picture width in pixels")
+    p.add_argument("--height", type=positive_int(MAX_PIXELS), default=540, help="picture height in pixels")
     set_command(p, cmd_render)

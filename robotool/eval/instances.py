@@ -14,6 +14,7 @@ from pydantic import BaseModel, ConfigDict
 from robotool import tasks
 from robotool.eval.config import EvalError
 from robotool.eval.reference import BUILTIN_TOOLS, PAPER_TASKS
+from robotool.safe_text import capped
 from robotool.task.concepts import needs_tool
 from robotool.task.task_model import Task
 
@@ -98,19 +99,27 @@ def _distinct(chosen: list[TaskInstance], notes: list[str]) -> list[TaskInstance
     return list(by_name.values())
 
 
+MAX_SEEDS = 1000
+"""Seeds one ``--seeds`` may name (each is an instance of every family): counted before a range is expanded, so
+``0-99999999999`` is refused at once rather than filling the memory."""
+
+
 def parse_seeds(text: str) -> tuple[int, ...]:
-    """``"A-B"`` (inclusive), ``"A"`` or ``"A,B,C"`` -> seeds; ValueError with a readable message."""
-    seeds: list[int] = []
+    """``"A-B"`` (inclusive), ``"A"`` or ``"A,B,C"`` -> seeds, at most :data:`MAX_SEEDS` of them; ValueError with a
+    readable message."""
+    ranges: list[range] = []
     for part in text.split(","):
         low, dash, high = part.strip().partition("-")
         try:
             first, last = int(low), int(high) if dash else int(low)
-        except ValueError:
-            raise ValueError(f"seeds must look like 0-9 or 1,4,7, got {text!r}") from None
+        except ValueError:  # also a number of more digits than Python converts
+            raise ValueError(f"seeds must look like 0-9 or 1,4,7, got {capped(text, 60)!r}") from None
         if first < 0 or last < first:
-            raise ValueError(f"seed range {part.strip()!r} must be A-B with 0 <= A <= B")
-        seeds.extend(range(first, last + 1))
-    return tuple(dict.fromkeys(seeds))
+            raise ValueError(f"seed range {capped(part.strip(), 60)!r} must be A-B with 0 <= A <= B")
+        ranges.append(range(first, last + 1))
+        if sum(r.stop - r.start for r in ranges) > MAX_SEEDS:  # len() of a range fails past 2**63
+            raise ValueError(f"at most {MAX_SEEDS} seeds at once, got more in {capped(text, 60)!r}")
+    return tuple(dict.fromkeys(seed for r in ranges for seed in r))
 
 
 def select(

@@ -45,7 +45,7 @@ from robotool.eval.solvers import (
 from robotool.eval.tables import all_tables
 from robotool.eval.work import NotAttempted, RunJob, RunWork
 from robotool.processes import cores
-from robotool.safe_text import console_plain, json_text
+from robotool.safe_text import TerminalConsole, console_plain, json_text
 from robotool.version import version
 from robotool.vocabulary import BackendName
 
@@ -162,6 +162,19 @@ def uses_lm(method: str) -> bool:
     return METHODS[method].uses_lm if method in METHODS else True
 
 
+MAX_RUNS = 100_000
+"""Runs one evaluation may ask for (task instances x methods x runs), refused before the first is planned."""
+
+
+def _check_size(instances: int, methods: int, runs: int) -> None:
+    """Refuse an evaluation of more than :data:`MAX_RUNS` runs, saying what multiplied to it."""
+    if instances * methods * runs > MAX_RUNS:
+        raise EvalError(
+            f"{instances} task instance(s) x {methods} method(s) x {runs} run(s) is {instances * methods * runs} runs; "
+            f"one evaluation runs at most {MAX_RUNS}: ask for fewer --tasks, --seeds, --methods or --runs"
+        )
+
+
 def _check_folder(config: EvalConfig) -> None:
     """Create the output folder; refuse one that holds a different request unless ``--resume``."""
     folder = config.out_dir
@@ -245,7 +258,7 @@ def evaluate(
     unavailable for some runs: they are not journalled, and no report is written.
     """
     started = time.perf_counter()
-    console = console or Console(emoji=False)  # emoji codes in a program's text stay text
+    console = console or TerminalConsole()  # emoji codes in a program's text stay text; paths' controls escaped
     lm = _lm(config, lm)
     if lm is not None and config.settings.lm is None:
         config = config.model_copy(update={"settings": config.settings.model_copy(update={"lm": lm.model})})
@@ -254,6 +267,7 @@ def evaluate(
     backend = executor.backend(config.settings.backend)
     chosen, skipped, stages = _methods(config, lm, solvers, backend)
     notes = [*notes, *held_out_warnings(config, instances)]
+    _check_size(len(instances), len(chosen), config.runs)
     _check_folder(config)
     journal = Journal(config.out_dir)
     plan = _plan(config, instances, list(chosen), backend)

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel, Field, ValidationError
 
 from robotool.errors import RobotoolError
+from robotool.task.task_file import read_at_most
 from robotool.version import version
 
 if TYPE_CHECKING:
@@ -63,6 +64,10 @@ class CompiledInfo(BaseModel):
     notes: list[str] = Field(default_factory=list, description="what the optimiser did not do, and why")
 
 
+MAX_COMPILED_BYTES = 64 * 2**20
+"""A compiled program file's largest size (its prompts and demonstrations take some hundreds of kB)."""
+
+
 def save_compiled(program: dspy.Module, path: Path, info: CompiledInfo) -> None:
     """Write the program's state and ``info`` to ``path`` (JSON)."""
     state = program.dump_state()
@@ -75,13 +80,20 @@ def read_compiled(path: Path) -> tuple[dict[str, Any], CompiledInfo | None]:
     if path.suffix.lower() != ".json":
         raise CompiledProgramError(f"{path}: a compiled program is a .json file")
     try:
-        state = json.loads(path.read_text(encoding="utf-8"))
+        data = read_at_most(path, MAX_COMPILED_BYTES)
+        if len(data) > MAX_COMPILED_BYTES:
+            raise CompiledProgramError(
+                f"{path} is larger than {MAX_COMPILED_BYTES // 2**20} MiB: not a compiled program"
+            )
+        state = json.loads(data.decode("utf-8"))
     except FileNotFoundError:
         raise CompiledProgramError(f"compiled program not found: {path}") from None
     except (OSError, UnicodeDecodeError) as e:
         raise CompiledProgramError(f"cannot read {path}: {getattr(e, 'strerror', None) or e}") from None
     except json.JSONDecodeError as e:
         raise CompiledProgramError(f"{path} is not JSON (line {e.lineno}, column {e.colno}: {e.msg})") from None
+    except ValueError as e:  # a number of thousands of digits
+        raise CompiledProgramError(f"{path} cannot be read: {str(e).split(';')[0]}") from None
     if not isinstance(state, dict):
         raise CompiledProgramError(f"{path} is not a compiled program (expected a JSON object)")
     info = None

@@ -21,7 +21,7 @@ from robotool.eval.report import preamble
 from robotool.eval.tables import TextTable
 from robotool.execute import RunReport
 from robotool.report_page.views import Media, PageView, record_view, rollouts_view, solution_view
-from robotool.safe_text import html_text
+from robotool.safe_text import html_text, url_path
 from robotool.solution import Solution
 from robotool.task.task_model import Task
 
@@ -34,9 +34,9 @@ def _finalize(value: object) -> Markup:
 
 
 def _url(src: str) -> Markup:
-    """A media address the host built (a path in the results folder, or a ``data:`` URI), HTML-escaped whole: the
-    sink's length cap would cut a ``data:`` URI."""
-    return escape(src)
+    """A media address the host built: a ``data:`` URI, HTML-escaped whole (the sink's length cap would cut it), or a
+    path relative to the page (its file name may be the user's, control characters and all), percent-encoded."""
+    return escape(src if src.startswith("data:") else url_path(src))
 
 
 @cache

@@ -7,6 +7,18 @@ import os
 from pydantic import BaseModel, ConfigDict, Field
 
 
+class BatchTooLarge(ValueError):
+    """A batch of more programs than the sandbox's memory can give each one its MiB (see
+    :meth:`SandboxLimits.for_batch`); the command line refuses it before anything runs."""
+
+    def __init__(self, programs: int, batch_mb: int) -> None:
+        super().__init__(
+            f"a batch of {programs} programs does not fit in {batch_mb} MiB of sandbox memory "
+            f"(at least 1 MiB each: at most {batch_mb} programs at once)"
+        )
+        self.programs, self.batch_mb = programs, batch_mb
+
+
 class SandboxLimits(BaseModel):
     """Per-program limits. Time spent waiting for the simulator to answer a skill call counts
     against none of them: ``cpu_s`` is the worker's own CPU time (it does not grow while 256 workers
@@ -37,12 +49,12 @@ class SandboxLimits(BaseModel):
     def for_batch(self, programs: int) -> SandboxLimits:
         """The limits of each program of a batch of ``programs`` that run at once: ``memory_mb`` cut to
         an equal share of the batch's memory, so that the batch together cannot exhaust the machine
-        (the worker's address-space limit is what enforces it). Raises ``ValueError`` when a share would
-        be under 1 MiB."""
+        (the worker's address-space limit is what enforces it). Raises :class:`BatchTooLarge` (a ``ValueError``)
+        when a share would be under 1 MiB."""
         batch_mb = self.batch_memory_mb or default_batch_memory_mb()
         share = batch_mb // max(programs, 1)
         if share < 1:
-            raise ValueError(f"a batch of {programs} programs does not fit in {batch_mb} MiB of sandbox memory")
+            raise BatchTooLarge(programs, batch_mb)
         return self.model_copy(update={"memory_mb": min(self.memory_mb, share)})
 
     def skill_calls_exceeded(self) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, StringConstraints, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 from robotool.task import geometry
 
@@ -17,9 +17,19 @@ SHEET_THICKNESS = 0.003  # m: a box this thin or thinner is a sheet (paper), not
 SHEET_AREAL_DENSITY = 1.0  # kg/m^2: ... unless it weighs more than this per square metre of its face (heavy card is
 # about 0.5; a 3 mm box of the default density 0.9; a 3 mm steel plate 23)
 
+MAX_COORDINATE = 1000.0
+"""m (and degrees for ``rpy``): the largest coordinate a task file may give. A scene is a room or a yard; a centre of
+1e308 m is a mistake, and the geometry checks would overflow on it."""
+MAX_LENGTH = 1000.0
+"""m: the largest size, thickness, drop or height a task file may give (also the largest friction coefficient)."""
+MAX_MASS = 100_000.0
+"""kg: the heaviest object a task file may give (a loaded lorry; a real task's heaviest is under a tonne)."""
+
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
-PositiveLength = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-Vec3 = tuple[FiniteFloat, FiniteFloat, FiniteFloat]
+PositiveLength = Annotated[float, Field(gt=0, le=MAX_LENGTH, allow_inf_nan=False)]
+Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE, allow_inf_nan=False)]
+Mass = Annotated[float, Field(gt=0, le=MAX_MASS, allow_inf_nan=False)]
+Vec3 = tuple[Coordinate, Coordinate, Coordinate]
 Size3 = tuple[PositiveLength, PositiveLength, PositiveLength]
 Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
 
@@ -53,7 +63,7 @@ class SceneObject(StrictModel):
     axis: Literal["x", "y", "z"] = "z"
     thickness: PositiveLength = 0.02
     movable: bool = True
-    mass: PositiveLength | None = None
+    mass: Mass | None = None
     friction: PositiveLength | None = None
     magnetic: bool = False
     soft: bool = False

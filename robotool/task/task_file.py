@@ -9,6 +9,7 @@ from __future__ import annotations
 import difflib
 import json
 import reprlib
+import sys
 import types
 import typing
 from collections.abc import Mapping
@@ -21,7 +22,7 @@ from pydantic import BaseModel, ValidationError
 
 from robotool import robots
 from robotool.task import geometry
-from robotool.task.task_model import Task
+from robotool.task.task_model import MAX_OBJECTS, WHY_MAX_OBJECTS, Task
 from robotool.task.task_problem import Problem
 
 RESTING_TOLERANCE = 0.01  # m: how far an object may float above or sink into its support
@@ -73,7 +74,16 @@ def _format_loc(loc: tuple[int | str, ...], raw: Any) -> str:
     return out
 
 
-_SHOWN = reprlib.Repr()
+class _Shown(reprlib.Repr):
+    def repr_int(self, x: int, level: int) -> str:
+        try:
+            return super().repr_int(x, level)
+        except ValueError:  # more digits than Python converts (YAML reads 0x... of any length)
+            return f"an integer of about {int(x.bit_length() * DIGITS_PER_BIT)} digits"
+
+
+DIGITS_PER_BIT = 0.30103  # log10(2)
+_SHOWN = _Shown()
 _SHOWN.maxlevel, _SHOWN.maxstring, _SHOWN.maxother = 2, 80, 80
 _SHOWN.maxlist = _SHOWN.maxtuple = _SHOWN.maxdict = _SHOWN.maxset = 6
 
@@ -203,8 +213,18 @@ def _check_semantics(task: Task) -> list[Problem]:
     return problems
 
 
+def _xy_bounds(parts: list[geometry.Part]) -> np.ndarray:
+    """An object's x-y bounds ``[xmin, ymin, xmax, ymax]``, from its parts' world bounds."""
+    bounds = [p.aabb() for p in parts]
+    lo, hi = np.min([b[0] for b in bounds], axis=0), np.max([b[1] for b in bounds], axis=0)
+    return np.array([lo[0], lo[1], hi[0], hi[1]])
+
+
 def _check_geometry(task: Task) -> list[Problem]:
     parts = {o.name: geometry.object_parts(o) for o in task.objects}
+    names = list(parts)
+    margin = np.array([-1, -1, 1, 1]) * RESTING_TOLERANCE
+    xy = np.array([_xy_bounds(parts[n]) for n in names]).reshape(-1, 4) + margin
     problems: list[Problem] = []
     sunk: set[frozenset[str]] = set()  # pairs already reported as one sunk into the other
     for i, obj in enumerate(task.objects):
@@ -218,7 +238,9 @@ def _check_geometry(task: Task) -> list[Problem]:
                         "is in world coordinates (metres) and must lie within or on its object",
                     )
                 )
-        others = {n: p for n, p in parts.items() if n != obj.name}
+        # only what lies under its x-y bounds can carry it or be sunk into: one test for all, not one per pair
+        under = (xy[:, 0] <= xy[i, 2]) & (xy[:, 2] >= xy[i, 0]) & (xy[:, 1] <= xy[i, 3]) & (xy[:, 3] >= xy[i, 1])
+        others = {names[k]: parts[names[k]] for k in np.flatnonzero(under) if k != i}
         contact = geometry.resting_contact(parts[obj.name], others, obj.center[2], RESTING_TOLERANCE)
         if contact.penetration > RESTING_TOLERANCE:
             sunk.add(frozenset((obj.name, contact.into)))
@@ -315,6 +337,10 @@ def parse_task(data: Any, source: str = "<task>") -> Task:
     """Validate already-loaded task data (a mapping), raising :class:`TaskFileError`."""
     if not isinstance(data, Mapping):
         raise TaskFileError(source, [Problem(path="", message="a task file must be a mapping of keys")])
+    objects = data.get("objects")
+    if isinstance(objects, list) and len(objects) > MAX_OBJECTS:
+        message = f"{len(objects)} objects; a task holds at most {MAX_OBJECTS} ({WHY_MAX_OBJECTS})"
+        raise TaskFileError(source, [Problem(path="objects", message=message)])
     unknown_robot = _unknown_robot_type(data)
     try:
         task = Task.model_validate(data)
@@ -349,18 +375,30 @@ def _with_robot_problem(problems: list[Problem], robot: Problem | None) -> list[
     return [*problems[:at], robot, *problems[at:]]
 
 
+def read_at_most(path: Path, limit: int) -> bytes:
+    """The bytes of the file at ``path``, but never more than ``limit + 1`` of them: a caller that gets more than
+    ``limit`` refuses the file without having read it whole (``/dev/zero``, a file of gigabytes). OSError as
+    :meth:`~pathlib.Path.read_bytes` raises it."""
+    with path.open("rb") as f:
+        return f.read(limit + 1)
+
+
 def load_task(path: str | Path) -> Task:
-    """Load and validate a YAML or JSON task file."""
+    """Load and validate a YAML or JSON task file (of at most :data:`MAX_TASK_FILE_BYTES`)."""
     path = Path(path)
     source = str(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        data = read_at_most(path, MAX_TASK_FILE_BYTES)
+        if len(data) > MAX_TASK_FILE_BYTES:
+            raise TaskFileError(source, [Problem(path="", message=TOO_LARGE)])
+        text = data.decode("utf-8")
     except FileNotFoundError:
         raise TaskFileError(source, [Problem(path="", message="file not found")]) from None
     except (OSError, UnicodeDecodeError) as e:
         raise TaskFileError(source, [Problem(path="", message=f"cannot read the file: {e}")]) from None
+    kind = "JSON" if path.suffix == ".json" else "YAML"
     try:
-        data = json.loads(text) if path.suffix == ".json" else yaml.safe_load(text)
+        data = json.loads(text) if kind == "JSON" else yaml.safe_load(text)
     except json.JSONDecodeError as e:
         raise TaskFileError(source, [_syntax_problem("JSON", text, e.lineno, e.colno, e.msg)]) from None
     except yaml.MarkedYAMLError as e:
@@ -369,9 +407,22 @@ def load_task(path: str | Path) -> Task:
         raise TaskFileError(source, [_syntax_problem("YAML", text, None, None, " ".join(str(e).split()))]) from None
     except RecursionError:
         raise TaskFileError(source, [Problem(path="", message=NESTED_TOO_DEEP)]) from None
+    except ValueError as e:  # a number of more digits than Python converts (the parsers raise nothing more precise)
+        raise TaskFileError(source, [_syntax_problem(kind, text, None, None, _too_many_digits(e))]) from None
     return parse_task(data, source)
 
 
+def _too_many_digits(error: ValueError) -> str:
+    """The parser's error for a number with thousands of digits, without Python's advice to raise the limit."""
+    if "digits" in str(error):
+        return f"a number has more than {sys.get_int_max_str_digits()} digits"
+    return " ".join(str(error).split())
+
+
+MAX_TASK_FILE_BYTES = 1_000_000
+"""A task file's largest size: a task of the most objects allowed (:data:`MAX_OBJECTS`), each with long notes, is a
+tenth of it; the built-in ones are 1-3 kB."""
+TOO_LARGE = f"the file is larger than {MAX_TASK_FILE_BYTES // 1000} kB (a task file is a few kB)"
 NESTED_TOO_DEEP = "lists or mappings are nested too deeply to read (a task file nests a few levels)"
 
 

@@ -5,11 +5,17 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, Field, FiniteFloat, StringConstraints
+from pydantic import BaseModel, Field, StringConstraints
 
 from robotool.robots.limits_table import limits_model
-from robotool.task.scene import Name, SceneObject, StrictModel
+from robotool.task.scene import Coordinate, Name, SceneObject, StrictModel
 from robotool.task.task_goal import Goal
+
+MAX_OBJECTS = 200
+"""The most objects a task may hold. The built-in tasks hold 3 to 8 and the generated ones, distractors included, a
+dozen; every object adds a body to the simulated scene and to each check of how objects rest and overlap, so a file of
+thousands (3000 stacked boxes took minutes to load) is refused at once rather than loaded."""
+WHY_MAX_OBJECTS = "a real task holds a few dozen at most"
 
 Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
 
@@ -19,7 +25,7 @@ class Robot(StrictModel):
     start position and limit overrides."""
 
     type: str
-    position: tuple[FiniteFloat, FiniteFloat] | None = None
+    position: tuple[Coordinate, Coordinate] | None = None
     limits: dict[str, Any] = Field(default_factory=dict)
 
     def required_position(self) -> tuple[float, float]:
@@ -37,7 +43,7 @@ class Task(StrictModel):
     category: Category
     instruction: Annotated[str, StringConstraints(min_length=1, strip_whitespace=True)]
     robot: Robot
-    objects: list[SceneObject]
+    objects: list[SceneObject] = Field(max_length=MAX_OBJECTS)
     goal: Goal
 
     @property
