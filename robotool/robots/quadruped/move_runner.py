@@ -289,9 +289,9 @@ class MoveRunner:
 
 
 def finding_measured(finding: Finding) -> dict[str, float]:
-    """A finding's measured values, as a refusal reports them."""
+    """A finding's measured values, as a refusal reports them (a want of grip: the surface's friction)."""
     return {
-        finding.kind: finding.measured,
+        "friction" if finding.kind == "grip" else finding.kind: finding.measured,
         "limit": finding.limit,
         "x": round(finding.where[0], 3),
         "y": round(finding.where[1], 3),

@@ -108,8 +108,9 @@ class Plans:
 
     def _sweep_problem(self, w: int, yaw: float, target: float) -> str | None:
         """What a turn in place from heading ``yaw`` to ``target`` (rad) in world ``w`` would meet: anything in the
-        body's sweep (its outline and ``side_margin``) above the feet's level, or a foot's arc leaving the level it
-        stands on; None when the way round is clear."""
+        body's sweep (its outline and ``side_margin``) above the feet's level, a foot's arc leaving the level it
+        stands on, or crossing a surface too slippery for the feet to push the body round (under ``walk_grip``, as the
+        world's perturbation scales its friction); None when the way round is clear."""
         here = self.senses.position(w)
         arcs, sweep = turn_sweep(self.limits, yaw, target, self.config.side_margin)
         levels = feet(self.senses.state, self.senses.facts.ids)[w, :, 2] - FOOT_RADIUS
@@ -124,7 +125,9 @@ class Plans:
             k = int(np.argmax(high))
             name = self.scene.object_names[objects[k]] if objects[k] >= 0 else "something"
             return f"{name} stands in the body's way at [{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
-        under = self.rays.heights(w, (here + arcs).reshape(-1, 2), top)[0].reshape(arcs.shape[:2])
+        world = np.array([w])
+        under, _, geoms = self.rays.surface(world, (here + arcs).reshape(1, -1, 2), np.array([top]))
+        under, geoms = under.reshape(arcs.shape[:2]), geoms.reshape(arcs.shape[:2])
         off = np.abs(under - levels) > RISE
         if off.any():
             k, foot = np.argwhere(off)[0]
@@ -132,6 +135,16 @@ class Plans:
             step = under[k, foot] - levels[foot]
             edge = "step" if step > 0 else "drop"
             return f"the {FOOT_NAMES[foot]} foot would meet a {abs(step):.2f} m {edge} at [{x:.2f}, {y:.2f}]"
+        friction = self.rays.friction(world, geoms[None])[0]
+        slip = friction < self.config.walk_grip  # the feet push the body round: they need a walk's grip
+        if slip.any():
+            k, foot = np.argwhere(slip)[0]
+            x, y = here + arcs[k, foot]
+            return (
+                f"{self.rays.surface_name(int(geoms[k, foot]))} is too slippery to turn on: its friction of "
+                f"{friction[k, foot]:.4g} under the {FOOT_NAMES[foot]} foot at [{x:.2f}, {y:.2f}] is under the "
+                f"{self.config.walk_grip:.3f} the feet need to grip"
+            )
         return None
 
     def push(self, w: int, name: str, target: tuple[float, float, float]) -> SkillPlan:
@@ -200,9 +213,9 @@ class Plans:
 
     def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
         """One straight push of object ``index`` to ``goal`` in world ``w``, refused where what it would move is over
-        the push limit now (:meth:`.push_rules.PushRules.load_rule`: something came to ride on it since the push rules
-        were checked); its outcome."""
-        broken = self.referee.pushes.load_rule(w, index)
+        the push limit now (something came to ride on it since the push rules were checked) or takes more than the feet
+        hold where the robot stands (:meth:`.push_rules.PushRules.leg_rules`); its outcome."""
+        broken = self.referee.pushes.leg_rules(w, index)
         if broken is not None:
             return "refused", f"cannot push {self.scene.object_names[index]}: {broken[0]}", broken[1]
         return (yield Move(goal, pushing=index, face=face))

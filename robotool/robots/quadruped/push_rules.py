@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.quadruped.body import GRAVITY
 from robotool.robots.quadruped.push import mass_violation, rule_violation
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
@@ -23,17 +24,16 @@ class PushRules:
         self.facts, self.scene = senses.facts, senses.scene
 
     def push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
-        """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves."""
-        senses, names = self.senses, self.scene.object_names
-        centres = feet(senses.state, self.facts.ids)[w]
-        z, objects = self.rays.heights(w, centres[:, :2], float(centres[:, 2].max()) + 0.05)
+        """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves; then
+        whether the feet can hold the push (:meth:`grip_rule`)."""
+        names = self.scene.object_names
+        z, objects, feet_on = self._feet_surface(w)
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
         movable = next((names[o] for o in on if self.facts.movable[o]), None)
-        _, obj_hi = senses.bounds3(w, index)
-        below, _ = self.rays.heights(w, self._under(w, index), obj_hi[2] + 0.01, exclude=self.scene.object_body[index])
+        below, support = self._support(w, index)
         mass, riders, stuck = self._load(w, index)
-        return rule_violation(
+        broken = rule_violation(
             movable=bool(self.facts.movable[index]),
             mass=mass,
             riders=riders,
@@ -44,12 +44,65 @@ class PushRules:
             robot_support=float(z.max()),
             limits=self.limits,
         )
+        return broken or self._grip(w, index, mass, support, feet_on)
 
     def load_rule(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
         """Check the push limit alone in world ``w`` as a push leg of object ``index`` starts: what rides on it or is
         stuck to it may have come since the push rules were checked (an anvil that slid onto a sled during the walk
         to the push's start rides along)."""
         return mass_violation(*self._load(w, index), self.limits)
+
+    def leg_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
+        """Check, as a push leg of object ``index`` starts in world ``w``, the push limit (as :meth:`load_rule`) and
+        that the friction under the robot's feet holds the push's reaction (:meth:`_grip`): the robot may have walked
+        onto another surface since the push rules were checked, and what rides on the object may have changed."""
+        load = self._load(w, index)
+        heavy = mass_violation(*load, self.limits)
+        return heavy or self._grip(w, index, load[0], self._support(w, index)[1], self._feet_surface(w)[2])
+
+    def _grip(
+        self, w: int, index: int, mass: float, support: int, feet_on: np.ndarray
+    ) -> tuple[str, dict[str, float]] | None:
+        """Whether the robot's feet hold a push of object ``index`` in world ``w``: the push must slide ``mass`` (kg:
+        the object with what rides on it or is stuck to it) on the geom ``support`` under it (-1: none), which takes
+        its weight times the friction between them (the larger of the two geoms', as the simulator combines them); the
+        feet (frictionless in the simulation: the x-y servos push from the world) hold the robot's weight times the
+        friction under them (each foot a quarter of it, on the geom ``feet_on`` (4,) under it). Frictions as the
+        world's perturbation scales them. A push that takes more is refused: on that footing the feet, not the object,
+        would slide."""
+        world = np.array([w])
+        own = self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max()
+        friction = float(max(own, self.rays.friction(world, np.array([[support]]))[0, 0]))
+        force = mass * GRAVITY * friction
+        robot = float(self.senses.sim.body_mass[w, self.scene.robot_body].sum())
+        grip = self.rays.friction(world, feet_on[None])[0]
+        holds = robot * GRAVITY * float(grip.mean())
+        if force <= holds:
+            return None
+        floor = self.rays.surface_name(int(feet_on[np.argmin(grip)]))
+        return (
+            f"sliding it takes {force:.1f} N ({mass:.1f} kg on {self.rays.surface_name(support)} at friction "
+            f"{friction:.3g}), more than the {holds:.1f} N the robot's feet hold ({robot:.1f} kg on {floor} at "
+            f"friction {grip.mean():.3g}): its feet would slip",
+            {"force": round(force, 2), "limit": round(holds, 2), "friction": round(float(grip.mean()), 4)},
+        )
+
+    def _feet_surface(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms (-1: none)."""
+        centres = feet(self.senses.state, self.facts.ids)[w]
+        top = np.array([float(centres[:, 2].max()) + 0.05])
+        z, _, geoms = self.rays.surface(np.array([w]), centres[None, :, :2], top)
+        return z[0], self.rays.objects_of(geoms[0]), geoms[0]
+
+    def _support(self, w: int, index: int) -> tuple[np.ndarray, int]:
+        """What object ``index`` rests on in world ``w``: the heights under it (:meth:`_under`) and the geom of the
+        highest (-1: none)."""
+        _, obj_hi = self.senses.bounds3(w, index)
+        points = self._under(w, index)
+        below, _, geoms = self.rays.surface(
+            np.array([w]), points[None], np.array([obj_hi[2] + 0.01]), self.scene.object_body[index]
+        )
+        return below[0], int(geoms[0, np.argmax(below[0])])
 
     def _load(self, w: int, index: int) -> tuple[float, list[str], list[str]]:
         """What a push of object ``index`` in world ``w`` moves: its mass (kg) with its riders and what is stuck to

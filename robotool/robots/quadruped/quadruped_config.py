@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robotool.robots.quadruped.body import GRAVITY
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, LOOKAHEAD, RISE, SPACING
 
 
@@ -156,6 +157,20 @@ class QuadrupedConfig:
     """m between the stops tried when a route's stop on its target is pulled back."""
     stance_slack: float = 0.05
     """m a staircase's climb line keeps the feet from the steps' side edges, where the steps allow it."""
+
+    @property
+    def walk_grip(self) -> float:
+        """The friction the feet need under them to walk, climb or turn on level ground: the body's horizontal
+        acceleration over g (on a slope add its tangent: :func:`.terrain.first_slip`). The feet are frictionless in the
+        simulation and the x-y servos are anchored to the world, so nothing but this rule stops a walk on ice.
+
+        A walk's x-y setpoint leaves at ``walk_speed`` from rest and runs at most ``leash`` ahead of the body, so a body
+        that follows it reaches walking speed (and stops from it) within the leash: it accelerates at least at
+        ``walk_speed ** 2 / (2 * leash)`` = 0.4 ** 2 / 0.12 = 1.33 m/s2, 0.136 g. That is the gentlest start and stop
+        the gait allows (the x-y servos, 20 kN/m with up to 120 N on 12 kg, drive up to 10 m/s2), hence the least grip
+        its feet need: 0.136. A turn in place moves the feet at ``turn_speed`` times their 0.36 m from the centre,
+        0.36 m/s, no faster than a walk: the walk's grip is the turn's too."""
+        return self.walk_speed**2 / (2 * self.leash) / GRAVITY
 
     @property
     def foot_radius(self) -> float:

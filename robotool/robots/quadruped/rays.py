@@ -73,6 +73,19 @@ class Rays:
         """The object each ray's hit geom (-1: none) belongs to (-1: none, or not an object's)."""
         return np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
 
+    def surface_name(self, geom: int) -> str:
+        """What a ray's hit geom (-1: none) is: its object's name, the ground (no object's geom) or nothing."""
+        if geom < 0:
+            return "nothing"
+        thing = int(self.facts.geom_object[geom])
+        return self.sim.scene.object_names[thing] if thing >= 0 else "the ground"
+
+    def friction(self, worlds: np.ndarray, geom: np.ndarray) -> np.ndarray:
+        """The sliding friction of the hit geoms ``geom`` (k, ...) (-1: none, 0) in ``worlds`` (k,), as each world's
+        perturbation scales it."""
+        scale = self.sim.friction_scale[worlds].reshape(-1, *([1] * (geom.ndim - 1)))
+        return np.where(geom >= 0, self.sim.scene.model.geom_friction[np.maximum(geom, 0), 0], 0.0) * scale
+
     def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
         """Whether each ray's hit geom (-1: none) belongs to a cloth."""
         objects = self.objects_of(geom)

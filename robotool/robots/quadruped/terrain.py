@@ -17,6 +17,9 @@ foot by foot: each of the four feet sweeps a straight path, sampled every :data:
 A slope is footing only as steep as the surface's friction holds (the feet slide down one steeper than
 ``atan(friction)``): :func:`steepness` reads it under every sample and :func:`first_steep` finds the first that is
 too steep, a ``slope`` finding (the simulator's check; the planner's and the key concepts' heights carry no friction).
+A move also needs grip: the feet push the body along, so the surface's friction must carry the body's horizontal
+acceleration over g (``walk_grip`` in :class:`~.quadruped_config.QuadrupedConfig`) plus a slope's tangent;
+:func:`first_slip` finds the first sample whose friction does not, a ``grip`` finding (the simulator's check too).
 
 A finding carries its kind, the measured value, the limit, where it starts (x-y) and which foot met it.
 :func:`check_walk` answers whether a walk keeps within the limits (the simulator's and the planner's question);
@@ -53,7 +56,7 @@ EDGE_KINDS: tuple[TerrainKind, ...] = (TerrainKind.GAP, TerrainKind.DROP)
 """The kinds whose edge a foot's centre passes (a step is met face on); for ``np.isin`` over scan codes."""
 
 EdgeKind = Literal["step", "gap", "drop"]
-FindingKind = Literal[EdgeKind, "slope"]
+FindingKind = Literal[EdgeKind, "slope", "grip"]
 KINDS: tuple[EdgeKind, ...] = ("step", "gap", "drop")  # in :class:`TerrainKind` order (its codes 1, 2, 3)
 RISE = 0.015  # m: a change smaller than this is the same surface (noise, slopes between samples)
 TOLERANCE = 0.01  # m: measurement slack allowed over a limit (sampling and pose noise)
@@ -77,15 +80,21 @@ class Finding:
     """A limit of the legs that a move breaks: what, the measured value, the limit, where and which foot."""
 
     kind: FindingKind
-    measured: float  # m: the step height, gap width or drop depth; deg: a slope
-    limit: float  # m; deg: the steepest slope the surface's friction holds
+    measured: float  # m: the step height, gap width or drop depth; deg: a slope; grip: the surface's friction
+    limit: float  # m; deg: the steepest slope the surface's friction holds; grip: the friction the feet need there
     where: tuple[float, float]  # x-y where the foot meets it
     foot: str
+    surface: str = ""  # grip: what the foot would stand on (an object's name, or the ground)
 
     def describe(self) -> str:
         """The refusal reason, with the measured value, the limit and where."""
         if self.kind == "slope":
             what = f"slope of {self.measured:.1f} deg exceeds the {self.limit:.1f} deg its surface's friction holds"
+        elif self.kind == "grip":
+            what = (
+                f"{self.surface} is too slippery to walk on: its friction of {self.measured:.4g} is under the "
+                f"{self.limit:.3f} the feet need to grip (the walk's acceleration over g, plus a slope's tangent)"
+            )
         else:
             name = {"step": "step up", "gap": "gap", "drop": "drop"}[self.kind]
             what = f"{name} of {self.measured:.2f} m exceeds the limit of {self.limit:.2f} m"
@@ -209,16 +218,40 @@ def steepness(heights: np.ndarray, geoms: np.ndarray, points: np.ndarray) -> np.
     return np.where(planar[:, None, :], np.linalg.norm(gradient, axis=1)[:, None, :], np.abs(along))
 
 
+def too_steep(tangent: np.ndarray, friction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where slopes (tangents, NaN: none) on surfaces of sliding ``friction`` are steeper than it holds
+    (``atan(friction)`` and :data:`SLOPE_TOLERANCE`), the slopes and the steepest their friction holds (deg)."""
+    angle, holds = np.degrees(np.arctan(tangent)), np.degrees(np.arctan(friction))
+    return np.nan_to_num(angle, nan=-np.inf) > holds + SLOPE_TOLERANCE, angle, holds
+
+
 def first_steep(tangent: np.ndarray, friction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Along paths (..., n) of slopes (tangents, NaN: none) on surfaces of sliding ``friction``: the first sample
-    steeper than its friction holds (``atan(friction)`` and :data:`SLOPE_TOLERANCE`; n where none), that slope and
-    the steepest its friction holds there (deg)."""
-    angle, holds = np.degrees(np.arctan(tangent)), np.degrees(np.arctan(friction))
-    over = np.nan_to_num(angle, nan=-np.inf) > holds + SLOPE_TOLERANCE
-    n = tangent.shape[-1]
-    index = np.where(over.any(axis=-1), over.argmax(axis=-1), n)
+    steeper than its friction holds (:func:`too_steep`; n where none), that slope and the steepest its friction holds
+    there (deg)."""
+    over, angle, holds = too_steep(tangent, friction)
+    index, slope, limit = _first(over, angle, holds)
+    return index, slope, limit
+
+
+def first_slip(tangent: np.ndarray, friction: np.ndarray, grip: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Along paths (..., n) of slopes (tangents, NaN: none) on surfaces of sliding ``friction`` (inf: none read): the
+    first sample whose friction is under what the feet need to grip there (n where none), that friction and that need.
+
+    The feet need ``grip`` (the body's horizontal acceleration over g) plus the slope's tangent, the slope read less
+    :data:`SLOPE_TOLERANCE` as :func:`first_steep` allows it (its sampling and pose noise)."""
+    slope = np.maximum(np.nan_to_num(np.degrees(np.arctan(tangent)), nan=0.0) - SLOPE_TOLERANCE, 0.0)
+    need = grip + np.tan(np.radians(slope))
+    index, have, limit = _first(friction < need, friction, need)
+    return index, have, limit
+
+
+def _first(hit: np.ndarray, *values: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The first sample along paths (..., n) where ``hit`` (n where none) and each of ``values`` there."""
+    n = hit.shape[-1]
+    index = np.where(hit.any(axis=-1), hit.argmax(axis=-1), n)
     at = np.minimum(index, n - 1)[..., None]
-    return index, np.take_along_axis(angle, at, -1)[..., 0], np.take_along_axis(holds, at, -1)[..., 0]
+    return (index, *(np.take_along_axis(v, at, -1)[..., 0] for v in values))
 
 
 def foot_offsets(limits: QuadrupedLimits) -> np.ndarray:

@@ -38,11 +38,13 @@ from robotool.robots.quadruped.terrain import (
     TerrainKind,
     clamp,
     finding_kind,
+    first_slip,
     first_steep,
     limit_of,
     rotated,
     scan_paths,
     steepness,
+    too_steep,
 )
 
 
@@ -75,6 +77,32 @@ class TerrainState:
             hover_from=np.full((nworld, 4), np.nan),
             lift=np.full(nworld, np.nan),
             legs=np.full((nworld, 4), -press),  # standing: each leg carries its share
+        )
+
+
+@dataclass
+class Footing:
+    """What :meth:`TerrainFollowing._footing` found on each foot's path (k, 4) of one scan: where a slope or a slippery
+    surface starts (the scan's sample; ``samples``: none), the sample where it was read (a slope: the middle of its
+    run), whether it is a slope (else a want of grip), its measured value and its limit, as a :class:`Finding`
+    carries them, and what the foot would stand on (a want of grip: flat, foot by foot)."""
+
+    start: np.ndarray
+    read: np.ndarray
+    slope: np.ndarray
+    measured: np.ndarray
+    limit: np.ndarray
+    surface: list[str]
+
+    def finding(self, k: int, foot: int, where: np.ndarray) -> Finding:
+        """The finding of ``foot`` in the scan's ``k``-th world, met at ``where`` (x-y)."""
+        return Finding(
+            "slope" if self.slope[k, foot] else "grip",
+            float(self.measured[k, foot]),
+            float(self.limit[k, foot]),
+            (float(where[0]), float(where[1])),
+            FOOT_NAMES[foot],
+            "" if self.slope[k, foot] else self.surface[4 * k + foot],
         )
 
 
@@ -182,12 +210,12 @@ class TerrainFollowing:
         past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
         relevant = (kind != TerrainKind.NONE) & (meets - past <= length[:, None])
         margin = np.where(edges, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
-        steep, slope, holds = self._steep(worlds, np.where(pushed, z, solid), geoms, points, behind)
-        slope_from = np.maximum(steep - SLOPE_HALF, 0)  # where the run read too steep starts
-        slope_meets = travel[:, None] + np.take_along_axis(sample, np.minimum(slope_from, samples - 1), axis=1)
-        slope_meets = np.where((steep < index) & (slope_meets <= length[:, None]), slope_meets, np.inf)
-        stop_at = np.minimum(
-            np.where(relevant, meets - margin, np.inf).min(axis=1), (slope_meets - config.stop_margin).min(axis=1)
+        footing = self._footing(worlds, np.where(pushed, z, solid), geoms, points, behind)
+        slope_meets = travel[:, None] + np.take_along_axis(sample, np.minimum(footing.start, samples - 1), axis=1)
+        slope_meets = np.where((footing.read < index) & (slope_meets <= length[:, None]), slope_meets, np.inf)
+        stop_at = np.minimum(  # before a slope or a slippery surface, or where it stands when already on one
+            np.where(relevant, meets - margin, np.inf).min(axis=1),
+            np.maximum(slope_meets - config.stop_margin, travel[:, None]).min(axis=1),
         )
         limit = np.where(length > travel + config.scan_ahead, travel + config.scan_ahead, length)
         halted = s.halted[worlds]
@@ -198,14 +226,7 @@ class TerrainFollowing:
                 continue
             foot = int(np.argmin(slope_meets[k]))
             if np.isfinite(slope_meets[k, foot]) and (not hits.size or slope_meets[k, foot] <= meets[k, hits].min()):
-                where = points[k, foot, slope_from[k, foot]]
-                s.findings[w] = Finding(
-                    "slope",
-                    round(float(slope[k, foot]), 1),
-                    round(float(holds[k, foot]), 1),
-                    (float(where[0]), float(where[1])),
-                    FOOT_NAMES[foot],
-                )
+                s.findings[w] = footing.finding(k, foot, points[k, foot, footing.start[k, foot]])
                 continue
             if not hits.size:
                 s.findings[w] = None
@@ -221,17 +242,41 @@ class TerrainFollowing:
                 FOOT_NAMES[foot],
             )
 
-    def _steep(
+    def _footing(
         self, worlds: np.ndarray, z: np.ndarray, geoms: np.ndarray, points: np.ndarray, behind: int
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The first sample (k, 4) from under each foot on that is steeper than its surface's friction holds in its
-        world (``samples`` where none), that slope and the steepest the friction holds (deg); the paths' heights (of
-        the solids: a cloth lies on them, or hangs from them), hit geoms and points as :meth:`scan` reads them (a
-        geom's friction as the perturbation scales it)."""
-        friction = self.senses.scene.model.geom_friction[np.maximum(geoms, 0), 0]  # none hit: no slope read
-        friction = friction * self.senses.sim.friction_scale[worlds][:, None, None]
-        steep, slope, holds = first_steep(steepness(z, geoms, points)[:, :, behind:], friction[:, :, behind:])
-        return steep + behind, slope, holds
+    ) -> Footing:
+        """Where each foot's path (k, 4) from under the foot on first meets a surface that cannot carry the move in
+        its world: a slope steeper than its friction holds, or a surface whose friction is under the grip the feet
+        need there (``config.walk_grip`` plus a slope's tangent: :func:`~.terrain.first_slip`), whichever comes first
+        (a slope on a tie); the paths' heights (of the solids: a cloth lies on them, or hangs from them), hit geoms and
+        points as :meth:`scan` reads them (a geom's friction as the perturbation scales it). A slippery surface that
+        is also too steep somewhere on the paths is a slope (the robot could not even stand on it), met where the
+        foot meets that surface."""
+        n, hit = geoms.shape[2] - behind, geoms[:, :, behind:]
+        friction = self.rays.friction(worlds, hit)
+        tangent = steepness(z, geoms, points)[:, :, behind:]
+        over, angle, holds = too_steep(tangent, friction)  # none hit: no slope read
+        steep, slope, limit = first_steep(tangent, friction)
+        slip, have, need = first_slip(tangent, np.where(hit >= 0, friction, np.inf), self.config.walk_grip)
+        is_slope = (steep < n) & (np.maximum(steep - SLOPE_HALF, 0) <= slip)
+        found = Footing(
+            start=np.where(is_slope, np.maximum(steep + behind - SLOPE_HALF, 0), slip + behind),
+            read=np.where(is_slope, steep, slip) + behind,
+            slope=is_slope,
+            measured=np.where(is_slope, np.round(slope, 1), np.round(have, 4)),
+            limit=np.where(is_slope, np.round(limit, 1), np.round(need, 3)),
+            surface=["" for _ in range(4 * len(worlds))],
+        )
+        for k, f in zip(*np.nonzero(~is_slope & (slip < n)), strict=True):  # rare: the surfaces of the slips only
+            geom = hit[k, f, slip[k, f]]
+            steep_there = over[k] & (hit[k] == geom)  # that surface too steep for its friction somewhere ahead
+            if steep_there.any():
+                first = np.argmax(steep_there.any(axis=0))
+                g = int(np.argmax(steep_there[:, first]))
+                found.slope[k, f] = True
+                found.measured[k, f], found.limit[k, f] = round(angle[k, g, first], 1), round(holds[k, g, first], 1)
+            found.surface[4 * k + f] = self.rays.surface_name(int(geom))
+        return found
 
     def lift(
         self,

@@ -106,9 +106,15 @@ def test_lever_needs_both_the_chair_away_and_the_robot_on_it(sim_scene: Any, nam
 
 
 def test_a_light_robot_does_not_tip_the_lever() -> None:
+    """A 1 kg robot that walks onto the lever's raised end leaves the cube down, every motion done, where a robot of
+    the usual weight lifts it. The chair that props the lever is left out, so that only the robot's weight decides: a
+    1 kg robot's feet cannot hold a push of the 3 kg chair (the grip rule refuses it)."""
     data = tasks.load("cube_lifting").model_dump(mode="json", exclude_defaults=True)
+    data["objects"] = [o for o in data["objects"] if o["name"] != "chair"]
+    for rollout in run(parse_task(data), "cube_lifting_lever_only", 2):  # the control: the usual weight tips it
+        assert rollout.conditions["cube_lifted"], motion_calls(rollout)
     data["robot"]["limits"] = {"mass": 1.0}
-    for rollout in run(parse_task(data), "cube_lifting", 2):
+    for rollout in run(parse_task(data), "cube_lifting_lever_only", 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
         assert rollout.conditions == {"cube_lifted": False, "robot_has_not_fallen": True, "robot_shoved_nothing": True}
 
