@@ -33,7 +33,7 @@ QUADRUPED_TASKS = [t for t in REFERENCE if tasks.load(t).robot.type == "quadrupe
 @pytest.mark.slow  # ten worlds of a whole reference program: up to 8 s
 @pytest.mark.parametrize(
     ("task", "name", "seed"),
-    [(task, REFERENCE[task], seed) for task in QUADRUPED_TASKS for seed in (0, 3)]
+    [(task, REFERENCE[task], 0) for task in QUADRUPED_TASKS]  # (the Warp tests run them at seed 5)
     + [("sofa_traversing", "paper_sofa_traversing", 3), ("sofa_climbing", "paper_sofa_climbing", 3)],
 )
 def test_reference_program_solves_nine_of_ten_perturbed_worlds(sim_scene: Any, task: str, name: str, seed: int) -> None:
