@@ -86,7 +86,7 @@ def test_an_unknown_key_suggests_the_right_one() -> None:
     data = _task_data(robot={"type": "arm", "limits": {"grasp_radios": 0.05}})
     assert _problems(data) == [
         "robot.limits.grasp_radios: unknown key 'grasp_radios' (did you mean 'grasp_radius'?); "
-        "keys here: workspace_min, workspace_max, grasp_radius, gripper_opening"
+        "keys here: workspace_min, workspace_max, grasp_radius, gripper_opening, max_payload"
     ]
 
 

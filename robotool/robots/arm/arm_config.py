@@ -73,6 +73,11 @@ class ArmConfig:
     (slip adds up: a load that keeps coming back in short bursts slips it as a steady one does). The planner's tool
     pulls go past it for one tick at most (a tool's head landing on the table), a stick tipping a carton over
     by its top edge for two."""
+    payload_time: float = 0.3
+    """s: an arm that has carried more than ``max_payload`` for this long in all over the run (three 0.1 s ticks)
+    carried too much (:mod:`.arm_payload`): an instant's peak, a load coming off its support or a pushed crate
+    hopping against a held tool for a tick, is ridden out, as a real arm's peak torque rides it out; a lift of any
+    use lasts longer. The time adds up across grasps, so a load cannot be carried in hops with regrasps between."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
     pinch at its edge."""

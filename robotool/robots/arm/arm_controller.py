@@ -19,6 +19,7 @@ import numpy as np
 from robotool.robots.arm.arm_body import AXES, add_body, finger_open, graspable_points
 from robotool.robots.arm.arm_config import ARM, ArmConfig
 from robotool.robots.arm.arm_grasp import ArmParts, Grasp
+from robotool.robots.arm.arm_payload import Payload
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event
 from robotool.sim.backend import BatchedSim, BatchState
@@ -86,18 +87,24 @@ class ArmController(SkillController):
         self.sim, self.limits, self.config, self.scene = sim, limits, config, sim.scene
         self.parts = ArmParts.of(self.scene)
         self.grasp = Grasp(sim, self.parts, limits, config)
+        self.payload = Payload(sim, self.parts, self.grasp, limits, config)
         self.state = MotionState.empty(sim.nworld, len(self.scene.object_names), config.home)
         sim.ctrl[:, self.parts.xyz_act] = config.home
         self.finger_open = finger_open(limits)
         sim.ctrl[:, self.parts.finger_act] = self.finger_open
 
     def world_states(self) -> tuple[Any, ...]:
-        """The motion's and the grasp's per-world state."""
-        return (self.state, self.grasp.state)
+        """The motion's, the grasp's and the payload's per-world state."""
+        return (self.state, self.grasp.state, self.payload.state)
 
     def overloaded(self, state: BatchState) -> np.ndarray:
-        """The worlds where a held object loads the grip past what it holds (:meth:`Grasp.past_capacity`)."""
-        return self.grasp.past_capacity(state)
+        """The worlds where a held object loads the grip past what it holds (:meth:`Grasp.past_capacity`), or where
+        the arm carried more than its payload at the last tick (:class:`~.arm_payload.Payload`)."""
+        return self.grasp.past_capacity(state) | self.payload.state.over_now
+
+    def robot_conditions(self) -> dict[str, list[bool]]:
+        """The arm carried no more than ``max_payload`` (in scenes whose movable objects could weigh more)."""
+        return self.payload.conditions()
 
     # -- motion skills -------------------------------------------------------------------------
 
@@ -141,7 +148,8 @@ class ArmController(SkillController):
         ``worlds``, every world when None)."""
         mask = world_mask(self.sim.nworld, worlds)
         self.grasp.check_holds(state, mask)
-        ends = self._tick_moves(state, mask) + self._tick_fingers(state, mask)
+        ends = self._overweight(state, mask)
+        ends += self._tick_moves(state, mask) + self._tick_fingers(state, mask)
         if ends:
             ends = self._with_pushed_out(state, ends)
         moving = np.flatnonzero((self.state.mode == MOVE) & mask)
@@ -215,6 +223,23 @@ class ArmController(SkillController):
             self.sim.ctrl[w, self.parts.xyz_act] = pos[k]
         for end in ends:
             self.state.mode[end.world] = IDLE
+        return ends
+
+    def _overweight(self, state: BatchState, mask: np.ndarray) -> list[SkillEnd]:
+        """Let go where the arm has carried more than its payload for too long (:class:`~.arm_payload.Payload`): the
+        move in progress is refused with the reason and the gripper stops; otherwise the next skill end tells it."""
+        ends = []
+        for w, i, reason, measured in self.payload.check(state, mask):
+            self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), False)
+            event = Event(
+                kind="refused", object=self.scene.object_names[i], limit="max_payload", measured=measured, detail=reason
+            )
+            if self.state.mode[w] != MOVE:
+                self.grasp.state.let_go[w].append(event)
+                continue
+            self.state.mode[w] = IDLE
+            self.sim.ctrl[w, self.parts.xyz_act] = state.xpos[w, self.parts.gripper]
+            ends.append(SkillEnd(w, "refused", reason, measured, events=(event,)))
         return ends
 
     def _clamp_reason(self, w: int) -> str | None:

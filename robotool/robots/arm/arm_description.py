@@ -25,6 +25,8 @@ def robot_section(task: Task) -> list[str]:
         "object only when both fingers close on its sides and it is no "
         "wider than the opening (a thin sheet is pinched where both fingertips press on it); a held object moves "
         "rigidly with the gripper and pushes what it meets; aim the gripper centre at the graspable point.",
+        f"- it carries at most {num(limits.max_payload)} kg: the held object with what rests on it or is stuck to "
+        "it, once lifted off its support (pushing or dragging along a surface is no payload).",
     ]
 
 

@@ -361,6 +361,10 @@ class Grasp:
         s = self.state
         return Hold(s.hold_depth[w], s.hold_edge[w], s.hold_width[w], s.hold_centre[w])
 
+    def holding(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, int]]:
+        """(world, object) for each world in ``mask`` whose gripper holds an object (its grasp weld is on)."""
+        return self._held(state, mask)
+
     def _held(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, int]]:
         """(world, object) for each world in ``mask`` whose gripper holds an object (its grasp weld is on)."""
         objects = np.flatnonzero(self.parts.grasp_eq >= 0)

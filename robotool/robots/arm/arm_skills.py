@@ -16,6 +16,12 @@ class ArmLimits(BaseModel):
     workspace_max: tuple[float, float, float] = (0.45, 0.45, 0.50)
     grasp_radius: float = Field(0.02, gt=0, description="how close the gripper must be to a graspable point, m")
     gripper_opening: float = Field(0.06, gt=0, le=0.2, description="distance between the open fingers' inner faces, m")
+    max_payload: float = Field(
+        4.0,
+        gt=0,
+        description="heaviest load it carries off its support (the held object, what rides on it or is "
+        "stuck to it), kg; a Kinova Gen3's rated payload at mid range",
+    )
 
 
 ARM_SKILLS: tuple[SkillSpec, ...] = (
