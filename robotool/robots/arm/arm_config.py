@@ -78,6 +78,9 @@ class ArmConfig:
     carried too much (:mod:`.arm_payload`): an instant's peak, a load coming off its support or a pushed crate
     hopping against a held tool for a tick, is ridden out, as a real arm's peak torque rides it out; a lift of any
     use lasts longer. The time adds up across grasps, so a load cannot be carried in hops with regrasps between."""
+    contact_lift: float = 1.0
+    """N: the least net upward force the robot's bodies put through their contacts on a group of objects it does not
+    grasp for the group to count as held up by them (:mod:`.arm_payload`); less is a push, a drag or a graze."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
     pinch at its edge."""

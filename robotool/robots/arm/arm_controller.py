@@ -229,11 +229,11 @@ class ArmController(SkillController):
         """Let go where the arm has carried more than its payload for too long (:class:`~.arm_payload.Payload`): the
         move in progress is refused with the reason and the gripper stops; otherwise the next skill end tells it."""
         ends = []
-        for w, i, reason, measured in self.payload.check(state, mask):
-            self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[i]), False)
-            event = Event(
-                kind="refused", object=self.scene.object_names[i], limit="max_payload", measured=measured, detail=reason
-            )
+        for w, load, reason, measured in self.payload.check(state, mask):
+            if load.held >= 0:
+                self.sim.set_weld(np.array([w]), int(self.parts.grasp_eq[load.held]), False)
+            name = self.scene.object_names[load.named]
+            event = Event(kind="refused", object=name, limit="max_payload", measured=measured, detail=reason)
             if self.state.mode[w] != MOVE:
                 self.grasp.state.let_go[w].append(event)
                 continue

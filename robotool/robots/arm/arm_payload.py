@@ -1,15 +1,21 @@
-"""The arm's payload: what it carries while it holds something, judged against ``max_payload`` (a Kinova Gen3
-carries about 4 kg at mid range, 2 kg at full reach; its servos and its grip alone would lift about 10 kg).
+"""The arm's payload: what it bears, however it bears it, judged against ``max_payload`` (a Kinova Gen3 carries about
+4 kg at mid range, 2 kg at full reach; its servos and its grip alone would lift about 10 kg).
 
-At each control tick, in a world whose gripper holds an object (its grasp weld is on), the load is read from the
-simulation: the held object, what is stuck to it (welded to it by magnets, in a chain) and the movable objects that
-touch these, directly or through one another (what rides on it, what rides on that) form one group. When nothing
-in the group touches anything that does not move (the table, a fixed object) and no magnet anchors it to one, the
-arm carries the whole group: its mass is the payload. Where the group touches a support, the arm carries only what
-the grasp weld bears of it, the upward pull the held object puts on the gripper over g, never more than the group's
-mass: an object dragged or pushed along the table, or a tool pressed up into a button (its spring is no payload),
-loads the arm with little or nothing; a block lifted while it scrapes along a wall, or a board tilted up by one
-end, with what the grip actually holds up.
+At each control tick, in a world whose gripper holds an object (its grasp weld is on) or whose robot bodies touch a
+movable object, the load is read from the simulation. The held object, what is stuck to it (welded to it by magnets,
+in a chain) and the movable objects that touch these, directly or through one another (what rides on it, what rides
+on that) form one group; each other movable object a robot body touches forms one with what touches it. A group the
+robot does not grasp counts only where the robot's contacts press it up (by ``contact_lift`` at least, net: a push, a
+drag or a press down bears nothing): a plate lifted on the open gripper's palm and fingers is carried as a grasped one
+is. When nothing in a group touches anything that does not move (the table, a fixed object) and no magnet anchors it
+to one, the arm carries the whole group: its mass is its payload. Where the group touches a support, the arm carries
+only what it bears of it: the upward force the grasp weld and the robot's contacts put on the group
+(:func:`~.arm_bearing.robot_forces`, the solver's contact forces on both backends) over g, never more than the
+group's mass: an object dragged or pushed along the table, or a tool pressed up into a button (its spring is no
+payload), loads the arm with little or nothing; a block lifted while it scrapes along a wall, or a board tilted up by
+one end, with what the arm actually holds up. The payload is the sum over the groups. The contact forces are read
+only in the worlds where the groups could weigh more than the limit, and not at all in a scene whose movable objects
+together weigh no more.
 
 A real arm rides out a peak above its rated payload for an instant (the jerk as a load comes off its support, a
 pushed crate hopping against a held tool for a tick), so a world fails only once its arm has carried more than
@@ -26,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robotool.robots.arm.arm_bearing import robot_forces
 from robotool.robots.arm.arm_config import ArmConfig
 from robotool.robots.arm.arm_grasp import GRAVITY, ArmParts, Grasp
 from robotool.robots.arm.arm_skills import ArmLimits
@@ -36,15 +43,33 @@ PAYLOAD_CONDITION = "robot_carried_within_payload"  # the goal condition carryin
 
 @dataclass(frozen=True)
 class Load:
-    """What the arm carries in one world at one tick: the payload (kg), the mass of the group that holds together
-    with the held object (kg), whether that group rests on something that does not move, and its members."""
+    """What the arm carries in one world at one tick: the payload (kg), the mass of the groups it bears (kg), whether
+    one of them rests on something that does not move, the object held (-1: none), the one the reason names (the
+    held one, else the heaviest the robot holds up by contact), and the other members."""
 
     payload: float
     group_mass: float
     supported: bool
     held: int
+    named: int
     stuck: tuple[int, ...]
     touching: tuple[int, ...]
+
+    @property
+    def by_contact(self) -> bool:
+        """Some of it is borne by the robot's bodies' contacts rather than by a grasp."""
+        return self.held < 0
+
+
+@dataclass(frozen=True)
+class Groups:
+    """The groups the robot may bear in one world (each a (nobject,) bool), whether each rests on a support, and
+    their masses (kg): the held object's group first, where it holds one."""
+
+    members: list[np.ndarray]
+    supported: list[bool]
+    mass: list[float]
+    carried: np.ndarray  # (nobject,) bool: what the grasp welds join to the gripper
 
 
 @dataclass(frozen=True)
@@ -53,6 +78,9 @@ class Bodies:
 
     member: np.ndarray  # (nbody, nobject) 1.0 where the body is the object's
     ground: np.ndarray  # (nbody,) bool: the world's own bodies (the table top), not the robot's nor an object's
+    owner: np.ndarray  # (nbody,) each body's object (-1: none)
+    robot: np.ndarray  # (nbody,) bool: the robot's own bodies
+    loose: np.ndarray  # the movable objects' bodies
 
 
 @dataclass
@@ -73,12 +101,12 @@ class Payload:
 
     def __init__(self, sim: BatchedSim, parts: ArmParts, grasp: Grasp, limits: ArmLimits, config: ArmConfig):
         self.sim, self.parts, self.grasp, self.scene = sim, parts, grasp, sim.scene
-        self.limit, self.time = limits.max_payload, config.payload_time
+        self.limit, self.time, self.lift = limits.max_payload, config.payload_time, config.contact_lift
         owner = np.asarray(self.scene.body_object)
-        robot = np.zeros(len(owner), dtype=bool)
-        robot[np.asarray(self.scene.robot_body, dtype=int)] = True
+        robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
-        self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot)
+        loose = np.flatnonzero(member @ parts.movable > 0)
+        self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot, owner=owner, robot=robot, loose=loose)
         self.state = PayloadState.empty(sim.nworld)
         movable_mass = np.asarray(sim.body_mass) @ (member * parts.movable[None, :])  # (nworld, nobject)
         self.relevant = bool((movable_mass.sum(axis=1) > self.limit).any())  # all of it might be too much
@@ -87,19 +115,24 @@ class Payload:
         """The payload condition per world, where the scene's movable objects together could be too much to carry."""
         return {PAYLOAD_CONDITION: [b is None for b in self.state.broke]} if self.relevant else {}
 
-    def check(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, int, str, dict[str, float]]]:
-        """Weigh the load in the worlds in ``mask``; (world, held object, reason, measured) for each world whose arm
-        has now carried more than ``max_payload`` for ``payload_time`` (once per world)."""
+    def check(self, state: BatchState, mask: np.ndarray) -> list[tuple[int, Load, str, dict[str, float]]]:
+        """Weigh the load in the worlds in ``mask``; (world, load, reason, measured) for each world whose arm has now
+        carried more than ``max_payload`` for ``payload_time`` (once per world)."""
         s = self.state
         s.over_now[mask] = False
         if not self.relevant:
             return []
+        held = dict(self.grasp.holding(state, mask))
+        robot = np.flatnonzero(self.bodies.robot)
+        touches = state.touching[:, robot][:, :, self.bodies.loose].any(axis=(1, 2))  # touching a movable object
+        worlds = [w for w in np.flatnonzero(mask & touches).tolist() + list(held) if s.broke[w] is None]
+        groups = {w: self._groups(state, w, held.get(w, -1)) for w in dict.fromkeys(worlds)}
+        heavy = [w for w, g in groups.items() if sum(g.mass) > self.limit + 1e-9]  # might be too much: weigh it
+        forces = robot_forces(self.sim, np.array(heavy, dtype=int), self.bodies.robot, self.bodies.owner)
         out = []
-        for w, i in self.grasp.holding(state, mask):
-            if s.broke[w] is not None:
-                continue
-            load = self.load(state, w, i)
-            if load.payload <= self.limit + 1e-9:
+        for k, w in enumerate(heavy):
+            load = self._load(state, w, held.get(w, -1), groups[w], forces[k])
+            if load is None or load.payload <= self.limit + 1e-9:
                 continue
             s.over_now[w] = True
             s.over_for[w] += self.scene.control_dt
@@ -107,32 +140,59 @@ class Payload:
                 continue
             reason, measured = self._words(load, float(s.over_for[w]))
             s.broke[w] = reason
-            out.append((w, i, reason, measured))
+            out.append((w, load, reason, measured))
         return out
 
-    def load(self, state: BatchState, w: int, i: int) -> Load:
-        """What the arm carries in world ``w`` holding object ``i`` (see the module's doc)."""
+    def _groups(self, state: BatchState, w: int, i: int) -> Groups:
+        """The groups the robot may bear in world ``w`` (holding object ``i``, -1: none): the held object with what
+        the grasp welds join to it, and each movable object a robot body touches, each grown through the movable
+        objects that touch it (what rides on it, what rides on that)."""
         movable, member, ground = self.parts.movable, self.bodies.member, self.bodies.ground
-        carried = self.grasp.carried(state, w)
+        carried = self.grasp.carried(state, w) if i >= 0 else np.zeros(len(movable), dtype=bool)
         touch = state.touching[w].astype(float)
         objects = (member.T @ touch @ member) > 0  # (nobject, nobject) which objects touch
         on_ground = (touch[:, ground].sum(axis=1) @ member) > 0  # (nobject,) touching the table
         rests = on_ground | objects[:, ~movable].any(axis=1)
-        group = carried & movable
-        while True:
-            grown = objects[group].any(axis=0) & movable & ~group
-            if not grown.any():
-                break
-            group |= grown
-        mass = float((np.asarray(self.sim.body_mass[w]) @ member)[group].sum())
-        supported = bool((carried & ~movable).any() or rests[group].any())
-        payload = mass
-        if supported and mass > self.limit:
-            force = self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, :3]
-            payload = min(mass, max(-float(force[2]), 0.0) / GRAVITY)
-        stuck = tuple(int(o) for o in np.flatnonzero(carried & movable) if o != i)
-        touching = tuple(int(o) for o in np.flatnonzero(group & ~carried))
-        return Load(payload, mass, supported, i, stuck, touching)
+        touched = (touch[self.bodies.robot].sum(axis=0) @ member > 0) & movable & ~carried
+        seeds = [carried & movable] if i >= 0 else []
+        seeds += [np.arange(len(movable)) == o for o in np.flatnonzero(touched)]
+        mass = np.asarray(self.sim.body_mass[w]) @ member
+        out = Groups(members=[], supported=[], mass=[], carried=carried)
+        taken = np.zeros(len(movable), dtype=bool)
+        for group in seeds:
+            if (group & taken).any():
+                continue
+            while True:
+                grown = objects[group].any(axis=0) & movable & ~group
+                if not grown.any():
+                    break
+                group = group | grown
+            taken |= group
+            out.members.append(group)
+            out.supported.append(bool(rests[group].any() or (len(out.members) == 1 and (carried & ~movable).any())))
+            out.mass.append(float(mass[group].sum()))
+        return out
+
+    def _load(self, state: BatchState, w: int, i: int, groups: Groups, force: np.ndarray) -> Load | None:
+        """What the arm carries in world ``w`` holding object ``i`` (-1: none) of ``groups`` (see the module's doc),
+        ``force`` (nobject, 3) N being what the robot's contacts put on each object; None where it bears nothing."""
+        up = force[:, 2].copy()
+        if i >= 0:
+            up[i] -= float(self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, 2])
+        payload, mass, supported, borne = 0.0, 0.0, False, np.zeros(len(up), dtype=bool)
+        for k, (group, rests, weight) in enumerate(zip(groups.members, groups.supported, groups.mass, strict=True)):
+            bears = float(up[group].sum())
+            held_here = i >= 0 and k == 0
+            if not held_here and bears < self.lift:
+                continue  # pushed, dragged or pressed down on: not held up
+            payload += min(weight, max(bears, 0.0) / GRAVITY) if rests else weight
+            mass, supported, borne = mass + weight, supported or rests, borne | group
+        if not borne.any():
+            return None
+        named = i if i >= 0 else int(np.argmax(np.where(borne, up, -np.inf)))
+        stuck = tuple(int(o) for o in np.flatnonzero(groups.carried & self.parts.movable) if o != i)
+        touching = tuple(int(o) for o in np.flatnonzero(borne & ~groups.carried) if o != named)
+        return Load(payload, mass, supported, i, named, stuck, touching)
 
     def _words(self, load: Load, over: float) -> tuple[str, dict[str, float]]:
         """The reason a load broke the payload limit, and its measures."""
@@ -144,12 +204,14 @@ class Payload:
             if objs
         ]
         with_ = f" with {' and '.join(along)}" if along else ""
+        on = " on the gripper" if load.by_contact else ""
         if load.supported:
-            what = f"the arm bears {load.payload:.1f} kg of its {load.group_mass:.1f} kg{with_} (a support the rest)"
+            bears = "the gripper bears" if load.by_contact else "the arm bears"
+            what = f"{bears} {load.payload:.1f} kg of its {load.group_mass:.1f} kg{with_} (a support the rest)"
         else:
-            what = f"{load.payload:.1f} kg{with_}"
+            what = f"{load.payload:.1f} kg{' borne' if on else ''}{on}{with_}"
         reason = (
-            f"cannot lift {names[load.held]}: {what}, over the arm's {self.limit:.1f} kg payload "
+            f"cannot lift {names[load.named]}: {what}, over the arm's {self.limit:.1f} kg payload "
             f"(carried for {over:.1f} s)"
         )
         measured = {
@@ -158,6 +220,7 @@ class Payload:
             "group_mass": round(load.group_mass, 3),
             "riders": float(len(load.touching)),
             "stuck": float(len(load.stuck)),
+            "contact": float(load.by_contact),
             "for": round(over, 3),
         }
         return reason, measured
