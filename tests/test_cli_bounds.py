@@ -16,40 +16,17 @@ from pathlib import Path
 
 import pytest
 import yaml
+from fixtures.cli_calls import forbid_work
+from fixtures.cli_calls import status as _status
 from fixtures.reference import program_path
 
 from robotool import tasks
-from robotool.cli import dispatch as cli
-from robotool.cli.eval_command import main as eval_main
 from robotool.task.task_file import TaskFileError, load_task
-
-
-def _status(argv: list[str]) -> int:
-    """``robotool ARGV`` in-process; argparse's own exit for a bad option is returned as a status."""
-    try:
-        if argv[:1] == ["eval"]:
-            return eval_main(argv[1:], prog="robotool eval")
-        return cli.main(argv)
-    except SystemExit as e:
-        return int(e.code or 0)
-
-
-def _must_not_run(*args: object, **kwargs: object) -> None:
-    raise AssertionError("the command started its work before checking its arguments")
 
 
 @pytest.fixture
 def no_work(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Any solve, run, evaluation or optimisation that starts fails the test: mistakes are found before work."""
-    import robotool.cli.optimize_command
-    import robotool.eval.sweep
-    import robotool.execute
-    import robotool.planner
-
-    monkeypatch.setattr(robotool.planner, "solve", _must_not_run)
-    monkeypatch.setattr(robotool.execute, "run", _must_not_run)
-    monkeypatch.setattr(robotool.eval.sweep, "evaluate", _must_not_run)
-    monkeypatch.setattr(robotool.cli.optimize_command, "optimize", _must_not_run)
+    forbid_work(monkeypatch)
 
 
 def _one_line_error(capsys: pytest.CaptureFixture[str], argv: list[str], status: int) -> str:

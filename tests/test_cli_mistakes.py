@@ -11,41 +11,20 @@ import sys
 from pathlib import Path
 
 import pytest
+from fixtures.cli_calls import forbid_work, must_not_run
+from fixtures.cli_calls import status as _status
 from fixtures.reference import program_path
 from rich.console import Console
 
-from robotool.cli import dispatch as cli
-from robotool.cli.eval_command import main as eval_main
 from robotool.cli.options import CAPTURED_WIDTH, warn_if_warp_on_cpu
 from robotool.sandbox import ProgramRejected
 from robotool.sandbox.strict import check_user_program
 from robotool.sim.backend import default_backend
 
 
-def _status(argv: list[str]) -> int:
-    """``robotool ARGV`` in-process; argparse's own exit for a bad option is returned as a status."""
-    try:
-        if argv[:1] == ["eval"]:
-            return eval_main(argv[1:], prog="robotool eval")
-        return cli.main(argv)
-    except SystemExit as e:
-        return int(e.code or 0)
-
-
-def _must_not_run(*args: object, **kwargs: object) -> None:
-    raise AssertionError("the command started its work before checking its arguments")
-
-
 @pytest.fixture
 def no_work(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Any solve, run or evaluation that starts fails the test: mistakes are found before work."""
-    import robotool.eval.sweep
-    import robotool.execute
-    import robotool.planner
-
-    monkeypatch.setattr(robotool.planner, "solve", _must_not_run)
-    monkeypatch.setattr(robotool.execute, "run", _must_not_run)
-    monkeypatch.setattr(robotool.eval.sweep, "evaluate", _must_not_run)
+    forbid_work(monkeypatch)
 
 
 def _mistakes(tmp_path: Path) -> list[tuple[list[str], str]]:
@@ -150,7 +129,7 @@ def test_a_truncated_program_exits_2_naming_its_line_and_nothing_runs(
 ) -> None:
     import robotool.execute
 
-    monkeypatch.setattr(robotool.execute, "run_codes", _must_not_run)  # nothing may reach the simulator
+    monkeypatch.setattr(robotool.execute, "run_codes", must_not_run)  # nothing may reach the simulator
     lines = program_path("milk_reaching_direct").read_text().rstrip("\n").split("\n")
     cut = lines[-1].index("(") + 1
     truncated = "\n".join([*lines[:-1], lines[-1][:cut]]) + "\n"  # the last call's bracket is never closed
