@@ -103,6 +103,18 @@ PROVIDER_FAULTS = {
         json.dumps({"object": "error", "message": "The model is overloaded", "type": "ServiceUnavailableError"}),
         "not a chat completion (it says: The model is overloaded)",
     ),
+    "an error object that carries choices": (  # found by an adversarial run: its choice's text was the answer
+        json.dumps(
+            {
+                "object": "error",
+                "message": "Upstream failed",
+                "choices": [
+                    {"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": "open_gripper()"}}
+                ],
+            }
+        ),
+        "is an error object: it is not a chat completion (it says: Upstream failed)",
+    ),
     "a detail object": (json.dumps({"detail": "Internal Server Error"}), "(it says: Internal Server Error)"),
     "a null choice": (json.dumps({"object": "chat.completion", "choices": [None]}), "its choice holds no message"),
     "a stream's chunk": (

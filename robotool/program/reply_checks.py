@@ -57,6 +57,10 @@ def not_a_completion(lm: dspy.LM) -> NotACompletion | None:
     body = _body(_last_response(lm))
     if body is None:
         return None
+    if body.get("object") == "error":  # an error object, whatever else it carries (choices included), is no answer
+        said = next((body[k] for k in ("message", "detail", "error") if body.get(k)), None)
+        detail = f" (it says: {_said(said)})" if said is not None else ""
+        return NotACompletion(f"the reply (HTTP 200) is an error object: it is not a chat completion{detail}")
     if "choices" in body and not body["choices"]:
         return NotACompletion("the reply (HTTP 200) held no choices: it is not a chat completion")
     if not isinstance(body.get("choices"), list):

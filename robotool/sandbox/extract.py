@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import codeop
 import contextlib
+import html
 import itertools
 import re
 import warnings
@@ -49,29 +50,31 @@ def extract(text: str) -> Extraction:
     :func:`without_reasoning` knows) is never code. Of several Python (or untagged) Markdown code blocks
     (an unclosed last block runs to the end), the programs are those that parse and do more than name or
     display values (an output listing is none); a program whose lines all lie in another is a quote of it (a
-    snippet explained after the whole program). One program left is taken; of several, the last one a line
-    just before it marks as final ("Final program:", "Here is the corrected code:") is taken; otherwise which
+    snippet explained after the whole program, compared with its indentation). Of several programs, the last one a line
+    just before it marks as final ("Final program:", "Here is the corrected code:"; not an echo such as "Your current
+    program:") is taken, quote or not; else one program left is taken; otherwise which
     one is meant is not clear (a draft and a correction, a program and a usage example, two options) and
     :class:`ProgramRejected` says so, to be asked again. A Python block that does not parse, and an untagged one
     that looks like code, is meant as a program: its syntax error is raised, never passed over for another
     block. Blocks are never joined, and :attr:`Extraction.chosen` says which was taken. Without a block,
     the program is the reply with prose before and after it left out; when a line that looks like code
     would be left out too, the program does not parse as a whole and its syntax error is raised.
-    Normalizes Windows and old Mac line endings, a BOM, non-breaking spaces and tab indentation (a tab is
-    four spaces), and adds ``import numpy as np`` / ``import math`` at the top when the program uses
-    ``np.`` / ``math.`` without importing them. Raises :class:`ProgramRejected` when no program is found or
-    it does not parse.
+    Normalizes Windows and old Mac line endings, a BOM, non-breaking spaces and tab indentation Python accepts (a tab is
+    four spaces; tabs mixed with spaces the way Python refuses are its syntax error), and adds ``import numpy as np``
+    / ``import math`` at the top when the program uses ``np.`` / ``math.`` without importing them. Raises
+    :class:`ProgramRejected` when no program is found or it does not parse.
     """
     if len(text) > MAX_PROGRAM_CHARS:
         raise ProgramRejected(None, "text", f"answer is longer than {MAX_PROGRAM_CHARS} characters")
     check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
-    text = "\n".join(_expand_indent_tabs(line) for line in text.split("\n"))
-    text = without_reasoning(text)
+    text = _html_code_blocks(without_reasoning(text))
     text, lone_fence = _without_a_lone_fence(text)
     blocks = _fenced_blocks(text)
     chosen = None
     if blocks:
+        if _has_diff(_outside_blocks(text).split("\n")):
+            raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
         index, why = _choose_block(blocks)
         code = blocks[index].code.strip("\n")
         if len(blocks) > 1:
@@ -81,7 +84,8 @@ def extract(text: str) -> Extraction:
         code, fence_lines = _unfenced_program(text).strip("\n"), lone_fence
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
-    tree = parse_program(code)
+    tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
+    code = "\n".join(_expand_indent_tabs(line) for line in code.split("\n"))
     if not _has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]
@@ -98,10 +102,11 @@ _REASONING_END = re.compile(rf"^.*?(?:</(?:{_THOUGHT})>|\[/THINK\]|◁/(?:{_THOU
 _THOUGHT_TOKENS = re.compile(
     r"<\|begin_of_thought\|>.*?(?:<\|end_of_thought\|>|\Z)|<\|(?:begin|end)_of_solution\|>", re.DOTALL
 )
+_STRIPPED_ANALYSIS = re.compile(r"\A\s*analysis(?:(?=[A-Z])|(?=(?s:.*)assistantfinal))")  # not `analysis = ...`
 _ANSWER_AFTER = [  # (how a reply opens its reasoning, what opens its answer): the answer is what follows the last
     (re.compile(r"\A\s*Here is my thought process:", re.IGNORECASE), re.compile(r"^\s*Here is my response:", re.M)),
     (re.compile(r"\A\s*Here are my reasoning steps:", re.IGNORECASE), re.compile(r"\[BEGIN FINAL RESPONSE\]")),
-    (re.compile(r"\A\s*analysis"), re.compile(r"assistantfinal")),  # channels whose special tokens were stripped
+    (_STRIPPED_ANALYSIS, re.compile(r"assistantfinal")),  # channels whose special tokens were stripped
 ]
 _FINAL_RESPONSE_END = "[END FINAL RESPONSE]"
 _END_OF_TURN = re.compile(r"<\|im_end\|>|<\|eot_id\|>|<\|endoftext\|>|<\|end_of_text\|>|<end_of_turn>|</s>")
@@ -122,6 +127,7 @@ def without_reasoning(text: str) -> str:
     but what follows the last opening of its answer ("Here is my response:", ``[BEGIN FINAL RESPONSE]``,
     ``assistantfinal``); and everything after the model's end of turn (``<|im_end|>``, ``<|eot_id|>``: a turn it
     went on to invent is no answer)."""
+    text = _code_masked(text)
     if _CHANNEL in text:
         finals = _FINAL_CHANNEL.findall(text)
         text = finals[-1] if finals else ""
@@ -132,7 +138,49 @@ def without_reasoning(text: str) -> str:
             text = text[starts[-1].end() :].split(_FINAL_RESPONSE_END)[0] if starts else ""
     text = _THOUGHT_TOKENS.sub("", text)
     text = _REASONING.sub("", text)
-    return _REASONING_END.sub("", text, count=1)
+    return _REASONING_END.sub("", text, count=1).translate(_OUT_OF_CODE)
+
+
+_IN_CODE = str.maketrans({"<": "\ue000", "[": "\ue001", "\u25c1": "\ue002"})
+_OUT_OF_CODE = str.maketrans({"\ue000": "<", "\ue001": "[", "\ue002": "\u25c1"})
+_COMMENT = re.compile(r"(?:^[ \t]*|(?<=\S)[ \t]{2,}|(?<=[)\]'\"]))#[^\n]*", re.MULTILINE)
+
+
+def _code_masked(text: str) -> str:
+    """``text`` with the characters that open markers of reasoning or of an end of turn replaced by private stand-ins
+    inside code (the lines of fenced blocks, comments such as ``# no </think> here``), where they are code, not the
+    model's reasoning; :func:`without_reasoning` puts them back."""
+    parts, end = [], 0
+    for opening, closing in _fence_pairs(text):
+        inner_end = closing.start() if closing else len(text)
+        parts += [_comments_masked(text[end : opening.end()]), text[opening.end() : inner_end].translate(_IN_CODE)]
+        end = inner_end
+    parts.append(_comments_masked(text[end:]))
+    return "".join(parts)
+
+
+def _comments_masked(text: str) -> str:
+    return _COMMENT.sub(lambda found: found.group(0).translate(_IN_CODE), text)
+
+
+_HTML_OPEN = re.compile(r"<pre\b[^>]*>[ \t]*<code\b([^>]*)>", re.IGNORECASE)
+_HTML_CLOSE = re.compile(r"</code>\s*</pre>", re.IGNORECASE)
+_HTML_LANGUAGE = re.compile(r"\blang(?:uage)?-([\w.+-]+)")
+
+
+def _html_code_blocks(text: str) -> str:
+    """``text`` with each HTML code block (``<pre><code class="language-python">...</code></pre>``) written as a fenced
+    one, its first line included."""
+    parts, end = [], 0
+    while (opening := _HTML_OPEN.search(text, end)) is not None:
+        closing = _HTML_CLOSE.search(text, opening.end())
+        if closing is None:
+            break
+        language = _HTML_LANGUAGE.search(opening.group(1))
+        code = html.unescape(text[opening.end() : closing.start()]).strip("\n")
+        parts += [text[end : opening.start()], f"\n```{language.group(1) if language else ''}\n{code}\n```\n"]
+        end = closing.end()
+    return "".join([*parts, text[end:]])
 
 
 def _non_blank(text: str) -> int:
@@ -160,44 +208,108 @@ def _without_a_lone_fence(text: str) -> tuple[str, int]:
     return text[: fences[0].start()] + text[fences[0].end() + 1 :], 1
 
 
-def _fenced_blocks(text: str) -> list[_Block]:
-    """The Python or untagged fenced blocks, in order (one pass over the fences)."""
-    blocks: list[_Block] = []
+def _fence_pairs(text: str) -> list[tuple[re.Match[str], re.Match[str] | None]]:
+    """Each code block's opening fence and its closing one (None: the block runs to the end), as CommonMark pairs them:
+    a fence closes a block when it is of the same character, at least as long, has no info string and is indented at
+    most three columns more than the opening (a fence in an indented docstring is code)."""
     fences = list(_FENCE.finditer(text))
+    pairs: list[tuple[re.Match[str], re.Match[str] | None]] = []
     i = 0
-    previous_end = 0
     while i < len(fences):
-        opening = fences[i]
-        j = i + 1
-        while j < len(fences) and not (fences[j].group(1)[0] == opening.group(1)[0] and not fences[j].group(2)):
+        opening, j = fences[i], i + 1
+        while j < len(fences) and not _closes(opening, fences[j]):
             j += 1
-        end = fences[j].start() if j < len(fences) else len(text)
+        pairs.append((opening, fences[j] if j < len(fences) else None))
+        i = j + 1
+    return pairs
+
+
+def _closes(opening: re.Match[str], fence: re.Match[str]) -> bool:
+    mark, close = opening.group(1), fence.group(1)
+    indented = _indent(fence) <= _indent(opening) + 3
+    return close[0] == mark[0] and len(close) >= len(mark) and not fence.group(2) and indented
+
+
+def _indent(fence: re.Match[str]) -> int:
+    line = fence.group(0)
+    return len(line[: len(line) - len(line.lstrip(" \t"))].expandtabs(4))
+
+
+_MARKDOWN_TAGS = frozenset({"markdown", "md"})
+
+
+def _fenced_blocks(text: str, depth: int = 0) -> list[_Block]:
+    """The Python or untagged fenced blocks, in order, those inside a Markdown block (````markdown) included."""
+    blocks: list[_Block] = []
+    previous_end = 0
+    for opening, closing in _fence_pairs(text):
+        end = closing.start() if closing else len(text)
         _check_fence(opening)
-        if _PYTHON_TAG.fullmatch(opening.group(2)):
+        tag, inner = opening.group(2), text[opening.end() + 1 : end]
+        if tag.lower() in _MARKDOWN_TAGS and depth < 2:
+            blocks += _fenced_blocks(inner, depth + 1)
+        elif _PYTHON_TAG.fullmatch(tag):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
             label = before[-1].strip() if before else ""
-            code = text[opening.end() + 1 : end].strip("\n")
-            blocks.append(_Block(code, 1 + (j < len(fences)), label, tagged=bool(opening.group(2))))
-        previous_end = fences[j].end() if j < len(fences) else len(text)
-        i = j + 1
+            blocks.append(_Block(inner.strip("\n"), 1 + (closing is not None), label, tagged=bool(tag)))
+        previous_end = closing.end() if closing else len(text)
     return blocks
+
+
+def _outside_blocks(text: str) -> str:
+    parts, end = [], 0
+    for opening, closing in _fence_pairs(text):
+        parts.append(text[end : opening.start()])
+        end = closing.end() if closing else len(text)
+    return "\n".join([*parts, text[end:]])
+
+
+_DIFF_PROBLEM = (
+    "no Python program found: the reply gives a change as a diff; give the whole program, changes made, in one code "
+    "block"
+)
+
+
+def _has_diff(lines: list[str]) -> bool:
+    """Whether ``lines`` give a change as a diff (tagged or not): a run of lines that remove (``-``) and add (``+``)
+    code, headers (``---``, ``+++``, ``@@``) aside."""
+    run: list[str] = []
+    for line in [*lines, ""]:
+        if line.startswith(("---", "+++", "@@")):
+            continue
+        if line[:1] in ("-", "+"):
+            run.append(line)
+            continue
+        if {kept[0] for kept in run} == {"-", "+"} and any(_looks_like_code(kept[1:]) for kept in run):
+            return True
+        run = []
+    return False
 
 
 _DIFF_TAGS = frozenset({"diff", "patch", "udiff"})
 _CALL = re.compile(r"[A-Za-z_][\w.]*\s*\(")
 
 
+def _code_on_fence_line(rest: str) -> bool:
+    """Whether what follows an opening fence's tag is a statement (``p = open_gripper()``), not attributes
+    (``title="x.py"``)."""
+    try:
+        tree = _quiet_parse(rest)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return False
+    calls = any(isinstance(node, ast.Call) for node in ast.walk(tree))
+    return _has_action(tree) and (calls or re.search(r"\s=\s|:\s", rest) is not None)
+
+
 def _check_fence(opening: re.Match[str]) -> None:
     """Refuse a block that gives a change rather than a program (a diff), or whose opening fence line holds code
     after its tag (that code would be read as the block's info string and left out)."""
-    if opening.group(2).lower() in _DIFF_TAGS:
-        raise ProgramRejected(
-            None,
-            "blocks",
-            "the reply gives a change as a diff; give the whole program, changes made, in one code block",
-        )
-    rest = opening.group(3).strip()
-    if _CALL.match(rest):
+    tag, rest = opening.group(2), opening.group(3).strip()
+    if tag.lower() in _DIFF_TAGS:
+        raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
+    if not _PYTHON_TAG.fullmatch(tag):
+        rest = (tag + opening.group(3)).strip()  # ```open_gripper() is code, not a language tag
+    if _CALL.match(rest) or _code_on_fence_line(rest):
         raise ProgramRejected(
             None,
             "blocks",
@@ -212,7 +324,8 @@ _FINAL = re.compile(
     re.IGNORECASE,
 )
 _NOT_FINAL = re.compile(
-    r"\b(?:not|never|no|wrong|incorrect|buggy|broken|original|old|older|previous|earlier|initial|first|draft)\b|n't\b",
+    r"\b(?:not|never|no|wrong|incorrect|buggy|broken|original|old|older|previous|earlier|initial|first|draft|current|"
+    r"currently|existing|gave|given|sent|fails?|failed|failing)\b|n't\b",
     re.IGNORECASE,
 )
 
@@ -237,19 +350,23 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
         try:
             tree = _quiet_parse(block.code)
         except (SyntaxError, ValueError, RecursionError, MemoryError):
-            if block.tagged or any(_CODE_LINE.match(line) for line in block.code.split("\n")):
+            if _has_diff(block.code.split("\n")):
+                raise ProgramRejected(None, "blocks", _DIFF_PROBLEM) from None
+            if block.tagged or any(_looks_like_code(line) for line in block.code.split("\n")):
                 return k, "it does not parse"  # parse_program raises its syntax error
             continue  # an untagged listing of text
         if _has_action(tree):
             programs.append(k)
+        elif _has_diff(block.code.split("\n")):
+            raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
     if not programs:
         return len(blocks) - 1, "the last"
+    marked = [k for k in programs if _marked_final(blocks[k].label)]
+    if marked and len(programs) > 1:  # a correction marked final is meant, however it compares with a draft
+        return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
     whole = _whole_programs(blocks, programs)
     if len(whole) == 1:
         return whole[0], "the only program; the other blocks quote it or are no programs"
-    marked = [k for k in whole if _marked_final(blocks[k].label)]
-    if marked:
-        return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
     several = (
         f"more than {MOST_PROGRAMS} different programs"
         if len(whole) > MOST_PROGRAMS
@@ -276,7 +393,8 @@ def _whole_programs(blocks: list[_Block], programs: list[int]) -> list[int]:
     whole: list[int] = []
     for k in sorted(programs, key=lambda k: (-len(lines[k]), -k)):  # a block can only quote one before it here
         quoted = (
-            lines[k] == lines[j] or (counts[k] <= counts[j] and 2 * len(lines[k]) <= len(lines[j])) for j in whole
+            lines[k] == lines[j] or (2 * len(lines[k]) <= len(lines[j]) and _quotes(lines[k], lines[j], counts[j]))
+            for j in whole
         )
         if not any(quoted):
             whole.append(k)
@@ -285,17 +403,28 @@ def _whole_programs(blocks: list[_Block], programs: list[int]) -> list[int]:
     return sorted(whole)
 
 
+def _quotes(snippet: list[str], program: list[str], counts: Counter[str]) -> bool:
+    """Whether every line of ``snippet`` is one of ``program``'s (as often), the snippet's indentation kept or all of it
+    moved right by the same columns (a loop's body quoted on its own)."""
+    shifts = {_columns(line) - _columns(snippet[0]) for line in program if line.lstrip() == snippet[0].lstrip()}
+    return any(Counter(" " * shift + line for line in snippet) <= counts for shift in shifts if shift >= 0)
+
+
+def _columns(line: str) -> int:
+    return len(line) - len(line.lstrip(" "))
+
+
 def _statement_lines(code: str) -> list[str]:
-    """A block's lines as code, one by one: each line that parses alone as written by ``ast.unparse`` (comments,
-    spacing and quotes do not matter), any other (the head of a compound statement) stripped; none for a blank or
-    comment line."""
+    """A block's lines as code, one by one: its indentation as written (a tab is four columns), then the line as
+    ``ast.unparse`` writes it when it parses alone (comments, spacing and quotes do not matter), else as written (the
+    head of a compound statement); none for a blank or comment line."""
     lines = []
     for line in code.split("\n"):
         text = line.strip()
         with contextlib.suppress(SyntaxError, ValueError, RecursionError, MemoryError):
             text = ast.unparse(_quiet_parse(text))
         if text:
-            lines.append(text)
+            lines.append(line[: len(line) - len(line.lstrip())].expandtabs(4) + text)
     return lines
 
 
@@ -313,13 +442,38 @@ _CODE_LINE = re.compile(
 )
 
 
+_CLAUSE = re.compile(r"(?:else|elif|except|finally)\b")
+
+
+def _looks_like_code(line: str) -> bool:
+    """Whether a line reads as Python, not prose: a :data:`_CODE_LINE` shape, or a line that parses, alone, as a
+    compound statement's head or as a clause after one (``if x: f()``, ``else: g()``, ``[f(w) for w in ws]``,
+    ``not f()``, ``lift: float = 0.2``) and does more than name a value."""
+    text = line.strip()
+    if _CODE_LINE.match(line):
+        return True
+    if not text or len(text) > 2000 or text.startswith("#"):
+        return False
+    sources = [text, *([f"{text}\n    pass", f"{text}\n    case _: pass"] if text.endswith(":") else [])]
+    if _CLAUSE.match(text):
+        sources = [f"{before}: pass\n{source}" for before in ("if 1", "try") for source in sources]
+    for source in sources:
+        try:
+            return _has_action(_quiet_parse(source))
+        except (SyntaxError, ValueError, RecursionError, MemoryError):
+            continue
+    return False
+
+
 def _unfenced_program(text: str) -> str:
     """The program of a reply without code blocks: the longest run of lines that parses and acts, when every
     line left out is prose; raises :class:`ProgramRejected` with the syntax error of the whole code when a line
     that looks like code would be left out (the program would be cut)."""
     lines = text.split("\n")
     start, end = _longest_parsing_run(text)
-    code_like = [k for k, line in enumerate(lines) if (k < start or k >= end) and _CODE_LINE.match(line)]
+    if _has_diff(lines):
+        raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
+    code_like = [k for k, line in enumerate(lines) if (k < start or k >= end) and _looks_like_code(line)]
     if not code_like:
         return "\n".join(lines[start:end])
     first, last = (
