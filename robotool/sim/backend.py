@@ -109,6 +109,11 @@ class BatchedSim(Protocol):
         :data:`TOUCH_DISTANCE`), the sum of their contacts' unit normals pointing from the first body to the second
         (antisymmetric); zeros for the pairs that do not touch. Which way one body presses on another."""
 
+    def contact_forces(self, worlds: np.ndarray, first: np.ndarray) -> np.ndarray:
+        """(k, nbody, 3) N after the last step in ``worlds`` (k,): the force the bodies flagged in ``first`` ((nbody,)
+        bool) put on each other body through their contacts, in world axes (the solver's contact forces; zeros for
+        the bodies they do not touch and for the flagged ones)."""
+
     def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position (nworld, ngeom, 3) and rotation matrix (nworld, ngeom, 9) after the last step, current
         in ``worlds`` (the other worlds' rows may be stale); read-only."""
@@ -281,6 +286,17 @@ def normals_from_contacts(
     np.add.at(out, (b1, b2), n)
     np.add.at(out, (b2, b1), -n)
     return out
+
+
+def contacts_from(geom_body: np.ndarray, geom: np.ndarray, first: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Of contacts between geoms ``geom`` (n, 2): those that join a body flagged in ``first`` to one that is not, that
+    other body, and the sign of the contact's force on it (+1: its geom is the contact's second, which the force acts
+    on; -1: the first, which bears its reaction)."""
+    b1, b2 = geom_body[geom[:, 0]], geom_body[geom[:, 1]]
+    onto_second, onto_first = first[b1] & ~first[b2], first[b2] & ~first[b1]
+    index = np.flatnonzero(onto_second | onto_first)
+    other = np.where(onto_second[index], b2[index], b1[index])
+    return index, other, np.where(onto_second[index], 1.0, -1.0)
 
 
 @functools.cache

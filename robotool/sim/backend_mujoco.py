@@ -26,6 +26,7 @@ from robotool.sim.backend import (
     TOUCH_DISTANCE,
     BatchState,
     Perturbation,
+    contacts_from,
     geom_groups,
     normals_from_contacts,
     weld_load_from_rows,
@@ -274,6 +275,23 @@ class MujocoSim:
         d = self.datas[world]
         con = d.contact
         return normals_from_contacts(self.scene.model.nbody, self._geom_body, con.geom, con.dist, con.frame[:, :3])
+
+    def contact_forces(self, worlds: np.ndarray, first: np.ndarray) -> np.ndarray:
+        """The force the bodies ``first`` put on the others through their contacts (:meth:`BatchedSim.contact_forces`),
+        ``mj_contactForce`` on each such contact of each world's ``MjData``."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        out = np.zeros((len(worlds), self.scene.model.nbody, 3))
+        wrench = np.zeros(6)
+        for k, w in enumerate(worlds.tolist()):
+            model, data = self.models[w], self.datas[w]
+            con = data.contact
+            index, other, sign = contacts_from(self._geom_body, con.geom, first)
+            frames = con.frame.reshape(-1, 3, 3)
+            for c, body, s in zip(index.tolist(), other.tolist(), sign.tolist(), strict=True):
+                if con.efc_address[c] >= 0:  # (a contact beyond its margin has no force)
+                    mujoco.mj_contactForce(model, data, c, wrench)
+                    out[k, body] += s * (wrench[:3] @ frames[c])
+        return out
 
     def rays(
         self,

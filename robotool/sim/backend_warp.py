@@ -8,6 +8,8 @@ whose sticky overflow flag is set (contacts or constraint rows over ``nconmax``/
 
 from __future__ import annotations
 
+from typing import Any
+
 import mujoco
 import mujoco_warp as mjw
 import numpy as np
@@ -17,6 +19,7 @@ from robotool.sim import ray_cast
 from robotool.sim.backend import (
     BatchState,
     Perturbation,
+    contacts_from,
     geom_groups,
     normals_from_contacts,
     touching_from_contacts,
@@ -194,6 +197,29 @@ class WarpSim:
         return normals_from_contacts(
             self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
         )
+
+    def contact_forces(self, worlds: np.ndarray, first: np.ndarray) -> np.ndarray:
+        """The force the bodies ``first`` put on the others through their contacts (:meth:`BatchedSim.contact_forces`),
+        ``mjw.contact_force`` on those contacts of the batch's list in ``worlds``, in world axes."""
+        worlds = np.asarray(worlds, dtype=int).reshape(-1)
+        out = np.zeros((len(worlds), self.scene.model.nbody, 3))
+        nacon = int(self.d.nacon.numpy()[0])
+        if not worlds.size or not nacon:
+            return out
+        row = np.full(self.nworld, -1)
+        row[worlds] = np.arange(len(worlds))
+        worldid = self.d.contact.worldid.numpy()[:nacon]
+        index, other, sign = contacts_from(self.scene.model.geom_bodyid, self.d.contact.geom.numpy()[:nacon], first)
+        asked = row[worldid[index]] >= 0
+        index, other, sign = index[asked], other[asked], sign[asked]
+        if not index.size:
+            return out
+        with wp.ScopedDevice(self.device):
+            force: Any = wp.zeros(len(index), dtype=wp.spatial_vector)  # (a force, then a torque, per contact)
+            mjw.contact_force(self.m, self.d, wp.array(index.astype(np.int32), dtype=int), True, force)
+            world_force = np.asarray(force.numpy(), dtype=np.float64)[:, :3]
+        np.add.at(out, (row[worldid[index]], other), sign[:, None] * world_force)
+        return out
 
     def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position and rotation matrix in every world (:meth:`BatchedSim.geom_poses`), read back once

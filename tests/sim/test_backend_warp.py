@@ -76,6 +76,25 @@ def test_contact_normals_match_between_backends(sim_scene: Any, warp_rollouts: l
     np.testing.assert_allclose(unit[1], unit[0], atol=1e-3)
 
 
+def test_contact_forces_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    """The force the world's own bodies put on what rests on them, from each backend's solver: each cube lying on the
+    table is borne up by its weight, on Warp as on C (the arm's payload reads what the robot bears this way)."""
+    scene = sim_scene(TASK)
+    sims = [sim.make_sim(scene, 2, backend=b) for b in ("mujoco", "warp")]
+    ground = np.zeros(scene.model.nbody, dtype=bool)
+    ground[0] = True
+    for s in sims:
+        for _ in range(10):
+            s.step(scene.control_substeps, np.ones(2, dtype=bool))
+    c, w = (s.contact_forces(np.array([1, 0]), ground) for s in sims)
+    np.testing.assert_allclose(w, c, atol=0.05)
+    cubes = [int(scene.object_body[scene.object_index(f"magnetic_cube{k}")]) for k in (1, 2, 3)]
+    weight = sims[0].body_mass[1, cubes] * 9.81
+    np.testing.assert_allclose(c[0, cubes, 2], weight, rtol=0.02)
+    np.testing.assert_allclose(c[0, cubes, :2], 0.0, atol=1e-3)
+    assert not c[:, 0].any()  # none on the flagged bodies themselves
+
+
 @pytest.mark.parametrize("task_name", ["can_grasping", "milk_reaching", "milk_reaching_near"])
 def test_reference_programs_solve_the_other_arm_tasks(sim_scene: Any, run_texts: Any, task_name: str) -> None:
     """Grasps by contact, rigid holds and sheet carriers behave on Warp as on C (fewer worlds: Warp on CPU is slow)."""

@@ -9,8 +9,8 @@ robot does not grasp counts only where the robot's contacts press it up (by ``co
 drag or a press down bears nothing): a plate lifted on the open gripper's palm and fingers is carried as a grasped one
 is. When nothing in a group touches anything that does not move (the table, a fixed object) and no magnet anchors it
 to one, the arm carries the whole group: its mass is its payload. Where the group touches a support, the arm carries
-only what it bears of it: the upward force the grasp weld and the robot's contacts put on the group
-(:func:`~.arm_bearing.robot_forces`, the solver's contact forces on both backends) over g, never more than the
+only what it bears of it: the upward force the grasp weld and the robot's contacts put on the group (the solver's
+contact forces, :meth:`~robotool.sim.backend.BatchedSim.contact_forces`, on both backends) over g, never more than the
 group's mass: an object dragged or pushed along the table, or a tool pressed up into a button (its spring is no
 payload), loads the arm with little or nothing; a block lifted while it scrapes along a wall, or a board tilted up by
 one end, with what the arm actually holds up. The payload is the sum over the groups. The contact forces are read
@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robotool.robots.arm.arm_bearing import robot_forces
 from robotool.robots.arm.arm_config import ArmConfig
 from robotool.robots.arm.arm_grasp import GRAVITY, ArmParts, Grasp
 from robotool.robots.arm.arm_skills import ArmLimits
@@ -128,7 +127,8 @@ class Payload:
         worlds = [w for w in np.flatnonzero(mask & touches).tolist() + list(held) if s.broke[w] is None]
         groups = {w: self._groups(state, w, held.get(w, -1)) for w in dict.fromkeys(worlds)}
         heavy = [w for w, g in groups.items() if sum(g.mass) > self.limit + 1e-9]  # might be too much: weigh it
-        forces = robot_forces(self.sim, np.array(heavy, dtype=int), self.bodies.robot, self.bodies.owner)
+        on_bodies = self.sim.contact_forces(np.array(heavy, dtype=int), self.bodies.robot)
+        forces = np.einsum("kbi,bo->koi", on_bodies, self.bodies.member)  # (k, nobject, 3) on each object
         out = []
         for k, w in enumerate(heavy):
             load = self._load(state, w, held.get(w, -1), groups[w], forces[k])
