@@ -77,7 +77,6 @@ class Bodies:
 
     member: np.ndarray  # (nbody, nobject) 1.0 where the body is the object's
     ground: np.ndarray  # (nbody,) bool: the world's own bodies (the table top), not the robot's nor an object's
-    owner: np.ndarray  # (nbody,) each body's object (-1: none)
     robot: np.ndarray  # (nbody,) bool: the robot's own bodies
     loose: np.ndarray  # the movable objects' bodies
 
@@ -105,7 +104,7 @@ class Payload:
         robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
         loose = np.flatnonzero(member @ parts.movable > 0)
-        self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot, owner=owner, robot=robot, loose=loose)
+        self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot, robot=robot, loose=loose)
         self.state = PayloadState.empty(sim.nworld)
         movable_mass = np.asarray(sim.body_mass) @ (member * parts.movable[None, :])  # (nworld, nobject)
         self.relevant = bool((movable_mass.sum(axis=1) > self.limit).any())  # all of it might be too much
