@@ -5,13 +5,13 @@ from __future__ import annotations
 import ast
 import codeop
 import contextlib
-import html
 import itertools
 import re
 import warnings
 from collections import Counter
 from dataclasses import dataclass
 
+from robotool.sandbox.html_blocks import html_code_blocks
 from robotool.sandbox.validate import MAX_PROGRAM_CHARS, ProgramRejected, check_parse_cost, parse_program
 
 _FENCE = re.compile(r"^[ \t]*(```+|~~~+)[ \t]*([\w.+-]*)([^\n]*)$", re.MULTILINE)  # fence, tag, the rest
@@ -68,7 +68,7 @@ def extract(text: str) -> Extraction:
         raise ProgramRejected(None, "text", f"answer is longer than {MAX_PROGRAM_CHARS} characters")
     check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
-    text = _html_code_blocks(without_reasoning(text))
+    text = html_code_blocks(without_reasoning(text))
     text, lone_fence = _without_a_lone_fence(text)
     blocks = _fenced_blocks(text)
     chosen = None
@@ -160,27 +160,19 @@ def _code_masked(text: str) -> str:
 
 
 def _comments_masked(text: str) -> str:
-    return _COMMENT.sub(lambda found: found.group(0).translate(_IN_CODE), text)
+    """Comments, and string literals on lines that read as code (``label = "</think>"``), masked."""
+    masked = _COMMENT.sub(lambda found: found.group(0).translate(_IN_CODE), text)
+    return _CODE_WITH_MARKER.sub(lambda found: _strings_masked(found.group(0)), masked)
 
 
-_HTML_OPEN = re.compile(r"<pre\b[^>]*>[ \t]*<code\b([^>]*)>", re.IGNORECASE)
-_HTML_CLOSE = re.compile(r"</code>\s*</pre>", re.IGNORECASE)
-_HTML_LANGUAGE = re.compile(r"\blang(?:uage)?-([\w.+-]+)")
+_CODE_WITH_MARKER = re.compile(r"^[^\n]*[<\[\u25c1][^\n]*$", re.MULTILINE)
+_STRING = re.compile(r"""(?:[rRbBuUfF]{0,2})("|')(?:\\.|(?!\1)[^\\\n])*\1""")
 
 
-def _html_code_blocks(text: str) -> str:
-    """``text`` with each HTML code block (``<pre><code class="language-python">...</code></pre>``) written as a fenced
-    one, its first line included."""
-    parts, end = [], 0
-    while (opening := _HTML_OPEN.search(text, end)) is not None:
-        closing = _HTML_CLOSE.search(text, opening.end())
-        if closing is None:
-            break
-        language = _HTML_LANGUAGE.search(opening.group(1))
-        code = html.unescape(text[opening.end() : closing.start()]).strip("\n")
-        parts += [text[end : opening.start()], f"\n```{language.group(1) if language else ''}\n{code}\n```\n"]
-        end = closing.end()
-    return "".join([*parts, text[end:]])
+def _strings_masked(line: str) -> str:
+    if not _looks_like_code(line.translate(_OUT_OF_CODE)):
+        return line
+    return _STRING.sub(lambda found: found.group(0).translate(_IN_CODE), line)
 
 
 def _non_blank(text: str) -> int:
