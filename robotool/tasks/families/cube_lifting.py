@@ -9,7 +9,9 @@ Description:
 Randomizations:
     - the cube's mass: 6-11 kg (too heavy to push) or 1.5-5 kg (light enough to push, yet the robot still
       cannot raise it by itself: the lever is needed either way);
-    - the chair's place along the board's raised end (its height follows the board), the robot's start
+    - the chair's place along the board's raised end (its height follows the board; under a light cube, which
+      does not hold the board down, pushing the chair out drags the board along, so the chair is light enough that
+      both stay under the push limit in every perturbed world), the robot's start
       on the floor on either side of the lever; in scenes turned a quarter the board is wider than the robot
       is long (so that it can walk along the board flank first, without a turn);
     - decoys: a box too heavy to push elsewhere on the floor; in unsolvable scenes the chair is too heavy
@@ -26,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.sim.backend import MASS_NOISE
 from robotool.task import geometry
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
@@ -61,7 +65,10 @@ def build(rng: np.random.Generator) -> Draft:
     end = footprint(board)[0]  # the board's raised -x end
     edge = uniform(rng, end + 0.05, end + 0.2)  # the chair's +x edge, under the board
     under, _ = geometry.object_interval(geometry.object_parts(board), np.array([[edge, board.center[1]]]))
-    chair_mass = uniform(rng, 6.0, 10.0, 1) if heavy_chair else chair.mass
+    chair_mass = uniform(rng, 6.0, 10.0, 1) if heavy_chair else chair.mass or 0.0
+    if light:  # the chair and the board it drags out with it, under the push limit in every perturbed world
+        pushable = QuadrupedLimits().max_push_mass / (1 + MASS_NOISE) - (board.mass or 0.0)
+        chair_mass = min(chair_mass, float(np.floor(pushable * 10) / 10))
     # Notes without directions: the layout may mirror or turn the scene.
     scene = [
         roller.model_copy(update={"notes": "a yoga roller lying on its side, fixed to the floor"}),
