@@ -10,7 +10,7 @@ import pytest
 import yaml
 from pydantic import BaseModel
 
-from robotool import tasks
+from robotool import sim, tasks
 from robotool.cli import main
 from robotool.execute import run
 from robotool.planner import solve
@@ -331,3 +331,17 @@ def test_only_objects_near_each_other_are_tested_for_overlap(monkeypatch: pytest
     with pytest.raises(TaskFileError, match=re.escape("'box_0' and 'box_1' overlap by 0.050 m")):
         parse_task(data)
     assert len(calls) == 1
+
+
+def test_a_button_written_without_movable_is_fixed_and_one_written_movable_is_refused() -> None:
+    """Found by an adversarial run: a button without ``movable: false`` (the format page said the key is ignored for
+    buttons) ended every run in an internal error (exit 70): the perturbation looked for the free joint of a movable
+    object that a button's fixed housing has not got."""
+    unset = {key: value for key, value in BUTTON.items() if key != "movable"}
+    task = parse_task({**_scene(), "objects": [unset]})
+    (button,) = task.objects
+    assert button.movable is False
+    rollouts = sim.run_programs(task, [lambda robot: robot.open_gripper()], seed=0)
+    assert not rollouts[0].internal_error and not rollouts[0].success
+    (problem,) = _problems({**_scene(), "objects": [{**BUTTON, "movable": True}]})
+    assert "a button's housing is fixed in place" in problem, problem

@@ -73,6 +73,16 @@ class SceneObject(StrictModel):
     travel: PositiveLength | None = None  # buttons: how far the face can be pushed in, m
     notes: str | None = None
 
+    @model_validator(mode="before")
+    @classmethod
+    def _buttons_are_fixed(cls, data: object) -> object:
+        """A button's housing is fixed: ``movable`` defaults to false for it, and true is an error."""
+        if isinstance(data, dict) and data.get("shape") == "button":
+            if data.get("movable", False) is not False:
+                raise ValueError("a button's housing is fixed in place: leave out 'movable' or write movable: false")
+            data = {**data, "movable": False}
+        return data
+
     @model_validator(mode="after")
     def _shape_options(self) -> SceneObject:
         if self.axis != "z" and self.shape != "cylinder":
