@@ -26,7 +26,8 @@ def robot_section(task: Task) -> list[str]:
         "wider than the opening (a thin sheet is pinched where both fingertips press on it); a held object moves "
         "rigidly with the gripper and pushes what it meets; aim the gripper centre at the graspable point.",
         f"- it carries at most {num(limits.max_payload)} kg: the held object with what rests on it or is stuck to "
-        "it, once lifted off its support (pushing or dragging along a surface is no payload).",
+        "it, once lifted off its support; a push, drag or press that moves things takes its share too (its force "
+        "counts as the weight it would hold up; pressing into a support that gives no way is free).",
     ]
 
 

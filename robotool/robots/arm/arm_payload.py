@@ -1,25 +1,32 @@
-"""The arm's payload: what it bears, however it bears it, judged against ``max_payload`` (a Kinova Gen3 carries about
-4 kg at mid range, 2 kg at full reach; its servos and its grip alone would lift about 10 kg).
+"""The arm's payload: what it bears and what it pushes, however it does, judged against ``max_payload`` (a Kinova
+Gen3 carries about 4 kg at mid range, 2 kg at full reach, and exerts about that weight, 39 N, at its end effector in
+any direction; its servos and its grip alone would lift about 10 kg and press 100 N).
 
 At each control tick, in a world whose gripper holds an object (its grasp weld is on) or whose robot bodies touch a
 movable object, the load is read from the simulation. The held object, what is stuck to it (welded to it by magnets,
 in a chain) and the movable objects that touch these, directly or through one another (what rides on it, what rides
 on that) form one group; each other movable object a robot body touches forms one with what touches it. A group the
-robot does not grasp counts only where the robot's contacts press it up (by ``contact_lift`` at least, net: a push, a
-drag or a press down bears nothing): a plate lifted on the open gripper's palm and fingers is carried as a grasped one
-is. When nothing in a group touches anything that does not move (the table, a fixed object) and no magnet anchors it
-to one, the arm carries the whole group: its mass is its payload. Where the group touches a support, the arm carries
-only what it bears of it: the upward force the grasp weld and the robot's contacts put on the group (the solver's
-contact forces, :meth:`~robotool.sim.backend.BatchedSim.contact_forces`, on both backends) over g, never more than the
-group's mass: an object dragged or pushed along the table, or a tool pressed up into a button (its spring is no
-payload), loads the arm with little or nothing; a block lifted while it scrapes along a wall, or a board tilted up by
-one end, with what the arm actually holds up. The payload is the sum over the groups. The contact forces are read
-only in the worlds where the groups could weigh more than the limit, and not at all in a scene whose movable objects
-together weigh no more.
+robot grasps, or whose net upward push from the robot's contacts is ``contact_lift`` at least, is held up: a plate
+lifted on the open gripper's palm and fingers is carried as a grasped one is. When nothing in such a group touches
+anything that does not move (the table, a fixed object) and no magnet anchors it to one, the arm carries the whole
+group: its mass is its payload. Where the group touches a support, the arm carries only what it bears of it: the
+upward force the grasp weld and the robot's contacts put on the group (the solver's contact forces,
+:meth:`~robotool.sim.backend.BatchedSim.contact_forces`, on both backends) over g, never more than the group's mass.
+
+The rest of the force the robot puts on a group (pushed or dragged along the table, pressed down, pulled through the
+grasp, in any direction) is a push, which takes the rating as the weight it would hold up (its size over g), never
+more than the group's mass left over from what the arm bears (more only drives the group into its supports): the
+arm's load is the payload and the push, so it carries 4 kg, or pushes 39 N, or carries 2 kg while it pushes 20 N. A
+push that moves nothing but down is no load (a block set down with its target below its support, the stack under it
+sinking into its soft contacts): a push over the limit counts once something it pushes has moved ``press_travel`` up
+or sideways since it went over (a lever's end pressed down under a heavy anvil raises it centimetres). Force straight
+into what does not move (the fingers driven into the table) moves nothing and is no load either. Neither share is more
+than a group's mass, so the contact forces are read only in the worlds where the groups could weigh more than the
+limit, and not at all in a scene whose movable objects together weigh no more.
 
 A real arm rides out a peak above its rated payload for an instant (the jerk as a load comes off its support, a
-pushed crate hopping against a held tool for a tick), so a world fails only once its arm has carried more than
-``max_payload`` for ``payload_time`` (three control ticks) in all over the run; the time adds up across grasps, so
+pushed crate hopping against a held tool for a tick), so a world fails only once its arm has carried (or pushed) more
+than ``max_payload`` for ``payload_time`` (three control ticks) in all over the run; the time adds up across grasps, so
 an overweight load cannot be carried in short hops with the grip opened between them. The world then fails
 (the robot condition ``robot_carried_within_payload``), the move in progress is refused with a reason naming the
 objects and the numbers, and the gripper lets go (the arm cannot hold it up); a tick over the limit is also one
@@ -44,7 +51,8 @@ PAYLOAD_CONDITION = "robot_carried_within_payload"  # the goal condition carryin
 class Load:
     """What the arm carries in one world at one tick: the payload (kg), the mass of the groups it bears (kg), whether
     one of them rests on something that does not move, the object held (-1: none), the one the reason names (the
-    held one, else the heaviest the robot holds up by contact), and the other members."""
+    held one, else the one the robot holds up or pushes hardest), the other members, and the force (N) it pushes,
+    drags or presses with (``down``: mostly down) on the groups it does not hold up (``pushed``)."""
 
     payload: float
     group_mass: float
@@ -53,11 +61,24 @@ class Load:
     named: int
     stuck: tuple[int, ...]
     touching: tuple[int, ...]
+    push: float
+    down: bool
+    pushed: np.ndarray  # (nobject,) bool: the members of the groups it pushes
 
     @property
     def by_contact(self) -> bool:
         """Some of it is borne by the robot's bodies' contacts rather than by a grasp."""
         return self.held < 0
+
+    @property
+    def total(self) -> float:
+        """kg of the arm's rating it takes: the payload and the push (as the weight it would hold up)."""
+        return self.payload + self.push / GRAVITY
+
+    @property
+    def pushing(self) -> bool:
+        """The push takes more of the rating than what is held up: the reason names the push."""
+        return self.push / GRAVITY > self.payload
 
 
 @dataclass(frozen=True)
@@ -87,11 +108,17 @@ class PayloadState:
 
     over_for: np.ndarray  # (nworld,) s over max_payload, added up over the run
     over_now: np.ndarray  # (nworld,) bool: over it at the last tick
+    press_from: np.ndarray  # (nworld, nobject, 3) m: the objects' centres when the push went over (NaN: it is not)
     broke: list[str | None]  # the reason the arm carried too much (the world fails), once it did
 
     @classmethod
-    def empty(cls, nworld: int) -> PayloadState:
-        return cls(over_for=np.zeros(nworld), over_now=np.zeros(nworld, dtype=bool), broke=[None] * nworld)
+    def empty(cls, nworld: int, nobject: int) -> PayloadState:
+        return cls(
+            over_for=np.zeros(nworld),
+            over_now=np.zeros(nworld, dtype=bool),
+            press_from=np.full((nworld, nobject, 3), np.nan),
+            broke=[None] * nworld,
+        )
 
 
 class Payload:
@@ -100,12 +127,13 @@ class Payload:
     def __init__(self, sim: BatchedSim, parts: ArmParts, grasp: Grasp, limits: ArmLimits, config: ArmConfig):
         self.sim, self.parts, self.grasp, self.scene = sim, parts, grasp, sim.scene
         self.limit, self.time, self.lift = limits.max_payload, config.payload_time, config.contact_lift
+        self.travel = config.press_travel
         owner = np.asarray(self.scene.body_object)
         robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
         loose = np.flatnonzero(member @ parts.movable > 0)
         self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot, robot=robot, loose=loose)
-        self.state = PayloadState.empty(sim.nworld)
+        self.state = PayloadState.empty(sim.nworld, len(self.scene.object_names))
         movable_mass = np.asarray(sim.body_mass) @ (member * parts.movable[None, :])  # (nworld, nobject)
         self.relevant = bool((movable_mass.sum(axis=1) > self.limit).any())  # all of it might be too much
 
@@ -128,10 +156,13 @@ class Payload:
         heavy = [w for w, g in groups.items() if sum(g.mass) > self.limit + 1e-9]  # might be too much: weigh it
         on_bodies = self.sim.contact_forces(np.array(heavy, dtype=int), self.bodies.robot)
         forces = np.einsum("kbi,bo->koi", on_bodies, self.bodies.member)  # (k, nobject, 3) on each object
-        out = []
+        out, pressing = [], np.zeros(self.sim.nworld, dtype=bool)
         for k, w in enumerate(heavy):
             load = self._load(state, w, held.get(w, -1), groups[w], forces[k])
-            if load is None or load.payload <= self.limit + 1e-9:
+            if load is None or load.total <= self.limit + 1e-9:
+                continue
+            pressing[w] = load.push > 0.0
+            if not self._moves(state, w, load):
                 continue
             s.over_now[w] = True
             s.over_for[w] += self.scene.control_dt
@@ -140,7 +171,20 @@ class Payload:
             reason, measured = self._words(load, float(s.over_for[w]))
             s.broke[w] = reason
             out.append((w, load, reason, measured))
+        s.press_from[mask & ~pressing] = np.nan
         return out
+
+    def _moves(self, state: BatchState, w: int, load: Load) -> bool:
+        """Whether ``load`` (over the limit in all) counts: what is held up always, a push only once something it
+        pushes has moved ``press_travel`` up or sideways since the push went over the limit (a press into a support
+        moves nothing but down: it is no load)."""
+        if load.payload > self.limit + 1e-9 or load.push <= 0.0:
+            return True
+        now = state.xpos[w, np.asarray(self.scene.object_body)]
+        if np.isnan(self.state.press_from[w]).any():
+            self.state.press_from[w] = now
+        moved = now[load.pushed] - self.state.press_from[w][load.pushed]
+        return bool((np.maximum(np.linalg.norm(moved[:, :2], axis=1), moved[:, 2]) >= self.travel).any())
 
     def _groups(self, state: BatchState, w: int, i: int) -> Groups:
         """The groups the robot may bear in world ``w`` (holding object ``i``, -1: none): the held object with what
@@ -175,28 +219,42 @@ class Payload:
     def _load(self, state: BatchState, w: int, i: int, groups: Groups, force: np.ndarray) -> Load | None:
         """What the arm carries in world ``w`` holding object ``i`` (-1: none) of ``groups`` (see the module's doc),
         ``force`` (nobject, 3) N being what the robot's contacts put on each object; None where it bears nothing."""
-        up = force[:, 2].copy()
+        force = force.copy()
         if i >= 0:
-            up[i] -= float(self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, 2])
+            force[i] -= self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, :3]
+        up = force[:, 2]
         payload, mass, supported, borne = 0.0, 0.0, False, np.zeros(len(up), dtype=bool)
+        push, pushed, pushed_on = 0.0, np.zeros(len(up), dtype=bool), np.zeros(3)
         for k, (group, rests, weight) in enumerate(zip(groups.members, groups.supported, groups.mass, strict=True)):
-            bears = float(up[group].sum())
-            held_here = i >= 0 and k == 0
-            if not held_here and bears < self.lift:
-                continue  # pushed, dragged or pressed down on: not held up
-            payload += min(weight, max(bears, 0.0) / GRAVITY) if rests else weight
-            mass, supported, borne = mass + weight, supported or rests, borne | group
-        if not borne.any():
+            on = force[group].sum(axis=0)
+            lifted = (i >= 0 and k == 0) or float(on[2]) >= self.lift  # held, or held up by contact: borne
+            if lifted and not rests:
+                payload, mass, borne = payload + weight, mass + weight, borne | group
+                continue
+            share = min(weight, max(float(on[2]), 0.0) / GRAVITY) if lifted else 0.0
+            rest = on - np.array([0.0, 0.0, share * GRAVITY])  # pushed, dragged or pressed with (the rest)
+            pressed = min(float(np.linalg.norm(rest)), (weight - share) * GRAVITY)
+            if lifted:
+                payload, mass, supported, borne = payload + share, mass + weight, True, borne | group
+            if pressed > 0.0:
+                push, pushed, pushed_on = push + pressed, pushed | group, pushed_on + rest
+        if not (borne.any() or push > 0.0):
             return None
-        named = i if i >= 0 else int(np.argmax(np.where(borne, up, -np.inf)))
+        if i >= 0:
+            named = i
+        elif push / GRAVITY > payload:
+            named = int(np.argmax(np.where(pushed, np.linalg.norm(force, axis=1), -np.inf)))
+        else:
+            named = int(np.argmax(np.where(borne, up, -np.inf)))
         stuck = tuple(int(o) for o in np.flatnonzero(groups.carried & self.parts.movable) if o != i)
-        touching = tuple(int(o) for o in np.flatnonzero(borne & ~groups.carried) if o != named)
-        return Load(payload, mass, supported, i, named, stuck, touching)
+        touching = tuple(int(o) for o in np.flatnonzero((borne | pushed) & ~groups.carried) if o != named)
+        down = bool(-pushed_on[2] >= np.linalg.norm(pushed_on[:2]))
+        return Load(payload, mass, supported, i, named, stuck, touching, push, down, pushed)
 
     def _words(self, load: Load, over: float) -> tuple[str, dict[str, float]]:
         """The reason a load broke the payload limit, and its measures."""
         names = self.scene.object_names
-        how = "touching" if load.supported else "riding on"
+        how = "touching" if load.supported or load.pushing else "riding on"
         along = [
             f"{', '.join(names[o] for o in objs)} {verb} it"
             for objs, verb in ((load.touching, how), (load.stuck, "stuck to"))
@@ -204,19 +262,32 @@ class Payload:
         ]
         with_ = f" with {' and '.join(along)}" if along else ""
         on = " on the gripper" if load.by_contact else ""
-        if load.supported:
-            bears = "the gripper bears" if load.by_contact else "the arm bears"
-            what = f"{bears} {load.payload:.1f} kg of its {load.group_mass:.1f} kg{with_} (a support the rest)"
+        if load.pushing:
+            verb = "press" if load.down else "push"
+            besides = f" besides the {load.payload:.1f} kg it carries" if load.payload > 0 else ""
+            name, force = names[load.named], f"{load.push:.0f} N"
+            what = f"with {name}: {force}" if load.held >= 0 else f"{name}: {force} on it"
+            reason = (
+                f"cannot {verb} {what}{with_}{besides}, over the "
+                f"{self.limit * GRAVITY:.0f} N the arm's {self.limit:.1f} kg payload allows ({verb}ed for {over:.1f} s)"
+            )
         else:
-            what = f"{load.payload:.1f} kg{' borne' if on else ''}{on}{with_}"
-        reason = (
-            f"cannot lift {names[load.named]}: {what}, over the arm's {self.limit:.1f} kg payload "
-            f"(carried for {over:.1f} s)"
-        )
+            if load.supported:
+                bears = "the gripper bears" if load.by_contact else "the arm bears"
+                what = f"{bears} {load.payload:.1f} kg of its {load.group_mass:.1f} kg{with_} (a support the rest)"
+            else:
+                what = f"{load.payload:.1f} kg{' borne' if on else ''}{on}{with_}"
+            if round(load.push):
+                what += f" and pushes with {load.push:.0f} N"
+            reason = (
+                f"cannot lift {names[load.named]}: {what}, over the arm's {self.limit:.1f} kg payload "
+                f"(carried for {over:.1f} s)"
+            )
         measured = {
             "mass": round(load.payload, 3),
             "limit": self.limit,
             "group_mass": round(load.group_mass, 3),
+            "force": round(load.push, 1),
             "riders": float(len(load.touching)),
             "stuck": float(len(load.stuck)),
             "contact": float(load.by_contact),

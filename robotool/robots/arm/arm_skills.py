@@ -20,7 +20,8 @@ class ArmLimits(BaseModel):
         4.0,
         gt=0,
         description="heaviest load it carries off its support (the held object, what rides on it or is "
-        "stuck to it), kg; a Kinova Gen3's rated payload at mid range",
+        "stuck to it), kg, its weight also the most force it pushes or presses with; a Kinova Gen3's rated "
+        "payload at mid range",
     )
 
 
