@@ -3,16 +3,17 @@
 For each embodiment and nworld, the runner executes a reference program in nworld perturbed worlds: the arm's
 button_pressing and the quadruped's sofa_climbing.
 A recording pass (untimed, same seeds) wraps the backend's ``step`` and records each world's initial
-state, the ctrl and ``eq_active`` applied to every active world at every ``step(nstep, active)`` call,
+state, the ctrl, ``xfrc_applied`` and ``eq_active`` applied to every active world at every ``step(nstep, active)`` call,
 and the per-world weld ``eq_data`` (relative poses set at attach time). The raw baselines replay exactly
 that physics:
 
 - ``mujoco``: ``mujoco.rollout`` (2 threads), one model copy per world (the runner's own copies:
-  perturbed friction/mass/inertia and final ``eq_data``), ``control_spec=mjSTATE_CTRL|mjSTATE_EQ_ACTIVE``.
+  perturbed friction/mass/inertia and final ``eq_data``),
+  ``control_spec=mjSTATE_CTRL|mjSTATE_XFRC_APPLIED|mjSTATE_EQ_ACTIVE``.
   A world that the runner stops early gets a NaN ctrl at its last step + 1, where rollout stops
   stepping it (MuJoCo's bad-ctrl warning; so it does one uncounted extra step).
 - ``warp``: a fresh ``WarpSim`` with the same perturbation and the final ``eq_data``; a captured graph of
-  one control interval (a kernel writes the tick's recorded ctrl/``eq_active`` from device arrays, then
+  one control interval (a kernel writes the tick's recorded ctrl/``xfrc_applied``/``eq_active`` from device arrays, then
   ``mjw.step`` x substeps, then bumps the tick), launched once per recorded tick. Graph capture is
   outside the timing (the runner captures its graphs inside each run).
 
@@ -53,7 +54,8 @@ from robotool.sim.backend_choice import make_sim
 
 PROGRAMS = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "programs"
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS
-CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_EQ_ACTIVE  # laid out ctrl, then eq_active
+CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED | mujoco.mjtState.mjSTATE_EQ_ACTIVE
+"""Laid out ctrl, xfrc_applied (nbody x 6), then eq_active."""
 
 
 def button_pressing(robot: Any) -> None:
@@ -132,8 +134,8 @@ class Recording:
     sim: Any = None
     initial: np.ndarray | None = None  # (nworld, nstate) full physics state before the first step (mujoco)
     warmstart: np.ndarray | None = None  # (nworld, nv) qacc_warmstart before the first step (mujoco)
-    calls: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)  # nstep, worlds,
-    # ctrl (len(worlds), nu), eq_active (len(worlds), neq)
+    calls: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)  # nstep,
+    # worlds, ctrl (len(worlds), nu), xfrc_applied (len(worlds), nbody * 6), eq_active (len(worlds), neq)
     first_eq_data: np.ndarray | None = None  # (nworld, neq, neqdata) value of each weld when first active
     eq_data_changed: np.ndarray | None = None  # (nworld, neq) changed while active after first use
 
@@ -154,7 +156,8 @@ class Recording:
             worlds = np.arange(s.nworld)
             eq_active = s.d.eq_active.numpy().astype(bool)
             eq_data = s._eq_data.copy()
-        self.calls.append((nstep, worlds, s.ctrl[worlds].copy(), eq_active))
+        xfrc = s.xfrc_applied[worlds].reshape(len(worlds), -1).copy()
+        self.calls.append((nstep, worlds, s.ctrl[worlds].copy(), xfrc, eq_active))
         if self.first_eq_data is None:
             self.first_eq_data = np.full_like(eq_data, np.nan)
             self.eq_data_changed = np.zeros(eq_data.shape[:2], dtype=bool)
@@ -168,7 +171,7 @@ class Recording:
     def steps(self) -> np.ndarray:
         """Physics steps per world."""
         steps = np.zeros(self.sim.nworld, dtype=int)
-        for nstep, worlds, _, _ in self.calls:
+        for nstep, worlds, *_ in self.calls:
             steps[worlds] += nstep
         return steps
 
@@ -229,7 +232,7 @@ class RolloutReplay:
     models: list[mujoco.MjModel]
     initial: np.ndarray
     warmstart: np.ndarray
-    control: np.ndarray  # (nworld, nstep, nu + neq)
+    control: np.ndarray  # (nworld, nstep, nu + nbody * 6 + neq)
     steps: np.ndarray
     state: np.ndarray  # output buffers, allocated once
     sensordata: np.ndarray
@@ -240,16 +243,18 @@ def rollout_replay(rec: Recording) -> RolloutReplay:
     model = s.scene.model
     steps = rec.steps
     length = int(steps.max())
-    control = np.zeros((s.nworld, length, model.nu + model.neq))
+    xfrc_end = model.nu + model.nbody * 6
+    control = np.zeros((s.nworld, length, xfrc_end + model.neq))
     pos = np.zeros(s.nworld, dtype=int)
-    for nstep, worlds, ctrl, eq_active in rec.calls:
+    for nstep, worlds, ctrl, xfrc, eq_active in rec.calls:
         if not worlds.size:
             continue
         p = pos[worlds[0]]
         if (pos[worlds] != p).any():
             raise SystemExit("active worlds out of step: cannot replay as one rollout")
         control[worlds, p : p + nstep, : model.nu] = ctrl[:, None]
-        control[worlds, p : p + nstep, model.nu :] = eq_active[:, None]
+        control[worlds, p : p + nstep, model.nu : xfrc_end] = xfrc[:, None]
+        control[worlds, p : p + nstep, xfrc_end:] = eq_active[:, None]
         pos[worlds] += nstep
     short = np.flatnonzero(steps < length)
     control[short, steps[short], 0] = np.nan  # bad ctrl: rollout stops this world after one more step
@@ -323,14 +328,20 @@ def _warp_kernels() -> tuple[Any, Any]:
     def apply_tick(
         tick: wp.array(dtype=int),
         ctrl_all: wp.array3d(dtype=float),
+        xfrc_all: wp.array3d(dtype=float),
         eq_all: wp.array3d(dtype=bool),
         ctrl: wp.array2d(dtype=float),
+        xfrc_applied: wp.array2d(dtype=wp.spatial_vector),
         eq_active: wp.array2d(dtype=bool),
     ):
         w = wp.tid()
         t = tick[0]
         for j in range(ctrl.shape[1]):
             ctrl[w, j] = ctrl_all[t, w, j]
+        for b in range(xfrc_applied.shape[1]):
+            x = xfrc_all[t, w]
+            k = 6 * b
+            xfrc_applied[w, b] = wp.spatial_vector(x[k], x[k + 1], x[k + 2], x[k + 3], x[k + 4], x[k + 5])
         for j in range(eq_active.shape[1]):
             eq_active[w, j] = eq_all[t, w, j]
 
@@ -358,26 +369,29 @@ def warp_replay(rec: Recording, scene: sim.Scene) -> WarpReplay:
     apply_tick, next_tick = _warp_kernels()
     nworld, sub = rec.sim.nworld, scene.control_substeps
     ws = make_sim(scene, nworld, backend="warp", perturbation=Perturbation.sample(scene, nworld, 0))
-    ticks, ctrl, eq_active = [], [], []
-    for nstep, _, c, e in rec.calls:  # a settle step of k control intervals replays as k ticks
+    ticks, ctrl, xfrc, eq_active = [], [], [], []
+    for nstep, _, c, x, e in rec.calls:  # a settle step of k control intervals replays as k ticks
         n, k = (sub, nstep // sub) if nstep % sub == 0 else (nstep, 1)
         ticks += [n] * k
         ctrl += [c] * k
+        xfrc += [x] * k
         eq_active += [e] * k
     with wp.ScopedDevice(ws.device):
         ws.m.eq_data.assign(rec.final_eq_data())
         ctrl_all = wp.array(np.array(ctrl, dtype=np.float32))
+        xfrc_all = wp.array(np.array(xfrc, dtype=np.float32))
         eq_all = wp.array(np.array(eq_active, dtype=bool))
         tick = wp.zeros(1, dtype=int)
         d, m = ws.d, ws.m
 
         def chunk(n: int) -> None:
-            wp.launch(apply_tick, dim=nworld, inputs=[tick, ctrl_all, eq_all, d.ctrl, d.eq_active])
+            inputs = [tick, ctrl_all, xfrc_all, eq_all, d.ctrl, d.xfrc_applied, d.eq_active]
+            wp.launch(apply_tick, dim=nworld, inputs=inputs)
             for _ in range(n):
                 mjw.step(m, d)
             wp.launch(next_tick, dim=1, inputs=[tick])
 
-        keys = ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")
+        keys = ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "xfrc_applied", "eq_active", "overflow")
         saved = {k: getattr(d, k).numpy().copy() for k in keys}
         graphs = {}
         for n in sorted(set(ticks)):
@@ -453,7 +467,7 @@ def measure(scene: sim.Scene, case: Case, backend: str, nworld: int, repeat: int
         wrep = warp_replay(rec, scene)
         saved = {
             k: getattr(wrep.sim.d, k).numpy().copy()
-            for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "eq_active", "overflow")
+            for k in ("qpos", "qvel", "act", "time", "qacc_warmstart", "ctrl", "xfrc_applied", "eq_active", "overflow")
         }
     run_rate, replay_rate, rest_rate, same = 0.0, 0.0, 0.0, True
     for _ in range(repeat):  # interleaved, so all see the same machine load

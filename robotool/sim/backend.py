@@ -74,14 +74,16 @@ def quat_to_mat(q: np.ndarray) -> np.ndarray:
 class BatchedSim(Protocol):
     """``nworld`` copies of one scene stepped together.
 
-    ``ctrl`` (nworld, nu) and ``mocap_pos`` (nworld, nmocap, 3) are buffers the controllers write;
-    the backend applies them before each step. ``body_mass`` and ``friction_scale`` are read-only.
+    ``ctrl`` (nworld, nu), ``mocap_pos`` (nworld, nmocap, 3) and ``xfrc_applied`` (nworld, nbody, 6: a force and a
+    torque on each body's centre of mass, world axes) are buffers the controllers write; the backend applies them
+    before each step. ``body_mass`` and ``friction_scale`` are read-only.
     """
 
     scene: Scene
     nworld: int
     ctrl: np.ndarray
     mocap_pos: np.ndarray
+    xfrc_applied: np.ndarray
     body_mass: np.ndarray
     """(nworld, nbody) each world's body masses, perturbations included (kg)."""
     friction_scale: np.ndarray

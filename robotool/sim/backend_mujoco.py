@@ -124,6 +124,7 @@ class MujocoSim:
         self.friction_scale = np.array(perturbation.friction_scale, dtype=float)
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.array([d.mocap_pos for d in self.datas]).reshape(nworld, model.nmocap, 3)
+        self.xfrc_applied = np.zeros((nworld, model.nbody, 6))
         self._time = np.zeros(nworld)
         self._qpos = np.zeros((nworld, model.nq))
         self._qvel = np.zeros((nworld, model.nv))
@@ -175,6 +176,7 @@ class MujocoSim:
         for w in worlds.tolist():
             m, d = self.models[w], self.datas[w]
             d.ctrl[:] = self.ctrl[w]
+            d.xfrc_applied[:] = self.xfrc_applied[w]
             if mocap:
                 d.mocap_pos[:] = self.mocap_pos[w]
             mujoco.mj_step(m, d, nstep)

@@ -76,6 +76,7 @@ class WarpSim:
         self._eq_active = self.d.eq_active.numpy().copy()
         self.ctrl = np.zeros((nworld, model.nu))
         self.mocap_pos = np.tile(mjd.mocap_pos, (nworld, 1, 1))
+        self.xfrc_applied = np.zeros((nworld, model.nbody, 6))
         self._graphs: dict[int, wp.Graph] = {}
         self._state = self._read()
         self._contacts: tuple[np.ndarray, ...] | None = None  # the contact list read back for contact_normals
@@ -90,6 +91,7 @@ class WarpSim:
         """Step every world ``nstep`` times (``active`` is ignored: the batch moves together)."""
         with wp.ScopedDevice(self.device):
             self.d.ctrl.assign(self.ctrl.astype(np.float32))
+            self.d.xfrc_applied.assign(self.xfrc_applied.astype(np.float32))
             if self.scene.model.nmocap:
                 self.d.mocap_pos.assign(self.mocap_pos.astype(np.float32))
             graph = self._graphs.get(nstep)

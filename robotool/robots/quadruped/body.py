@@ -13,7 +13,8 @@ contacts can be read apart. x and y are driven by force-limited position servos 
 lift motor that can only push up, with a force bounded by :data:`LIFT_FACTOR` times the robot's weight, and pitch
 and roll have torque motors bounded by :data:`TILT_FACTOR` (weight times metres) that the controller uses only to
 hold the body level while the lift carries it; it switches both on only while a foot crosses a step, a small gap or
-a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet. The feet
+a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet; while
+they act, :mod:`.lift_load` puts their reaction on what the feet stand on, as legs would. The feet
 and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
 servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot. The torso's faces
 grip what they push (:data:`TORSO_FRICTION`), so that an object pushed off-centre turns no more than friction lets

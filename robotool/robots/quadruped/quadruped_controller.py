@@ -10,6 +10,8 @@ dataclass:
 - :mod:`.terrain_following` reads the feet's paths, sets where a move must stop and why, and drives the legs and the
   lift over edges (:class:`~.terrain_following.TerrainState`);
 - :mod:`.referee` judges falls, shoves, rams, crushes and the push rules (:class:`~.referee.RefereeState`);
+- :mod:`.lift_load` puts the lift's and the tilt motors' reaction on what the feet stand on
+  (:class:`~.lift_load.LoadState`);
 - :mod:`.rays` casts the downward rays, :mod:`.sensing` reads the batched state.
 
 The tunables are in :mod:`.quadruped_config`. Nothing here reads the task's category or name: limits come from
@@ -24,6 +26,7 @@ import mujoco
 import numpy as np
 
 from robotool.robots.quadruped.body import add_body
+from robotool.robots.quadruped.lift_load import LiftLoad
 from robotool.robots.quadruped.move_runner import MoveRunner
 from robotool.robots.quadruped.plans import Plans
 from robotool.robots.quadruped.quadruped_config import QUADRUPED, QuadrupedConfig
@@ -66,10 +69,11 @@ class QuadrupedController(SkillController):
         self.referee = Referee(self.senses, rays, limits, config)
         self.moves = MoveRunner(self.senses, self.terrain, config, on_push=self.referee.push_started)
         self.plans = Plans(self.senses, rays, self.referee, limits, config)
+        self.load = LiftLoad(sim, rays, self.senses.facts.ids, self.senses.facts.reach)
 
     def world_states(self) -> tuple[Any, ...]:
-        """The per-world state of the move runner, the terrain following and the referee."""
-        return (self.moves.state, self.terrain.state, self.referee.state)
+        """The per-world state of the move runner, the terrain following, the referee and the lift's load."""
+        return (self.moves.state, self.terrain.state, self.referee.state, self.load.state)
 
     def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:
         """Begin a motion skill; pushes that break a rule, and any motion of a fallen robot, are refused at once."""
@@ -97,14 +101,16 @@ class QuadrupedController(SkillController):
         return self.referee.conditions()
 
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
-        """Report finished skills, falls and shoves, and write the controls for the next interval (in ``worlds``,
-        every world when None)."""
+        """Report finished skills, falls and shoves, and write the controls for the next interval, with the reaction
+        of the lift and tilt motors on what the feet stand on (in ``worlds``, every world when None)."""
         self.senses.state = state
         mask = world_mask(self.sim.nworld, worlds)
         ends = self.referee.judge(mask, self.moves)
         worlds = np.flatnonzero(mask & self.moves.state.moving & np.array([f is None for f in state.failed]))
+        self.load.clear(np.flatnonzero(mask & ~world_mask(self.sim.nworld, worlds)))
         if worlds.size:
             self.moves.drive(worlds, ends)
+            self.terrain.let_go(self.load.apply(state, worlds))
         return ends
 
     def query(self, state: BatchState, world: int, skill: str, args: tuple[Any, ...]) -> Any:

@@ -341,6 +341,14 @@ class TerrainFollowing:
         sim.ctrl[worlds[:, None], ids.actuator[3:]] = level
         return np.any(up & (bottom < ahead + config.clearance / 2), axis=1)
 
+    def let_go(self, worlds: np.ndarray) -> None:
+        """The lift and the tilt motors let go in ``worlds`` (what the feet stand on gave way: the body goes down
+        with it)."""
+        ids = self.senses.facts.ids
+        self.state.lift[worlds] = np.nan
+        self.senses.sim.ctrl[worlds, ids.actuator[2]] = OFF
+        self.senses.sim.ctrl[worlds[:, None], ids.actuator[3:]] = 0.0
+
     @property
     def reach(self) -> float:
         """m a leg reaches down."""
