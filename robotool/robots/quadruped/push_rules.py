@@ -71,8 +71,7 @@ class PushRules:
         world's perturbation scales them. A push that takes more is refused: on that footing the feet, not the object,
         would slide."""
         world = np.array([w])
-        own = self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max()
-        friction = float(max(own, self.rays.friction(world, np.array([[support]]))[0, 0]))
+        friction = self.sliding_friction(w, index, support)
         force = mass * GRAVITY * friction
         robot = float(self.senses.sim.body_mass[w, self.scene.robot_body].sum())
         grip = self.rays.friction(world, feet_on[None])[0]
@@ -86,6 +85,15 @@ class PushRules:
             f"friction {grip.mean():.3g}): its feet would slip",
             {"force": round(force, 2), "limit": round(holds, 2), "friction": round(float(grip.mean()), 4)},
         )
+
+    def sliding_friction(self, w: int, index: int, support: int | None = None) -> float:
+        """The friction object ``index`` slides at in world ``w`` on the geom ``support`` under it (-1: none; None:
+        read it, :meth:`_support`): the larger of the two geoms', as the simulator combines them, as the world's
+        perturbation scales them."""
+        support = self._support(w, index)[1] if support is None else support
+        world = np.array([w])
+        own = self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max()
+        return float(max(own, self.rays.friction(world, np.array([[support]]))[0, 0]))
 
     def _feet_surface(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms (-1: none)."""

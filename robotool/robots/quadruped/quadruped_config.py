@@ -83,6 +83,11 @@ class QuadrupedConfig:
     """m a push round must bring the object closer to the target for another round to follow."""
     shove: float = 0.03
     """m a movable object may move after the torso touched it, unless it is being pushed."""
+    push_force_margin: float = 2.0
+    """How many times the force that slides an object of the push limit (on the pushed object's support) a push may
+    take (the contact forces are read at an instant: a push starts, knocks and turns what it pushes)."""
+    push_strain_time: float = 0.5
+    """s a push of an object may take more than that force, added up over the run, before it moves too much."""
     ray_height: float = 0.6
     """m above the feet where downward rays start (things higher are overhead)."""
     cloth_step: float = 1e-4

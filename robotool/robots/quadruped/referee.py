@@ -7,10 +7,12 @@ with outcome ``fell`` and a reason that says where and which feet lost support, 
 its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object (a
 cloth too) that the torso has touched, other than one being pushed, and that has moved more than ``shove`` since
 (what a foot's weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of
-the pushed one, or drags along stuck to it, or carries on it a while, once together they weigh more than the push
-limit. The move is stopped and refused, naming them, and the world fails. A foot or the belly that rests on a
-fragile object (a low glass vase reads as a step) breaks it, and so does standing on a movable object that rests on
-it: the move is refused, naming it, and the world fails. (The tunables are in
+the pushed one, or drags along under it or stuck to it, or carries on it a while, once together they weigh more than
+the push limit, and so was what a push moves that takes more force than pushing what the robot may push takes
+(:mod:`.push_force`: a chair pushed out from under a heavily loaded lever). The move is stopped and refused, naming
+them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step)
+breaks it, and so does standing on a movable object that rests on it: the move is refused, naming it, and the world
+fails. (The tunables are in
 :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
@@ -21,7 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from robotool.robots.quadruped.body import GRAVITY
 from robotool.robots.quadruped.move_runner import MoveRunner
+from robotool.robots.quadruped.push_force import PushForce
 from robotool.robots.quadruped.push_rules import PushRules
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -29,6 +33,7 @@ from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import (
     FOOTING_ANGLE,
+    Weighing,
     bears_up,
     centre_of_mass,
     feet,
@@ -71,6 +76,8 @@ class RefereeState:
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
+    strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
+    force_limit: np.ndarray  # (nworld,) N the push leg under way may take (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
 
     @classmethod
@@ -87,6 +94,8 @@ class RefereeState:
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
             overloaded=np.full(nworld, np.nan),
+            strained=np.zeros((nworld, nobject)),
+            force_limit=np.full(nworld, np.nan),
             last_centres=centres,
         )
 
@@ -100,6 +109,7 @@ class Referee:
         self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state))
         self.magnets = Magnets(self.scene)
         self.pushes = PushRules(senses, rays, limits, self.magnets)
+        self.forces = PushForce(senses, self.pushes, limits, config)
 
     def conditions(self) -> dict[str, list[bool]]:
         """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
@@ -119,6 +129,7 @@ class Referee:
         self.state.bumped[w, index] = np.nan
         self.state.carried[w, index] = 0.0
         self.state.rammed_by[w, index] = -1
+        self.state.force_limit[w] = np.nan  # read anew: it may push from another surface
 
     def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
         """Check the rules in the worlds in ``mask`` after a tick: end the skills of robots that fell, stop and
@@ -130,6 +141,7 @@ class Referee:
         self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso that lifts what lies on it shoves it too
         self._rams(ends, mask, centres[:, :, :2], shift[:, :, :2], moves)
         self._riders(ends, mask, moves)
+        self._strains(ends, mask, np.linalg.norm(shift, axis=2), moves)
         if self.facts.fragile.any():
             self._crushes(ends, mask, moves)
         return ends
@@ -289,7 +301,13 @@ class Referee:
         if worlds.size == 0:
             return loaded, via
         normals = np.stack([self.senses.sim.contact_normals(int(w)) for w in worlds])
-        load, passed_by = pass_weight(resting_on(normals, parts), under_feet[worlds], carrier)
+
+        def forces(k: int, bodies: np.ndarray) -> np.ndarray:
+            return self.senses.sim.contact_forces(worlds[k : k + 1], bodies)[0]
+
+        weight = GRAVITY * np.asarray(self.senses.sim.body_mass)[worlds] @ parts.member.T
+        rests = resting_on(normals, parts, Weighing(forces, weight))
+        load, passed_by = pass_weight(rests, under_feet[worlds], carrier)
         loaded[worlds] = parts.objects(load, nobject)
         for o in np.flatnonzero(loaded[worlds].any(axis=0)):  # the part that passed it to one of o's loaded parts
             own = np.flatnonzero(parts.owner == o)
@@ -306,7 +324,8 @@ class Referee:
         the push (:meth:`_pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
         rammed, books lying on it or not). What rides on it is weighed when the push starts, as each push leg starts
         (:meth:`.push_rules.PushRules.load_rule`) and while it moves (:meth:`_riders`); what it drags by friction,
-        pressing down on it, is not rammed.
+        pressing down on it, is not rammed (its weight loads the push: :mod:`.push_force`), but what bears it up and
+        goes along under it is.
         The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does
         what it travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box
         rolls on: the push set it moving). Once the pushed object and the objects it rammed that travelled more than
@@ -353,6 +372,15 @@ class Referee:
                 continue
             s.shoves[w] = reason = f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}"
             moves.refuse(w, reason, heavy[1], ends)
+
+    def _strains(self, ends: list[SkillEnd], mask: np.ndarray, travel: np.ndarray, moves: MoveRunner) -> None:
+        """Stop and refuse the pushes, in the worlds in ``mask``, that have taken more force than the robot may push
+        with (:class:`~.push_force.PushForce`; ``travel``: each object's this tick); the world fails
+        (:meth:`conditions`)."""
+        for w, reason, measured in self.forces.check(mask, moves, travel, self.state.strained, self.state.force_limit):
+            if self.state.shoves[w] is None and self.senses.state.failed[w] is None:
+                self.state.shoves[w] = reason
+                moves.refuse(w, reason, measured, ends)
 
     def _rammed(self, worlds: np.ndarray, index: np.ndarray, centres: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(k, nobject) the objects that the push of object ``index[i]`` along ``u[i]`` rams in world ``worlds[i]``
@@ -407,7 +435,8 @@ class Referee:
         :data:`SIDE_ANGLE` of horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of
         its way moves it as surely as its face does). Each presser is judged alone, by its horizontal part, so that
         what lies on the object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push
-        nor makes one."""
+        nor makes one. What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down:
+        a bar rolling under a pushed board's raised end goes where the push takes it."""
         normals = self._object_normals(w)  # (nobject, nobject, 3) from one object onto another
         pressers = pressed.copy()
         pressers[index] = True
@@ -415,7 +444,8 @@ class Referee:
         flat = np.linalg.norm(pressing[:, :, :2], axis=2)
         along = pressing[:, :, :2] @ u
         aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
-        return pressed & ((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0)
+        under = bears_up(normals[:, index])  # (nobject,) pressing the object up
+        return pressed & (((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0) | under)
 
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""

@@ -6,6 +6,7 @@ lies inside it (three or four feet; with fewer the robot cannot stand). Everythi
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,6 +101,22 @@ FOOTING_ANGLE = np.radians(30.0)
 frictionless foot up at a steeper angle takes more of its push sideways than up, and is pushed, not stood on."""
 
 
+PARTLY_UP = 0.05
+"""Summed contact normals whose upward part is at least this share of their length press partly up."""
+BEARING_SHARE = 0.1
+"""The share of a part's weight that contacts pressing it partly up must lift to bear it up (:func:`resting_on`)."""
+
+
+@dataclass(frozen=True)
+class Weighing:
+    """How :func:`resting_on` weighs contacts that press partly up in k worlds: ``forces(i, bodies)`` (nbody, 3) N is
+    the force ``bodies`` put on each body through their contacts in the i-th world
+    (:meth:`~robotool.sim.backend.BatchedSim.contact_forces`), ``weight`` (k, npart) N each part's weight."""
+
+    forces: Callable[[int, np.ndarray], np.ndarray]
+    weight: np.ndarray
+
+
 def bears_up(normals: np.ndarray, within: float = BEARING_ANGLE) -> np.ndarray:
     """Whether summed contact normals (..., 3), each from one body onto another, press it up: within ``within``
     (rad, default :data:`BEARING_ANGLE`) of up (none where nothing touches)."""
@@ -134,16 +151,24 @@ class Parts:
         return out
 
 
-def resting_on(normals: np.ndarray, parts: Parts) -> np.ndarray:
+def resting_on(normals: np.ndarray, parts: Parts, weighing: Weighing | None = None) -> np.ndarray:
     """[k, a, b]: part ``a`` rests on part ``b`` (:class:`Parts`) in each of k worlds: ``b`` bears it up, the contacts
     through which ``b`` presses on ``a`` summing to a normal within :data:`BEARING_ANGLE` of up (a board lying on
     ``b`` or leaning on its edge from the floor, a cloth's link lying on it), however either is turned or shaped; what
     only touches a side (in the crook of an L, down a wall) or lies on top bears nothing. ``normals`` (k, nbody, nbody,
     3): each world's summed contact normals from one body onto another
-    (:meth:`~robotool.sim.backend.BatchedSim.contact_normals`)."""
+    (:meth:`~robotool.sim.backend.BatchedSim.contact_normals`). With a ``weighing``, where ``b`` presses ``a`` partly
+    up but its normals sum beyond that angle (a board's lip pressed hard on a vase's side, its edge on the vase's
+    top), ``b`` bears ``a`` up when its force lifts at least :data:`BEARING_SHARE` of ``a``'s weight."""
     member = parts.member.astype(float)
     onto = np.einsum("pb,kbcx,qc->kpqx", member, normals, member)  # [k, b, a]: from part b onto part a
-    rests = bears_up(onto).transpose(0, 2, 1).copy()
+    rests = bears_up(onto)
+    if weighing is not None:
+        unsure = (onto[..., 2] > PARTLY_UP * np.linalg.norm(onto, axis=-1)) & ~rests
+        for k, b in zip(*np.nonzero(unsure.any(axis=2)), strict=True):
+            lift = member @ weighing.forces(int(k), parts.member[b])[:, 2]  # (npart,) N from part b up onto each part
+            rests[k, b] |= unsure[k, b] & (lift >= BEARING_SHARE * weighing.weight[k])
+    rests = rests.transpose(0, 2, 1).copy()
     rests[:, np.arange(len(parts.owner)), np.arange(len(parts.owner))] = False
     return rests
 

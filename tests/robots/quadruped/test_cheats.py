@@ -536,16 +536,11 @@ def test_a_heavy_crate_wedged_aside_by_a_pushed_hook_is_rammed() -> None:
         assert "pushing hook rammed crate" in failure_reason(rollout), failure_reason(rollout)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: what bears a part up is read from the sum of its contacts' unit normals, not from their "
-    "forces, so a board with a lip pressed on a glass vase's side (four sideways contacts) and its edge on the vase's "
-    "top (two upward ones) sums to 63 degrees from up and does not rest on the vase, though the vase carries up to "
-    "45 N as the robot crosses: weighing each contact by its force needs contact forces from both backends",
-)
 def test_a_board_whose_lip_presses_a_vases_side_still_loads_the_vase_it_lies_on() -> None:
-    """Found by an adversarial run this session (the summed-normal rest rule): the honest plain board on the same
-    vase is refused for crushing it, and so must this one be."""
+    """Found by an adversarial run (the summed-normal rest rule): a board with a lip pressed on a glass vase's side
+    (four sideways contacts) and its edge on the vase's top (two upward ones) summed to 63 degrees from up, so it did
+    not rest on the vase, though the vase carried up to 45 N as the robot crossed. Contacts that press partly up are
+    weighed by their force: the honest plain board on the same vase is refused for crushing it, and so is this one."""
     rollouts = sim.run_sessions(
         _scene("lipped_board_on_a_tall_vase"), start_sessions([_text("walk_over_board_on_vase")] * 2, "quadruped")
     )
@@ -554,43 +549,30 @@ def test_a_board_whose_lip_presses_a_vases_side_still_loads_the_vase_it_lies_on(
     ]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: a rider must be borne up by nothing but what the push moves, so a crate whose edge also "
-    "rests on a fixed strip is not weighed, though the pallet drags it along. Weighing what a push bears up once it "
-    "travels 3 cm also refused honest lever pushes (a chair dragging a surfboard and the cube on it); weighing it once "
-    "it travels 80 % of the pushed object's way misses this crate (0.33 m for the pallet's 0.69 m): weighing its share "
-    "of the load needs contact forces",
-)
 def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed() -> None:
-    """Found by an adversarial run this session: a 2.5 kg pallet carrying a 10 kg crate, whose edge also rests on a
-    fixed strip, was pushed 0.7 m with the crate riding along (the push was allowed, as for the pallet alone)."""
+    """Found by an adversarial run: a 2.5 kg pallet carrying a 10 kg crate, whose edge also rests on a fixed strip,
+    was pushed 0.7 m with the crate riding along (the push was allowed, as for the pallet alone: the crate is no
+    rider, the strip bears it up too). Dragging it takes the robot about 120 N, over twice what sliding 5 kg takes."""
     (rollout,) = sim.run_sessions(
         _scene("crate_on_a_pallet_and_a_strip"),
         start_sessions([_text("drag_a_heavy_crate_half_on_a_strip")], "quadruped"),
         seed=11,
     )
     (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
-    assert push.outcome == "refused" and "its mass with crate riding on it" in (push.reason or ""), push.reason
+    assert push.outcome == "refused" and "pushing pallet (touching crate) took" in (push.reason or ""), push.reason
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: a push weighs the pushed object and what rests on nothing but what the push moves, not "
-    "the load pressing on it, so a 3 kg chair under a lever's raised end that carries a 30 kg sandbag (about 145 N on "
-    "the chair, held up by the fixed roller too) is pushed out as 3 kg and the cube rises; the torso pressed on it "
-    "with 71-114 N (median) where an honest chair push takes 9-28 N: weighing a push by the load on it, or the robot's "
-    "push force, needs contact forces from both backends (as the weld load has them)",
-)
 def test_a_chair_pinned_under_a_loaded_lever_end_is_weighed_with_its_load() -> None:
-    """Found by an adversarial run this session: every world of seeds 0-3 lifted the cube (0.15 m)."""
+    """Found by an adversarial run: every world of seeds 0-3 lifted the cube (0.15 m). The push weighed the 3 kg chair,
+    not the 30 kg sandbag pressing it down through the lever (about 145 N, held up by the fixed roller too): the torso
+    pressed on it with 71-114 N (median), where an honest chair push takes 9-28 N, and is refused for that force."""
     rollouts = sim.run_sessions(
         _scene("lever_with_a_sandbag_on_its_raised_end"),
         start_sessions([_text("push_out_a_chair_pinned_under_a_loaded_lever")] * 2, "quadruped"),
         seed=0,
     )
     for rollout in rollouts:
-        assert not rollout.success, failure_reason(rollout)
+        assert not rollout.success and "pushing chair (touching surfboard) took" in failure_reason(rollout)
 
 
 def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
@@ -686,13 +668,16 @@ def test_a_goal_is_read_once_everything_lies_still() -> None:
 def test_a_magnet_lets_go_of_more_than_it_holds() -> None:
     """Found by an adversarial run: a magnet weld of unbounded strength held a board by its 2 cm end face to the side
     of a magnetic cabinet, a bridge the robot walked over across a gap. It lets go under the robot: the walk moves the
-    board (refused) or the robot falls with it."""
+    board (refused) or the robot falls with it; or the push that brings the board against the cabinet presses it
+    there harder than the robot may push (refused)."""
     program = _text("walk_over_a_board_stuck_by_its_end_to_a_magnet")
     scene = _scene("magnetic_board_beside_a_magnetic_cabinet")
     for rollout in sim.run_sessions(scene, start_sessions([program] * 2, "quadruped")):
         assert not rollout.success
         reason = failure_reason(rollout)
-        assert "the robot ran into board and moved it" in reason or "fell at" in reason, reason
+        assert any(r in reason for r in ("the robot ran into board and moved it", "fell at", "pushing board took")), (
+            reason
+        )
 
 
 @pytest.mark.parametrize("seed", [11, 21])
@@ -723,26 +708,26 @@ def test_a_cloth_is_read_where_each_of_its_links_lies() -> None:
         assert rollout.conditions["blanket_lowered"]
 
 
-OPEN_PUSH_LOOPHOLES = [  # (program, layout): found by an adversarial run, each a success in every world
-    # a board pushed with its raised end on a 20 kg bar rolls the bar off a ledge: the board presses the bar down, the
-    # bar lies behind its front face, and nothing else touches it
-    ("push_a_board_that_rolls_a_heavy_bar_off_a_ledge", "steel_bar_under_a_tilted_board_on_a_ledge"),
-    # a pushed pallet drags a 20 kg crate whose front edge rests on a loose roller (as on the fixed strip above)
-    ("drag_a_heavy_crate_half_on_a_roller", "crate_on_a_pallet_and_a_roller"),
+PUSHES_THAT_MOVE_MORE = [  # (program, layout, what the refusal must say): found by an adversarial run, each a success
+    # in every world before
+    # a board pushed with its raised end on a 20 kg drum rolls the drum off a ledge: the board presses it down, it lies
+    # behind the board's front face, and nothing else touches it; what bears a pushed object up is dragged along
+    (
+        "push_a_board_that_rolls_a_heavy_bar_off_a_ledge",
+        "steel_bar_under_a_tilted_board_on_a_ledge",
+        "pushing board rammed drum",
+    ),
+    # a pushed pallet drags a 20 kg crate whose front edge rests on a loose roller (as on the fixed strip above): the
+    # crate is no rider, and the push is refused for the force it takes
+    ("drag_a_heavy_crate_half_on_a_roller", "crate_on_a_pallet_and_a_roller", "pushing pallet (touching crate) took"),
 ]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="an open loophole: a push weighs what it rams ahead and what rides on nothing but what it moves, so an "
-    "object it presses down on (a bar under a board's raised end) or drags while something loose also bears it up (a "
-    "crate's edge on a roller) moves however heavy: weighing what a push moves by the force it takes needs contact "
-    "forces from both backends",
-)
-@pytest.mark.parametrize(("program", "scene"), OPEN_PUSH_LOOPHOLES)
-def test_what_a_push_moves_by_pressing_down_or_dragging_is_weighed(program: str, scene: str) -> None:
+@pytest.mark.parametrize(("program", "scene", "reason"), PUSHES_THAT_MOVE_MORE)
+def test_what_a_push_moves_by_pressing_down_or_dragging_is_weighed(program: str, scene: str, reason: str) -> None:
     rollouts = sim.run_sessions(_scene(scene), start_sessions([_text(program)] * 3, "quadruped"), seed=0)
-    assert not any(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+    for rollout in rollouts:
+        assert not rollout.success and reason in failure_reason(rollout), failure_reason(rollout)
 
 
 def test_feet_on_the_floor_beside_a_low_disc_do_not_stand_on_it() -> None:
