@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from robotool.robots.quadruped.quadruped_concepts import start_surface
+from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.task.describe import number_text, vector_text
 from robotool.task.task_model import Task
@@ -26,5 +27,9 @@ def robot_section(task: Task) -> list[str]:
         f"- it pushes only movable objects of at most {num(limits.max_push_mass)} kg, only while standing "
         "on the ground or on a fixed object, only objects on the same surface as itself, and never the "
         "object it stands on.",
+        f"- its feet need grip: it walks, climbs and turns only where the friction under them is at least "
+        f"{num(round(QUADRUPED.walk_grip, 3))} (on a slope, that plus the slope's tangent), and a push may take no "
+        "more force than its feet hold (its weight times the friction under them; sliding an object takes its "
+        "weight times the friction under it).",
         "A skill that would break a limit stops the robot where it is and is refused.",
     ]
