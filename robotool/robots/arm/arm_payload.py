@@ -14,15 +14,23 @@ upward force the grasp weld and the robot's contacts put on the group (the solve
 :meth:`~robotool.sim.backend.BatchedSim.contact_forces`, on both backends) over g, never more than the group's mass.
 
 The rest of the force the robot puts on a group (pushed or dragged along the table, pressed down, pulled through the
-grasp, in any direction) is a push, which takes the rating as the weight it would hold up (its size over g), never
-more than the group's mass left over from what the arm bears (more only drives the group into its supports): the
-arm's load is the payload and the push, so it carries 4 kg, or pushes 39 N, or carries 2 kg while it pushes 20 N. A
-push that moves nothing but down is no load (a block set down with its target below its support, the stack under it
-sinking into its soft contacts): a push over the limit counts once something it pushes has moved ``press_travel`` up
-or sideways since it went over (a lever's end pressed down under a heavy anvil raises it centimetres). Force straight
-into what does not move (the fingers driven into the table) moves nothing and is no load either. Neither share is more
-than a group's mass, so the contact forces are read only in the worlds where the groups could weigh more than the
-limit, and not at all in a scene whose movable objects together weigh no more.
+grasp, in any direction) is a push, which takes the rating as the weight it would hold up (its size over g): the arm's
+load is the payload and the push, so it carries 4 kg, or pushes 39 N, or carries 2 kg while it pushes 20 N. A push is
+not capped at the group's weight: a lever multiplies it (pressing a beam 5 cm before its fulcrum raises an anvil 10 cm
+beyond it with twice the anvil's weight). A push is no load until it moves what it pushes: a tick of a push over the
+limit counts once the pushes over it have moved what they push ``press_travel`` up or sideways, and the gripper as far
+along them, in all over the run, each push as far as it moved them from where it went over (so a load pushed along in
+short strokes counts as one long push). A press into a support is no load: it moves nothing but down (a block set down
+with its target below its support, the stack under it sinking into its soft contacts), or it carries the gripper nowhere
+(the fingers driven into the table, a beam pressed down onto the table sliding along under them). A lever's end pressed
+down under a heavy anvil carries the gripper down and the anvil up centimetres, and holding it down after that counts
+too.
+
+The moving parts of fixed objects (a button's face) are pushed too: the force the robot's bodies and what its grasp
+carries (a held tool) put on such a part counts, up to what holds it where it is (its spring at its travel, its
+guide's friction and its weight: more goes into its end stop), whether it moves or not (a stiff button held pressed).
+The contact forces are read only in a scene whose movable objects together could weigh more than the limit or one of
+whose moving parts could take more than it (a stiff button).
 
 A real arm rides out a peak above its rated payload for an instant (the jerk as a load comes off its support, a
 pushed crate hopping against a held tool for a tick), so a world fails only once its arm has carried (or pushed) more
@@ -37,6 +45,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from robotool.robots.arm.arm_config import ArmConfig
@@ -52,7 +61,9 @@ class Load:
     """What the arm carries in one world at one tick: the payload (kg), the mass of the groups it bears (kg), whether
     one of them rests on something that does not move, the object held (-1: none), the one the reason names (the
     held one, else the one the robot holds up or pushes hardest), the other members, and the force (N) it pushes,
-    drags or presses with (``down``: mostly down) on the groups it does not hold up (``pushed``)."""
+    drags or presses with (``down``: mostly down) on the groups it does not hold up and the moving parts of fixed
+    objects (``pushed``: the groups' members and the parts' objects; ``toward``: which way), ``spring`` N of it on the
+    parts."""
 
     payload: float
     group_mass: float
@@ -63,7 +74,9 @@ class Load:
     touching: tuple[int, ...]
     push: float
     down: bool
-    pushed: np.ndarray  # (nobject,) bool: the members of the groups it pushes
+    pushed: np.ndarray  # (nobject,) bool: the members of the groups it pushes, the objects whose parts it pushes
+    spring: float
+    toward: np.ndarray  # (3,) which way it pushes (a unit vector)
 
     @property
     def by_contact(self) -> bool:
@@ -74,6 +87,11 @@ class Load:
     def total(self) -> float:
         """kg of the arm's rating it takes: the payload and the push (as the weight it would hold up)."""
         return self.payload + self.push / GRAVITY
+
+    @property
+    def held_still(self) -> float:
+        """kg of the rating it takes whether or not what it pushes moves: the payload and the push on moving parts."""
+        return self.payload + self.spring / GRAVITY
 
     @property
     def pushing(self) -> bool:
@@ -94,21 +112,64 @@ class Groups:
 
 @dataclass(frozen=True)
 class Bodies:
-    """Which object owns each body and which bodies are the world's own (fixed facts of a scene)."""
+    """Which object owns each body, which bodies are the world's own and which are fixed objects' moving parts (fixed
+    facts of a scene)."""
 
     member: np.ndarray  # (nbody, nobject) 1.0 where the body is the object's
     ground: np.ndarray  # (nbody,) bool: the world's own bodies (the table top), not the robot's nor an object's
     robot: np.ndarray  # (nbody,) bool: the robot's own bodies
     loose: np.ndarray  # the movable objects' bodies
+    parts: np.ndarray  # (npart,) the bodies of fixed objects that move on their own joints (a button's face)
+    part_object: np.ndarray  # (npart,) the object each part belongs to
+
+
+@dataclass(frozen=True)
+class Springs:
+    """What holds each moving part of a fixed object where it is (a fixed fact of a scene): ``rest + stiffness *
+    travel`` N, its travel read at ``qpos`` (a part on any other joint than one limited slide: no bound)."""
+
+    qpos: np.ndarray  # (npart,) int: its joint's qpos address
+    low: np.ndarray  # (npart,) m: its travel's start
+    span: np.ndarray  # (npart,) m: its travel's length
+    stiffness: np.ndarray  # (npart,) N/m
+    rest: np.ndarray  # (npart,) N: its guide's friction and its weight (inf: no bound)
+
+    def hold(self, qpos: np.ndarray) -> np.ndarray:
+        """(npart,) N that hold each part where it is, at the joint positions ``qpos`` (nq,)."""
+        return self.rest + self.stiffness * np.maximum(qpos[self.qpos] - self.low, 0.0)
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, bodies: np.ndarray) -> Springs:
+        out = cls(np.zeros(len(bodies), dtype=int), *(np.zeros(len(bodies)) for _ in range(4)))
+        for k, b in enumerate(bodies.tolist()):
+            j = int(model.body_jntadr[b])
+            out.qpos[k], out.low[k], out.span[k] = (
+                model.jnt_qposadr[j],
+                model.jnt_range[j][0],
+                np.ptp(model.jnt_range[j]),
+            )
+            out.stiffness[k] = model.jnt_stiffness[j]
+            slide = model.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE and model.jnt_limited[j]
+            rest = model.body_mass[b] * GRAVITY + model.dof_frictionloss[model.jnt_dofadr[j]]
+            out.rest[k] = rest if slide and model.body_jntnum[b] == 1 else np.inf
+        return out
+
+    @property
+    def most(self) -> np.ndarray:
+        """(npart,) N the most each part could take: held at the end of its travel."""
+        return self.rest + self.stiffness * self.span
 
 
 @dataclass
 class PayloadState:
-    """Per world (index first): how long the arm has carried more than its payload, and whether it does now."""
+    """Per world (index first): how long the arm has carried more than its payload, whether it does now, and how far
+    its pushes over the limit have moved what they push."""
 
     over_for: np.ndarray  # (nworld,) s over max_payload, added up over the run
     over_now: np.ndarray  # (nworld,) bool: over it at the last tick
-    press_from: np.ndarray  # (nworld, nobject, 3) m: the objects' centres when the push went over (NaN: it is not)
+    press_from: np.ndarray  # (nworld, nobject + 1, 3) m: the objects, the gripper as the push went over (NaN: not)
+    press_peak: np.ndarray  # (nworld,) m: the farthest the push now over the limit has moved them (see Payload._moves)
+    pressed: np.ndarray  # (nworld,) m: how far the earlier pushes over the limit moved them, added up
     broke: list[str | None]  # the reason the arm carried too much (the world fails), once it did
 
     @classmethod
@@ -116,7 +177,9 @@ class PayloadState:
         return cls(
             over_for=np.zeros(nworld),
             over_now=np.zeros(nworld, dtype=bool),
-            press_from=np.full((nworld, nobject, 3), np.nan),
+            press_from=np.full((nworld, nobject + 1, 3), np.nan),
+            press_peak=np.zeros(nworld),
+            pressed=np.zeros(nworld),
             broke=[None] * nworld,
         )
 
@@ -132,10 +195,15 @@ class Payload:
         robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
         loose = np.flatnonzero(member @ parts.movable > 0)
-        self.bodies = Bodies(member=member, ground=(owner < 0) & ~robot, robot=robot, loose=loose)
+        model = self.scene.model
+        fixed = (owner >= 0) & ~parts.movable[np.maximum(owner, 0)]
+        moving = np.flatnonzero(fixed & (np.asarray(model.body_jntnum) > 0))
+        self.bodies = Bodies(member, (owner < 0) & ~robot, robot, loose, moving, owner[moving])
+        self.springs = Springs.of(model, moving)
         self.state = PayloadState.empty(sim.nworld, len(self.scene.object_names))
         movable_mass = np.asarray(sim.body_mass) @ (member * parts.movable[None, :])  # (nworld, nobject)
-        self.relevant = bool((movable_mass.sum(axis=1) > self.limit).any())  # all of it might be too much
+        heavy = bool((movable_mass.sum(axis=1) > self.limit).any())  # all of it might be too much
+        self.relevant = heavy or bool((self.springs.most > self.limit * GRAVITY).any())
 
     def conditions(self) -> dict[str, list[bool]]:
         """The payload condition per world, where the scene's movable objects together could be too much to carry."""
@@ -149,20 +217,21 @@ class Payload:
         if not self.relevant:
             return []
         held = dict(self.grasp.holding(state, mask))
-        robot = np.flatnonzero(self.bodies.robot)
-        touches = state.touching[:, robot][:, :, self.bodies.loose].any(axis=(1, 2))  # touching a movable object
+        things = np.concatenate([self.bodies.loose, self.bodies.parts])  # what a push may move
+        touches = state.touching[:, self.bodies.robot][:, :, things].any(axis=(1, 2))
         worlds = [w for w in np.flatnonzero(mask & touches).tolist() + list(held) if s.broke[w] is None]
         groups = {w: self._groups(state, w, held.get(w, -1)) for w in dict.fromkeys(worlds)}
-        heavy = [w for w, g in groups.items() if sum(g.mass) > self.limit + 1e-9]  # might be too much: weigh it
-        on_bodies = self.sim.contact_forces(np.array(heavy, dtype=int), self.bodies.robot)
+        weighed = np.array(list(groups), dtype=int)
+        on_bodies = self.sim.contact_forces(weighed, self.bodies.robot)
         forces = np.einsum("kbi,bo->koi", on_bodies, self.bodies.member)  # (k, nobject, 3) on each object
         out, pressing = [], np.zeros(self.sim.nworld, dtype=bool)
-        for k, w in enumerate(heavy):
-            load = self._load(state, w, held.get(w, -1), groups[w], forces[k])
+        for k, w in enumerate(weighed.tolist()):
+            tool = self._through_grasp(state, w, groups[w].carried)
+            load = self._load(state, w, held.get(w, -1), groups[w], forces[k], on_bodies[k, self.bodies.parts], tool)
             if load is None or load.total <= self.limit + 1e-9:
                 continue
-            pressing[w] = load.push > 0.0
-            if not self._moves(state, w, load):
+            pressing[w] = load.push > load.spring
+            if load.held_still <= self.limit + 1e-9 and not self._moves(state, w, load):
                 continue
             s.over_now[w] = True
             s.over_for[w] += self.scene.control_dt
@@ -171,20 +240,33 @@ class Payload:
             reason, measured = self._words(load, float(s.over_for[w]))
             s.broke[w] = reason
             out.append((w, load, reason, measured))
-        s.press_from[mask & ~pressing] = np.nan
+        done = mask & ~pressing
+        s.pressed[done] += s.press_peak[done]
+        s.press_peak[done] = 0.0
+        s.press_from[done] = np.nan
         return out
 
+    def _through_grasp(self, state: BatchState, w: int, carried: np.ndarray) -> np.ndarray:
+        """(npart, 3) N what the grasp carries in world ``w`` (``carried``: (nobject,) bool) puts on the moving
+        parts of fixed objects it touches (a held tool pressing a button)."""
+        bodies = np.asarray(self.bodies.member[:, carried].any(axis=1))
+        if not state.touching[w][bodies][:, self.bodies.parts].any():
+            return np.zeros((len(self.bodies.parts), 3))
+        return self.sim.contact_forces(np.array([w]), bodies)[0, self.bodies.parts]
+
     def _moves(self, state: BatchState, w: int, load: Load) -> bool:
-        """Whether ``load`` (over the limit in all) counts: what is held up always, a push only once something it
-        pushes has moved ``press_travel`` up or sideways since the push went over the limit (a press into a support
-        moves nothing but down: it is no load)."""
-        if load.payload > self.limit + 1e-9 or load.push <= 0.0:
-            return True
-        now = state.xpos[w, np.asarray(self.scene.object_body)]
-        if np.isnan(self.state.press_from[w]).any():
-            self.state.press_from[w] = now
-        moved = now[load.pushed] - self.state.press_from[w][load.pushed]
-        return bool((np.maximum(np.linalg.norm(moved[:, :2], axis=1), moved[:, 2]) >= self.travel).any())
+        """Whether a push over the limit counts at this tick: once the pushes over the limit have moved what they push
+        ``press_travel`` up or sideways and carried the gripper as far along themselves, in all, each from where it
+        went over (a press into a support moves nothing but down, or carries the gripper nowhere: it is no load)."""
+        s = self.state
+        now = state.xpos[w, np.append(self.scene.object_body, self.parts.gripper)]
+        if np.isnan(s.press_from[w]).any():
+            s.press_from[w] = now
+        moved = now - s.press_from[w]
+        objects = moved[:-1][load.pushed & self.parts.movable]
+        lifted = float(np.max(np.maximum(np.linalg.norm(objects[:, :2], axis=1), objects[:, 2]), initial=0.0))
+        s.press_peak[w] = max(float(s.press_peak[w]), min(lifted, float(moved[-1] @ load.toward)))
+        return bool(s.pressed[w] + s.press_peak[w] >= self.travel)
 
     def _groups(self, state: BatchState, w: int, i: int) -> Groups:
         """The groups the robot may bear in world ``w`` (holding object ``i``, -1: none): the held object with what
@@ -216,12 +298,23 @@ class Payload:
             out.mass.append(float(mass[group].sum()))
         return out
 
-    def _load(self, state: BatchState, w: int, i: int, groups: Groups, force: np.ndarray) -> Load | None:
+    def _load(
+        self,
+        state: BatchState,
+        w: int,
+        i: int,
+        groups: Groups,
+        force: np.ndarray,
+        on_parts: np.ndarray,
+        tool: np.ndarray,
+    ) -> Load | None:
         """What the arm carries in world ``w`` holding object ``i`` (-1: none) of ``groups`` (see the module's doc),
-        ``force`` (nobject, 3) N being what the robot's contacts put on each object; None where it bears nothing."""
-        force = force.copy()
-        if i >= 0:
-            force[i] -= self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, :3]
+        ``force`` (nobject, 3) N being what the robot's contacts put on each object, ``on_parts`` and ``tool``
+        (npart, 3) N what they and what the grasp carries put on each moving part of a fixed object; None where it bears
+        and pushes nothing."""
+        force = np.where(self.parts.movable[:, None], force, 0.0)
+        if i >= 0:  # the weld's force on it, but for what it passes on to moving parts (weighed there)
+            force[i] -= self.sim.weld_load(np.array([w]), int(self.parts.grasp_eq[i]))[0, :3] + tool.sum(axis=0)
         up = force[:, 2]
         payload, mass, supported, borne = 0.0, 0.0, False, np.zeros(len(up), dtype=bool)
         push, pushed, pushed_on = 0.0, np.zeros(len(up), dtype=bool), np.zeros(3)
@@ -233,11 +326,17 @@ class Payload:
                 continue
             share = min(weight, max(float(on[2]), 0.0) / GRAVITY) if lifted else 0.0
             rest = on - np.array([0.0, 0.0, share * GRAVITY])  # pushed, dragged or pressed with (the rest)
-            pressed = min(float(np.linalg.norm(rest)), (weight - share) * GRAVITY)
+            pressed = float(np.linalg.norm(rest))
             if lifted:
                 payload, mass, supported, borne = payload + share, mass + weight, True, borne | group
             if pressed > 0.0:
                 push, pushed, pushed_on = push + pressed, pushed | group, pushed_on + rest
+        on_parts = on_parts + tool
+        held_by = np.minimum(np.linalg.norm(on_parts, axis=1), self.springs.hold(state.qpos[w]))
+        spring = float(held_by.sum())
+        push, pushed_on = push + spring, pushed_on + on_parts.sum(axis=0)
+        np.add.at(force, self.bodies.part_object, on_parts)
+        pushed[self.bodies.part_object[held_by > 0.0]] = True
         if not (borne.any() or push > 0.0):
             return None
         if i >= 0:
@@ -249,7 +348,8 @@ class Payload:
         stuck = tuple(int(o) for o in np.flatnonzero(groups.carried & self.parts.movable) if o != i)
         touching = tuple(int(o) for o in np.flatnonzero((borne | pushed) & ~groups.carried) if o != named)
         down = bool(-pushed_on[2] >= np.linalg.norm(pushed_on[:2]))
-        return Load(payload, mass, supported, i, named, stuck, touching, push, down, pushed)
+        toward = pushed_on / max(float(np.linalg.norm(pushed_on)), 1e-9)
+        return Load(payload, mass, supported, i, named, stuck, touching, push, down, pushed, spring, toward)
 
     def _words(self, load: Load, over: float) -> tuple[str, dict[str, float]]:
         """The reason a load broke the payload limit, and its measures."""

@@ -85,8 +85,9 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_press_fingers_on_face", "arm_tray_too_wide", "was not between the fingers"),  # friction jammed the fingers
     ("arm_pinch_a_steel_plate", "arm_steel_plate_lying_flat", "wider than their"),  # 3 mm thin: read as paper
     ("arm_nudge_a_rolled_cube_half_onto_a_ribbon", "arm_rolled_cube_beside_a_narrow_ribbon", "clamped"),  # its side
-    # 141 N pushed through a friction grip that holds 120 N: the press the weld passed on is not counted either
-    ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "the 120 N their friction holds"),
+    # 141 N pushed through a friction grip that holds 120 N: the press the weld passed on is not counted either; 135 N
+    # for the centimetre is past the arm's 39 N, which stops it first
+    ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "over the 39 N the arm's 4.0 kg payload"),
     # the press was seen at a tick where the stick twisted in the grip past what it holds, before it slipped out
     ("arm_jab_a_stick_up_into_a_stiff_button", "arm_stiff_button_facing_down_over_a_post", "closing axis"),
     # the jug raked in 4 cm steps, re-grasping between them: it stays beyond reach
@@ -144,14 +145,18 @@ def test_a_heavy_jug_raked_in_by_a_held_hammer_overloads_the_grip(run_texts: Any
         assert "hammer slipped out of the grip" in world_failure(rollout), world_failure(rollout)
 
 
-def test_the_slat_presses_a_button_its_grip_can_push(run_texts: Any) -> None:
-    """The control for the stiff button: the same program presses the same button on a 9000 N/m spring (90 N for the
-    centimetre, within the 120 N the pads' friction holds), so its failure above is the grip, not the program."""
+@pytest.mark.parametrize(("stiffness", "pressed"), [(700.0, True), (9000.0, False)])
+def test_the_slat_presses_a_button_the_arm_can_push(run_texts: Any, stiffness: float, pressed: bool) -> None:
+    """The controls for the stiff button: the same program presses the same button on a 700 N/m spring (7 N for the
+    centimetre, 36 N at the end of the travel it drives the face to), so its failure above is not the program. On a
+    9000 N/m spring (90 N for the centimetre) it once did, within the 120 N the pads' friction holds; but the arm
+    (a Kinova Gen3 rated for 4 kg) pushes 39 N at most, through what it holds too."""
     data = _task("arm_stiff_button_facing_down").model_dump(mode="json", exclude_defaults=True)
-    next(o for o in data["objects"] if o["name"] == "button")["stiffness"] = 9000.0
+    next(o for o in data["objects"] if o["name"] == "button")["stiffness"] = stiffness
     code = (CHEATS / "arm_drive_a_slat_into_a_stiff_button.py").read_text()
     for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
-        assert rollout.success, world_failure(rollout)
+        assert rollout.success == pressed, world_failure(rollout)
+        assert pressed or "cannot push with stick: " in (world_failure(rollout) or "")
 
 
 @pytest.mark.parametrize(("stiffness", "pressed"), [(2000.0, False), (300.0, True)])

@@ -1,7 +1,10 @@
 """The arm's force: a Kinova Gen3 rated for 4 kg (``max_payload``) exerts about 39 N in any direction, but the
 payload rule weighed only what the arm bears up, so pressing a 1:1 lever's near end down with about 80 N raised an
 8 kg anvil on its far end in 5 of 6 worlds. A push, a drag or a press on what the arm does not hold up now takes its
-share of the rating too, once it moves something up or sideways; a press that moves nothing but down does not."""
+share of the rating too, once it moves something up or sideways; a press that moves nothing but down does not. Three
+holes found by an adversarial run are closed the same way: the pushes' travel adds up over the run (a heavy crate
+pushed in short strokes), a button's face is pushed too (a stiff button rammed with the bare gripper), and a push is
+not capped at the weight of what it pushes (a lever against the arm)."""
 
 from __future__ import annotations
 
@@ -46,5 +49,92 @@ def test_the_same_lever_raises_a_light_anvil(run_texts: Any, tmp_path: Path) -> 
     path = tmp_path / "lever.yaml"
     path.write_text(text.replace("mass: 8.0", "mass: 2.0").replace("goal:\n", block + "goal:\n"))
     for rollout in _press(run_texts, tasks.load(path)):
+        assert rollout.success, world_failure(rollout)
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+
+
+BLOCK = "  - {name: block, shape: box, center: [0.25, 0.30, 0.03], size: [0.06, 0.06, 0.06], mass: 5.0}\n"
+
+
+def _layout(tmp_path: Path, name: str, edits: tuple[tuple[str, str], ...] = (), block: bool = False) -> Task:
+    """The layout ``name`` with each ``(old, new)`` of ``edits`` written in, and a 5 kg block on the table out of the
+    way where ``block`` (the scene's movable objects could weigh more than the payload: the arm's load is weighed)."""
+    text = (FIXTURES / "layouts" / f"{name}.yaml").read_text()
+    for old, new in edits + ((("goal:", BLOCK + "goal:"),) if block else ()):
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(text)
+    return tasks.load(path)
+
+
+def _fails_over_the_rating(rollouts: list[Rollout], pattern: str) -> None:
+    for rollout in rollouts:
+        assert not rollout.success, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is False, rollout.conditions
+        failure = world_failure(rollout) or ""
+        assert re.search(pattern + r", over the 39 N the arm.s 4\.0 kg payload allows", failure), failure
+
+
+STROKES = (FIXTURES / "cheats" / "arm_push_a_heavy_crate_in_short_strokes.py").read_text()
+
+
+def test_a_heavy_crate_pushed_in_short_strokes_is_over_the_payload(run_texts: Any, tmp_path: Path) -> None:
+    """Found by an adversarial run: a crate too heavy for the arm's 39 N to slide was pushed along in strokes that each
+    moved it under 5 mm, backing off between them, and pressed a button (a push counted only once it had moved
+    something 5 mm since it went over the limit; backing off started it again). The strokes now add up."""
+    task = _layout(tmp_path, "arm_heavy_crate_before_a_soft_button")
+    _fails_over_the_rating(list(run_texts(task, [STROKES] * 2, seed=11)), r"cannot push crate: \d+ N on it")
+
+
+def test_a_light_crate_pushed_in_short_strokes_presses_the_button(run_texts: Any, tmp_path: Path) -> None:
+    task = _layout(tmp_path, "arm_heavy_crate_before_a_soft_button", (("mass: 14.0", "mass: 3.0"),), block=True)
+    for rollout in run_texts(task, [STROKES] * 2, seed=11):
+        assert rollout.success, world_failure(rollout)
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+
+
+RAM = (FIXTURES / "cheats" / "arm_ram_a_stiff_button_with_the_bare_gripper.py").read_text()
+
+
+def test_a_stiff_button_rammed_with_the_bare_gripper_is_over_the_payload(run_texts: Any, tmp_path: Path) -> None:
+    """Found by an adversarial run: an 8000 N/m button (80 N for the centimetre) pressed with the closed gripper in
+    every world, as only the forces on movable objects were weighed, and a scene with none was not weighed at all. A
+    button's face is pushed too, up to what its spring holds at its travel."""
+    task = tasks.load(FIXTURES / "layouts" / "arm_stiff_button_on_the_table.yaml")
+    _fails_over_the_rating(list(run_texts(task, [RAM] * 2, seed=11)), r"cannot push button: \d+ N on it")
+
+
+def test_a_soft_button_rammed_into_its_stop_is_within_it(run_texts: Any, tmp_path: Path) -> None:
+    """The control: the same ram presses a 300 N/m button (6 N at the end of its travel) with the servo's full 100 N,
+    the rest of it into the face's end stop, in a scene whose load is weighed."""
+    task = _layout(tmp_path, "arm_stiff_button_on_the_table", (("stiffness: 8000", "stiffness: 300"),), block=True)
+    for rollout in run_texts(task, [RAM] * 2, seed=11):
+        assert rollout.success, world_failure(rollout)
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+
+
+SHORT_LEVER = (FIXTURES / "cheats" / "arm_press_a_short_lever_end_down.py").read_text()
+
+
+def test_a_lever_against_the_arm_is_over_the_payload(run_texts: Any, tmp_path: Path) -> None:
+    """Found by an adversarial run: a beam pressed down 5 cm before its fulcrum raised a 3.2 kg anvil 10 cm beyond it
+    into a button in every world, with about 63 N, as a push counted for no more than the weight of what it pushed
+    (34 N). A lever multiplies force: the push is what the robot puts on the beam."""
+    task = tasks.load(FIXTURES / "layouts" / "arm_anvil_on_a_short_lever_under_a_button.yaml")
+    _fails_over_the_rating(
+        list(run_texts(task, [SHORT_LEVER] * 2, seed=11)), r"cannot press beam: \d+ N on it with anvil touching it"
+    )
+
+
+def test_a_lever_for_the_arm_raises_the_anvil_within_it(run_texts: Any, tmp_path: Path) -> None:
+    """The control: the anvil and the button 5 cm beyond the fulcrum and the beam pressed 9 cm before it (about 17 N),
+    only as far as that takes (the servo's lead under 39 N)."""
+    edits = (("center: [0.35, 0.0, 0.105]", "center: [0.30, 0.0, 0.105]"), ("[0.35, 0.0, 0.15]", "[0.30, 0.0, 0.15]"))
+    code = SHORT_LEVER.replace("0.20, 0.0, 0.15", "0.16, 0.0, 0.15").replace("[0.20, 0.0, 0.0]", "[0.16, 0.0, 0.04]")
+    assert code.count("0.16") == 2
+    for rollout in run_texts(
+        _layout(tmp_path, "arm_anvil_on_a_short_lever_under_a_button", edits), [code] * 2, seed=11
+    ):
         assert rollout.success, world_failure(rollout)
         assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
