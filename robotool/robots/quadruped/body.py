@@ -16,9 +16,11 @@ hold the body level while the lift carries it; it switches both on only while a 
 a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet; while
 they act, :mod:`.lift_load` puts their reaction on what the feet stand on, as legs would. The feet
 and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
-servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot. The torso's faces
-grip what they push (:data:`TORSO_FRICTION`), so that an object pushed off-centre turns no more than friction lets
-it. Robot geoms are in geom group :data:`ROBOT_GROUP`, which the terrain rays skip.
+servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot; :mod:`.lift_load`
+puts the servos' reaction, as much of it as the feet's grip passes on, on what the feet stand on too (a stride rolls
+a cart on free rollers back). The torso's faces grip what they push (:data:`TORSO_FRICTION`), so that an object
+pushed off-centre turns no more than friction lets it. Robot geoms are in geom group :data:`ROBOT_GROUP`, which the
+terrain rays skip.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ class BodyIds:
     qvel: np.ndarray  # (5,)
     actuator: np.ndarray  # (5,) x servo, y servo, lift motor, pitch motor, roll motor
     leg_qpos: np.ndarray  # (4,) qpos addresses of the legs' slides (0: nominal, negative: reaching down)
+    leg_qvel: np.ndarray  # (4,)
     leg_actuator: np.ndarray  # (4,) the legs' servos
     yaw_qpos: int  # qpos address of the yaw hinge (rad, 0: the body's length along x)
     yaw_qvel: int
@@ -87,6 +90,7 @@ class BodyIds:
             qvel=np.array([model.jnt_dofadr[j.id] for j in joints]),
             actuator=np.array(acts),
             leg_qpos=np.array([model.jnt_qposadr[model.joint(f"{BODY}_leg{i}").id] for i in range(4)]),
+            leg_qvel=np.array([model.jnt_dofadr[model.joint(f"{BODY}_leg{i}").id] for i in range(4)]),
             leg_actuator=np.array([model.actuator(f"{BODY}_leg{i}").id for i in range(4)]),
             yaw_qpos=int(model.jnt_qposadr[model.joint(f"{BODY}_yaw").id]),
             yaw_qvel=int(model.jnt_dofadr[model.joint(f"{BODY}_yaw").id]),

@@ -1,16 +1,27 @@
-"""The load of the quadruped's lift and tilt motors, put on what the feet stand on.
+"""The load of the quadruped's motors and servos, put on what the feet stand on.
 
-The lift motor (on the world-anchored z slide) and the pitch and roll motors push the body from the world. A real
-robot's legs would carry that force and those torques down to what its feet stand on, so each tick, in every world
-where they act, their reaction is put, as downward forces (``xfrc_applied``), on the movable bodies under the feet:
-under each foot a downward ray finds the solid within the legs' reach (a foot over a gap stands on nothing; a cloth
-is limp, the load goes to what carries it: :meth:`.rays.Rays.surface`), and the forces at those points sum to the
-lift's force and balance the tilt torques about the centre of mass (the least forces that do; none pulls up). A
-foot's load grows no faster than the whole weight in :data:`LOAD_TIME`, as a leg takes it (the force is held through
-a control tick, and would otherwise fling a light body), and a support that sinks away from a foot faster than
-:data:`YIELD_SPEED` bears nothing that tick: the lift and the tilt motors let go there, and the body goes down with
-what it stood on. A board balanced on a pillar thus tips under a robot the lift carries onto its edge, as it would
-under the robot's weight; fixed bodies bear the load without it being applied.
+The lift motor (on the world-anchored z slide), the pitch and roll motors, the x-y servos and the yaw servo push the
+body from the world. A real robot's legs would carry that force and those torques down to what its feet stand on, so
+each tick, in every moving world where they act, their reaction is put (``xfrc_applied``) on the movable bodies under
+the feet: under each foot a downward ray finds the solid within the legs' reach (a foot over a gap stands on nothing;
+a cloth is limp, the load goes to what carries it: :meth:`.rays.Rays.surface`). Fixed bodies bear it without it being
+applied.
+
+The lift's force and the tilt torques go down as the least downward forces at the feet that sum to the lift's force
+and balance the tilt torques about the centre of mass (none pulls up). A foot's load grows no faster than the whole
+weight in :data:`LOAD_TIME`, as a leg takes it (the force is held through a control tick, and would otherwise fling a
+light body), and a support that sinks away from a foot faster than :data:`YIELD_SPEED` bears nothing that tick: the
+lift and the tilt motors let go there, and the body goes down with what it stood on. A board balanced on a pillar thus
+tips under a robot the lift carries onto its edge, as it would under the robot's weight.
+
+The x-y servos' force and the yaw servo's torque (the stride, a push's shove, a turn) go back as the least horizontal
+forces at the feet that touch their surfaces (within :data:`TOUCH`) that sum to the opposite force and torque, each
+capped at what the foot's friction passes on: its load (its leg servo's press) times the friction it grips
+(:meth:`.rays.Rays.grip`: a surface too slippery to push on is not pushed). The feet on fixed ground take what they
+can first; what they cannot goes to the movable bodies under the others. While the lift carries the body across an
+edge the legs do not stride, and the servos' reaction is not applied. A cart on free rollers thus rolls back under a
+stride, and a push made standing on it pushes it back. All are read from the actuators' force laws and the controls
+just set, and held through the tick: the servos' as their mean over it (:meth:`LiftLoad.servo_loads`).
 """
 
 from __future__ import annotations
@@ -28,23 +39,22 @@ from robotool.sim.backend import BatchedSim, BatchState, quat_to_mat
 
 LOAD_TIME = 0.5  # s a foot takes to put the whole weight on what it stands on (its load grows at most that fast)
 YIELD_SPEED = 0.05  # m/s: a support that sinks faster than this under a foot leaves it, and bears nothing that tick
+TOUCH = 0.01  # m: a foot whose bottom is at most this far above its surface pushes on it sideways
+SUBSTEPS = 25  # steps the servos' mean force over a tick is read in (the simulator's)
+STILL = 1.0  # N (and N m): servos pushing less than this put nothing on the feet (nor are the rays cast for them)
 
 
 @dataclass(frozen=True)
-class MotorFacts:
-    """The lift, pitch and roll motors' force law (an affine servo on its joint, clamped) and where the load goes."""
+class ForceLaw:
+    """Some actuators' force law: an affine servo on its joint, its control and force clamped."""
 
-    gain: np.ndarray  # (3,) force per unit of control
-    bias: np.ndarray  # (3, 3) constant, per unit of joint position, per unit of joint velocity
-    ctrl_range: np.ndarray  # (3, 2) the controls' range (+-inf: unlimited)
-    force_range: np.ndarray  # (3, 2) the forces' range (+-inf: unlimited)
-    movable: np.ndarray  # (nbody,) bool: the bodies a force moves (not welded to the world)
-    body_com: np.ndarray  # (nbody, 3) each body's centre of mass in its own frame
-    reach: float  # m below a foot's bottom that a surface bears it
+    gain: np.ndarray  # (n,) force per unit of control
+    bias: np.ndarray  # (n, 3) constant, per unit of joint position, per unit of joint velocity
+    ctrl_range: np.ndarray  # (n, 2) the controls' range (+-inf: unlimited)
+    force_range: np.ndarray  # (n, 2) the forces' range (+-inf: unlimited)
 
     @classmethod
-    def of(cls, model: mujoco.MjModel, ids: BodyIds, reach: float) -> MotorFacts:
-        act = ids.actuator[2:]
+    def of(cls, model: mujoco.MjModel, act: np.ndarray) -> ForceLaw:
         limited = model.actuator_ctrllimited[act].astype(bool)[:, None]
         forced = model.actuator_forcelimited[act].astype(bool)[:, None]
         unlimited = np.array([-np.inf, np.inf])
@@ -53,6 +63,40 @@ class MotorFacts:
             bias=model.actuator_biasprm[act, :3].copy(),
             ctrl_range=np.where(limited, model.actuator_ctrlrange[act], unlimited),
             force_range=np.where(forced, model.actuator_forcerange[act], unlimited),
+        )
+
+    def force(self, ctrl: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """(k, n) the forces at controls ``ctrl``, joint positions ``q`` and velocities ``qd`` (k, n)."""
+        ctrl = np.clip(ctrl, self.ctrl_range[:, 0], self.ctrl_range[:, 1])
+        force = self.gain * ctrl + self.bias[:, 0] + self.bias[:, 1] * q + self.bias[:, 2] * qd
+        return np.clip(force, self.force_range[:, 0], self.force_range[:, 1])
+
+
+@dataclass(frozen=True)
+class MotorFacts:
+    """The force laws of the lift, pitch and roll motors, of the x, y and yaw servos and of the legs' servos, and
+    where the load goes."""
+
+    motors: ForceLaw  # lift, pitch, roll
+    servos: ForceLaw  # x, y, yaw
+    legs: ForceLaw  # the legs' servos, feet's order
+    inertia: np.ndarray  # (3,) the robot's mass (kg) along x and y and its moment of inertia about its yaw (kg m2)
+    movable: np.ndarray  # (nbody,) bool: the bodies a force moves (not welded to the world)
+    body_com: np.ndarray  # (nbody, 3) each body's centre of mass in its own frame
+    reach: float  # m below a foot's bottom that a surface bears it
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, ids: BodyIds, reach: float) -> MotorFacts:
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        full = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, full)
+        dofs = np.array([*ids.qvel[:2], ids.yaw_qvel])
+        return cls(
+            motors=ForceLaw.of(model, ids.actuator[2:]),
+            servos=ForceLaw.of(model, np.array([*ids.actuator[:2], ids.yaw_actuator])),
+            legs=ForceLaw.of(model, ids.leg_actuator),
+            inertia=full[dofs, dofs],
             movable=model.body_weldid != 0,
             body_com=model.body_ipos.copy(),
             reach=reach,
@@ -66,7 +110,7 @@ class LoadState:
     body: np.ndarray  # (nworld, 4) the body under each foot (-1: none)
     anchor: np.ndarray  # (nworld, 4, 3) the point under the foot, in that body's frame
     height: np.ndarray  # (nworld, 4) m: that point's height then
-    load: np.ndarray  # (nworld, 4) N: the load put there
+    load: np.ndarray  # (nworld, 4) N: the lift's load put there
 
     @classmethod
     def empty(cls, nworld: int) -> LoadState:
@@ -79,8 +123,8 @@ class LoadState:
 
 
 class LiftLoad:
-    """Puts the lift's and the tilt motors' reaction on the movable bodies under the feet (state: :class:`LoadState`;
-    it writes ``sim.xfrc_applied`` anew every tick)."""
+    """Puts the reaction of the lift, the tilt motors and the x-y and yaw servos on the movable bodies under the feet
+    (state: :class:`LoadState`; it writes ``sim.xfrc_applied`` anew every tick)."""
 
     def __init__(self, sim: BatchedSim, rays: Rays, ids: BodyIds, reach: float):
         self.sim, self.rays, self.ids = sim, rays, ids
@@ -97,32 +141,50 @@ class LiftLoad:
     def motor_loads(self, state: BatchState, worlds: np.ndarray) -> np.ndarray:
         """(k, 3) the lift's force (N, up) and the pitch and roll motors' torques (N m) in ``worlds`` as the
         controls now set them."""
-        f, ids = self.facts, self.ids
-        ctrl = np.clip(self.sim.ctrl[worlds][:, ids.actuator[2:]], f.ctrl_range[:, 0], f.ctrl_range[:, 1])
-        q, qd = state.qpos[worlds][:, ids.qpos[2:]], state.qvel[worlds][:, ids.qvel[2:]]
-        force = f.gain * ctrl + f.bias[:, 0] + f.bias[:, 1] * q + f.bias[:, 2] * qd
-        return np.clip(force, f.force_range[:, 0], f.force_range[:, 1])
+        ids = self.ids
+        return self.facts.motors.force(
+            self.sim.ctrl[worlds][:, ids.actuator[2:]],
+            state.qpos[worlds][:, ids.qpos[2:]],
+            state.qvel[worlds][:, ids.qvel[2:]],
+        )
+
+    def servo_loads(self, state: BatchState, worlds: np.ndarray) -> np.ndarray:
+        """(k, 3) the mean force (N) of the x-y servos and torque (N m) of the yaw servo on the body in ``worlds``
+        through the coming tick, as the controls now set them: their law followed along the motion it gives the body
+        free of anything else (:data:`SUBSTEPS` steps; sampled at the tick's start, a servo's force that falls within
+        it as the body catches up with its setpoint would be held through it)."""
+        ids, law = self.ids, self.facts.servos
+        ctrl = self.sim.ctrl[worlds][:, np.append(ids.actuator[:2], ids.yaw_actuator)]
+        q = state.qpos[worlds][:, np.append(ids.qpos[:2], ids.yaw_qpos)]
+        qd = state.qvel[worlds][:, np.append(ids.qvel[:2], ids.yaw_qvel)]
+        h, total = self.dt / SUBSTEPS, np.zeros(q.shape)
+        for _ in range(SUBSTEPS):  # as the simulator steps it (implicitfast: the servos' damping implicit)
+            force = law.force(ctrl, q, qd)
+            total += force
+            qd = qd + h * force / (self.facts.inertia - h * law.bias[:, 2])
+            q = q + qd * h
+        return total / SUBSTEPS
 
     def apply(self, state: BatchState, worlds: np.ndarray) -> np.ndarray:
-        """Set ``xfrc_applied`` in ``worlds``: the reaction of their motors' loads on what their feet stand on.
-        Returns the worlds where a support that should bear some of it sank away: the lift cannot carry the body
-        on it there."""
+        """Set ``xfrc_applied`` in ``worlds``: the reaction of their motors' and servos' loads on what their feet
+        stand on. Returns the worlds where a support that should bear some of the lift's load sank away: the lift
+        cannot carry the body on it there."""
         s, f, ids = self.state, self.facts, self.ids
-        loads = self.motor_loads(state, worlds)
-        acting = (loads[:, 0] > 0.0) | (loads[:, 1:] != 0.0).any(axis=1)
+        loads, servo = self.motor_loads(state, worlds), self.servo_loads(state, worlds)
+        acting = (loads[:, 0] > 0.0) | (loads[:, 1:] != 0.0).any(axis=1) | (np.abs(servo) >= STILL).any(axis=1)
         self.clear(worlds[~acting])
-        worlds, loads = worlds[acting], loads[acting]
+        worlds, loads, servo = worlds[acting], loads[acting], servo[acting]
+        lifting = (loads[:, 0] > 0.0) | (loads[:, 1:] != 0.0).any(axis=1)
         self.sim.xfrc_applied[worlds] = 0.0
         if not worlds.size:
             return worlds
         centres = feet(state, ids)[worlds]
-        _, solid, geom = self.rays.surface(worlds, centres[:, :, :2], centres[:, :, 2].max(axis=1))
+        top, solid, geom, cloth = self.rays.surface(worlds, centres[:, :, :2], centres[:, :, 2].max(axis=1))
         stands = (geom >= 0) & (centres[:, :, 2] - FOOT_RADIUS - solid <= f.reach)
         points = np.concatenate([centres[:, :, :2], np.where(stands, solid, centres[:, :, 2])[:, :, None]], axis=2)
         body = np.where(stands, self.sim.scene.model.geom_bodyid[np.maximum(geom, 0)], -1)
-        wanted = self._foot_forces(
-            loads, points, stands, centre_of_mass(state, ids)[worlds], state.xmat(ids.body)[worlds]
-        )
+        com = centre_of_mass(state, ids)[worlds]
+        wanted = self._foot_forces(loads, points, stands, com, state.xmat(ids.body)[worlds])
         w = np.repeat(worlds, 4)
         pos, rot = self._pose(state, w, s.body[worlds].reshape(-1))
         before = np.einsum("nij,nj->ni", rot, s.anchor[worlds].reshape(-1, 3)) + pos
@@ -131,15 +193,34 @@ class LiftLoad:
         pos, rot = self._pose(state, w, body.reshape(-1))
         s.anchor[worlds] = np.einsum("nji,nj->ni", rot, points.reshape(-1, 3) - pos).reshape(-1, 4, 3)
         s.body[worlds], s.height[worlds], s.load[worlds] = body, points[:, :, 2], applied
-        pushed = stands & f.movable[np.maximum(body, 0)] & (applied > 0.0)
-        kk, foot = np.nonzero(pushed)
-        w, b = worlds[kk], body[kk, foot]
-        com = state.xpos[w, b] + np.einsum("nij,nj->ni", quat_to_mat(state.xquat[w, b]), f.body_com[b])
-        wrench = np.zeros((len(w), 6))
-        wrench[:, 2] = -applied[kk, foot]
-        wrench[:, 3:] = np.cross(points[kk, foot] - com, wrench[:, :3])
-        np.add.at(self.sim.xfrc_applied, (w, b), wrench)
+        touch = stands & (centres[:, :, 2] - FOOT_RADIUS - top <= TOUCH)
+        press = -f.legs.force(
+            self.sim.ctrl[worlds][:, ids.leg_actuator],
+            state.qpos[worlds][:, ids.leg_qpos],
+            state.qvel[worlds][:, ids.leg_qvel],
+        )
+        grip = np.maximum(press, 0.0) * self.rays.friction(worlds, self.rays.grip(geom, cloth)) * touch
+        grip[lifting] = 0.0  # the lift carries the body across an edge: the legs are not striding
+        movable = stands & f.movable[np.maximum(body, 0)]
+        held = self._stride_forces(servo, points, touch & ~movable, com, grip)  # the feet on fixed ground first
+        arm = points[:, :, :2] - com[:, None, :2]
+        moment = (arm[:, :, 0] * held[:, :, 1] - arm[:, :, 1] * held[:, :, 0]).sum(axis=1)
+        rest = servo + np.concatenate([held[:, :, :2].sum(axis=1), moment[:, None]], axis=1)
+        sideways = self._stride_forces(rest, points, touch & movable, com, grip)
+        sideways[:, :, 2] = -applied  # with the lift's load: the forces at the feet
+        self._put(state, worlds, body, points, sideways * movable[:, :, None])
         return worlds[(sinking & (wanted > 0.0)).any(axis=1)]
+
+    def _put(
+        self, state: BatchState, worlds: np.ndarray, body: np.ndarray, points: np.ndarray, force: np.ndarray
+    ) -> None:
+        """Add the forces ``force`` (k, 4, 3) at ``points`` (k, 4, 3) to the bodies ``body`` (k, 4) in ``worlds``, as
+        forces and torques about their centres of mass."""
+        kk, foot = np.nonzero((force != 0.0).any(axis=2))
+        w, b = worlds[kk], body[kk, foot]
+        com = state.xpos[w, b] + np.einsum("nij,nj->ni", quat_to_mat(state.xquat[w, b]), self.facts.body_com[b])
+        push = force[kk, foot]
+        np.add.at(self.sim.xfrc_applied, (w, b), np.concatenate([push, np.cross(points[kk, foot] - com, push)], 1))
 
     @staticmethod
     def _pose(state: BatchState, worlds: np.ndarray, bodies: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -160,3 +241,26 @@ class LiftLoad:
         target = np.stack([loads[:, 0], torque[:, 0], torque[:, 1]], axis=1)
         forces = np.einsum("kfi,ki->kf", np.linalg.pinv(system), target)
         return np.maximum(forces, 0.0) * stands
+
+    @staticmethod
+    def _stride_forces(
+        servo: np.ndarray, points: np.ndarray, touch: np.ndarray, com: np.ndarray, grip: np.ndarray
+    ) -> np.ndarray:
+        """(k, 4, 3) the horizontal forces at ``points`` (k, 4, 3) of the feet that ``touch`` their surfaces that sum
+        to the opposite of the x-y servos' force and whose moments about ``com`` (k, 3) are the opposite of the yaw
+        servo's torque (``servo`` (k, 3)): the least such forces, each capped at its foot's ``grip`` (k, 4; N)."""
+        arm = points[:, :, :2] - com[:, None, :2]
+        on = touch.astype(float)
+        zero = np.zeros(on.shape)
+        system = np.stack(  # (k, 3, 8): the unknowns are each foot's x then y
+            [
+                np.concatenate([on, zero], axis=1),
+                np.concatenate([zero, on], axis=1),
+                np.concatenate([-arm[:, :, 1] * on, arm[:, :, 0] * on], axis=1),
+            ],
+            axis=1,
+        )
+        solved = np.einsum("kfi,ki->kf", np.linalg.pinv(system), -servo)
+        forces = np.stack([solved[:, :4], solved[:, 4:], zero], axis=2)
+        size = np.linalg.norm(forces, axis=2)
+        return forces * (np.minimum(size, grip) / np.maximum(size, 1e-9))[:, :, None]

@@ -126,8 +126,8 @@ class Plans:
             name = self.scene.object_names[objects[k]] if objects[k] >= 0 else "something"
             return f"{name} stands in the body's way at [{points[k, 0]:.2f}, {points[k, 1]:.2f}]"
         world = np.array([w])
-        under, _, geoms = self.rays.surface(world, (here + arcs).reshape(1, -1, 2), np.array([top]))
-        under, geoms = under.reshape(arcs.shape[:2]), geoms.reshape(arcs.shape[:2])
+        under, _, solid, cloth = self.rays.surface(world, (here + arcs).reshape(1, -1, 2), np.array([top]))
+        under, geoms = under.reshape(arcs.shape[:2]), self.rays.grip(solid, cloth).reshape(arcs.shape[:2])
         off = np.abs(under - levels) > RISE
         if off.any():
             k, foot = np.argwhere(off)[0]

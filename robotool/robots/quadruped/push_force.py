@@ -7,10 +7,13 @@ whether or not they count as moved. So while a push moves, in each world where t
 the force the robot's bodies put on the movable objects along the push is read from the solver's contact forces
 (:meth:`~robotool.sim.backend.BatchedSim.contact_forces`); its limit is ``push_force_margin`` times the force that
 slides ``max_push_mass`` on the pushed object's support (its weight times the friction between them, read once per
-push leg). A push of an object that takes more than that while the object moves (faster than ``settled_speed``: a
-push pressed against what stands in the way moves nothing) for ``push_strain_time`` in all over the run (the forces
-are read at an instant: knocks and starts peak) moves more than the robot may push: the referee refuses it and the
-world fails. (The tunables are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+push leg), and no more than the robot's feet hold (frictionless in the simulation: the x-y servos push from the
+world): its weight times the friction under them, as the push rules read it (:meth:`.PushRules.feet_hold`, a cloth
+under them included), read at the same time. A push of an object that takes more than either while the object moves
+(faster than ``settled_speed``: a push pressed against what stands in the way moves nothing) for ``push_strain_time``
+in all over the run (the forces are read at an instant: knocks and starts peak) moves more than the robot may push,
+or more than its feet could push: the referee refuses it and the world fails. (The tunables are in
+:class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
@@ -52,8 +55,8 @@ class PushForce:
         """Weigh the pushes under way in the worlds in ``mask`` whose robot touches a movable object and whose pushed
         object moved this tick (``travel`` (nworld, nobject) m); (world, reason, measured) for each push that has now
         taken more than its limit for ``push_strain_time``. ``strained`` (nworld, nobject) s each object's pushes
-        have taken more, added up over the run, and ``limits`` (nworld,) N the limit of the push leg under way (NaN:
-        not read yet) are updated in place."""
+        have taken more, added up over the run, and ``limits`` (nworld, 2) N the limits of the push leg under way
+        (the push limit's, then what the feet hold; NaN: not read yet) are updated in place."""
         m, state, names = moves.state, self.senses.state, self.scene.object_names
         robot, movable = self.bodies.robot, self.bodies.movable
         touches = state.touching[:, robot][:, :, movable].any(axis=(1, 2))
@@ -61,25 +64,32 @@ class PushForce:
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0) & touches & moved)
         if worlds.size == 0:
             return []
-        for w in worlds[np.isnan(limits[worlds])].tolist():
+        for w in worlds[np.isnan(limits[worlds, 0])].tolist():
             friction = self.pushes.sliding_friction(w, int(m.pushing[w]))
-            limits[w] = self.margin * self.mass * GRAVITY * friction
+            limits[w] = self.margin * self.mass * GRAVITY * friction, self.pushes.feet_hold(w)[1]
         forces = self.senses.sim.contact_forces(worlds, robot)[:, movable, :2].sum(axis=1)  # (k, 2) on what it pushes
         along = np.einsum("ki,ki->k", forces, m.u[worlds])
         out = []
-        for k in np.flatnonzero(along > limits[worlds]).tolist():
+        for k in np.flatnonzero(along > limits[worlds].min(axis=1)).tolist():
             w, index = int(worlds[k]), int(m.pushing[worlds[k]])
             strained[w, index] += self.scene.control_dt
             if strained[w, index] < self.time - 1e-9:
                 continue
-            limit = float(limits[w])
+            limit = float(limits[w].min())
             near = self.scene.body_object[state.touching[w][self.scene.body_object == index].any(axis=0) & movable]
             others = [names[o] for o in np.unique(near) if o != index]
             touching = f" (touching {', '.join(others)})" if others else ""
-            reason = (
-                f"pushing {names[index]}{touching} took over {limit:.0f} N for {strained[w, index]:.1f} s ("
-                f"{along[k]:.0f} N now), {self.margin:g} times what sliding {self.mass:.1f} kg, the push limit, on its "
-                "support takes: it moves more than the robot may push"
-            )
+            took = f"pushing {names[index]}{touching} took over {limit:.0f} N for {strained[w, index]:.1f} s"
+            if limits[w, 1] < limits[w, 0]:
+                feet = self.pushes.feet_hold(w)
+                reason = (
+                    f"{took} ({along[k]:.0f} N now), the most the robot's feet hold on {feet[2]} at friction "
+                    f"{limit / (feet[0] * GRAVITY):.3g}: its feet would slip"
+                )
+            else:
+                reason = (
+                    f"{took} ({along[k]:.0f} N now), {self.margin:g} times what sliding {self.mass:.1f} kg, the push "
+                    "limit, on its support takes: it moves more than the robot may push"
+                )
             out.append((w, reason, {"force": round(float(along[k]), 1), "limit": round(limit, 1)}))
         return out

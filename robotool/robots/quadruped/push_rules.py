@@ -15,6 +15,9 @@ from robotool.robots.quadruped.support import bears_up, feet
 from robotool.robots.quadruped.terrain import RISE
 from robotool.sim.magnets import Magnets
 
+FOOTPRINT = 4  # points a side of the grid under each of a pushed object's parts where its friction is read
+BORNE = 0.5  # N: what bears another object up by less bears none of it
+
 
 class PushRules:
     """Weighs pushes in the worlds of one batched simulator (no state of its own)."""
@@ -31,7 +34,7 @@ class PushRules:
         on = objects[z >= z.max() - RISE]
         on = on[on >= 0]
         movable = next((names[o] for o in on if self.facts.movable[o]), None)
-        below, support = self._support(w, index)
+        below, support, friction = self._support(w, index)
         mass, riders, stuck = self._load(w, index)
         broken = rule_violation(
             movable=bool(self.facts.movable[index]),
@@ -44,7 +47,7 @@ class PushRules:
             robot_support=float(z.max()),
             limits=self.limits,
         )
-        return broken or self._grip(w, index, mass, support, feet_on)
+        return broken or self._grip(w, index, mass, support, friction, feet_on)
 
     def load_rule(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
         """Check the push limit alone in world ``w`` as a push leg of object ``index`` starts: what rides on it or is
@@ -58,59 +61,94 @@ class PushRules:
         onto another surface since the push rules were checked, and what rides on the object may have changed."""
         load = self._load(w, index)
         heavy = mass_violation(*load, self.limits)
-        return heavy or self._grip(w, index, load[0], self._support(w, index)[1], self._feet_surface(w)[2])
+        _, support, friction = self._support(w, index)
+        return heavy or self._grip(w, index, load[0], support, friction, self._feet_surface(w)[2])
 
     def _grip(
-        self, w: int, index: int, mass: float, support: int, feet_on: np.ndarray
+        self, w: int, index: int, mass: float, support: int, friction: float, feet_on: np.ndarray
     ) -> tuple[str, dict[str, float]] | None:
         """Whether the robot's feet hold a push of object ``index`` in world ``w``: the push must slide ``mass`` (kg:
-        the object with what rides on it or is stuck to it) on the geom ``support`` under it (-1: none), which takes
-        its weight times the friction between them (the larger of the two geoms', as the simulator combines them); the
-        feet (frictionless in the simulation: the x-y servos push from the world) hold the robot's weight times the
-        friction under them (each foot a quarter of it, on the geom ``feet_on`` (4,) under it). Frictions as the
-        world's perturbation scales them. A push that takes more is refused: on that footing the feet, not the object,
-        would slide."""
-        world = np.array([w])
-        friction = self.sliding_friction(w, index, support)
-        force = mass * GRAVITY * friction
-        robot = float(self.senses.sim.body_mass[w, self.scene.robot_body].sum())
-        grip = self.rays.friction(world, feet_on[None])[0]
-        holds = robot * GRAVITY * float(grip.mean())
+        the object with what rides on it or is stuck to it) on its support (the geom ``support`` it rests on most,
+        -1: none), which takes its weight times the ``friction`` between them (:meth:`_support`), and drag what it
+        bears up in part (:meth:`_dragged`); the feet hold :meth:`feet_hold`. A push that takes more is refused: on
+        that footing the feet, not the object, would slide."""
+        drag, dragged = self._dragged(w, index, friction)
+        force = mass * GRAVITY * friction + drag
+        robot, holds, floor, grip = self.feet_hold(w, feet_on)
         if force <= holds:
             return None
-        floor = self.rays.surface_name(int(feet_on[np.argmin(grip)]))
+        also = f", and {drag:.1f} N to drag {', '.join(dragged)}" if dragged else ""
         return (
             f"sliding it takes {force:.1f} N ({mass:.1f} kg on {self.rays.surface_name(support)} at friction "
-            f"{friction:.3g}), more than the {holds:.1f} N the robot's feet hold ({robot:.1f} kg on {floor} at "
-            f"friction {grip.mean():.3g}): its feet would slip",
-            {"force": round(force, 2), "limit": round(holds, 2), "friction": round(float(grip.mean()), 4)},
+            f"{friction:.3g}{also}), more than the {holds:.1f} N the robot's feet hold ({robot:.1f} kg on {floor} at "
+            f"friction {grip:.3g}): its feet would slip",
+            {"force": round(force, 2), "limit": round(holds, 2), "friction": round(grip, 4)},
         )
 
-    def sliding_friction(self, w: int, index: int, support: int | None = None) -> float:
-        """The friction object ``index`` slides at in world ``w`` on the geom ``support`` under it (-1: none; None:
-        read it, :meth:`_support`): the larger of the two geoms', as the simulator combines them, as the world's
-        perturbation scales them."""
-        support = self._support(w, index)[1] if support is None else support
-        world = np.array([w])
-        own = self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max()
-        return float(max(own, self.rays.friction(world, np.array([[support]]))[0, 0]))
+    def _dragged(self, w: int, index: int, friction: float) -> tuple[float, list[str]]:
+        """The force (N) a push of object ``index`` in world ``w`` takes beyond sliding what it moves at ``friction``,
+        and the names of what adds it: each movable object that what the push moves (:meth:`_carried`) bears up in
+        part (an anvil lying partly on a pushed sled, partly on a fixed rail) presses it onto its support with the
+        force it bears there (read from the solver's contact forces, which loads the push at ``friction``), and is
+        dragged along until it slides on it or its other supports slide under it, whichever takes less (at its own
+        friction, the least either pair has)."""
+        owner, names = self.scene.body_object, self.scene.object_names
+        moved = np.isin(owner, [index, *(o for part in self._carried(w, index) for o in part)])
+        up = self.senses.sim.contact_forces(np.array([w]), moved)[0, :, 2]  # N each body is borne up by the moved
+        movable = (owner >= 0) & self.facts.movable[np.maximum(owner, 0)] & ~self.scene.robot_body
+        drag, dragged = 0.0, []
+        for o in np.unique(owner[movable & ~moved & (up > BORNE)]).tolist():
+            share = float(up[owner == o].clip(min=0.0).sum())
+            rest = max(self.senses.mass(w, o) * GRAVITY - share, 0.0)
+            own = float(self.rays.friction(np.array([w]), np.flatnonzero(self.facts.geom_object == o)[None]).max())
+            drag += share * friction + min(share, rest) * own
+            dragged.append(names[o])
+        return drag, dragged
+
+    def feet_hold(self, w: int, feet_on: np.ndarray | None = None) -> tuple[float, float, str, float]:
+        """What the robot's feet hold in world ``w`` (frictionless in the simulation: the x-y servos push from the
+        world): its mass (kg), the force (N: its weight times the friction under the feet, each foot a quarter of it,
+        on the geoms ``feet_on`` (4,) whose friction it meets, :meth:`_feet_surface`; None: read them), the name of
+        the most slippery surface under them and their mean friction, as the world's perturbation scales it."""
+        feet_on = self._feet_surface(w)[2] if feet_on is None else feet_on
+        robot = float(self.senses.sim.body_mass[w, self.scene.robot_body].sum())
+        grip = self.rays.friction(np.array([w]), feet_on[None])[0]
+        floor = self.rays.surface_name(int(feet_on[np.argmin(grip)]))
+        return robot, robot * GRAVITY * float(grip.mean()), floor, float(grip.mean())
+
+    def sliding_friction(self, w: int, index: int) -> float:
+        """The friction object ``index`` slides at on its support in world ``w`` (:meth:`_support`)."""
+        return self._support(w, index)[2]
 
     def _feet_surface(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms (-1: none)."""
+        """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms whose friction
+        the feet meet (-1: none; a cloth lying on what carries them where it is the more slippery,
+        :meth:`~.rays.Rays.grip`)."""
         centres = feet(self.senses.state, self.facts.ids)[w]
         top = np.array([float(centres[:, 2].max()) + 0.05])
-        z, _, geoms = self.rays.surface(np.array([w]), centres[None, :, :2], top)
-        return z[0], self.rays.objects_of(geoms[0]), geoms[0]
+        z, _, geoms, cloth = self.rays.surface(np.array([w]), centres[None, :, :2], top)
+        return z[0], self.rays.objects_of(geoms[0]), self.rays.grip(geoms[0], cloth[0])
 
-    def _support(self, w: int, index: int) -> tuple[np.ndarray, int]:
-        """What object ``index`` rests on in world ``w``: the heights under it (:meth:`_under`) and the geom of the
-        highest (-1: none)."""
-        _, obj_hi = self.senses.bounds3(w, index)
-        points = self._under(w, index)
-        below, _, geoms = self.rays.surface(
-            np.array([w]), points[None], np.array([obj_hi[2] + 0.01]), self.scene.object_body[index]
-        )
-        return below[0], int(geoms[0, np.argmax(below[0])])
+    def _support(self, w: int, index: int) -> tuple[np.ndarray, int, float]:
+        """What object ``index`` rests on in world ``w``: the heights under it (:meth:`_under`), the geom it rests on
+        most (-1: none; the cloth lying on it, if any) and the friction it slides at: the mean, over :data:`FOOTPRINT`
+        points under each of its parts that rest at the height of the highest, of the friction between it and what
+        it rests on there (:meth:`~.rays.Rays.sliding`: through a cloth, as the world's perturbation scales them; a
+        crate on rubber with an ice seam under its centre slides on the rubber)."""
+        world, body = np.array([w]), self.scene.object_body[index]
+        top = np.array([self.senses.bounds3(w, index)[1][2] + 0.01])
+        below, _, geoms, cloth = self.rays.surface(world, self._under(w, index)[None], top, body)
+        highest = int(np.argmax(below[0]))
+        support = int(cloth[0, highest] if cloth[0, highest] >= 0 else geoms[0, highest])
+        z, _, geoms, cloth = self.rays.surface(world, self._footprint(w, index)[None], top, body)
+        own = float(self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max())
+        cloth = np.where(self.rays.objects_of(cloth) == index, -1, cloth)  # a pushed cloth's own links
+        rests = np.abs(z[0] - below[0, highest]) <= RISE
+        if not rests.any():
+            return below[0], support, own
+        on, count = np.unique(np.where(cloth >= 0, cloth, geoms)[0, rests], return_counts=True)
+        friction = self.rays.sliding(world, own, geoms, cloth)[0, rests]
+        return below[0], int(on[np.argmax(count)]), float(friction.mean())
 
     def _load(self, w: int, index: int) -> tuple[float, list[str], list[str]]:
         """What a push of object ``index`` in world ``w`` moves: its mass (kg) with its riders and what is stuck to
@@ -129,6 +167,19 @@ class PushRules:
             return ((lo + hi) / 2)[None, :2]
         xpos, _ = self.senses.sim.geom_poses(np.array([w]))
         return xpos[w, self.facts.geom_object == index, :2]
+
+    def _footprint(self, w: int, index: int) -> np.ndarray:
+        """(n, 2) points under object ``index`` in world ``w`` where its friction is read: a grid of FOOTPRINT x
+        :data:`FOOTPRINT` cell centres over the x-y bounds of each of its geoms (a cloth: under its centre)."""
+        if self.facts.cloth[index]:
+            return self._under(w, index)
+        xpos, xmat = self.senses.sim.geom_poses(np.array([w]))
+        mine = np.flatnonzero(self.facts.geom_object == index)
+        half = self.scene.model.geom_aabb[mine, 3:]  # (n, 3) each geom's half sizes in its own frame
+        reach = np.abs(xmat[w, mine].reshape(-1, 3, 3)) @ half[:, :, None]  # (n, 3, 1) world half extents
+        cells = (np.arange(FOOTPRINT) + 0.5) / FOOTPRINT * 2 - 1  # -1..1
+        grid = np.stack(np.meshgrid(cells, cells, indexing="ij"), axis=-1).reshape(-1, 2)
+        return (xpos[w, mine, None, :2] + grid[None] * reach[:, None, :2, 0]).reshape(-1, 2)
 
     def loaded(self, w: int, index: int) -> bool:
         """Whether another object lies on object ``index`` in world ``w``, borne up by it at least in part (a board's

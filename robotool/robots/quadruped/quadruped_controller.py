@@ -10,8 +10,8 @@ dataclass:
 - :mod:`.terrain_following` reads the feet's paths, sets where a move must stop and why, and drives the legs and the
   lift over edges (:class:`~.terrain_following.TerrainState`);
 - :mod:`.referee` judges falls, shoves, rams, crushes and the push rules (:class:`~.referee.RefereeState`);
-- :mod:`.lift_load` puts the lift's and the tilt motors' reaction on what the feet stand on
-  (:class:`~.lift_load.LoadState`);
+- :mod:`.lift_load` puts the reaction of the lift, the tilt motors and the x-y and yaw servos on what the feet stand
+  on (:class:`~.lift_load.LoadState`);
 - :mod:`.rays` casts the downward rays, :mod:`.sensing` reads the batched state.
 
 The tunables are in :mod:`.quadruped_config`. Nothing here reads the task's category or name: limits come from
@@ -102,7 +102,7 @@ class QuadrupedController(SkillController):
 
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         """Report finished skills, falls and shoves, and write the controls for the next interval, with the reaction
-        of the lift and tilt motors on what the feet stand on (in ``worlds``, every world when None)."""
+        of the motors and servos on what the feet stand on (in ``worlds``, every world when None)."""
         self.senses.state = state
         mask = world_mask(self.sim.nworld, worlds)
         ends = self.referee.judge(mask, self.moves)

@@ -1,6 +1,7 @@
 """Downward rays for the quadruped controller: surface heights and the geoms and objects that carry them, in many
 worlds at once through the simulator's batched ray cast (:meth:`~robotool.sim.backend.BatchedSim.rays`); a cloth
-carries no load over a gap, so rays see through it to what carries it."""
+carries no load over a gap, so rays see through it to what carries it, and tell which cloth links they passed through:
+what lies on a cloth meets the cloth's friction."""
 
 from __future__ import annotations
 
@@ -29,15 +30,16 @@ class Rays:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: surface heights
         and the objects that carry them (-1: ground or nothing); the robot is never hit (see :meth:`surface`)."""
-        z, _, geom = self.surface(worlds, xy, top, exclude)
+        z, _, geom, _ = self.surface(worlds, xy, top, exclude)
         return z, self.objects_of(geom)
 
     def surface(
         self, worlds: np.ndarray, xy: np.ndarray, top: np.ndarray, exclude: int = -1
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Downward rays from height ``top`` (per world) over ``xy`` (k, nray, 2) in ``worlds``: the heights the feet
-        stand at, the heights of the solids that carry them and those solids' geoms (-1: nothing); the robot is
-        never hit.
+        stand at, the heights of the solids that carry them, those solids' geoms (-1: nothing) and the geoms of the
+        most slippery cloth links lying on them that the rays passed through (-1: none; see :meth:`grip`); the robot
+        is never hit.
 
         A cloth is limp: it carries no load over a gap, whichever way it lies. A ray that meets a cloth's link is
         cast again from just above the point it met, that link left out, until it meets something solid, which is
@@ -47,10 +49,11 @@ class Rays:
         start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
         z, geom = self._cast_from(worlds, xy, start, exclude)
         if not self.facts.cloth_crossings:  # no cloth in the scene
-            return z, z, geom
+            return z, z, geom, np.full(geom.shape, -1)
         model = self.sim.scene.model
         through = self._on_cloth(geom)
         cloth_top = np.where(through, z, np.nan)
+        slick = np.where(through, geom, -1)
         for _ in range(self.facts.cloth_crossings):  # each ray's recasts are its own: every ray on any link at once
             if not through.any():
                 break
@@ -66,8 +69,9 @@ class Rays:
             )
             z[rows[:, None], redo], geom[rows[:, None], redo] = z_again, geom_again
             through = self._on_cloth(geom)
+            slick = np.where(through & ((slick < 0) | (self._raw(geom) < self._raw(slick))), geom, slick)
         lying = cloth_top - z <= self.limits.max_step_up  # False where no cloth was met (NaN)
-        return np.where(lying, cloth_top, z), z, geom
+        return np.where(lying, cloth_top, z), z, geom, np.where(lying, slick, -1)
 
     def objects_of(self, geom: np.ndarray) -> np.ndarray:
         """The object each ray's hit geom (-1: none) belongs to (-1: none, or not an object's)."""
@@ -84,7 +88,29 @@ class Rays:
         """The sliding friction of the hit geoms ``geom`` (k, ...) (-1: none, 0) in ``worlds`` (k,), as each world's
         perturbation scales it."""
         scale = self.sim.friction_scale[worlds].reshape(-1, *([1] * (geom.ndim - 1)))
-        return np.where(geom >= 0, self.sim.scene.model.geom_friction[np.maximum(geom, 0), 0], 0.0) * scale
+        return self._raw(geom) * scale
+
+    def grip(self, geom: np.ndarray, cloth: np.ndarray) -> np.ndarray:
+        """The geoms whose friction the feet meet where rays hit the solids ``geom`` through the cloth links ``cloth``
+        (-1: none; :meth:`surface`): a foot grips a cloth at the cloth's friction, and the cloth, lying on the solid,
+        slides on it; the most slippery of them sets what the feet hold."""
+        if not self.facts.cloth_crossings:  # no cloth in the scene
+            return geom
+        return np.where((cloth >= 0) & (self._raw(cloth) < self._raw(geom)), cloth, geom)
+
+    def sliding(self, worlds: np.ndarray, own: float, geom: np.ndarray, cloth: np.ndarray) -> np.ndarray:
+        """The friction an object whose geoms' largest friction is ``own`` (as the perturbation scales it) slides at
+        on the solids ``geom`` (k, ...) under it in ``worlds`` (k,), through the cloth links ``cloth`` (-1: none;
+        :meth:`surface`): each pair at the larger of its two frictions, as the simulator combines them; on a cloth,
+        the object slides on the cloth or the cloth with it on the solid, whichever slides first."""
+        solid = self.friction(worlds, geom)
+        limp = self.friction(worlds, cloth)
+        on_cloth = np.minimum(np.maximum(own, limp), np.maximum(limp, solid))
+        return np.where(cloth >= 0, on_cloth, np.maximum(own, solid))
+
+    def _raw(self, geom: np.ndarray) -> np.ndarray:
+        """The unscaled friction of geoms ``geom`` (-1: none, 0)."""
+        return np.where(geom >= 0, self.sim.scene.model.geom_friction[np.maximum(geom, 0), 0], 0.0)
 
     def _on_cloth(self, geom: np.ndarray) -> np.ndarray:
         """Whether each ray's hit geom (-1: none) belongs to a cloth."""

@@ -77,7 +77,8 @@ class RefereeState:
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
-    force_limit: np.ndarray  # (nworld,) N the push leg under way may take (NaN: not read yet; :mod:`.push_force`)
+    force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
+    # (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
 
     @classmethod
@@ -95,7 +96,7 @@ class RefereeState:
             rammed_by=np.full((nworld, nobject), -1),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
-            force_limit=np.full(nworld, np.nan),
+            force_limit=np.full((nworld, 2), np.nan),
             last_centres=centres,
         )
 

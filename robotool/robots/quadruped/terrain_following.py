@@ -174,7 +174,7 @@ class TerrainFollowing:
         read_back = self.rays.surface(
             worlds, points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
         )
-        z, solid, geoms = (
+        z, solid, geoms, cloth = (
             np.concatenate([a, np.repeat(a[:, :, -1:], samples - read, axis=2)], axis=2)
             for a in (r.reshape(*points.shape[:2], read) for r in read_back)
         )
@@ -210,7 +210,7 @@ class TerrainFollowing:
         past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
         relevant = (kind != TerrainKind.NONE) & (meets - past <= length[:, None])
         margin = np.where(edges, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
-        footing = self._footing(worlds, np.where(pushed, z, solid), geoms, points, behind)
+        footing = self._footing(worlds, np.where(pushed, z, solid), geoms, self.rays.grip(geoms, cloth), points, behind)
         slope_meets = travel[:, None] + np.take_along_axis(sample, np.minimum(footing.start, samples - 1), axis=1)
         slope_meets = np.where((footing.read < index) & (slope_meets <= length[:, None]), slope_meets, np.inf)
         stop_at = np.minimum(  # before a slope or a slippery surface, or where it stands when already on one
@@ -243,16 +243,17 @@ class TerrainFollowing:
             )
 
     def _footing(
-        self, worlds: np.ndarray, z: np.ndarray, geoms: np.ndarray, points: np.ndarray, behind: int
+        self, worlds: np.ndarray, z: np.ndarray, geoms: np.ndarray, grip: np.ndarray, points: np.ndarray, behind: int
     ) -> Footing:
         """Where each foot's path (k, 4) from under the foot on first meets a surface that cannot carry the move in
         its world: a slope steeper than its friction holds, or a surface whose friction is under the grip the feet
         need there (``config.walk_grip`` plus a slope's tangent: :func:`~.terrain.first_slip`), whichever comes first
         (a slope on a tie); the paths' heights (of the solids: a cloth lies on them, or hangs from them), hit geoms and
-        points as :meth:`scan` reads them (a geom's friction as the perturbation scales it). A slippery surface that
-        is also too steep somewhere on the paths is a slope (the robot could not even stand on it), met where the
-        foot meets that surface."""
-        n, hit = geoms.shape[2] - behind, geoms[:, :, behind:]
+        points as :meth:`scan` reads them, and the geoms whose friction the feet meet there (``grip``: a cloth lying
+        on a solid where it is more slippery, :meth:`~.rays.Rays.grip`; a geom's friction as the perturbation scales
+        it). A slippery surface that is also too steep somewhere on the paths is a slope (the robot could not even
+        stand on it), met where the foot meets that surface."""
+        n, hit = geoms.shape[2] - behind, grip[:, :, behind:]
         friction = self.rays.friction(worlds, hit)
         tangent = steepness(z, geoms, points)[:, :, behind:]
         over, angle, holds = too_steep(tangent, friction)  # none hit: no slope read

@@ -549,30 +549,39 @@ def test_a_board_whose_lip_presses_a_vases_side_still_loads_the_vase_it_lies_on(
     ]
 
 
+DRAG = "N to drag crate), more than the"  # the push rules' refusal, as a push starts, of a pallet that drags a crate
+
+
 def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed() -> None:
     """Found by an adversarial run: a 2.5 kg pallet carrying a 10 kg crate, whose edge also rests on a fixed strip,
     was pushed 0.7 m with the crate riding along (the push was allowed, as for the pallet alone: the crate is no
-    rider, the strip bears it up too). Dragging it takes the robot about 120 N, over twice what sliding 5 kg takes."""
+    rider, the strip bears it up too). Dragging it takes the robot about 120 N, over twice what sliding 5 kg takes, and
+    over what its feet hold: refused as it starts (the crate's weight on the pallet and its drag, from the contact
+    forces) or else as it moves."""
     (rollout,) = sim.run_sessions(
         _scene("crate_on_a_pallet_and_a_strip"),
         start_sessions([_text("drag_a_heavy_crate_half_on_a_strip")], "quadruped"),
         seed=11,
     )
     (push,) = [c for c in rollout.calls if c.skill == "push_to_position"]
-    assert push.outcome == "refused" and "pushing pallet (touching crate) took" in (push.reason or ""), push.reason
+    reason = push.reason or ""
+    assert push.outcome == "refused" and ("pushing pallet (touching crate) took" in reason or DRAG in reason), reason
 
 
 def test_a_chair_pinned_under_a_loaded_lever_end_is_weighed_with_its_load() -> None:
     """Found by an adversarial run: every world of seeds 0-3 lifted the cube (0.15 m). The push weighed the 3 kg chair,
     not the 30 kg sandbag pressing it down through the lever (about 145 N, held up by the fixed roller too): the torso
-    pressed on it with 71-114 N (median), where an honest chair push takes 9-28 N, and is refused for that force."""
+    pressed on it with 71-114 N (median), where an honest chair push takes 9-28 N, and is refused for that force, or as
+    it starts for the lever's weight on the chair and its drag, more than the feet hold."""
     rollouts = sim.run_sessions(
         _scene("lever_with_a_sandbag_on_its_raised_end"),
         start_sessions([_text("push_out_a_chair_pinned_under_a_loaded_lever")] * 2, "quadruped"),
         seed=0,
     )
     for rollout in rollouts:
-        assert not rollout.success and "pushing chair (touching surfboard) took" in failure_reason(rollout)
+        reason = failure_reason(rollout)
+        assert not rollout.success, reason
+        assert "pushing chair (touching surfboard) took" in reason or "to drag surfboard" in reason, reason
 
 
 def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
@@ -718,8 +727,9 @@ PUSHES_THAT_MOVE_MORE = [  # (program, layout, what the refusal must say): found
         "pushing board rammed drum",
     ),
     # a pushed pallet drags a 20 kg crate whose front edge rests on a loose roller (as on the fixed strip above): the
-    # crate is no rider, and the push is refused for the force it takes
-    ("drag_a_heavy_crate_half_on_a_roller", "crate_on_a_pallet_and_a_roller", "pushing pallet (touching crate) took"),
+    # crate is no rider, and the push is refused as it starts for the crate's weight on the pallet and its drag, more
+    # than the feet hold
+    ("drag_a_heavy_crate_half_on_a_roller", "crate_on_a_pallet_and_a_roller", DRAG),
 ]
 
 
