@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Protocol
 import mujoco
 import numpy as np
 
+from robotool.task.scene import MASS_NOISE
 from robotool.vocabulary import BackendName
 
 if TYPE_CHECKING:
@@ -138,9 +139,6 @@ class BatchedSim(Protocol):
         ``from_inside``, a ray that starts inside a geom it may hit (not a plane; the last of several in geom order)
         meets it at distance 0, where ``mj_ray`` would meet it where it leaves it.
         """
-
-
-MASS_NOISE = 0.15  # a movable object's mass is scaled by up to this much either way in a perturbed world
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_vali
 from robotool.task import geometry
 
 DEFAULT_DENSITY = 300.0  # kg/m^3, for movable objects without a mass
+MASS_NOISE = 0.15  # a movable object's mass is scaled by up to this much either way in a perturbed world
 PRESS_TRAVEL = 0.01  # m: a button counts as pressed after its face travelled this far
 DEFAULT_BUTTON_STIFFNESS = 300.0  # N/m: 3 N at the press travel, like a real push button
 DEFAULT_BUTTON_TRAVEL = 0.02  # m the face can be pushed in

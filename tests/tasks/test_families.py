@@ -201,7 +201,7 @@ def test_a_chair_under_a_light_cubes_lever_is_pushable_with_the_board_in_every_w
     whose masses were perturbed up, over the 5 kg push limit, though the instance was labelled solvable. A light cube
     does not hold the board down, so its chair and the board weigh under the limit in every perturbed world."""
     from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-    from robotool.sim.backend import MASS_NOISE
+    from robotool.task.scene import MASS_NOISE
 
     light = [i for i in (_instance("cube_lifting", s) for s in [*SEEDS, 12010]) if i.task.object("cube").mass < 6]
     assert light and all(i.solvable for i in light)

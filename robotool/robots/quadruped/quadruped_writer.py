@@ -30,7 +30,7 @@ from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_routes import DIRECTIONS, Quadruped, Route
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.terrain import foot_offsets
-from robotool.sim.backend import MASS_NOISE
+from robotool.task.scene import MASS_NOISE
 
 
 def _push_plans(

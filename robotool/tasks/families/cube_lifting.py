@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.sim.backend import MASS_NOISE
 from robotool.task import geometry
+from robotool.task.scene import MASS_NOISE
 from robotool.tasks.families._common import (
     FLOOR_CLUTTER,
     Draft,
