@@ -10,21 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fixtures.paths import FIXTURES
-
-from robotool import sim, tasks
-from robotool.rollout import Rollout
-from robotool.sandbox import start_sessions
-
-
-def _run(layout: str, program: str) -> list[Rollout]:
-    text = (FIXTURES / "cheats" / f"{program}.py").read_text()
-    scene = sim.build(tasks.load(FIXTURES / "layouts" / f"{layout}.yaml"))
-    return sim.run_sessions(scene, start_sessions([text] * 3, "quadruped"), seed=0)
-
-
-def _reasons(rollouts: list[Rollout]) -> list[tuple[str, str, str | None]]:
-    return [(c.skill, c.outcome, c.reason) for r in rollouts for c in r.calls]
+from fixtures.corpus_runs import reasons, run_quadruped
 
 
 def test_the_walk_needs_the_grip_of_the_gaits_gentlest_start() -> None:
@@ -52,9 +38,9 @@ def test_the_first_sample_too_slippery_for_the_walk_and_its_slope_is_found() -> 
 def test_a_walk_on_ice_is_refused_where_the_robot_stands() -> None:
     """Standing on ice (friction 0.001), the walk across the rink onto the iced platform is refused at once, where the
     feet stand, naming the ice and the friction against what the walk needs."""
-    for rollout in _run("ice_rink_before_an_iced_platform", "walk_across_an_ice_rink_onto_a_platform"):
+    for rollout in run_quadruped("ice_rink_before_an_iced_platform", "walk_across_an_ice_rink_onto_a_platform"):
         walk = rollout.calls[-1]
-        assert not rollout.success and walk.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and walk.outcome == "refused", reasons([rollout])
         assert "ice is too slippery to walk on" in (walk.reason or ""), walk.reason
         assert walk.measured["friction"] < 0.0013 and walk.measured["limit"] == pytest.approx(0.136, abs=0.001)
         assert walk.measured["x"] < 0.0, walk.measured  # under a foot where it stands: it never left
@@ -63,9 +49,9 @@ def test_a_walk_on_ice_is_refused_where_the_robot_stands() -> None:
 
 def test_a_walk_onto_an_iced_platform_stops_before_it() -> None:
     """From a rink of ordinary friction the walk stops before the iced platform's edge (at x = 1.5), refused there."""
-    for rollout in _run("rink_before_an_iced_platform", "walk_across_an_ice_rink_onto_a_platform"):
+    for rollout in run_quadruped("rink_before_an_iced_platform", "walk_across_an_ice_rink_onto_a_platform"):
         walk = rollout.calls[-1]
-        assert not rollout.success and walk.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and walk.outcome == "refused", reasons([rollout])
         assert "platform is too slippery to walk on" in (walk.reason or ""), walk.reason
         assert walk.measured["friction"] < walk.measured["limit"]
         assert 1.45 <= walk.measured["x"] <= 1.55, walk.measured
@@ -73,18 +59,18 @@ def test_a_walk_onto_an_iced_platform_stops_before_it() -> None:
 
 def test_a_turn_on_ice_is_refused() -> None:
     """A quarter turn in place on the ice is refused: the feet cannot push the body round."""
-    for rollout in _run("ice_rink_before_an_iced_platform", "turn_on_an_ice_rink_then_walk_onto_the_platform"):
+    for rollout in run_quadruped("ice_rink_before_an_iced_platform", "turn_on_an_ice_rink_then_walk_onto_the_platform"):
         turn = rollout.calls[0]
-        assert not rollout.success and turn.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and turn.outcome == "refused", reasons([rollout])
         assert "ice is too slippery to turn on" in (turn.reason or ""), turn.reason
 
 
 def test_a_push_from_ice_is_refused() -> None:
     """Standing on ice, the robot may not push a 4.2 kg rubber-footed crate (about 41 N to slide): its feet hold
     about 0.1 N."""
-    for rollout in _run("crate_on_an_ice_deck", "push_a_crate_off_an_ice_deck"):
+    for rollout in run_quadruped("crate_on_an_ice_deck", "push_a_crate_off_an_ice_deck"):
         push = rollout.calls[-1]
-        assert not rollout.success and push.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and push.outcome == "refused", reasons([rollout])
         assert "cannot push crate: sliding it takes" in (push.reason or ""), push.reason
         assert "its feet would slip" in (push.reason or "") and "ice_deck" in (push.reason or ""), push.reason
         assert push.measured["force"] > 30.0 and push.measured["limit"] < 0.2, push.measured
@@ -94,9 +80,9 @@ def test_a_push_from_ice_is_refused() -> None:
 def test_a_push_the_feet_can_walk_on_but_not_hold_is_refused() -> None:
     """On a waxed deck (friction 0.2) the robot may walk, but its feet hold 24 N, under the 41 N that sliding the crate
     takes (both scaled alike by each world's perturbation, the crate's mass by up to 15%): refused with the forces."""
-    for rollout in _run("crate_on_a_waxed_deck", "push_a_crate_off_an_ice_deck"):
+    for rollout in run_quadruped("crate_on_a_waxed_deck", "push_a_crate_off_an_ice_deck"):
         push = rollout.calls[-1]
-        assert not rollout.success and push.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and push.outcome == "refused", reasons([rollout])
         assert "its feet would slip" in (push.reason or "") and "waxed_deck" in (push.reason or ""), push.reason
         force, holds = push.measured["force"], push.measured["limit"]
         assert force / holds == pytest.approx(4.2 * 1.0 / (12.0 * 0.2), rel=0.16), push.measured
@@ -112,5 +98,5 @@ def test_a_push_the_feet_can_walk_on_but_not_hold_is_refused() -> None:
 )
 def test_the_same_moves_succeed_at_ordinary_friction(layout: str, program: str) -> None:
     """The controls: the rink and the platform at friction 0.6, the deck at 1.0 (the feet hold 118 N)."""
-    rollouts = _run(layout, program)
-    assert all(r.success for r in rollouts), _reasons(rollouts)
+    rollouts = run_quadruped(layout, program)
+    assert all(r.success for r in rollouts), reasons(rollouts)

@@ -12,23 +12,9 @@ are the controls.
 from __future__ import annotations
 
 import pytest
-from fixtures.paths import FIXTURES
-
-from robotool import sim, tasks
-from robotool.rollout import Rollout
-from robotool.sandbox import start_sessions
+from fixtures.corpus_runs import reasons, run_quadruped
 
 CLOTH = pytest.mark.slow  # a cloth's many links are many contacts to simulate
-
-
-def _run(layout: str, program: str) -> list[Rollout]:
-    text = (FIXTURES / "cheats" / f"{program}.py").read_text()
-    scene = sim.build(tasks.load(FIXTURES / "layouts" / f"{layout}.yaml"))
-    return sim.run_sessions(scene, start_sessions([text] * 3, "quadruped"), seed=0)
-
-
-def _reasons(rollouts: list[Rollout]) -> list[tuple[str, str, str | None]]:
-    return [(c.skill, c.outcome, c.reason) for r in rollouts for c in r.calls]
 
 
 @pytest.mark.parametrize(
@@ -67,9 +53,9 @@ def test_a_move_the_feet_cannot_hold_is_refused_at_its_start(layout: str, progra
     """Read at the skill's start: the tarp under the feet (0.005), the rubber mat under the crate (2.0, not the waxed
     deck under it), the rubber under the crate's footprint (not the ice seam under its centre), the anvil's weight on
     the sled and its drag along the rail."""
-    for rollout in _run(layout, program):
+    for rollout in run_quadruped(layout, program):
         move = next(c for c in rollout.calls if c.outcome != "done")
-        assert not rollout.success and move.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and move.outcome == "refused", reasons([rollout])
         assert all(s in (move.reason or "") for s in said), move.reason
         m = move.measured
         assert m["force"] > m["limit"] if "force" in m else m["friction"] < m["limit"], m
@@ -78,11 +64,11 @@ def test_a_move_the_feet_cannot_hold_is_refused_at_its_start(layout: str, progra
 def test_ramming_crates_the_feet_cannot_push_is_refused_as_it_moves() -> None:
     """A 0.8 kg box rams two rubber-footed crates (4.2 kg in all, within the push limit) off a waxed stage: the push
     takes about 67 N, over the about 24 N the feet hold for more than half a second."""
-    for rollout in _run(
+    for rollout in run_quadruped(
         "light_box_before_rubber_footed_crates_on_a_waxed_stage", "ram_crates_off_a_stage_with_a_light_box"
     ):
         push = rollout.calls[-1]
-        assert not rollout.success and push.outcome == "refused", _reasons([rollout])
+        assert not rollout.success and push.outcome == "refused", reasons([rollout])
         reason = push.reason or ""
         assert reason.startswith("pushing box_a (touching crate_b, crate_c) took over"), reason
         assert "the most the robot's feet hold on stage at friction" in reason and "feet would slip" in reason, reason
@@ -103,5 +89,5 @@ def test_ramming_crates_the_feet_cannot_push_is_refused_as_it_moves() -> None:
 def test_the_same_moves_succeed_on_ordinary_surfaces(layout: str, program: str) -> None:
     """The controls: a canvas tarp (0.8), a felt mat on a wooden deck, the robot on rubber before the seam, felt-footed
     crates on a wooden stage, a 1 kg weight on the sled."""
-    rollouts = _run(layout, program)
-    assert all(r.success for r in rollouts), _reasons(rollouts)
+    rollouts = run_quadruped(layout, program)
+    assert all(r.success for r in rollouts), reasons(rollouts)
