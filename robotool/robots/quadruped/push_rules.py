@@ -100,8 +100,7 @@ class PushRules:
         for o in np.unique(owner[movable & ~moved & (up > BORNE)]).tolist():
             share = float(up[owner == o].clip(min=0.0).sum())
             rest = max(self.senses.mass(w, o) * GRAVITY - share, 0.0)
-            own = float(self.rays.friction(np.array([w]), np.flatnonzero(self.facts.geom_object == o)[None]).max())
-            drag += share * friction + min(share, rest) * own
+            drag += share * friction + min(share, rest) * self._own_friction(w, o)
             dragged.append(names[o])
         return drag, dragged
 
@@ -119,6 +118,10 @@ class PushRules:
     def sliding_friction(self, w: int, index: int) -> float:
         """The friction object ``index`` slides at on its support in world ``w`` (:meth:`_support`)."""
         return self._support(w, index)[2]
+
+    def _own_friction(self, w: int, index: int) -> float:
+        """The largest friction of object ``index``'s geoms in world ``w``, as its perturbation scales it."""
+        return float(self.rays.friction(np.array([w]), np.flatnonzero(self.facts.geom_object == index)[None]).max())
 
     def _feet_surface(self, w: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms whose friction
@@ -141,7 +144,7 @@ class PushRules:
         highest = int(np.argmax(below[0]))
         support = int(cloth[0, highest] if cloth[0, highest] >= 0 else geoms[0, highest])
         z, _, geoms, cloth = self.rays.surface(world, self._footprint(w, index)[None], top, body)
-        own = float(self.rays.friction(world, np.flatnonzero(self.facts.geom_object == index)[None]).max())
+        own = self._own_friction(w, index)
         cloth = np.where(self.rays.objects_of(cloth) == index, -1, cloth)  # a pushed cloth's own links
         rests = np.abs(z[0] - below[0, highest]) <= RISE
         if not rests.any():
