@@ -6,11 +6,13 @@ the same walk along the board on fixed blocks reaches the dock."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from fixtures.paths import FIXTURES
 
 from robotool import sim, tasks
 from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
+from robotool.verify import world_failure
 
 LAYOUTS = FIXTURES / "layouts"
 PROGRAM = (FIXTURES / "cheats" / "walk_off_a_cart_onto_the_dock.py").read_text()
@@ -85,3 +87,21 @@ def test_the_same_walk_along_the_board_on_fixed_blocks_reaches_the_dock() -> Non
         assert rollout.success, _why(rollout)
         before, after = (np.array(c.result) for c in rollout.calls if c.skill == "get_position" and c.args[0] == "cart")
         assert abs(after[0] - before[0]) < 0.02, (before, after)
+
+
+@pytest.mark.parametrize(
+    ("layout", "program", "reasons"),
+    [
+        ("board_on_a_pillar", "climb_onto_a_pillar_board_in_short_steps", (*TIPPED_REASONS, "step up of")),
+        ("cart_on_rollers_before_a_tall_dock", "climb_from_a_cart_onto_the_dock", ("step up of", "ran into cart")),
+    ],
+)
+def test_the_same_cheats_in_other_call_orders_fail_in_every_world(
+    layout: str, program: str, reasons: tuple[str, ...]
+) -> None:
+    """Tried as an optimiser would: the pillar climb in short steps (each crossing's ramped load small), and the cart
+    crossed by one climb instead of a walk (no stride reaction while the lift carries the body)."""
+    text = (FIXTURES / "cheats" / f"{program}.py").read_text()
+    for rollout in _walks(layout, text):
+        failure = world_failure(rollout) or ""
+        assert not rollout.success and any(r in failure for r in reasons), failure
