@@ -276,3 +276,14 @@ def test_a_concept_kind_that_names_nothing_is_asked_again() -> None:
         assert len(server.requests) == 5
     assert solution.stages.key_concepts[0].kind == "workspace_excess"
     assert any("kind 'friction' is not one of" in note for note in solution.notes)
+
+
+def test_a_reasoning_marker_in_a_string_of_the_program_is_the_programs_text_over_http() -> None:
+    """Over the stand-in: real reasoning closed by its marker, then a program whose string literal holds the marker.
+    The program runs as written (not cut at the literal, not asked again)."""
+    program = GRASP_DIRECTLY.replace("open_gripper()\n", 'open_gripper()\nlabel = "no </think> here"\n')
+    reply = "<think>Draft: move straight down.</think>\n" + chat_reply(code=program)
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(reply=reply, times=1)])
+    with StandinServer(Script(rules=rules)) as server:
+        solution = _solve(server)
+    assert solution.success and solution.code == program, solution.code
