@@ -67,9 +67,12 @@ class ForceLaw:
 
     def force(self, ctrl: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """(k, n) the forces at controls ``ctrl``, joint positions ``q`` and velocities ``qd`` (k, n)."""
-        ctrl = np.clip(ctrl, self.ctrl_range[:, 0], self.ctrl_range[:, 1])
-        force = self.gain * ctrl + self.bias[:, 0] + self.bias[:, 1] * q + self.bias[:, 2] * qd
+        force = self.held(ctrl) + self.bias[:, 1] * q + self.bias[:, 2] * qd
         return np.clip(force, self.force_range[:, 0], self.force_range[:, 1])
+
+    def held(self, ctrl: np.ndarray) -> np.ndarray:
+        """(k, n) the force's terms that depend on the controls ``ctrl`` (k, n) alone (its gain and its constant)."""
+        return self.gain * np.clip(ctrl, self.ctrl_range[:, 0], self.ctrl_range[:, 1]) + self.bias[:, 0]
 
 
 @dataclass(frozen=True)
@@ -158,10 +161,13 @@ class LiftLoad:
         q = state.qpos[worlds][:, np.append(ids.qpos[:2], ids.yaw_qpos)]
         qd = state.qvel[worlds][:, np.append(ids.qvel[:2], ids.yaw_qvel)]
         h, total = self.dt / SUBSTEPS, np.zeros(q.shape)
+        held = law.held(ctrl)  # the law's terms that do not change through the tick
+        lo, hi = law.force_range[:, 0], law.force_range[:, 1]
+        effective = self.facts.inertia - h * law.bias[:, 2]
         for _ in range(SUBSTEPS):  # as the simulator steps it (implicitfast: the servos' damping implicit)
-            force = law.force(ctrl, q, qd)
+            force = np.minimum(np.maximum(held + law.bias[:, 1] * q + law.bias[:, 2] * qd, lo), hi)
             total += force
-            qd = qd + h * force / (self.facts.inertia - h * law.bias[:, 2])
+            qd = qd + h * force / effective
             q = q + qd * h
         return total / SUBSTEPS
 
