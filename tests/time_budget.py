@@ -2,8 +2,11 @@
 
 The budgets live in ``tests/time_budgets.json`` (file -> seconds, the sum of its tests' setup, call and
 teardown times); a file that is not listed gets :data:`DEFAULT_BUDGET_S`. They are set at twice what the file
-takes on a 2-core machine running the suite on two workers, plus :data:`SLACK_S` (a first Warp kernel compile
-may land in any file), so noise passes and a test that became several times slower does not. ``pytest
+takes on a 2-core machine running the suite on two workers, plus :data:`SLACK_S` (a first compile of our own small
+Warp kernels may land in any file), so noise passes and a test that became several times slower does not. The
+simulator's Warp kernels (mujoco_warp's) compile in the first file of the Warp group, ``tests/sim/test_backend_warp.py``
+(the group's largest budget, so its first), on a machine that has not compiled them yet, as CI's has not: about a
+minute there, so its budget was measured with an empty kernel cache. ``pytest
 --record-budgets`` writes the measured times of the files that ran that way into the file instead of checking
 them. Works with pytest-xdist: the controller adds up the workers' reports.
 
