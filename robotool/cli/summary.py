@@ -98,14 +98,17 @@ def print_solution(solution: Solution, console: Console) -> None:
 
 
 def print_solution_verdict(solution: Solution, console: Console) -> None:
-    """The last line of ``solve``: solved or not (as the exit status says), the success rate and the cost."""
+    """The last line of ``solve``: solved or not (as the exit status says), the success rate and the cost; a best
+    program that failed in some of its perturbed worlds is said to be solved in those it did only, with how many."""
     verdict = "[green]solved[/]" if solution.success else "[red]not solved[/]"
+    rate = f"best success rate {solution.success_rate:.0%}"
+    if solution.success and solution.success_rate < 1.0 and solution.best is not None:
+        rollouts = solution.candidates[solution.best].rollouts
+        verdict = "[yellow]solved in some worlds only[/]"
+        rate += f" ({sum(r.success for r in rollouts)} of {len(rollouts)} perturbed worlds: not a plan to trust as is)"
     tokens = sum(u.prompt_tokens + u.completion_tokens for u in solution.usage.values())
     calls = f" in {len(solution.lm_calls)} LM call(s)" if solution.lm_calls else ""
-    console.print(
-        f"{verdict}: best success rate {solution.success_rate:.0%}; "
-        f"{tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s"
-    )
+    console.print(f"{verdict}: {rate}; {tokens} LM tokens{calls}; {solution.timings.get('total', 0.0):.1f} s")
 
 
 def print_repairs(solution: Solution, console: Console) -> None:
