@@ -18,12 +18,14 @@ nothing), the paper slid under half the can, 2 mm short of its centre, before a 
 any share of an object's base marks it slid under), and a puck slid up a wall face and flung over its top by the
 servo's pent-up pull (now a move's reference stays near the gripper). Each case names what its failure reason must
 say. A task named ``family:seed`` is a generated instance the family calls unsolvable. Two magnetic cubes shoved
-loose by the closed fingers are honest tool use: they press the built-in button and no unsolvable one. The honest
-references on the same tasks succeed in tests/robots/arm/test_skills.py.
+loose by the closed fingers are honest tool use: they press the built-in button and no unsolvable one. Open (a strict
+xfail): a beam pressed 2:1 against the arm raises a light anvil into a button, as a scene whose movable objects are
+light is not weighed. The honest references on the same tasks succeed in tests/robots/arm/test_skills.py.
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -33,6 +35,7 @@ from fixtures.reference import program
 
 from robotool import sim, tasks
 from robotool.robots.arm.arm_config import ARM
+from robotool.robots.arm.arm_payload import PAYLOAD_CONDITION
 from robotool.rollout import Rollout
 from robotool.sim.recorder import StateRecorder
 from robotool.task.task_file import parse_task
@@ -425,3 +428,35 @@ def test_a_bottle_set_down_on_a_gentle_slope_is_not_read_while_it_starts_to_roll
     for rollout in rollouts:
         assert not rollout.success
         assert "did not come to rest: bottle still moved" in str(rollout.error), rollout.error
+
+
+LIGHT_LEVER = "arm_light_anvil_on_a_short_lever_under_a_button"
+LIGHT_PRESS = (CHEATS / "arm_press_a_light_anvil_up_on_a_short_lever.py").read_text()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: a scene whose movable objects are light is not weighed; weighing it everywhere over-counts presses "
+    "into supports and end stops (an eased-off vase, a puck slid up a wall), and the fix tried opened a wedge's press",
+)
+def test_a_lever_pressed_past_the_rating_in_a_light_scene_is_over_the_payload(run_texts: Any) -> None:
+    """Found by an adversarial run: a beam pressed 2:1 against the arm with 58-100 N raises a 2.8 kg anvil into a
+    button in every world, as a scene whose movable objects could not weigh more than the payload (3.1 kg here) is
+    not weighed at all; a lever multiplies the push."""
+    for rollout in run_texts(_task(LIGHT_LEVER), [LIGHT_PRESS] * 2, seed=11):
+        assert not rollout.success and rollout.error is None, [(c.skill, c.outcome, c.reason) for c in rollout.calls]
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is False, rollout.conditions
+        failure = world_failure(rollout) or ""
+        assert re.search(r"cannot press beam: \d+ N on it with anvil touching it, over the 39 N the arm.s", failure)
+
+
+def test_a_light_lever_pressed_within_the_rating_raises_the_anvil(run_texts: Any) -> None:
+    """The control: a 0.8 kg anvil on the same lever (about 19 N on the beam), pressed only as far as that takes (the
+    servo's lead under 39 N, the rest of the press into the button's end stop), presses the button."""
+    data = _task(LIGHT_LEVER).model_dump(mode="json", exclude_defaults=True)
+    next(o for o in data["objects"] if o["name"] == "anvil")["mass"] = 0.8
+    code = LIGHT_PRESS.replace("[0.19, 0.0, 0.0]", "[0.19, 0.0, 0.065]")
+    assert code != LIGHT_PRESS
+    for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
+        assert rollout.success, world_failure(rollout)
+        assert PAYLOAD_CONDITION not in rollout.conditions, rollout.conditions  # nothing broke it in a light scene
