@@ -11,6 +11,7 @@ import copy
 import itertools
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,11 +42,23 @@ STEP_GAP = 0.01  # m a staircase link is placed short of the next (pushed flush,
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
 
 
+class RoutePush(NamedTuple):
+    """A push a route makes: the object, its new x-y centre, why; and the movable object it is placed against, if
+    any, with the axis along which it meets it: the push's target on that axis then follows where that object is
+    measured to stand (a staircase link stops its gap short of the link it meets, however far a perturbed world's
+    push left that one from its plan; across the climb it keeps its own line)."""
+
+    name: str
+    xy: np.ndarray
+    why: str
+    against: tuple[str, int] | None = None
+
+
 @dataclass
 class Route:
     """Pushes that rearrange the scene, then waypoints the robot walks through (each on a named surface)."""
 
-    pushes: list[tuple[str, np.ndarray, str]] = field(default_factory=list)  # object, x-y centre, why
+    pushes: list[RoutePush] = field(default_factory=list)
     waypoints: list[tuple[np.ndarray, str]] = field(default_factory=list)  # x-y, surface ("ground" or object)
     uses: list[tuple[str, str]] = field(default_factory=list)  # object, role
     words: str = ""
@@ -55,8 +68,8 @@ class Route:
     def layout(self, base: Layout) -> Layout:
         """``base`` with the route's pushes made."""
         out = base
-        for name, xy, _ in self.pushes:
-            out = out.with_moved(name, xy)
+        for push in self.pushes:
+            out = out.with_moved(push.name, push.xy)
         return out
 
 
@@ -301,7 +314,7 @@ def _bridges(quad: Quadruped, name: str) -> Iterator[Route]:
                 inside[lat] = np.clip(line, target.lo[lat] + quad.half[lat], target.hi[lat] - quad.half[lat])
                 waypoints = [(lined, quad.floor_name)] if abs(line - quad.start[lat]) > 0.01 else []
                 yield Route(
-                    pushes=[(obj.name, xy, f"across the {far - near:.2f} m gap")],
+                    pushes=[RoutePush(obj.name, xy, f"across the {far - near:.2f} m gap")],
                     waypoints=[*waypoints, (inside, name)],
                     uses=[(obj.name, "tool: a rigid board to bridge the gap")],
                     words=f"Push {obj.name} across the gap as a bridge, then walk over it onto {name}.",
@@ -392,9 +405,9 @@ def _place_chain(quad: Quadruped, chain: list[SceneObject], move_standing: bool)
 def _pushed_distance(layout: Layout, route: Route) -> float:
     """How far a route's pushes move objects in all."""
     total = 0.0
-    for name, xy, _ in route.pushes:
-        total += float(np.linalg.norm(xy - layout.box(name).center))
-        layout = layout.with_moved(name, xy)
+    for push in route.pushes:
+        total += float(np.linalg.norm(push.xy - layout.box(push.name).center))
+        layout = layout.with_moved(push.name, push.xy)
     return total
 
 
@@ -439,9 +452,10 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
             box = layout.box(obj.name)
             lined = _lined_up(box.center, xy, d)
             if lined is not None and layout.collides(box.moved_to(lined), ignore=[obj.name]) is None:  # a free spot
-                route.pushes.append((obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
+                route.pushes.append(RoutePush(obj.name, lined, f"in line with {chain[k + 1].name}'s side"))
             layout = layout.with_moved(obj.name, xy)
-            route.pushes.append((obj.name, xy, f"against {chain[k + 1].name}'s side"))
+            against = (chain[k + 1].name, int(np.argmax(np.abs(d)))) if chain[k + 1].movable else None
+            route.pushes.append(RoutePush(obj.name, xy, f"against {chain[k + 1].name}'s side", against))
     boxes = [layout.box(o.name) for o in chain]
     here = quad.start
     lines = []
@@ -492,7 +506,7 @@ def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placemen
     names = ", ".join(o.name for o in chain[:-1])
     route.words = (
         f"Make a staircase of {names} against {chain[-1].name}"
-        + (" by pushing " + ", ".join(p[0] for p in route.pushes) + " into place" if route.pushes else "")
+        + (" by pushing " + ", ".join(p.name for p in route.pushes) + " into place" if route.pushes else "")
         + f", then climb it onto {chain[-1].name}."
     )
     return route

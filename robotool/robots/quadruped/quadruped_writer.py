@@ -106,7 +106,9 @@ class Writer:
             self.refs[name] = self.prog.query("get_position", name, (*box.center, 0.0))
         return self.refs[name]
 
-    def push(self, name: str, xy: np.ndarray, why: str, turns: bool = False) -> None:
+    def push(
+        self, name: str, xy: np.ndarray, why: str, turns: bool = False, against: tuple[str, int] | None = None
+    ) -> None:
         """Push ``name`` to ``xy`` the first way (:func:`_push_plans`) predicted fine that leaves it room to drift
         (:func:`~.predict.drift_room`), lines up near its centre line (:data:`~.predict.OFF_CENTRE`) and with
         :data:`PUSH_ROOM` of room (:func:`~.predict.push_room`), else the one predicted fine that meets the most of
@@ -115,7 +117,9 @@ class Writer:
         lines up is predicted blocked, the robot walks there around what stands in the way. With ``turns``, when no
         way is predicted fine and lined up near the centre line as the body lies, the robot may also turn a quarter
         in place before a push that the turned body makes better (:meth:`_turned_push`); the writer's ``quad`` then
-        lies as the body does after the last push."""
+        lies as the body does after the last push. With ``against`` (a movable object ``name`` is placed against, and
+        the axis along which it meets it), the last push's target on that axis is read from where that object is
+        when the push starts, at its planned offset from it."""
         xy = np.asarray(xy, dtype=float)
         predicted, rank = None, (True, True, True, True)  # a problem, no room to drift, off the centre line, cramped
         for turning in (False, True) if turns else (False,):
@@ -143,10 +147,15 @@ class Writer:
                     self.walk(via, self.surface, f"walk to where the push of {name} lines up")
             ref = self.position(name)
             start = self.layout.box(name).center
+            point = Point.at(ref, (*(step.target - start), 0.0))
+            if against is not None and step is steps[-1]:  # where the object it meets stands, not where it should
+                other, axis = against
+                offset = float(step.target[axis] - self.layout.box(other).center[axis])
+                point = point.with_axis(axis, self.position(other), offset)
             self.prog.motion(
                 "push_to_position",
                 obj=name,
-                point=Point.at(ref, (*(step.target - start), 0.0)),
+                point=point,
                 intent=f"push {name} {why}",
                 explanation=f"centre to [{step.target[0]:.3f}, {step.target[1]:.3f}]",
             )
@@ -302,8 +311,8 @@ class Writer:
         self.prog.slack = min(self.prog.slack, route.slack)
         for name, role in route.uses:
             self.prog.use(name, role)
-        for name, xy, why in route.pushes:
-            self.push(name, xy, why)
+        for push in route.pushes:
+            self.push(push.name, push.xy, push.why, against=push.against)
         first, surface = route.waypoints[0]
         if surface == self.quad.floor_name:
             self.around(first)

@@ -602,7 +602,7 @@ def test_a_staircase_link_is_not_lined_up_on_a_spot_something_else_stands_on(see
     quad = Quadruped(task)
     for route in routes_onto(quad, "sofa", tools=True):
         layout = quad.layout
-        for name, xy, _ in route.pushes:
+        for name, xy, *_ in route.pushes:
             assert layout.collides(layout.box(name).moved_to(xy), ignore=[name]) is None, (name, xy)
             layout = layout.with_moved(name, xy)
 
