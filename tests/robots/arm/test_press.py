@@ -48,9 +48,7 @@ def test_the_same_lever_raises_a_light_anvil(run_texts: Any, tmp_path: Path) -> 
     assert "mass: 8.0" in text
     path = tmp_path / "lever.yaml"
     path.write_text(text.replace("mass: 8.0", "mass: 2.0").replace("goal:\n", block + "goal:\n"))
-    for rollout in _press(run_texts, tasks.load(path)):
-        assert rollout.success, world_failure(rollout)
-        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+    _holds_within_the_rating(list(_press(run_texts, tasks.load(path))))
 
 
 BLOCK = "  - {name: block, shape: box, center: [0.25, 0.30, 0.03], size: [0.06, 0.06, 0.06], mass: 5.0}\n"
@@ -76,6 +74,12 @@ def _fails_over_the_rating(rollouts: list[Rollout], pattern: str) -> None:
         assert re.search(pattern + r", over the 39 N the arm.s 4\.0 kg payload allows", failure), failure
 
 
+def _holds_within_the_rating(rollouts: list[Rollout]) -> None:
+    for rollout in rollouts:
+        assert rollout.success, world_failure(rollout)
+        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+
+
 STROKES = (FIXTURES / "cheats" / "arm_push_a_heavy_crate_in_short_strokes.py").read_text()
 
 
@@ -89,9 +93,7 @@ def test_a_heavy_crate_pushed_in_short_strokes_is_over_the_payload(run_texts: An
 
 def test_a_light_crate_pushed_in_short_strokes_presses_the_button(run_texts: Any, tmp_path: Path) -> None:
     task = _layout(tmp_path, "arm_heavy_crate_before_a_soft_button", (("mass: 14.0", "mass: 3.0"),), block=True)
-    for rollout in run_texts(task, [STROKES] * 2, seed=11):
-        assert rollout.success, world_failure(rollout)
-        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+    _holds_within_the_rating(list(run_texts(task, [STROKES] * 2, seed=11)))
 
 
 RAM = (FIXTURES / "cheats" / "arm_ram_a_stiff_button_with_the_bare_gripper.py").read_text()
@@ -109,9 +111,7 @@ def test_a_soft_button_rammed_into_its_stop_is_within_it(run_texts: Any, tmp_pat
     """The control: the same ram presses a 300 N/m button (6 N at the end of its travel) with the servo's full 100 N,
     the rest of it into the face's end stop, in a scene whose load is weighed."""
     task = _layout(tmp_path, "arm_stiff_button_on_the_table", (("stiffness: 8000", "stiffness: 300"),), block=True)
-    for rollout in run_texts(task, [RAM] * 2, seed=11):
-        assert rollout.success, world_failure(rollout)
-        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+    _holds_within_the_rating(list(run_texts(task, [RAM] * 2, seed=11)))
 
 
 SHORT_LEVER = (FIXTURES / "cheats" / "arm_press_a_short_lever_end_down.py").read_text()
@@ -133,8 +133,6 @@ def test_a_lever_for_the_arm_raises_the_anvil_within_it(run_texts: Any, tmp_path
     edits = (("center: [0.35, 0.0, 0.105]", "center: [0.30, 0.0, 0.105]"), ("[0.35, 0.0, 0.15]", "[0.30, 0.0, 0.15]"))
     code = SHORT_LEVER.replace("0.20, 0.0, 0.15", "0.16, 0.0, 0.15").replace("[0.20, 0.0, 0.0]", "[0.16, 0.0, 0.04]")
     assert code.count("0.16") == 2
-    for rollout in run_texts(
-        _layout(tmp_path, "arm_anvil_on_a_short_lever_under_a_button", edits), [code] * 2, seed=11
-    ):
-        assert rollout.success, world_failure(rollout)
-        assert rollout.conditions.get(PAYLOAD_CONDITION) is True, rollout.conditions
+    _holds_within_the_rating(
+        list(run_texts(_layout(tmp_path, "arm_anvil_on_a_short_lever_under_a_button", edits), [code] * 2, seed=11))
+    )
