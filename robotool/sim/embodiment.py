@@ -121,10 +121,14 @@ class SkillController(ABC):
         for state, saved in zip(live, snapshot.states, strict=True):
             copy_state(saved, into=state)
 
-    def robot_conditions(self) -> dict[str, list[bool]]:
-        """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``);
-        none by default (a robot that cannot fall)."""
+    def robot_conditions(self, state: BatchState, worlds: list[int]) -> dict[str, list[bool]]:
+        """Conditions on the robot itself that every goal gains, per world (such as ``robot_has_not_fallen``), as the
+        goal of ``worlds`` (settled at ``state``) is read; none by default (a robot that cannot fall)."""
         return {}
+
+    def robot_events(self, world: int) -> list[Event]:
+        """What the robot's conditions saw happen in one world as its goal was read (none by default)."""
+        return []
 
     def overloaded(self, state: BatchState) -> np.ndarray:
         """(nworld,) bool: the worlds in which ``state`` has the robot bear more than its contacts hold (a grip loaded

@@ -403,13 +403,14 @@ class _Run:
     def _read_goals(self, worlds: list[int], state: BatchState) -> None:
         """Read the goal in ``worlds`` (their runs are over): its conditions, the robot's and the goal's events."""
         conditions: dict[str, np.ndarray | list[bool]] = {**self.goal.conditions(state)}
-        conditions.update(self.controller.robot_conditions())
+        conditions.update(self.controller.robot_conditions(state, worlds))
         for i in worlds:
             world = self.worlds[i]
             world.finished = True
             world.sim_time = float(state.time[i] - self.t0[i])  # the world's whole run, its settling included
             world.conditions = {k: bool(v[i]) for k, v in conditions.items()}
-            seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in goal_events(self.goal, i)]
+            happened = [*goal_events(self.goal, i), *self.controller.robot_events(i)]
+            seen = [_during_calls(e, e.time - float(self.t0[i]), world.calls) for e in happened]
             world.events = sorted(world.events + seen, key=lambda e: e.time)
             if state.failed[i] is not None and world.error is None:
                 world.error = f"simulation failed: {state.failed[i]}"

@@ -102,7 +102,7 @@ class ArmController(SkillController):
         the arm carried more than its payload at the last tick (:class:`~.arm_payload.Payload`)."""
         return self.grasp.past_capacity(state) | self.payload.state.over_now
 
-    def robot_conditions(self) -> dict[str, list[bool]]:
+    def robot_conditions(self, state: BatchState, worlds: list[int]) -> dict[str, list[bool]]:
         """The arm carried no more than ``max_payload`` (in scenes whose movable objects could weigh more)."""
         return self.payload.conditions()
 

@@ -32,11 +32,13 @@ from robotool.robots.quadruped.plans import Plans
 from robotool.robots.quadruped.quadruped_config import QUADRUPED, QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
-from robotool.robots.quadruped.referee import Referee
+from robotool.robots.quadruped.referee import FALL_CONDITION, Referee
 from robotool.robots.quadruped.sensing import SceneFacts, Senses
+from robotool.robots.quadruped.stance import Stance
 from robotool.robots.quadruped.support import feet
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, quarter_turns
 from robotool.robots.quadruped.terrain_following import TerrainFollowing
+from robotool.rollout import Event
 from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.embodiment import QueryError, SkillController, SkillEnd, size_now, world_mask
 from robotool.task.task_model import Task
@@ -70,10 +72,12 @@ class QuadrupedController(SkillController):
         self.moves = MoveRunner(self.senses, self.terrain, config, on_push=self.referee.push_started)
         self.plans = Plans(self.senses, rays, self.referee, limits, config)
         self.load = LiftLoad(sim, rays, self.senses.facts.ids, self.senses.facts.reach)
+        self.stance = Stance(self.senses, rays, config)
 
     def world_states(self) -> tuple[Any, ...]:
-        """The per-world state of the move runner, the terrain following, the referee and the lift's load."""
-        return (self.moves.state, self.terrain.state, self.referee.state, self.load.state)
+        """The per-world state of the move runner, the terrain following, the referee, the lift's load and the stance
+        read at the goal."""
+        return (self.moves.state, self.terrain.state, self.referee.state, self.load.state, self.stance.state)
 
     def start(self, state: BatchState, worlds: np.ndarray, skill: str, args: tuple[Any, ...]) -> list[SkillEnd]:
         """Begin a motion skill; pushes that break a rule, and any motion of a fallen robot, are refused at once."""
@@ -95,10 +99,19 @@ class QuadrupedController(SkillController):
                 ends.append(end)
         return ends
 
-    def robot_conditions(self) -> dict[str, list[bool]]:
+    def robot_conditions(self, state: BatchState, worlds: list[int]) -> dict[str, list[bool]]:
         """The referee's conditions (:meth:`~.referee.Referee.conditions`): not fallen, shoved nothing, and, with a
-        fragile object, stood on none."""
-        return self.referee.conditions()
+        fragile object, stood on none; as the goal of ``worlds`` is read, a robot left standing where it would slide
+        (:mod:`.stance`) has fallen too."""
+        self.stance.read(state, worlds)
+        conditions = self.referee.conditions()
+        stood = self.stance.holds()
+        conditions[FALL_CONDITION] = [a and b for a, b in zip(conditions[FALL_CONDITION], stood, strict=True)]
+        return conditions
+
+    def robot_events(self, world: int) -> list[Event]:
+        """A fall off a slope read as the goal of ``world`` was (:meth:`.stance.Stance.events`)."""
+        return self.stance.events(world)
 
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         """Report finished skills, falls and shoves, and write the controls for the next interval, with the reaction

@@ -1,0 +1,88 @@
+"""The quadruped's stance when its goal is read: feet left on a slope steeper than the friction there holds would slide.
+
+The simulated body stands on frictionless feet, held up and sideways by its world-anchored servos, so it stays put on
+any slope; a real robot slides off one steeper than its feet's friction holds. Moves check the slopes on their way
+(:func:`~.terrain.first_steep`), but not a slope the world turns under a robot standing still: a board tipping past
+the drum it rests on as the robot walks past it leaves the robot on its short arm at 20 degrees, on lacquer that holds
+15. So once the world has settled, under each foot that touches something, rays read the surface's slope around the
+foot (across :data:`REACH` each way along x and y, all on one geom, no edge between) and the friction the foot meets
+there (:meth:`~.rays.Rays.grip`, as the world's perturbation scales it); a slope steeper than that holds
+(:func:`~.terrain.too_steep`) is a fall, with the reason.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.rays import Rays
+from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.support import feet, feet_touching
+from robotool.robots.quadruped.terrain import FOOT_NAMES, too_steep
+from robotool.rollout import Event
+from robotool.sim.backend import BatchState
+
+REACH = 0.04  # m each way from a foot's centre that its surface's slope is read across
+AROUND = np.array([[REACH, 0.0], [-REACH, 0.0], [0.0, REACH], [0.0, -REACH]])  # where, about the foot's centre
+
+
+@dataclass
+class StanceState:
+    """Per world: why the robot would slide off where it stood when its goal was read (None: it would not), and when
+    (the world's time, NaN: not read)."""
+
+    slid: list[str | None]
+    time: np.ndarray
+
+    @classmethod
+    def empty(cls, nworld: int) -> StanceState:
+        return cls(slid=[None] * nworld, time=np.full(nworld, np.nan))
+
+
+class Stance:
+    """Reads the robot's stance at the goal read (state: :class:`StanceState`)."""
+
+    def __init__(self, senses: Senses, rays: Rays, config: QuadrupedConfig):
+        self.senses, self.rays, self.config = senses, rays, config
+        self.state = StanceState.empty(senses.sim.nworld)
+
+    def read(self, state: BatchState, worlds: list[int]) -> None:
+        """Read, in ``worlds`` (settled), whether a foot stands on a slope steeper than its friction holds."""
+        if not worlds:
+            return
+        w = np.asarray(worlds, dtype=int)
+        ids = self.senses.facts.ids
+        centres = feet(state, ids)[w]  # (k, 4, 3)
+        touching = feet_touching(state, ids, self.senses.facts.not_robot)[w]
+        xy = centres[:, :, None, :2] + AROUND  # (k, 4, 4, 2)
+        top = centres[:, :, 2].max(axis=1) + self.config.ray_height
+        read = self.rays.surface(w, np.concatenate([centres[:, :, None, :2], xy], axis=2).reshape(len(w), -1, 2), top)
+        z, _, geom, cloth = (a.reshape(len(w), 4, 5) for a in read)
+        one = (geom == geom[:, :, :1]).all(axis=2) & (geom[:, :, 0] >= 0) & touching
+        gradient = np.stack([z[:, :, 1] - z[:, :, 2], z[:, :, 3] - z[:, :, 4]], axis=2) / (2 * REACH)
+        tangent = np.where(one, np.linalg.norm(gradient, axis=2), np.nan)
+        friction = self.rays.friction(w, self.rays.grip(geom[:, :, 0], cloth[:, :, 0]))
+        over, angle, holds = too_steep(tangent, friction)
+        for k, world in enumerate(w.tolist()):
+            if not over[k].any() or self.state.slid[world] is not None:
+                continue
+            foot = int(np.argmax(np.where(over[k], angle[k] - holds[k], -np.inf)))
+            self.state.slid[world] = (
+                f"it stood where it would slide: a slope of {angle[k, foot]:.1f} deg under its {FOOT_NAMES[foot]} "
+                f"foot, on {self.rays.surface_name(int(geom[k, foot, 0]))}, exceeds the {holds[k, foot]:.1f} deg "
+                "its friction holds"
+            )
+            self.state.time[world] = float(state.time[world])
+
+    def holds(self) -> list[bool]:
+        """Per world: the robot would not slide off where it stood when its goal was read."""
+        return [slid is None for slid in self.state.slid]
+
+    def events(self, world: int) -> list[Event]:
+        """The robot's fall off a slope in one world, if it would slide."""
+        reason = self.state.slid[world]
+        if reason is None:
+            return []
+        return [Event(kind="fell", time=float(self.state.time[world]), detail=reason)]
