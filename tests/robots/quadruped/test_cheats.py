@@ -266,8 +266,10 @@ def _rollouts(program: str, scene: str) -> list[Rollout]:
 
 
 def _grouped(cases: list[tuple[str, str]]) -> list[Any]:
-    """The cases as parameters, each scene's in one xdist group (its worker runs each shared batch once)."""
-    return [pytest.param(p, scene, marks=pytest.mark.xdist_group(f"cheats-on-{scene}")) for p, scene in cases]
+    """The cases as parameters, each scene's in one xdist group (its worker runs each shared batch once); marked slow,
+    as the first case of each batch of :data:`BATCH_PROGRAMS` runs the whole batch (5-12 s on a 2-core machine)."""
+    marks = [pytest.mark.slow]
+    return [pytest.param(p, scene, marks=[*marks, pytest.mark.xdist_group(f"cheats-on-{scene}")]) for p, scene in cases]
 
 
 @pytest.mark.parametrize(("program", "scene"), _grouped(CASES))

@@ -242,6 +242,7 @@ def test_what_lies_on_an_object_is_read_from_the_contacts_that_bear_it_up() -> N
     }
 
 
+@pytest.mark.slow  # 9-11 s on a 2-core machine
 def test_a_fall_read_at_every_physics_step_is_the_same_physics(sim_scene: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     """The runner steps the worlds the goal watches (a fragile object falling far enough to break) one physics step at
     a time: with its world watched at every tick, the reference program's world moves exactly as in steps of a whole
