@@ -9,11 +9,12 @@ the force the robot's bodies put on the movable objects along the push is read f
 slides ``max_push_mass`` on the pushed object's support (its weight times the friction between them, read once per
 push leg), and no more than the robot's feet hold (frictionless in the simulation: the x-y servos push from the
 world): its weight times the friction under them, as the push rules read it (:meth:`.PushRules.feet_hold`, a cloth
-under them included), read at the same time. A push of an object that takes more than either while the object moves
-(faster than ``settled_speed``: a push pressed against what stands in the way moves nothing) for ``push_strain_time``
-in all over the run (the forces are read at an instant: knocks and starts peak) moves more than the robot may push,
-or more than its feet could push: the referee refuses it and the world fails. (The tunables are in
-:class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+under them included), read at every tick it is weighed, where the feet stand then (a push that starts on rubber and
+carries on with the feet on ice holds what the ice does). A push of an object that takes more than either while the
+object moves (faster than ``settled_speed``: a push pressed against what stands in the way moves nothing) for
+``push_strain_time`` in all over the run (the forces are read at an instant: knocks and starts peak) moves more than
+the robot may push, or more than its feet could push: the referee refuses it and the world fails. (The tunables are
+in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
@@ -56,7 +57,8 @@ class PushForce:
         object moved this tick (``travel`` (nworld, nobject) m); (world, reason, measured) for each push that has now
         taken more than its limit for ``push_strain_time``. ``strained`` (nworld, nobject) s each object's pushes
         have taken more, added up over the run, and ``limits`` (nworld, 2) N the limits of the push leg under way
-        (the push limit's, then what the feet hold; NaN: not read yet) are updated in place."""
+        (the push limit's, read once per leg, NaN: not read yet; then what the feet hold, read now) are updated in
+        place."""
         m, state, names = moves.state, self.senses.state, self.scene.object_names
         robot, movable = self.bodies.robot, self.bodies.movable
         touches = state.touching[:, robot][:, :, movable].any(axis=(1, 2))
@@ -65,8 +67,8 @@ class PushForce:
         if worlds.size == 0:
             return []
         for w in worlds[np.isnan(limits[worlds, 0])].tolist():
-            friction = self.pushes.sliding_friction(w, int(m.pushing[w]))
-            limits[w] = self.margin * self.mass * GRAVITY * friction, self.pushes.feet_hold(w)[1]
+            limits[w, 0] = self.margin * self.mass * GRAVITY * self.pushes.sliding_friction(w, int(m.pushing[w]))
+        limits[worlds, 1] = self.pushes.feet_holds(worlds)  # where the feet stand now: a push walked onto ice
         forces = self.senses.sim.contact_forces(worlds, robot)[:, movable, :2].sum(axis=1)  # (k, 2) on what it pushes
         along = np.einsum("ki,ki->k", forces, m.u[worlds])
         out = []

@@ -115,6 +115,13 @@ class PushRules:
         floor = self.rays.surface_name(int(feet_on[np.argmin(grip)]))
         return robot, robot * GRAVITY * float(grip.mean()), floor, float(grip.mean())
 
+    def feet_holds(self, worlds: np.ndarray) -> np.ndarray:
+        """(k,) N what the robot's feet hold in ``worlds`` where they stand now (:meth:`feet_hold`'s force, read in
+        every world at once)."""
+        feet_on = self._feet_surfaces(worlds)[2]
+        robot = self.senses.sim.body_mass[worlds][:, self.scene.robot_body].sum(axis=1)
+        return robot * GRAVITY * self.rays.friction(worlds, feet_on).mean(axis=1)
+
     def sliding_friction(self, w: int, index: int) -> float:
         """The friction object ``index`` slides at on its support in world ``w`` (:meth:`_support`)."""
         return self._support(w, index)[2]
@@ -127,10 +134,15 @@ class PushRules:
         """Under the robot's feet in world ``w``: the heights (4,), the objects (-1: none) and the geoms whose friction
         the feet meet (-1: none; a cloth lying on what carries them where it is the more slippery,
         :meth:`~.rays.Rays.grip`)."""
-        centres = feet(self.senses.state, self.facts.ids)[w]
-        top = np.array([float(centres[:, 2].max()) + 0.05])
-        z, _, geoms, cloth = self.rays.surface(np.array([w]), centres[None, :, :2], top)
-        return z[0], self.rays.objects_of(geoms[0]), self.rays.grip(geoms[0], cloth[0])
+        z, objects, feet_on = self._feet_surfaces(np.array([w]))
+        return z[0], objects[0], feet_on[0]
+
+    def _feet_surfaces(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_feet_surface` in ``worlds`` (k,) at once: each (k, 4)."""
+        centres = feet(self.senses.state, self.facts.ids)[worlds]
+        top = centres[:, :, 2].max(axis=1) + 0.05
+        z, _, geoms, cloth = self.rays.surface(worlds, centres[:, :, :2], top)
+        return z, self.rays.objects_of(geoms), self.rays.grip(geoms, cloth)
 
     def _support(self, w: int, index: int) -> tuple[np.ndarray, int, float]:
         """What object ``index`` rests on in world ``w``: the heights under it (:meth:`_under`), the geom it rests on
