@@ -969,3 +969,19 @@ def test_a_fragile_object_the_goal_does_not_name_must_not_break() -> None:
         broke = [e for e in rollout.events if e.kind == "broke"]
         assert not rollout.success and len(broke) == 1 and broke[0].object == "glass_vase", rollout.events
         assert "glass_vase broke" in (world_failure(rollout) or ""), world_failure(rollout)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: the terrain rays read only the line under each foot's centre; a foothold's width is never checked",
+)
+def test_a_gap_walked_across_on_two_blades_under_the_feet_is_refused() -> None:
+    """Found by an adversarial run (6 of 6 worlds on three seeds): two 4 mm steel plates on edge, exactly under the
+    lines the feet walk on, carry the robot across a 1 m gap; the world-anchored servos hold the frictionless feet on
+    them. A foothold narrower than the foot should read as the gap it stands in."""
+    program = (CHEATS / "walk_across_a_gap_on_two_blades.py").read_text()
+    for rollout in sim.run_sessions(
+        _scene("gap_crossed_on_two_steel_blades"), start_sessions([program] * 2, "quadruped"), seed=11
+    ):
+        assert not rollout.success, rollout.conditions
+        assert "gap of" in (world_failure(rollout) or ""), world_failure(rollout)
