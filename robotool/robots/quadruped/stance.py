@@ -5,9 +5,10 @@ any slope; a real robot slides off one steeper than its feet's friction holds. M
 (:func:`~.terrain.first_steep`), but not a slope the world turns under a robot standing still: a board tipping past
 the drum it rests on as the robot walks past it leaves the robot on its short arm at 20 degrees, on lacquer that holds
 15. So once the world has settled, under each foot that touches something, rays read the surface's slope around the
-foot (across :data:`REACH` each way along x and y, all on one geom, no edge between) and the friction the foot meets
-there (:meth:`~.rays.Rays.grip`, as the world's perturbation scales it); a slope steeper than that holds
-(:func:`~.terrain.too_steep`) is a fall, with the reason.
+foot (across :data:`REACH` each way along x and along y, each way where both its points lie on the foot's geom: a foot
+near a side edge reads the slope along it) and the friction the foot meets there (:meth:`~.rays.Rays.grip`, as the
+world's perturbation scales it); a slope steeper than that holds (:func:`~.terrain.too_steep`) is a fall, with the
+reason.
 """
 
 from __future__ import annotations
@@ -60,9 +61,11 @@ class Stance:
         top = centres[:, :, 2].max(axis=1) + self.config.ray_height
         read = self.rays.surface(w, np.concatenate([centres[:, :, None, :2], xy], axis=2).reshape(len(w), -1, 2), top)
         z, _, geom, cloth = (a.reshape(len(w), 4, 5) for a in read)
-        one = (geom == geom[:, :, :1]).all(axis=2) & (geom[:, :, 0] >= 0) & touching
-        gradient = np.stack([z[:, :, 1] - z[:, :, 2], z[:, :, 3] - z[:, :, 4]], axis=2) / (2 * REACH)
-        tangent = np.where(one, np.linalg.norm(gradient, axis=2), np.nan)
+        same = geom == geom[:, :, :1]  # (k, 4, 5): on the foot's own geom
+        pairs = np.stack([same[:, :, 1] & same[:, :, 2], same[:, :, 3] & same[:, :, 4]], axis=2)  # along x, along y
+        rise = np.stack([z[:, :, 1] - z[:, :, 2], z[:, :, 3] - z[:, :, 4]], axis=2) / (2 * REACH)
+        read = pairs.any(axis=2) & (geom[:, :, 0] >= 0) & touching  # a foot near a side edge reads the other way
+        tangent = np.where(read, np.linalg.norm(np.where(pairs, rise, 0.0), axis=2), np.nan)
         friction = self.rays.friction(w, self.rays.grip(geom[:, :, 0], cloth[:, :, 0]))
         over, angle, holds = too_steep(tangent, friction)
         for k, world in enumerate(w.tolist()):

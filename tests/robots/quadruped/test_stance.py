@@ -11,7 +11,7 @@ from robotool import sim, tasks
 from robotool.robots.quadruped.referee import FALL_CONDITION
 from robotool.sandbox import start_sessions
 from robotool.task.task_file import parse_task
-from robotool.verify import world_failure
+from robotool.verify import run_worlds, world_failure
 
 LAYOUT = FIXTURES / "layouts" / "seesaw_tipped_onto_a_slippery_arm.yaml"
 CHEAT = (FIXTURES / "cheats" / "stand_on_a_tipped_slippery_seesaw.py").read_text()
@@ -35,3 +35,13 @@ def test_the_same_tipped_board_with_grip_enough_holds_the_robot() -> None:
     for rollout in sim.run_sessions(sim.build(task), start_sessions([CHEAT] * 2, "quadruped"), seed=11):
         assert rollout.conditions[FALL_CONDITION] is True, world_failure(rollout)
         assert "would slide" not in (world_failure(rollout) or "")
+
+
+def test_a_foot_near_a_side_edge_reads_the_slope_along_it() -> None:
+    """Found trying to fool the stance read: on a 0.30 m wide ramp tilted 20 deg (friction 0.2), each foot stands 3 cm
+    inside a side edge, so the rays 4 cm beside it missed the ramp and no slope was read: a program that stays where
+    it starts stood on the ramp in every world. The slope along the ramp is read where its two points lie on it."""
+    task = tasks.load(FIXTURES / "layouts" / "narrow_steep_ramp_under_the_start.yaml")
+    for rollout in run_worlds(task, ['p = get_position("robot")'] * 2, [0, 1]):
+        assert not rollout.success and rollout.conditions[FALL_CONDITION] is False, rollout.conditions
+        assert "a slope of 20.0 deg under its" in (world_failure(rollout) or ""), world_failure(rollout)
