@@ -11,7 +11,16 @@ from robotool.bugs import InternalError
 from robotool.vocabulary import SkillOutcome
 
 EventKind = Literal[
-    "clamped", "grasped", "grasp_failed", "pushed_out", "stalled", "timeout", "refused", "fell", "broke"
+    "clamped",
+    "grasped",
+    "grasp_failed",
+    "pushed_out",
+    "stalled",
+    "timeout",
+    "refused",
+    "fell",
+    "broke",
+    "passed_through",
 ]
 GraspFailure = Literal["nothing_between", "one_finger", "too_wide", "on_top", "not_between", "weak_grip", "slipped"]
 
@@ -50,7 +59,8 @@ class Event(BaseModel):
     (``grasped``) or held nothing (``grasp_failed``, with its ``cause``), an object ``pushed_out`` of
     the robot's reach, a skill that ``stalled``, ran out of time (``timeout``) or was ``refused``, the
     robot ``fell``, or a fragile ``object`` that ``broke`` in a fall (``measured``: ``fall`` and
-    ``max_drop``; ``detail``: what it landed on). ``call`` is the index of the skill call it happened in
+    ``max_drop``; ``detail``: what it landed on), or an ``object`` that ``passed_through`` a solid (``detail``: which;
+    the simulator's soft contact gave way). ``call`` is the index of the skill call it happened in
     (None outside calls), ``limit`` the robot limit involved (e.g. ``workspace``), ``measured`` the
     numbers in SI units and ``detail`` the controller's own words, if any.
     """
@@ -92,6 +102,8 @@ class Event(BaseModel):
             )
         elif self.kind == "fell":
             text = "the robot fell" + (f": {self.detail}" if self.detail else "")
+        elif self.kind == "passed_through":
+            text = f"{self.object} passed through {self.detail} (a solid cannot: the contact gave way)"
         elif self.kind == "broke" and "strike_speed" in m:
             text = (
                 f"{self.object} broke: {self.detail or 'something hard'} met it at {m['strike_speed']:.2f} m/s "

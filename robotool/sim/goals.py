@@ -4,7 +4,7 @@ A :class:`GoalTracker` is updated every control tick (so "at any time" goals suc
 remember) and reports ``{condition name: (nworld,) bool}``; success is all of them. The object goals any
 robot may be given live here (``pressed``) and in :mod:`robotool.sim.object_goals` (``lifted``, ``lowered``); a
 robot's own goal kinds (``RobotType.sim.goal_trackers``) are trackers in its package. Whatever the goal, every fragile
-object in the scene must end unbroken (:class:`WithFragiles`).
+object in the scene must end unbroken and nothing may pass through a solid (:class:`WithSceneRules`).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import GoalTracker, ReadAtTicks, goal_events
 from robotool.sim.object_goals import FallTracker, LiftedGoal, LoweredGoal
+from robotool.sim.passage import CONDITION, PassageWatch
 from robotool.task.scene import PRESS_TRAVEL
 
 
@@ -49,33 +50,38 @@ OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {
 """Trackers of the goal kinds about objects, which any robot may support."""
 
 
-class WithFragiles:
-    """A goal, and every fragile object in the scene unbroken at the end (``<name>_unbroken``): the vase a ``lowered``
-    goal names, and one knocked off a table on the way to any goal."""
+class WithSceneRules:
+    """A goal, and the rules every world keeps whatever its goal: every fragile object in the scene unbroken at the end
+    (``<name>_unbroken``: the vase a ``lowered`` goal names, and one knocked off a table on the way to any goal), and
+    nothing passed through a solid (``nothing_passed_through``: :mod:`robotool.sim.passage`)."""
 
-    def __init__(self, goal: GoalTracker, falls: list[FallTracker]):
-        self.goal, self.falls = goal, falls
+    def __init__(self, goal: GoalTracker, falls: list[FallTracker], passage: PassageWatch | None):
+        self.goal, self.falls, self.passage = goal, falls, passage
 
     def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
         self.goal.update(state, active, credited)
         for falls in self.falls:
             falls.update(state, active)
+        if self.passage is not None:
+            self.passage.update(state, active)
 
     def watched(self, state: BatchState) -> np.ndarray:
         return np.logical_or.reduce([self.goal.watched(state), *(f.watched(state) for f in self.falls)])
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         nworld = len(state.time)
-        return {**self.goal.conditions(state), **{f"{f.name}_unbroken": f.unbroken(nworld) for f in self.falls}}
+        kept = {CONDITION: self.passage.kept_apart(nworld)} if self.passage is not None else {}
+        return {**self.goal.conditions(state), **{f"{f.name}_unbroken": f.unbroken(nworld) for f in self.falls}, **kept}
 
     def events(self, world: int) -> list[Event]:
-        """The goal's events and each other fragile object's ``broke`` event in one world."""
-        return [*goal_events(self.goal, world), *(e for f in self.falls for e in f.events(world))]
+        """The goal's events, each fragile object's ``broke`` event and the ``passed_through`` event in one world."""
+        passed = self.passage.events(world) if self.passage is not None else []
+        return [*goal_events(self.goal, world), *(e for f in self.falls for e in f.events(world)), *passed]
 
 
 def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
     """The tracker for the scene's goal kind (an object goal's, or one of the robot's own, run by ``sim``), with every
-    fragile object kept unbroken (:class:`WithFragiles`)."""
+    fragile object kept unbroken and nothing passing through a solid (:class:`WithSceneRules`)."""
     kind = scene.task.goal.kind
     if kind in OBJECT_GOALS:
         goal = OBJECT_GOALS[kind](scene)
@@ -86,4 +92,5 @@ def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
         for index, obj in enumerate(scene.task.objects)
         if obj.fragile is not None and obj.movable  # (a fixed object does not fall)
     ]
-    return WithFragiles(goal, falls) if falls else goal
+    passage = PassageWatch(scene)
+    return WithSceneRules(goal, falls, passage if passage else None) if falls or passage else goal

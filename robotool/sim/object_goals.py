@@ -33,6 +33,7 @@ from robotool.task.scene import SceneObject
 RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 WELD, BODY = int(mujoco.mjtEq.mjEQ_WELD), int(mujoco.mjtObj.mjOBJ_BODY)
 FALL_ACCELERATION = 2 * 9.81  # m/s^2: the most a falling object is taken to gain downward speed by (gravity, twice)
+RIM_POINTS = 12  # points read round each rim of a cylinder for how fast its outline comes down
 
 
 def local_corners(scene: Scene) -> list[np.ndarray]:
@@ -93,6 +94,18 @@ class Underside:
             radius=np.array([p.half[0] for p in cylinders]),
             half_length=np.array([p.half[2] for p in cylinders]),
         )
+
+    def rims(self, points: int = RIM_POINTS) -> np.ndarray:
+        """(k, 3) points on the object's outline in its body frame: its boxes' corners and ``points`` points round
+        each rim of its cylinders."""
+        angle = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
+        rims = []
+        for centre, axis, radius, half in zip(self.centres, self.axes, self.radius, self.half_length, strict=True):
+            side = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
+            side /= np.linalg.norm(side)
+            ring = radius * (np.cos(angle)[:, None] * side + np.sin(angle)[:, None] * np.cross(axis, side))
+            rims += [centre + end * half * axis + ring for end in (-1.0, 1.0)]
+        return np.vstack([self.corners, *rims])
 
     def bottom(self, state: BatchState, body: int) -> np.ndarray:
         """(nworld,) the height of the object's lowest point in each world: a cylinder whose axis makes an angle
@@ -172,6 +185,8 @@ class FallTracker:
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
         self.strikes = StrikeWatch(scene, index, max_drop)
+        self.landings = OutlineLandings(scene, index, max_drop)
+        self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
         touch = np.any(state.touching[:, self.bodies][:, :, self.others], axis=1)  # (nworld, len(others))
@@ -179,7 +194,9 @@ class FallTracker:
         if self.rest_height is None:
             self.rest_height = height.copy()
             self.broken = np.zeros(height.shape, dtype=bool)
+            self._touch = touch
         assert self.broken is not None
+        self.landings.rise(state, active)
         self.rest_height = np.where(active, np.maximum(self.rest_height, height), self.rest_height)  # from the top
         fall = self.rest_height - height  # read before this tick's rest: a landing that stops dead still fell
         hard = touch & self.hard
@@ -204,11 +221,28 @@ class FallTracker:
                 measured={"strike_speed": float(speed[w]), "max_speed": self.strikes.limit, "max_drop": self.max_drop},
                 detail=" and ".join(names),
             )
+        new = hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
+        landing = self.landings.landing(state, active & new.any(axis=1))
+        for w in map(int, np.flatnonzero(active & (landing > self.strikes.limit) & ~self.broken)):
+            self.broken[w] = True
+            self.breaks[w] = Event(
+                kind="broke",
+                time=float(state.time[w]),
+                object=self.name,
+                measured={
+                    "strike_speed": float(landing[w]),
+                    "max_speed": self.strikes.limit,
+                    "max_drop": self.max_drop,
+                },
+                detail=self._names(self.scene.body_object[self.others[new[w]]]),
+            )
+        self._touch = np.where(active[:, None], touch, self._touch)
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
         held = self._held(state)
         borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
         resting = active & (held | (borne & (speed < RESTING_SPEED)))
         self.rest_height = np.where(resting, height, self.rest_height)
+        self.landings.rest(state, resting)
 
     def unbroken(self, nworld: int) -> np.ndarray:
         """(nworld,) bool: the worlds in which it has not broken."""
@@ -221,7 +255,8 @@ class FallTracker:
 
     def watched(self, state: BatchState) -> np.ndarray:
         """(nworld,) the unbroken worlds where the object could fall past ``max_drop`` before the next tick (its fall
-        so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it), or
+        so far, plus what its downward speed and :data:`FALL_ACCELERATION` add in a control interval, passes it), a
+        point of its outline not in the robot's grip could come down faster than the limit by then, or it could
         be struck too fast (:meth:`~robotool.sim.strikes.StrikeWatch.watched`)."""
         if self.rest_height is None or self.broken is None:
             return np.zeros(len(state.time), dtype=bool)
@@ -229,7 +264,9 @@ class FallTracker:
         fall = self.rest_height - state.xpos[:, self.body, 2]
         sinking = np.maximum(-state.qvel[:, self._dof()[2]], 0.0)
         falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
-        return ~self.broken & (falling | self.strikes.watched(state, dt, self._held(state)))
+        held = self._held(state)
+        landing = ~held & (self.landings.descent(state).max(axis=1) + FALL_ACCELERATION * dt > self.strikes.limit)
+        return ~self.broken & (falling | landing | self.strikes.watched(state, dt, held))
 
     def _held(self, state: BatchState) -> np.ndarray:
         """(nworld,) whether it is in the robot's grip, where it moves with the hand."""
@@ -246,9 +283,59 @@ class FallTracker:
         return np.arange(adr, adr + 3)
 
 
+class OutlineLandings:
+    """How the outline of one fragile object lands (:class:`FallTracker` reads its centre's falls): a tall glass column
+    knocked over lands on its top's edge at about sqrt(3 g L), though its centre drops less than ``max_drop`` (found
+    by an adversarial run). Each point of its outline (its boxes' corners, points round its cylinders' rims) falls, like
+    the centre, from where it last rested or the highest it rose to since; where the object comes to touch something
+    hard (the ground too), a point that fell more than ``max_drop`` and came down faster than such a fall lands (at
+    this reading or the last) lands on it. A rolling object comes down at no point where it meets the ground, and a
+    wobble lifts a point less than any fall that breaks."""
+
+    def __init__(self, scene: Scene, index: int, max_drop: float):
+        self.body, self.max_drop = int(scene.object_body[index]), max_drop
+        self.limit = float(np.sqrt(2 * 9.81 * max_drop))
+        self.dof = int(scene.model.body_dofadr[self.body])  # its free joint: linear (world), then angular (own frame)
+        self.outline = Underside.of(scene.task.objects[index]).rims()  # (k, 3) in its body's frame
+        self.rest_heights = np.zeros((0, len(self.outline)))  # (nworld, k) where each point fell from
+        self._descent = np.zeros((0, len(self.outline)))  # (nworld, k) how fast each came down at the last reading
+
+    def rise(self, state: BatchState, active: np.ndarray) -> None:
+        """Read the ``active`` worlds before a landing is looked for: each point falls from the highest it rose to."""
+        heights = self._heights(state)
+        if len(self.rest_heights) != len(heights):
+            self.rest_heights, self._descent = heights, self.descent(state)
+        self.rest_heights = np.where(active[:, None], np.maximum(self.rest_heights, heights), self.rest_heights)
+
+    def landing(self, state: BatchState, touched: np.ndarray) -> np.ndarray:
+        """(nworld,) where the object ``touched`` something hard anew, the speed the fastest of its points that fell
+        more than ``max_drop`` came down at (0 elsewhere); the descent is remembered in every world."""
+        descent = self.descent(state)
+        fell = self.rest_heights - self._heights(state) > self.max_drop
+        speed = np.where(fell & touched[:, None], np.maximum(descent, self._descent), 0.0).max(axis=1, initial=0.0)
+        self._descent = descent
+        return speed
+
+    def rest(self, state: BatchState, resting: np.ndarray) -> None:
+        """The ``resting`` worlds: each point falls from where it is now."""
+        self.rest_heights = np.where(resting[:, None], self._heights(state), self.rest_heights)
+
+    def descent(self, state: BatchState) -> np.ndarray:
+        """(nworld, k) how fast each point of the outline comes down (0: it does not)."""
+        frame = state.xmat(self.body)
+        offset = np.einsum("wij,kj->wki", frame, self.outline)  # each point from the body's origin
+        spin = np.einsum("wij,wj->wi", frame, state.qvel[:, self.dof + 3 : self.dof + 6])
+        up = state.qvel[:, None, self.dof + 2] + spin[:, None, 0] * offset[:, :, 1] - spin[:, None, 1] * offset[:, :, 0]
+        return np.maximum(-up, 0.0)
+
+    def _heights(self, state: BatchState) -> np.ndarray:
+        """(nworld, k) each point's height."""
+        return world_corners(state, self.body, self.outline)[:, :, 2]
+
+
 class LoweredGoal(ReadAtTicks):
     """``lowered: {object, height}``: bottom at most ``height`` above the ground (a fragile object must also end
-    unbroken, as every fragile object must: :class:`robotool.sim.goals.WithFragiles`)."""
+    unbroken, as every fragile object must: :class:`robotool.sim.goals.WithSceneRules`)."""
 
     def __init__(self, scene: Scene):
         goal = scene.task.goal.lowered

@@ -211,12 +211,15 @@ class FixedBodies:
     def _boxes(self, state: BatchState, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Boxes around ``geoms`` in every world: centres (nworld, k, 3), axes as columns (nworld, k, 3, 3), half
         sizes (k, 3)."""
-        model = self.model
-        body = model.geom_bodyid[geoms]
-        frame = quat_to_mat(state.xquat[:, body].reshape(-1, 4)).reshape(len(state.time), len(geoms), 3, 3)
-        local = quat_to_mat(model.geom_quat[geoms])
-        centre = state.xpos[:, body] + np.einsum("wkij,kj->wki", frame, model.geom_pos[geoms])
-        return centre, frame @ local, self.half[geoms]
+        return *geom_poses(self.model, state, geoms), self.half[geoms]
+
+
+def geom_poses(model: mujoco.MjModel, state: BatchState, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (nworld, k, 3) and frames (nworld, k, 3, 3; axes as columns) of ``geoms`` in every world."""
+    body = model.geom_bodyid[geoms]
+    frame = quat_to_mat(state.xquat[:, body].reshape(-1, 4)).reshape(len(state.time), len(geoms), 3, 3)
+    centre = state.xpos[:, body] + np.einsum("wkij,kj->wki", frame, model.geom_pos[geoms])
+    return centre, frame @ quat_to_mat(model.geom_quat[geoms])
 
 
 def geom_half_sizes(model: mujoco.MjModel) -> np.ndarray:

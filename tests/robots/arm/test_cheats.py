@@ -99,8 +99,9 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drop_the_vase_from_high", "arm_vase_on_a_stool", "vase broke: it fell 0.4"),
     # the glass dropped on the way to lifting the cube: not the goal's object, but broken
     ("arm_drop_the_glass_then_lift_the_cube", "arm_cube_and_a_wine_glass", "glass broke: it fell 0.3"),
-    # shoved off a stool past a 0.05 m max_drop, touching the fingers as it went
-    ("arm_shove_the_brittle_vase_off_the_stool", "arm_brittle_vase_on_a_stool", "vase broke: it fell 0.0"),
+    # shoved off a stool past a 0.05 m max_drop, touching the fingers as it went (it tips first: its top lands on the
+    # stool faster than such a fall lands, or its centre's fall breaks it on the floor)
+    ("arm_shove_the_brittle_vase_off_the_stool", "arm_brittle_vase_on_a_stool", "vase broke: "),
     # a 3.5 kg bar hung by a 3 cm square magnet patch on a post's side, its weight twisting the patch by 9 N m: a magnet
     # held 20 N m of twist whatever its patch
     ("arm_hang_a_steel_bar_on_a_post_by_its_side", "arm_steel_bar_beside_a_magnetic_post", "not reached: bar_lifted"),
@@ -196,7 +197,7 @@ def test_the_same_two_cube_chain_held_at_the_centre_falls_short(run_texts: Any) 
     assert centred != SLIVER_CHAIN
     for rollout in run_texts(_task("button_pressing"), [centred] * 3, seed=11):
         assert not rollout.success and not any(e.kind == "grasp_failed" for e in rollout.events), rollout.events
-        assert rollout.conditions == {"button_pressed": False}
+        assert rollout.conditions == {"button_pressed": False, "nothing_passed_through": True}
 
 
 def test_a_grip_just_past_the_half_pad_rule_holds_but_reaches_no_further_than_honest_physics(run_texts: Any) -> None:
@@ -207,7 +208,7 @@ def test_a_grip_just_past_the_half_pad_rule_holds_but_reaches_no_further_than_ho
     assert edge != SLIVER_CHAIN
     for rollout in run_texts(_task("button_pressing"), [edge] * 3, seed=11):
         assert not rollout.success and not any(e.kind == "grasp_failed" for e in rollout.events), rollout.events
-        assert rollout.conditions == {"button_pressed": False}
+        assert rollout.conditions == {"button_pressed": False, "nothing_passed_through": True}
 
 
 def test_tipping_over_a_carton_within_its_reach_succeeds(run_texts: Any) -> None:
@@ -319,7 +320,11 @@ def test_two_cubes_pushed_loose_do_not_press_a_button_labelled_unsolvable(run_te
     """On instances the family labels unsolvable (faces 0.53-0.555 m, two magnetic cubes) the same program pushes
     the pair to the workspace edge and the button stays unpressed; the reason tells where the pair was left."""
     for rollout in run_texts(_task(f"button_pressing:{seed}"), [LOOSE_CHAIN] * 2, seed=11):
-        assert not rollout.success and rollout.error is None and rollout.conditions == {"button_pressed": False}
+        assert (
+            not rollout.success
+            and rollout.error is None
+            and rollout.conditions == {"button_pressed": False, "nothing_passed_through": True}
+        )
         reason = world_failure(rollout)
         assert reason.startswith("goal not reached: button_pressed") and "magnetic_cube" in reason, reason
 
@@ -333,10 +338,25 @@ def test_a_vase_carried_down_from_a_shelf_and_let_go_just_above_the_floor_is_unb
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
 
-def test_a_brittle_vase_eased_off_its_stool_along_the_fingers_is_unbroken(run_texts: Any) -> None:
-    """The control of the shove above: the fingers follow the vase down from the 0.08 m stool, so it never falls
-    freely past its 0.05 m max_drop (about 8 mm); a touch of the robot at rest speed carries it, as any support does."""
+def test_a_brittle_vase_tipped_over_onto_its_stool_breaks_where_its_top_lands(run_texts: Any) -> None:
+    """The fingers ease the vase over the stool's edge and follow it down, so its centre never falls freely past its
+    0.05 m max_drop (about 8 mm); but pushed at its top it first tips over onto the stool, its top coming down about
+    0.1 m at 1.3 m/s, faster than a 0.05 m fall lands (0.99 m/s): it breaks there."""
     program = (PROGRAMS / "arm_ease_the_brittle_vase_down_along_the_fingers.py").read_text()
+    rollouts: list[Rollout] = run_texts(_task("arm_brittle_vase_on_a_stool"), [program] * 2, seed=11)
+    for rollout in rollouts:
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.detail == "stool" and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+
+
+def test_a_brittle_vase_set_down_in_the_grip_is_unbroken(run_texts: Any) -> None:
+    """The control: held at its graspable point, carried off the stool and let go at the floor, the vase is whole."""
+    program = (
+        'g = get_graspable_point("vase")\nopen_gripper()\nmove_to_position([g[0], g[1], g[2] + 0.05])\n'
+        "move_to_position(g)\nclose_gripper()\nmove_to_position([g[0] - 0.15, g[1], g[2]])\n"
+        "move_to_position([g[0] - 0.15, g[1], g[2] - 0.125])\nopen_gripper()\n"
+        "move_to_position([g[0] - 0.15, g[1], g[2] + 0.05])\n"
+    )
     rollouts: list[Rollout] = run_texts(_task("arm_brittle_vase_on_a_stool"), [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
@@ -394,7 +414,9 @@ def test_the_farthest_honest_push_leaves_the_cube_short_of_the_button(fling_runs
     """The control of the fling: the puck held by its back end pushes the cube over the table to the workspace edge at
     the move speed, and the cube stops short of the button's face: only a throw pressed it."""
     rollout = fling_runs[2][FLING_WORLDS]
-    assert rollout.error is None and rollout.conditions == {"button_pressed": False}, world_failure(rollout)
+    assert rollout.error is None and rollout.conditions == {"button_pressed": False, "nothing_passed_through": True}, (
+        world_failure(rollout)
+    )
     assert all(c.outcome == "done" for c in rollout.calls), [(c.skill, c.outcome, c.reason) for c in rollout.calls]
 
 

@@ -59,7 +59,11 @@ def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
     assert seen["before"] == pytest.approx([0.38, 0.12, 0.08], abs=2e-3)
     assert seen["grasp"] == pytest.approx([0.38, 0.12, 0.135], abs=2e-3)
     assert [c.skill for c in r.calls][-2:] == ["move_to_position", "get_graspable_point"]
-    assert r.error is None and not r.success and r.conditions == {"milk_held": False, "milk_in_gripper": False}
+    assert (
+        r.error is None
+        and not r.success
+        and r.conditions == {"milk_held": False, "milk_in_gripper": False, "nothing_passed_through": True}
+    )
 
 
 def test_errors_end_only_their_own_world(sim_scene: Any) -> None:
@@ -73,8 +77,10 @@ def test_errors_end_only_their_own_world(sim_scene: Any) -> None:
         raise RuntimeError("boom")
 
     scene = sim_scene("milk_reaching_near")
-    sessions = [*sim.trusted_sessions(scene.task, [bad_name, bad_args, crashes]),
-                *sandbox.start_sessions([program(REFERENCE["milk_reaching_near"])], "arm")]
+    sessions = [
+        *sim.trusted_sessions(scene.task, [bad_name, bad_args, crashes]),
+        *sandbox.start_sessions([program(REFERENCE["milk_reaching_near"])], "arm"),
+    ]
     rollouts = sim.run_sessions(scene, sessions)
     assert "unicorn" in rollouts[0].error and rollouts[0].calls[0].outcome == "error"
     assert "position" in rollouts[1].calls[0].reason and rollouts[1].error.startswith("SkillCallError")

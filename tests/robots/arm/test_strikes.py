@@ -121,3 +121,28 @@ def test_glass_shoved_short_of_a_fixed_wall_stays_whole(run_texts: Any) -> None:
     rollouts: list[Rollout] = run_texts(task, [program] * 4, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
     assert "dish" in rollouts[0].touched and not [e for r in rollouts for e in r.events if e.kind == "broke"]
+
+
+def test_a_tall_glass_column_knocked_over_breaks_where_its_top_lands(run_texts: Any) -> None:
+    """Found by an adversarial run: a 0.5 m glass column knocked off a low stool drops its centre less than its
+    ``max_drop`` but lands on its top's edge faster than such a fall lands: it breaks where it lands."""
+    task = tasks.load(LAYOUTS / "arm_tall_glass_column_on_a_low_stool.yaml")
+    rollouts = run_texts(task, [(CHEATS / "arm_knock_a_tall_glass_column_off_its_stool.py").read_text()] * 2, seed=5)
+    for rollout in rollouts:
+        assert rollout.conditions["column_lowered"] and not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+        assert broke.detail in ("the ground", "stool", "stool and the ground"), broke
+
+
+def test_a_short_glass_block_knocked_over_the_same_way_is_whole(run_texts: Any) -> None:
+    """The control: a glass block 0.14 m tall on the same stool, knocked over at its top, lands slower than the
+    limit."""
+    task = tasks.load(LAYOUTS / "arm_tall_glass_column_on_a_low_stool.yaml")
+    column = next(o for o in task.objects if o.name == "column")
+    short = column.model_copy(update={"size": [0.08, 0.08, 0.14], "center": [0.30, 0.0, 0.13]})
+    task = task.model_copy(update={"objects": [short if o is column else o for o in task.objects]})
+    program = (CHEATS / "arm_knock_a_tall_glass_column_off_its_stool.py").read_text().replace("0.45", "0.17")
+    for rollout in run_texts(task, [program] * 2, seed=5):
+        assert rollout.conditions["column_unbroken"], world_failure(rollout)
+        assert not any(e.kind == "broke" for e in rollout.events)

@@ -781,14 +781,18 @@ def test_a_foot_on_the_glass_vase_does_not_count_as_footing() -> None:
         assert "stood on glass_vase, which is fragile" in (failure_reason(rollout) or ""), failure_reason(rollout)
 
 
-def test_a_scene_solved_by_pushing_the_vase_from_a_step_level_with_the_sofa_is_labelled_solvable() -> None:
+def test_a_vase_pushed_off_a_step_level_with_the_sofa_tips_and_lands_on_its_corner() -> None:
     """vase_lowering seed 1098: the vase lies where the steps lead onto the sofa, but the sofa's top is level with
-    the top step's, so the robot pushes the vase aside from the step, climbs on and pushes it off (a fall of 0.23 m):
-    the program breaks no rule, and the family must not call the scene unsolvable."""
+    the top step's, so the robot pushes the vase aside from the step, climbs on and pushes it off. Its centre falls
+    0.23 m, less than its 0.3 m max_drop, but it tips over the edge and lands on a corner faster than such a fall
+    lands: it breaks. The scene stays labelled solvable (the planner finds another way: see benchmarks/planner.py)."""
     instance = generate("vase_lowering", 1098)
     code = (CHEATS / "push_vase_from_level_step.py").read_text()
     rollouts = sim.run_sessions(instance.task, start_sessions([code] * 2, "quadruped"), seed=0)
-    assert any(r.success for r in rollouts), [failure_reason(r) for r in rollouts]
+    for rollout in rollouts:
+        assert rollout.conditions["glass_vase_lowered"] and not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.measured["strike_speed"] > broke.measured["max_speed"], broke
     assert instance.solvable
 
 

@@ -102,7 +102,12 @@ def test_cloth_across_the_gap_sags_and_walking_onto_it_is_refused() -> None:
 def test_lever_needs_both_the_chair_away_and_the_robot_on_it(sim_scene: Any, name: str, lifted: bool) -> None:
     for rollout in run(sim_scene("cube_lifting"), name, 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": lifted, "robot_has_not_fallen": True, "robot_shoved_nothing": True}
+        assert rollout.conditions == {
+            "cube_lifted": lifted,
+            "robot_has_not_fallen": True,
+            "robot_shoved_nothing": True,
+            "nothing_passed_through": True,
+        }
 
 
 def test_a_light_robot_does_not_tip_the_lever() -> None:
@@ -116,7 +121,12 @@ def test_a_light_robot_does_not_tip_the_lever() -> None:
     data["robot"]["limits"] = {"mass": 1.0}
     for rollout in run(parse_task(data), "cube_lifting_lever_only", 2):
         assert all(c.outcome == "done" for c in motion_calls(rollout)), motion_calls(rollout)
-        assert rollout.conditions == {"cube_lifted": False, "robot_has_not_fallen": True, "robot_shoved_nothing": True}
+        assert rollout.conditions == {
+            "cube_lifted": False,
+            "robot_has_not_fallen": True,
+            "robot_shoved_nothing": True,
+            "nothing_passed_through": True,
+        }
 
 
 @pytest.mark.parametrize(
@@ -134,6 +144,7 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: st
             "robot_has_not_fallen": True,
             "robot_shoved_nothing": True,
             "robot_stood_on_nothing_fragile": True,
+            "nothing_passed_through": True,
         }
         assert rollout.success is unbroken
         broke = [e for e in rollout.events if e.kind == "broke"]
@@ -141,8 +152,10 @@ def test_the_vase_survives_only_a_fall_onto_the_cushion(sim_scene: Any, name: st
         if not unbroken:  # the failure reason gives the measured fall and what the vase landed on
             assert broke[0].object == "glass_vase" and broke[0].measured["fall"] > broke[0].measured["max_drop"]
             assert 0 < broke[0].time <= rollout.sim_time
-            assert re.search(r"glass_vase broke: it fell \d\.\d\d m onto the ground \(a fall of more than",
-                             world_failure(rollout) or "")
+            assert re.search(
+                r"glass_vase broke: it fell \d\.\d\d m onto the ground \(a fall of more than",
+                world_failure(rollout) or "",
+            )
 
 
 def test_queries_answer_from_the_current_state(sim_scene: Any) -> None:
@@ -179,6 +192,7 @@ def test_a_push_that_turns_the_object_off_its_line_is_corrected_until_the_object
     """A board's raised end rests on the chair, so the robot can push it only from 0.1 m off its centre: the chair
     turns and slides 0.15-0.25 m sideways. The push pushes on and corrects from the side (walking round the chair,
     away from the board) until the chair's centre is at the target."""
+
     def program(robot: Any) -> None:
         robot.walk_to_position([1.22, 0.0598, 0.0])
         chair = robot.get_position("chair")
@@ -247,15 +261,17 @@ def test_a_fall_read_at_every_physics_step_is_the_same_physics(sim_scene: Any, m
     """The runner steps the worlds the goal watches (a fragile object falling far enough to break) one physics step at
     a time: with its world watched at every tick, the reference program's world moves exactly as in steps of a whole
     control interval, and ends the same."""
-    from robotool.sim.goals import WithFragiles
+    from robotool.sim.goals import WithSceneRules
     from robotool.sim.recorder import StateRecorder
 
     def tracks(watch_all: bool) -> tuple[list[Rollout], list[np.ndarray]]:
         if watch_all:
-            monkeypatch.setattr(WithFragiles, "watched", lambda self, state: np.ones(len(state.time), dtype=bool))
+            monkeypatch.setattr(WithSceneRules, "watched", lambda self, state: np.ones(len(state.time), dtype=bool))
         recorder = StateRecorder([0])
         rollouts = sim.run_sessions(
-            sim_scene("vase_lowering"), start_sessions([program("vase_lowering")], "quadruped"), seed=0,
+            sim_scene("vase_lowering"),
+            start_sessions([program("vase_lowering")], "quadruped"),
+            seed=0,
             recorder=recorder,
         )
         return rollouts, [np.array(recorder.tracks[0].qpos)]
