@@ -70,6 +70,24 @@ def test_malformed_analyzer_reply_leaves_candidates_to_run_without_key_concepts(
     assert len(analyzer_calls) == 3 and all(c.error and c.prompt_tokens > 0 for c in analyzer_calls)
 
 
+def test_replies_too_costly_to_read_are_asked_again_unread() -> None:
+    """Found by an adversarial run: 24 KB of open braces in a Coder reply held the host 16 s of CPU in the JSON
+    salvage's search (48 KB: four times that), and 30 KB of open brackets in the Analyzer's typed field 62 s in its
+    JSON repair, with no timeout to end it. Such replies are refused before any reader runs, the reason sent back."""
+    braces = "[1]\n" + "{a" * 12_000
+    brackets = "[[ ## analysis ## ]]\nshort\n\n[[ ## key_concepts ## ]]\n" + '["a' * 10_000
+    rules = stage_rules(
+        arm_script([GRASP_DIRECTLY]),
+        analyzer=[Rule(reply=brackets, times=1)],
+        coder=[Rule(reply=braces, times=1)],
+    )
+    with StandinServer(Script(rules=rules)) as server:
+        solution = _solve(server)
+    assert solution.success
+    refused = [c for c in solution.lm_calls if c.error and "brackets in" in c.error]
+    assert {c.stage for c in refused} == {"analyzer", "coder"}, [(c.stage, c.error) for c in solution.lm_calls]
+
+
 def test_cli_solve_against_the_standin(tmp_path: Path, capsys) -> None:
     with StandinServer(Script(rules=stage_rules(arm_script([GRASP_DIRECTLY])))) as server:
         status = main(
@@ -93,6 +111,21 @@ def test_cli_solve_against_the_standin(tmp_path: Path, capsys) -> None:
     assert (tmp_path / "p.py").read_text() == GRASP_DIRECTLY
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["success_rate"] == 1.0 and report["method"] == "robotool"
+
+
+def test_cli_solve_saves_no_program_holding_raw_escapes(tmp_path: Path) -> None:
+    """Found by an adversarial run: a reply whose program held raw terminal escapes in a comment and a string (a
+    clipboard write, a screen clear, a fake verdict) was written unescaped to the ``--out`` file; it is refused now,
+    with the character named, and nothing is saved."""
+    hostile = '# \x1b]52;c;ZWNobyBwd25lZA==\x07\nmove_to_position([0.3, 0.0, 0.2])\nprint("\x1b[2J\x1b[32mok")\n'
+    solve = ["solve", TASK, "--lm", "openai/standin", "--no-cache", "--worlds", "1", "--candidates", "1"]
+    with StandinServer(Script(rules=stage_rules(arm_script([hostile])))) as server:
+        main(
+            [*solve, "--api-base", server.base_url, "--out", str(tmp_path / "p.py"), "--json", str(tmp_path / "r.json")]
+        )
+    assert not (tmp_path / "p.py").exists()
+    (candidate,) = json.loads((tmp_path / "r.json").read_text())["candidates"]
+    assert "raw control character U+001B" in candidate["failure"]["reason"], candidate["failure"]
 
 
 def test_cli_without_lm_says_how_to_configure_and_uses_the_search_planner(monkeypatch, capsys) -> None:

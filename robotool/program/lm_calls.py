@@ -39,7 +39,7 @@ from pydantic import ValidationError
 
 from robotool.errors import LMUnavailableError
 from robotool.program.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
-from robotool.program.reply_checks import not_a_completion, repeated_fields, unfinished
+from robotool.program.reply_checks import costly_to_read, not_a_completion, repeated_fields, unfinished
 from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
@@ -210,7 +210,8 @@ def _attempt_context(settings: CallSettings) -> Iterator[_Recorder]:
 
 def _reasoning_free(adapter: dspy.Adapter) -> dspy.Adapter:
     """A copy of ``adapter`` that parses replies without the model's reasoning (``<think>...</think>``), so that
-    a draft inside the reasoning is never read as an answer."""
+    a draft inside the reasoning is never read as an answer, and refuses a reply too costly to read
+    (:func:`~robotool.program.reply_checks.costly_to_read`) before its readers run."""
     reading = copy.copy(adapter)
     reading.__class__ = _reasoning_free_class(adapter.__class__)
     return reading
@@ -219,7 +220,11 @@ def _reasoning_free(adapter: dspy.Adapter) -> dspy.Adapter:
 @functools.cache
 def _reasoning_free_class(kind: type[dspy.Adapter]) -> type[dspy.Adapter]:
     def parse(self: dspy.Adapter, signature: type[dspy.Signature], completion: str) -> dict[str, Any]:
-        return kind.parse(self, signature, without_reasoning(completion))
+        text = without_reasoning(completion)
+        costly = costly_to_read(text)
+        if costly is not None:
+            raise AdapterParseError(kind.__name__, signature, completion, message=costly)
+        return kind.parse(self, signature, text)
 
     return type(kind.__name__, (kind,), {"parse": parse, "__module__": kind.__module__})
 
@@ -446,6 +451,9 @@ def _salvaged(
     if not text.strip():
         only_reasoning = bool((reply or "").strip())
         return None, "the reply held only reasoning, no answer" if only_reasoning else "the reply was empty", None
+    costly = costly_to_read(text)
+    if costly is not None:  # nor is it read in another format
+        return None, costly, None
     problem = parse_problem(error, signature, adapter)
     json_asked = isinstance(adapter, dspy.JSONAdapter)
     other: dspy.Adapter = dspy.ChatAdapter() if json_asked else dspy.JSONAdapter()

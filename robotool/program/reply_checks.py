@@ -6,7 +6,8 @@ A body that is not a chat completion (no choices: a provider's error object such
 a finished answer (cut off at the token limit, stopped by a content filter, a tool called instead of an answer, a
 reason this module does not know) is what was wrong with the reply, to be asked again. A reply in field markers that
 gives one field twice (a draft, then "Corrected:" and the field again) does not say which value is meant. Reasons
-are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``).
+are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``). A reply too
+long, or too full of brackets for its length, is not read at all (:func:`costly_to_read`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,13 @@ from dspy.utils.exceptions import LMError
 
 from robotool.safe_text import capped
 from robotool.sandbox.extract import without_reasoning
+
+MAX_REPLY_CHARS = 100_000
+"""The longest reply text (its reasoning left out) that is read as an answer."""
+READING_BUDGET = 20_000_000
+"""Most characters times brackets (``{`` and ``[``) in a reply that is read: the answer formats' readers (a JSON
+object's search, the repair of a typed field's JSON) take time that grows with both, about 1.4 s at this budget on a
+2-core machine; 24 KB holding 12,000 open braces took 16 s of CPU, 48 KB four times that (an adversarial run)."""
 
 FINISHED = frozenset({"stop", "eos", "eos_token", "end_turn", "stop_sequence", "end"})
 """Finish reasons of an answer the model finished (a missing reason is taken as finished: many servers omit it)."""
@@ -145,4 +153,21 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     _, completed, after = text.partition("[[ ## completed ## ]]")
     if completed and re.search(r"^[ \t]*(?:```|~~~|\[\[ ## )", after, re.MULTILINE):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
+    return None
+
+
+def costly_to_read(text: str) -> str | None:
+    """What is wrong with a reply's text (its reasoning left out) that would take too long to read as an answer: over
+    :data:`MAX_REPLY_CHARS`, or more brackets than :data:`READING_BUDGET` allows for its length; None if it may be
+    read."""
+    if len(text) > MAX_REPLY_CHARS:
+        return (
+            f"the reply is {len(text)} characters long, over the {MAX_REPLY_CHARS} an answer may take; answer briefly"
+        )
+    brackets = text.count("{") + text.count("[")
+    if brackets * len(text) > READING_BUDGET:
+        return (
+            f"the reply holds {brackets} brackets in {len(text)} characters, more than can be read (at most "
+            f"{READING_BUDGET // len(text)} in a reply this long); answer briefly"
+        )
     return None

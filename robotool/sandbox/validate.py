@@ -31,6 +31,7 @@ from __future__ import annotations
 import ast
 import builtins
 import re
+import unicodedata
 from collections.abc import Sequence
 
 from robotool import robots
@@ -108,6 +109,32 @@ def check_program_size(code: str) -> None:
         raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
 
 
+_RAW_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
+"""The control characters a program's text may not hold raw (tab, newline and carriage return it may)."""
+
+
+def check_characters(code: str) -> None:
+    """Refuse program text holding a raw control character or an invisible format character (a bidi override, a
+    zero-width joiner) anywhere, in a string or a comment too. Python runs them there,
+    but the text reaches files and terminals that would obey them (an escape sequence that writes the clipboard,
+    clears the screen or paints a fake verdict; text that reads in an editor otherwise than it runs); written as an
+    escape (``\\x1b``) in a string, the same character runs the same."""
+    found = _RAW_CONTROL.search(code)
+    places = [found.start()] if found else []
+    places += [code.index(c) for c in set(code) if ord(c) > 0x9F and unicodedata.category(c) == "Cf"]
+    if not places:
+        return
+    at = min(places)
+    char = code[at]
+    kind = "control" if unicodedata.category(char) == "Cc" else f"format ({unicodedata.name(char, 'unnamed')})"
+    raise ProgramRejected(
+        code.count("\n", 0, at) + 1,
+        f"U+{ord(char):04X}",
+        f"the program holds the raw {kind} character U+{ord(char):04X}: write it as an escape in a string "
+        f"(\\u{ord(char):04x}) or leave it out",
+    )
+
+
 def parse_program(code: str) -> ast.Module:
     """Parse program text, turning every way it can fail into a :class:`ProgramRejected`."""
     check_parse_cost(code, "program")
@@ -128,6 +155,7 @@ def validate(code: str, embodiment: str) -> None:
     one parse, one visit per node, and only the reported problem's source text is cut out.
     """
     check_program_size(code)
+    check_characters(code)
     tree = parse_program(code)
     checker = _Checker(embodiment)
     try:

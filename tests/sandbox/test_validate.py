@@ -68,6 +68,10 @@ def test_typical_programs_pass(code: str, embodiment: str) -> None:
         ("f = move_to_position\n", 1, "move_to_position", "can only be called"),
         ("@staticmethod\ndef f():\n    pass\n", 2, "def f():", "decorators are not allowed"),
         ("x = [1]\nx.append(2)\nx.pop().__class__\n", 3, "x.pop().__class__", "'__class__'"),
+        # raw escapes in a string or a comment run as Python, but a saved program would obey them in a terminal (an
+        # adversarial run: a reply's clipboard write reached the `solve --out` file); a bidi override reads otherwise
+        ('x = 1\nprint("\x1b]52;c;ZWNobw==\x07\x1b[2J")\n', 2, "U+001B", "raw control character U+001B"),
+        ("# \u202e evil\nprint(1)\n", 1, "U+202E", "RIGHT-TO-LEFT OVERRIDE"),
     ],
 )
 def test_rejection_names_line_and_construct(code: str, line: int, construct: str, words: str) -> None:
