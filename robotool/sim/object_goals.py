@@ -26,7 +26,7 @@ from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import ReadAtTicks
-from robotool.sim.strikes import StrikeWatch
+from robotool.sim.strikes import StrikeWatch, geom_half_sizes, geom_poses
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
@@ -34,6 +34,7 @@ RESTING_SPEED = 0.05  # m/s: slower than this while supported is resting
 WELD, BODY = int(mujoco.mjtEq.mjEQ_WELD), int(mujoco.mjtObj.mjOBJ_BODY)
 FALL_ACCELERATION = 2 * 9.81  # m/s^2: the most a falling object is taken to gain downward speed by (gravity, twice)
 RIM_POINTS = 12  # points read round each rim of a cylinder for how fast its outline comes down
+TOUCH_BAND = 0.02  # m: a point of an outline this close to a body's geom (its box) may be what touched it
 
 
 def local_corners(scene: Scene) -> list[np.ndarray]:
@@ -185,7 +186,7 @@ class FallTracker:
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
         self.strikes = StrikeWatch(scene, index, max_drop)
-        self.landings = OutlineLandings(scene, index, max_drop)
+        self.landings = OutlineLandings(scene, index, max_drop, self.others)
         self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
@@ -221,8 +222,8 @@ class FallTracker:
                 measured={"strike_speed": float(speed[w]), "max_speed": self.strikes.limit, "max_drop": self.max_drop},
                 detail=" and ".join(names),
             )
-        new = hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
-        landing = self.landings.landing(state, active & new.any(axis=1))
+        new = active[:, None] & hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
+        landing, onto = self.landings.landing(state, new)
         for w in map(int, np.flatnonzero(active & (landing > self.strikes.limit) & ~self.broken)):
             self.broken[w] = True
             self.breaks[w] = Event(
@@ -234,7 +235,7 @@ class FallTracker:
                     "max_speed": self.strikes.limit,
                     "max_drop": self.max_drop,
                 },
-                detail=self._names(self.scene.body_object[self.others[new[w]]]),
+                detail=self._names(self.scene.body_object[self.others[onto[w]]]),
             )
         self._touch = np.where(active[:, None], touch, self._touch)
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
@@ -288,12 +289,13 @@ class OutlineLandings:
     knocked over lands on its top's edge at about sqrt(3 g L), though its centre drops less than ``max_drop`` (found
     by an adversarial run). Each point of its outline (its boxes' corners, points round its cylinders' rims) falls, like
     the centre, from where it last rested or the highest it rose to since; where the object comes to touch something
-    hard (the ground too), a point that fell more than ``max_drop`` and came down faster than such a fall lands (at
-    this reading or the last) lands on it. A rolling object comes down at no point where it meets the ground, and a
-    wobble lifts a point less than any fall that breaks."""
+    hard (the ground too), a point near it that fell more than ``max_drop`` and came down faster than such a fall
+    lands (at this reading or the last) lands on it. A rolling object comes down at no point where it meets the ground,
+    and a wobble lifts a point less than any fall that breaks."""
 
-    def __init__(self, scene: Scene, index: int, max_drop: float):
-        self.body, self.max_drop = int(scene.object_body[index]), max_drop
+    def __init__(self, scene: Scene, index: int, max_drop: float, bodies: np.ndarray):
+        self.body, self.max_drop, self.bodies = int(scene.object_body[index]), max_drop, bodies
+        self.model, self.half = scene.model, geom_half_sizes(scene.model)
         self.limit = float(np.sqrt(2 * 9.81 * max_drop))
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint: linear (world), then angular (own frame)
         self.outline = Underside.of(scene.task.objects[index]).rims()  # (k, 3) in its body's frame
@@ -307,14 +309,39 @@ class OutlineLandings:
             self.rest_heights, self._descent = heights, self.descent(state)
         self.rest_heights = np.where(active[:, None], np.maximum(self.rest_heights, heights), self.rest_heights)
 
-    def landing(self, state: BatchState, touched: np.ndarray) -> np.ndarray:
-        """(nworld,) where the object ``touched`` something hard anew, the speed the fastest of its points that fell
-        more than ``max_drop`` came down at (0 elsewhere); the descent is remembered in every world."""
-        descent = self.descent(state)
-        fell = self.rest_heights - self._heights(state) > self.max_drop
-        speed = np.where(fell & touched[:, None], np.maximum(descent, self._descent), 0.0).max(axis=1, initial=0.0)
+    def landing(self, state: BatchState, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the object came to touch bodies ``new`` (nworld, len(bodies)) anew: (nworld,) the speed the fastest
+        of its points that fell more than ``max_drop`` came down at, of those within :data:`TOUCH_BAND` of such a
+        body (0 elsewhere), and (nworld, len(bodies)) which bodies they landed on. The descent is remembered in every
+        world. A point high in the air lands on nothing: a column pivoting on its stool touches the stool anew each
+        time the pivot's contact flickers while its top is still falling (a false alarm an adversarial run found: the
+        top then landed on a soft cushion)."""
+        descent, points = self.descent(state), world_corners(state, self.body, self.outline)
+        coming = np.maximum(descent, self._descent)
         self._descent = descent
-        return speed
+        fast = (self.rest_heights - points[:, :, 2] > self.max_drop) & (coming > self.limit)
+        speed, onto = np.zeros(len(points)), np.zeros(new.shape, dtype=bool)
+        for w in map(int, np.flatnonzero(new.any(axis=1) & fast.any(axis=1))):
+            for j in map(int, np.flatnonzero(new[w])):
+                near = self._near(state, w, int(self.bodies[j]), points[w, fast[w]])
+                if near.any():
+                    onto[w, j] = True
+                    speed[w] = max(speed[w], float(coming[w, fast[w]][near].max()))
+        return speed, onto
+
+    def _near(self, state: BatchState, world: int, body: int, points: np.ndarray) -> np.ndarray:
+        """(m,) which ``points`` (m, 3) lie within :data:`TOUCH_BAND` of a geom of ``body`` in ``world`` (its box, or
+        above a plane)."""
+        near = np.zeros(len(points), dtype=bool)
+        geoms = np.flatnonzero(self.model.geom_bodyid == body)
+        centres, frames = geom_poses(self.model, state, geoms)
+        for k, g in enumerate(geoms.tolist()):
+            local = (points - centres[world, k]) @ frames[world, k]
+            if self.model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:
+                near |= local[:, 2] <= TOUCH_BAND
+            else:
+                near |= (np.abs(local) <= self.half[g] + TOUCH_BAND).all(axis=1)
+        return near
 
     def rest(self, state: BatchState, resting: np.ndarray) -> None:
         """The ``resting`` worlds: each point falls from where it is now."""

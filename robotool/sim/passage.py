@@ -8,11 +8,13 @@ adversarial run: the rod ended on the floor under a table top that covers all th
 
 It is read from the centres of the geoms of the rigid movable objects (a centre always lies inside its own solid),
 between two readings of the goal (every control tick, and every physics step where a goal is watched), in the frame
-of every box-shaped solid of another object (a box; a cylinder through its caps; fixed or movable, a cloth's links
-left out). A centre that was on one side of the middle of such a solid, straight over one of its faces, and is now on
-the other side, still over that face, has passed through it (or half into it): a centre never lies inside another
-solid, and any real way round the solid leaves its shadow over the face. The first passage of each world is kept as
-a ``passed_through`` event.
+of every box or cylinder of another object (fixed or movable, a cloth's links left out). A centre that was on one side
+of the middle of a box, straight over one of its faces, and is now on the other side, still over that face, has passed
+through it (or half into it): a centre never lies inside another solid, and any real way round the solid leaves its
+shadow over the face. So has one that crossed a cylinder's caps so, or its round side: across the plane through its
+axis square to the centre's way, nearer the axis than the radius, within its length (found by an adversarial run: a
+deck of steel bars lying side by side let the rod through as the table top had). The first passage of each world is
+kept as a ``passed_through`` event.
 """
 
 from __future__ import annotations
@@ -102,7 +104,17 @@ class PassageWatch:
             | (crossed[..., 1] & inside[..., 0] & inside[..., 2])
             | (crossed[..., 2] & inside[..., 0] & inside[..., 1])
         )
-        radius = self.half[None, None, :, 0]  # a cylinder: through its caps, over its circle
+        radius = self.half[None, None, :, 0]  # a cylinder: through its caps, over its circle,
         capped = crossed[..., 2] & (np.hypot(before[..., 0], before[..., 1]) < radius)
         capped &= np.hypot(now[..., 0], now[..., 1]) < radius
-        return np.where(self.round[None, None], capped, through)
+        return np.where(self.round[None, None], capped | self._across(before, now, radius, inside[..., 2]), through)
+
+    @staticmethod
+    def _across(before: np.ndarray, now: np.ndarray, radius: np.ndarray, along: np.ndarray) -> np.ndarray:
+        """(nworld, mover, wall) the centres that crossed a cylinder through its round side, within its length
+        (``along``): across the plane through its axis square to their way, nearer the axis than its radius."""
+        way = now[..., :2] - before[..., :2]
+        crossed = ((before[..., :2] * way).sum(axis=-1) < 0.0) & ((now[..., :2] * way).sum(axis=-1) > 0.0)
+        length = np.maximum(np.hypot(way[..., 0], way[..., 1]), 1e-12)
+        off_axis = np.abs(before[..., 0] * way[..., 1] - before[..., 1] * way[..., 0]) / length
+        return crossed & (off_axis < radius) & along

@@ -22,6 +22,8 @@ LAYOUTS = FIXTURES / "layouts"
         ("arm_drop_a_rod_through_a_table_top", "arm_steel_rod_over_a_table_top_covering_the_reach"),
         # a 2 mm rod let go 1.4 cm above a 1 mm steel table top fell through it
         ("arm_let_a_thin_rod_go_just_above_a_thin_steel_table", "arm_thin_steel_rod_over_a_one_mm_steel_table_top"),
+        # the 1 cm rod dropped onto a deck of 2 cm steel bars lying side by side went through a bar's round side
+        ("arm_drop_a_rod_through_a_table_top", "arm_steel_rod_over_a_deck_of_steel_bars"),
     ],
 )
 def test_a_rod_that_comes_out_under_the_table_top_fails(run_texts: Any, program: str, layout: str) -> None:
@@ -30,8 +32,8 @@ def test_a_rod_that_comes_out_under_the_table_top_fails(run_texts: Any, program:
         assert rollout.conditions["rod_lowered"], "the rod no longer falls through: the test shows nothing"
         assert not rollout.success and not rollout.conditions["nothing_passed_through"]
         (passed,) = [e for e in rollout.events if e.kind == "passed_through"]
-        assert (passed.object, passed.detail) == ("rod", "table_top")
-        assert "rod passed through table_top" in world_failure(rollout), world_failure(rollout)
+        assert passed.object == "rod" and passed.detail.startswith(("table_top", "bar_")), passed
+        assert f"rod passed through {passed.detail}" in world_failure(rollout), world_failure(rollout)
 
 
 def test_a_rod_let_go_low_stays_on_the_table_top(run_texts: Any) -> None:

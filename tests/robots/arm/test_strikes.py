@@ -146,3 +146,13 @@ def test_a_short_glass_block_knocked_over_the_same_way_is_whole(run_texts: Any) 
     for rollout in run_texts(task, [program] * 2, seed=5):
         assert rollout.conditions["column_unbroken"], world_failure(rollout)
         assert not any(e.kind == "broke" for e in rollout.events)
+
+
+def test_a_tall_glass_column_tipped_over_onto_a_soft_cushion_is_whole(run_texts: Any) -> None:
+    """The control, found by an adversarial run as a false alarm: the column's bottom edge pivots on its stool, whose
+    contact comes and goes as it tips, while its top falls onto a soft cushion; the stool touched anew is no landing
+    for the top, high in the air then."""
+    task = tasks.load(LAYOUTS / "arm_tall_glass_column_beside_a_soft_cushion.yaml")
+    program = (FIXTURES / "programs" / "arm_tip_a_tall_glass_column_onto_a_cushion.py").read_text()
+    for rollout in run_texts(task, [program] * 3, seed=1):
+        assert rollout.success, world_failure(rollout)
