@@ -56,6 +56,7 @@ STILL = 1e-5  # m an object may move in a tick and count as still: whether a foo
 SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
 RIDE_TIME = 0.5  # s a push may carry more than the push limit before it counts (what tips against it leans a while)
+REST_TIME = 0.5  # s an object must stay still (in 3-D) to have come to rest: a wedged box tipping free pauses a tick
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -76,6 +77,7 @@ class RefereeState:
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     coasting: np.ndarray  # (nworld, nobject) bool: pushed, and not at rest since (it may roll on after the push)
+    still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
     force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
@@ -96,6 +98,7 @@ class RefereeState:
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
             coasting=np.zeros((nworld, nobject), dtype=bool),
+            still=np.zeros((nworld, nobject)),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
             force_limit=np.full((nworld, 2), np.nan),
@@ -142,7 +145,7 @@ class Referee:
         shift = centres - self.state.last_centres  # each object's travel since the last tick
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
         self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso that lifts what lies on it shoves it too
-        self._rams(ends, mask, centres[:, :, :2], shift[:, :, :2], moves)
+        self._rams(ends, mask, centres[:, :, :2], shift, moves)
         self._riders(ends, mask, moves)
         self._strains(ends, mask, np.linalg.norm(shift, axis=2), moves)
         if self.facts.fragile.any():
@@ -332,13 +335,18 @@ class Referee:
         The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does
         what it travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box
         rolls on: the push set it moving); what the pushed object or a rammed one rams on its own way after the push,
-        until it comes to rest, is rammed by the push too (:meth:`_coasting_rams`). Once the pushed object and the
-        objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot shoved them (a
-        light object used as a ram moves no more than the robot may push): the world fails (:meth:`conditions`) and a
-        move in progress is stopped and refused, naming them."""
+        until it comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is still in 3-D for
+        :data:`REST_TIME` on end (found by an adversarial run: a pushed box that wedged for one tick at an edge, then
+        slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). Once the pushed
+        object and the objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot
+        shoved them (a light object used as a ram moves no more than the robot may push): the world fails
+        (:meth:`conditions`) and a move in progress is stopped and refused, naming them."""
         s, m = self.state, moves.state
-        step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick
-        at_rest = mask[:, None] & (step <= STILL)
+        still = mask[:, None] & (np.linalg.norm(shift, axis=2) <= STILL)
+        s.still = np.where(still, s.still + self.scene.control_dt, np.where(mask[:, None], 0.0, s.still))
+        shift = shift[:, :, :2]
+        step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
+        at_rest = mask[:, None] & (s.still >= REST_TIME)
         s.rammed_by[at_rest] = -1  # at rest: what moves it later is not this ram
         s.coasting[at_rest] = False
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))

@@ -20,13 +20,17 @@ LAYOUTS = FIXTURES / "layouts"
     [
         ("push_a_drum_to_roll_on_into_a_heavy_crate", "drum_on_a_stage_before_a_heavy_crate_on_ice"),
         ("push_a_drum_over_the_ramp_top_into_a_heavy_crate", "drum_on_a_platform_above_a_ramp_to_a_heavy_crate"),
+        # a box that wedged for a tick at an edge, then slid free down a ramp: one still tick was taken for rest
+        ("push_a_box_to_wedge_then_slide_into_a_heavy_crate", "box_on_ice_above_a_ramp_to_a_heavy_crate"),
     ],
 )
-def test_a_drum_left_to_roll_on_into_a_heavy_crate_rams_it(program: str, layout: str) -> None:
+def test_a_light_object_left_to_move_on_into_a_heavy_crate_rams_it(program: str, layout: str) -> None:
     task = tasks.load(LAYOUTS / f"{layout}.yaml")
     code = (CHEATS / f"{program}.py").read_text()
-    for rollout in sim.run_sessions(task, start_sessions([code] * 2, "quadruped"), seed=0):
-        assert rollout.conditions["crate_lowered"], "the crate stays on the deck: the test shows nothing"
+    rollouts = sim.run_sessions(task, start_sessions([code] * 4, "quadruped"), seed=1)
+    lowered = [r for r in rollouts if r.conditions["crate_lowered"]]
+    assert lowered, "the crate stays on the deck in every world: the test shows nothing"
+    for rollout in lowered:
         assert not rollout.success and not rollout.conditions["robot_shoved_nothing"], world_failure(rollout)
 
 
