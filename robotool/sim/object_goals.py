@@ -186,7 +186,7 @@ class FallTracker:
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
         self.strikes = StrikeWatch(scene, index, max_drop)
-        self.landings = OutlineLandings(scene, index, max_drop, self.others)
+        self.landings = OutlineLandings(scene, index, max_drop, self.strikes.limit, self.others)
         self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
@@ -197,53 +197,40 @@ class FallTracker:
             self.broken = np.zeros(height.shape, dtype=bool)
             self._touch = touch
         assert self.broken is not None
-        self.landings.rise(state, active)
         self.rest_height = np.where(active, np.maximum(self.rest_height, height), self.rest_height)  # from the top
         fall = self.rest_height - height  # read before this tick's rest: a landing that stops dead still fell
         hard = touch & self.hard
         struck = active & hard.any(axis=1) & (fall > self.max_drop) & ~self.broken
         for w in map(int, np.flatnonzero(struck)):
-            self.broken[w] = True
-            self.breaks[w] = Event(
-                kind="broke",
-                time=float(state.time[w]),
-                object=self.name,
-                measured={"fall": float(fall[w]), "max_drop": self.max_drop},
-                detail=self._names(self.scene.body_object[self.others[hard[w]]]),
-            )
+            measured = {"fall": float(fall[w]), "max_drop": self.max_drop}
+            self._break(state, w, measured, self._names(self.scene.body_object[self.others[hard[w]]]))
         speed, strikers, through = self.strikes.update(state, active)
         for w in map(int, np.flatnonzero(active & (speed > self.strikes.limit) & ~self.broken)):
-            self.broken[w] = True
             names = sorted({self.strikes.name(k, int(through[w, k])) for k in np.flatnonzero(strikers[w]).tolist()})
-            self.breaks[w] = Event(
-                kind="broke",
-                time=float(state.time[w]),
-                object=self.name,
-                measured={"strike_speed": float(speed[w]), "max_speed": self.strikes.limit, "max_drop": self.max_drop},
-                detail=" and ".join(names),
-            )
+            self._break(state, w, self._strike(float(speed[w])), " and ".join(names))
         new = active[:, None] & hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
-        landing, onto = self.landings.landing(state, new)
+        landing, onto = self.landings.landing(state, active, new)
         for w in map(int, np.flatnonzero(active & (landing > self.strikes.limit) & ~self.broken)):
-            self.broken[w] = True
-            self.breaks[w] = Event(
-                kind="broke",
-                time=float(state.time[w]),
-                object=self.name,
-                measured={
-                    "strike_speed": float(landing[w]),
-                    "max_speed": self.strikes.limit,
-                    "max_drop": self.max_drop,
-                },
-                detail=self._names(self.scene.body_object[self.others[onto[w]]]),
-            )
+            landed_on = self._names(self.scene.body_object[self.others[onto[w]]])
+            self._break(state, w, self._strike(float(landing[w])), landed_on)
         self._touch = np.where(active[:, None], touch, self._touch)
         speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
         held = self._held(state)
         borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
         resting = active & (held | (borne & (speed < RESTING_SPEED)))
         self.rest_height = np.where(resting, height, self.rest_height)
-        self.landings.rest(state, resting)
+        self.landings.rest(resting)
+
+    def _break(self, state: BatchState, world: int, measured: dict[str, float], detail: str) -> None:
+        """It broke in ``world`` now: keep the ``broke`` event."""
+        assert self.broken is not None
+        self.broken[world] = True
+        event = Event(kind="broke", time=float(state.time[world]), object=self.name, measured=measured, detail=detail)
+        self.breaks[world] = event
+
+    def _strike(self, speed: float) -> dict[str, float]:
+        """What a strike (or a landing) at ``speed`` m/s measured."""
+        return {"strike_speed": speed, "max_speed": self.strikes.limit, "max_drop": self.max_drop}
 
     def unbroken(self, nworld: int) -> np.ndarray:
         """(nworld,) bool: the worlds in which it has not broken."""
@@ -293,33 +280,31 @@ class OutlineLandings:
     lands (at this reading or the last) lands on it. A rolling object comes down at no point where it meets the ground,
     and a wobble lifts a point less than any fall that breaks."""
 
-    def __init__(self, scene: Scene, index: int, max_drop: float, bodies: np.ndarray):
-        self.body, self.max_drop, self.bodies = int(scene.object_body[index]), max_drop, bodies
+    def __init__(self, scene: Scene, index: int, max_drop: float, limit: float, bodies: np.ndarray):
+        self.body, self.max_drop, self.limit, self.bodies = int(scene.object_body[index]), max_drop, limit, bodies
         self.model, self.half = scene.model, geom_half_sizes(scene.model)
-        self.limit = float(np.sqrt(2 * 9.81 * max_drop))
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint: linear (world), then angular (own frame)
         self.outline = Underside.of(scene.task.objects[index]).rims()  # (k, 3) in its body's frame
         self.rest_heights = np.zeros((0, len(self.outline)))  # (nworld, k) where each point fell from
         self._descent = np.zeros((0, len(self.outline)))  # (nworld, k) how fast each came down at the last reading
+        self._heights = np.zeros((0, len(self.outline)))  # (nworld, k) each point's height at this reading
 
-    def rise(self, state: BatchState, active: np.ndarray) -> None:
-        """Read the ``active`` worlds before a landing is looked for: each point falls from the highest it rose to."""
-        heights = self._heights(state)
-        if len(self.rest_heights) != len(heights):
-            self.rest_heights, self._descent = heights, self.descent(state)
-        self.rest_heights = np.where(active[:, None], np.maximum(self.rest_heights, heights), self.rest_heights)
-
-    def landing(self, state: BatchState, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Where the object came to touch bodies ``new`` (nworld, len(bodies)) anew: (nworld,) the speed the fastest
-        of its points that fell more than ``max_drop`` came down at, of those within :data:`TOUCH_BAND` of such a
-        body (0 elsewhere), and (nworld, len(bodies)) which bodies they landed on. The descent is remembered in every
-        world. A point high in the air lands on nothing: a column pivoting on its stool touches the stool anew each
-        time the pivot's contact flickers while its top is still falling (a false alarm an adversarial run found: the
-        top then landed on a soft cushion)."""
+    def landing(self, state: BatchState, active: np.ndarray, new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Read the ``active`` worlds (each point falls from the highest it rose to) and where the object came to
+        touch bodies ``new`` (nworld, len(bodies)) anew: (nworld,) the speed the fastest of its points that fell more
+        than ``max_drop`` came down at, of those within :data:`TOUCH_BAND` of such a body (0 elsewhere), and
+        (nworld, len(bodies)) which bodies they landed on. The descent is remembered in every world. A point high in
+        the air lands on nothing: a column pivoting on its stool touches the stool anew each time the pivot's contact
+        flickers while its top is still falling (a false alarm an adversarial run found: the top then landed on a soft
+        cushion)."""
         descent, points = self.descent(state), world_corners(state, self.body, self.outline)
+        self._heights = points[:, :, 2]
+        if len(self.rest_heights) != len(points):
+            self.rest_heights, self._descent = self._heights, descent
+        self.rest_heights = np.where(active[:, None], np.maximum(self.rest_heights, self._heights), self.rest_heights)
         coming = np.maximum(descent, self._descent)
         self._descent = descent
-        fast = (self.rest_heights - points[:, :, 2] > self.max_drop) & (coming > self.limit)
+        fast = (self.rest_heights - self._heights > self.max_drop) & (coming > self.limit)
         speed, onto = np.zeros(len(points)), np.zeros(new.shape, dtype=bool)
         for w in map(int, np.flatnonzero(new.any(axis=1) & fast.any(axis=1))):
             for j in map(int, np.flatnonzero(new[w])):
@@ -343,9 +328,9 @@ class OutlineLandings:
                 near |= (np.abs(local) <= self.half[g] + TOUCH_BAND).all(axis=1)
         return near
 
-    def rest(self, state: BatchState, resting: np.ndarray) -> None:
-        """The ``resting`` worlds: each point falls from where it is now."""
-        self.rest_heights = np.where(resting[:, None], self._heights(state), self.rest_heights)
+    def rest(self, resting: np.ndarray) -> None:
+        """The ``resting`` worlds: each point falls from where it was at the last :meth:`landing` reading."""
+        self.rest_heights = np.where(resting[:, None], self._heights, self.rest_heights)
 
     def descent(self, state: BatchState) -> np.ndarray:
         """(nworld, k) how fast each point of the outline comes down (0: it does not)."""
@@ -354,10 +339,6 @@ class OutlineLandings:
         spin = np.einsum("wij,wj->wi", frame, state.qvel[:, self.dof + 3 : self.dof + 6])
         up = state.qvel[:, None, self.dof + 2] + spin[:, None, 0] * offset[:, :, 1] - spin[:, None, 1] * offset[:, :, 0]
         return np.maximum(-up, 0.0)
-
-    def _heights(self, state: BatchState) -> np.ndarray:
-        """(nworld, k) each point's height."""
-        return world_corners(state, self.body, self.outline)[:, :, 2]
 
 
 class LoweredGoal(ReadAtTicks):

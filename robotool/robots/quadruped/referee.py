@@ -355,7 +355,7 @@ class Referee:
             s.coasting[worlds, index] = True
             rammed = self._rammed(worlds, index, centres, m.u[worlds])
             s.rammed_by[worlds] = np.where(rammed, index[:, None], s.rammed_by[worlds])
-        self._coasting_rams(mask, centres, shift, step, moves)
+        self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step)
         travelling = (s.rammed_by >= 0) & mask[:, None]
         s.carried += np.where(travelling, step, 0.0)
         moved = travelling & (s.carried > self.config.shove)
@@ -364,16 +364,22 @@ class Referee:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
 
     def _coasting_rams(
-        self, mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, step: np.ndarray, moves: MoveRunner
+        self,
+        pushing: np.ndarray,
+        pushed: np.ndarray,
+        mask: np.ndarray,
+        centres: np.ndarray,
+        shift: np.ndarray,
+        step: np.ndarray,
     ) -> None:
         """What a pushed object, or one its push rammed, rams on its own way once the push is over, until it comes to
         rest, is rammed by that push too (found by an adversarial run: a 4.2 kg drum pushed at walking pace and left
         to roll on across ice knocked a 10 kg crate off a deck, and one pushed to the top of a ramp a 15 kg one; only
-        what it pressed while the push ran was weighed). Read along each one's own way this tick."""
-        s, m = self.state, moves.state
+        what it pressed while the push ran was weighed). Read along each one's own way this tick, in the worlds in
+        ``mask``; in the worlds ``pushing``, where a push runs, its object ``pushed`` is read by the push itself."""
+        s = self.state
         pushed_now = np.zeros(s.coasting.shape, dtype=bool)
-        running = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
-        pushed_now[running, m.pushing[running]] = True
+        pushed_now[pushing, pushed] = True
         rolling = (s.coasting | (s.rammed_by >= 0)) & ~pushed_now & mask[:, None] & (step > STILL)
         worlds, objects = np.nonzero(rolling)
         if not worlds.size:
