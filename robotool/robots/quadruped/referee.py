@@ -364,12 +364,7 @@ class Referee:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
 
     def _coasting_rams(
-        self,
-        pushing: np.ndarray,
-        pushed: np.ndarray,
-        mask: np.ndarray,
-        centres: np.ndarray,
-        shift: np.ndarray,
+        self, pushing: np.ndarray, pushed: np.ndarray, mask: np.ndarray, centres: np.ndarray, shift: np.ndarray,
         step: np.ndarray,
     ) -> None:
         """What a pushed object, or one its push rammed, rams on its own way once the push is over, until it comes to
