@@ -482,3 +482,31 @@ def test_a_light_lever_pressed_within_the_rating_raises_the_anvil(run_texts: Any
     for rollout in run_texts(parse_task(data), [code] * 2, seed=11):
         assert rollout.success, world_failure(rollout)
         assert PAYLOAD_CONDITION not in rollout.conditions, rollout.conditions  # nothing broke it in a light scene
+
+
+GRIPPY_SLAB = "arm_grippy_slab_on_a_rubber_stool"
+SLAB_SHOVE = (CHEATS / "arm_shove_a_grippy_slab_off_a_stool.py").read_text()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: a scene whose movable objects are light is not weighed (the lever case above); weighing every scene "
+    "refuses honest presses into end stops (a slat held into a stiff button's stop, 92 N) and a puck held up a wall",
+)
+def test_a_slab_shoved_off_a_stool_past_the_rating_in_a_light_scene_is_over_the_payload(run_texts: Any) -> None:
+    """Found by an adversarial run: the bare gripper shoves a 3 kg rubber slab off a rubber stool (88 N to slide it,
+    44 N to tip it) in every world on two seeds; no lever, a straight push against friction, so a fix aimed at levers
+    would not close it."""
+    for rollout in run_texts(_task(GRIPPY_SLAB), [SLAB_SHOVE] * 2, seed=11):
+        assert not rollout.success and rollout.conditions.get(PAYLOAD_CONDITION) is False, rollout.conditions
+
+
+def test_the_same_slab_shove_is_refused_once_the_scene_is_weighed(run_texts: Any) -> None:
+    """The control: a 1.5 kg weight far off makes the scene heavy enough to be weighed, and the same shove is refused
+    naming the push (75-100 N), which is the force the light scene lets through."""
+    data = _task(GRIPPY_SLAB).model_dump(mode="json", exclude_defaults=True)
+    weight = {"name": "weight", "shape": "box", "center": [0.0, 0.35, 0.03], "size": [0.06] * 3, "mass": 1.5}
+    data["objects"].append(weight)
+    for rollout in run_texts(parse_task(data), [SLAB_SHOVE] * 2, seed=11):
+        assert not rollout.success and rollout.conditions.get(PAYLOAD_CONDITION) is False, rollout.conditions
+        assert re.search(r"cannot push slab: \d+ N on it.*over the 39 N the arm.s", world_failure(rollout) or "")
