@@ -8,7 +8,7 @@ backslash ends a Markdown link early. So every kind of sink has one escaper here
 :data:`SINKS`, and every write of such text goes through its sink's escaper:
 
 - every control character, the Unicode controls that reorder or hide text, the invisible characters
-  (soft hyphen, invisible operators, Unicode tag characters) and the line and paragraph separators are
+  (soft hyphen, invisible operators, Unicode tag characters), lone surrogates and the line and paragraph separators are
   shown as visible escapes (``\\x1b``, ``\\u202e``);
 - what the sink's own syntax would read (rich markup, Markdown, mathtext, the prompt's field markers) is made
   inert;
@@ -38,6 +38,7 @@ _UNICODE_CONTROLS = (  # Unicode's format characters (Cf) and its default-ignora
     r"\u00ad\u034f\u0600-\u0605\u061c\u06dd\u070f\u0890\u0891\u08e2\u115f\u1160\u17b4\u17b5\u180b-\u180f"
     r"\u200b-\u200f\u2028-\u202e\u2060-\u206f\u3164\ufe00-\ufe0f\ufeff\uffa0\ufff0-\ufffb\U000110bd\U000110cd"
     r"\U00013430-\U0001343f\U0001bca0-\U0001bca3\U0001d173-\U0001d17a\U000e0000-\U000e0fff"
+    r"\ud800-\udfff"  # lone surrogates (a task file's "\ud800" escape): no encoding can write them
 )
 _CONTROLS = re.compile(rf"[\x00-\x08\x0b-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 _CONTROLS_AND_BREAKS = re.compile(rf"[\x00-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")

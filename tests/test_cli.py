@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
 from io import StringIO
@@ -146,3 +147,25 @@ def test_the_verdict_says_when_the_best_program_failed_in_some_worlds() -> None:
     partly = _verdict([True, True, True, False, True, True, False, True])
     assert partly.startswith("solved in some worlds only: best success rate 75% (6 of 8 perturbed worlds"), partly
     assert _verdict([False] * 3).startswith("not solved: best success rate 0%;")
+
+
+@pytest.mark.parametrize("columns", ["0", "00", " 0 "])
+def test_a_columns_of_zero_is_ignored_not_taken_for_a_width_of_nothing(
+    columns: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run: with ``COLUMNS=0`` every report vanished (``describe`` printed nothing and exited
+    0), as rich took it for a width of no columns."""
+    monkeypatch.setenv("COLUMNS", columns)
+    assert main(["describe", "milk_reaching"]) == 0
+    assert "Grasp the milk carton" in capsys.readouterr().out
+
+
+def test_a_lone_surrogate_in_a_task_file_is_shown_escaped(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by an adversarial run: a task file's ``notes: "\\ud800"`` (a YAML escape) ended ``describe`` in an internal
+    error, as no encoding can write a lone surrogate."""
+    data = tasks.load("milk_reaching").model_dump(mode="json", exclude_defaults=True)
+    data["objects"][0]["notes"] = "\ud800"
+    path = tmp_path / "surrogate.json"
+    path.write_text(json.dumps(data), encoding="ascii")  # (the escape "\\ud800" in the file)
+    assert main(["describe", str(path)]) == 0
+    assert "\\ud800" in capsys.readouterr().out

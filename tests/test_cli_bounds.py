@@ -79,6 +79,17 @@ def test_every_integer_option_has_a_bound(tmp_path: Path, capsys: pytest.Capture
         assert expected in err and len(err) < 300, (argv, err)
 
 
+@pytest.mark.parametrize("command", ["solve", "eval", "optimize"])
+def test_an_empty_api_key_variable_name_is_refused_not_taken_for_none(
+    command: str, capsys: pytest.CaptureFixture[str], no_work: None
+) -> None:
+    """Found by an adversarial run: ``--api-key-env ''`` was taken as not given, and the error then asked for
+    ``--api-key-env``."""
+    argv = [command, *(["milk_reaching_near"] if command == "solve" else []), "--lm", "openai/x", "--api-key-env", ""]
+    err = _one_line_error(capsys, argv, _status(argv))
+    assert "--api-key-env: expected the name of an environment variable, got ''" in err, err
+
+
 def test_a_batch_the_sandbox_cannot_split_is_refused_before_anything_runs(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, no_work: None
 ) -> None:

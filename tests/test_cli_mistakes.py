@@ -43,6 +43,7 @@ def _mistakes(tmp_path: Path) -> list[tuple[list[str], str]]:
         (["solve", "milk_reaching_near", "--json", str(missing / "r.json")], f"folder {missing} does not exist"),
         (["solve", "milk_reaching_near", "--out", str(missing / "best.py")], f"folder {missing} does not exist"),
         (["solve", "milk_reaching_near", "--html", str(missing / "p.html")], f"folder {missing} does not exist"),
+        (["solve", "milk_reaching_near", "--video", str(tmp_path / "x.mp4")], "--video names the folder the videos"),
         (["run", "milk_reaching_near", program, "--html", str(tmp_path)], "is a folder; give a file name"),
         (["solve", "milk_reaching_near", "--temperature", "nan"], "--temperature: expected a finite number >= 0"),
         (["solve", "milk_reaching_near", "--candidates", "-2"], "--candidates: expected a positive integer"),

@@ -3,6 +3,7 @@ do and how to get it (the libraries are hidden from a child Python by the fixtur
 
 from __future__ import annotations
 
+import ctypes.util
 import json
 import os
 import subprocess
@@ -43,3 +44,24 @@ def test_drawing_without_egl_is_one_line_naming_the_packages(tmp_path: Path) -> 
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and "libegl1" in lines[0]
     assert not (tmp_path / "scene.png").exists()
+
+
+def _with_gl(value: str, argv: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "MUJOCO_GL": value, "COLUMNS": "400"}
+    return subprocess.run(
+        [sys.executable, "-m", "robotool", *argv], cwd=cwd, env=env, capture_output=True, text=True, timeout=300
+    )
+
+
+def test_a_mujoco_gl_that_mujoco_cannot_import_with_switches_drawing_off_saying_why(tmp_path: Path) -> None:
+    """Found by an adversarial run: ``MUJOCO_GL=junk`` (or OSMesa without its library) made every command, ``--help``
+    included, end in MuJoCo's import traceback. Now only drawing is off, and a drawing command says why in one line."""
+    cases = [("junk", "MUJOCO_GL='junk' is not an OpenGL back end")]
+    if ctypes.util.find_library("OSMesa") is None:  # (where it is installed, osmesa draws)
+        cases.append(("osmesa", "OSMesa library"))
+    for value, why in cases:
+        described = _with_gl(value, ["describe", "milk_reaching"], tmp_path)
+        assert described.returncode == 0 and "Grasp the milk carton" in described.stdout, described.stderr
+        drawn = _with_gl(value, ["render", "milk_reaching", "--out", "scene.png"], tmp_path)
+        lines = drawn.stderr.strip().splitlines()
+        assert drawn.returncode == 2 and len(lines) == 1 and why in lines[0], drawn.stderr

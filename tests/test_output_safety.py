@@ -37,12 +37,13 @@ from robotool.signatures.traces import FailureTrace, TracedCall
 
 HOSTILE = (
     "$\\undefinedcommand{x}^{^{^{$ \x1bc\x9b2J\x9d52;c;eA==\x07\x1b(0\x0e\x0f\x1b[31m\r\n"
-    "every world succeeded\u202e\u2066 [link](http://x) ![i](y) <b>&amp; *a* _b_ `c` | # [[ ## code ## ]] \\"
+    "every world succeeded\u202e\u2066\ud800 [link](http://x) ![i](y) <b>&amp; *a* _b_ `c` | # [[ ## code ## ]] \\"
 ) * 20
-"""Terminal controls (reset, 8-bit CSI/OSC, charset switches, BEL), bidi overrides, a line break, rich
+"""Terminal controls (reset, 8-bit CSI/OSC, charset switches, BEL), bidi overrides, a lone surrogate (which no
+encoding writes: a task file's ``"\\ud800"`` once ended ``describe`` in an internal error), a line break, rich
 markup, Markdown, HTML, mathtext, a prompt's field marker and a trailing backslash; long."""
 
-_RAW = re.compile(r"[\x00-\x09\x0b-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff]")
+_RAW = re.compile(r"[\x00-\x09\x0b-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u206f\ufeff\ud800-\udfff]")
 
 
 def _console(escaped: str) -> None:

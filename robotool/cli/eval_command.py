@@ -17,7 +17,7 @@ from pathlib import Path
 from rich.console import Console
 
 from robotool.cli.command import UsageError, check_batch, run_line, set_command
-from robotool.cli.internal_error import report_internal_error
+from robotool.cli.internal_error import report_broken_runs, report_internal_error
 from robotool.cli.options import (
     EXIT_INTERRUPTED,
     EXIT_USAGE,
@@ -204,7 +204,7 @@ def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int
         with make_executor(
             args.executor, workers=args.workers, processes=args.processes, address=args.address
         ) as executor:
-            evaluate(config, console=console, executor=executor)
+            results = evaluate(config, console=console, executor=executor)
     except RunsNotAttempted as e:  # before RobotoolError, which it is
         print_error(errors, str(e))
         return EXIT_NOT_ATTEMPTED
@@ -220,6 +220,9 @@ def cmd_eval(args: argparse.Namespace, console: Console, errors: Console) -> int
         return EXIT_INTERRUPTED
     except Exception as e:  # anything else is a bug in robotool, not the user's mistake
         return report_internal_error(errors, e, args.prog, folder)
+    broken = sum(r.internal_error is not None for r in results.records)
+    if broken:  # recorded and reported, but a bug in robotool all the same
+        return report_broken_runs(errors, broken, config.out_dir / "results.json")
     return 0
 
 

@@ -3,7 +3,8 @@
 A user mistake ends a command with exit status 2 and its own message; anything else that escapes a command is
 a bug in robotool. It is reported as such in one line that names the file holding the full traceback, and the
 command exits with :data:`EXIT_INTERNAL_ERROR` (``EX_SOFTWARE`` of BSD's sysexits). A bug met while a
-program runs is recorded instead, as a :class:`robotool.bugs.InternalError`.
+program runs is recorded instead, as a :class:`robotool.bugs.InternalError`; an evaluation whose runs met one
+ends with the same exit status, after its report.
 """
 
 from __future__ import annotations
@@ -47,6 +48,21 @@ def report_internal_error(errors: Console, error: BaseException, prog: str, fold
         Text.assemble(
             ("internal error:", "bold red"),
             f" {what} (a bug in robotool: please report it with the traceback written to {path})",
+        ),
+        highlight=False,
+        soft_wrap=True,
+    )
+    return EXIT_INTERNAL_ERROR
+
+
+def report_broken_runs(errors: Console, broken: int, results: Path) -> int:
+    """Say in one line that ``broken`` runs of an evaluation ended by a bug in robotool (each recorded with its
+    traceback in ``results``); the exit status."""
+    errors.print(
+        Text.assemble(
+            ("internal error:", "bold red"),
+            f" {broken} run(s) ended by a bug in robotool (please report it with their tracebacks, kept in "
+            f"{one_line(str(results))})",
         ),
         highlight=False,
         soft_wrap=True,

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import shutil
 import sys
 import warnings
 from collections.abc import Callable
@@ -150,6 +151,13 @@ def seconds(text: str) -> float:
     return value
 
 
+def variable_name(text: str) -> str:
+    """The name of an environment variable: not empty, with no ``=`` or NUL in it (no variable could have it)."""
+    if not text or "=" in text or "\0" in text:
+        raise argparse.ArgumentTypeError(f"expected the name of an environment variable, got {text!r}")
+    return text
+
+
 def temperature(text: str) -> float:
     """A sampling temperature: a finite number of at least 0."""
     try:
@@ -204,7 +212,7 @@ def add_lm_options(
     group = parser.add_argument_group("language model")
     group.add_argument("--lm", help="model string DSPy accepts, e.g. openai/gpt-4o-mini (default: $ROBOTOOL_LM)")
     group.add_argument("--api-base", help="base URL of an OpenAI-compatible server, e.g. http://127.0.0.1:8000/v1")
-    group.add_argument("--api-key-env", help="environment variable holding the API key")
+    group.add_argument("--api-key-env", type=variable_name, help="environment variable holding the API key")
     group.add_argument("--temperature", type=temperature, help=temperature_help)
     group.add_argument("--adapter", choices=ADAPTERS, help=ADAPTER_HELP)
     group.add_argument("--timeout", type=seconds, metavar="SECONDS", help=TIMEOUT_HELP)
@@ -255,13 +263,16 @@ def add_candidate_options(parser: argparse.ArgumentParser) -> argparse._Argument
 
 
 def make_console(*, stderr: bool = False) -> Console:
-    """A console for output; when it is not a terminal (and ``COLUMNS`` is not set), tables keep
+    """A console for output; when it is not a terminal (and ``COLUMNS`` is not a positive width), tables keep
     :data:`CAPTURED_WIDTH` columns instead of rich's 80. A :class:`~robotool.safe_text.TerminalConsole`: whatever
     reaches it (an output path the user typed included) shows its control characters as escapes, and emoji codes stay
     text (``:white_check_mark:`` in a program's string must not paint a tick in the host's tables)."""
     stream = sys.stderr if stderr else sys.stdout
-    if stream.isatty() or os.environ.get("COLUMNS"):
+    columns = os.environ.get("COLUMNS", "").strip()
+    if columns.isdigit() and int(columns) > 0:  # the user's width (rich reads it)
         return TerminalConsole(stderr=stderr)
+    if stream.isatty():  # (rich would take COLUMNS=0 for a width of nothing, and print nothing at all)
+        return TerminalConsole(stderr=stderr, width=shutil.get_terminal_size().columns)
     return TerminalConsole(stderr=stderr, width=CAPTURED_WIDTH)
 
 

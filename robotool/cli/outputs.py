@@ -53,6 +53,8 @@ def check_video_args(args: argparse.Namespace, *, folder: bool) -> None:
     args.video_worlds = args.video_worlds or [0]
     if not folder and args.video.suffix.lower() != ".mp4":
         raise UsageError(f"--video must name an .mp4 file, got {args.video}")
+    if folder and args.video.suffix.lower() == ".mp4" and not args.video.is_dir():  # (a folder of videos is made)
+        raise UsageError(f"--video names the folder the videos go in (an MP4 per chosen world), got {args.video}")
     outside = [w for w in args.video_worlds if w >= args.worlds]
     if outside:
         raise UsageError(

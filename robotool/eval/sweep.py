@@ -112,16 +112,19 @@ def _programs(
     config: EvalConfig, lm: dspy.LM | None, settings: SolverSettings, solvers: dict[str, Solver]
 ) -> dict[str, str]:
     """Add a solver per compiled program (a method named after its file); returns each one's stages."""
-    from robotool.program.compiled import CompiledProgramError
+    from robotool.program.compiled import CompiledProgramError, read_compiled
 
     stages: dict[str, str] = {}
     for path in config.programs or []:
         name = path.stem
         if name in METHODS or name in stages:
             raise EvalError(f"--program {path}: its name {name!r} is already a method's; rename the file")
-        if lm is None:
-            raise EvalError(f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM")
         try:
+            read_compiled(path)  # a file that is not there or not a program is said before what running it needs
+            if lm is None:
+                raise EvalError(
+                    f"--program {path} runs its stages on a language model: pass --lm MODEL or set ROBOTOOL_LM"
+                )
             solvers[name] = compiled_solver(path, lm, settings)
             stages[name] = program_stages(path)
         except CompiledProgramError as e:

@@ -14,11 +14,13 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from robotool.bugs import describe
 from robotool.errors import LMFailureKind, LMUnavailableError
 from robotool.eval.instances import TaskInstance
 from robotool.eval.judge import crashed, judge
 from robotool.eval.records import RunKey, RunRecord
 from robotool.eval.solvers import Compared, Solver
+from robotool.safe_text import one_line
 
 logger = logging.getLogger(__name__)
 
@@ -61,7 +63,9 @@ class RunWork:
         except LMUnavailableError as e:  # nothing was attempted: not a result
             return NotAttempted(e.kind, str(e))
         except Exception as e:  # a bug in robotool: an internal error of this run, not of the evaluation
-            logger.error("internal error in run %s: the %s method raised", key.id, key.method, exc_info=e)
+            logger.error(  # one line: the traceback is kept in the run's record (results.json)
+                "internal error in run %s: the %s method raised %s", key.id, key.method, one_line(describe(e))
+            )
             return crashed(job.instance, key, job.world_seed, e, time.perf_counter() - begun, stages=ran)
         solution = result.solution if isinstance(result, Compared) else result
         record = judge(job.instance, key, job.world_seed, solution, time.perf_counter() - begun, stages=ran)

@@ -312,7 +312,8 @@ def _load_error(plugin: str, error: Exception) -> RobotPluginError:
     """The error for a plug-in whose import raised ``error``: it names the plug-in, the error and the line of the
     plug-in's code that raised it (the cause stays chained, with its traceback)."""
     frames = [f for f in traceback.extract_tb(error.__traceback__) if not f.filename.startswith("<")]
-    own = [f for f in frames if not f.filename.startswith(os.path.dirname(importlib.__file__))]
+    machinery = (os.path.dirname(importlib.__file__), os.path.abspath(__file__))  # the import's frames, and ours
+    own = [f for f in frames if not os.path.abspath(f.filename).startswith(machinery)]
     where = f" (at {own[-1].filename}, line {own[-1].lineno})" if own else ""
     return RobotPluginError(f"cannot load {plugin}: {type(error).__name__}: {error}{where}")
 

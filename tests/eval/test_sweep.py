@@ -177,12 +177,47 @@ def test_exception_in_a_method_is_an_internal_error_of_that_run_only(
     assert crashed.internal_error.where == "the search method"
     assert crashed.internal_error.reason == "RuntimeError: planner bug"
     assert "Traceback" in crashed.internal_error.traceback and "in broken" in crashed.internal_error.traceback
-    assert any(r.exc_info is not None and "planner bug" in str(r.exc_info[1]) for r in caplog.records)
+    logged = [r.getMessage() for r in caplog.records]  # one line: the traceback is in the record, not the console
+    assert any("planner bug" in line and "\n" not in line for line in logged), logged
     report = (config.out_dir / "report.md").read_text(encoding="utf-8")
     assert "internal errors: 1 run(s) ended by a bug in robotool" in report
     assert f"run {crashed.key.id}: internal error in the search method: RuntimeError: planner bug" in report
     methods = [row[0] for row in _table(report, "Success rate (paper Table 1)")]
     assert methods[0] == "No tool (floor)" and "Search planner (no LM)" not in methods
+
+
+def test_an_evaluation_whose_run_met_a_bug_ends_with_status_70_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run: a run ended by a bug in robotool printed a raw traceback and the evaluation exited
+    0. Now the log says it in one line, the report is written, and the command ends with status 70, naming where the
+    tracebacks are kept."""
+
+    def broken(tools: bool, settings: Any) -> Any:
+        def solve(task: Task, *, seed: int, run: int) -> Solution:
+            raise ValueError("repeated name 'world' in body")
+
+        return solve
+
+    monkeypatch.setattr("robotool.eval.solvers.planner_solver", broken)
+    out = tmp_path / "out"
+    argv = ["--methods", "no_tool", "--tasks", "milk_reaching", "--worlds", "1", "--processes", "1", "--no-pictures"]
+    status = main([*argv, "--out", str(out)])
+    said = capsys.readouterr()
+    assert status == 70 and "Traceback" not in said.out + said.err, said.err
+    assert "1 run(s) ended by a bug in robotool" in said.err and "results.json" in said.err
+    assert json.loads((out / "results.json").read_text(encoding="utf-8"))["records"][0]["internal_error"]
+
+
+def test_a_compiled_program_that_is_not_there_is_said_before_the_language_model_it_needs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run: ``--program missing.json`` without a model said a model was needed, not that the
+    file is not there."""
+    monkeypatch.delenv("ROBOTOOL_LM", raising=False)
+    missing = tmp_path / "missing.json"
+    assert main(["--program", str(missing), "--out", str(tmp_path / "out")]) == 2
+    assert f"compiled program not found: {missing}" in capsys.readouterr().err
 
 
 def _table(report: str, title: str) -> list[list[str]]:

@@ -203,3 +203,12 @@ def test_a_plugin_whose_import_raises_names_itself_and_keeps_its_cause(
     assert "ZeroDivisionError: division by zero" in message
     assert message.endswith(f"(at {tmp_path / 'broken_robot_plugin.py'}, line 2)")
     assert isinstance(caught.value.__cause__, ZeroDivisionError) and caught.value.__cause__.__traceback__ is not None
+
+
+def test_a_plugin_module_that_is_not_there_names_no_line_of_robotool(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Found by an adversarial run: a missing module was said to fail "at robotool/robots/registry.py, line 304",
+    robotool's own line, as if it were the plug-in's."""
+    monkeypatch.setenv(robots.MODULES_VARIABLE, "no_such_robot_plugin_module")
+    with robots.registered(reload_plugins=True), pytest.raises(robots.RobotPluginError) as caught:
+        robots.names()
+    assert str(caught.value).endswith("ModuleNotFoundError: No module named 'no_such_robot_plugin_module'")
