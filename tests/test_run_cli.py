@@ -150,6 +150,23 @@ def test_missing_program_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_pa
     assert err.strip() == f"error: program file not found: {missing}"
 
 
+def test_a_program_file_is_read_in_the_encoding_its_coding_line_declares(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """Found by an adversarial run: a PEP 263 coding line was ignored (the file read as UTF-8), unlike Python; an
+    encoding Python does not know is one line."""
+    declared = tmp_path / "latin.py"
+    text = "# -*- coding: latin-1 -*-\n# pour le caf\u00e9\n" + program("milk_reaching_direct")
+    declared.write_bytes(text.encode("latin-1"))
+    status, out, err = run_cli(capsys, "milk_reaching_near", str(declared))
+    assert status == 0 and "Traceback" not in out + err, err
+    unknown = tmp_path / "unknown.py"
+    unknown.write_bytes(b"# coding: no-such-encoding\n" + program("milk_reaching_direct").encode())
+    status, out, err = run_cli(capsys, "milk_reaching_near", str(unknown))
+    assert status == 2
+    assert err.strip() == f"error: cannot read the program {unknown}: unknown encoding: no-such-encoding"
+
+
 def test_a_long_output_is_shown_cut_with_how_much_is_left_out() -> None:
     """Found by an adversarial run: a program's output was cut at 500 characters with no mark, ending mid-word as if
     that were all it printed."""

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import codecs
+import io
+import tokenize
 from pathlib import Path
 
 from rich.console import Console
@@ -32,6 +34,12 @@ RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
 
 
+def source_encoding(data: bytes) -> str:
+    """The encoding Python reads the source ``data`` in: UTF-8 with or without a BOM, or the one a coding line on
+    its first two lines declares (PEP 263). SyntaxError for a declaration Python refuses (an unknown encoding)."""
+    return tokenize.detect_encoding(io.BytesIO(data).readline)[0]
+
+
 def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
     """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
     from robotool.cli.summary import print_run, print_run_verdict
@@ -43,10 +51,10 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
         data = read_at_most(args.program, MAX_PROGRAM_BYTES)  # /dev/zero is not read whole
         if len(data) > MAX_PROGRAM_BYTES:
             raise UsageError(f"{args.program}: program is longer than {MAX_PROGRAM_CHARS} characters")
-        code = data.decode("utf-8-sig")  # as Python reads source: a BOM is allowed
+        code = data.decode(source_encoding(data))  # as Python reads source: a BOM, or a coding line (PEP 263)
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
-    except (OSError, UnicodeDecodeError) as e:
+    except (OSError, UnicodeDecodeError, SyntaxError) as e:
         raise UsageError(f"cannot read the program {args.program}: {getattr(e, 'strerror', None) or e}") from None
     recorder = run_recorder(args)
     try:
