@@ -54,6 +54,7 @@ def _mistakes(tmp_path: Path) -> list[tuple[list[str], str]]:
         (["eval", "--videos", "-1"], "--videos: expected a whole number >= 0, got -1"),
         (["run", "milk_reaching_near", str(tmp_path / "nope.py")], "program file not found"),
         (["describe", "no_such_task"], "no built-in task or file by that name"),
+        (["describe", ""], "error: '': give a built-in task name or a task file"),  # it read the folder "."
     ]
 
 

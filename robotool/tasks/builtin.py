@@ -22,6 +22,8 @@ def load(name_or_path: str | Path) -> Task:
     if text in names():
         with resources.as_file(_DATA.joinpath(f"{text}.yaml")) as path:
             return load_task(path)
+    if not text.strip():  # (Path("") is the current folder)
+        raise TaskFileError(repr(text), [Problem(path="", message="give a built-in task name or a task file")])
     path = Path(name_or_path)
     if path.suffix.lower() in (".yaml", ".yml", ".json") or path.exists():
         return load_task(path)
