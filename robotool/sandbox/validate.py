@@ -372,13 +372,26 @@ class _Checker(ast.NodeVisitor):
         except SkillArgumentError as e:
             self.reject(node, str(e))
 
+    def visit_AnnAssign(self, node: ast.AnnAssign) -> None:
+        self.check_annotation(node.annotation)
+        super().generic_visit(node)
+
+    def check_annotation(self, annotation: ast.expr) -> None:
+        """An annotation is evaluated where it stands (a module's or a function's): a call in one runs, which no
+        annotation means (``Optional: open_gripper()``, a model's prose label before a call, would open the
+        gripper)."""
+        call = next((n for n in ast.walk(annotation) if isinstance(n, ast.Call)), None)
+        if call is not None:
+            self.reject(call, "a call in an annotation is not allowed (annotations are evaluated: the call would run)")
+        self.visit(annotation)
+
     def visit_FunctionDef(self, node: ast.FunctionDef) -> None:
         if node.decorator_list:
             self.reject(node, "decorators are not allowed")
         self.check_binding(node, node.name)
         self.visit(node.args)
         if node.returns:
-            self.visit(node.returns)
+            self.check_annotation(node.returns)
         own = {a.arg for a in _parameters(node.args)} | _scope_bindings(node.body)
         self.in_scope(own, node.body)
 
@@ -391,7 +404,7 @@ class _Checker(ast.NodeVisitor):
         for parameter in _parameters(node):
             self.check_binding(parameter, parameter.arg)
             if parameter.annotation:
-                self.visit(parameter.annotation)
+                self.check_annotation(parameter.annotation)
         for default in [*node.defaults, *filter(None, node.kw_defaults)]:
             self.visit(default)
 

@@ -222,3 +222,20 @@ def test_an_integer_too_long_to_print_is_a_clear_rejection(argument: str) -> Non
 def test_introspection_and_numpy_side_doors_are_refused(code: str, words: str) -> None:
     with pytest.raises(ProgramRejected, match=re.escape(words)):
         validate(code, "arm")
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        'p = get_graspable_point("milk")\nOptional: open_gripper()\n',  # a model's prose label before a call
+        "x: move_to_position([0.4, 0.0, 0.3]) = 1\n",
+        "def f(a: open_gripper()) -> None:\n    pass\n",
+        "def f(a) -> close_gripper():\n    pass\n",
+    ],
+)
+def test_a_call_in_an_annotation_is_refused(code: str) -> None:
+    """Found by an adversarial run: ``Optional: open_gripper()`` after a program parsed as an annotation, which Python
+    evaluates where it stands, so the gripper opened. An annotation without a call stays allowed."""
+    with pytest.raises(ProgramRejected, match="a call in an annotation is not allowed"):
+        validate(code, "arm")
+    validate("x: float = 1.0\ndef f(a: float) -> float:\n    return a\n", "arm")
