@@ -5,13 +5,15 @@ A body that is not a chat completion (no choices: a provider's error object such
 ``error``), is a transport fault: its text, whole or cut, is never an answer. A choice that ended for any reason but
 a finished answer (cut off at the token limit, stopped by a content filter, a tool called instead of an answer, a
 reason this module does not know) is what was wrong with the reply, to be asked again. A reply in field markers that
-gives one field twice (a draft, then "Corrected:" and the field again) does not say which value is meant. Reasons
+gives one field twice (a draft, then "Corrected:" and the field again), or goes on with more code after its answer
+(after ``[[ ## completed ## ]]``, or after its JSON object), does not say which value is meant. Reasons
 are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``). A reply too
 long, or too full of brackets for its length, is not read at all (:func:`costly_to_read`).
 """
 
 from __future__ import annotations
 
+import json
 import re
 from typing import Any
 
@@ -151,8 +153,32 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     if twice:
         return f"the reply gives the field(s) {', '.join(twice)}; it is not clear which is meant: give each field once"
     _, completed, after = text.partition("[[ ## completed ## ]]")
-    if completed and re.search(r"^[ \t]*(?:```|~~~|\[\[ ## )", after, re.MULTILINE):
+    if completed and _MORE_CODE.search(after):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
+    after = _after_json_answer(text, set(signature.output_fields))
+    if after is not None and _MORE_CODE.search(after):
+        return "the reply goes on after its JSON object with more code; give the answer once, then end it"
+    return None
+
+
+_MORE_CODE = re.compile(r"^[ \t]*(?:```|~~~|\[\[ ## )", re.MULTILINE)
+"""A line that starts a fenced block or a field: more code, or another answer."""
+_CLOSING_FENCE = re.compile(r"\A[ \t]*\n?[ \t]*(?:```|~~~)[ \t]*(?:\n|\Z)")
+
+
+def _after_json_answer(text: str, names: set[str]) -> str | None:
+    """The text after the first JSON object that starts a line and gives one of the output fields ``names`` (and
+    after the fence that closes it, when it stood in one), or None when there is no such object."""
+    decoder = json.JSONDecoder()
+    for start in re.finditer(r"^[ \t]*\{", text, re.MULTILINE):
+        try:
+            answer, end = decoder.raw_decode(text, start.end() - 1)
+        except ValueError:
+            continue
+        if isinstance(answer, dict) and names & set(answer):
+            rest = text[end:]
+            closing = _CLOSING_FENCE.match(rest)
+            return rest[closing.end() :] if closing else rest
     return None
 
 
