@@ -155,8 +155,8 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     _, completed, after = text.partition("[[ ## completed ## ]]")
     if completed and _MORE_CODE.search(after):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
-    after = _after_json_answer(text, set(signature.output_fields))
-    if after is not None and _MORE_CODE.search(after):
+    rest = _after_json_answer(text, set(signature.output_fields))
+    if rest is not None and _MORE_CODE.search(rest):
         return "the reply goes on after its JSON object with more code; give the answer once, then end it"
     return None
 
