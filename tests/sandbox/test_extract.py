@@ -343,3 +343,146 @@ def test_extraction_counts_the_lines_it_left_out() -> None:
     assert "2 non-blank line(s)" in prose.note
     with pytest.raises(ProgramRejected, match="line 5: syntax error"):  # a cut-off last line is not dropped
         extract(f"{PROGRAM}move_to_position([0.3, 0,\n")
+
+
+# Found by a third adversarial run: each ran a program the model did not mean (a draft, a quote, a cut program).
+GRASP = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position(p)\nclose_gripper()\n'
+PUT_DOWN = f"{GRASP}move_to_position([0.3, 0.0, 0.3])\nopen_gripper()\nmove_to_position([0.3, 0.2, 0.3])\n" + (
+    "close_gripper()\n"
+)
+
+
+@pytest.mark.parametrize("word", ["move_to_position", "open_gripper", "close_gripper()"])
+def test_inline_code_at_the_start_of_a_line_is_prose_not_a_fence(word: str) -> None:
+    answer = (
+        f"Here is a first attempt:\n```python\n{PUT_DOWN}```\n```{word}``` to the side drops the milk again. "
+        f"Final program:\n```python\n{GRASP}```\n"
+    )
+    extraction = extract(answer)
+    assert extraction.code == GRASP and "block 2 (marked" in extraction.note
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        "```python\n" + "-" * 1000 + "1\nopen_gripper()\n```\n",
+        "-" * 5000 + "1\nopen_gripper()\n",
+        "Program:\n" + "~" * 3000 + "x\nopen_gripper()\nDone.\n",
+    ],
+    ids=["fenced", "unfenced", "after-prose"],
+)
+def test_a_reply_nested_deeper_than_the_parser_follows_is_refused_never_raised_nor_cut(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="nested too deeply"):
+        extract(answer)
+
+
+def test_many_quotes_of_a_long_program_are_told_apart_in_linear_time() -> None:
+    answer = "```python\n" + "".join(f"a{k}=1\n" for k in range(6800)) + "```\n" + "```\na1=1\n```\n" * 3500
+    assert len(answer) < 100_000
+    gc.collect()
+    started = time.thread_time()
+    assert extract(answer).code.startswith("a0=1\na1=1\n")
+    assert time.thread_time() - started < CPU_LIMIT_S / 5
+
+
+@pytest.mark.parametrize(
+    "prose",
+    [
+        "This <s>works</s> does not work: it puts the milk down again.",
+        "The tokenizer adds <|endoftext|> here.",
+        "A model ends its turn with <|im_end|> or </s> tokens.",
+    ],
+)
+def test_an_end_of_turn_marker_named_in_prose_cuts_nothing(prose: str) -> None:
+    answer = f"Draft:\n```python\n{PUT_DOWN}```\n{prose} Final program:\n```python\n{GRASP}```\n"
+    assert extract(answer).code == GRASP
+
+
+def test_a_closing_think_tag_named_in_a_sentence_ends_no_reasoning() -> None:
+    answer = (
+        f"Final program:\n```python\n{GRASP}```\nThe reply has no </think> tag, so nothing is stripped. "
+        f"To try the other grasp:\n```python\n{PUT_DOWN}```\n"
+    )
+    assert extract(answer).code == GRASP
+    assert extract(f"I should open the gripper first.</think>\n\n{GRASP}").code == GRASP  # the tag ends its line
+
+
+@pytest.mark.parametrize(
+    "program",
+    [
+        f"# Log lines are shown as <pre><code>\n{GRASP}# blocks, closed by </code></pre>\nopen_gripper()\n",
+        'open_gripper()\nreport = "<pre><code>"\nmove_to_position(get_graspable_point("milk"))\n'
+        'report += "</code></pre>"\nclose_gripper()\nprint(report)\n',
+    ],
+    ids=["comments", "strings"],
+)
+def test_html_code_tags_inside_a_fenced_program_are_its_code(program: str) -> None:
+    assert extract(f"Final program:\n```python\n{program}```\n").code == program
+    assert extract(program).code == program  # unfenced: a tag in a comment or a string opens no HTML block
+
+
+@pytest.mark.parametrize(
+    ("final", "where"),
+    [
+        (GRASP, "outside the code blocks"),
+        ("".join(f"    {line}\n" for line in GRASP.splitlines()), "outside the code blocks"),
+        (f"\u200b```python\n{GRASP}\u200b```\n", "outside the code blocks"),
+        (f"```text\n{GRASP}```\n", "in a block tagged 'text'"),
+    ],
+    ids=["unfenced", "indented-four-spaces", "zero-width-space-fences", "tagged-text"],
+)
+def test_code_outside_the_python_block_makes_the_choice_unclear(final: str, where: str) -> None:
+    answer = f"Draft:\n```python\n{PUT_DOWN}```\nThe last four lines put the milk down again. Final program:\n\n{final}"
+    with pytest.raises(ProgramRejected, match=f"code block 1 and also code {where}"):
+        extract(answer)
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["For comparison, the complete code before my fix:", "For reference, the full program you provided:"],
+)
+def test_an_echo_of_the_old_program_is_no_final_program(label: str) -> None:
+    answer = f"Here is the corrected program:\n```python\n{GRASP}```\n{label}\n```python\n{PUT_DOWN}```\n"
+    assert extract(answer).code == GRASP
+
+
+def test_a_test_after_the_final_program_is_not_taken_for_it() -> None:
+    test = "print(get_graspable_point('milk'))\nmove_to_position([0.3, 0.0, 0.3])\n"
+    answer = f"Final program:\n```python\n{GRASP}```\nAnd the complete code for testing it:\n```python\n{test}```\n"
+    assert extract(answer).code == GRASP
+
+
+def test_two_different_programs_both_marked_final_are_asked_again() -> None:
+    answer = f"Final program:\n```python\n{GRASP}```\nOr, from above, the final code:\n```python\n{OTHER}```"
+    with pytest.raises(ProgramRejected, match=r"marks 2 different programs as final \(code blocks 1, 2\)"):
+        extract(answer)
+    options = f"The full code for option A:\n```python\n{GRASP}```\nFull code for option B:\n```python\n{OTHER}```"
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(options)
+
+
+def test_a_later_block_that_keeps_the_drafts_beginning_is_a_correction_not_a_quote() -> None:
+    answer = (
+        f"```python\n{PUT_DOWN}```\nWait, the extra moves at the end are wrong: they put the milk down again. "
+        f"Just this:\n```python\n{GRASP}```\n"
+    )
+    with pytest.raises(ProgramRejected, match=r"2 different programs \(code blocks 1, 2\)"):
+        extract(answer)
+
+
+def test_a_marker_glued_to_an_unfenced_programs_first_line_never_cuts_it() -> None:
+    assert extract(f"<|python_tag|>{GRASP}").code == GRASP  # Llama's tool-call marker, special tokens kept
+    with pytest.raises(ProgramRejected, match="line 1: code follows prose on one line"):
+        extract(f"Sure! {GRASP}")
+    assert extract(f"Run this on the arm (UR5)\n{GRASP}").code == GRASP  # a word and a bracket are no call
+
+
+def test_a_block_indented_in_a_list_item_loses_the_list_indentation() -> None:
+    indented = "".join(f"   {line}\n" for line in GRASP.splitlines())
+    assert extract(f"1. The program:\n   ```python\n{indented}   ```\n2. Run it.\n").code == GRASP
+
+
+def test_a_word_after_an_unfenced_program_is_prose_not_a_line_of_it() -> None:
+    extraction = extract(f"{GRASP}Done\n")
+    assert extraction.code == GRASP and extraction.dropped_lines == 1
+    assert extract("x = \\\n1\nopen_gripper()\n").code == "x = \\\n1\nopen_gripper()\n"  # a continued line is kept

@@ -1,0 +1,138 @@
+"""The program of a reply without code blocks: the longest run of lines that parses and acts, prose around it."""
+
+from __future__ import annotations
+
+import codeop
+import itertools
+import re
+import warnings
+
+from robotool.sandbox.code_shape import calls, has_action, looks_like_code, quiet_parse
+from robotool.sandbox.validate import ProgramRejected, parse_program
+
+
+def unfenced_program(text: str) -> str:
+    """The program of a reply without code blocks: the longest run of lines that parses and acts (a word such as
+    ``Done`` at its ends left out), when every line left out is prose; raises :class:`ProgramRejected` with the syntax
+    error of the whole code when a line that looks like code would be left out (the program would be cut), and when
+    the line before the run ends in code glued to prose (``Sure! open_gripper()``: its first line would be cut)."""
+    lines = text.split("\n")
+    start, end = _without_words_around(lines, *_longest_parsing_run(text))
+    before = next((k for k in range(start - 1, -1, -1) if lines[k].strip()), None) if end > start else None
+    if before is not None and _ends_with_code(lines[before]):
+        raise ProgramRejected(
+            before + 1,
+            "text",
+            f"code follows prose on one line ({lines[before].strip()[:40]!r}); put each line of the program on a line "
+            "of its own",
+        )
+    code_like = [k for k, line in enumerate(lines) if (k < start or k >= end) and looks_like_code(line)]
+    if not code_like:
+        return "\n".join(lines[start:end])
+    first, last = (
+        min([*code_like, *([start] if end > start else [])]),
+        max([*code_like, *([end - 1] if end > start else [])]),
+    )
+    whole = "\n".join(lines[first : last + 1])
+    parse_program(whole)  # raises the syntax error that stops the code from parsing as a whole
+    return whole
+
+
+def _without_words_around(lines: list[str], start: int, end: int) -> tuple[int, int]:
+    """The run ``lines[start:end]`` without the lines at its ends that only name or display a value, unindented
+    (``Done`` after a program: prose that parses), when the rest still parses as a whole."""
+    first, last = start, end
+    while last > first and _only_a_value(lines[last - 1]):
+        last -= 1
+    while first < last and _only_a_value(lines[first]):
+        first += 1
+    if (first, last) == (start, end) or first == last:
+        return start, end
+    try:
+        quiet_parse("\n".join(lines[first:last]))
+    except (SyntaxError, ValueError, MemoryError):
+        return start, end
+    return first, last
+
+
+def _only_a_value(line: str) -> bool:
+    if not line.strip():
+        return True
+    if line[0].isspace() or line.startswith("#"):
+        return False
+    try:
+        return not has_action(quiet_parse(line))
+    except (SyntaxError, ValueError, MemoryError):
+        return False
+
+
+_WORD_START = re.compile(r"(?<=[^\w.])(?=[A-Za-z_])")
+_CALL_WRITTEN_AS_CODE = re.compile(r"[A-Za-z_][\w.]*\(")
+
+
+def _ends_with_code(line: str) -> bool:
+    """Whether prose ends in a statement that calls something, glued to it (``Sure! open_gripper()``): the line a
+    program's first line would be cut from. A call is written ``f(``, not ``arm (UR5)``; the last 12 words are tried."""
+    starts = [found.start() for found in _WORD_START.finditer(line)][-12:]
+    return any(_CALL_WRITTEN_AS_CODE.search(line, k) is not None and calls(line[k:]) for k in starts)
+
+
+def _longest_parsing_run(text: str) -> tuple[int, int]:
+    """The longest run of whole lines that parses and acts, preferring the earliest, as (first line, end line);
+    an empty span if none is found.
+
+    Each line may start a run; one that cannot start a program on its own (prose such as "Here is
+    the code:") is ruled out by compiling that line alone. From a start, a syntax error at line k
+    of a candidate means no run from there can extend past line k-1, so each start costs a few
+    parses. A parse that succeeds without any action, made of one-line statements only, rules out
+    every later start inside it. The whole search is bounded by :data:`SEARCH_EFFORT` parsed
+    characters per character of text; past that, the best run found so far is kept.
+    """
+    lines = text.split("\n")
+    offsets = list(itertools.accumulate((len(line) + 1 for line in lines), initial=0))
+    budget = SEARCH_EFFORT * len(text) + _PARSE_OVERHEAD_CHARS * 64
+    best = (0, 0)
+    start = 0
+    while start < len(lines) and budget > 0:
+        next_start = start + 1
+        end = len(lines)
+        if not lines[start].strip() or not _can_start_program(lines[start]):
+            start = next_start
+            continue
+        while end - start > best[1] - best[0] and budget > 0:
+            candidate = text[offsets[start] : offsets[end] - 1]
+            budget -= len(candidate) // 16 + _PARSE_OVERHEAD_CHARS  # slicing and encoding the candidate
+            try:
+                tree = quiet_parse(candidate)
+            except SyntaxError as e:
+                error_line = start + (e.lineno or 1)
+                budget -= offsets[min(error_line, end)] - offsets[start]
+                end = min(end - 1, error_line - 1)
+                continue
+            except (ValueError, MemoryError):
+                break
+            budget -= len(candidate)
+            if has_action(tree):
+                best = (start, end)
+            elif all(statement.end_lineno == statement.lineno for statement in tree.body):
+                next_start = end
+            break
+        start = next_start
+    return best
+
+
+SEARCH_EFFORT = 4
+"""Characters the unfenced-program search may parse per character of the answer."""
+
+_PARSE_OVERHEAD_CHARS = 256
+
+
+def _can_start_program(line: str) -> bool:
+    """False when the line alone is invalid Python however it continues (complete or incomplete is fine)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            codeop.compile_command(line, symbol="exec")
+    except (SyntaxError, ValueError, OverflowError, MemoryError):
+        return False
+    return True
