@@ -72,7 +72,8 @@ _CALL_WRITTEN_AS_CODE = re.compile(r"[A-Za-z_][\w.]*\(")
 
 def _ends_with_code(line: str) -> bool:
     """Whether prose ends in a statement that calls something, glued to it (``Sure! open_gripper()``): the line a
-    program's first line would be cut from. A call is written ``f(``, not ``arm (UR5)``; the last 12 words are tried."""
+    program's first line would be cut from. A call is written ``f(``, not ``gripper (left)``; the last 12 words are
+    tried."""
     starts = [found.start() for found in _WORD_START.finditer(line)][-12:]
     return any(_CALL_WRITTEN_AS_CODE.search(line, k) is not None and calls(line[k:]) for k in starts)
 
