@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from robotool.robots.quadruped.body import GRAVITY
+from robotool.robots.quadruped.crushes import Crushes
 from robotool.robots.quadruped.move_runner import MoveRunner
 from robotool.robots.quadruped.push_force import PushForce
 from robotool.robots.quadruped.push_rules import PushRules
@@ -33,18 +33,14 @@ from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import (
     FOOTING_ANGLE,
-    Weighing,
     bears_up,
     centre_of_mass,
     feet,
     feet_touching,
-    pass_weight,
-    resting_on,
     supported,
     tilt,
     unsupported_feet,
 )
-from robotool.robots.quadruped.terrain import rotated
 from robotool.sim.embodiment import SkillEnd
 from robotool.sim.magnets import Magnets
 
@@ -77,6 +73,7 @@ class RefereeState:
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     coasting: np.ndarray  # (nworld, nobject) bool: pushed, and not at rest since (it may roll on after the push)
+    driven: np.ndarray  # (nworld, nobject) bool: of those, moved by the stride of a walk or climb standing on it
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
@@ -98,6 +95,7 @@ class RefereeState:
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
             coasting=np.zeros((nworld, nobject), dtype=bool),
+            driven=np.zeros((nworld, nobject), dtype=bool),
             still=np.zeros((nworld, nobject)),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
@@ -116,6 +114,7 @@ class Referee:
         self.magnets = Magnets(self.scene)
         self.pushes = PushRules(senses, rays, limits, self.magnets)
         self.forces = PushForce(senses, self.pushes, limits, config)
+        self.crushes = Crushes(senses)
 
     def conditions(self) -> dict[str, list[bool]]:
         """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
@@ -144,8 +143,8 @@ class Referee:
         centres = self.senses.centers(self.senses.state)
         shift = centres - self.state.last_centres  # each object's travel since the last tick
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
-        self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso that lifts what lies on it shoves it too
-        self._rams(ends, mask, centres[:, :, :2], shift, moves)
+        stood_on = self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso lifting what lies on it shoves
+        self._rams(ends, mask, centres[:, :, :2], shift, moves, stood_on)
         self._riders(ends, mask, moves)
         self._strains(ends, mask, np.linalg.norm(shift, axis=2), moves)
         if self.facts.fragile.any():
@@ -185,7 +184,7 @@ class Referee:
 
     def _shoves(
         self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
-    ) -> None:
+    ) -> np.ndarray:
         """Find the objects the robot shoved, in the worlds in ``mask``: a movable object (a cloth too, read as a
         whole: a heavy chain on a platform, which the rays see through, was driven off it by the torso) that the
         torso or a leg touches outside a push of it or of something it touches (and the contact that lasts on from the
@@ -225,6 +224,7 @@ class Referee:
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
             moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
+        return stood_on
 
     def _owned(self, bodies: npt.ArrayLike) -> np.ndarray:
         """(..., nobject) the objects that own any of ``bodies`` (..., nbody, bool) (a cloth: any of its links)."""
@@ -252,77 +252,22 @@ class Referee:
         return out
 
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
-        """Find the fragile objects the robot stands on, in the worlds in ``mask``: a foot that touches one with its
-        centre above the object's centre, a belly that touches one whose centre lies under the torso, or a foot or the
-        belly that it bears up (:meth:`_borne_by`: the foot of a glass L, whose centre lies in the air above it),
-        rests the robot's weight on it, which breaks it (a low vase read as a step is no footing); so does standing on a
-        movable object that rests on it (:meth:`_loaded`: a board lying on a vase). The world fails
-        (:meth:`conditions`) and a move in progress there is stopped and refused, naming the object."""
-        s, state, facts, names = self.state, self.senses.state, self.facts, self.scene.object_names
-        bodies = self.scene.object_body[facts.fragile]
-        centres = state.xpos[:, bodies]  # (nworld, nfragile, 3)
-        foot_z = feet(state, facts.ids)[:, :, 2]
-        by_foot = state.touching[:, facts.ids.feet][:, :, bodies] & (foot_z[:, :, None] > centres[:, None, :, 2])
-        torso = state.xpos[:, facts.ids.body]
-        along_body = rotated(centres[:, :, :2] - torso[:, None, :2], -self.senses.yaw())
-        under = np.all(np.abs(along_body) < facts.half, axis=2)
-        by_belly = state.touching[:, facts.ids.body][:, bodies] & under
-        stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
-        stood_on |= self._borne_by(bodies, mask & ~stood_on.any(axis=1))
-        loaded, via = self._loaded(mask)
-        for w in np.flatnonzero((stood_on | loaded[:, facts.fragile]).any(axis=1)):
-            if s.crushes[w] is not None or state.failed[w] is not None:
-                continue
-            index = int(np.flatnonzero(facts.fragile)[np.argmax(stood_on[w] | loaded[w, facts.fragile])])
-            name = names[index]
-            what = name if stood_on[w].any() else f"{names[via[w, index]]}, which rests on {name}"
-            s.crushes[w] = reason = f"the robot stood on {what}, which is fragile: the robot's weight would break it"
-            moves.refuse(int(w), reason, {}, ends)
-
-    def _borne_by(self, bodies: np.ndarray, mask: np.ndarray) -> np.ndarray:
-        """(nworld, len(bodies)) which of ``bodies`` bear the robot up, in the worlds in ``mask``: the contacts through
-        which one presses on a foot or the torso press it up (:func:`~.support.bears_up`)."""
-        state, ids = self.senses.state, self.facts.ids
-        robot = np.array([*ids.feet, ids.body])
-        touch = state.touching[:, robot][:, :, bodies]  # (nworld, 5, nbodies)
-        out = np.zeros((len(mask), len(bodies)), dtype=bool)
-        for w in np.flatnonzero(mask & touch.any(axis=(1, 2))):
-            normals = self.senses.sim.contact_normals(int(w))[bodies][:, robot]  # from each body onto each robot part
-            out[w] = (bears_up(normals) & touch[w].T).any(axis=1)
-        return out
-
-    def _loaded(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(nworld, nobject) the objects that carry the robot's weight through movable objects, in the worlds in
-        ``mask``: a movable object (not fragile) under a foot carries it, and passes it on to each object it rests
-        on (:func:`~.support.resting_on`: what bears it up, such as what a board lies on or leans on from the floor,
-        or what the very link of a cloth under the foot lies on); a fixed object passes it to the ground.
-        Also (nworld, nobject) the object that passed the weight on to each one."""
-        state, facts, parts = self.senses.state, self.facts, self.facts.parts
-        nworld, nobject = self.senses.sim.nworld, len(self.scene.object_names)
-        loaded, via = np.zeros((nworld, nobject), dtype=bool), np.zeros((nworld, nobject), dtype=int)
-        carrier = (facts.movable & ~facts.fragile)[parts.owner]
-        on_feet = state.touching[:, facts.ids.feet].any(axis=1).astype(float)  # (nworld, nbody)
-        under_feet = (on_feet @ parts.member.T.astype(float) > 0) & carrier  # (nworld, npart)
-        worlds = np.flatnonzero(mask & under_feet.any(axis=1))
-        if worlds.size == 0:
-            return loaded, via
-        normals = np.stack([self.senses.sim.contact_normals(int(w)) for w in worlds])
-
-        def forces(k: int, bodies: np.ndarray) -> np.ndarray:
-            return self.senses.sim.contact_forces(worlds[k : k + 1], bodies)[0]
-
-        weight = GRAVITY * np.asarray(self.senses.sim.body_mass)[worlds] @ parts.member.T
-        rests = resting_on(normals, parts, Weighing(forces, weight))
-        load, passed_by = pass_weight(rests, under_feet[worlds], carrier)
-        loaded[worlds] = parts.objects(load, nobject)
-        for o in np.flatnonzero(loaded[worlds].any(axis=0)):  # the part that passed it to one of o's loaded parts
-            own = np.flatnonzero(parts.owner == o)
-            first = own[np.argmax(load[:, own], axis=1)]
-            via[worlds, o] = parts.owner[passed_by[np.arange(len(worlds)), first]]
-        return loaded, via
+        """Stop and refuse the moves, in the worlds in ``mask``, whose robot stands on a fragile object, or on a
+        movable object that rests on one (:class:`~.crushes.Crushes`); the world fails (:meth:`conditions`)."""
+        s, failed = self.state, self.senses.state.failed
+        for w, reason in self.crushes.found(mask).items():
+            if s.crushes[w] is None and failed[w] is None:
+                s.crushes[w] = reason
+                moves.refuse(w, reason, {}, ends)
 
     def _rams(
-        self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, shift: np.ndarray, moves: MoveRunner
+        self,
+        ends: list[SkillEnd],
+        mask: np.ndarray,
+        centres: np.ndarray,
+        shift: np.ndarray,
+        moves: MoveRunner,
+        stood_on: np.ndarray,
     ) -> None:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
         objects that the pushed object presses, directly or through others, and that lie ahead of it: their centres
@@ -337,7 +282,10 @@ class Referee:
         rolls on: the push set it moving); what the pushed object or a rammed one rams on its own way after the push,
         until it comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is still in 3-D for
         :data:`REST_TIME` on end (found by an adversarial run: a pushed box that wedged for one tick at an edge, then
-        slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). Once the pushed
+        slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). What the stride
+        of a walk or a climb drives back under the feet (``stood_on``, from :meth:`_shoves`) rams as a pushed object
+        does, until it comes to rest (found by an adversarial run: a 15 cm walk along a 3 kg board on free rollers
+        kicked it back into a 10 kg crate on ice, off its pad, with no push and no touch). Once the pushed
         object and the objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot
         shoved them (a light object used as a ram moves no more than the robot may push): the world fails
         (:meth:`conditions`) and a move in progress is stopped and refused, naming them."""
@@ -348,11 +296,15 @@ class Referee:
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
         at_rest = mask[:, None] & (s.still >= REST_TIME)
         s.rammed_by[at_rest] = -1  # at rest: what moves it later is not this ram
-        s.coasting[at_rest] = False
+        s.coasting[at_rest] = s.driven[at_rest] = False
+        driven = stood_on & (mask & m.moving & (m.pushing < 0))[:, None] & (step > STILL)
+        s.coasting |= driven  # a walk's stride drives back what the feet stand on: it rams like a pushed object
+        s.driven |= driven
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
         if worlds.size:
             index = m.pushing[worlds]
             s.coasting[worlds, index] = True
+            s.driven[worlds, index] = False
             rammed = self._rammed(worlds, index, centres, m.u[worlds])
             s.rammed_by[worlds] = np.where(rammed, index[:, None], s.rammed_by[worlds])
         self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step)
@@ -448,8 +400,11 @@ class Referee:
                 mass = float(masses[k, pusher] + masses[k, group].sum())
                 if mass <= limit or s.shoves[w] is not None or self.senses.state.failed[w] is not None:
                     continue
+                ram = f"{names[pusher]}, driven by the stride of the robot on it," if s.driven[w, pusher] else (
+                    f"pushing {names[pusher]}"
+                )
                 s.shoves[w] = reason = (
-                    f"pushing {names[pusher]} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "
+                    f"{ram} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "
                     f"{mass:.1f} kg in all, over the push limit of {limit:.1f} kg (a push moves only what the robot "
                     "may push)"
                 )

@@ -44,3 +44,31 @@ def test_a_drum_left_to_roll_on_into_a_light_crate_knocks_it_off() -> None:
     for rollout in sim.run_sessions(task, start_sessions([code] * 2, "quadruped"), seed=0):
         conditions = rollout.conditions
         assert conditions["crate_lowered"] and conditions["robot_shoved_nothing"], world_failure(rollout)
+
+
+BOARD_ON_ROLLERS = LAYOUTS / "board_on_rollers_before_a_heavy_crate_on_ice.yaml"
+KICK = (CHEATS / "walk_on_a_board_on_rollers_to_kick_it_into_a_heavy_crate.py").read_text()
+
+
+def test_a_board_a_walk_kicks_back_into_a_heavy_crate_rams_it() -> None:
+    """Found by an adversarial run: a 15 cm walk along a 3 kg board on free rollers kicked it back into a 10 kg crate
+    on ice and off its pad (4 of 4 worlds on one seed, 3 of 4 on three more, the rest failing only for a roller still
+    rolling): nothing was pushed and nothing of the robot touched the crate. What the stride drives back under the
+    feet now rams as a pushed object does."""
+    rollouts = sim.run_sessions(tasks.load(BOARD_ON_ROLLERS), start_sessions([KICK] * 3, "quadruped"), seed=1)
+    assert any(r.conditions["crate_lowered"] for r in rollouts), "the crate stays on its pad: the test shows nothing"
+    for rollout in rollouts:
+        assert not rollout.success and not rollout.conditions["robot_shoved_nothing"], world_failure(rollout)
+        assert "cart, driven by the stride of the robot on it, rammed" in (world_failure(rollout) or "")
+
+
+def test_a_board_a_walk_kicks_back_into_a_light_crate_knocks_it_off() -> None:
+    """The control: the same walk, the crate 0.5 kg (the board, its rollers and the crate within the push limit):
+    the walk ends done, not refused, and the crate comes down (the rollers roll on, so the worlds never come to
+    rest: what is judged here is the walk)."""
+    task = tasks.load(BOARD_ON_ROLLERS)
+    light = [o.model_copy(update={"mass": 0.5}) if o.name == "crate" else o for o in task.objects]
+    task = task.model_copy(update={"objects": light})
+    for rollout in sim.run_sessions(task, start_sessions([KICK] * 2, "quadruped"), seed=1):
+        assert rollout.conditions["crate_lowered"], world_failure(rollout)
+        assert [c.outcome for c in rollout.calls] == ["done"], rollout.calls
