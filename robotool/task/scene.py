@@ -5,7 +5,16 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictBool,
+    StringConstraints,
+    model_validator,
+)
 
 from robotool.task import geometry
 
@@ -26,13 +35,63 @@ MAX_LENGTH = 1000.0
 MAX_MASS = 100_000.0
 """kg: the heaviest object a task file may give (a loaded lorry; a real task's heaviest is under a tonne)."""
 
+MIN_LENGTH = 0.0001
+"""m: the smallest size, thickness, drop or height a task file may give (0.1 mm, a sheet of paper's thickness)."""
+MIN_MASS = 0.001
+"""kg: the lightest movable object (1 g, given or from the volume). With :data:`MIN_LENGTH` the lightest, smallest
+body the simulator builds has a mass and a moment of inertia (at least ``MIN_MASS * MIN_LENGTH**2 / 12``, about 1e-12
+kg m^2) far above the 1e-15 (``mjMINVAL``) below which MuJoCo refuses to build it; a size of 1e-300 m divided by
+zero."""
+MIN_CLOTH_MASS = 0.01
+"""kg per metre of a cloth's length: the simulator builds a cloth as a chain of links about 10 cm long, each as heavy
+as :data:`MIN_MASS` at least (a 200 m cloth of 1 g did not build)."""
+MAX_CLOTH_LENGTH = 20.0
+"""m: the longest cloth, 200 links (a cloth of 120 m nests its links deeper than the simulator builds)."""
+
+
+def _not_boolean(value: object) -> object:
+    """A number is refused as true or false (pydantic would read them as 1 and 0)."""
+    if isinstance(value, bool):
+        raise ValueError(f"a number is needed, not a boolean (got {str(value).lower()})")
+    return value
+
+
+def _at_least(smallest: float, what: str) -> AfterValidator:
+    """A lower bound, above 0, whose message names what it bounds."""
+
+    def check(value: float) -> float:
+        if value < smallest:
+            raise ValueError(f"{value:g} is below the smallest {what} a task file may give, {smallest:g}")
+        return value
+
+    return AfterValidator(check)
+
+
+NOT_BOOLEAN = BeforeValidator(_not_boolean)
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
-PositiveLength = Annotated[float, Field(gt=0, le=MAX_LENGTH, allow_inf_nan=False)]
-Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE, allow_inf_nan=False)]
-Mass = Annotated[float, Field(gt=0, le=MAX_MASS, allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, le=MAX_LENGTH, allow_inf_nan=False), NOT_BOOLEAN]
+PositiveLength = Annotated[Positive, _at_least(MIN_LENGTH, "length (m)")]
+Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE, allow_inf_nan=False), NOT_BOOLEAN]
+Mass = Annotated[float, Field(gt=0, le=MAX_MASS, allow_inf_nan=False), NOT_BOOLEAN, _at_least(MIN_MASS, "mass (kg)")]
 Vec3 = tuple[Coordinate, Coordinate, Coordinate]
 Size3 = tuple[PositiveLength, PositiveLength, PositiveLength]
 Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
+
+
+def reserved_name(name: str) -> str | None:
+    """Why an object may not have this name, or None: the simulator names its bodies, geoms, joints and welds after
+    the objects (``<name>``, ``<name>__geom0``, ``magnet__<a>__<b>``) beside its own (``world``; the robot's parts
+    ``robot``, ``robot_gripper``, ``robot_foot0``, ...), and two equal names would not build."""
+    if name == "world":
+        return "'world' is reserved: it is the simulator's name for the world itself"
+    if name.startswith("robot"):
+        return f"{name!r} is reserved: names starting with 'robot' are the robot's (its parts in the simulator)"
+    if "__" in name or name.startswith("_") or name.endswith("_"):
+        return (
+            f"{name!r}: '_' stands only singly between letters or digits (the simulator names an object's parts "
+            "<name>__<part>, and such a name could be another's)"
+        )
+    return None
 
 
 def number_text(value: float) -> str:
@@ -63,14 +122,14 @@ class SceneObject(StrictModel):
     rpy: Vec3 = (0.0, 0.0, 0.0)
     axis: Literal["x", "y", "z"] = "z"
     thickness: PositiveLength = 0.02
-    movable: bool = True
+    movable: StrictBool = True
     mass: Mass | None = None
-    friction: PositiveLength | None = None
-    magnetic: bool = False
-    soft: bool = False
+    friction: Positive | None = None
+    magnetic: StrictBool = False
+    soft: StrictBool = False
     fragile: Fragile | None = None
     graspable_point: Vec3 | None = None
-    stiffness: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None  # buttons: spring, N/m
+    stiffness: Annotated[float, Field(gt=0, allow_inf_nan=False), NOT_BOOLEAN] | None = None  # buttons: spring, N/m
     travel: PositiveLength | None = None  # buttons: how far the face can be pushed in, m
     notes: str | None = None
 
@@ -102,6 +161,37 @@ class SceneObject(StrictModel):
             raise ValueError(
                 f"hook thickness {self.thickness} m must be smaller than its length and head "
                 f"({self.size[0]} m x {self.size[1]} m)"
+            )
+        return self._movable_options()
+
+    def _movable_options(self) -> SceneObject:
+        """``mass`` and ``graspable_point`` are a movable object's (a fixed thin box's mass says whether it is a
+        sheet), and a movable object weighs at least :data:`MIN_MASS`."""
+        if not self.movable and self.mass is not None and not self.is_thin_box:
+            raise ValueError(
+                f"'mass' applies to movable objects only (and to a fixed box at most {SHEET_THICKNESS * 1000:g} mm "
+                "thick, a sheet or a plate by its mass); a fixed object does not move"
+            )
+        if not self.movable and self.graspable_point is not None:
+            raise ValueError("'graspable_point' applies to movable objects only; the gripper holds nothing fixed")
+        if self.movable and self.effective_mass < MIN_MASS:
+            raise ValueError(
+                f"it weighs {self.effective_mass:.2g} kg at the default {DEFAULT_DENSITY:g} kg/m^3 of its volume, "
+                f"less than the lightest a task file may give; give it a 'mass' of at least {MIN_MASS:g} kg"
+            )
+        return self if self.shape != "cloth" else self._cloth_options()
+
+    def _cloth_options(self) -> SceneObject:
+        """A cloth, movable or not, is at most :data:`MAX_CLOTH_LENGTH` long and :data:`MIN_CLOTH_MASS` per metre
+        heavy, :data:`MIN_MASS` at least."""
+        length = max(self.size[:2])
+        if length > MAX_CLOTH_LENGTH:
+            raise ValueError(f"a cloth is at most {MAX_CLOTH_LENGTH:g} m long (this one {length:g} m)")
+        lightest = max(MIN_MASS, MIN_CLOTH_MASS * length)
+        if self.effective_mass < lightest:
+            raise ValueError(
+                f"a cloth weighs at least {MIN_CLOTH_MASS:g} kg per metre of its length and {MIN_MASS:g} kg in all, "
+                f"{lightest:.3g} kg for this one (it weighs {self.effective_mass:.3g} kg)"
             )
         return self
 
@@ -139,10 +229,15 @@ class SceneObject(StrictModel):
         per square metre of its face, like paper or card): it cannot push or lift anything with its edge, and the
         gripper pinches a fold of it. A heavier thin box is a rigid plate (a 3 mm steel plate weighs 23 kg per square
         metre: no gripper pinches it). (Cloth is built as hinged links that drape.)"""
-        if self.shape != "box":
+        if not self.is_thin_box:
             return False
-        thickness, *face = sorted(self.size)
-        return thickness <= SHEET_THICKNESS and self.effective_mass <= SHEET_AREAL_DENSITY * face[0] * face[1]
+        _, *face = sorted(self.size)
+        return self.effective_mass <= SHEET_AREAL_DENSITY * face[0] * face[1]
+
+    @property
+    def is_thin_box(self) -> bool:
+        """Whether it is a box at most :data:`SHEET_THICKNESS` thick: a sheet or a plate, as its mass decides."""
+        return self.shape == "box" and min(self.size) <= SHEET_THICKNESS
 
     @property
     def grasp_point(self) -> tuple[float, float, float]:

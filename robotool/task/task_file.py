@@ -9,6 +9,7 @@ from __future__ import annotations
 import difflib
 import json
 import reprlib
+import stat
 import sys
 import types
 import typing
@@ -21,7 +22,9 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from robotool import robots
-from robotool.task import geometry
+from robotool.task import geometry, task_text
+from robotool.task.limit_rules import limit_problems
+from robotool.task.scene import reserved_name
 from robotool.task.task_model import MAX_OBJECTS, WHY_MAX_OBJECTS, Task
 from robotool.task.task_problem import Problem
 
@@ -121,8 +124,20 @@ def _model_problems(error: ValidationError, raw: Any, model: type[BaseModel] | N
         message = _friendly(e)
         if e["type"] == "extra_forbidden" and loc and isinstance(loc[-1], str):
             message = _unknown_key(loc[-1], _keys_at(model or Task, loc[:-1]))
+        if e["type"] == "invalid_key":  # its location ends with the key itself, as a list index or a text
+            loc, message = loc[:-1], f"{_key_text(e['input'])}: keys must be strings"
         problems.append(Problem(path=_format_loc(loc, raw), message=message))
     return problems
+
+
+def _key_text(key: Any) -> str:
+    """A key as a message names it: ``key 1 (a number)``, ``key null``."""
+    if key is None:
+        return "key null (an empty key)"
+    if isinstance(key, bool):
+        return f"key {str(key).lower()} (a boolean)"
+    kind = "a number" if isinstance(key, int | float) else f"a {type(key).__name__}"
+    return f"key {shown(key)} ({kind})"
 
 
 def _keys_at(model: type[BaseModel], loc: tuple[int | str, ...]) -> list[str]:
@@ -174,18 +189,21 @@ def _check_semantics(task: Task) -> list[Problem]:
                 )
             )
         seen.setdefault(obj.name, i)
-        if obj.name == "robot":
-            problems.append(Problem(path=f"objects[{i}].name", message="'robot' is reserved for the robot itself"))
+        reserved = reserved_name(obj.name)
+        if reserved is not None:
+            problems.append(Problem(path=f"objects[{i}].name", message=reserved))
 
     robot = task.robot
-    limits_ok = True
     try:
-        task.limits  # noqa: B018 - validates the overrides
+        limits = limit_problems(robot.limits, task.limits)
     except ValidationError as e:
-        limits_ok = False
         model = robots.get(robot.type).limits
-        for problem in _model_problems(e, robot.limits, model):
-            problems.append(Problem(path=f"robot.limits.{problem.path}", message=problem.message))
+        limits = [
+            Problem(path=f"robot.limits.{p.path}" if p.path else "robot.limits", message=p.message)
+            for p in _model_problems(e, robot.limits, model)
+        ]
+    limits_ok = not limits
+    problems += limits
     robot_type = robots.get(robot.type)
     problems += robot_type.rules.check_robot(task)
 
@@ -375,10 +393,18 @@ def _with_robot_problem(problems: list[Problem], robot: Problem | None) -> list[
     return [*problems[:at], robot, *problems[at:]]
 
 
+class NotARegularFile(OSError):
+    """A path that names a directory, a named pipe, a socket or a device, not a file to read."""
+
+
 def read_at_most(path: Path, limit: int) -> bytes:
-    """The bytes of the file at ``path``, but never more than ``limit + 1`` of them: a caller that gets more than
-    ``limit`` refuses the file without having read it whole (``/dev/zero``, a file of gigabytes). OSError as
-    :meth:`~pathlib.Path.read_bytes` raises it."""
+    """The bytes of the regular file at ``path``, but never more than ``limit + 1`` of them: a caller that gets more
+    than ``limit`` refuses the file without having read it whole (a file of gigabytes). What is not a regular file is
+    refused before it is opened (:class:`NotARegularFile`): a named pipe would wait for a writer for ever, a device
+    (``/dev/zero``) never ends. OSError as :meth:`~pathlib.Path.read_bytes` raises it."""
+    mode = path.stat().st_mode
+    if not stat.S_ISREG(mode):
+        raise NotARegularFile(f"not a regular file ({SPECIAL_FILES.get(stat.S_IFMT(mode), 'a device')})")
     with path.open("rb") as f:
         return f.read(limit + 1)
 
@@ -394,11 +420,13 @@ def load_task(path: str | Path) -> Task:
         text = data.decode("utf-8")
     except FileNotFoundError:
         raise TaskFileError(source, [Problem(path="", message="file not found")]) from None
+    except NotARegularFile as e:
+        raise TaskFileError(source, [Problem(path="", message=f"{e}; give a task file")]) from None
     except (OSError, UnicodeDecodeError) as e:
         raise TaskFileError(source, [Problem(path="", message=f"cannot read the file: {e}")]) from None
-    kind = "JSON" if path.suffix == ".json" else "YAML"
+    kind: task_text.Kind = "JSON" if path.suffix.lower() == ".json" else "YAML"
     try:
-        data = json.loads(text) if kind == "JSON" else yaml.safe_load(text)
+        data, repeated = task_text.parse_text(text, kind)
     except json.JSONDecodeError as e:
         raise TaskFileError(source, [_syntax_problem("JSON", text, e.lineno, e.colno, e.msg)]) from None
     except yaml.MarkedYAMLError as e:
@@ -409,7 +437,21 @@ def load_task(path: str | Path) -> Task:
         raise TaskFileError(source, [Problem(path="", message=NESTED_TOO_DEEP)]) from None
     except ValueError as e:  # a number of more digits than Python converts (the parsers raise nothing more precise)
         raise TaskFileError(source, [_syntax_problem(kind, text, None, None, _too_many_digits(e))]) from None
+    if repeated:
+        raise TaskFileError(source, [_repeated_problem(loc, r, data) for loc, r in task_text.locate(data, repeated)])
     return parse_task(data, source)
+
+
+SPECIAL_FILES = {stat.S_IFDIR: "a directory", stat.S_IFIFO: "a named pipe", stat.S_IFSOCK: "a socket"}
+
+
+def _repeated_problem(loc: task_text.Location, repeated: task_text.Repeated, data: Any) -> Problem:
+    """``objects[0](milk): key 'mass' given twice (lines 12 and 13); give each key once``."""
+    times = "twice" if repeated.count == 2 else f"{repeated.count} times"
+    lines = [str(n) for n in repeated.lines]
+    where = f" (lines {', '.join(lines[:-1])} and {lines[-1]})" if lines else ""
+    message = f"key {shown(repeated.key)} given {times}{where}; give each key once"
+    return Problem(path=_format_loc(loc, data), message=message)
 
 
 def _too_many_digits(error: ValueError) -> str:

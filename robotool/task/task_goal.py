@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from robotool.task.scene import Name, PositiveLength, StrictModel, number_text
+from robotool.task.scene import MAX_LENGTH, NOT_BOOLEAN, Name, PositiveLength, StrictModel, number_text
 
 GoalKind = Literal["robot_on", "grasped", "pressed", "lifted", "lowered"]
 
@@ -19,7 +19,7 @@ class LiftGoal(StrictModel):
 
 class LowerGoal(StrictModel):
     object: Name
-    height: Annotated[float, Field(ge=0, allow_inf_nan=False)]
+    height: Annotated[float, Field(ge=0, le=MAX_LENGTH, allow_inf_nan=False), NOT_BOOLEAN]
 
 
 class Goal(StrictModel):

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, Field, StringConstraints
+from pydantic import BaseModel, BeforeValidator, Field, StringConstraints
 
 from robotool.robots.limits_table import limits_model
 from robotool.task.scene import Coordinate, Name, SceneObject, StrictModel
@@ -16,6 +16,14 @@ MAX_OBJECTS = 200
 dozen; every object adds a body to the simulated scene and to each check of how objects rest and overlap, so a file of
 thousands (3000 stacked boxes took minutes to load) is refused at once rather than loaded."""
 WHY_MAX_OBJECTS = "a real task holds a few dozen at most"
+
+def _integer(value: object) -> object:
+    """The format is the integer 1: true and 1.0, which pydantic would read as 1, are refused."""
+    if isinstance(value, bool | float):
+        written = str(value).lower() if isinstance(value, bool) else value
+        raise ValueError(f"the format is the integer 1 (got {written})")
+    return value
+
 
 Category = Literal["tool_selection", "sequential_tool_use", "tool_manufacturing", "no_tool"]
 
@@ -38,7 +46,7 @@ class Robot(StrictModel):
 class Task(StrictModel):
     """A whole task file (format 1)."""
 
-    format: Literal[1]
+    format: Annotated[Literal[1], BeforeValidator(_integer)]
     name: Name
     category: Category
     instruction: Annotated[str, StringConstraints(min_length=1, strip_whitespace=True)]

@@ -30,13 +30,12 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import BELLY_HEIGHT, QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
 from robotool.task import geometry
 from robotool.task.task_model import Task
 
 BODY = "robot"
-BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its faces push objects)
 LEG_SHARE = 0.02  # of the robot's mass in each leg; the torso carries the rest
 XY_KP = 20000.0  # N/m
 XY_FORCE = 120.0  # N: the most the legs push sideways (about the weight: a blocked push cannot flip the body)

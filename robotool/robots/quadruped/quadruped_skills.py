@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from robotool.robots.skills import HEADING, POSITION, QUERY_NAME, SkillSpec
+
+BELLY_HEIGHT = 0.05  # m: the torso's underside above the feet's bottom (its faces push objects)
+MIN_TORSO = 0.01  # m: the thinnest torso a body's height leaves above its legs
 
 
 class QuadrupedLimits(BaseModel):
@@ -18,6 +21,15 @@ class QuadrupedLimits(BaseModel):
     max_gap: float = Field(0.10, gt=0, description="widest gap it can cross, m")
     max_step_down: float = Field(0.40, gt=0, description="deepest drop it can step down, m")
     max_push_mass: float = Field(5.0, gt=0, description="heaviest object it can push, kg")
+
+    @field_validator("body_size")
+    @classmethod
+    def _taller_than_its_legs(cls, size: tuple[float, float, float]) -> tuple[float, float, float]:
+        """The legs hold the torso's underside :data:`BELLY_HEIGHT` up: a body no taller has no torso to build."""
+        if not size[2] >= BELLY_HEIGHT + MIN_TORSO:
+            raise ValueError(f"the body's height (z) must be at least {BELLY_HEIGHT + MIN_TORSO:g} m (its legs hold "
+                             f"its underside {BELLY_HEIGHT:g} m up)")
+        return size
 
 
 QUADRUPED_SKILLS: tuple[SkillSpec, ...] = (

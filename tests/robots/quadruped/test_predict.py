@@ -246,7 +246,7 @@ def _low_box_task(movable: bool) -> Task:
         "format": 1, "name": "low_box", "instruction": "Stand on the box.", "category": "sequential_tool_use",
         "robot": {"type": "quadruped", "position": [-1.0, 0.0]},
         "objects": [{"name": "box", "shape": "box", "center": [0.0, 0.0, 0.05], "size": [0.4, 2.0, 0.1],
-                     "movable": movable, "mass": 2.0}],
+                     "movable": movable, **({"mass": 2.0} if movable else {})}],
         "goal": {"robot_on": "box"},
     })
 
