@@ -21,6 +21,7 @@ import dspy
 from dspy.utils.exceptions import LMError
 
 from robotool.safe_text import capped
+from robotool.sandbox.code_shape import calls, looks_like_code
 from robotool.sandbox.extract import without_reasoning
 
 MAX_REPLY_CHARS = 100_000
@@ -153,12 +154,24 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     if twice:
         return f"the reply gives the field(s) {', '.join(twice)}; it is not clear which is meant: give each field once"
     _, completed, after = text.partition("[[ ## completed ## ]]")
-    if completed and _MORE_CODE.search(after):
+    if completed and _more_code(after):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
     rest = _after_json_answer(text, set(signature.output_fields))
-    if rest is not None and _MORE_CODE.search(rest):
+    if rest is not None and _more_code(rest):
         return "the reply goes on after its JSON object with more code; give the answer once, then end it"
     return None
+
+
+def _more_code(text: str) -> bool:
+    """Whether ``text`` (what follows an answer) holds more code: a fenced block or a field, or a line that reads as
+    code and calls something (a correction written without fences, or indented as a Markdown code block)."""
+    return bool(_MORE_CODE.search(text)) or any(
+        looks_like_code(line) and calls(line.strip()) for line in text.split("\n")[:MAX_LINES_AFTER]
+    )
+
+
+MAX_LINES_AFTER = 200
+"""The lines after an answer read for more code (a correction comes soon after the answer it corrects)."""
 
 
 _MORE_CODE = re.compile(r"^[ \t]*(?:```|~~~|\[\[ ## )", re.MULTILINE)
