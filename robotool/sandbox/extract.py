@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import builtins
 import contextlib
 import re
 import textwrap
@@ -49,11 +50,13 @@ def extract(text: str) -> Extraction:
     Extraction chooses a block, never cuts one. Reasoning (``<think>...</think>`` and the other forms
     :func:`without_reasoning` knows) is never code. Of several Python (or untagged) Markdown code blocks
     (an unclosed last block runs to the end), the programs are those that parse and do more than name or
-    display values (an output listing is none); a program whose lines all lie in another is a quote of it (a
-    snippet explained after the whole program, compared with its indentation; not a later block that keeps the
+    display values (an output listing is none, nor an untagged block that calls nothing, or does not parse and has
+    no line that calls, beside a Python block); a program whose lines lie in another, in order and one after another,
+    is a quote of it (a snippet explained; not a block that does the task alone, nor a later block that keeps the
     other's first lines, a correction). Of several programs, the last one a line just before it marks as final
-    ("Final program:", "Here is the corrected code:"; not an echo such as "Your current program:" or "the code before
-    my fix:") is taken, quote or not; else one program left is taken; otherwise which one is meant is not clear (a
+    ("Final program:", "Here is the corrected code:"; not an echo such as "Your current program:", nor a fragment of
+    another program) is taken when no different program follows it but an aside ("For comparison, ..."); else one
+    program left is taken; otherwise which one is meant is not clear (a
     draft and a correction, a program and a usage example, two options, two different programs marked final, code
     outside the Python blocks too) and :class:`ProgramRejected` says so, to be asked again. A Python block that does
     not parse, and an untagged one that looks like code, is meant as a program: its syntax error is raised, never
@@ -84,7 +87,7 @@ def _extract(text: str) -> Extraction:
         if _has_diff(outside_blocks(text).split("\n")):
             raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
         index, why = _choose_block(blocks)
-        elsewhere = _code_outside_python_blocks(text)
+        elsewhere = _code_outside_python_blocks(text, blocks)
         if elsewhere:
             raise ProgramRejected(
                 None,
@@ -112,10 +115,7 @@ def _extract(text: str) -> Extraction:
 
 
 _THOUGHT = r"think|thinking|reasoning|thought|seed:think"
-_REASONING = re.compile(
-    rf"<({_THOUGHT})>.*?(?:</\1>|\Z)|\[THINK\].*?(?:\[/THINK\]|\Z)|◁({_THOUGHT})▷.*?(?:◁/\2▷|\Z)",
-    re.DOTALL | re.IGNORECASE,
-)
+_REASONING_OPEN = re.compile(rf"<({_THOUGHT})>|\[(THINK)\]|◁({_THOUGHT})▷", re.IGNORECASE)
 _REASONING_END = re.compile(
     rf"^.*?(?:</(?:{_THOUGHT})>|\[/THINK\]|◁/(?:{_THOUGHT})▷)[ \t]*(?=\n|\Z)", re.DOTALL | re.IGNORECASE
 )
@@ -169,8 +169,35 @@ def without_reasoning(text: str) -> str:
             starts = list(answer.finditer(text))
             text = text[starts[-1].end() :].split(_FINAL_RESPONSE_END)[0] if starts else ""
     text = _THOUGHT_TOKENS.sub("", text)
-    text = _REASONING.sub("", text)
+    text = _without_thoughts(text)
     return _REASONING_END.sub("", text, count=1).translate(_OUT_OF_CODE)
+
+
+def _without_thoughts(text: str) -> str:
+    """``text`` without its reasoning spans (``<think>...</think>`` and the other spellings), each closed, or unclosed
+    and opening the reply or a line (it runs to the end); an unclosed tag in a sentence (``planned in a <think>
+    block``) is prose. One pass: a closing tag looked for in vain is not looked for again."""
+    parts: list[str] = []
+    end, never_closed = 0, set[str]()
+    while (opening := _REASONING_OPEN.search(text, end)) is not None:
+        tag = opening.group(0)
+        closing_tag = (tag[0] + "/" + tag[1:]).lower()
+        closing = None
+        if closing_tag not in never_closed:
+            closing = re.compile(re.escape(closing_tag), re.IGNORECASE).search(text, opening.end())
+        if closing is None:
+            never_closed.add(closing_tag)
+            before = opening.start()
+            while before > 0 and text[before - 1] in " \t":
+                before -= 1
+            if before == 0 or text[before - 1] == "\n":
+                return "".join([*parts, text[end : opening.start()]])
+            parts.append(text[end : opening.end()])
+            end = opening.end()
+            continue
+        parts.append(text[end : opening.start()])
+        end = closing.end()
+    return "".join([*parts, text[end:]])
 
 
 _IN_CODE = str.maketrans({"<": "\ue000", "[": "\ue001", "\u25c1": "\ue002"})
@@ -198,13 +225,36 @@ def _comments_masked(text: str) -> str:
 
 
 _CODE_WITH_MARKER = re.compile(r"^[^\n]*[<\[\u25c1][^\n]*$", re.MULTILINE)
-_STRING = re.compile(r"""(?:[rRbBuUfF]{0,2})("|')(?:\\.|(?!\1)[^\\\n])*\1""")
 
 
 def _strings_masked(line: str) -> str:
+    """A line that reads as code with its string literals masked, in one pass (an unclosed string masks nothing)."""
     if not looks_like_code(line.translate(_OUT_OF_CODE)):
         return line
-    return _STRING.sub(lambda found: found.group(0).translate(_IN_CODE), line)
+    parts, start, k = [], 0, 0
+    while k < len(line):
+        if line[k] not in "'\"":
+            k += 1
+            continue
+        end = _string_end(line, k)
+        if end is None:
+            break
+        parts += [line[start:k], line[k:end].translate(_IN_CODE)]
+        start = k = end
+    return "".join([*parts, line[start:]])
+
+
+def _string_end(line: str, opening: int) -> int | None:
+    """Where the string literal opened by the quote at ``opening`` ends (after its closing quote), or None."""
+    k = opening + 1
+    while k < len(line):
+        if line[k] == "\\":
+            k += 2
+        elif line[k] == line[opening]:
+            return k + 1
+        else:
+            k += 1
+    return None
 
 
 def _non_blank(text: str) -> int:
@@ -260,13 +310,25 @@ def _dedented(code: str, columns: int) -> str:
     return "\n".join(line[min(columns, len(line) - len(line.lstrip(" "))) :] for line in code.split("\n"))
 
 
-def _code_outside_python_blocks(text: str) -> str | None:
+_WORD = re.compile(r"[A-Za-z_]\w*")
+
+
+def _formula(line: str, named: set[str]) -> bool:
+    """Whether a line is one assignment whose names none of the Python blocks uses (``d = sqrt(x**2 + y**2)`` in
+    prose): math shown, not a step of the program."""
+    tree = quiet_parse(line)
+    names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
+    return len(tree.body) == 1 and isinstance(tree.body[0], ast.Assign) and not names & named
+
+
+def _code_outside_python_blocks(text: str, blocks: list[_Block]) -> str | None:
     """Where ``text`` holds code outside its Python (and untagged) blocks, in words, or None: a line outside every
     block that reads as code and parses alone with a call (an unfenced program, a Markdown block indented four spaces,
-    fences that a zero-width space made text), or a block tagged with another language (``text``) whose body parses as
-    a program with a call."""
+    fences that a zero-width space made text; not :func:`_formula`), or a block tagged with another language
+    (``text``) whose body parses as a program with a call."""
+    named = {word for block in blocks for word in _WORD.findall(block.code)}
     for line in outside_blocks(text).split("\n"):
-        if looks_like_code(line) and calls(line.strip()):
+        if looks_like_code(line) and calls(line.strip()) and not _formula(line.strip(), named):
             return f"outside the code blocks ({line.strip()[:40]!r})"
     for opening, closing in fence_pairs(text):
         tag = opening.group(2)
@@ -358,23 +420,32 @@ def _marked_final(label: str) -> bool:
 def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     """The index of the block to run and why (see :func:`extract`); raises :class:`ProgramRejected` when a block
     meant as a program does not parse, or several different programs leave it unclear which one is meant."""
-    programs: list[int] = []
+    trees: dict[int, ast.Module | None] = {}
     for k, block in enumerate(blocks):
         try:
-            tree = quiet_parse(block.code)
+            trees[k] = quiet_parse(block.code)
         except (SyntaxError, ValueError, MemoryError):
-            if _has_diff(block.code.split("\n")):
-                raise ProgramRejected(None, "blocks", _DIFF_PROBLEM) from None
-            if block.tagged or any(looks_like_code(line) for line in block.code.split("\n")):
+            trees[k] = None
+    tagged = any(block.tagged and trees[k] is not None for k, block in enumerate(blocks))
+    programs: list[int] = []
+    for k, block in enumerate(blocks):
+        tree, code = trees[k], block.code
+        if tree is None:
+            if _has_diff(code.split("\n")):
+                raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
+            if block.tagged or (not tagged and any(looks_like_code(line) for line in code.split("\n"))):
                 return k, "it does not parse"  # parse_program raises its syntax error
-            continue  # an untagged listing of text
-        if has_action(tree):
-            programs.append(k)
-        elif _has_diff(block.code.split("\n")):
+            if not tagged or any(calls(line.strip()) for line in code.split("\n")):
+                return k, "it does not parse"
+            continue  # an untagged listing (``open_gripper() -> ok``) beside a Python block that parses
+        if has_action(tree) and (block.tagged or not tagged or _has_call(tree)):
+            programs.append(k)  # an untagged block that calls nothing beside a Python block is an output listing
+        elif _has_diff(code.split("\n")):
             raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
     if not programs:
         return len(blocks) - 1, "the last"
-    marked = [k for k in programs if _marked_final(blocks[k].label)]
+    quotes = _Quotes(blocks, programs)
+    marked = [k for k in programs if _marked_final(blocks[k].label) and not quotes.fragment(k)]
     if len({tuple(_statement_lines(blocks[k].code)) for k in marked}) > 1:  # two options, or an echo marked too
         raise ProgramRejected(
             None,
@@ -383,11 +454,15 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
             f"{', '.join(str(k + 1) for k in marked)}) and does not say which one is meant; give exactly one program, "
             "in one code block",
         )
-    if marked and len(programs) > 1:  # a correction marked final is meant, however it compares with a draft
-        return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
-    whole = _whole_programs(blocks, programs)
-    if len(whole) == 1:
-        return whole[0], "the only program; the other blocks quote it or are no programs"
+    if marked and len(programs) > 1:  # a program marked final is meant unless a different one follows it
+        later = [k for k in programs if k > marked[-1] and not quotes(k, marked[-1]) and not _aside(blocks[k].label)]
+        if not later:
+            return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
+        whole = [marked[-1], *later]
+    else:
+        whole = quotes.whole()
+        if len(whole) == 1:
+            return whole[0], "the only program; the other blocks quote it or are no programs"
     several = (
         f"more than {MOST_PROGRAMS} different programs"
         if len(whole) > MOST_PROGRAMS
@@ -400,52 +475,89 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     )
 
 
+def _has_call(tree: ast.Module) -> bool:
+    return any(isinstance(node, ast.Call) for node in ast.walk(tree))
+
+
+def _aside(label: str) -> bool:
+    """Whether a label's last sentence says the block after it is not the program (``For comparison, the naive
+    version:``, ``The code you provided:``); a correction after a program marked final says nothing of the kind."""
+    sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
+    return _NOT_FINAL.search(label[sentence:]) is not None
+
+
 MOST_PROGRAMS = 8
 """Different programs in one reply past which they are not told apart (each more costs a pass over the blocks)."""
 
 
-def _whole_programs(blocks: list[_Block], programs: list[int]) -> list[int]:
-    """The ``programs`` (block indices, in order) that quote no other: a block quotes another when every line of it is
-    one of the other's (as often) and it has at most half as many (a snippet explained; a correction that only leaves
-    lines out, or the program again with lines added, is another program), or the same lines in the same order (of
-    two equal blocks, the earlier quotes the later). A later block that repeats the other's first lines (more than one)
-    is its beginning kept, a correction that leaves the rest out, not a quote. Past :data:`MOST_PROGRAMS`, those found
-    so far. Each comparison costs the snippet's lines, not the program's."""
-    lines = {k: _statement_lines(blocks[k].code) for k in programs}
-    counts = {k: Counter(lines[k]) for k in programs}
-    columns: dict[int, dict[str, set[int]]] = {}
-    for k in programs:
-        columns[k] = {}
-        for line in lines[k]:
-            columns[k].setdefault(line.lstrip(), set()).add(_columns(line))
+class _Quotes:
+    """Which program blocks quote which: ``quotes(k, j)`` when block ``k`` is the same lines as block ``j`` in the same
+    order, or a snippet of it explained: at most half as many lines, found in it in the same order, one after another,
+    with the same indentation or all of it moved right (a loop's body quoted on its own); never a block that does the
+    task on its own (:func:`_stands_alone`: a correction that leaves lines out, or the program an option extends), nor
+    a later block that repeats the other's first lines (more than one), a correction that leaves the rest out. Each
+    comparison costs the snippet's lines, and the program's text only when every line of the snippet is one of its."""
 
-    def quotes(k: int, j: int) -> bool:
-        if lines[k] == lines[j]:
-            return True
-        if 2 * len(lines[k]) > len(lines[j]) or (k > j and len(lines[k]) > 1 and lines[j][: len(lines[k])] == lines[k]):
+    def __init__(self, blocks: list[_Block], programs: list[int]) -> None:
+        self.programs = programs
+        self.lines = {k: _statement_lines(blocks[k].code) for k in programs}
+        self.counts = {k: Counter(self.lines[k]) for k in programs}
+        self.joined = {k: "\n" + "\n".join(self.lines[k]) + "\n" for k in programs}
+        self.alone = {k: len(self.lines[k]) >= 3 and _stands_alone(quiet_parse(blocks[k].code)) for k in programs}
+        self.columns: dict[int, dict[str, set[int]]] = {k: {} for k in programs}
+        for k in programs:
+            for line in self.lines[k]:
+                self.columns[k].setdefault(line.lstrip(), set()).add(_columns(line))
+
+    def __call__(self, k: int, j: int) -> bool:
+        lines = self.lines
+        if k == j or lines[k] == lines[j]:
+            return k != j
+        if 2 * len(lines[k]) > len(lines[j]) or self.alone[k]:
             return False
-        return _quotes(lines[k], columns[j].get(lines[k][0].lstrip(), set()), counts[j])
-
-    whole: list[int] = []
-    for k in sorted(programs, key=lambda k: (-len(lines[k]), -k)):  # a block can only quote one before it here
-        if not any(quotes(k, j) for j in whole):
-            whole.append(k)
-            if len(whole) > MOST_PROGRAMS:
-                break
-    return sorted(whole)
-
-
-def _quotes(snippet: list[str], columns: set[int], counts: Counter[str]) -> bool:
-    """Whether every line of ``snippet`` is one of the program's (``counts``, as often), the snippet's indentation kept
-    or all of it moved right by the same columns (a loop's body quoted on its own); ``columns``: where the program
-    indents the snippet's first line."""
-    shifts = {column - _columns(snippet[0]) for column in columns}
-    for shift in shifts:
-        if shift >= 0:
-            moved = Counter(" " * shift + line for line in snippet)
-            if all(count <= counts[line] for line, count in moved.items()):
+        if k > j and len(lines[k]) > 1 and lines[j][: len(lines[k])] == lines[k]:
+            return False
+        shifts = {column - _columns(lines[k][0]) for column in self.columns[j].get(lines[k][0].lstrip(), set())}
+        for shift in (shift for shift in shifts if shift >= 0):
+            moved = [" " * shift + line for line in lines[k]]
+            in_it = all(n <= self.counts[j][line] for line, n in Counter(moved).items())
+            if in_it and "\n".join(["", *moved, ""]) in self.joined[j]:  # in order, one after another
                 return True
-    return False
+        return False
+
+    def fragment(self, k: int) -> bool:
+        """Whether block ``k`` is part of another program rather than one: it quotes one, or it is at most half as
+        long as one and does not do the task on its own (``add this at the end of the full program:``)."""
+        return not self.alone[k] and any(2 * len(self.lines[k]) <= len(self.lines[j]) for j in self.programs)
+
+    def whole(self) -> list[int]:
+        """The programs (block indices, in order) that quote no other (of two equal blocks, the earlier quotes the
+        later); past :data:`MOST_PROGRAMS`, those found so far."""
+        whole: list[int] = []
+        for k in sorted(self.programs, key=lambda k: (-len(self.lines[k]), -k)):  # a block only quotes a longer one
+            if not any(self(k, j) for j in whole):
+                whole.append(k)
+                if len(whole) > MOST_PROGRAMS:
+                    break
+        return sorted(whole)
+
+
+def _stands_alone(tree: ast.Module) -> bool:
+    """Whether a program reads only names it assigns, imports or defines (calls and builtins aside): it does the task
+    on its own, not a piece of a program that uses the names another part assigns."""
+    stored, read = set(_IMPORTS), set[str]()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            (read if isinstance(node.ctx, ast.Load) else stored).add(node.id)
+        elif isinstance(node, ast.arg):
+            stored.add(node.arg)
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            stored.add(node.name)
+        elif isinstance(node, ast.alias):
+            stored.add((node.asname or node.name).split(".")[0])
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
+            stored.add(node.func.id)
+    return read <= stored | set(dir(builtins))
 
 
 def _columns(line: str) -> int:

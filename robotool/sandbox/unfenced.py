@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import codeop
+import ast
 import itertools
 import re
 import warnings
@@ -26,6 +26,7 @@ def unfenced_program(text: str) -> str:
             f"code follows prose on one line ({lines[before].strip()[:40]!r}); put each line of the program on a line "
             "of its own",
         )
+    _refuse_two_programs(lines, start, end)
     code_like = [k for k, line in enumerate(lines) if (k < start or k >= end) and looks_like_code(line)]
     if not code_like:
         return "\n".join(lines[start:end])
@@ -53,6 +54,33 @@ def _without_words_around(lines: list[str], start: int, end: int) -> tuple[int, 
     except (SyntaxError, ValueError, MemoryError):
         return start, end
     return first, last
+
+
+def _refuse_two_programs(lines: list[str], start: int, end: int) -> None:
+    """Refuse a run that is two programs with a line between them that only names a value, unindented (``...``,
+    ``OR``; a string is a comment): each part parses and acts alone. The first few such lines are tried."""
+    between = [k for k in range(start + 1, end - 1) if _separates(lines[k])]
+    for k in between[:4]:
+        try:
+            parts = [quiet_parse("\n".join(lines[start:k])), quiet_parse("\n".join(lines[k + 1 : end]))]
+        except (SyntaxError, ValueError, MemoryError):
+            continue
+        if all(has_action(part) for part in parts):
+            raise ProgramRejected(
+                k + 1,
+                "text",
+                f"the reply holds two programs, one before and one after {lines[k].strip()[:40]!r}, and does not say "
+                "which one is meant; give exactly one program, in one code block",
+            )
+
+
+def _separates(line: str) -> bool:
+    """Whether an unindented line only names a value other than a string (``...``, ``OR``)."""
+    if not _only_a_value(line) or not line.strip():
+        return False
+    statement = quiet_parse(line).body[0]
+    value = statement.value if isinstance(statement, ast.Expr) else None
+    return not (isinstance(value, ast.Constant) and isinstance(value.value, str | bytes))
 
 
 def _only_a_value(line: str) -> bool:
@@ -129,11 +157,24 @@ _PARSE_OVERHEAD_CHARS = 256
 
 
 def _can_start_program(line: str) -> bool:
-    """False when the line alone is invalid Python however it continues (complete or incomplete is fine)."""
+    """False when the line alone is invalid Python however it continues (complete or incomplete is fine); as
+    ``codeop.compile_command`` decides, but parsed only, never compiled (compiling nested lambdas is superlinear)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            codeop.compile_command(line, symbol="exec")
+            try:
+                compile(line, "<line>", "exec", _PARSE_ONLY | _INCOMPLETE)
+            except SyntaxError:
+                try:
+                    compile(line + "\n", "<line>", "exec", _PARSE_ONLY | _INCOMPLETE)
+                except SyntaxError as e:
+                    if "incomplete input" not in str(e):
+                        compile(line, "<line>", "exec", _PARSE_ONLY)
     except (SyntaxError, ValueError, OverflowError, MemoryError):
         return False
     return True
+
+
+_PARSE_ONLY = ast.PyCF_ONLY_AST
+_INCOMPLETE = 0x4000 | 0x200
+"""``codeop``'s flags PyCF_ALLOW_INCOMPLETE_INPUT and PyCF_DONT_IMPLY_DEDENT: incomplete input is no error."""

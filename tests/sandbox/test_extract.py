@@ -305,6 +305,8 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "```\n~~~\n" * 12_000,  # fences that never close each other
         "```json\n" * 12_000,
         'x = f"' + "{1}" * 30_000 + '"',  # Python 3.11 parses one f-string's fields in quadratic time
+        "x = ['" + "\\'" * 47_000 + "\n",  # string masking from every quote (second adversarial run)
+        ("x = " + "lambda: " * 2_850 + "1\nHmm.\n") * 4,  # compiling nested lambdas (second adversarial run)
     ],
     ids=[
         "names",
@@ -317,6 +319,8 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "fences",
         "tagged-fences",
         "f-string-fields",
+        "escaped-quotes",
+        "nested-lambdas",
     ],
 )
 def test_extraction_of_100_kb_stays_linear(answer: str) -> None:
@@ -401,7 +405,7 @@ def test_an_end_of_turn_marker_named_in_prose_cuts_nothing(prose: str) -> None:
 def test_a_closing_think_tag_named_in_a_sentence_ends_no_reasoning() -> None:
     answer = (
         f"Final program:\n```python\n{GRASP}```\nThe reply has no </think> tag, so nothing is stripped. "
-        f"To try the other grasp:\n```python\n{PUT_DOWN}```\n"
+        f"For comparison, the other grasp:\n```python\n{PUT_DOWN}```\n"
     )
     assert extract(answer).code == GRASP
     assert extract(f"I should open the gripper first.</think>\n\n{GRASP}").code == GRASP  # the tag ends its line
@@ -486,3 +490,121 @@ def test_a_word_after_an_unfenced_program_is_prose_not_a_line_of_it() -> None:
     extraction = extract(f"{GRASP}Done\n")
     assert extraction.code == GRASP and extraction.dropped_lines == 1
     assert extract("x = \\\n1\nopen_gripper()\n").code == "x = \\\n1\nopen_gripper()\n"  # a continued line is kept
+
+
+# Found by the second adversarial run (adv5): each ran a program the model did not mean, refused a clear reply, or took
+# seconds.
+NOGRIP = 'p = get_graspable_point("milk")\nmove_to_position(p)\nclose_gripper()\n'
+WAYPOINTS = "\n".join(f"move_to_position([0.3, {y}, 0.3])" for y in (0.0, 0.1, 0.2)) + "\nprint(p)"
+
+
+def test_reasoning_is_stripped_from_a_long_line_of_escaped_quotes_in_linear_time() -> None:
+    from robotool.sandbox.extract import without_reasoning
+
+    line = "x = ['" + "\\'" * 48_000 + "<think>\n"
+    started = time.process_time()
+    assert without_reasoning(line) == line
+    assert time.process_time() - started < CPU_LIMIT_S / 5
+
+
+ADV5_AMBIGUOUS = {
+    "a correction after a block marked final": (
+        f"Here is the complete code:\n```python\n{NOGRIP}```\nWait, the gripper has to be opened before moving. "
+        f"Here is the correct code:\n```python\n{GRASP}```\n"
+    ),
+    "an echo marked full, then a fix": (
+        f"The full code from the last attempt:\n```python\n{OTHER}```\nIt misses the milk. Use its graspable point "
+        f"instead:\n```python\n{GRASP}```\n"
+    ),
+    "a program marked final split over two blocks": (
+        'Final program:\n```python\np = get_graspable_point("milk")\nopen_gripper()\n```\n'
+        "```python\nmove_to_position(p)\nclose_gripper()\n```\n"
+    ),
+    "a def marked complete, its call in the next block": (
+        "Here's the complete code:\n```python\ndef pick(name):\n    p = get_graspable_point(name)\n    open_gripper()\n"
+        '    move_to_position(p)\n    close_gripper()\n```\nThen call it:\n```python\npick("milk")\n```\n'
+    ),
+    "a line added at the end of the full program": (
+        f"```python\n{NOGRIP}```\nTo lift it, add this at the end of the full program:\n"
+        "```python\nmove_to_position([0.3, 0.0, 0.3])\n```\n"
+    ),
+    "a shorter correction that drops the draft's middle lines": (
+        f"```python\n{GRASP.replace('open_gripper()', 'open_gripper()' + chr(10) + WAYPOINTS)}```\nThe waypoints "
+        f"are not needed. Simply:\n```python\n{GRASP}```\n"
+    ),
+    "a shorter correction that drops the draft's first lines": (
+        f"```python\n{WAYPOINTS}\n{GRASP}```\nWait, the first four lines are wrong. Just this:\n```python\n{GRASP}```\n"
+    ),
+    "a simple version, then a longer optional one": (
+        f"Here's a simple version:\n```python\n{GRASP}```\nIf you also want to put it down, extend it like this:\n"
+        f"```python\n{PUT_DOWN}```\n"
+    ),
+}
+
+
+@pytest.mark.parametrize("answer", ADV5_AMBIGUOUS.values(), ids=ADV5_AMBIGUOUS.keys())
+def test_a_later_different_program_or_a_fragment_marked_final_is_asked_again(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(answer)
+
+
+@pytest.mark.parametrize(
+    "label", ["The key line of the complete program is the grasp itself:", "The only change in the revised code:"]
+)
+def test_a_line_of_the_program_under_a_marker_word_is_a_quote_not_the_program(label: str) -> None:
+    answer = f"Here is the program:\n```python\n{GRASP}```\n{label}\n```python\nopen_gripper()\n```\n"
+    assert extract(answer).code == GRASP
+
+
+@pytest.mark.parametrize("tag", ["<think>", "<reasoning>", "[THINK]", "`<think>`"])
+def test_an_unclosed_think_tag_in_a_sentence_cuts_nothing(tag: str) -> None:
+    answer = (
+        f"Draft:\n```python\n{NOGRIP}```\nThis misses the open step (I should have planned it in a {tag} block). "
+        f"Final program:\n```python\n{GRASP}```\n"
+    )
+    assert extract(answer).code == GRASP
+    if not tag.startswith("`"):  # opening a line, unclosed, it runs to the end
+        assert extract(f"{GRASP}\n  {tag}\nDraft:\n```python\n{NOGRIP}```\n").code == GRASP
+
+
+@pytest.mark.parametrize(
+    "listing",
+    [
+        "Expected output:\n```\nResult: success\n```",
+        "Output:\n```\nGripper: closed\n```",
+        "Example output:\n```\np = [0.35, 0.0, 0.12]\n```",
+        "Task file used:\n```\ntask: milk_reaching_near\nstage: coder\n```",
+        "When run, the simulator logs:\n```\nopen_gripper() -> ok\nclose_gripper() -> ok\n```",
+        "The reach is checked as\n\n    d = sqrt(x**2 + y**2)\n\nwhich is within reach.",
+    ],
+    ids=["status", "state", "assignment", "yaml", "trace", "formula"],
+)
+def test_an_output_listing_or_a_formula_beside_the_program_is_no_second_program(listing: str) -> None:
+    assert extract(f"```python\n{GRASP}```\n{listing}\n").code == GRASP
+
+
+def test_an_untagged_correction_that_does_not_parse_is_still_its_syntax_error() -> None:
+    answer = f"```python\n{NOGRIP}```\nFixed:\n```\nopen_gripper()\nmove_to_position(p\n```\n"
+    with pytest.raises(ProgramRejected, match="syntax error"):
+        extract(answer)
+
+
+@pytest.mark.parametrize("between", ["...", "OR"])
+def test_two_unfenced_programs_with_a_value_line_between_are_asked_again(between: str) -> None:
+    with pytest.raises(ProgramRejected, match=f"two programs, one before and one after '{between}'"):
+        extract(f"{NOGRIP}{between}\n{GRASP}")
+    program = f'{GRASP}"""Then lift it."""\nmove_to_position([0.3, 0.0, 0.3])\n'
+    assert extract(program).code == program  # a string between statements is a comment
+
+
+ADV5_CONTROLS = {
+    "inline code after the block": f"```python\n{GRASP}```\n1. `open_gripper()` opens it first.\n",
+    "a pip block beside it": f"```bash\npip install numpy\n```\n```python\n{GRASP}```\n",
+    "a json result block": f'```python\n{GRASP}```\nResult:\n```json\n{{"held": true}}\n```\n',
+    "answer tags after reasoning": f"<think>\nDraft:\n```python\n{NOGRIP}```\n</think>\n<answer>\n{GRASP}</answer>\n",
+}
+
+
+@pytest.mark.parametrize("answer", ADV5_CONTROLS.values(), ids=ADV5_CONTROLS.keys())
+def test_clear_replies_found_by_the_second_adversarial_run_are_kept(answer: str) -> None:
+    assert extract(answer).code == GRASP
