@@ -196,7 +196,7 @@ class Referee:
         torso that rises under what lies on its back lifts it), it was shoved (a walk or a climb is no push: it would
         move things the push rules refuse, such as objects over the push limit, and what it moved may slide or tip on
         after the robot stops). The world fails (:meth:`conditions`) and a move in progress there is stopped and
-        refused, naming the object."""
+        refused, naming the object. Returns which of the objects that moved this tick a foot stands on."""
         s, state, facts, scene, m = self.state, self.senses.state, self.facts, self.scene, moves.state
         touched = self._owned(state.touching[:, scene.robot_body].any(axis=1))  # by the torso or a leg
         touched &= facts.movable & mask[:, None]
