@@ -37,7 +37,7 @@ from robotool.program_session import (
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
-from robotool.safe_text import capped
+from robotool.safe_text import capped, one_line
 from robotool.sim.backend import BatchedSim, BatchState, Perturbation
 from robotool.sim.backend_choice import make_sim
 from robotool.sim.build import build, embodiment_for
@@ -333,14 +333,14 @@ class _Run:
         return resumed
 
     def _internal_error(self, i: int, state: BatchState, error: BaseException, skill: str | None = None) -> None:
-        """An exception inside the controller (a bug in robotool) ends world ``i`` as an internal error: the
-        traceback is logged and recorded, its program ends and its goal is read now; ``skill`` is the query it
+        """An exception inside the controller (a bug in robotool) ends world ``i`` as an internal error: it is logged
+        in one line and its traceback recorded, its program ends and its goal is read now; ``skill`` is the query it
         answered (a motion skill in progress is named by the world)."""
         world = self.worlds[i]
         call = world.calls[-1] if skill is not None else world.pending
         where = f"in {call.skill}" if call is not None else "after the program ended"
         found = InternalError.of(error, f"the {self.robot.name} controller, {where}, world {i}")
-        logger.error("%s", found, exc_info=error)
+        logger.error("%s (a bug in robotool: its traceback is the rollout's internal_error)", one_line(str(found)))
         world.internal_error = world.internal_error or found
         reason = capped(" ".join(f"internal error: controller error {where}: {found.reason}".split()), 500)
         if world.ended:  # settling after its program: the goal is read now, with the error

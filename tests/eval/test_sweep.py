@@ -251,7 +251,7 @@ def test_a_controller_bug_is_an_internal_error_the_tables_leave_out_and_the_repo
     assert broken.success_rate == 0.5 and [w.internal_error for w in broken.worlds] == [False, True]
     assert broken.internal_error is not None and broken.internal_error.where.endswith("world 1")
     assert "breaks_in_world_1" in broken.internal_error.traceback
-    assert any(r.exc_info is not None and isinstance(r.exc_info[1], FloatingPointError) for r in caplog.records)
+    assert any("FloatingPointError" in r.getMessage() and r.exc_info is None for r in caplog.records)
     report = (config.out_dir / "report.md").read_text(encoding="utf-8")
     index = [r.key.method for r in results.records].index("no_tool")
     listed = (
