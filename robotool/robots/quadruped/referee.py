@@ -74,6 +74,7 @@ class RefereeState:
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     coasting: np.ndarray  # (nworld, nobject) bool: pushed, and not at rest since (it may roll on after the push)
     driven: np.ndarray  # (nworld, nobject) bool: of those, moved by the stride of a walk or climb standing on it
+    drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet of a walk or climb, since rest
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
@@ -96,6 +97,7 @@ class RefereeState:
             rammed_by=np.full((nworld, nobject), -1),
             coasting=np.zeros((nworld, nobject), dtype=bool),
             driven=np.zeros((nworld, nobject), dtype=bool),
+            drift=np.zeros((nworld, nobject)),
             still=np.zeros((nworld, nobject)),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
@@ -134,6 +136,7 @@ class Referee:
         self.state.bumped[w, index] = np.nan
         self.state.carried[w, index] = 0.0
         self.state.rammed_by[w, index] = -1
+        self.state.drift[w, index] = 0.0
         self.state.force_limit[w] = np.nan  # read anew: it may push from another surface
 
     def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
@@ -284,8 +287,11 @@ class Referee:
         :data:`REST_TIME` on end (found by an adversarial run: a pushed box that wedged for one tick at an edge, then
         slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). What the stride
         of a walk or a climb drives back under the feet (``stood_on``, from :meth:`_shoves`) rams as a pushed object
-        does, until it comes to rest (found by an adversarial run: a 15 cm walk along a 3 kg board on free rollers
-        kicked it back into a 10 kg crate on ice, off its pad, with no push and no touch). Once the pushed
+        does, until it comes to rest, once it has travelled ``shove`` across under them (found by an adversarial run:
+        a 15 cm walk along a 3 kg board on free rollers kicked it back into a 10 kg crate on ice, off its pad, with no
+        push and no touch); it rams what it meets, not what rides on it or what it rides on (a second run: a lever on
+        a loose 6 kg roller, rolling a few centimetres as it tips under the feet, lifts the cube on its far end as a
+        lever should). Once the pushed
         object and the objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot
         shoved them (a light object used as a ram moves no more than the robot may push): the world fails
         (:meth:`conditions`) and a move in progress is stopped and refused, naming them."""
@@ -297,7 +303,10 @@ class Referee:
         at_rest = mask[:, None] & (s.still >= REST_TIME)
         s.rammed_by[at_rest] = -1  # at rest: what moves it later is not this ram
         s.coasting[at_rest] = s.driven[at_rest] = False
-        driven = stood_on & (mask & m.moving & (m.pushing < 0))[:, None] & (step > STILL)
+        s.drift[at_rest] = 0.0
+        ridden = stood_on & (mask & m.moving & (m.pushing < 0))[:, None] & (step > STILL)
+        s.drift += np.where(ridden, step, 0.0)
+        driven = ridden & (s.drift > self.config.shove)  # a lever tipping under the feet rocks, a cart rolls away
         s.coasting |= driven  # a walk's stride drives back what the feet stand on: it rams like a pushed object
         s.driven |= driven
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
@@ -337,6 +346,9 @@ class Referee:
         for k in np.flatnonzero(rammed.any(axis=1)).tolist():
             w = int(worlds[k])
             hit = rammed[k] & (s.rammed_by[w] < 0) & (np.arange(rammed.shape[1]) != source[k])
+            if s.driven[w, source[k]]:  # it rams what it meets, not what rides on it or what it rides on
+                normals = self._object_normals(w)
+                hit &= ~(bears_up(normals[source[k]]) | bears_up(normals[:, source[k]]))
             s.rammed_by[w, hit] = source[k]
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:

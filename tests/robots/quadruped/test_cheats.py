@@ -603,12 +603,11 @@ def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
 
 REASONED_CASES = [  # (program, layout, what the refusal must say): found by adversarial runs, each a success before
     # the rear feet plowed an 8.5 kg plate 0.5 m along by its rim until it bridged a 0.30 m gap while the front feet
-    # stood on it, which excused its travel: what another part of the robot presses on a side or a rim is driven (and
-    # what the stride drives under the feet rams as a pushed object does: that rule now stops the plate first)
+    # stood on it, which excused its travel: what another part of the robot presses on a side or a rim is driven
     (
         "plow_a_heavy_plate_with_the_rear_feet_standing_on_it_in_front",
         "heavy_deck_plate_over_a_gap",
-        "deck_plate, driven by the stride of the robot on it, rammed",
+        "the robot ran into deck_plate",
     ),
     # pushing a 2 kg magnetic block dragged the 20 kg slab it lay on, stuck to it, off a platform (the slab bears the
     # block up, so it is no rider, and lies behind its face): weighed as the push leg starts when they stick during
