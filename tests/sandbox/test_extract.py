@@ -386,7 +386,8 @@ def test_many_quotes_of_a_long_program_are_told_apart_in_linear_time() -> None:
     gc.collect()
     started = time.thread_time()
     assert extract(answer).code.startswith("a0=1\na1=1\n")
-    assert time.thread_time() - started < CPU_LIMIT_S / 5
+    # the quadratic check took 5.1 s here; the linear one 0.6-0.8 s on an idle 2-core machine and 1.0 s in a loaded CI
+    assert time.thread_time() - started < CPU_LIMIT_S / 2
 
 
 @pytest.mark.parametrize(
