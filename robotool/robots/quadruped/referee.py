@@ -73,7 +73,6 @@ class RefereeState:
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
     coasting: np.ndarray  # (nworld, nobject) bool: pushed, and not at rest since (it may roll on after the push)
-    driven: np.ndarray  # (nworld, nobject) bool: of those, moved by the stride of a walk or climb standing on it
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet of a walk or climb, since rest
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
@@ -96,7 +95,6 @@ class RefereeState:
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
             coasting=np.zeros((nworld, nobject), dtype=bool),
-            driven=np.zeros((nworld, nobject), dtype=bool),
             drift=np.zeros((nworld, nobject)),
             still=np.zeros((nworld, nobject)),
             overloaded=np.full(nworld, np.nan),
@@ -302,18 +300,16 @@ class Referee:
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
         at_rest = mask[:, None] & (s.still >= REST_TIME)
         s.rammed_by[at_rest] = -1  # at rest: what moves it later is not this ram
-        s.coasting[at_rest] = s.driven[at_rest] = False
+        s.coasting[at_rest] = False
         s.drift[at_rest] = 0.0
         ridden = stood_on & (mask & m.moving & (m.pushing < 0))[:, None] & (step > STILL)
         s.drift += np.where(ridden, step, 0.0)
-        driven = ridden & (s.drift > self.config.shove)  # a lever tipping under the feet rocks, a cart rolls away
-        s.coasting |= driven  # a walk's stride drives back what the feet stand on: it rams like a pushed object
-        s.driven |= driven
+        s.coasting |= ridden & self._driven()  # a lever tipping under the feet rocks, a cart rolls away: the stride
+        # drives back what the feet stand on, and it rams like a pushed object
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
         if worlds.size:
             index = m.pushing[worlds]
             s.coasting[worlds, index] = True
-            s.driven[worlds, index] = False
             rammed = self._rammed(worlds, index, centres, m.u[worlds])
             s.rammed_by[worlds] = np.where(rammed, index[:, None], s.rammed_by[worlds])
         self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step)
@@ -346,7 +342,7 @@ class Referee:
         for k in np.flatnonzero(rammed.any(axis=1)).tolist():
             w = int(worlds[k])
             hit = rammed[k] & (s.rammed_by[w] < 0) & (np.arange(rammed.shape[1]) != source[k])
-            if s.driven[w, source[k]]:  # it rams what it meets, not what rides on it or what it rides on
+            if self._driven()[w, source[k]]:  # it rams what it meets, not what rides on it or what it rides on
                 normals = self._object_normals(w)
                 hit &= ~(bears_up(normals[source[k]]) | bears_up(normals[:, source[k]]))
             s.rammed_by[w, hit] = source[k]
@@ -401,6 +397,11 @@ class Referee:
             rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
         return rammed
 
+    def _driven(self) -> np.ndarray:
+        """(nworld, nobject) the objects the stride has driven ``shove`` across under the feet since they last rested
+        (or were pushed): they ram as pushed objects do."""
+        return self.state.drift > self.config.shove
+
     def _weigh_rams(self, ends: list[SkillEnd], worlds: np.ndarray, moved: np.ndarray, moves: MoveRunner) -> None:
         """Fail the ``worlds`` where a pushed object and the objects its push rammed and ``moved`` (k, nobject) weigh
         more than the push limit; stop and refuse the move in progress there."""
@@ -412,7 +413,7 @@ class Referee:
                 mass = float(masses[k, pusher] + masses[k, group].sum())
                 if mass <= limit or s.shoves[w] is not None or self.senses.state.failed[w] is not None:
                     continue
-                ram = f"{names[pusher]}, driven by the stride of the robot on it," if s.driven[w, pusher] else (
+                ram = f"{names[pusher]}, driven by the stride of the robot on it," if self._driven()[w, pusher] else (
                     f"pushing {names[pusher]}"
                 )
                 s.shoves[w] = reason = (
