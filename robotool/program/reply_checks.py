@@ -21,7 +21,7 @@ import dspy
 from dspy.utils.exceptions import LMError
 
 from robotool.safe_text import capped
-from robotool.sandbox.code_shape import calls, looks_like_code
+from robotool.sandbox.code_shape import calling_line
 from robotool.sandbox.extract import without_reasoning
 
 MAX_REPLY_CHARS = 100_000
@@ -166,7 +166,7 @@ def _more_code(text: str) -> bool:
     """Whether ``text`` (what follows an answer) holds more code: a fenced block or a field, or a line that reads as
     code and calls something (a correction written without fences, or indented as a Markdown code block)."""
     return bool(_MORE_CODE.search(text)) or any(
-        looks_like_code(line) and calls(line.strip()) for line in text.split("\n")[:MAX_LINES_AFTER]
+        calling_line(line) for line in text.split("\n")[:MAX_LINES_AFTER]
     )
 
 

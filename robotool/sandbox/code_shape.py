@@ -43,6 +43,12 @@ def looks_like_code(line: str) -> bool:
     return False
 
 
+def calling_line(line: str) -> bool:
+    """Whether a line reads as code and parses, alone, as a statement that calls something: a step of a program
+    written where none was expected (outside the code blocks, after the answer)."""
+    return looks_like_code(line) and calls(line.strip())
+
+
 def quiet_parse(code: str) -> ast.Module:
     """``ast.parse`` without the warnings that text which is not the program raises."""
     with warnings.catch_warnings():

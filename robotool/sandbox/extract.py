@@ -10,7 +10,7 @@ import textwrap
 from collections import Counter
 from dataclasses import dataclass
 
-from robotool.sandbox.code_shape import calls, has_action, looks_like_code, quiet_parse
+from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_like_code, quiet_parse
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
 from robotool.sandbox.unfenced import unfenced_program
@@ -328,7 +328,7 @@ def _code_outside_python_blocks(text: str, blocks: list[_Block]) -> str | None:
     (``text``) whose body parses as a program with a call."""
     named = {word for block in blocks for word in _WORD.findall(block.code)}
     for line in outside_blocks(text).split("\n"):
-        if looks_like_code(line) and calls(line.strip()) and not _formula(line.strip(), named):
+        if calling_line(line) and not _formula(line.strip(), named):
             return f"outside the code blocks ({line.strip()[:40]!r})"
     for opening, closing in fence_pairs(text):
         tag = opening.group(2)
