@@ -47,6 +47,14 @@ MIN_CLOTH_MASS = 0.01
 as :data:`MIN_MASS` at least (a 200 m cloth of 1 g did not build)."""
 MAX_CLOTH_LENGTH = 20.0
 """m: the longest cloth, 200 links (a cloth of 120 m nests its links deeper than the simulator builds)."""
+MIN_BUTTON_STIFFNESS = 1.0
+"""N/m: the softest button spring a task file may give (0.01 N at the press travel; a softer one would be described
+as a spring of 0 N/m)."""
+MAX_BUTTON_STIFFNESS = 15_000.0
+"""N/m: the stiffest button spring a task file may give, 150 N at the press travel: more than the arm pushes (its
+servos' 100 N; 39 N, its 4 kg payload, by the payload rule), so a button too stiff for it can still be given. The
+simulator follows the 20 g face on its spring stably at its 2 ms step up to ``4 m / dt^2`` = 20000 N/m; a face let go
+1.5 cm in on a 30000 N/m spring blew up the simulation."""
 
 
 def _not_boolean(value: object) -> object:
@@ -67,12 +75,29 @@ def _at_least(smallest: float, what: str) -> AfterValidator:
     return AfterValidator(check)
 
 
+def _between(low: float, high: float, what: str, unit: str) -> AfterValidator:
+    """A closed range whose message names what it bounds and the range."""
+
+    def check(value: float) -> float:
+        if not low <= value <= high:
+            raise ValueError(f"{what} lies between {low:g} and {high:g} {unit} (got {value:g})")
+        return value
+
+    return AfterValidator(check)
+
+
 NOT_BOOLEAN = BeforeValidator(_not_boolean)
 Name = Annotated[str, StringConstraints(pattern=r"^[a-z0-9_]+$", min_length=1, max_length=64)]
 Positive = Annotated[float, Field(gt=0, le=MAX_LENGTH, allow_inf_nan=False), NOT_BOOLEAN]
 PositiveLength = Annotated[Positive, _at_least(MIN_LENGTH, "length (m)")]
 Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE, le=MAX_COORDINATE, allow_inf_nan=False), NOT_BOOLEAN]
 Mass = Annotated[float, Field(gt=0, le=MAX_MASS, allow_inf_nan=False), NOT_BOOLEAN, _at_least(MIN_MASS, "mass (kg)")]
+ButtonStiffness = Annotated[
+    float,
+    Field(allow_inf_nan=False),
+    NOT_BOOLEAN,
+    _between(MIN_BUTTON_STIFFNESS, MAX_BUTTON_STIFFNESS, "a button's spring stiffness", "N/m"),
+]
 Vec3 = tuple[Coordinate, Coordinate, Coordinate]
 Size3 = tuple[PositiveLength, PositiveLength, PositiveLength]
 Shape = Literal["box", "cylinder", "hook", "cloth", "button"]
@@ -129,7 +154,7 @@ class SceneObject(StrictModel):
     soft: StrictBool = False
     fragile: Fragile | None = None
     graspable_point: Vec3 | None = None
-    stiffness: Annotated[float, Field(gt=0, allow_inf_nan=False), NOT_BOOLEAN] | None = None  # buttons: spring, N/m
+    stiffness: ButtonStiffness | None = None  # buttons: spring, N/m
     travel: PositiveLength | None = None  # buttons: how far the face can be pushed in, m
     notes: str | None = None
 

@@ -9,10 +9,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mujoco
+import numpy as np
 import pytest
 
 from robotool import tasks
 from robotool.sim.build import build
+from robotool.task.describe import describe
+from robotool.task.scene import MAX_BUTTON_STIFFNESS, MIN_BUTTON_STIFFNESS
 from robotool.task.task_file import TaskFileError
 from robotool.task.task_model import Task
 
@@ -133,6 +137,56 @@ def test_limits_within_the_bounds_load(tmp_path: Path) -> None:
 )
 def test_tiny_sizes_and_masses_are_refused(tmp_path: Path, side: float, extra: str, problem: str) -> None:
     assert f"objects[0](cube){problem}" in _refusal(tmp_path, _arm(extra=extra, side=side)).replace(").", ")", 1)
+
+
+def _with_button(extra: str) -> str:
+    """The arm task with a button on the ground (``extra``: its further keys) after the table."""
+    button = f"{{name: button, shape: button, center: [0.5, 0.0, 0.04], size: [0.06, 0.06, 0.08]{extra}}}"
+    return _arm().replace("goal:", f"  - {button}\ngoal:")
+
+
+RANGE = "a button's spring stiffness lies between 1 and 15000 N/m"
+
+
+@pytest.mark.parametrize(
+    ("extra", "problem"),
+    [
+        (", stiffness: 1.0e+300", f".stiffness: {RANGE} (got 1e+300)"),
+        (", stiffness: 30000", f".stiffness: {RANGE} (got 30000)"),
+        (", stiffness: 1.0e-300", f".stiffness: {RANGE} (got 1e-300)"),
+        (", stiffness: -5", f".stiffness: {RANGE} (got -5)"),
+        (", stiffness: .inf", ".stiffness: Input should be a finite number (got inf)"),
+        (", stiffness: true", ".stiffness: a number is needed, not a boolean (got true)"),
+        (", travel: 1.0e+300", ".travel: Input should be less than or equal to 1000 (got 1e+300)"),
+        (
+            ", travel: 0.5",
+            ": button travel 0.5 m must exceed the 0.01 m that counts as pressed and be at most half the button's "
+            "length (0.03 m)",
+        ),
+    ],
+)
+def test_a_buttons_spring_and_travel_are_bounded(tmp_path: Path, extra: str, problem: str) -> None:
+    """A stiffness of 1e300 N/m loaded and ran, a button nothing could press, and one stiffer than the simulator's
+    step follows blows the simulation up: each is refused in one line naming the key and the range."""
+    assert _refusal(tmp_path, _with_button(extra)) == f"{tmp_path / 'task.yaml'}: objects[2](button){problem}"
+
+
+@pytest.mark.parametrize("stiffness", [MIN_BUTTON_STIFFNESS, MAX_BUTTON_STIFFNESS])
+def test_the_softest_and_stiffest_springs_load_and_read_in_the_description(tmp_path: Path, stiffness: float) -> None:
+    said = describe(_load(tmp_path, _with_button(f", stiffness: {stiffness}")))
+    assert f"counts as pressed after 0.01 m of travel, against a spring of {stiffness:g} N/m;" in said
+
+
+def test_the_stiffest_button_allowed_springs_back_stably_in_the_simulator(tmp_path: Path) -> None:
+    """Its face pushed to the end of its travel and let go returns to rest; a stiffer spring than the simulator's
+    step follows (30000 N/m) blew the simulation up."""
+    model = build(_load(tmp_path, _with_button(f", stiffness: {MAX_BUTTON_STIFFNESS}, travel: 0.03"))).model
+    data = mujoco.MjData(model)
+    face = model.joint("button__travel").qposadr[0]
+    data.qpos[face] = 0.03
+    mujoco.mj_step(model, data, nstep=1000)
+    assert not data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number and np.isfinite(data.qvel).all()
+    assert abs(data.qpos[face]) < 0.001
 
 
 @pytest.mark.parametrize(
