@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import logging
 import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
+from fixtures.reference import REFERENCE, program_path
 
 from robotool.cli.internal_error import EXIT_INTERNAL_ERROR, TRACEBACK_PREFIX
+from robotool.robots.arm.arm_controller import ArmController
 
 
 class InjectedFault(Exception):
@@ -78,3 +83,40 @@ def test_a_user_mistake_still_exits_2_without_a_traceback_file(
     assert main(["describe", str(tmp_path / "missing.yaml")]) == 2
     assert "internal error" not in capsys.readouterr().err
     assert not list(tmp_path.glob(f"{TRACEBACK_PREFIX}*"))
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "milk_reaching_near", str(program_path(REFERENCE["milk_reaching_near"]))],
+        ["solve", "milk_reaching_near", "--planner", "search"],
+    ],
+    ids=["run", "solve"],
+)
+def test_a_world_ended_by_a_controller_bug_exits_70_with_its_one_logged_line(
+    argv: list[str],
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """``robotool run`` exited 1 and ``robotool solve`` 0 ("solved") when a skill controller raised in a world (a bug
+    in robotool, recorded as the rollout's internal error), as for a program's own outcome. Now they print their
+    summary and exit 70; the bug is logged in one line as it happens."""
+    from robotool.cli import main
+
+    original = ArmController.start
+
+    def breaks_in_world_1(self: ArmController, state: Any, worlds: np.ndarray, skill: str, args: Any) -> Any:
+        if 1 in np.asarray(worlds):  # TEST FIXTURE: a fault injected into the controller
+            raise FloatingPointError("overflow encountered in the servo reference")
+        return original(self, state, worlds, skill, args)
+
+    monkeypatch.setattr(ArmController, "start", breaks_in_world_1)
+    with caplog.at_level(logging.ERROR, logger="robotool.sim.lockstep"):
+        status = main([*argv, "--worlds", "2", "--backend", "mujoco"])
+    out, err = capsys.readouterr()
+    assert status == EXIT_INTERNAL_ERROR and "Traceback" not in out + err, err
+    assert "internal error: controller error in " in " ".join(out.replace("│", " ").split())  # the summary says it
+    logged = [r.getMessage() for r in caplog.records]
+    assert logged and all("\n" not in line and "FloatingPointError: overflow" in line for line in logged), logged
+    assert logged[0].endswith("(a bug in robotool: its traceback is the rollout's internal_error)")

@@ -12,12 +12,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from fixtures.reference import REFERENCE, TOOL_FREE, program, program_path
 
 import robotool
 from robotool import tasks
 from robotool.cli import main
+from robotool.cli.internal_error import EXIT_INTERNAL_ERROR
+from robotool.robots.arm.arm_controller import ArmController
 
 REFUSALS = {  # quadruped task -> (skill refused, measured key, value, tolerance) for its tool-free program
     "sofa_traversing": ("walk_to_position", "gap", 0.30, 0.02),  # beyond the end of the board reaching over it
@@ -133,6 +136,27 @@ def test_json_report_matches_the_library(capsys: pytest.CaptureFixture[str], tmp
         assert rollout["calls"][-1]["skill"] == "move_to_position"
     library = robotool.run("button_pressing", program("button_pressing"), worlds=2, seed=4, backend="mujoco")
     assert [r.model_dump(mode="json") for r in library.rollouts] == data["rollouts"]
+
+
+def test_a_controller_bug_exits_70_with_its_traceback_in_the_json_report(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A skill controller that raises (a bug in robotool) is not the program's failure: the run exits 70, not 1, and
+    the traceback its logged line points to is the rollout's ``internal_error`` in the report."""
+
+    def breaks(self: ArmController, state: Any, worlds: np.ndarray, skill: str, args: Any) -> Any:
+        raise FloatingPointError("overflow encountered in the servo reference")  # TEST FIXTURE: an injected fault
+
+    monkeypatch.setattr(ArmController, "start", breaks)
+    report = tmp_path / "report.json"
+    path = str(program_path(REFERENCE["milk_reaching_near"]))
+    status, out, _ = run_cli(capsys, "milk_reaching_near", path, "--backend", "mujoco", "--json", str(report))
+    (rollout,) = json.loads(report.read_text())["rollouts"]
+    assert status == EXIT_INTERNAL_ERROR and "some worlds failed: success rate 0%" in out
+    assert (
+        "FloatingPointError" in rollout["internal_error"]["reason"]
+        and "breaks" in rollout["internal_error"]["traceback"]
+    )
 
 
 def test_bad_task_file_exits_2(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -13,6 +13,7 @@ from rich.console import Console
 
 from robotool import tasks
 from robotool.cli.command import UsageError, check_batch, set_command
+from robotool.cli.internal_error import EXIT_INTERNAL_ERROR
 from robotool.cli.options import DEFAULT_WORLDS, TASK_HELP, Verbs, add_world_options, output_file
 from robotool.cli.outputs import (
     add_html_option,
@@ -41,7 +42,8 @@ def source_encoding(data: bytes) -> str:
 
 
 def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
-    """Run a skill program file (parsed strictly, as written) against a task and report what happened."""
+    """Run a skill program file (parsed strictly, as written) against a task and report what happened. Exit status 0
+    when every world succeeded, 1 when any failed, 70 when a bug in robotool (a controller that raised) ended one."""
     from robotool.cli.summary import print_run, print_run_verdict
     from robotool.execute import run
 
@@ -85,6 +87,8 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
 
         write_page(args.html, lambda: run_page(args.html, task, report, videos), console)
     print_run_verdict(report, console)
+    if any(r.internal_error is not None for r in report.rollouts):  # logged in one line as it happened
+        return EXIT_INTERNAL_ERROR
     return 0 if report.success else 1
 
 

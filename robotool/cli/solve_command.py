@@ -12,6 +12,7 @@ from rich.console import Console
 
 from robotool import tasks
 from robotool.cli.command import UsageError, check_batch, set_command
+from robotool.cli.internal_error import EXIT_INTERNAL_ERROR
 from robotool.cli.options import (
     MAX_REPAIRS,
     TASK_HELP,
@@ -49,7 +50,8 @@ WAIT_LINE_EVERY = 30
 
 
 def cmd_solve(args: argparse.Namespace, console: Console, errors: Console) -> int:
-    """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary."""
+    """Solve a task with the RoboTool program, or with the LM-free search planner, and print the summary. Exit
+    status 0 when solved, 1 when not, 70 when a bug in robotool (a controller that raised) ended a candidate's world."""
     from robotool.cli.summary import print_solution, print_solution_verdict
     from robotool.program.lm import HOW_TO_CONFIGURE
 
@@ -102,6 +104,8 @@ def cmd_solve(args: argparse.Namespace, console: Console, errors: Console) -> in
 
         write_page(args.html, lambda: solution_page(args.html, task, solution, videos), console)
     print_solution_verdict(solution, console)
+    if any(r.internal_error is not None for c in solution.candidates for r in c.rollouts):  # each logged in one line
+        return EXIT_INTERNAL_ERROR
     return 0 if solution.success else 1
 
 
