@@ -46,14 +46,23 @@ class BatchState:
     touching: np.ndarray  # (nworld, nbody, nbody) bool
     failed: list[str | None]
     _xmats: dict[int, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
+    _frames: list[np.ndarray] = field(default_factory=list, init=False, repr=False, compare=False)
 
     def xmat(self, body: int) -> np.ndarray:
         """Rotation matrices of one body in every world, (nworld, 3, 3) (computed once per state and body: do not
         write into it)."""
         cached = self._xmats.get(body)
         if cached is None:
-            cached = self._xmats[body] = quat_to_mat(self.xquat[:, body])
+            cached = self._xmats[body] = self.frames()[:, body].copy()
         return cached
+
+    def frames(self) -> np.ndarray:
+        """Rotation matrices of every body in every world, (nworld, nbody, 3, 3) (computed once per state: do not
+        write into it)."""
+        if not self._frames:
+            nworld, nbody = self.xquat.shape[:2]
+            self._frames.append(quat_to_mat(self.xquat.reshape(-1, 4)).reshape(nworld, nbody, 3, 3))
+        return self._frames[0]
 
 
 def quat_to_mat(q: np.ndarray) -> np.ndarray:
@@ -69,6 +78,17 @@ def quat_to_mat(q: np.ndarray) -> np.ndarray:
     out[:, 2, 0] = 2 * (x * z - w * y)
     out[:, 2, 1] = 2 * (y * z + w * x)
     out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The cross products of 3-vectors ``a`` and ``b`` (..., 3, broadcast), each component's two products subtracted
+    as ``np.cross`` subtracts them (the same numbers to the bit, without its argument handling)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    a0, a1, a2, b0, b1, b2 = a[..., 0], a[..., 1], a[..., 2], b[..., 0], b[..., 1], b[..., 2]
+    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
+    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
+    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
     return out
 
 

@@ -36,8 +36,9 @@ All arrays carry the world index first, ``(nworld, ...)``; lengths are metres, t
 from __future__ import annotations
 
 import copy
+import functools
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, fields, is_dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -153,9 +154,15 @@ def copy_state(state: Any, into: Any = None) -> Any:
     out = copy.copy(state) if into is None else into
     if type(out) is not type(state):
         raise TypeError(f"cannot copy a {type(state).__name__} into a {type(out).__name__}")
-    for f in fields(state):
-        object.__setattr__(out, f.name, _copied(getattr(state, f.name)))
+    for name in _field_names(type(state)):
+        object.__setattr__(out, name, _copied(getattr(state, name)))
     return out
+
+
+@functools.cache
+def _field_names(kind: type) -> tuple[str, ...]:
+    """The names of a dataclass's fields."""
+    return tuple(f.name for f in fields(kind))
 
 
 _CONTAINERS = (np.ndarray, list, dict)  # what a copy copies (anything else is shared)
@@ -165,10 +172,15 @@ def _copied(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.copy()
     if isinstance(value, list):
-        return [_copied(v) if isinstance(v, _CONTAINERS) else v for v in value]
+        return [_copied(v) for v in value] if _nested(value) else value.copy()
     if isinstance(value, dict):
-        return {k: _copied(v) if isinstance(v, _CONTAINERS) else v for k, v in value.items()}
+        return {k: _copied(v) for k, v in value.items()} if _nested(value.values()) else value.copy()
     return value
+
+
+def _nested(values: Iterable[Any]) -> bool:
+    """Whether any of ``values`` is an array, list or dict (which a copy copies in turn)."""
+    return any(issubclass(kind, _CONTAINERS) for kind in set(map(type, values)))
 
 
 def error_end(world: int, error: Exception) -> SkillEnd:

@@ -185,6 +185,7 @@ class _Run:
         self.goal: GoalTracker = goal_tracker(scene, sim)
         nworld, nobj = sim.nworld, len(scene.object_names)
         self.touched = np.zeros((nworld, nobj), dtype=bool)
+        self.object_bodies = np.flatnonzero(scene.body_object >= 0)
         self.robot_welds = _robot_welds(scene)
         self.start_xpos = np.zeros(0)
         self.t0 = np.zeros(nworld)
@@ -376,7 +377,7 @@ class _Run:
         failed while settling; fail those still moving ``SETTLE_LONGEST`` past their end."""
         if not any(world.ended and not world.finished for world in self.worlds):
             return  # no world settles: nothing to read in the step loop
-        objects = np.flatnonzero(self.scene.body_object >= 0)
+        objects = self.object_bodies
         travel = np.linalg.norm(state.xpos[:, objects] - previous.xpos[:, objects], axis=2)  # (nworld, nbody)
         speed = travel / np.maximum(state.time - previous.time, 1e-9)[:, None]
         half_step = self.scene.model.opt.timestep / 2
@@ -423,13 +424,11 @@ class _Run:
         self.magnets.update(self.sim, state, alive)
         self.sheets.update(self.sim, state, alive)
         self.goal.update(state, alive, alive & ~self.controller.overloaded(state))
-        scene = self.scene
-        owner = scene.body_object
-        robot_contact = state.touching[:, scene.robot_body, :].any(axis=1)  # (nworld, nbody)
-        moved = np.linalg.norm(state.xpos - self.start_xpos, axis=2) > MOVED
-        hit = (robot_contact | moved)[:, owner >= 0]
+        objects = self.object_bodies
+        robot_contact = state.touching[:, self.scene.robot_body][:, :, objects].any(axis=1)  # (nworld, object bodies)
+        moved = np.linalg.norm(state.xpos[:, objects] - self.start_xpos[:, objects], axis=2) > MOVED
         touched = np.zeros_like(self.touched)
-        np.logical_or.at(touched.T, owner[owner >= 0], hit.T)
+        np.logical_or.at(touched.T, self.scene.body_object[objects], (robot_contact | moved).T)
         self.touched |= touched & alive[:, None]
         self._mark_held(state, alive)
         failed = np.array([f is not None for f in state.failed])

@@ -26,7 +26,7 @@ from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import ReadAtTicks
-from robotool.sim.strikes import StrikeWatch, geom_half_sizes, geom_poses
+from robotool.sim.strikes import GeomFrames, StrikeWatch, geom_half_sizes
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
@@ -319,7 +319,7 @@ class OutlineLandings:
         above a plane)."""
         near = np.zeros(len(points), dtype=bool)
         geoms = np.flatnonzero(self.model.geom_bodyid == body)
-        centres, frames = geom_poses(self.model, state, geoms)
+        centres, frames = GeomFrames.of(self.model, geoms).poses(state)
         for k, g in enumerate(geoms.tolist()):
             local = (points - centres[world, k]) @ frames[world, k]
             if self.model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:

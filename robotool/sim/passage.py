@@ -25,7 +25,7 @@ import numpy as np
 from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 from robotool.sim.compiled_scene import Scene
-from robotool.sim.strikes import geom_half_sizes, geom_poses
+from robotool.sim.strikes import GeomFrames, geom_half_sizes
 
 CONDITION = "nothing_passed_through"
 """The sub-condition every goal gets where the scene has something that could pass through something else."""
@@ -47,7 +47,7 @@ class PassageWatch:
         self.half = geom_half_sizes(model)[self.walls]  # a cylinder's: its radius twice, its half-length
         self.round = cylinder[self.walls]  # a cylinder: passed through its caps only, inside its circle
         self.apart = geom_owner[self.movers][:, None] != geom_owner[self.walls][None, :]  # (mover, wall)
-        self.model = model
+        self.mover_frames, self.wall_frames = GeomFrames.of(model, self.movers), GeomFrames.of(model, self.walls)
         self.names = [o.name for o in objects]
         self.mover_owner, self.wall_owner = geom_owner[self.movers], geom_owner[self.walls]
         self._before: np.ndarray | None = None  # (nworld, mover, wall, 3): each centre in each wall's frame
@@ -88,8 +88,8 @@ class PassageWatch:
 
     def _in_walls(self, state: BatchState) -> np.ndarray:
         """(nworld, mover, wall, 3) each mover's centre in each wall's frame (its centre the origin)."""
-        centre = geom_poses(self.model, state, self.movers)[0]
-        wall_centre, wall_frame = geom_poses(self.model, state, self.walls)
+        centre = self.mover_frames.centres(state)
+        wall_centre, wall_frame = self.wall_frames.poses(state)
         offset = centre[:, :, None, :] - wall_centre[:, None, :, :]
         return np.einsum("wkji,wmkj->wmki", wall_frame, offset)
 
@@ -104,6 +104,8 @@ class PassageWatch:
             | (crossed[..., 1] & inside[..., 0] & inside[..., 2])
             | (crossed[..., 2] & inside[..., 0] & inside[..., 1])
         )
+        if not self.round.any():
+            return through
         radius = self.half[None, None, :, 0]  # a cylinder: through its caps, over its circle,
         capped = crossed[..., 2] & (np.hypot(before[..., 0], before[..., 1]) < radius)
         capped &= np.hypot(now[..., 0], now[..., 1]) < radius

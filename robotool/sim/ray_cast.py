@@ -46,6 +46,7 @@ class RayGeoms:
     visible: np.ndarray  # (ngeom,) bool
     bound: np.ndarray  # (ngeom,) the squared radius of the bounding sphere a ray must meet first (0: none tested)
     _eligible: dict[tuple[bytes, int], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
+    _picked: dict[bytes, GeomFacts] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def of(cls, model: mujoco.MjModel) -> RayGeoms:
@@ -77,6 +78,29 @@ class RayGeoms:
             self._eligible[key] = index
         return index
 
+    def picked(self, index: np.ndarray) -> GeomFacts:
+        """The facts of geoms ``index`` as the kernels read them, found once per ``index`` (read-only)."""
+        key = np.asarray(index, dtype=np.int64).tobytes()
+        facts = self._picked.get(key)
+        if facts is None:
+            facts = self._picked[key] = GeomFacts(
+                type=self.type[index].astype(np.int32),
+                size=np.ascontiguousarray(self.size[index]),
+                bound=np.ascontiguousarray(self.bound[index]),
+                body=self.body[index].astype(np.int32),
+            )
+        return facts
+
+
+@dataclass(frozen=True)
+class GeomFacts:
+    """Some geoms' facts, as the kernels read them."""
+
+    type: np.ndarray  # (k,) int32
+    size: np.ndarray  # (k, 3)
+    bound: np.ndarray  # (k,) the squared radius of the bounding sphere a ray must meet first (0: none tested)
+    body: np.ndarray  # (k,) int32
+
 
 def cast(
     geoms: RayGeoms,
@@ -101,11 +125,12 @@ def cast(
     shape = pnt.shape[:2]
     if not len(index):
         return np.full(shape, -1.0), np.full(shape, -1, dtype=int)
+    picked = geoms.picked(index)
     x, hit = ray_kernel.cast(
-        geoms.type[index],
-        geoms.size[index],
-        geoms.bound[index],
-        geoms.body[index],
+        picked.type,
+        picked.size,
+        picked.bound,
+        picked.body,
         xpos,
         xmat,
         pnt,
@@ -133,10 +158,11 @@ def inside(
     shape = pnt.shape[:2]
     if not len(candidates):
         return np.full(shape, -1)
+    picked = geoms.picked(candidates)
     found = ray_kernel.inside(
-        geoms.type[candidates],
-        geoms.size[candidates],
-        geoms.body[candidates],
+        picked.type,
+        picked.size,
+        picked.body,
         xpos,
         xmat,
         pnt,

@@ -383,8 +383,10 @@ def _floats(values: np.ndarray) -> np.ndarray:
 
 
 def _ints(values: np.ndarray) -> np.ndarray:
-    """Flat int32 values (the kernels index per-ray values by the ray's flat index)."""
-    return np.ascontiguousarray(values, dtype=np.int32).reshape(-1)
+    """Flat int32 values (the kernels index per-ray values by the ray's flat index): ``values`` itself where they are
+    so already."""
+    flat = np.ascontiguousarray(values, dtype=np.int32)
+    return flat if flat.ndim == 1 else flat.reshape(-1)
 
 
 def _poses(xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

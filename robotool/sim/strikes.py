@@ -22,10 +22,12 @@ dish lands between two readings, each slower than the landing.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
-from robotool.sim.backend import BatchState, quat_to_mat
+from robotool.sim.backend import BatchState, cross, quat_to_mat
 from robotool.sim.compiled_scene import Scene
 
 GRAVITY = 9.81  # m/s^2
@@ -71,7 +73,7 @@ class StrikeWatch:
         what lands on it), and through which striker each did (-1: directly); a fixed object it came to touch met it at
         its own speed."""
         xpos = state.xpos[:, self.strikers]
-        xmat = quat_to_mat(state.xquat[:, self.strikers].reshape(-1, 4)).reshape(*xpos.shape, 3)
+        xmat = state.frames()[:, self.strikers]
         direct = np.asarray(state.touching[:, self.mine][:, :, self.strikers].any(axis=1))
         pairs = np.asarray(state.touching[:, self.strikers][:, :, self.strikers])  # [w, s, c]: s touches c
         carried = self._resting(direct, pairs, self.loose & self._above(state))
@@ -87,7 +89,7 @@ class StrikeWatch:
         rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
         spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
         centre = state.xpos[:, None, self.body]
-        moving = (xpos - self._xpos) * rate + np.cross(spin, centre - xpos)  # where the object's centre is
+        moving = (xpos - self._xpos) * rate + cross(spin, centre - xpos)  # where the object's centre is
         speed = np.linalg.norm(own[:, None] - moving, axis=2)  # (nworld, nstriker)
         fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
         via = fresh.any(axis=2) & ~direct & ~self._touching()  # (what rested on it already does not strike it anew)
@@ -173,7 +175,7 @@ class StrikeWatch:
         if not fast.any():
             return fast
         cover = speed * dt + gain * dt**2 / 2
-        near = (self.fixed.gaps(state, self.mine) < cover[:, None]) & ~self._walls
+        near = (self.fixed.gaps(state) < cover[:, None]) & ~self._walls
         return fast & near.any(axis=1)
 
 
@@ -189,37 +191,53 @@ class FixedBodies:
         self.bodies = np.flatnonzero(fixed)
         self.names = [objects[owner[b]].name for b in self.bodies.tolist()]
         shaped = model.geom_rbound > 0  # (a plane bounds nothing)
-        self.geoms = np.flatnonzero(shaped & fixed[model.geom_bodyid])
-        self.column = np.searchsorted(self.bodies, model.geom_bodyid[self.geoms])  # each geom's fixed body
-        self.mine = np.flatnonzero(shaped & (owner[model.geom_bodyid] == index))
-        self.half = geom_half_sizes(model)
-        self.model = model
+        geoms = np.flatnonzero(shaped & fixed[model.geom_bodyid])
+        self.column = np.searchsorted(self.bodies, model.geom_bodyid[geoms])  # each geom's fixed body
+        mine = np.flatnonzero(shaped & (owner[model.geom_bodyid] == index))
+        half = geom_half_sizes(model)
+        self.geoms, self.mine = GeomFrames.of(model, geoms), GeomFrames.of(model, mine)
+        self.geom_half, self.mine_half = half[geoms], half[mine]
 
     def touching(self, state: BatchState, mine: np.ndarray) -> np.ndarray:
         """(nworld, nfixed) which fixed bodies touch the object (its bodies ``mine``)."""
         return np.asarray(state.touching[:, mine][:, :, self.bodies].any(axis=1))
 
-    def gaps(self, state: BatchState, mine: np.ndarray) -> np.ndarray:
+    def gaps(self, state: BatchState) -> np.ndarray:
         """(nworld, nfixed) at most how far the object's geoms are from each fixed body's (0 or less: they may
-        touch)."""
-        ours, theirs = self._boxes(state, self.mine), self._boxes(state, self.geoms)
-        gap = box_gaps(*ours, *theirs).min(axis=1)  # (nworld, ngeom of the fixed bodies)
+        touch), read from the boxes around them."""
+        ours, theirs = self.mine.poses(state), self.geoms.poses(state)
+        gap = box_gaps(*ours, self.mine_half, *theirs, self.geom_half).min(axis=1)  # (nworld, the fixed bodies' ngeom)
         out = np.full((len(state.time), len(self.bodies)), np.inf)
         np.minimum.at(out.T, self.column, gap.T)
         return out
 
-    def _boxes(self, state: BatchState, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Boxes around ``geoms`` in every world: centres (nworld, k, 3), axes as columns (nworld, k, 3, 3), half
-        sizes (k, 3)."""
-        return *geom_poses(self.model, state, geoms), self.half[geoms]
 
+@dataclass(frozen=True)
+class GeomFrames:
+    """Some geoms of a model, placed in every world by their bodies' poses: each one's body, and its position and
+    rotation in that body's frame."""
 
-def geom_poses(model: mujoco.MjModel, state: BatchState, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Centres (nworld, k, 3) and frames (nworld, k, 3, 3; axes as columns) of ``geoms`` in every world."""
-    body = model.geom_bodyid[geoms]
-    frame = quat_to_mat(state.xquat[:, body].reshape(-1, 4)).reshape(len(state.time), len(geoms), 3, 3)
-    centre = state.xpos[:, body] + np.einsum("wkij,kj->wki", frame, model.geom_pos[geoms])
-    return centre, frame @ quat_to_mat(model.geom_quat[geoms])
+    body: np.ndarray  # (k,)
+    pos: np.ndarray  # (k, 3)
+    rot: np.ndarray  # (k, 3, 3)
+
+    @classmethod
+    def of(cls, model: mujoco.MjModel, geoms: np.ndarray) -> GeomFrames:
+        return cls(model.geom_bodyid[geoms], model.geom_pos[geoms], quat_to_mat(model.geom_quat[geoms]))
+
+    def centres(self, state: BatchState) -> np.ndarray:
+        """(nworld, k, 3) the geoms' centres in every world."""
+        return self._placed(state)[0]
+
+    def poses(self, state: BatchState) -> tuple[np.ndarray, np.ndarray]:
+        """Centres (nworld, k, 3) and frames (nworld, k, 3, 3; axes as columns) of the geoms in every world."""
+        centre, frame = self._placed(state)
+        return centre, frame @ self.rot
+
+    def _placed(self, state: BatchState) -> tuple[np.ndarray, np.ndarray]:
+        """The geoms' centres (nworld, k, 3) and their bodies' frames (nworld, k, 3, 3)."""
+        frame = state.frames()[:, self.body]
+        return state.xpos[:, self.body] + np.einsum("wkij,kj->wki", frame, self.pos), frame
 
 
 def geom_half_sizes(model: mujoco.MjModel) -> np.ndarray:

@@ -35,7 +35,7 @@ from robotool.robots.quadruped.body import GRAVITY, BodyIds
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.support import centre_of_mass, feet
 from robotool.robots.quadruped.terrain import FOOT_RADIUS
-from robotool.sim.backend import BatchedSim, BatchState, quat_to_mat
+from robotool.sim.backend import BatchedSim, BatchState, cross
 
 LOAD_TIME = 0.5  # s a foot takes to put the whole weight on what it stands on (its load grows at most that fast)
 YIELD_SPEED = 0.05  # m/s: a support that sinks faster than this under a foot leaves it, and bears nothing that tick
@@ -156,19 +156,15 @@ class LiftLoad:
         through the coming tick, as the controls now set them: their law followed along the motion it gives the body
         free of anything else (:data:`SUBSTEPS` steps; sampled at the tick's start, a servo's force that falls within
         it as the body catches up with its setpoint would be held through it)."""
+        from robotool.sim import servo_kernel  # Warp loads on the first tick, not on every import
+
         ids, law = self.ids, self.facts.servos
         ctrl = self.sim.ctrl[worlds][:, np.append(ids.actuator[:2], ids.yaw_actuator)]
         q = state.qpos[worlds][:, np.append(ids.qpos[:2], ids.yaw_qpos)]
         qd = state.qvel[worlds][:, np.append(ids.qvel[:2], ids.yaw_qvel)]
-        h, total = self.dt / SUBSTEPS, np.zeros(q.shape)
-        held = law.held(ctrl)  # the law's terms that do not change through the tick
-        lo, hi = law.force_range[:, 0], law.force_range[:, 1]
-        effective = self.facts.inertia - h * law.bias[:, 2]
-        for _ in range(SUBSTEPS):  # as the simulator steps it (implicitfast: the servos' damping implicit)
-            force = np.minimum(np.maximum(held + law.bias[:, 1] * q + law.bias[:, 2] * qd, lo), hi)
-            total += force
-            qd = qd + h * force / effective
-            q = q + qd * h
+        h = self.dt / SUBSTEPS
+        effective = self.facts.inertia - h * law.bias[:, 2]  # the simulator's implicitfast: the damping implicit
+        total = servo_kernel.summed_forces(law.held(ctrl), q, qd, law.bias, law.force_range, effective, h, SUBSTEPS)
         return total / SUBSTEPS
 
     def apply(self, state: BatchState, worlds: np.ndarray) -> np.ndarray:
@@ -224,15 +220,15 @@ class LiftLoad:
         forces and torques about their centres of mass."""
         kk, foot = np.nonzero((force != 0.0).any(axis=2))
         w, b = worlds[kk], body[kk, foot]
-        com = state.xpos[w, b] + np.einsum("nij,nj->ni", quat_to_mat(state.xquat[w, b]), self.facts.body_com[b])
+        com = state.xpos[w, b] + np.einsum("nij,nj->ni", state.frames()[w, b], self.facts.body_com[b])
         push = force[kk, foot]
-        np.add.at(self.sim.xfrc_applied, (w, b), np.concatenate([push, np.cross(points[kk, foot] - com, push)], 1))
+        np.add.at(self.sim.xfrc_applied, (w, b), np.concatenate([push, cross(points[kk, foot] - com, push)], 1))
 
     @staticmethod
     def _pose(state: BatchState, worlds: np.ndarray, bodies: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Position (n, 3) and rotation (n, 3, 3) of ``bodies`` (n,; -1: the world's frame) in ``worlds`` (n,)."""
         b = np.maximum(bodies, 0)
-        return state.xpos[worlds, b], quat_to_mat(state.xquat[worlds, b])
+        return state.xpos[worlds, b], state.frames()[worlds, b]
 
     @staticmethod
     def _foot_forces(
