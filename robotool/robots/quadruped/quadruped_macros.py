@@ -25,6 +25,7 @@ from robotool.robots.quadruped.predict import (
 from robotool.robots.quadruped.quadruped_routes import (
     CLEARANCES,
     DIRECTIONS,
+    DRAG_CLEARANCE,
     INSET,
     MIN_CLEARANCE,
     ROOM_MARGIN,
@@ -176,6 +177,10 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             if w.quad.stands_clear(w.layout, near_prop):  # (else the push routes to where it lines up by itself)
                 w.floor_walk(near_prop, f"walk beside {prop.name}")
             w.push(prop.name, out, "out from under the board")
+            thin = _thin_prop_push(quad.layout, p, bbox, -side * lat, clearance)
+            if thin is not None:
+                prog.thin.append(thin)
+            prog.late += int(clearance < DRAG_CLEARANCE)  # for when the far spots, on either side, are taken
         if across:
             w = _turned_lengthwise(w, bbox, a, lat * side, board_name)
         walker = w.quad
@@ -256,6 +261,17 @@ def _prop_clearances(quad: Quadruped, props: list[SceneObject], board: Box, dire
                     clearances.append(round(float(c), 3))
                     break
     return clearances
+
+
+def _thin_prop_push(layout: Layout, prop: Box, board: Box, direction: np.ndarray, clearance: float) -> str | None:
+    """Why pushing ``prop`` out to ``clearance`` beyond ``board``'s side along ``direction`` may fail in some perturbed
+    worlds (None: it leaves room): too near the board, which it may drag along (:data:`DRAG_CLEARANCE`), or ending
+    within :data:`ROOM_MARGIN` of what stands beyond."""
+    if clearance < DRAG_CLEARANCE:
+        return f"{prop.name} is pushed out only {clearance:.2f} m beyond {board.name}'s side: it may drag the board"
+    if _push_blocked(layout, prop, board, direction, clearance, ROOM_MARGIN):
+        return f"{prop.name}, pushed out from under {board.name}, ends within {ROOM_MARGIN:.2f} m of something"
+    return None
 
 
 def _push_blocked(

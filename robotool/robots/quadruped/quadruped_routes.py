@@ -34,6 +34,7 @@ OVERLAP = QUADRUPED.bridge_overlap
 CLEARANCES = QUADRUPED.prop_clearances
 MIN_CLEARANCE = QUADRUPED.prop_min_clearance
 ROOM_MARGIN = QUADRUPED.prop_room_margin
+DRAG_CLEARANCE = QUADRUPED.prop_drag_clearance
 SIDE = QUADRUPED.board_side
 TIP_PAST = QUADRUPED.tip_past
 MAX_STEPS = QUADRUPED.max_steps

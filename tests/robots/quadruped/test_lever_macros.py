@@ -30,6 +30,19 @@ def test_the_prop_is_pushed_well_clear_of_the_board_or_just_clear() -> None:
     assert clear == [1.2, 0.8, 0.5, 0.2] * 2
 
 
+def test_a_prop_with_little_room_beyond_the_board_is_pushed_far_out_the_other_way_first() -> None:
+    """cube_lifting 16002: beyond the board's side away from the robot, a heavy toolbox leaves the chair room to go
+    out 0.2 m. Pushed there (2 mm short of the toolbox, the push lined up off the chair's centre under the board), it
+    dragged the board 19 cm off its roller or rammed the toolbox in 6 to 8 worlds of 24; pushed 1.2 m out the other
+    way, it held in all 24. A push that leaves the board so little room is a less likely choice, for when the far
+    spots on both sides are taken."""
+    task = generate("cube_lifting", 16002).task
+    board, chair = Layout(task).box("surfboard"), task.object("chair")
+    (push,) = [m for m in order(candidates(task, tools=True))[0].motions if m.obj == "chair"]
+    y = float(push.point.estimate()[1])  # the board runs along x: the chair goes out along y, away from the toolbox
+    assert y < chair.center[1] and board.lo[1] - (y + chair.size[1] / 2) == pytest.approx(1.2)
+
+
 def test_the_step_onto_the_lever_is_placed_by_its_fulcrum_straight_on_from_the_lane() -> None:
     """The prop's push may drag the board along its length (8 cm in some worlds); the fulcrum stays. The spot where the
     robot steps on is read along the board from the fulcrum, a fixed number, and across it from the board as it lies
