@@ -2,17 +2,18 @@
 every world, and the push rules checked when a push starts (and the push limit as each push leg starts).
 
 Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
-``fall_ticks`` ticks with the lift off and that tips, or that tilts past ``fall_tilt``, has fallen: its skill ends
-with outcome ``fell`` and a reason that says where and which feet lost support, :attr:`RefereeState.failures` marks
-its world failed, and later motion skills there are refused. A walk or a climb is no push: a movable object (a
-cloth too) that the torso has touched, other than one being pushed, and that has moved more than ``shove`` since
-(what a foot's weight or a push moved it by not counted), was shoved; so were the objects that a push rams ahead of
-the pushed one, or drags along under it or stuck to it, or carries on it a while, once together they weigh more than
-the push limit, and so was what a push moves that takes more force than pushing what the robot may push takes
-(:mod:`.push_force`: a chair pushed out from under a heavily loaded lever). The move is stopped and refused, naming
-them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step)
-breaks it, and so does standing on a movable object that rests on it: the move is refused, naming it, and the world
-fails. (The tunables are in
+``fall_ticks`` ticks with the lift off and that tips, or that tilts past ``fall_tilt``, has fallen: its skill ends with
+outcome ``fell`` and a reason that says where and which feet lost support, :attr:`RefereeState.failures` marks its world
+failed, and later motion skills there are refused. A walk or a climb is no push: a movable object (a cloth too) that the
+torso has touched, other than one being pushed, and that has moved more than ``shove`` since (what a foot's weight or a
+push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one, or drags along
+under it or stuck to it, or carries on it a while, once together they weigh more than the push limit, and so was what a
+push moves that takes more force than pushing what the robot may push takes (:mod:`.push_force`: a chair pushed out from
+under a heavily loaded lever), and so was what the stride of a walk or a climb drives back under the feet, once it and
+what goes along with it weigh more than the push limit, ramming something or not (:mod:`.stride_loads`: a 15 kg cart on
+free rollers, walked off, rolled off them onto the floor). The move is stopped and refused, naming them, and the world
+fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so does
+standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables are in
 :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
@@ -31,6 +32,7 @@ from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.stride_loads import StrideLoads
 from robotool.robots.quadruped.support import (
     FOOTING_ANGLE,
     bears_up,
@@ -80,6 +82,9 @@ class RefereeState:
     force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
     # (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
+    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride began to carry something
+    # under the feet (NaN: it carries nothing; :mod:`.stride_loads`)
+    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: no ride)
 
     @classmethod
     def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
@@ -101,6 +106,8 @@ class RefereeState:
             strained=np.zeros((nworld, nobject)),
             force_limit=np.full((nworld, 2), np.nan),
             last_centres=centres,
+            ride_start=np.full((nworld, nobject, 3), np.nan),
+            ride_top=np.full((nworld, nobject), np.nan),
         )
 
 
@@ -115,6 +122,7 @@ class Referee:
         self.pushes = PushRules(senses, rays, limits, self.magnets)
         self.forces = PushForce(senses, self.pushes, limits, config)
         self.crushes = Crushes(senses)
+        self.strides = StrideLoads(senses, limits, config)  # (its state: the ride_ fields of RefereeState)
 
     def conditions(self) -> dict[str, list[bool]]:
         """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
@@ -146,6 +154,7 @@ class Referee:
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
         stood_on = self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso lifting what lies on it shoves
         self._rams(ends, mask, centres[:, :, :2], shift, moves, stood_on)
+        self._stride_loads(ends, mask, centres, moves)
         self._riders(ends, mask, moves)
         self._strains(ends, mask, np.linalg.norm(shift, axis=2), moves)
         if self.facts.fragile.any():
@@ -278,21 +287,21 @@ class Referee:
         (:meth:`.push_rules.PushRules.load_rule`) and while it moves (:meth:`_riders`); what it drags by friction,
         pressing down on it, is not rammed (its weight loads the push: :mod:`.push_force`), but what bears it up and
         goes along under it is.
-        The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does
-        what it travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box
-        rolls on: the push set it moving); what the pushed object or a rammed one rams on its own way after the push,
-        until it comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is still in 3-D for
-        :data:`REST_TIME` on end (found by an adversarial run: a pushed box that wedged for one tick at an edge, then
-        slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). What the stride
-        of a walk or a climb drives back under the feet (``stood_on``, from :meth:`_shoves`) rams as a pushed object
-        does, until it comes to rest, once it has travelled ``shove`` across under them (found by an adversarial run:
-        a 15 cm walk along a 3 kg board on free rollers kicked it back into a 10 kg crate on ice, off its pad, with no
-        push and no touch); it rams what it meets, not what rides on it or what it rides on (a second run: a lever on
-        a loose 6 kg roller, rolling a few centimetres as it tips under the feet, lifts the cube on its far end as a
-        lever should). Once the pushed
-        object and the objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot
-        shoved them (a light object used as a ram moves no more than the robot may push): the world fails
-        (:meth:`conditions`) and a move in progress is stopped and refused, naming them."""
+        The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does what it
+        travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box rolls on:
+        the push set it moving); what the pushed object or a rammed one rams on its own way after the push, until it
+        comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is still in 3-D for :data:`REST_TIME`
+        on end (found by an adversarial run: a pushed box that wedged for one tick at an edge, then slid free down a
+        ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D). What the stride of a walk or a climb
+        drives back under the feet (``stood_on``, from :meth:`_shoves`) rams as a pushed object does, until it comes to
+        rest, once it has travelled ``shove`` across under them (found by an adversarial run: a 15 cm walk along a 3 kg
+        board on free rollers kicked it back into a 10 kg crate on ice, off its pad, with no push and no touch); it rams
+        what it meets, not what rides on it or what it rides on (a second run: a lever on a loose 6 kg roller, rolling a
+        few centimetres as it tips under the feet, lifts the cube on its far end as a lever should); what it and what
+        goes along with it weigh is weighed whatever they ram (:meth:`_stride_loads`). Once the pushed object and the
+        objects it rammed that travelled more than ``shove`` weigh more than the push limit, the robot shoved them (a
+        light object used as a ram moves no more than the robot may push): the world fails (:meth:`conditions`) and a
+        move in progress is stopped and refused, naming them."""
         s, m = self.state, moves.state
         still = mask[:, None] & (np.linalg.norm(shift, axis=2) <= STILL)
         s.still = np.where(still, s.still + self.scene.control_dt, np.where(mask[:, None], 0.0, s.still))
@@ -321,7 +330,12 @@ class Referee:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
 
     def _coasting_rams(
-        self, pushing: np.ndarray, pushed: np.ndarray, mask: np.ndarray, centres: np.ndarray, shift: np.ndarray,
+        self,
+        pushing: np.ndarray,
+        pushed: np.ndarray,
+        mask: np.ndarray,
+        centres: np.ndarray,
+        shift: np.ndarray,
         step: np.ndarray,
     ) -> None:
         """What a pushed object, or one its push rammed, rams on its own way once the push is over, until it comes to
@@ -346,6 +360,15 @@ class Referee:
                 normals = self._object_normals(w)
                 hit &= ~(bears_up(normals[source[k]]) | bears_up(normals[:, source[k]]))
             s.rammed_by[w, hit] = source[k]
+
+    def _stride_loads(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, moves: MoveRunner) -> None:
+        """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
+        or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
+        s, limit = self.state, self.limits.max_push_mass
+        for w, (reason, mass) in self.strides.weigh(s, mask, centres, self._pressed_by).items():
+            if s.shoves[w] is None and self.senses.state.failed[w] is None:
+                s.shoves[w] = reason
+                moves.refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends)
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Weigh what a push carries while it moves, in the worlds in ``mask`` where another movable object touches the
@@ -413,8 +436,10 @@ class Referee:
                 mass = float(masses[k, pusher] + masses[k, group].sum())
                 if mass <= limit or s.shoves[w] is not None or self.senses.state.failed[w] is not None:
                     continue
-                ram = f"{names[pusher]}, driven by the stride of the robot on it," if self._driven()[w, pusher] else (
-                    f"pushing {names[pusher]}"
+                ram = (
+                    f"{names[pusher]}, driven by the stride of the robot on it,"
+                    if self._driven()[w, pusher]
+                    else (f"pushing {names[pusher]}")
                 )
                 s.shoves[w] = reason = (
                     f"{ram} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "

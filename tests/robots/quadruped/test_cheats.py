@@ -603,11 +603,12 @@ def test_a_crate_on_a_cloth_draped_off_a_pushed_pallet_is_weighed() -> None:
 
 REASONED_CASES = [  # (program, layout, what the refusal must say): found by adversarial runs, each a success before
     # the rear feet plowed an 8.5 kg plate 0.5 m along by its rim until it bridged a 0.30 m gap while the front feet
-    # stood on it, which excused its travel: what another part of the robot presses on a side or a rim is driven
+    # stood on it, which excused its travel: what another part of the robot presses on a side or a rim is driven (the
+    # first walk, back along the plate on its greased runners, now already slides it 3 cm under the stride: weighed)
     (
         "plow_a_heavy_plate_with_the_rear_feet_standing_on_it_in_front",
         "heavy_deck_plate_over_a_gap",
-        "the robot ran into deck_plate",
+        "deck_plate, driven by the stride of the robot on it, moved",
     ),
     # pushing a 2 kg magnetic block dragged the 20 kg slab it lay on, stuck to it, off a platform (the slab bears the
     # block up, so it is no rider, and lies behind its face): weighed as the push leg starts when they stick during

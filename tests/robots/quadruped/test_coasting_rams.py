@@ -10,6 +10,7 @@ from fixtures.reference import program
 
 from robotool import sim, tasks
 from robotool.sandbox import start_sessions
+from robotool.task.task_model import Task
 from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
@@ -85,3 +86,56 @@ def test_a_lever_on_a_loose_pivot_tipped_under_the_feet_lifts_its_load() -> None
     rollouts = sim.run_sessions(task, start_sessions([code] * 3, "quadruped"), seed=1)
     assert sum(r.success for r in rollouts) >= 2, [world_failure(r) for r in rollouts]
     assert not any("driven by the stride" in (world_failure(r) or "") for r in rollouts)
+
+
+HEAVY_CART = ("walk_off_a_heavy_cart_on_rollers_to_roll_it_off_them", "heavy_cart_on_two_rollers_on_the_floor")
+BOARD_ON_CART = (
+    "walk_off_a_board_on_a_heavy_cart_to_roll_the_cart_off_its_rollers",
+    "board_on_a_heavy_cart_on_two_rollers",
+)
+
+
+def _light_cart(layout: str) -> Task:
+    """The layout with its cart 2 kg: the cart, and a board on it, within the 5 kg push limit."""
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    light = [o.model_copy(update={"mass": 2.0}) if o.name == "cart" else o for o in task.objects]
+    return task.model_copy(update={"objects": light})
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "seed", "moved"),
+    [
+        (*HEAVY_CART, 1, "(cart)"),
+        (*HEAVY_CART, 2, "(cart)"),
+        (*BOARD_ON_CART, 1, "(board, cart)"),
+        (*BOARD_ON_CART, 2, "(board, cart)"),
+    ],
+)
+def test_a_heavy_cart_the_stride_drives_off_its_rollers_is_weighed(
+    program: str, layout: str, seed: int, moved: str
+) -> None:
+    """Found by an adversarial run: walking off a 15 kg cart lying on free rollers (three times the push limit), or
+    off a 1 kg board lying on it, kicked the cart back until it rolled off its rear roller onto the floor, lowering it
+    in 2 of 3 worlds on seed 1 and 1 of 3 on seed 2 (the board: 1 and 2 of 3); the cart rammed nothing, so it was
+    never weighed. What the stride drives, and what goes along with it, is now weighed against the push limit."""
+    code = (CHEATS / f"{program}.py").read_text()
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    rollouts = sim.run_sessions(task, start_sessions([code] * 3, "quadruped"), seed=seed)
+    assert not any(r.success for r in rollouts), [r.conditions for r in rollouts]
+    for rollout in rollouts:
+        failure = world_failure(rollout) or ""
+        assert not rollout.conditions["robot_shoved_nothing"], failure
+        assert "driven by the stride of the robot on it, moved" in failure and moved in failure, failure
+
+
+@pytest.mark.parametrize(("program", "layout"), [HEAVY_CART, BOARD_ON_CART])
+def test_a_light_cart_the_stride_drives_off_its_rollers_comes_down(program: str, layout: str) -> None:
+    """The control: the same walks, the cart 2 kg. The walks end done, not refused, and the cart comes down in some
+    world (a roller rolling on after the cart left it keeps most worlds from coming to rest: what is judged here is
+    the walks)."""
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(_light_cart(layout), start_sessions([code] * 3, "quadruped"), seed=2)
+    for rollout in rollouts:
+        assert "driven by the stride" not in (world_failure(rollout) or ""), world_failure(rollout)
+    done = [r for r in rollouts if [c.outcome for c in r.calls] == ["done", "done"]]
+    assert any(r.conditions["cart_lowered"] for r in done), [world_failure(r) for r in rollouts]

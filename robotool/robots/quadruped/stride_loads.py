@@ -1,0 +1,78 @@
+"""What the stride of a walk or a climb moves, for the quadruped's referee: an object the stride drives back under the
+feet is moved as a push moves it, so it and what goes along with it are weighed against the push limit, whether or not
+it rams anything (:class:`StrideLoads`; found by an adversarial run: walking off a 15 kg cart on free rollers, or off a
+1 kg board lying on it, kicked the cart back until it rolled off its rear roller onto the floor)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+
+from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
+from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.sensing import Senses
+
+SLIP = 0.3  # the most an object may shift against a driven one, as a share of the driven one's own travel, and go
+# along with it: the cart under a driven board shifts about 1 % of it; a roller rolling under it stays half behind
+
+Group = Callable[[np.ndarray, np.ndarray], np.ndarray]  # (worlds, index) -> (k, nobject) what touches each object
+
+
+class Rides(Protocol):
+    """The referee's per-world state that :class:`StrideLoads` reads and keeps."""
+
+    drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet since it rested
+    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the ride began (NaN: no ride)
+    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been in the ride (NaN: no ride)
+
+
+class StrideLoads:
+    """Weighs what the stride moves (its state lives in the referee's: :class:`Rides`)."""
+
+    def __init__(self, senses: Senses, limits: QuadrupedLimits, config: QuadrupedConfig):
+        self.senses, self.limits, self.config = senses, limits, config
+
+    def weigh(self, rides: Rides, mask: np.ndarray, centres: np.ndarray, group: Group) -> dict[int, tuple[str, float]]:
+        """Find the worlds in ``mask`` where the stride moves more than the push limit. A ride begins when the stride
+        first carries an object across under the feet (``rides.drift``) and ends once all it carried rests. An object
+        driven ``shove`` across under the feet (the referee's ``_driven``) that lies more than ``shove`` across from
+        where it was when the ride began is moved by the robot, as by a push; so are the movable objects it touches,
+        directly or through others (``group``), that lie more than ``shove`` across from where they were and have
+        shifted against it by no more than :data:`SLIP` of its travel (what it rides on and rolls with it, what rides
+        on it; not a roller it rolls on), unless they rose more than ``shove`` in the ride (a lever's load that the
+        driven board lifts is the lever's work: it rises before the lever rolls back or forth with it, and may drop
+        back as the lever rocks). Returns, for each world where they weigh more than the push limit, the reason,
+        naming the driven object, and their mass."""
+        shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
+        start, top = rides.ride_start, rides.ride_top
+        ridden = (drift > 0).any(axis=1)
+        start[mask & ~ridden] = np.nan
+        top[mask & ~ridden] = np.nan
+        begun = mask & ridden & np.isnan(start[:, 0, 0])
+        start[begun] = centres[begun]
+        top[mask & ridden] = np.fmax(top[mask & ridden], centres[mask & ridden, :, 2])
+        travel = centres - start  # (nworld, nobject, 3) NaN where no ride
+        across = np.nan_to_num(np.linalg.norm(travel[:, :, :2], axis=2))
+        worlds, objects = np.nonzero((drift > shove) & (across > shove) & mask[:, None])
+        if worlds.size == 0:
+            return {}
+        rows = np.arange(len(worlds))
+        slip = np.linalg.norm(travel[worlds, :, :2] - travel[worlds, objects][:, None, :2], axis=2)
+        lifted = top[worlds] - start[worlds, :, 2] > shove
+        along = group(worlds, objects) & (across[worlds] > shove) & ~lifted
+        along &= slip <= SLIP * across[worlds, objects][:, None]
+        along[rows, objects] = True
+        load = (self.senses.masses(worlds) * along).sum(axis=1)
+        names = self.senses.scene.object_names
+        found: dict[int, tuple[str, float]] = {}
+        for k in np.flatnonzero(load > limit).tolist():
+            others = [names[o] for o in np.flatnonzero(along[k]) if o != objects[k]]
+            what = ", ".join([names[objects[k]], *others])
+            reason = (
+                f"{names[objects[k]]}, driven by the stride of the robot on it, moved {load[k]:.1f} kg in all "
+                f"({what}), over the push limit of {limit:.1f} kg (a walk or a climb moves no more than a push may)"
+            )
+            found.setdefault(int(worlds[k]), (reason, float(load[k])))
+        return found
