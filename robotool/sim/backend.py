@@ -11,9 +11,9 @@ from __future__ import annotations
 import ctypes.util
 import functools
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import mujoco
 import numpy as np
@@ -47,6 +47,7 @@ class BatchState:
     failed: list[str | None]
     _xmats: dict[int, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
     _frames: list[np.ndarray] = field(default_factory=list, init=False, repr=False, compare=False)
+    _derived: dict[Any, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def xmat(self, body: int) -> np.ndarray:
         """Rotation matrices of one body in every world, (nworld, 3, 3) (computed once per state and body: do not
@@ -63,6 +64,15 @@ class BatchState:
             nworld, nbody = self.xquat.shape[:2]
             self._frames.append(quat_to_mat(self.xquat.reshape(-1, 4)).reshape(nworld, nbody, 3, 3))
         return self._frames[0]
+
+    def derived(self, key: Any, compute: Callable[[], np.ndarray]) -> np.ndarray:
+        """``compute()``, a quantity of this state that several readers share, found once per state and ``key``
+        (read-only)."""
+        found = self._derived.get(key)
+        if found is None:
+            found = self._derived[key] = compute()
+            found.flags.writeable = False
+        return found
 
 
 def quat_to_mat(q: np.ndarray) -> np.ndarray:

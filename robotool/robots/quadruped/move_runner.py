@@ -182,40 +182,44 @@ class MoveRunner:
                 return
         s, t, terrain, config = self.state, self.terrain.state, self.terrain, self.config
         state = self.senses.state
-        q = state.qpos[worlds][:, self.ids.qpos]
-        travel = np.einsum("ki,ki->k", q[:, :2] - s.origin[worlds], s.u[worlds])
-        centres = feet(state, self.ids)[worlds]
+        q, qd = state.qpos[worlds][:, self.ids.qpos], state.qvel[worlds][:, self.ids.qvel]
         u, length, pushing = s.u[worlds], s.length[worlds], s.pushing[worlds]
-        local, local_objects, under_torso = terrain.local(worlds, centres, u, pushing)
+        travel = np.einsum("ki,ki->k", q[:, :2] - s.origin[worlds], u)
+        centres = feet(state, self.ids)[worlds]
+        local, local_objects, under_torso = terrain.local(worlds, centres, q[:, :2], u, pushing)
         index = terrain.indices(worlds, travel)
+        scan_t0 = t.scan_t0[worlds]
         stale = t.rescan[worlds] | np.any((index < 0) | (index >= terrain.samples), axis=1)
-        stale |= (travel > t.scan_t0[worlds] + config.scan_ahead / 2) & (length > t.scan_t0[worlds] + config.scan_ahead)
-        stored = terrain.gather(t.heights[worlds], index)
+        stale |= (travel > scan_t0 + config.scan_ahead / 2) & (length > scan_t0 + config.scan_ahead)
+        stored = terrain.gather(t.heights, worlds, index)
         pushed = (local_objects == pushing[:, None, None]) & (local_objects >= 0)
         stale |= np.any(~pushed & (np.abs(local - stored) > RISE), axis=(1, 2))
         if stale.any():
             terrain.scan(worlds[stale], travel[stale], centres[stale], u[stale], length[stale], pushing[stale])
             index = terrain.indices(worlds, travel)
-        local = np.where(pushed, terrain.gather(t.heights[worlds], index), local)
-        waiting = terrain.lift(worlds, q, travel, centres, local, under_torso, index)
-        self._steer(worlds, q, waiting)
-        self._check_arrival(worlds, q, travel, ends)
+            stored = terrain.gather(t.heights, worlds, index)
+        local = np.where(pushed, stored, local)
+        waiting = terrain.lift(worlds, q, qd, travel, centres, local, under_torso, index)
+        stop = self._steer(worlds, q, waiting)
+        self._check_arrival(worlds, q, qd, travel, stop, ends)
 
-    def _steer(self, worlds: np.ndarray, q: np.ndarray, waiting: np.ndarray) -> None:
-        """Move the x-y setpoints toward the stopping points at walking speed, leashed to the bodies."""
+    def _steer(self, worlds: np.ndarray, q: np.ndarray, waiting: np.ndarray) -> np.ndarray:
+        """Move the x-y setpoints toward the stopping points at walking speed, leashed to the bodies; return the
+        stopping points (k, 2)."""
         s, config = self.state, self.config
         body = q[:, :2]
         sp = s.setpoint[worlds]
         stop = s.origin[worlds] + s.u[worlds] * self.terrain.state.stop[worlds][:, None]
         to_stop = stop - sp
-        gap = np.linalg.norm(to_stop, axis=1)
-        go = ~waiting & (gap > 1e-9) & (np.linalg.norm(sp - body, axis=1) < config.leash)
+        gap = lengths(to_stop)
+        go = ~waiting & (gap > 1e-9) & (lengths(sp - body) < config.leash)
         step = np.minimum(gap, config.walk_speed * self.senses.scene.control_dt)
         direction = to_stop / np.maximum(gap, 1e-9)[:, None]
         sp = sp + np.where(go[:, None], direction * step[:, None], 0.0)
         velocity = np.where((go & (gap > step))[:, None], direction * config.walk_speed, 0.0)
         s.setpoint[worlds] = sp
         self.sim.ctrl[worlds[:, None], self.ids.actuator[:2]] = sp + self.senses.facts.lead * velocity
+        return stop
 
     def _turn(self, worlds: np.ndarray, ends: list[SkillEnd]) -> None:
         """Move the heading setpoints of turns in place toward their headings at turning speed (x-y held, legs as
@@ -236,20 +240,24 @@ class MoveRunner:
         there = (np.abs(s.turn[worlds] - yaw) < config.turn_arrived) & still
         self._end_moves(worlds, state.qpos[worlds][:, ids.qpos], remaining, there, ends)
 
-    def _check_arrival(self, worlds: np.ndarray, q: np.ndarray, travel: np.ndarray, ends: list[SkillEnd]) -> None:
-        """End the moves whose body reached its stopping point (done or refused), stalled or ran out of time."""
+    def _check_arrival(
+        self,
+        worlds: np.ndarray,
+        q: np.ndarray,
+        qd: np.ndarray,
+        travel: np.ndarray,
+        stop: np.ndarray,
+        ends: list[SkillEnd],
+    ) -> None:
+        """End the moves whose body (coordinates ``q`` (k, 5), moving at ``qd``) reached its stopping point ``stop``
+        (k, 2) (done or refused), stalled or ran out of time."""
         s, t, config = self.state, self.terrain.state, self.config
-        state = self.senses.state
-        qvel = state.qvel[worlds][:, self.ids.qvel]
-        still = (np.abs(qvel[:, :3]).max(axis=1) < config.settled_speed) & (
-            np.abs(qvel[:, 3:]).max(axis=1) < config.settled_turn
-        )
-        stop = s.origin[worlds] + s.u[worlds] * t.stop[worlds][:, None]
-        there = (np.linalg.norm(q[:, :2] - stop, axis=1) < config.arrived) & still
-        remaining = np.abs(s.length[worlds] - travel)
-        finished = there & (
-            (t.stop[worlds] >= s.length[worlds] - 1e-9) | np.array([t.findings[w] is not None for w in worlds])
-        )
+        speed = np.abs(qd)
+        still = (speed[:, :3].max(axis=1) < config.settled_speed) & (speed[:, 3:].max(axis=1) < config.settled_turn)
+        there = (lengths(q[:, :2] - stop) < config.arrived) & still
+        length = s.length[worlds]
+        remaining = np.abs(length - travel)
+        finished = there & ((t.stop[worlds] >= length - 1e-9) | np.array([t.findings[w] is not None for w in worlds]))
         self._end_moves(worlds, q, remaining, finished, ends)
 
     def _end_moves(
@@ -286,6 +294,12 @@ class MoveRunner:
             end = self.advance(w, outcome)
             if end is not None:
                 ends.append(end)
+
+
+def lengths(v: np.ndarray) -> np.ndarray:
+    """The lengths (k,) of x-y vectors ``v`` (k, 2), as ``np.linalg.norm(v, axis=1)`` gives them."""
+    x, y = v[:, 0], v[:, 1]
+    return np.sqrt(x * x + y * y)
 
 
 def finding_measured(finding: Finding) -> dict[str, float]:

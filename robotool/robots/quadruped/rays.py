@@ -46,7 +46,7 @@ class Rays:
         the geom returned; the feet's height is the cloth's where that solid lies no deeper under it than a step the
         legs climb (a cloth lying on a surface, or bunched up on it, is stepped onto), else the solid's (over a gap
         the feet would sink to it)."""
-        start = np.repeat(np.asarray(top, dtype=float)[:, None], xy.shape[1], axis=1)
+        start = np.asarray(top, dtype=float)[:, None]
         z, geom = self._cast_from(worlds, xy, start, exclude)
         if not self.facts.cloth_crossings:  # no cloth in the scene
             return z, z, geom, np.full(geom.shape, -1)
@@ -75,7 +75,7 @@ class Rays:
 
     def objects_of(self, geom: np.ndarray) -> np.ndarray:
         """The object each ray's hit geom (-1: none) belongs to (-1: none, or not an object's)."""
-        return np.where(geom >= 0, self.facts.geom_object[np.maximum(geom, 0)], -1)
+        return self.facts.hit_object[geom]
 
     def surface_name(self, geom: int) -> str:
         """What a ray's hit geom (-1: none) is: its object's name, the ground (no object's geom) or nothing."""
@@ -120,11 +120,11 @@ class Rays:
     def _cast_from(
         self, worlds: np.ndarray, xy: np.ndarray, start: np.ndarray, exclude: int | np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Downward rays from heights ``start`` (k, nray) over ``xy`` (k, nray, 2) in ``worlds``, the robot and body
-        ``exclude`` (one for all rays, or (k, nray): each ray's own) left out: surface heights (0 where nothing is hit)
-        and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller than the rays' start) would meet
-        it where it leaves it, at its bottom: it reads that geom at the ray's start instead (``from_inside``),
-        something at least that high."""
+        """Downward rays from heights ``start`` ((k, nray), or (k, 1): one per world) over ``xy`` (k, nray, 2) in
+        ``worlds``, the robot and body ``exclude`` (one for all rays, or (k, nray): each ray's own) left out: surface
+        heights (0 where nothing is hit) and the geoms hit (-1: none). A ray that starts inside a geom (a wall taller
+        than the rays' start) would meet it where it leaves it, at its bottom: it reads that geom at the ray's start
+        instead (``from_inside``), something at least that high."""
         pnt = np.empty((*xy.shape[:2], 3))
         pnt[..., :2] = xy
         pnt[..., 2] = start

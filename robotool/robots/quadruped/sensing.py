@@ -31,6 +31,7 @@ class SceneFacts:
     reach: float  # m a leg reaches down (the step-down limit and the legs' slack)
     corners: list[np.ndarray]  # each object's box corners (8, 3) in its own frame
     geom_object: np.ndarray  # (ngeom,) the object of each geom (-1: none)
+    hit_object: np.ndarray  # (ngeom + 1,) the same, then -1: the object of a ray's hit geom (-1: none) read at it
     cloth: np.ndarray  # (nobject,) bool
     cloth_crossings: int  # the most recasts one ray cast needs: one per cloth link for every layer of cloth
     movable: np.ndarray  # (nobject,) bool
@@ -53,6 +54,7 @@ class SceneFacts:
             reach=limits.max_step_down + LEG_SLACK,
             corners=local_corners(scene),
             geom_object=geom_object,
+            hit_object=np.append(geom_object, -1),
             cloth=cloth,
             cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,
             movable=np.array([o.movable for o in scene.task.objects]),

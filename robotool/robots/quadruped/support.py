@@ -26,16 +26,24 @@ FOOT_GROUPS = {  # how a set of feet without support is named, from the most spe
 
 
 def centre_of_mass(state: BatchState, ids: BodyIds) -> np.ndarray:
-    """The robot's centre of mass in every world (nworld, 3); the feet turn with the body."""
-    bodies = np.array([ids.body, *ids.feet])
-    points = state.xpos[:, bodies] + np.einsum("wij,kj->wki", state.xmat(ids.body), ids.com_offsets)
-    return np.einsum("k,wki->wi", ids.masses, points) / ids.masses.sum()
+    """The robot's centre of mass in every world (nworld, 3), read-only; the feet turn with the body."""
+
+    def compute() -> np.ndarray:
+        bodies = np.array([ids.body, *ids.feet])
+        points = state.xpos[:, bodies] + np.einsum("wij,kj->wki", state.xmat(ids.body), ids.com_offsets)
+        return np.einsum("k,wki->wi", ids.masses, points) / ids.masses.sum()
+
+    return state.derived(("centre_of_mass", ids.body), compute)
 
 
 def feet(state: BatchState, ids: BodyIds) -> np.ndarray:
-    """The feet's sphere centres in every world (nworld, 4, 3)."""
-    up = state.xmat(ids.body)[:, :, 2]
-    return state.xpos[:, ids.feet] + up[:, None, :] * FOOT_RADIUS
+    """The feet's sphere centres in every world (nworld, 4, 3), read-only."""
+
+    def compute() -> np.ndarray:
+        up = state.xmat(ids.body)[:, :, 2]
+        return state.xpos[:, ids.feet] + up[:, None, :] * FOOT_RADIUS
+
+    return state.derived(("feet", ids.body), compute)
 
 
 def feet_touching(state: BatchState, ids: BodyIds, bodies: np.ndarray) -> np.ndarray:

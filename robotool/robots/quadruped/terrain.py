@@ -230,23 +230,27 @@ def first_steep(tangent: np.ndarray, friction: np.ndarray) -> tuple[np.ndarray, 
     steeper than its friction holds (:func:`too_steep`; n where none), that slope and the steepest its friction holds
     there (deg)."""
     over, angle, holds = too_steep(tangent, friction)
-    index, slope, limit = _first(over, angle, holds)
+    index, slope, limit = first_where(over, angle, holds)
     return index, slope, limit
 
 
-def first_slip(tangent: np.ndarray, friction: np.ndarray, grip: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def first_slip(
+    tangent: np.ndarray, friction: np.ndarray, grip: float, angle: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Along paths (..., n) of slopes (tangents, NaN: none) on surfaces of sliding ``friction`` (inf: none read): the
-    first sample whose friction is under what the feet need to grip there (n where none), that friction and that need.
+    first sample whose friction is under what the feet need to grip there (n where none), that friction and that need;
+    ``angle``: the slopes in degrees where :func:`too_steep` has read them already.
 
     The feet need ``grip`` (the body's horizontal acceleration over g) plus the slope's tangent, the slope read less
     :data:`SLOPE_TOLERANCE` as :func:`first_steep` allows it (its sampling and pose noise)."""
-    slope = np.maximum(np.nan_to_num(np.degrees(np.arctan(tangent)), nan=0.0) - SLOPE_TOLERANCE, 0.0)
+    angle = np.degrees(np.arctan(tangent)) if angle is None else angle
+    slope = np.maximum(np.nan_to_num(angle, nan=0.0) - SLOPE_TOLERANCE, 0.0)
     need = grip + np.tan(np.radians(slope))
-    index, have, limit = _first(friction < need, friction, need)
+    index, have, limit = first_where(friction < need, friction, need)
     return index, have, limit
 
 
-def _first(hit: np.ndarray, *values: np.ndarray) -> tuple[np.ndarray, ...]:
+def first_where(hit: np.ndarray, *values: np.ndarray) -> tuple[np.ndarray, ...]:
     """The first sample along paths (..., n) where ``hit`` (n where none) and each of ``values`` there."""
     n = hit.shape[-1]
     index = np.where(hit.any(axis=-1), hit.argmax(axis=-1), n)

@@ -39,7 +39,7 @@ from robotool.robots.quadruped.terrain import (
     clamp,
     finding_kind,
     first_slip,
-    first_steep,
+    first_where,
     limit_of,
     rotated,
     scan_paths,
@@ -106,6 +106,30 @@ class Footing:
         )
 
 
+@dataclass(frozen=True)
+class Layout:
+    """Where :class:`TerrainFollowing` reads, fixed by the config and the body's size."""
+
+    offsets: np.ndarray  # (5,) m: the per-tick samples along a foot's path (``config.local``)
+    torso_grid: np.ndarray  # (n, 2) m: the rays under the torso, in its frame
+    along: np.ndarray  # (samples,) m of travel of each sample of a reading, from the foot
+    hold_len: int  # samples a foot crossing down holds behind an edge
+    span: np.ndarray  # the samples :meth:`TerrainFollowing.lift` reads around a foot's centre
+    edge_kinds: np.ndarray  # the scan codes of :data:`~.terrain.EDGE_KINDS`
+
+    @classmethod
+    def of(cls, config: QuadrupedConfig, half: np.ndarray) -> Layout:
+        hold_len = round(config.hold_behind / SPACING)
+        return cls(
+            offsets=config.local,
+            torso_grid=np.array(config.torso_grid) * half,
+            along=-config.back + np.arange(config.samples) * SPACING,
+            hold_len=hold_len,
+            span=np.arange(-hold_len - RADIUS_SAMPLES, round(config.lift_ahead / SPACING) + 1),
+            edge_kinds=np.array(EDGE_KINDS),
+        )
+
+
 class TerrainFollowing:
     """Reads the terrain along each move and sets the legs and the lift (state: :class:`TerrainState`)."""
 
@@ -113,6 +137,7 @@ class TerrainFollowing:
         self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
         self.samples, self.behind = config.samples, config.behind
         self.state = TerrainState.empty(senses.sim.nworld, self.samples, config.press)
+        self.layout = Layout.of(config, senses.facts.half)
 
     def start_move(self, w: int) -> None:
         """A new move in world ``w``: read its paths at the next tick."""
@@ -127,29 +152,38 @@ class TerrainFollowing:
     def indices(self, worlds: np.ndarray, travel: np.ndarray) -> np.ndarray:
         """Sample indices (k, 5) of the ``config.local`` offsets ahead of the feet in each world's last reading."""
         t = travel - self.state.scan_t0[worlds] + self.config.back
-        return np.round((t[:, None] + self.config.local[None, :]) / SPACING).astype(int)
+        return np.round((t[:, None] + self.layout.offsets[None, :]) / SPACING).astype(int)
 
-    def gather(self, table: np.ndarray, index: np.ndarray) -> np.ndarray:
-        """``table`` (k, 4, samples) at ``index`` (k, 5) for every foot -> (k, 4, 5) (NaN out of range)."""
+    def gather(self, table: np.ndarray, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """``table`` (nworld, 4, samples) of ``worlds`` (k,) at ``index`` (k, n) for every foot -> (k, 4, n) (NaN out
+        of range)."""
         ok = (index >= 0) & (index < self.samples)
-        out = np.take_along_axis(table, clamp(index, 0, self.samples - 1)[:, None, :], axis=2)
-        return np.where(ok[:, None, :], out, np.nan)
+        return np.where(ok[:, None, :], self._take(table, worlds, index), np.nan)
+
+    def _take(self, table: np.ndarray, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
+        """``table`` (nworld, 4, samples) of ``worlds`` (k,) at ``index`` (k, n), clamped to the samples, for every
+        foot -> (k, 4, n)."""
+        rows = (worlds[:, None] * 4 + np.arange(4)[None, :]) * self.samples
+        return np.take(table.reshape(-1), rows[:, :, None] + clamp(index, 0, self.samples - 1)[:, None, :])
 
     def local(
-        self, worlds: np.ndarray, centres: np.ndarray, u: np.ndarray, pushing: np.ndarray
+        self, worlds: np.ndarray, centres: np.ndarray, body: np.ndarray, u: np.ndarray, pushing: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Heights and objects (k, 4, 5) at the ``config.local`` offsets along each foot's path (direction ``u``
-        (k, 2)), and the highest surface under the torso (k,) (the object ``pushing`` (k,) left out)."""
-        k, local = len(worlds), self.config.local
-        facts = self.senses.facts
-        points = centres[:, :, None, :2] + local[None, None, :, None] * u[:, None, None, :]
-        grid = rotated(np.array(self.config.torso_grid) * facts.half, self.senses.yaw(worlds))
-        torso = self.senses.state.qpos[worlds][:, None, facts.ids.qpos[:2]] + grid
+        (k, 2)), and the highest surface under the torso (k,) at ``body`` (k, 2) (the object ``pushing`` (k,) left
+        out)."""
+        layout = self.layout
+        k, n = len(worlds), 4 * len(layout.offsets)
+        xy = np.empty((k, n + len(layout.torso_grid), 2))
+        xy[:, :n] = (centres[:, :, None, :2] + layout.offsets[None, None, :, None] * u[:, None, None, :]).reshape(
+            k, n, 2
+        )
+        xy[:, n:] = body[:, None, :] + rotated(layout.torso_grid, self.senses.yaw(worlds))
         top = centres[:, :, 2].min(axis=1) + self.config.ray_height
-        z, objects = self.rays.cast(worlds, np.concatenate([points.reshape(k, -1, 2), torso], axis=1), top)
+        z, objects = self.rays.cast(worlds, xy, top)
         pushed = (objects == pushing[:, None]) & (objects >= 0)
-        under_torso = np.where(pushed, -np.inf, z)[:, 4 * len(local) :].max(axis=1)
-        return (z[:, : 4 * len(local)].reshape(k, 4, -1), objects[:, : 4 * len(local)].reshape(k, 4, -1), under_torso)
+        under_torso = np.where(pushed[:, n:], -np.inf, z[:, n:]).max(axis=1)
+        return z[:, :n].reshape(k, 4, -1), objects[:, :n].reshape(k, 4, -1), under_torso
 
     def scan(
         self,
@@ -165,7 +199,7 @@ class TerrainFollowing:
         s, config, samples, behind = self.state, self.config, self.samples, self.behind
         bottom = centres[:, :, 2] - FOOT_RADIUS
         ahead = clamp(length - travel, 0.0, config.scan_ahead) + LOOKAHEAD
-        along = -config.back + np.arange(samples) * SPACING
+        along = self.layout.along
         sample = np.minimum(along, ahead[:, None])  # (k, samples)
         points = centres[:, :, None, :2] + sample[:, None, :, None] * u[:, None, None, :]
         read = samples  # the samples past every world's reach repeat its last: those are read once
@@ -182,7 +216,7 @@ class TerrainFollowing:
         under = z[:, :, behind - RADIUS_SAMPLES : behind + RADIUS_SAMPLES + 1]
         actual = np.minimum(bottom + RISE, np.nanmax(under, axis=2))
         now = self.indices(worlds, travel)[:, 1]
-        before = self.gather(s.level[worlds], now[:, None])[:, :, 0]
+        before = self.gather(s.level, worlds, now[:, None])[:, :, 0]
         over_gap = np.nan_to_num(before - actual, nan=0.0) > self.limits.max_step_up  # striding a gap: keep its level
         start = np.where(over_gap, before, actual)
         into_gap = np.zeros(over_gap.shape)
@@ -206,7 +240,7 @@ class TerrainFollowing:
         kind = result.kind.reshape(len(worlds), 4)
         measured = result.measured.reshape(len(worlds), 4)
         meets = travel[:, None] + np.take_along_axis(sample, np.minimum(index, samples - 1), axis=1)
-        edges = np.isin(kind, EDGE_KINDS)  # a gap or a drop
+        edges = (kind[:, :, None] == self.layout.edge_kinds).any(axis=2)  # a gap or a drop
         past = np.where(edges, FOOT_RADIUS, 0.0)  # a gap or a drop: the foot's centre passes its edge
         relevant = (kind != TerrainKind.NONE) & (meets - past <= length[:, None])
         margin = np.where(edges, FOOT_RADIUS + config.edge_margin, config.stop_margin)  # centre/edge, foot/face
@@ -257,8 +291,8 @@ class TerrainFollowing:
         friction = self.rays.friction(worlds, hit)
         tangent = steepness(z, geoms, points)[:, :, behind:]
         over, angle, holds = too_steep(tangent, friction)  # none hit: no slope read
-        steep, slope, limit = first_steep(tangent, friction)
-        slip, have, need = first_slip(tangent, np.where(hit >= 0, friction, np.inf), self.config.walk_grip)
+        steep, slope, limit = first_where(over, angle, holds)  # as first_steep finds it
+        slip, have, need = first_slip(tangent, np.where(hit >= 0, friction, np.inf), self.config.walk_grip, angle)
         is_slope = (steep < n) & (np.maximum(steep - SLOPE_HALF, 0) <= slip)
         found = Footing(
             start=np.where(is_slope, np.maximum(steep + behind - SLOPE_HALF, 0), slip + behind),
@@ -283,13 +317,15 @@ class TerrainFollowing:
         self,
         worlds: np.ndarray,
         q: np.ndarray,
+        qd: np.ndarray,
         travel: np.ndarray,
         centres: np.ndarray,
         local: np.ndarray,
         under_torso: np.ndarray,
         index: np.ndarray,
     ) -> np.ndarray:
-        """Set the legs and the lift; return the worlds (k,) that must wait for a foot to clear an edge.
+        """Set the legs and the lift (the body's coordinates ``q`` (k, 5) moving at ``qd``); return the worlds (k,)
+        that must wait for a foot to clear an edge.
 
         Each leg reaches down to the surface under its foot, a little further (``press``) so that it carries its
         share, the body level over the highest one and its torso ``torso_clearance`` above what lies under it;
@@ -304,13 +340,14 @@ class TerrainFollowing:
         """
         s, config, samples, sim = self.state, self.config, self.samples, self.senses.sim
         ids, dt = self.senses.facts.ids, self.senses.scene.control_dt
-        hold_len = round(config.hold_behind / SPACING)
-        span = np.arange(-hold_len - RADIUS_SAMPLES, round(config.lift_ahead / SPACING) + 1)
-        window = index[:, 1, None] + span[None, :]  # around each foot's centre
-        values = np.take_along_axis(s.level[worlds], clamp(window, 0, samples - 1)[:, None, :], 2)
+        hold_len = self.layout.hold_len
+        centre = hold_len + RADIUS_SAMPLES  # the foot's centre in the window
+        window = index[:, 1, None] + self.layout.span[None, :]  # around each foot's centre
+        known = (window >= 0) & (window < samples)
+        read = self._take(s.level, worlds, window)
+        standing = np.where(known[:, None, centre], read[:, :, centre], np.nan)  # the level accepted under each foot
         last = np.round((s.stop[worlds] - s.scan_t0[worlds] + config.back) / SPACING)  # the move's end (the foot's)
-        values = np.where(((window >= 0) & (window < samples) & (window <= last[:, None]))[:, None, :], values, np.nan)
-        values = np.where(np.isnan(values), -np.inf, values)
+        values = np.where(np.isnan(read) | ~(known & (window <= last[:, None]))[:, None, :], -np.inf, read)
         ahead = values[:, :, hold_len:].max(axis=2)
         behind = values[:, :, : hold_len + RADIUS_SAMPLES + 1].max(axis=2)  # up to the foot's centre
         under = local[:, :, :3].max(axis=2)
@@ -319,7 +356,6 @@ class TerrainFollowing:
         up = ahead - under > RISE
         hold = ~up & (behind - below > RISE)
         crossing = (up | hold).any(axis=1)
-        standing = self.gather(s.level[worlds], index[:, 1:2])[:, :, 0]  # the level accepted under each foot
         footing = np.abs(below - standing) <= RISE  # a surface the foot could stand on lies under it
         crossing &= ~self._no_footing(worlds, travel, up | hold, footing, centres)
         up &= crossing[:, None]
@@ -327,18 +363,20 @@ class TerrainFollowing:
         stance = clamp(under - np.maximum(under.max(axis=1), clear)[:, None] - config.press, -self.reach, 0.0)
         legs = s.legs[worlds]
         step = clamp(stance - legs, -config.leg_speed * dt, config.leg_speed * dt)
-        s.legs[worlds] = np.where(crossing[:, None], legs, legs + step)  # held while the lift carries the body
-        sim.ctrl[worlds[:, None], ids.leg_actuator] = s.legs[worlds]
+        legs = np.where(crossing[:, None], legs, legs + step)  # held while the lift carries the body
+        s.legs[worlds] = legs
+        sim.ctrl[worlds[:, None], ids.leg_actuator] = legs
         need = np.where(up, ahead + config.clearance, np.where(hold, behind, -np.inf)) - bottom
         wanted = np.where(crossing, np.maximum(q[:, 2] + need.max(axis=1), clear), np.nan)
         previous = np.minimum(s.lift[worlds], q[:, 2]) - config.descent_speed * dt  # NaN: was off
         target = np.where(np.isnan(wanted), previous, np.fmax(wanted, previous))
-        settled = np.all(np.abs(s.legs[worlds] - stance) < 1e-3, axis=1)  # the legs stand where they should
+        settled = np.all(np.abs(legs - stance) < 1e-3, axis=1)  # the legs stand where they should
         target = np.where(~crossing & settled & (target < q[:, 2] - config.release), np.nan, target)  # on its legs
         s.lift[worlds] = target
-        sim.ctrl[worlds, ids.actuator[2]] = np.where(np.isnan(target), OFF, target)
-        angle, rate = q[:, 3:], self.senses.state.qvel[worlds][:, ids.qvel[3:]]
-        level = clamp(-angle * config.tilt_gain - rate * config.tilt_damping, -1.0, 1.0) * ~np.isnan(target)[:, None]
+        off = np.isnan(target)
+        sim.ctrl[worlds, ids.actuator[2]] = np.where(off, OFF, target)
+        angle, rate = q[:, 3:], qd[:, 3:]
+        level = clamp(-angle * config.tilt_gain - rate * config.tilt_damping, -1.0, 1.0) * ~off[:, None]
         sim.ctrl[worlds[:, None], ids.actuator[3:]] = level
         return np.any(up & (bottom < ahead + config.clearance / 2), axis=1)
 
