@@ -9,12 +9,12 @@ torso has touched, other than one being pushed, and that has moved more than ``s
 push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one, or drags along
 under it or stuck to it, or carries on it a while, once together they weigh more than the push limit, and so was what a
 push moves that takes more force than pushing what the robot may push takes (:mod:`.push_force`: a chair pushed out from
-under a heavily loaded lever), and so was what the stride of a walk or a climb drives back under the feet, once it and
-what goes along with it weigh more than the push limit, ramming something or not (:mod:`.stride_loads`: a 15 kg cart on
-free rollers, walked off, rolled off them onto the floor). The move is stopped and refused, naming them, and the world
-fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so does
-standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables are in
-:class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+under a heavily loaded lever), and so was what the stride of a walk or a climb carried under the feet, and what went
+along with it, once they weigh more than the push limit, ramming something or not (:mod:`.stride_loads`: a 15 kg cart
+on free rollers, walked off, rolled off them onto the floor). The move is stopped and refused, naming them, and the
+world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so
+does standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables
+are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
@@ -85,6 +85,7 @@ class RefereeState:
     ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride began to carry something
     # under the feet (NaN: it carries nothing; :mod:`.stride_loads`)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: no ride)
+    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried since then
 
     @classmethod
     def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
@@ -108,6 +109,7 @@ class RefereeState:
             last_centres=centres,
             ride_start=np.full((nworld, nobject, 3), np.nan),
             ride_top=np.full((nworld, nobject), np.nan),
+            ride_touched=np.zeros((nworld, nobject), dtype=bool),
         )
 
 

@@ -1,7 +1,8 @@
-"""What the stride of a walk or a climb moves, for the quadruped's referee: an object the stride drives back under the
+"""What the stride of a walk or a climb moves, for the quadruped's referee: an object the stride carries back under the
 feet is moved as a push moves it, so it and what goes along with it are weighed against the push limit, whether or not
-it rams anything (:class:`StrideLoads`; found by an adversarial run: walking off a 15 kg cart on free rollers, or off a
-1 kg board lying on it, kicked the cart back until it rolled off its rear roller onto the floor)."""
+it rams anything (:class:`StrideLoads`; found by adversarial runs: walking off a 15 kg cart on free rollers, or off a
+1 kg board lying on it, kicked the cart back until it rolled off its rear roller onto the floor; a slick board kicked
+back 2.5 cm coasted on with the cart; a board walked along rolled a 20 kg drum out from under it off a ledge)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ class Rides(Protocol):
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet since it rested
     ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the ride began (NaN: no ride)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been in the ride (NaN: no ride)
+    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried, in the ride
 
 
 class StrideLoads:
@@ -37,32 +39,38 @@ class StrideLoads:
     def weigh(self, rides: Rides, mask: np.ndarray, centres: np.ndarray, group: Group) -> dict[int, tuple[str, float]]:
         """Find the worlds in ``mask`` where the stride moves more than the push limit. A ride begins when the stride
         first carries an object across under the feet (``rides.drift``) and ends once all it carried rests. An object
-        driven ``shove`` across under the feet (the referee's ``_driven``) that lies more than ``shove`` across from
-        where it was when the ride began is moved by the robot, as by a push; so are the movable objects it touches,
-        directly or through others (``group``), that lie more than ``shove`` across from where they were and have
-        shifted against it by no more than :data:`SLIP` of its travel (what it rides on and rolls with it, what rides
-        on it; not a roller it rolls on), unless they rose more than ``shove`` in the ride (a lever's load that the
-        driven board lifts is the lever's work: it rises before the lever rolls back or forth with it, and may drop
-        back as the lever rocks). Returns, for each world where they weigh more than the push limit, the reason,
-        naming the driven object, and their mass."""
+        the stride carried at all in the ride that lies more than ``shove`` across from where it was when the ride
+        began is moved by the robot, as by a push, whether it moved under the feet or coasted on after them (found by
+        an adversarial run: a board kicked 2.5 cm back coasted 0.85 m on with the 15 kg cart under it); so are the
+        movable objects that touched what it carried in the ride, directly or through others (``group``), that lie
+        more than ``shove`` across from where they were, and have shifted against it by no more than :data:`SLIP` of
+        its travel (what it rides on and rolls with it, what rides on it; not a roller it rolls on) or sank more than
+        ``shove`` (a second run: a 20 kg drum rolled out from under a driven board off a ledge), unless they rose more
+        than ``shove`` in the ride (a lever's load that the driven board lifts is the lever's work: it rises before
+        the lever rolls back or forth with it, and may drop back as the lever rocks). Returns, for each world where
+        they weigh more than the push limit, the reason, naming the carried object, and their mass."""
         shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
-        start, top = rides.ride_start, rides.ride_top
+        start, top, touched = rides.ride_start, rides.ride_top, rides.ride_touched
         ridden = (drift > 0).any(axis=1)
-        start[mask & ~ridden] = np.nan
-        top[mask & ~ridden] = np.nan
+        over = mask & ~ridden
+        start[over], top[over], touched[over] = np.nan, np.nan, False
         begun = mask & ridden & np.isnan(start[:, 0, 0])
         start[begun] = centres[begun]
         top[mask & ridden] = np.fmax(top[mask & ridden], centres[mask & ridden, :, 2])
+        carried = (drift > 0) & mask[:, None]
+        if carried.any():
+            np.logical_or.at(touched, np.nonzero(carried)[0], group(*np.nonzero(carried)))
         travel = centres - start  # (nworld, nobject, 3) NaN where no ride
         across = np.nan_to_num(np.linalg.norm(travel[:, :, :2], axis=2))
-        worlds, objects = np.nonzero((drift > shove) & (across > shove) & mask[:, None])
+        worlds, objects = np.nonzero(carried & (across > shove))
         if worlds.size == 0:
             return {}
         rows = np.arange(len(worlds))
         slip = np.linalg.norm(travel[worlds, :, :2] - travel[worlds, objects][:, None, :2], axis=2)
         lifted = top[worlds] - start[worlds, :, 2] > shove
-        along = group(worlds, objects) & (across[worlds] > shove) & ~lifted
-        along &= slip <= SLIP * across[worlds, objects][:, None]
+        sank = start[worlds, :, 2] - centres[worlds, :, 2] > shove
+        along = touched[worlds] & (across[worlds] > shove) & ~lifted
+        along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank
         along[rows, objects] = True
         load = (self.senses.masses(worlds) * along).sum(axis=1)
         names = self.senses.scene.object_names

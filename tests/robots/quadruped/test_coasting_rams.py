@@ -139,3 +139,54 @@ def test_a_light_cart_the_stride_drives_off_its_rollers_comes_down(program: str,
         assert "driven by the stride" not in (world_failure(rollout) or ""), world_failure(rollout)
     done = [r for r in rollouts if [c.outcome for c in r.calls] == ["done", "done"]]
     assert any(r.conditions["cart_lowered"] for r in done), [world_failure(r) for r in rollouts]
+
+
+DRUM = ("walk_along_a_board_to_roll_a_heavy_drum_off_a_ledge", "board_on_a_heavy_drum_at_a_ledge_edge")
+SLICK_CART = (
+    "kick_a_heavy_cart_under_3_cm_then_wait_while_it_coasts_off",
+    "slick_board_on_a_heavy_cart_on_two_rollers",
+)
+
+
+def _with_mass(layout: str, name: str, mass: float) -> Task:
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    objects = [o.model_copy(update={"mass": mass}) if o.name == name else o for o in task.objects]
+    return task.model_copy(update={"objects": objects})
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "seed", "worlds", "moved"),
+    [(*DRUM, 1, 3, "(board, drum)"), (*DRUM, 2, 3, "(board, drum)"), (*SLICK_CART, 2, 4, "(board, cart)")],
+)
+def test_what_the_stride_sets_rolling_is_weighed_however_it_slips_or_coasts(
+    program: str, layout: str, seed: int, worlds: int, moved: str
+) -> None:
+    """Found by an adversarial run on the stride-load rule: a 15 cm walk along a 3 kg board whose end lies on a 20 kg
+    drum at a ledge's edge rolled the drum out from under it, off the ledge (3 of 3 worlds on seeds 1 and 2): the drum,
+    rolling, shifts against the board by half its travel, more than what rides along may, so only the board was
+    weighed. And a slick board kicked back 2.5 cm on a 15 kg cart on free rollers, under the 3 cm a drive needed,
+    coasted on with the cart 0.85 m until it tipped off its rear roller (2 of 4 worlds on seed 2). What the stride
+    carried at all is weighed once it lies 3 cm from where it was, and what touched it and sank with it counts."""
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(
+        tasks.load(LAYOUTS / f"{layout}.yaml"), start_sessions([code] * worlds, "quadruped"), seed=seed
+    )
+    assert not any(r.success for r in rollouts), [r.conditions for r in rollouts]
+    for rollout in rollouts:
+        failure = world_failure(rollout) or ""
+        assert "driven by the stride of the robot on it, moved" in failure and moved in failure, failure
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "name", "mass", "seed"), [(*DRUM, "drum", 1.0, 3), (*SLICK_CART, "cart", 2.0, 1)]
+)
+def test_a_light_load_the_stride_sets_rolling_comes_down(
+    program: str, layout: str, name: str, mass: float, seed: int
+) -> None:
+    """The controls: the same programs with the drum 1 kg, the cart 2 kg (within the push limit with the board):
+    some world succeeds, and none is refused for what the stride moved."""
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(_with_mass(layout, name, mass), start_sessions([code] * 4, "quadruped"), seed=seed)
+    for rollout in rollouts:
+        assert "driven by the stride" not in (world_failure(rollout) or ""), world_failure(rollout)
+    assert any(r.success for r in rollouts), [world_failure(r) for r in rollouts]
