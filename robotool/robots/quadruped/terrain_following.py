@@ -107,7 +107,7 @@ class Footing:
 
 
 @dataclass(frozen=True)
-class Layout:
+class ReadingPattern:
     """Where :class:`TerrainFollowing` reads, fixed by the config and the body's size."""
 
     offsets: np.ndarray  # (5,) m: the per-tick samples along a foot's path (``config.local``)
@@ -118,7 +118,7 @@ class Layout:
     edge_kinds: np.ndarray  # the scan codes of :data:`~.terrain.EDGE_KINDS`
 
     @classmethod
-    def of(cls, config: QuadrupedConfig, half: np.ndarray) -> Layout:
+    def of(cls, config: QuadrupedConfig, half: np.ndarray) -> ReadingPattern:
         hold_len = round(config.hold_behind / SPACING)
         return cls(
             offsets=config.local,
@@ -137,7 +137,7 @@ class TerrainFollowing:
         self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
         self.samples, self.behind = config.samples, config.behind
         self.state = TerrainState.empty(senses.sim.nworld, self.samples, config.press)
-        self.layout = Layout.of(config, senses.facts.half)
+        self.layout = ReadingPattern.of(config, senses.facts.half)
 
     def start_move(self, w: int) -> None:
         """A new move in world ``w``: read its paths at the next tick."""
