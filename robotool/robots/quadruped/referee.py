@@ -86,6 +86,7 @@ class RefereeState:
     # under the feet (NaN: it carries nothing; :mod:`.stride_loads`)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: no ride)
     ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried since then
+    ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride since then
 
     @classmethod
     def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
@@ -110,6 +111,7 @@ class RefereeState:
             ride_start=np.full((nworld, nobject, 3), np.nan),
             ride_top=np.full((nworld, nobject), np.nan),
             ride_touched=np.zeros((nworld, nobject), dtype=bool),
+            ride_carried=np.zeros((nworld, nobject), dtype=bool),
         )
 
 
@@ -367,7 +369,8 @@ class Referee:
         """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
         or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
         s, limit = self.state, self.limits.max_push_mass
-        for w, (reason, mass) in self.strides.weigh(s, mask, centres, self._pressed_by).items():
+        resting = s.still >= REST_TIME
+        for w, (reason, mass) in self.strides.weigh(s, mask, centres, resting, self._pressed_by).items():
             if s.shoves[w] is None and self.senses.state.failed[w] is None:
                 s.shoves[w] = reason
                 moves.refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends)

@@ -27,7 +27,8 @@ class Rides(Protocol):
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet since it rested
     ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the ride began (NaN: no ride)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been in the ride (NaN: no ride)
-    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried, in the ride
+    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried (or was carried), in the ride
+    ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride in the ride
 
 
 class StrideLoads:
@@ -36,33 +37,39 @@ class StrideLoads:
     def __init__(self, senses: Senses, limits: QuadrupedLimits, config: QuadrupedConfig):
         self.senses, self.limits, self.config = senses, limits, config
 
-    def weigh(self, rides: Rides, mask: np.ndarray, centres: np.ndarray, group: Group) -> dict[int, tuple[str, float]]:
+    def weigh(
+        self, rides: Rides, mask: np.ndarray, centres: np.ndarray, resting: np.ndarray, group: Group
+    ) -> dict[int, tuple[str, float]]:
         """Find the worlds in ``mask`` where the stride moves more than the push limit. A ride begins when the stride
-        first carries an object across under the feet (``rides.drift``) and ends once all it carried rests. An object
-        the stride carried at all in the ride that lies more than ``shove`` across from where it was when the ride
-        began is moved by the robot, as by a push, whether it moved under the feet or coasted on after them (found by
-        an adversarial run: a board kicked 2.5 cm back coasted 0.85 m on with the 15 kg cart under it); so are the
-        movable objects that touched what it carried in the ride, directly or through others (``group``), that lie
-        more than ``shove`` across from where they were, and have shifted against it by no more than :data:`SLIP` of
-        its travel (what it rides on and rolls with it, what rides on it; not a roller it rolls on) or sank more than
-        ``shove`` (a second run: a 20 kg drum rolled out from under a driven board off a ledge), unless they rose more
-        than ``shove`` in the ride (a lever's load that the driven board lifts is the lever's work: it rises before
-        the lever rolls back or forth with it, and may drop back as the lever rocks). Returns, for each world where
-        they weigh more than the push limit, the reason, naming the carried object, and their mass."""
+        first carries an object across under the feet (``rides.drift``) and ends once all it carried, and all that
+        touched it, rests (``resting``, (nworld, nobject)). An object the stride carried at all in the ride that lies
+        more than ``shove`` across from where it was when the ride began is moved by the robot, as by a push, whether
+        it moved under the feet or coasted on after them (found by an adversarial run: a board kicked back 2.5 cm
+        coasted 0.85 m on with the 15 kg cart under it); so are the movable objects that touched what it carried in
+        the ride, directly or through others (``group``), that lie more than ``shove`` across from where they were,
+        and have shifted against it by no more than :data:`SLIP` of its travel (what it rides on and rolls with it,
+        what rides on it; not a roller it rolls on) or sank more than ``shove``, however little it moved itself
+        (a second run: a board walked along rolled a 20 kg drum out from under it off a ledge; a third: a board kicked
+        1.5 cm between stops knocked a 20 kg drum off a ledge), unless they rose more than ``shove`` in the ride (a
+        lever's load that the driven board lifts is the lever's work: it rises before the lever rolls back or forth
+        with it, and may drop back as the lever rocks). Returns, for each world where they weigh more than the push
+        limit, the reason, naming the carried object, and their mass."""
         shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
-        start, top, touched = rides.ride_start, rides.ride_top, rides.ride_touched
-        ridden = (drift > 0).any(axis=1)
-        over = mask & ~ridden
-        start[over], top[over], touched[over] = np.nan, np.nan, False
-        begun = mask & ridden & np.isnan(start[:, 0, 0])
+        start, top, touched, carried = rides.ride_start, rides.ride_top, rides.ride_touched, rides.ride_carried
+        carrying = (drift > 0) & mask[:, None]
+        riding = mask & (carrying.any(axis=1) | (touched & ~resting).any(axis=1))
+        over = mask & ~riding
+        start[over], top[over], touched[over], carried[over] = np.nan, np.nan, False, False
+        begun = riding & np.isnan(start[:, 0, 0])
         start[begun] = centres[begun]
-        top[mask & ridden] = np.fmax(top[mask & ridden], centres[mask & ridden, :, 2])
-        carried = (drift > 0) & mask[:, None]
-        if carried.any():
-            np.logical_or.at(touched, np.nonzero(carried)[0], group(*np.nonzero(carried)))
+        top[riding] = np.fmax(top[riding], centres[riding, :, 2])
+        carried |= carrying
+        touched |= carrying
+        if carrying.any():
+            np.logical_or.at(touched, np.nonzero(carrying)[0], group(*np.nonzero(carrying)))
         travel = centres - start  # (nworld, nobject, 3) NaN where no ride
         across = np.nan_to_num(np.linalg.norm(travel[:, :, :2], axis=2))
-        worlds, objects = np.nonzero(carried & (across > shove))
+        worlds, objects = np.nonzero(carried & riding[:, None])
         if worlds.size == 0:
             return {}
         rows = np.arange(len(worlds))
@@ -71,13 +78,13 @@ class StrideLoads:
         sank = start[worlds, :, 2] - centres[worlds, :, 2] > shove
         along = touched[worlds] & (across[worlds] > shove) & ~lifted
         along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank
-        along[rows, objects] = True
+        along[rows, objects] = across[worlds, objects] > shove
         load = (self.senses.masses(worlds) * along).sum(axis=1)
         names = self.senses.scene.object_names
         found: dict[int, tuple[str, float]] = {}
         for k in np.flatnonzero(load > limit).tolist():
-            others = [names[o] for o in np.flatnonzero(along[k]) if o != objects[k]]
-            what = ", ".join([names[objects[k]], *others])
+            moved = sorted(np.flatnonzero(along[k]).tolist(), key=lambda o: o != objects[k])  # the carried one first
+            what = ", ".join(names[o] for o in moved)
             reason = (
                 f"{names[objects[k]]}, driven by the stride of the robot on it, moved {load[k]:.1f} kg in all "
                 f"({what}), over the push limit of {limit:.1f} kg (a walk or a climb moves no more than a push may)"

@@ -190,3 +190,34 @@ def test_a_light_load_the_stride_sets_rolling_comes_down(
     for rollout in rollouts:
         assert "driven by the stride" not in (world_failure(rollout) or ""), world_failure(rollout)
     assert any(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+KICKED_INTO_A_DRUM = (
+    "kick_a_board_under_3_cm_into_a_heavy_drum_to_roll_it_off_a_ledge",
+    "board_on_rollers_kicked_under_3_cm_into_a_heavy_drum_on_a_ledge",
+)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_heavy_drum_knocked_off_a_ledge_by_a_board_kicked_less_than_3_cm_is_weighed(seed: int) -> None:
+    """Found by an adversarial run on the stride-load rule: a 2 cm walk on a board on free rollers, held by posts and
+    a stop to under 3 cm of travel, kicked it into a 20 kg drum that rolled on off a ledge (12 of 12 worlds on seeds
+    1-4). What touched what the stride carried is weighed however little the carried object itself moved, and the
+    ride lasts until what it touched rests (the drum falls after the walk)."""
+    program, layout = KICKED_INTO_A_DRUM
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(
+        tasks.load(LAYOUTS / f"{layout}.yaml"), start_sessions([code] * 3, "quadruped"), seed=seed
+    )
+    assert not any(r.success for r in rollouts), [r.conditions for r in rollouts]
+    assert not any(r.conditions["robot_shoved_nothing"] for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_a_light_drum_knocked_off_a_ledge_by_a_kicked_board_comes_down() -> None:
+    """The control: the same kick, the drum 1 kg (board and drum within the push limit): it comes down, and no world
+    is refused for what the stride moved."""
+    program, layout = KICKED_INTO_A_DRUM
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(_with_mass(layout, "drum", 1.0), start_sessions([code] * 3, "quadruped"), seed=1)
+    assert all(r.conditions["robot_shoved_nothing"] for r in rollouts), [world_failure(r) for r in rollouts]
+    assert any(r.success for r in rollouts), [world_failure(r) for r in rollouts]
