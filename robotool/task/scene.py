@@ -51,10 +51,10 @@ MIN_BUTTON_STIFFNESS = 1.0
 """N/m: the softest button spring a task file may give (0.01 N at the press travel; a softer one would be described
 as a spring of 0 N/m)."""
 MAX_BUTTON_STIFFNESS = 15_000.0
-"""N/m: the stiffest button spring a task file may give, 150 N at the press travel: more than the arm pushes (its
-servos' 100 N; 39 N, its 4 kg payload, by the payload rule), so a button too stiff for it can still be given. The
-simulator follows the 20 g face on its spring stably at its 2 ms step up to ``4 m / dt^2`` = 20000 N/m; a face let go
-1.5 cm in on a 30000 N/m spring blew up the simulation."""
+"""N/m: the stiffest button spring a task file may give, 150 N at the press travel: more than a robot that presses
+buttons pushes (100 N at most), so a button too stiff for it can still be given. The simulator follows the 20 g face
+on its spring stably at its 2 ms step up to ``4 m / dt^2`` = 20000 N/m; a face let go 1.5 cm in on a 30000 N/m spring
+blew up the simulation."""
 
 
 def _not_boolean(value: object) -> object:
