@@ -45,25 +45,18 @@ class BatchState:
     eq_active: np.ndarray  # (nworld, neq) bool
     touching: np.ndarray  # (nworld, nbody, nbody) bool
     failed: list[str | None]
-    _xmats: dict[int, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
-    _frames: list[np.ndarray] = field(default_factory=list, init=False, repr=False, compare=False)
     _derived: dict[Any, np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def xmat(self, body: int) -> np.ndarray:
-        """Rotation matrices of one body in every world, (nworld, 3, 3) (computed once per state and body: do not
-        write into it)."""
-        cached = self._xmats.get(body)
-        if cached is None:
-            cached = self._xmats[body] = self.frames()[:, body].copy()
-        return cached
+        """Rotation matrices of one body in every world, (nworld, 3, 3) (computed once per state and body;
+        read-only)."""
+        return self.derived(("xmat", body), lambda: self.frames()[:, body].copy())
 
     def frames(self) -> np.ndarray:
-        """Rotation matrices of every body in every world, (nworld, nbody, 3, 3) (computed once per state: do not
-        write into it)."""
-        if not self._frames:
-            nworld, nbody = self.xquat.shape[:2]
-            self._frames.append(quat_to_mat(self.xquat.reshape(-1, 4)).reshape(nworld, nbody, 3, 3))
-        return self._frames[0]
+        """Rotation matrices of every body in every world, (nworld, nbody, 3, 3) (computed once per state;
+        read-only)."""
+        nworld, nbody = self.xquat.shape[:2]
+        return self.derived("frames", lambda: quat_to_mat(self.xquat.reshape(-1, 4)).reshape(nworld, nbody, 3, 3))
 
     def derived(self, key: Any, compute: Callable[[], np.ndarray]) -> np.ndarray:
         """``compute()``, a quantity of this state that several readers share, found once per state and ``key``
