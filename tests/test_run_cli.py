@@ -191,6 +191,20 @@ def test_a_program_file_is_read_in_the_encoding_its_coding_line_declares(
     assert err.strip() == f"error: cannot read the program {unknown}: unknown encoding: no-such-encoding"
 
 
+@pytest.mark.parametrize("codec", ["rot13", "hex", "base64", "zlib_codec", "punycode"])
+def test_a_coding_line_naming_a_codec_python_refuses_for_source_is_one_line(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, codec: str
+) -> None:
+    """Found by an adversarial run: a coding line naming a codec that is not a text encoding (rot13, hex, base64,
+    zlib_codec) or one that cannot decode source (punycode) ended in an internal error (exit 70). Python itself says
+    "SyntaxError: encoding problem: <codec>" for these files."""
+    path = tmp_path / "codec.py"
+    path.write_bytes(f"# -*- coding: {codec} -*-\n".encode() + program("milk_reaching_direct").encode())
+    status, out, err = run_cli(capsys, "milk_reaching_near", str(path))
+    assert status == 2 and not out
+    assert err.startswith(f"error: cannot read the program {path}:") and len(err.strip().splitlines()) == 1, err
+
+
 def test_a_long_output_is_shown_cut_with_how_much_is_left_out() -> None:
     """Found by an adversarial run: a program's output was cut at 500 characters with no mark, ending mid-word as if
     that were all it printed."""

@@ -56,8 +56,10 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
         code = data.decode(source_encoding(data))  # as Python reads source: a BOM, or a coding line (PEP 263)
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
-    except (OSError, UnicodeDecodeError, SyntaxError) as e:
+    except (OSError, UnicodeError, SyntaxError) as e:
         raise UsageError(f"cannot read the program {args.program}: {getattr(e, 'strerror', None) or e}") from None
+    except LookupError:  # a codec, but not a text encoding (rot13, base64): Python refuses it for source
+        raise UsageError(f"cannot read the program {args.program}: encoding problem in its coding line") from None
     recorder = run_recorder(args)
     try:
         with console.status(f"running {args.program} on {task.name} in {args.worlds} world(s)"):
