@@ -9,7 +9,7 @@ from pathlib import Path
 
 import dspy
 import pytest
-from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script, stage_rules
+from fixtures.scripted_lm import GRASP_DIRECTLY, STAGE_MARKERS, arm_script, chat_reply, stage_rules
 
 from robotool import tasks
 from robotool.cli import main
@@ -423,3 +423,26 @@ def test_the_standin_stops_at_once_when_its_block_is_left() -> None:
         with StandinServer(Script(rules=[])):
             pass
     assert (time.perf_counter() - started) / 3 < 0.25
+
+
+def test_a_final_program_the_reply_takes_back_is_not_run_over_http(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Found by an adversarial run, through ``robotool solve --api-base``: the Coder marked a draft 'Final program:',
+    then wrote 'Wait, that is wrong.' and a correction; the draft ran (and failed). The correction, or a second
+    request naming the problem, is right."""
+    draft = "open_gripper()\nmove_to_position([0.3, 0.2, 0.3])\nclose_gripper()\n"
+    reply = chat_reply(
+        code=f"Final program:\n```python\n{draft}```\nWait, that is wrong.\n\n```python\n{GRASP_DIRECTLY}```"
+    )
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(reply=reply, times=1)])
+    with StandinServer(Script(rules=rules)) as server:
+        main(
+            [
+                *("solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"),
+                *("--worlds", "1", "--candidates", "1", "--json", str(tmp_path / "r.json")),
+            ]
+        )
+    capsys.readouterr()
+    (candidate,) = json.loads((tmp_path / "r.json").read_text())["candidates"]
+    assert candidate["code"] != draft

@@ -397,12 +397,13 @@ _FINAL = re.compile(
     r"(?:program|code|version|script|solution|answer)\b",
     re.IGNORECASE,
 )
-_NOT_FINAL = re.compile(
-    r"\b(?:not|never|no|wrong|incorrect|buggy|broken|original|old|older|previous|earlier|initial|first|draft|current|"
-    r"currently|existing|gave|given|sent|fails?|failed|failing|before|provided|reference|comparison|shared|wrote|"
-    r"crashed|options?|alternatives?|alternatively|test|testing|example|usage)\b|n't\b",
-    re.IGNORECASE,
+_FAULTY = r"wrong|incorrect|buggy|broken|fails?|failed|failing|crashed"  # may say so of the block before the label
+_SET_ASIDE = (
+    r"not|never|no|original|old|older|previous|earlier|initial|first|draft|current|currently|existing|gave|given|sent|"
+    r"before|provided|reference|comparison|shared|wrote|options?|alternatives?|alternatively|test|testing|example|usage"
 )
+_NOT_FINAL = re.compile(rf"\b(?:{_SET_ASIDE}|{_FAULTY})\b|n't\b", re.IGNORECASE)
+_ASIDE = re.compile(rf"\b(?:{_SET_ASIDE})\b|n't\b", re.IGNORECASE)
 
 
 def _marked_final(label: str) -> bool:
@@ -481,9 +482,11 @@ def _has_call(tree: ast.Module) -> bool:
 
 def _aside(label: str) -> bool:
     """Whether a label's last sentence says the block after it is not the program (``For comparison, the naive
-    version:``, ``The code you provided:``); a correction after a program marked final says nothing of the kind."""
+    version:``, ``The code you provided:``); a correction after a program marked final says nothing of the kind, and
+    a sentence that calls something wrong may take back the block before it (``Wait, that is wrong.``: found by an
+    adversarial run, where the retracted block ran)."""
     sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
-    return _NOT_FINAL.search(label[sentence:]) is not None
+    return _ASIDE.search(label[sentence:]) is not None
 
 
 MOST_PROGRAMS = 8

@@ -609,3 +609,39 @@ ADV5_CONTROLS = {
 @pytest.mark.parametrize("answer", ADV5_CONTROLS.values(), ids=ADV5_CONTROLS.keys())
 def test_clear_replies_found_by_the_second_adversarial_run_are_kept(answer: str) -> None:
     assert extract(answer).code == GRASP
+
+
+RETRACTED = "open_gripper()\nmove_to_position([0.3, 0.2, 0.3])\nclose_gripper()\n"
+RETRACTED_FINAL = {
+    "a final program, then 'that is wrong' and a correction": (
+        f"Final program:\n```python\n{RETRACTED}```\nWait, that is wrong.\n\n```python\n{PROGRAM}```\n"
+    ),
+    "a corrected code, then 'still wrong; here is the corrected code'": (
+        f"Here is the corrected code:\n```python\n{RETRACTED}```\nHmm, still wrong; here is the corrected code:\n"
+        f"```python\n{PROGRAM}```\n"
+    ),
+}
+
+
+@pytest.mark.parametrize("answer", RETRACTED_FINAL.values(), ids=RETRACTED_FINAL.keys())
+def test_a_program_marked_final_then_taken_back_is_never_run(answer: str) -> None:
+    """Found by an adversarial run: the retracted block ran (the sentence taking it back stands before the
+    correction, where it reads as a label saying the correction is not final). Taking the correction or asking again
+    are both right; running the retracted block is not."""
+    try:
+        code = extract(answer).code
+    except ProgramRejected:
+        return
+    assert code == PROGRAM
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open (minor): a bare 'Final:' label ('FINAL:', '**Final:**', '### Final') after a block labelled 'Draft:' "
+    "is not read as marking the block final; the reply is asked again saying it 'does not say which one is meant'",
+)
+@pytest.mark.parametrize("label", ["FINAL:", "**Final:**", "### Final"])
+def test_a_bare_final_label_after_a_draft_marks_the_block_final(label: str) -> None:
+    """Found by an adversarial run: 'Final version:' and 'FINAL ANSWER:' are read, a bare 'Final:' is not."""
+    answer = f"Draft:\n```python\n{RETRACTED}```\nThat draft misses the milk.\n\n{label}\n```python\n{PROGRAM}```\n"
+    assert extract(answer).code == PROGRAM
