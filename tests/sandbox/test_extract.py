@@ -635,13 +635,22 @@ def test_a_program_marked_final_then_taken_back_is_never_run(answer: str) -> Non
     assert code == PROGRAM
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (minor): a bare 'Final:' label ('FINAL:', '**Final:**', '### Final') after a block labelled 'Draft:' "
-    "is not read as marking the block final; the reply is asked again saying it 'does not say which one is meant'",
-)
 @pytest.mark.parametrize("label", ["FINAL:", "**Final:**", "### Final"])
 def test_a_bare_final_label_after_a_draft_marks_the_block_final(label: str) -> None:
-    """Found by an adversarial run: 'Final version:' and 'FINAL ANSWER:' are read, a bare 'Final:' is not."""
+    """Found by an adversarial run: 'Final version:' and 'FINAL ANSWER:' were read, a bare 'Final:' was not (the
+    reply was asked again)."""
     answer = f"Draft:\n```python\n{RETRACTED}```\nThat draft misses the milk.\n\n{label}\n```python\n{PROGRAM}```\n"
     assert extract(answer).code == PROGRAM
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        f"Final:\n```python\n{RETRACTED}```\nFINAL:\n```python\n{PROGRAM}```\n",  # two programs marked final
+        f"### Final\n```python\n{RETRACTED}```\nOn second thought:\n```python\n{PROGRAM}```\n",  # a different one after
+    ],
+    ids=["two bare labels", "a different program after it"],
+)
+def test_a_bare_final_label_is_asked_again_when_another_program_competes(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="which one is meant"):
+        extract(answer)
