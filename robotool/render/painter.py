@@ -1,4 +1,5 @@
-"""Draw a scene's state headless with ``mujoco.Renderer``, from a fixed camera, with its objects labelled.
+"""Draw a scene's state headless with MuJoCo's renderer (:mod:`robotool.render.offscreen`), from a fixed camera,
+with its objects labelled.
 
 Off screen on Linux without a display this uses EGL (``MUJOCO_GL=egl``, set by ``import robotool`` when
 no display is present); Mesa's software EGL works on machines without a GPU.
@@ -16,6 +17,7 @@ from PIL import Image
 from robotool import gl_backend, robots
 from robotool.errors import RobotoolError
 from robotool.render.camera import fit_camera, geom_corners, visible_geoms
+from robotool.render.offscreen import OffscreenRenderer
 from robotool.render.overlay import CaptionLine, Label, draw_caption, draw_labels, to_image
 from robotool.render.picture_model import ROBOT_RGBA, RenderModel, render_model
 from robotool.sim.compiled_scene import Scene
@@ -25,14 +27,14 @@ class RenderError(RobotoolError):
     """The picture cannot be drawn here (no OpenGL context, a size over the limit)."""
 
 
-def _renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+def _renderer(model: mujoco.MjModel, width: int, height: int) -> OffscreenRenderer:
     limit = (model.vis.global_.offwidth, model.vis.global_.offheight)
     if not (16 <= width <= limit[0] and 16 <= height <= limit[1]):
         raise RenderError(f"picture size {width}x{height} is outside 16x16 .. {limit[0]}x{limit[1]} pixels")
     if gl_backend.UNAVAILABLE is not None:
         raise RenderError(gl_backend.UNAVAILABLE)
     try:
-        return mujoco.Renderer(model, height=height, width=width)
+        return OffscreenRenderer(model, width, height)
     except Exception as e:  # the GL back ends raise several kinds (ImportError, RuntimeError, their own)
         raise RenderError(
             f"cannot open an OpenGL context for rendering (MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}): {e}; "
@@ -164,5 +166,5 @@ class Painter:
         return image
 
     def close(self) -> None:
-        """Free the OpenGL context."""
+        """Free the model's render context."""
         self._renderer.close()
