@@ -5,6 +5,7 @@ from __future__ import annotations
 from robotool.robots.quadruped.quadruped_concepts import start_surface
 from robotool.robots.quadruped.quadruped_config import QUADRUPED
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.terrain import FOOT_RADIUS
 from robotool.task.describe import number_text, vector_text
 from robotool.task.task_model import Task
 
@@ -31,5 +32,7 @@ def robot_section(task: Task) -> list[str]:
         f"{num(round(QUADRUPED.walk_grip, 3))} (on a slope, that plus the slope's tangent), and a push may take no "
         "more force than its feet hold (its weight times the friction under them; sliding an object takes its "
         "weight times the friction under it).",
+        f"- its feet are {num(2 * FOOT_RADIUS)} m across and stand only on a surface about as wide: a blade on edge, a "
+        "thin rail or a ridge is no foothold.",
         "A skill that would break a limit stops the robot where it is and is refused.",
     ]

@@ -8,7 +8,8 @@ legs' limits and against the friction of the geoms it crosses (a slope steeper t
 world: the feet are frictionless in the simulation and the x-y servos would hold the body on any slope): a finding
 moves the stopping point to just before it, and once the robot has stopped there the skill is refused with the
 measured value, the limit and where. A cloth is no footing over a gap: the rays see through it
-to what carries it. Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell
+to what carries it; nor is a surface narrower than a foot (a blade on edge, a ridge): the foot comes down beside it
+(:mod:`.footholds`). Every control tick, in all moving worlds at once, a few rays under and ahead of each foot tell
 whether a foot is crossing an accepted edge: then the lift motor carries the body so that foot clears the higher
 surface (a step up, a stridden gap), or lets it down slowly past a drop, and the x-y setpoint waits until the foot
 is clear. Otherwise the lift is off and the robot's weight rests on its feet.
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robotool.robots.quadruped.body import BELLY_HEIGHT, OFF
+from robotool.robots.quadruped.footholds import Footholds, comes_down_to, side_points
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.rays import Rays
@@ -138,6 +140,7 @@ class TerrainFollowing:
         self.samples, self.behind = config.samples, config.behind
         self.state = TerrainState.empty(senses.sim.nworld, self.samples, config.press)
         self.layout = ReadingPattern.of(config, senses.facts.half)
+        self.footholds = Footholds.of(senses.sim.scene.model)
 
     def start_move(self, w: int) -> None:
         """A new move in world ``w``: read its paths at the next tick."""
@@ -205,9 +208,8 @@ class TerrainFollowing:
         read = samples  # the samples past every world's reach repeat its last: those are read once
         if np.isfinite(ahead).all():
             read = min(samples, int(np.count_nonzero(along < ahead.max())) + 1)
-        read_back = self.rays.surface(
-            worlds, points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
-        )
+        xy, top = points[:, :, :read].reshape(len(worlds), -1, 2), bottom.min(axis=1) + config.ray_height
+        read_back = self._on_footholds(worlds, xy, u, top, self.rays.surface(worlds, xy, top))
         z, solid, geoms, cloth = (
             np.concatenate([a, np.repeat(a[:, :, -1:], samples - read, axis=2)], axis=2)
             for a in (r.reshape(*points.shape[:2], read) for r in read_back)
@@ -275,6 +277,34 @@ class TerrainFollowing:
                 (float(where[0]), float(where[1])),
                 FOOT_NAMES[foot],
             )
+
+    def _on_footholds(
+        self,
+        worlds: np.ndarray,
+        xy: np.ndarray,
+        u: np.ndarray,
+        top: np.ndarray,
+        read: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``read``, what the rays from ``top`` (k,) over ``xy`` (k, n, 2) met (:meth:`~.rays.Rays.surface`: heights,
+        solids, geoms, cloth links; (k, n) each), where the feet moving along ``u`` (k, 2) would stand: over a surface
+        that may be narrower than a foot, rays beside it tell, and where it is, the foot comes down beside it, to what
+        the rays there met (:mod:`.footholds`)."""
+        narrow = self.footholds.narrow(self.senses.state, worlds, read[2])
+        if not narrow.any():
+            return read
+        rows = np.flatnonzero(narrow.any(axis=1))
+        count = narrow[rows].sum(axis=1)
+        first = np.argsort(~narrow[rows], axis=1, kind="stable")[:, : count.max()]  # each row's narrow samples first
+        pick = np.where(np.arange(first.shape[1])[None, :] < count[:, None], first, first[:, :1])  # padded
+        sides = side_points(np.take_along_axis(xy[rows], pick[:, :, None], axis=1), u[rows][:, None, :])
+        beside = self.rays.surface(worlds[rows], sides.reshape(len(rows), -1, 2), top[rows])
+        which = comes_down_to(np.take_along_axis(read[0][rows], pick, axis=1), beside[0].reshape(*pick.shape, 4))
+        out = tuple(a.copy() for a in read)
+        for a, side in zip(out, beside, strict=True):
+            side = np.take_along_axis(side.reshape(*pick.shape, 4), np.maximum(which, 0)[..., None], axis=2)[..., 0]
+            a[rows[:, None], pick] = np.where(which >= 0, side, np.take_along_axis(a[rows], pick, axis=1))
+        return out[0], out[1], out[2], out[3]
 
     def _footing(
         self, worlds: np.ndarray, z: np.ndarray, geoms: np.ndarray, grip: np.ndarray, points: np.ndarray, behind: int

@@ -976,17 +976,23 @@ def test_a_fragile_object_the_goal_does_not_name_must_not_break() -> None:
         assert "glass_vase broke" in (world_failure(rollout) or ""), world_failure(rollout)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open: the terrain rays read only the line under each foot's centre; a foothold's width is never checked",
-)
 def test_a_gap_walked_across_on_two_blades_under_the_feet_is_refused() -> None:
     """Found by an adversarial run (6 of 6 worlds on three seeds): two 4 mm steel plates on edge, exactly under the
-    lines the feet walk on, carry the robot across a 1 m gap; the world-anchored servos hold the frictionless feet on
-    them. A foothold narrower than the foot should read as the gap it stands in."""
+    lines the feet walk on, carried the robot across a 1 m gap (the terrain rays read only the line under each foot's
+    centre); the world-anchored servos hold the frictionless feet on them. A foothold narrower than the foot reads as
+    the gap it stands in."""
     program = (CHEATS / "walk_across_a_gap_on_two_blades.py").read_text()
     for rollout in sim.run_sessions(
         _scene("gap_crossed_on_two_steel_blades"), start_sessions([program] * 2, "quadruped"), seed=11
     ):
         assert not rollout.success, rollout.conditions
-        assert "gap of" in (world_failure(rollout) or ""), world_failure(rollout)
+        assert "gap of 1.00 m" in (world_failure(rollout) or ""), world_failure(rollout)
+
+
+def test_the_same_gap_is_walked_across_on_two_beams_as_wide_as_the_feet() -> None:
+    """The control: beams 8 cm wide in the blades' place (a foot is 6 cm across) carry the same walk."""
+    program = (CHEATS / "walk_across_a_gap_on_two_blades.py").read_text()
+    for rollout in sim.run_sessions(
+        _scene("gap_crossed_on_two_beams"), start_sessions([program] * 2, "quadruped"), seed=11
+    ):
+        assert rollout.success, world_failure(rollout)
