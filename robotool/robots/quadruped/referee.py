@@ -82,9 +82,9 @@ class RefereeState:
     force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
     # (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
-    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride began to carry something
-    # under the feet (NaN: it carries nothing; :mod:`.stride_loads`)
-    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: no ride)
+    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride first carried something
+    # under the feet since the object was last pushed (NaN: not yet; :mod:`.stride_loads`)
+    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: not yet)
     ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried since then
     ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride since then
 
@@ -147,6 +147,8 @@ class Referee:
         self.state.carried[w, index] = 0.0
         self.state.rammed_by[w, index] = -1
         self.state.drift[w, index] = 0.0
+        self.state.ride_start[w, index] = np.nan  # where the stride moves it from, from the next ride on
+        self.state.ride_top[w, index] = np.nan
         self.state.force_limit[w] = np.nan  # read anew: it may push from another surface
 
     def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:

@@ -25,10 +25,11 @@ class Rides(Protocol):
     """The referee's per-world state that :class:`StrideLoads` reads and keeps."""
 
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet since it rested
-    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the ride began (NaN: no ride)
-    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been in the ride (NaN: no ride)
-    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried (or was carried), in the ride
-    ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride in the ride
+    ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride first moved anything since it
+    # was last pushed (NaN: not yet)
+    ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: not yet)
+    ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried (or was carried), in a ride
+    ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride in a ride
 
 
 class StrideLoads:
@@ -40,27 +41,27 @@ class StrideLoads:
     def weigh(
         self, rides: Rides, mask: np.ndarray, centres: np.ndarray, resting: np.ndarray, group: Group
     ) -> dict[int, tuple[str, float]]:
-        """Find the worlds in ``mask`` where the stride moves more than the push limit. A ride begins when the stride
-        first carries an object across under the feet (``rides.drift``) and ends once all it carried, and all that
-        touched it, rests (``resting``, (nworld, nobject)). An object the stride carried at all in the ride that lies
-        more than ``shove`` across from where it was when the ride began is moved by the robot, as by a push, whether
-        it moved under the feet or coasted on after them (found by an adversarial run: a board kicked back 2.5 cm
-        coasted 0.85 m on with the 15 kg cart under it); so are the movable objects that touched what it carried in
-        the ride, directly or through others (``group``), that lie more than ``shove`` across from where they were,
-        and have shifted against it by no more than :data:`SLIP` of its travel (what it rides on and rolls with it,
-        what rides on it; not a roller it rolls on) or sank more than ``shove``, however little it moved itself
-        (a second run: a board walked along rolled a 20 kg drum out from under it off a ledge; a third: a board kicked
-        1.5 cm between stops knocked a 20 kg drum off a ledge), unless they rose more than ``shove`` in the ride (a
-        lever's load that the driven board lifts is the lever's work: it rises before the lever rolls back or forth
-        with it, and may drop back as the lever rocks). Returns, for each world where they weigh more than the push
-        limit, the reason, naming the carried object, and their mass."""
+        """Find the worlds in ``mask`` where the stride moves more than the push limit. A ride goes on while the stride
+        carries an object across under the feet (``rides.drift``) or what touched what it carried still moves
+        (``resting``, (nworld, nobject)); what the rides move counts from where it was when the stride first moved
+        anything, over every ride since, until the robot pushes it itself (a fourth adversarial run: a board held to
+        under 3 cm of travel, kicked again and again, knocked a 20 kg drum 0.7 m along in strokes of under 3 cm). An
+        object the stride carried that lies more than ``shove`` across from there is moved by the robot, as by a
+        push, whether it moved under the feet or coasted on after them (a board kicked back 2.5 cm coasted 0.85 m on
+        with the 15 kg cart under it); so are the movable objects that touched what it carried, directly or through
+        others (``group``), that lie more than ``shove`` across from there and have shifted against it by no more
+        than :data:`SLIP` of its travel (what it rides on and rolls with it, what rides on it; not a roller it rolls
+        on), or went on more than ``shove`` farther than it (knocked on by it: the drum), or sank more than ``shove``,
+        however little it moved itself (a board walked along rolled a 20 kg drum out from under it off a ledge; a
+        board kicked 1.5 cm between stops knocked one off a ledge). What rose more than ``shove`` is a lever's load,
+        the lever's work, as long as it does not sink back below where it was by more than that (a 10 kg cube a
+        lever lifted rode 12-19 cm back on the board walked along, off a shelf, and came down). Returns, for each
+        world where they weigh more than the push limit, the reason, naming the carried object, and their mass."""
         shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
         start, top, touched, carried = rides.ride_start, rides.ride_top, rides.ride_touched, rides.ride_carried
         carrying = (drift > 0) & mask[:, None]
         riding = mask & (carrying.any(axis=1) | (touched & ~resting).any(axis=1))
-        over = mask & ~riding
-        start[over], top[over], touched[over], carried[over] = np.nan, np.nan, False, False
-        begun = riding & np.isnan(start[:, 0, 0])
+        begun = riding[:, None] & np.isnan(start[:, :, 0])
         start[begun] = centres[begun]
         top[riding] = np.fmax(top[riding], centres[riding, :, 2])
         carried |= carrying
@@ -76,8 +77,9 @@ class StrideLoads:
         slip = np.linalg.norm(travel[worlds, :, :2] - travel[worlds, objects][:, None, :2], axis=2)
         lifted = top[worlds] - start[worlds, :, 2] > shove
         sank = start[worlds, :, 2] - centres[worlds, :, 2] > shove
-        along = touched[worlds] & (across[worlds] > shove) & ~lifted
-        along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank
+        knocked = across[worlds] > across[worlds, objects][:, None] + shove  # farther than what drove it: knocked on
+        along = touched[worlds] & (across[worlds] > shove) & (~lifted | sank)
+        along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank | knocked
         along[rows, objects] = across[worlds, objects] > shove
         load = (self.senses.masses(worlds) * along).sum(axis=1)
         names = self.senses.scene.object_names

@@ -570,6 +570,26 @@ def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed(
     assert push.outcome == "refused" and ("pushing pallet (touching crate) took" in reason or DRAG in reason), reason
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: what a pushed object drags by friction (lying on it, borne up elsewhere too) is judged by the force "
+    "the drag takes, not by its mass; weighing it by mass, as a ram is, refuses the lever's own prop: the chair pushed "
+    "out from under a lever's raised end drags the board a few centimetres, and the cube on it rises",
+)
+def test_a_heavy_crate_dragged_along_a_greased_rail_by_a_pushed_pallet_is_weighed() -> None:
+    """Found by an adversarial run (19 of 20 worlds on seeds 1-5): a 1.5 kg pallet pushed 0.7 m dragged a 20 kg crate,
+    3 cm of whose edge lay on it and the rest on a greased rail (friction 0.02), 0.33 m along the rail and off its
+    end: 22-38 N, within the push's force. Pushing the crate itself is refused for its mass, and so is a box rammed
+    into it; a drag moves it as surely."""
+    rollouts = sim.run_sessions(
+        _scene("heavy_crate_on_a_greased_rail_beside_a_pallet"),
+        start_sessions([_text("push_a_pallet_to_drag_a_heavy_crate_off_a_greased_rail")] * 2, "quadruped"),
+        seed=1,
+    )
+    for rollout in rollouts:
+        assert not rollout.success and "crate" in failure_reason(rollout), failure_reason(rollout)
+
+
 def test_a_chair_pinned_under_a_loaded_lever_end_is_weighed_with_its_load() -> None:
     """Found by an adversarial run: every world of seeds 0-3 lifted the cube (0.15 m). The push weighed the 3 kg chair,
     not the 30 kg sandbag pressing it down through the lever (about 145 N, held up by the fixed roller too): the torso

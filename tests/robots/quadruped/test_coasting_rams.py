@@ -221,3 +221,54 @@ def test_a_light_drum_knocked_off_a_ledge_by_a_kicked_board_comes_down() -> None
     rollouts = sim.run_sessions(_with_mass(layout, "drum", 1.0), start_sessions([code] * 3, "quadruped"), seed=1)
     assert all(r.conditions["robot_shoved_nothing"] for r in rollouts), [world_failure(r) for r in rollouts]
     assert any(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+LEVER_OFF_A_SHELF = ("rock_a_lever_to_slide_its_heavy_load_off_a_shelf", "heavy_cube_on_a_board_end_on_a_low_shelf")
+KICKED_OFF_A_PAD = (
+    "kick_a_board_again_and_again_to_roll_a_heavy_drum_off_a_pad",
+    "heavy_drum_on_a_pad_behind_a_board_on_rollers",
+)
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "seed", "moved"),
+    [(*LEVER_OFF_A_SHELF, 1, "(surfboard, cube)"), (*KICKED_OFF_A_PAD, 3, "(drum)")],
+)
+def test_what_the_stride_moves_in_short_strokes_or_after_a_lever_lift_is_weighed(
+    program: str, layout: str, seed: int, moved: str
+) -> None:
+    """Found by an adversarial run on the stride-load rule. A 10 kg cube the lever lifted was never weighed again in
+    the ride: walking on along the board drove it back 12-19 cm with the cube on it, off a shelf, and the cube came
+    down (19 of 20 worlds on seeds 1-5); a load the lever lifts is the lever's work only while it stays up. And a
+    board held to under 3 cm of travel, kicked again and again, knocked a 20 kg drum 0.7 m along the level off a pad
+    (10 of 16 worlds on seeds 1-4): the drum, knocked on farther than the board, slipped against it as a roller under
+    it does, and each ride moved it less than 3 cm. What the stride moves now counts from where it was when the
+    stride first moved anything, over all the rides, until the robot pushes it itself."""
+    code = (CHEATS / f"{program}.py").read_text()
+    rollouts = sim.run_sessions(
+        tasks.load(LAYOUTS / f"{layout}.yaml"), start_sessions([code] * 4, "quadruped"), seed=seed
+    )
+    assert not any(r.success for r in rollouts), [r.conditions for r in rollouts]
+    for rollout in rollouts:
+        failure = world_failure(rollout) or ""
+        assert "driven by the stride of the robot on it, moved" in failure and moved in failure, failure
+
+
+@pytest.mark.parametrize(
+    ("program", "layout", "masses"),
+    [(*LEVER_OFF_A_SHELF, {"cube": 2.0, "yoga_roller": 1.0}), (*KICKED_OFF_A_PAD, {"drum": 1.0})],
+)
+def test_a_light_load_moved_in_short_strokes_or_after_a_lever_lift_is_not_refused(
+    program: str, layout: str, masses: dict[str, float]
+) -> None:
+    """The controls: the same programs with the cube 2 kg on a 1 kg roller, the drum 1 kg (within the push limit
+    with the board): some world succeeds, and none is refused for what the stride moved."""
+    code = (CHEATS / f"{program}.py").read_text()
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    light = [o.model_copy(update={"mass": masses[o.name]}) if o.name in masses else o for o in task.objects]
+    rollouts = sim.run_sessions(
+        task.model_copy(update={"objects": light}), start_sessions([code] * 4, "quadruped"), seed=1
+    )
+    for rollout in rollouts:
+        assert "driven by the stride" not in (world_failure(rollout) or ""), world_failure(rollout)
+    assert any(r.success for r in rollouts), [world_failure(r) for r in rollouts]
