@@ -96,27 +96,34 @@ class PassageWatch:
     def _through(self, before: np.ndarray, now: np.ndarray) -> np.ndarray:
         """(nworld, mover, wall) the centres that crossed the middle of a wall from one side to the other, over one of
         its faces both before and now."""
-        half = self.half[None, None]
-        inside = (np.abs(before) < half) & (np.abs(now) < half)  # (nworld, mover, wall, 3): over the wall both times
         crossed = before * now < 0.0  # from one side of its middle to the other, along each of its axes
-        through = (
-            (crossed[..., 0] & inside[..., 1] & inside[..., 2])
-            | (crossed[..., 1] & inside[..., 0] & inside[..., 2])
-            | (crossed[..., 2] & inside[..., 0] & inside[..., 1])
-        )
-        if not self.round.any():
-            return through
-        radius = self.half[None, None, :, 0]  # a cylinder: through its caps, over its circle,
-        capped = crossed[..., 2] & (np.hypot(before[..., 0], before[..., 1]) < radius)
-        capped &= np.hypot(now[..., 0], now[..., 1]) < radius
-        return np.where(self.round[None, None], capped | self._across(before, now, radius, inside[..., 2]), through)
+        half = self.half[None, None]
+        through = np.zeros(crossed.shape[:3], dtype=bool)
+        if crossed.any():  # (on most readings nothing crosses a middle: then nothing passed a face)
+            inside = (np.abs(before) < half) & (np.abs(now) < half)  # (nworld, mover, wall, 3): over the wall twice
+            through = (
+                (crossed[..., 0] & inside[..., 1] & inside[..., 2])
+                | (crossed[..., 1] & inside[..., 0] & inside[..., 2])
+                | (crossed[..., 2] & inside[..., 0] & inside[..., 1])
+            )
+            if self.round.any():  # a cylinder: through its caps, over its circle,
+                capped = crossed[..., 2] & (np.hypot(before[..., 0], before[..., 1]) < half[..., 0])
+                capped &= np.hypot(now[..., 0], now[..., 1]) < half[..., 0]
+                through = np.where(self.round[None, None], capped, through)
+        if self.round.any():
+            through |= self.round[None, None] & self._across(before, now, half[..., 0], half[..., 2])
+        return through
 
     @staticmethod
-    def _across(before: np.ndarray, now: np.ndarray, radius: np.ndarray, along: np.ndarray) -> np.ndarray:
-        """(nworld, mover, wall) the centres that crossed a cylinder through its round side, within its length
-        (``along``): across the plane through its axis square to their way, nearer the axis than its radius."""
+    def _across(before: np.ndarray, now: np.ndarray, radius: np.ndarray, length: np.ndarray) -> np.ndarray:
+        """(nworld, mover, wall) the centres that crossed a cylinder through its round side, within its half-length
+        ``length`` (before and now): across the plane through its axis square to their way, nearer the axis than its
+        ``radius``."""
         way = now[..., :2] - before[..., :2]
         crossed = ((before[..., :2] * way).sum(axis=-1) < 0.0) & ((now[..., :2] * way).sum(axis=-1) > 0.0)
-        length = np.maximum(np.hypot(way[..., 0], way[..., 1]), 1e-12)
-        off_axis = np.abs(before[..., 0] * way[..., 1] - before[..., 1] * way[..., 0]) / length
+        if not crossed.any():
+            return crossed
+        along = (np.abs(before[..., 2]) < length) & (np.abs(now[..., 2]) < length)
+        way_length = np.maximum(np.hypot(way[..., 0], way[..., 1]), 1e-12)
+        off_axis = np.abs(before[..., 0] * way[..., 1] - before[..., 1] * way[..., 0]) / way_length
         return crossed & (off_axis < radius) & along

@@ -29,10 +29,11 @@ class Crushes:
         centres = state.xpos[:, bodies]  # (nworld, nfragile, 3)
         foot_z = feet(state, facts.ids)[:, :, 2]
         by_foot = state.touching[:, facts.ids.feet][:, :, bodies] & (foot_z[:, :, None] > centres[:, None, :, 2])
-        torso = state.xpos[:, facts.ids.body]
-        along_body = rotated(centres[:, :, :2] - torso[:, None, :2], -self.senses.yaw())
-        under = np.all(np.abs(along_body) < facts.half, axis=2)
-        by_belly = state.touching[:, facts.ids.body][:, bodies] & under
+        by_belly = state.touching[:, facts.ids.body][:, bodies]
+        if by_belly.any():  # and its centre lies under the torso
+            torso = state.xpos[:, facts.ids.body]
+            along_body = rotated(centres[:, :, :2] - torso[:, None, :2], -self.senses.yaw())
+            by_belly &= np.all(np.abs(along_body) < facts.half, axis=2)
         stood_on = (by_foot.any(axis=1) | by_belly) & mask[:, None]
         stood_on |= self._borne_by(bodies, mask & ~stood_on.any(axis=1))
         loaded, via = self._loaded(mask)

@@ -26,6 +26,7 @@ just set, and held through the tick: the servos' as their mean over it (:meth:`L
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
@@ -83,6 +84,7 @@ class MotorFacts:
     motors: ForceLaw  # lift, pitch, roll
     servos: ForceLaw  # x, y, yaw
     legs: ForceLaw  # the legs' servos, feet's order
+    servo_ids: np.ndarray  # (3, 3) the x, y and yaw servos' actuators, then their joints' qpos, then their qvel
     inertia: np.ndarray  # (3,) the robot's mass (kg) along x and y and its moment of inertia about its yaw (kg m2)
     movable: np.ndarray  # (nbody,) bool: the bodies a force moves (not welded to the world)
     body_com: np.ndarray  # (nbody, 3) each body's centre of mass in its own frame
@@ -99,6 +101,9 @@ class MotorFacts:
             motors=ForceLaw.of(model, ids.actuator[2:]),
             servos=ForceLaw.of(model, np.array([*ids.actuator[:2], ids.yaw_actuator])),
             legs=ForceLaw.of(model, ids.leg_actuator),
+            servo_ids=np.array(
+                [[*ids.actuator[:2], ids.yaw_actuator], [*ids.qpos[:2], ids.yaw_qpos], [*ids.qvel[:2], ids.yaw_qvel]]
+            ),
             inertia=full[dofs, dofs],
             movable=model.body_weldid != 0,
             body_com=model.body_ipos.copy(),
@@ -158,10 +163,8 @@ class LiftLoad:
         it as the body catches up with its setpoint would be held through it)."""
         from robotool.sim import servo_kernel  # Warp loads on the first tick, not on every import
 
-        ids, law = self.ids, self.facts.servos
-        ctrl = self.sim.ctrl[worlds][:, np.append(ids.actuator[:2], ids.yaw_actuator)]
-        q = state.qpos[worlds][:, np.append(ids.qpos[:2], ids.yaw_qpos)]
-        qd = state.qvel[worlds][:, np.append(ids.qvel[:2], ids.yaw_qvel)]
+        law, (act, qpos, qvel) = self.facts.servos, self.facts.servo_ids
+        ctrl, q, qd = self.sim.ctrl[worlds][:, act], state.qpos[worlds][:, qpos], state.qvel[worlds][:, qvel]
         h = self.dt / SUBSTEPS
         effective = self.facts.inertia - h * law.bias[:, 2]  # the simulator's implicitfast: the damping implicit
         total = servo_kernel.summed_forces(law.held(ctrl), q, qd, law.bias, law.force_range, effective, h, SUBSTEPS)
@@ -173,10 +176,11 @@ class LiftLoad:
         cannot carry the body on it there."""
         s, f, ids = self.state, self.facts, self.ids
         loads, servo = self.motor_loads(state, worlds), self.servo_loads(state, worlds)
-        acting = (loads[:, 0] > 0.0) | (loads[:, 1:] != 0.0).any(axis=1) | (np.abs(servo) >= STILL).any(axis=1)
-        self.clear(worlds[~acting])
-        worlds, loads, servo = worlds[acting], loads[acting], servo[acting]
         lifting = (loads[:, 0] > 0.0) | (loads[:, 1:] != 0.0).any(axis=1)
+        acting = lifting | (np.abs(servo) >= STILL).any(axis=1)
+        if not acting.all():
+            self.clear(worlds[~acting])
+            worlds, loads, servo, lifting = worlds[acting], loads[acting], servo[acting], lifting[acting]
         self.sim.xfrc_applied[worlds] = 0.0
         if not worlds.size:
             return worlds
@@ -185,8 +189,9 @@ class LiftLoad:
         stands = (geom >= 0) & (centres[:, :, 2] - FOOT_RADIUS - solid <= f.reach)
         points = np.concatenate([centres[:, :, :2], np.where(stands, solid, centres[:, :, 2])[:, :, None]], axis=2)
         body = np.where(stands, self.sim.scene.model.geom_bodyid[np.maximum(geom, 0)], -1)
-        com = centre_of_mass(state, ids)[worlds]
-        wanted = self._foot_forces(loads, points, stands, com, state.xmat(ids.body)[worlds])
+        arm = points[:, :, :2] - centre_of_mass(state, ids)[worlds][:, None, :2]  # (k, 4, 2) from the centre of mass
+        axes = state.xmat(ids.body)[worlds]
+        wanted = solved_where((loads != 0.0).any(axis=1), stands.shape, self._foot_forces, loads, arm, stands, axes)
         w = np.repeat(worlds, 4)
         pos, rot = self._pose(state, w, s.body[worlds].reshape(-1))
         before = np.einsum("nij,nj->ni", rot, s.anchor[worlds].reshape(-1, 3)) + pos
@@ -204,11 +209,12 @@ class LiftLoad:
         grip = np.maximum(press, 0.0) * self.rays.friction(worlds, self.rays.grip(geom, cloth)) * touch
         grip[lifting] = 0.0  # the lift carries the body across an edge: the legs are not striding
         movable = stands & f.movable[np.maximum(body, 0)]
-        held = self._stride_forces(servo, points, touch & ~movable, com, grip)  # the feet on fixed ground first
-        arm = points[:, :, :2] - com[:, None, :2]
+        fixed, on = touch & ~movable, touch & movable  # the feet on fixed ground take what they can first
+        striding = ~lifting  # (while the lift carries the body no foot grips: the forces are zeros there)
+        held = solved_where(striding & fixed.any(axis=1), points.shape, self._stride_forces, servo, arm, fixed, grip)
         moment = (arm[:, :, 0] * held[:, :, 1] - arm[:, :, 1] * held[:, :, 0]).sum(axis=1)
         rest = servo + np.concatenate([held[:, :, :2].sum(axis=1), moment[:, None]], axis=1)
-        sideways = self._stride_forces(rest, points, touch & movable, com, grip)
+        sideways = solved_where(striding & on.any(axis=1), points.shape, self._stride_forces, rest, arm, on, grip)
         sideways[:, :, 2] = -applied  # with the lift's load: the forces at the feet
         self._put(state, worlds, body, points, sideways * movable[:, :, None])
         return worlds[(sinking & (wanted > 0.0)).any(axis=1)]
@@ -219,6 +225,8 @@ class LiftLoad:
         """Add the forces ``force`` (k, 4, 3) at ``points`` (k, 4, 3) to the bodies ``body`` (k, 4) in ``worlds``, as
         forces and torques about their centres of mass."""
         kk, foot = np.nonzero((force != 0.0).any(axis=2))
+        if not kk.size:  # no foot stands on a movable body (most ticks): nothing to put
+            return
         w, b = worlds[kk], body[kk, foot]
         com = state.xpos[w, b] + np.einsum("nij,nj->ni", state.frames()[w, b], self.facts.body_com[b])
         push = force[kk, foot]
@@ -231,38 +239,43 @@ class LiftLoad:
         return state.xpos[worlds, b], state.frames()[worlds, b]
 
     @staticmethod
-    def _foot_forces(
-        loads: np.ndarray, points: np.ndarray, stands: np.ndarray, com: np.ndarray, body_axes: np.ndarray
-    ) -> np.ndarray:
-        """(k, 4) the upward forces at ``points`` (k, 4, 3) of the feet that ``stands`` that sum to the lift's force
-        and whose moments about ``com`` (k, 3) are the tilt torques (about the body's y and x axes, ``body_axes``
-        (k, 3, 3)): the least such forces, none negative."""
+    def _foot_forces(loads: np.ndarray, arm: np.ndarray, stands: np.ndarray, body_axes: np.ndarray) -> np.ndarray:
+        """(k, 4) the upward forces at the feet that ``stands`` that sum to the lift's force and whose moments about
+        the centre of mass (the feet at ``arm`` (k, 4, 2) from it) are the tilt torques (about the body's y and x axes,
+        ``body_axes`` (k, 3, 3)): the least such forces, none negative."""
         torque = loads[:, 1, None] * body_axes[:, :, 1] + loads[:, 2, None] * body_axes[:, :, 0]
-        arm = points[:, :, :2] - com[:, None, :2]
-        system = np.stack([np.ones(arm.shape[:2]), arm[:, :, 1], -arm[:, :, 0]], axis=1) * stands[:, None, :]
-        target = np.stack([loads[:, 0], torque[:, 0], torque[:, 1]], axis=1)
+        system = np.empty((len(arm), 3, 4))
+        system[:, 0], system[:, 1], system[:, 2] = stands, arm[:, :, 1] * stands, -arm[:, :, 0] * stands
+        target = np.empty((len(arm), 3))
+        target[:, 0], target[:, 1:] = loads[:, 0], torque[:, :2]
         forces = np.einsum("kfi,ki->kf", np.linalg.pinv(system), target)
         return np.maximum(forces, 0.0) * stands
 
     @staticmethod
-    def _stride_forces(
-        servo: np.ndarray, points: np.ndarray, touch: np.ndarray, com: np.ndarray, grip: np.ndarray
-    ) -> np.ndarray:
-        """(k, 4, 3) the horizontal forces at ``points`` (k, 4, 3) of the feet that ``touch`` their surfaces that sum
-        to the opposite of the x-y servos' force and whose moments about ``com`` (k, 3) are the opposite of the yaw
-        servo's torque (``servo`` (k, 3)): the least such forces, each capped at its foot's ``grip`` (k, 4; N)."""
-        arm = points[:, :, :2] - com[:, None, :2]
+    def _stride_forces(servo: np.ndarray, arm: np.ndarray, touch: np.ndarray, grip: np.ndarray) -> np.ndarray:
+        """(k, 4, 3) the horizontal forces at the feet that ``touch`` their surfaces that sum to the opposite of the
+        x-y servos' force and whose moments about the centre of mass (the feet at ``arm`` (k, 4, 2) from it) are the
+        opposite of the yaw servo's torque (``servo`` (k, 3)): the least such forces, each capped at its foot's
+        ``grip`` (k, 4; N)."""
         on = touch.astype(float)
-        zero = np.zeros(on.shape)
-        system = np.stack(  # (k, 3, 8): the unknowns are each foot's x then y
-            [
-                np.concatenate([on, zero], axis=1),
-                np.concatenate([zero, on], axis=1),
-                np.concatenate([-arm[:, :, 1] * on, arm[:, :, 0] * on], axis=1),
-            ],
-            axis=1,
-        )
+        system = np.zeros((len(on), 3, 8))  # the unknowns are each foot's x then y
+        system[:, 0, :4], system[:, 1, 4:] = on, on
+        system[:, 2, :4], system[:, 2, 4:] = -arm[:, :, 1] * on, arm[:, :, 0] * on
         solved = np.einsum("kfi,ki->kf", np.linalg.pinv(system), -servo)
-        forces = np.stack([solved[:, :4], solved[:, 4:], zero], axis=2)
+        forces = np.zeros((*on.shape, 3))
+        forces[:, :, 0], forces[:, :, 1] = solved[:, :4], solved[:, 4:]
         size = np.linalg.norm(forces, axis=2)
         return forces * (np.minimum(size, grip) / np.maximum(size, 1e-9))[:, :, None]
+
+
+def solved_where(
+    needed: np.ndarray, shape: tuple[int, ...], solve: Callable[..., np.ndarray], *args: np.ndarray
+) -> np.ndarray:
+    """``solve(*args)`` (k, ...) in the rows ``needed`` (k,) alone, zeros elsewhere, where the forces it solves for
+    are zeros (nothing to balance, no foot to balance it, no grip), which add nothing; but in every row where an
+    argument is not finite (a NaN spreads, or fails the solver, as it would there)."""
+    out = np.zeros(shape)
+    rows = np.flatnonzero(needed) if all(np.isfinite(a).all() for a in args) else np.arange(len(needed))
+    if rows.size:
+        out[rows] = solve(*(a[rows] for a in args))
+    return out

@@ -61,9 +61,12 @@ class PushForce:
         place."""
         m, state, names = moves.state, self.senses.state, self.scene.object_names
         robot, movable = self.bodies.robot, self.bodies.movable
+        pushing = mask & m.moving & (m.pushing >= 0)
+        if not pushing.any():
+            return []
         touches = state.touching[:, robot][:, :, movable].any(axis=(1, 2))
         moved = travel[np.arange(len(mask)), m.pushing] > self.still
-        worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0) & touches & moved)
+        worlds = np.flatnonzero(pushing & touches & moved)
         if worlds.size == 0:
             return []
         for w in worlds[np.isnan(limits[worlds, 0])].tolist():

@@ -39,6 +39,7 @@ from robotool.robots.quadruped.support import (
     centre_of_mass,
     feet,
     feet_touching,
+    known_lengths,
     supported,
     tilt,
     unsupported_feet,
@@ -159,10 +160,11 @@ class Referee:
         shift = centres - self.state.last_centres  # each object's travel since the last tick
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
         stood_on = self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso lifting what lies on it shoves
-        self._rams(ends, mask, centres[:, :, :2], shift, moves, stood_on)
+        travel = np.linalg.norm(shift, axis=2)  # each object's, in 3-D
+        self._rams(ends, mask, centres[:, :, :2], shift, travel, moves, stood_on)
         self._stride_loads(ends, mask, centres, moves)
         self._riders(ends, mask, moves)
-        self._strains(ends, mask, np.linalg.norm(shift, axis=2), moves)
+        self._strains(ends, mask, travel, moves)
         if self.facts.fragile.any():
             self._crushes(ends, mask, moves)
         return ends
@@ -219,8 +221,9 @@ class Referee:
         pushed = (np.arange(len(scene.object_names))[None, :] == m.pushing[:, None]) & m.moving[:, None]
         pushed &= mask[:, None]
         rows = np.flatnonzero(pushed.any(axis=1))  # what the pushed object moves by touching it moves with it
-        mine = facts.bodies[m.pushing[rows]] > 0  # (k, nbody) the pushed object's bodies
-        pushed[rows] |= self._owned(np.einsum("kb,kbc->kc", mine, state.touching[rows]))
+        if rows.size:
+            mine = facts.bodies[m.pushing[rows]] > 0  # (k, nbody) the pushed object's bodies
+            pushed[rows] |= self._owned(np.einsum("kb,kbc->kc", mine, state.touching[rows]))
         walking = (m.moving & (m.pushing < 0))[:, None]
         s.pressed = np.where(mask[:, None], pushed | (s.pressed & touched & ~walking), s.pressed)
         moved_now = (np.abs(shift) > STILL).any(axis=2) & facts.movable & ~s.pressed
@@ -230,7 +233,7 @@ class Referee:
         s.bumped = np.where(excused[:, :, None], s.bumped + shift, s.bumped)
         first = touched & ~s.pressed & ~stood_on & np.isnan(s.bumped[:, :, 0])
         s.bumped[first] = centres[first]
-        moved = np.nan_to_num(np.linalg.norm(centres - s.bumped, axis=2), nan=0.0)
+        moved = known_lengths(np.linalg.norm(centres - s.bumped, axis=2))
         for w in np.flatnonzero(mask & (moved > self.config.shove).any(axis=1)):
             if s.shoves[w] is not None or state.failed[w] is not None:
                 continue
@@ -254,14 +257,14 @@ class Referee:
         a plate while the rear feet plow it along by its rim (what the robot drives is no ride). Only what moved this
         tick needs asking (:meth:`_shoves`): what a foot stands on without moving is shoved nowhere. A cloth's links
         are read together: a foot stands on it where their contacts summed press it up."""
-        state, feet_ids, member = self.senses.state, self.facts.ids.feet, self.facts.bodies
-        robot = np.flatnonzero(self.scene.robot_body)
-        foot = np.isin(robot, feet_ids)
-        touch = self._owned(state.touching[:, robot]) & asked[:, None, :]  # (nworld, nrobot, nobject)
+        state, robot, foot = self.senses.state, self.facts.robot_parts, self.facts.foot_parts
         out = np.zeros(asked.shape, dtype=bool)
+        if not asked.any():
+            return out
+        touch = self._owned(state.touching[:, robot]) & asked[:, None, :]  # (nworld, nrobot, nobject)
         for w in np.flatnonzero(touch[:, foot].any(axis=(1, 2))):
-            normals = np.einsum("ob,brx->orx", member, self.senses.sim.contact_normals(int(w))[:, robot])  # from
-            # each object (a cloth: all its links together) onto each part
+            normals = self.facts.sums.rows(self.senses.sim.contact_normals(int(w))[:, robot])  # from each object (a
+            # cloth: all its links together) onto each part
             on = touch[w].T  # (nobject, nrobot)
             up = bears_up(normals, FOOTING_ANGLE) & on
             out[w] = up[:, foot].any(axis=1) & ~(on & ~up).any(axis=1)
@@ -282,6 +285,7 @@ class Referee:
         mask: np.ndarray,
         centres: np.ndarray,
         shift: np.ndarray,
+        travel: np.ndarray,
         moves: MoveRunner,
         stood_on: np.ndarray,
     ) -> None:
@@ -309,7 +313,7 @@ class Referee:
         light object used as a ram moves no more than the robot may push): the world fails (:meth:`conditions`) and a
         move in progress is stopped and refused, naming them."""
         s, m = self.state, moves.state
-        still = mask[:, None] & (np.linalg.norm(shift, axis=2) <= STILL)
+        still = mask[:, None] & (travel <= STILL)
         s.still = np.where(still, s.still + self.scene.control_dt, np.where(mask[:, None], 0.0, s.still))
         shift = shift[:, :, :2]
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
@@ -423,8 +427,10 @@ class Referee:
         ahead = np.einsum("koi,ki->ko", centres[worlds] - centres[worlds, index][:, None], u) > front[:, None]
         pressed = self._pressed_by(worlds, index)
         rammed = pressed & (ahead | self._stuck_to(worlds, index, pressed))
-        for k in np.flatnonzero((pressed & ~ahead).any(axis=1)):  # the normals only where they can add a rammed one
-            rammed[k] |= self._pressed_along(int(worlds[k]), int(index[k]), pressed[k], u[k])
+        rows = np.flatnonzero((pressed & ~ahead).any(axis=1))  # the normals only where they can add a rammed one
+        normals = {w: self._object_normals(w) for w in set(worlds[rows].tolist())}  # a world's once: rows share it
+        for k in rows:
+            rammed[k] |= self._pressed_along(normals[int(worlds[k])], int(index[k]), pressed[k], u[k])
         return rammed
 
     def _driven(self) -> np.ndarray:
@@ -468,16 +474,17 @@ class Referee:
             out[:, owner[b1]] |= active & group[:, owner[b2]]
         return out & pressed
 
-    def _pressed_along(self, w: int, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
+    @staticmethod
+    def _pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
-        (x-y) or aside in world ``w``: for one of them, the horizontal part of the summed normals of its contacts with
-        the object is at least :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within
-        :data:`SIDE_ANGLE` of horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of
-        its way moves it as surely as its face does). Each presser is judged alone, by its horizontal part, so that
-        what lies on the object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push
-        nor makes one. What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down:
-        a bar rolling under a pushed board's raised end goes where the push takes it."""
-        normals = self._object_normals(w)  # (nobject, nobject, 3) from one object onto another
+        (x-y) or aside in a world whose objects press on each other along ``normals`` (:meth:`_object_normals`): for
+        one of them, the horizontal part of the summed normals of its contacts with the object is at least
+        :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within :data:`SIDE_ANGLE` of
+        horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of its way moves it as
+        surely as its face does). Each presser is judged alone, by its horizontal part, so that what lies on the
+        object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push nor makes one.
+        What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down: a bar rolling
+        under a pushed board's raised end goes where the push takes it."""
         pressers = pressed.copy()
         pressers[index] = True
         pressing = normals[pressers]  # (npresser, nobject, 3)
@@ -489,18 +496,17 @@ class Referee:
 
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
-        member = self.facts.bodies
-        return np.einsum("ab,bcx,dc->adx", member, self.senses.sim.contact_normals(w), member)
+        return self.facts.sums.pairs(self.senses.sim.contact_normals(w))
 
     def _pressed_by(self, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
         """(k, nobject) the movable objects that object ``index[i]`` touches in world ``worlds[i]``, directly or
         through other movable objects (itself left out)."""
         member = self.facts.bodies
-        touch = (np.einsum("ab,kbc,dc->kad", member, self.senses.state.touching[worlds], member) > 0).astype(float)
+        touch = ((member @ self.senses.state.touching[worlds] @ member.T) > 0).astype(float)  # counts: exact
         own = np.arange(len(self.scene.object_names))[None, :] == np.asarray(index)[:, None]
         group = own.copy()
         while True:
-            near = np.einsum("ka,kab->kb", group.astype(float), touch) > 0
+            near = (group.astype(float)[:, None, :] @ touch)[:, 0] > 0
             added = near & self.facts.movable & ~group
             if not added.any():
                 return group & ~own

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from robotool.robots.quadruped.body import LEG_SLACK, XY_KP, BodyIds
+from robotool.robots.quadruped.object_sums import ObjectSums
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.support import Parts
 from robotool.robots.quadruped.terrain import quarter_turns
@@ -36,8 +37,11 @@ class SceneFacts:
     cloth_crossings: int  # the most recasts one ray cast needs: one per cloth link for every layer of cloth
     movable: np.ndarray  # (nobject,) bool
     bodies: np.ndarray  # (nobject, nbody) 1.0 where a body is the object's, else 0.0
+    sums: ObjectSums  # sums over each object's bodies (``bodies``)
     fragile: np.ndarray  # (nobject,) bool
     not_robot: np.ndarray  # (nbody,) bool: bodies that are not the robot's
+    robot_parts: np.ndarray  # the robot's bodies
+    foot_parts: np.ndarray  # (len(robot_parts),) bool: which of them are feet
     parts: Parts  # the objects' parts that bear weight apart (a cloth's links)
 
     @classmethod
@@ -46,6 +50,8 @@ class SceneFacts:
         ids = BodyIds.of(model)
         geom_object = scene.body_object[model.geom_bodyid]
         cloth = np.array([o.shape == "cloth" for o in scene.task.objects], dtype=bool)
+        bodies = (scene.body_object[None, :] == np.arange(len(scene.task.objects))[:, None]).astype(float)
+        robot = np.flatnonzero(scene.robot_body)
         return cls(
             ids=ids,
             half=np.array(limits.body_size[:2]) / 2,
@@ -58,9 +64,12 @@ class SceneFacts:
             cloth=cloth,
             cloth_crossings=int(cloth[geom_object[geom_object >= 0]].sum()) ** 2,
             movable=np.array([o.movable for o in scene.task.objects]),
-            bodies=(scene.body_object[None, :] == np.arange(len(scene.task.objects))[:, None]).astype(float),
+            bodies=bodies,
+            sums=ObjectSums.of(bodies),
             fragile=np.array([o.fragile is not None for o in scene.task.objects], dtype=bool),
             not_robot=~scene.robot_body,
+            robot_parts=robot,
+            foot_parts=np.isin(robot, ids.feet),
             parts=Parts.of(scene),
         )
 
@@ -135,4 +144,5 @@ class Senses:
     def masses(self, worlds: np.ndarray) -> np.ndarray:
         """(k, nobject) each of ``worlds``' (perturbed) masses of every object, all its bodies (summed as
         :meth:`mass` sums them; read from the simulator each time: no state of its own)."""
-        return np.stack([self.sim.body_mass[worlds][:, row > 0].sum(axis=1) for row in self.facts.bodies], axis=1)
+        mass = self.sim.body_mass[worlds]
+        return np.stack([mass[:, bodies].sum(axis=1) for bodies in self.facts.sums.bodies], axis=1)

@@ -14,6 +14,7 @@ import numpy as np
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.support import known_lengths
 
 SLIP = 0.3  # the most an object may shift against a driven one, as a share of the driven one's own travel, and go
 # along with it: the cart under a driven board shifts about 1 % of it; a roller rolling under it stays half behind
@@ -61,6 +62,8 @@ class StrideLoads:
         start, top, touched, carried = rides.ride_start, rides.ride_top, rides.ride_touched, rides.ride_carried
         carrying = (drift > 0) & mask[:, None]
         riding = mask & (carrying.any(axis=1) | (touched & ~resting).any(axis=1))
+        if not riding.any():  # (most ticks) nothing carried, nothing moved
+            return {}
         begun = riding[:, None] & np.isnan(start[:, :, 0])
         start[begun] = centres[begun]
         top[riding] = np.fmax(top[riding], centres[riding, :, 2])
@@ -69,7 +72,7 @@ class StrideLoads:
         if carrying.any():
             np.logical_or.at(touched, np.nonzero(carrying)[0], group(*np.nonzero(carrying)))
         travel = centres - start  # (nworld, nobject, 3) NaN where no ride
-        across = np.nan_to_num(np.linalg.norm(travel[:, :, :2], axis=2))
+        across = known_lengths(np.linalg.norm(travel[:, :, :2], axis=2))
         worlds, objects = np.nonzero(carried & riding[:, None])
         if worlds.size == 0:
             return {}

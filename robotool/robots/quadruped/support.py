@@ -71,6 +71,7 @@ def _next_touching() -> np.ndarray:
 
 _NEXT_TOUCHING = _next_touching()
 _ORDER = np.array(CYCLE)
+_NEXT_FOOT = _ORDER[np.maximum(_NEXT_TOUCHING, 0)]  # the same as feet (the first where none is)
 _BITS = 1 << np.arange(4)  # a set of touching feet, in CYCLE's order, as the row of _NEXT_TOUCHING
 
 
@@ -81,12 +82,21 @@ def supported(com: np.ndarray, foot_xy: np.ndarray, touching: np.ndarray, margin
     """
     pts = foot_xy[:, _ORDER, :2]
     on = touching[:, _ORDER]
-    nxt = _NEXT_TOUCHING[on.astype(int) @ _BITS]  # (nworld, 4): each touching foot's next one
-    edge = np.take_along_axis(pts, np.maximum(nxt, 0)[:, :, None], axis=1) - pts
+    nxt = _NEXT_FOOT[on.astype(int) @ _BITS]  # (nworld, 4): each touching foot's next one
+    edge = foot_xy[np.arange(len(nxt))[:, None], nxt, :2] - pts
     rel = com[:, None, :2] - pts
-    length = np.maximum(np.linalg.norm(edge, axis=2), 1e-9)
+    length = np.maximum(np.sqrt(edge[..., 0] * edge[..., 0] + edge[..., 1] * edge[..., 1]), 1e-9)  # as norm gives
     cross = (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0]) / length
     return (on.sum(axis=1) >= 3) & np.all(~on | (cross >= margin), axis=1)
+
+
+_LARGEST = np.finfo(float).max
+
+
+def known_lengths(lengths: np.ndarray) -> np.ndarray:
+    """Lengths (>= 0; NaN: unknown) with an unknown one read as 0 and inf as the largest float: what
+    ``np.nan_to_num(lengths, nan=0.0)`` gives, at a quarter of its cost (the referee reads them every tick)."""
+    return np.where(np.isnan(lengths), 0.0, np.minimum(lengths, _LARGEST))
 
 
 def unsupported_feet(touching: np.ndarray) -> str:
