@@ -115,12 +115,15 @@ class MoveRunner:
             return error_end(w, e)
         return None
 
-    def refuse(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd]) -> None:
-        """Stop the move in progress in world ``w``, if any: its skill is refused with ``reason``."""
-        if self.state.moving[w] and self.state.plans[w] is not None:
-            end = self.advance(w, ("refused", reason, measured))
-            if end is not None:
-                ends.append(end)
+    def refuse(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd]) -> bool:
+        """Stop the move in progress in world ``w``, if any: its skill is refused with ``reason``. Returns whether a
+        move was in progress."""
+        if not (self.state.moving[w] and self.state.plans[w] is not None):
+            return False
+        end = self.advance(w, ("refused", reason, measured))
+        if end is not None:
+            ends.append(end)
+        return True
 
     def fell(self, w: int, reason: str, measured: dict[str, float]) -> SkillEnd | None:
         """The robot fell in world ``w``: the skill in progress, if any, ends ``fell``; the robot holds still."""

@@ -110,8 +110,10 @@ class QuadrupedController(SkillController):
         return conditions
 
     def robot_events(self, world: int) -> list[Event]:
-        """A fall off a slope read as the goal of ``world`` was (:meth:`.stance.Stance.events`)."""
-        return self.stance.events(world)
+        """A rule the robot broke in ``world`` while no skill ran, which no skill's refusal tells (a ram coasting on
+        after the program ended), and a fall off a slope read as the goal was (:meth:`.stance.Stance.events`)."""
+        untold = self.referee.state.untold[world]
+        return ([] if untold is None else [untold]) + self.stance.events(world)
 
     def tick(self, state: BatchState, worlds: np.ndarray | None = None) -> list[SkillEnd]:
         """Report finished skills, falls and shoves, and write the controls for the next interval, with the reaction

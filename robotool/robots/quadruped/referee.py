@@ -44,6 +44,7 @@ from robotool.robots.quadruped.support import (
     tilt,
     unsupported_feet,
 )
+from robotool.rollout import Event
 from robotool.sim.embodiment import SkillEnd
 from robotool.sim.magnets import Magnets
 
@@ -66,6 +67,7 @@ class RefereeState:
     failures: list[str | None]  # why the robot can no longer be trusted (it fell), else None
     shoves: list[str | None]  # the first object the robot shoved, and how far
     crushes: list[str | None]  # the first fragile object the robot stood on
+    untold: list[Event | None]  # a rule broken while no move ran (between calls, or once the program ended)
     outside: np.ndarray  # (nworld,) ticks the centre of mass has been outside the support
     lost_support: np.ndarray  # (nworld,) object: where and how it last left its support
     bumped: np.ndarray  # (nworld, nobject, 3) where each object's centre was when the torso first touched it (NaN:
@@ -96,6 +98,7 @@ class RefereeState:
             failures=[None] * nworld,
             shoves=[None] * nworld,
             crushes=[None] * nworld,
+            untold=[None] * nworld,
             outside=np.zeros(nworld, dtype=int),
             lost_support=np.full(nworld, None, dtype=object),
             bumped=np.full((nworld, nobject, 3), np.nan),
@@ -242,7 +245,7 @@ class Referee:
                 f"the robot ran into {scene.object_names[index]} and moved it {moved[w, index]:.2f} m "
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
-            moves.refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends)
+            self._refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends, moves)
         return stood_on
 
     def _owned(self, bodies: npt.ArrayLike) -> np.ndarray:
@@ -270,6 +273,12 @@ class Referee:
             out[w] = up[:, foot].any(axis=1) & ~(on & ~up).any(axis=1)
         return out
 
+    def _refuse(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd], moves: MoveRunner) -> None:
+        """Refuse the move in progress in world ``w`` for a broken rule; with none (the program over), an event."""
+        if not moves.refuse(w, reason, measured, ends) and self.state.untold[w] is None:
+            now = float(self.senses.state.time[w])
+            self.state.untold[w] = Event(kind="refused", time=now, measured=measured, detail=reason)
+
     def _crushes(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the moves, in the worlds in ``mask``, whose robot stands on a fragile object, or on a
         movable object that rests on one (:class:`~.crushes.Crushes`); the world fails (:meth:`conditions`)."""
@@ -277,7 +286,7 @@ class Referee:
         for w, reason in self.crushes.found(mask).items():
             if s.crushes[w] is None and failed[w] is None:
                 s.crushes[w] = reason
-                moves.refuse(w, reason, {}, ends)
+                self._refuse(w, reason, {}, ends, moves)
 
     def _rams(
         self,
@@ -375,11 +384,10 @@ class Referee:
         """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
         or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
         s, limit = self.state, self.limits.max_push_mass
-        resting = s.still >= REST_TIME
-        for w, (reason, mass) in self.strides.weigh(s, mask, centres, resting, self._pressed_by).items():
+        for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, self._pressed_by).items():
             if s.shoves[w] is None and self.senses.state.failed[w] is None:
                 s.shoves[w] = reason
-                moves.refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends)
+                self._refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Weigh what a push carries while it moves, in the worlds in ``mask`` where another movable object touches the
@@ -405,7 +413,7 @@ class Referee:
             if s.shoves[w] is not None or state.failed[w] is not None:
                 continue
             s.shoves[w] = reason = f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}"
-            moves.refuse(w, reason, heavy[1], ends)
+            self._refuse(w, reason, heavy[1], ends, moves)
 
     def _strains(self, ends: list[SkillEnd], mask: np.ndarray, travel: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the pushes, in the worlds in ``mask``, that have taken more force than the robot may push
@@ -414,7 +422,7 @@ class Referee:
         for w, reason, measured in self.forces.check(mask, moves, travel, self.state.strained, self.state.force_limit):
             if self.state.shoves[w] is None and self.senses.state.failed[w] is None:
                 self.state.shoves[w] = reason
-                moves.refuse(w, reason, measured, ends)
+                self._refuse(w, reason, measured, ends, moves)
 
     def _rammed(self, worlds: np.ndarray, index: np.ndarray, centres: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(k, nobject) the objects that the push of object ``index[i]`` along ``u[i]`` rams in world ``worlds[i]``
@@ -459,7 +467,7 @@ class Referee:
                     f"{mass:.1f} kg in all, over the push limit of {limit:.1f} kg (a push moves only what the robot "
                     "may push)"
                 )
-                moves.refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends)
+                self._refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
         """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
