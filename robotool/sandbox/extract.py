@@ -402,7 +402,7 @@ _SET_ASIDE = (
     r"not|never|no|original|old|older|previous|earlier|initial|first|draft|current|currently|existing|gave|given|sent|"
     r"before|provided|reference|comparison|shared|wrote|options?|alternatives?|alternatively|test|testing|example|usage"
 )
-_BARE_FINAL = re.compile(r"[#*_\s]*final[*_\s]*:?[*_\s]*", re.IGNORECASE)  # a label of one word: "FINAL:", "### Final"
+_BARE_FINAL = re.compile(r"[#*_\s]*final[*_\s]*:?[*_\s]*", re.IGNORECASE)  # one word: 'FINAL:', '### Final'
 _NOT_FINAL = re.compile(rf"\b(?:{_SET_ASIDE}|{_FAULTY})\b|n't\b", re.IGNORECASE)
 _ASIDE = re.compile(rf"\b(?:{_SET_ASIDE})\b|n't\b", re.IGNORECASE)
 
@@ -411,7 +411,7 @@ def _marked_final(label: str) -> bool:
     """Whether a label says the block after it is the final program ("Final program:", "Here is the corrected
     code:"), not only names a word ("To complete the task", "What was fixed:") or takes it back in the marker's
     sentence or after it ("This draft is not the final version:", "The original full program:", "The final version?
-    No, it is wrong:"); a label of the one word ("Final:", "**FINAL:**", "### Final") marks it too."""
+    No, it is wrong:"); a label of the one word (``Final:``, ``**FINAL:**``, ``### Final``) marks it too."""
     if _BARE_FINAL.fullmatch(label):
         return True
     found = _FINAL.search(label)
