@@ -158,6 +158,11 @@ def url_path(path: str) -> str:
     return quote(path, safe="/")
 
 
+def encodable(text: str) -> str:
+    """``text`` with its lone surrogates written as escapes (``\\ud800``), so that it encodes as UTF-8: fit to send."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def json_string(text: str) -> str:
     """One string as JSON: every non-ASCII and control character as a ``\\u`` escape."""
     return json.dumps(text, ensure_ascii=True)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from fixtures.cli_calls import forbid_work
+from fixtures.cli_calls import forbid_work, must_not_run
 from fixtures.cli_calls import status as _status
 from fixtures.reference import program_path
 
@@ -89,6 +89,53 @@ def test_an_empty_api_key_variable_name_is_refused_not_taken_for_none(
     argv = [command, *(["milk_reaching_near"] if command == "solve" else []), "--lm", "openai/x", "--api-key-env", ""]
     err = _one_line_error(capsys, argv, _status(argv))
     assert "--api-key-env: expected the name of an environment variable, got ''" in err, err
+
+
+BAD_LM_SETTINGS = {  # options (or the API base's variable), what the one-line error says
+    "api-base-not-a-url": (["--lm", "openai/x", "--api-base", "not a url"], "'not a url' (--api-base or"),
+    "api-base-a-file-url": (["--lm", "openai/x", "--api-base", "file:///etc/passwd"], "is not an http:// or https://"),
+    "api-base-unclosed-ipv6": (["--lm", "openai/x", "--api-base", "http://[::1"], "is not an http:// or https://"),
+    "api-base-variable": (["--lm", "openai/x", "ROBOTOOL_API_BASE=::::"], "'::::' (--api-base or ROBOTOOL_API_BASE)"),
+    "unknown-provider": (
+        ["--lm", "nosuchprovider/x", "--api-base", "http://127.0.0.1:9/v1"],
+        "names no provider DSPy or LiteLLM knows ('nosuchprovider'): check --lm",
+    ),
+    "huge-timeout": (["--lm", "openai/x", "--timeout", "1e10"], "--timeout: expected a number of seconds of at most"),
+}
+
+
+@pytest.mark.parametrize("command", ["solve", "eval", "optimize"])
+@pytest.mark.parametrize(("options", "expected"), BAD_LM_SETTINGS.values(), ids=list(BAD_LM_SETTINGS))
+def test_lm_settings_that_cannot_work_are_refused_before_anything_runs(
+    command: str,
+    options: list[str],
+    expected: str,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Found by an adversarial run: a malformed --api-base, an unknown provider or a timeout of 1e10 s failed each
+    LM request, and those runs were recorded as the method's failures (exit 1, or an evaluation's exit 0)."""
+    import robotool.eval.sweep
+    from robotool.program.lm_program import RoboTool
+
+    if command != "eval":  # an evaluation builds its LM first, then selects its tasks
+        forbid_work(monkeypatch)
+    monkeypatch.setattr(robotool.eval.sweep, "select", must_not_run)
+    monkeypatch.setattr(RoboTool, "forward", must_not_run)
+    monkeypatch.delenv("ROBOTOOL_API_BASE", raising=False)
+    for option in [o for o in options if o.startswith("ROBOTOOL_")]:
+        monkeypatch.setenv(*option.split("=", 1))
+    given = [o for o in options if not o.startswith("ROBOTOOL_")]
+    where = {
+        "solve": ["solve", "milk_reaching_near", "--method", "coder"],
+        "eval": ["eval", "--tasks", "milk_reaching_near", "--methods", "coder", "--out", str(tmp_path / "ev")],
+        "optimize": ["optimize", "--optimizer", "planner-demos", "--out", str(tmp_path / "p.json")],
+    }[command]
+    argv = [*where, *given]
+    err = _one_line_error(capsys, argv, _status(argv))
+    assert expected in err, err
+    assert not (tmp_path / "ev").exists()
 
 
 def test_a_batch_the_sandbox_cannot_split_is_refused_before_anything_runs(

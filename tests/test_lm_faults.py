@@ -27,16 +27,45 @@ def _solve(server: StandinServer, num_retries: int = 1, timeout: float | None = 
         return RoboTool(worlds_per_candidate=1, **options)(task=tasks.load(TASK)).solution
 
 
+_CHOICE = {"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": "x"}}
+
+
+def _raw(body: object) -> Rule:
+    """A 200 whose JSON body is ``body`` (with the fields of a chat completion when it is an object)."""
+    fields = {"id": "x", "object": "chat.completion", "created": 0, "model": "standin"}
+    text = json.dumps({**fields, **body} if isinstance(body, dict) else body)
+    return Rule(body=text, content_type="application/json")
+
+
 @pytest.mark.parametrize(
     ("fault", "expected"),
     [
         (Rule(body=GATEWAY_PAGE), "not JSON"),
         (Rule(body="\x00\x01garbage{", content_type="application/json"), "not JSON"),
         (Rule(reply="ignored", choices=0), "held no choices"),
+        # found by an adversarial run: bodies the client could not read, and a proxy's page, were the method's failure
+        (_raw({"choices": "oops"}), "choices must be an array"),
+        (_raw({"choices": {"0": {"message": {"role": "assistant", "content": "x"}}}}), "choices must be an array"),
+        (_raw([1, 2]), "a Chat Completions response body is a JSON object, got list"),
+        (_raw("hello"), "a Chat Completions response body is a JSON object, got str"),
+        (_raw({"choices": [_CHOICE], "usage": "lots"}), "'str' object has no attribute 'get'"),
+        (_raw({"choices": [_CHOICE], "usage": {"prompt_tokens": -5, "completion_tokens": -1}}), "must be >= 0"),
+        (Rule(status=413, body="<html>request too big</html>"), "<html>request too big</html>"),
     ],
-    ids=["html-gateway-page", "garbage", "no-choices"],
+    ids=[
+        "html-gateway-page",
+        "garbage",
+        "no-choices",
+        "choices-a-string",
+        "choices-an-object",
+        "body-a-list",
+        "body-a-string",
+        "usage-a-string",
+        "usage-negative",
+        "413-html-page",
+    ],
 )
-def test_a_200_that_is_not_a_chat_completion_is_retried_then_ends_the_solve(fault: Rule, expected: str) -> None:
+def test_a_reply_that_is_not_a_chat_completion_is_retried_then_ends_the_solve(fault: Rule, expected: str) -> None:
     rules = stage_rules(arm_script([GRASP_DIRECTLY]), analyzer=[fault])
     with StandinServer(Script(rules=rules)) as server, pytest.raises(LMUnavailableError) as raised:
         _solve(server, num_retries=1)

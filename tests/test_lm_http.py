@@ -138,8 +138,11 @@ def test_cli_without_lm_says_how_to_configure_and_uses_the_search_planner(monkey
 def test_bad_lm_settings_are_config_errors(monkeypatch) -> None:
     with pytest.raises(LMConfigError, match="provider prefix"):
         make_lm("gpt-4o")
-    with pytest.raises(LMConfigError, match="timeout must be positive"):
-        make_lm("openai/gpt-4o", timeout=0)
+    for timeout in (0, 1e10):  # found by an adversarial run: 1e10 s failed every request ("timestamp out of range")
+        with pytest.raises(LMConfigError, match=r"must be above 0 and at most 3600 s"):
+            make_lm("openai/gpt-4o", timeout=timeout)
+    with pytest.raises(LMConfigError, match="is not an http:// or https:// URL"):
+        make_lm("openai/gpt-4o", api_base="localhost:8000/v1")
     monkeypatch.delenv("NO_SUCH_KEY_VAR", raising=False)
     with pytest.raises(LMUnavailableError, match="NO_SUCH_KEY_VAR") as raised:
         make_lm("openai/gpt-4o", api_key_env="NO_SUCH_KEY_VAR")

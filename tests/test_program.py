@@ -21,6 +21,7 @@ from fixtures.scripted_lm import (
 from robotool import tasks
 from robotool.program.lm_program import RoboTool
 from robotool.program.methods import STAGES_BY_METHOD
+from robotool.safe_text import json_text
 
 CASES = {
     "milk_reaching_near": arm_script([GRASP_DIRECTLY]),
@@ -253,3 +254,59 @@ def test_a_task_file_s_text_opens_no_field_of_its_own_in_the_prompts(tmp_path: P
     assert prompts and all("forged by the task file" in message for message in prompts)  # shown, as text
     fields = [line for message in prompts for line in message.splitlines() if line.startswith("[[ ## c")]
     assert not fields, fields
+
+
+BIG = "1" + "0" * 400
+UNREADABLE_VALUES = {  # stage, text replaced in its scripted reply, the replacement, the problem the model is told
+    "escaped-surrogate-in-a-concept": (
+        "analyzer",
+        "distance of milk",
+        "\\ud800 distance of milk",
+        "field key_concepts: it holds text that is not valid Unicode (a lone surrogate U+D800",
+    ),
+    "escaped-surrogate-in-a-step": (
+        "planner",
+        '"intent": "prepare"',
+        '"intent": "\\udfff prepare"',
+        "field steps: it holds text that is not valid Unicode (a lone surrogate U+DFFF",
+    ),
+    "raw-surrogate-in-free-text": (
+        "analyzer",
+        "inside the workspace.",
+        "inside the \ud800 workspace.",
+        "field analysis: it holds text that is not valid Unicode (a lone surrogate U+D800",
+    ),
+    "400-digit-value": ("analyzer", '"value": 0.0', f'"value": {BIG}', "field key_concepts: it holds a number too"),
+    "400-digit-offset": ("calculator", '"offset": [0.0', f'"offset": [{BIG}', "field parameters: it holds a number"),
+    "nested-2500-deep": (
+        "analyzer",
+        '"value": 0.0',
+        '"value": ' + "[" * 2500 + "]" * 2500,
+        "field key_concepts: it holds a value nested too deeply to read",
+    ),
+    "object-nested-1500-deep-on-its-own-line": (
+        "analyzer",
+        '[{"name"',
+        '{"a":' * 1500 + "1" + "}" * 1500 + '\n[{"name"',
+        "field key_concepts: it holds a value nested too deeply to read",
+    ),
+}
+
+
+@pytest.mark.parametrize(("stage", "old", "new", "problem"), UNREADABLE_VALUES.values(), ids=list(UNREADABLE_VALUES))
+def test_a_stage_value_that_no_reader_or_sink_can_take_is_asked_for_again_with_the_exact_problem(
+    stage: str, old: str, new: str, problem: str
+) -> None:
+    """Found by an adversarial run: a lone surrogate passed on to the next stage and crashed the report's JSON; a
+    400-digit integer (OverflowError) or deep nesting (RecursionError) failed the stage with its requests uncounted."""
+    script = arm_script([GRASP_DIRECTLY])
+    good = script[stage][0]
+    assert old in good
+    script[stage] = [good.replace(old, new), good]
+    solution, engine = _solve("milk_reaching_near", script, format_retries=1)
+    assert solution.success and engine.calls[stage] == 2
+    calls = [c for c in solution.lm_calls if c.stage == stage]
+    assert [c.attempt for c in calls] == [1, 2] and problem in (calls[0].error or ""), calls
+    again = [message for asked, _, message in engine.prompts if asked == stage][1]
+    assert problem in again and again.encode("utf-8")
+    assert len(json_text(solution)) > 0  # the report's JSON takes the solution

@@ -21,7 +21,7 @@ from rich.console import Console
 from rich.text import Text
 
 from robotool.errors import RobotoolWarning
-from robotool.program.lm import DEFAULT_TIMEOUT
+from robotool.program.lm import DEFAULT_TIMEOUT, MAX_TIMEOUT
 from robotool.safe_text import TerminalConsole, capped, console_plain, one_line
 from robotool.vocabulary import BACKENDS, BackendName
 
@@ -34,7 +34,7 @@ DEFAULT_WORLDS = 3
 """Perturbed worlds per candidate for ``solve`` and ``eval``: enough to rank candidates."""
 BACKEND_HELP = "simulator (default: warp with a CUDA GPU, else mujoco)"
 ADAPTERS = ["chat", "json"]
-TIMEOUT_HELP = f"how long to wait for each LM reply (default: {DEFAULT_TIMEOUT:g})"
+TIMEOUT_HELP = f"how long to wait for each LM reply, at most {MAX_TIMEOUT:g} s (default: {DEFAULT_TIMEOUT:g})"
 ADAPTER_HELP = "answer format asked of the model: chat (field markers, default) or json"
 LOG_PROMPTS_HELP = "append every LM request and reply to this JSONL file"
 TEMPERATURE_HELP = (
@@ -141,13 +141,15 @@ def seed(text: str) -> int:
 
 
 def seconds(text: str) -> float:
-    """A duration: a finite number of seconds above 0."""
+    """A wait for one LM reply: a finite number of seconds above 0, at most :data:`~robotool.program.lm.MAX_TIMEOUT`."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}") from None
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"expected a finite number of seconds > 0, got {text!r}")
+    if value > MAX_TIMEOUT:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds of at most {MAX_TIMEOUT:g}, got {text!r}")
     return value
 
 

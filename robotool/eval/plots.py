@@ -20,6 +20,11 @@ COLORS = {
 }
 
 
+def _label(method: str) -> str:
+    """A method's name on a plot: a compiled program's is its file's, which the user named (escaped)."""
+    return plot_text(method_label(method))
+
+
 def write_plots(summary: Summary, folder: Path) -> list[str]:
     """Write the plots that have data into ``folder``; returns their file names."""
     import matplotlib
@@ -50,14 +55,14 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
         width = 0.8 / len(by_method)
         x = np.arange(len(columns))
         for i, (method, values) in enumerate(by_method.items()):
-            ax.bar(x + i * width, [values.get(c, 0.0) for c in columns], width, label=method_label(method))
+            ax.bar(x + i * width, [values.get(c, 0.0) for c in columns], width, label=_label(method))
         ax.set_xticks(x + 0.4 - width / 2, [plot_text(c) for c in columns], rotation=35, ha="right", fontsize=8)
         ax.set(ylabel="success rate", title="Success by method and task")
         save(fig, "success.png")
 
     if summary.errors:
         fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(summary.errors) + 2), 4))
-        labels = [method_label(b.method) for b in summary.errors]
+        labels = [_label(b.method) for b in summary.errors]
         bottom = np.zeros(len(labels))
         for outcome in OUTCOMES:
             shares = np.array([b.shares[outcome] for b in summary.errors])
@@ -74,7 +79,7 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
             (-0.2, 0.2), (("tool needed", "needed"), ("no tool needed", "not_needed")), strict=True
         ):
             ax.bar(x + offset, [getattr(d, attr).value or 0.0 for d in summary.discrimination], 0.4, label=name)
-        ax.set_xticks(x, [method_label(d.method) for d in summary.discrimination], rotation=25, fontsize=8)
+        ax.set_xticks(x, [_label(d.method) for d in summary.discrimination], rotation=25, fontsize=8)
         ax.set(ylabel="tool-use rate", title="Discriminative tool use")
         save(fig, "discrimination.png")
 
@@ -85,7 +90,7 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
                 [comparison.sampled_calls, comparison.plain_calls],
                 [comparison.sampled_success, comparison.plain_success],
                 "o-",
-                label=f"{method_label(comparison.method)}: plain best-of-K -> K'",
+                label=f"{_label(comparison.method)}: plain best-of-K -> K'",
             )[0]
             ax.plot(
                 [comparison.repair_calls],
@@ -93,7 +98,7 @@ def write_plots(summary: Summary, folder: Path) -> list[str]:
                 "*",
                 markersize=12,
                 color=line.get_color(),
-                label=f"{method_label(comparison.method)}: K + repair",
+                label=f"{_label(comparison.method)}: K + repair",
             )
         ax.set(xlabel="LM calls per run", ylabel="success rate", title="Repair against plain sampling")
         save(fig, "repair.png")

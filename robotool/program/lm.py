@@ -9,11 +9,14 @@ unknown model, an unreachable server, no quota, retries used up) into a one-line
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from typing import TYPE_CHECKING
+from urllib.parse import urlsplit
 
 from robotool.errors import LMUnavailableError, RobotoolError
+from robotool.safe_text import capped
 
 if TYPE_CHECKING:
     import dspy
@@ -23,8 +26,12 @@ API_BASE_ENV = "ROBOTOOL_API_BASE"
 PLACEHOLDER_KEY = "unused"  # local OpenAI-compatible servers accept any key
 DEFAULT_TIMEOUT = 180.0
 """Seconds to wait for each LM reply when no timeout is given."""
+MAX_TIMEOUT = 3600.0
+"""The longest wait for one LM reply that may be set (far longer ones overflow the transport's clock)."""
 DEFAULT_FORMAT_RETRIES = 2
 """Repairs after a reply that does not parse: each shows the model its reply and what was wrong."""
+MAX_RETRY_WAIT_S = 60.0
+"""The longest wait before a transport retry, whatever a server's Retry-After asks (a 429 may ask for hours)."""
 
 HOW_TO_CONFIGURE = (
     "No language model is configured. Pass --lm MODEL (any model string DSPy accepts, e.g. "
@@ -65,10 +72,15 @@ def make_lm(
         return None
     if "/" not in model:
         raise LMConfigError(f"model {model!r} needs a provider prefix, e.g. openai/{model}")
+    if not _provider_known(model):
+        raise LMConfigError(
+            f"model {model!r} names no provider DSPy or LiteLLM knows ({model.split('/', 1)[0]!r}): check --lm; an "
+            "OpenAI-compatible server is openai/MODEL with --api-base"
+        )
     kwargs: dict[str, object] = {}
     api_base = api_base or os.environ.get(API_BASE_ENV)
     if api_base:
-        kwargs["api_base"] = api_base
+        kwargs["api_base"] = _checked_api_base(api_base)
     if api_key_env:
         key = os.environ.get(api_key_env)
         if not key:
@@ -79,8 +91,8 @@ def make_lm(
     elif api_base:
         kwargs["api_key"] = os.environ.get(provider_key_variable(model)) or PLACEHOLDER_KEY
     timeout = DEFAULT_TIMEOUT if timeout is None else timeout
-    if timeout <= 0:
-        raise LMConfigError(f"the timeout must be positive, got {timeout} s")
+    if not 0 < timeout <= MAX_TIMEOUT:
+        raise LMConfigError(f"the timeout (--timeout) must be above 0 and at most {MAX_TIMEOUT:g} s, got {timeout:g} s")
     kwargs["timeout"] = timeout
     if temperature is not None and temperature < 0:
         raise LMConfigError(f"temperature must be at least 0, got {temperature}")
@@ -94,6 +106,37 @@ def make_lm(
         )
     except (ValueError, TypeError) as e:
         raise LMConfigError(f"cannot use model {model!r}: {e}") from None
+
+
+def _provider_known(model: str) -> bool:
+    """Whether DSPy can route ``model``: its own engine's providers, else LiteLLM's (imported only then, with its
+    bundled model cost map: fetching the remote one takes seconds and warns on every failed try)."""
+    from dspy.clients.engines.lm15_engine import LM15Engine
+    from dspy.lm15 import RouterConfig, UnknownModelError
+
+    try:
+        LM15Engine(RouterConfig(env={}, providers=()), model_type="chat").resolve(model)
+    except UnknownModelError:
+        from dspy.clients._litellm import get_litellm
+
+        os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+        return model.split("/", 1)[0] in get_litellm(feature="checking the provider of --lm").provider_list
+    return True
+
+
+def _checked_api_base(api_base: str) -> str:
+    """``api_base`` when it is an http(s) URL with a host, else the :class:`LMConfigError` that says so."""
+    try:
+        parts = urlsplit(api_base)
+        usable = parts.scheme in ("http", "https") and bool(parts.hostname) and parts.port != 0
+    except ValueError:  # an unclosed IPv6 bracket, a port that is no number or out of range
+        usable = False
+    if not usable:
+        raise LMConfigError(
+            f"the API base {capped(api_base, 80)!r} (--api-base or {API_BASE_ENV}) is not an http:// or https:// URL "
+            "with a host: check --api-base, e.g. http://127.0.0.1:8000/v1"
+        )
+    return api_base
 
 
 def provider_key_variable(model: str) -> str:
@@ -167,13 +210,29 @@ def unavailable(error: BaseException, lm: dspy.LM) -> LMUnavailableError | None:
     if isinstance(error, dx.LMRateLimitError):
         return LMUnavailableError(
             "retries_exhausted",
-            f"{where} turned requests away as too many (rate limit) on {tries}: wait and rerun, or lower --candidates",
+            f"{where} turned requests away as too many (rate limit) on {tries}{_wait_cut(error)}: wait and rerun, or "
+            "lower --candidates",
         )
     if isinstance(error, dx.LMServerError):
         return LMUnavailableError(
-            "retries_exhausted", f"{where} failed to answer on {tries} (server error): try again later"
+            "retries_exhausted",
+            f"{where} failed to answer on {tries} (server error){_wait_cut(error)}: try again later",
         )
     return None
+
+
+def retry_after(error: BaseException) -> float | None:
+    """The seconds a failed request's server asked to wait before the next (its Retry-After), when it said so."""
+    hint = getattr(error, "retry_after", None)
+    return float(hint) if isinstance(hint, int | float) and math.isfinite(hint) and hint >= 0 else None
+
+
+def _wait_cut(error: BaseException) -> str:
+    """Says so when the server asked for a longer wait between tries than :data:`MAX_RETRY_WAIT_S`."""
+    hint = retry_after(error)
+    if hint is None or hint <= MAX_RETRY_WAIT_S:
+        return ""
+    return f" (it asked to wait {hint:g} s; the tries waited at most {MAX_RETRY_WAIT_S:g} s)"
 
 
 def _causes(error: BaseException) -> list[BaseException]:

@@ -21,7 +21,6 @@ import contextvars
 import copy
 import functools
 import json
-import math
 import re
 import threading
 import time
@@ -30,16 +29,24 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, NoReturn, TypeVar
 
 import dspy
 from dspy.utils.callback import BaseCallback
-from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError, LMProviderError, is_retryable_lm_error
+from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError, is_retryable_lm_error
 from pydantic import ValidationError
 
 from robotool.errors import LMUnavailableError
-from robotool.program.lm import DEFAULT_FORMAT_RETRIES, LMConfigError, unavailable
-from robotool.program.reply_checks import costly_to_read, not_a_completion, repeated_fields, unfinished
+from robotool.program.lm import DEFAULT_FORMAT_RETRIES, MAX_RETRY_WAIT_S, LMConfigError, retry_after, unavailable
+from robotool.program.reply_checks import (
+    costly_to_read,
+    not_a_completion,
+    repeated_fields,
+    unencodable,
+    unfinished,
+    unreadable_body,
+)
+from robotool.safe_text import encodable
 from robotool.sandbox.extract import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
@@ -224,9 +231,29 @@ def _reasoning_free_class(kind: type[dspy.Adapter]) -> type[dspy.Adapter]:
         costly = costly_to_read(text)
         if costly is not None:
             raise AdapterParseError(kind.__name__, signature, completion, message=costly)
-        return kind.parse(self, signature, text)
+        names = list(signature.output_fields)
+        only = names[0] if len(names) == 1 else None
+        try:
+            fields = kind.parse(self, signature, text)
+        except RecursionError:
+            _refuse(kind, signature, completion, only, "it holds a value nested too deeply to read; give it flat")
+        except OverflowError:
+            _refuse(kind, signature, completion, only, "it holds a number too large to read; give a plausible number")
+        for name, value in fields.items():
+            if (wrong := unencodable(value)) is not None:
+                _refuse(kind, signature, completion, name, wrong)
+        return fields
 
     return type(kind.__name__, (kind,), {"parse": parse, "__module__": kind.__module__})
+
+
+def _refuse(
+    kind: type[dspy.Adapter], signature: type[dspy.Signature], completion: str, name: str | None, problem: str
+) -> NoReturn:
+    """Raise the adapter's error for a field value that no reader or sink can take, ``problem`` its cause as a wrong
+    value's is (see :func:`_value_error`); ``name`` is the field's, when known."""
+    message = f"Failed to parse field {name}: {problem}" if name else problem
+    raise AdapterParseError(kind.__name__, signature, completion, message=message) from ValueError(problem)
 
 
 WaitReport = Callable[[str, int | None, float], None]
@@ -319,7 +346,7 @@ def call_stage(
         last = recorder.requests[-1] if recorder.requests else None
         if last is None or last.error is not None:  # the request itself failed: asking again would fail the same way
             break
-        reply = last.reply or ""  # a reply with no text at all (a tool call alone) is asked again too
+        reply = encodable(last.reply or "")  # a reply with no text at all (a tool call alone) is asked again too
         rejected = (reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]", problem)
     tried = f"{len({c.attempt for c in calls})} attempt(s)"
     raise StageFailed(f"{problem} ({tried})" if calls else problem, calls)
@@ -374,7 +401,7 @@ def _ask(
             if mapped is not None and (mapped.kind not in _TRANSIENT or not is_retryable_lm_error(e)):
                 settings.cancelled.set()
                 raise mapped from None
-            if mapped is None and not _unreadable_body(e):
+            if mapped is None and not unreadable_body(e):
                 return None, f"the LM request failed: {_one_line((e.message or str(e)).splitlines()[0])}"
             fault = e
         if recorder.requests and fault is not None:
@@ -393,15 +420,6 @@ def _last_reply(recorder: _Recorder) -> str | None:
     return recorder.requests[-1].reply if recorder.requests else None
 
 
-def _unreadable_body(error: LMError) -> bool:
-    """Whether ``error`` is a 200 reply whose body is not one chat completion (an HTML page, garbage, several
-    choices where one was asked for)."""
-    said = str(error)
-    return (isinstance(error, LMProviderError) and "is not JSON" in said) or re.search(
-        r"carries \d+ choices", said
-    ) is not None
-
-
 def _not_a_reply(fault: LMError, lm: dspy.LM) -> LMUnavailableError:
     api_base = lm.kwargs.get("api_base")
     where = f"the server at {api_base}" if api_base else f"the provider of {lm.model}"
@@ -415,11 +433,10 @@ def _not_a_reply(fault: LMError, lm: dspy.LM) -> LMUnavailableError:
 
 
 def _retry_delay(fault: LMError, attempt: int) -> float:
-    """Seconds before retrying after ``fault``: the server's Retry-After, else 1, 2, 4 ... up to 60."""
-    hint = getattr(fault, "retry_after", None)
-    if isinstance(hint, int | float) and math.isfinite(hint) and hint >= 0:
-        return float(hint)
-    return float(min(2**attempt, 60))
+    """Seconds before retrying after ``fault``: the server's Retry-After, else 1, 2, 4 ...; at most
+    :data:`~robotool.program.lm.MAX_RETRY_WAIT_S`."""
+    hint = retry_after(fault)
+    return float(min(hint if hint is not None else 2**attempt, MAX_RETRY_WAIT_S))
 
 
 def _with_feedback(signature: type[dspy.Signature]) -> type[dspy.Signature]:
@@ -456,7 +473,7 @@ def _salvaged(
         return None, costly, None
     problem = parse_problem(error, signature, adapter)
     json_asked = isinstance(adapter, dspy.JSONAdapter)
-    other: dspy.Adapter = dspy.ChatAdapter() if json_asked else dspy.JSONAdapter()
+    other = _reasoning_free(dspy.ChatAdapter() if json_asked else dspy.JSONAdapter())
     try:
         outputs = dspy.Prediction(**other.parse(signature, text))
         return outputs, None, f"the reply used {'field markers' if json_asked else 'JSON'}; read it as such"

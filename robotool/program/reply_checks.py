@@ -8,17 +8,21 @@ reason this module does not know) is what was wrong with the reply, to be asked 
 gives one field twice (a draft, then "Corrected:" and the field again), or goes on with more code after its answer
 (after ``[[ ## completed ## ]]``, or after its JSON object), does not say which value is meant. Reasons
 are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``). A reply too
-long, or too full of brackets for its length, is not read at all (:func:`costly_to_read`).
+long, or too full of brackets for its length, is not read at all (:func:`costly_to_read`). A reply whose body the
+client could not read as a chat completion is a transport fault too (:func:`unreadable_body`). An output value holding
+text that no encoding can write is refused by :func:`unencodable`.
 """
 
 from __future__ import annotations
 
 import json
 import re
+import traceback
 from typing import Any
 
 import dspy
-from dspy.utils.exceptions import LMError
+from dspy.utils.exceptions import LMError, LMProviderError, LMUnexpectedError
+from pydantic import BaseModel
 
 from robotool.safe_text import capped
 from robotool.sandbox.code_shape import calling_line
@@ -41,6 +45,24 @@ PROVIDER_FAILED = frozenset({"error", "abort", "aborted", "cancelled", "canceled
 
 class NotACompletion(LMError):
     """A 200 reply that is not a chat completion (no choices), or whose choice ended in the provider's error."""
+
+
+def unreadable_body(error: LMError) -> bool:
+    """Whether ``error`` is a reply whose body is not one chat completion: a 200 that is no JSON (an HTML page,
+    garbage), that holds several choices where one was asked for, or whose shape the client could not read (choices
+    that are no list, a body that is no object, usage that is no counts); or an HTTP error answered with a gateway's
+    HTML page (a 413 from a proxy), not the provider's error."""
+    said = str(error)
+    if isinstance(error, LMProviderError) and ("is not JSON" in said or _HTML_PAGE.search(said)):
+        return True
+    if isinstance(error, LMUnexpectedError) and error.__cause__ is not None:
+        frames = traceback.walk_tb(error.__cause__.__traceback__)
+        if any(frame.f_code.co_name == "parse_response" for frame, _ in frames):  # the client reading the body
+            return True
+    return re.search(r"carries \d+ choices", said) is not None
+
+
+_HTML_PAGE = re.compile(r"<(?:!doctype html|html)\b", re.IGNORECASE)
 
 
 def _last_response(lm: dspy.LM) -> Any:
@@ -186,7 +208,7 @@ def _after_json_answer(text: str, names: set[str]) -> str | None:
     for start in re.finditer(r"^[ \t]*\{", text, re.MULTILINE):
         try:
             answer, end = decoder.raw_decode(text, start.end() - 1)
-        except ValueError:
+        except (ValueError, RecursionError):  # not JSON, or too deep to read: no answer here
             continue
         if isinstance(answer, dict) and names & set(answer):
             rest = text[end:]
@@ -209,4 +231,28 @@ def costly_to_read(text: str) -> str | None:
             f"the reply holds {brackets} brackets in {len(text)} characters, more than can be read (at most "
             f"{READING_BUDGET // len(text)} in a reply this long); answer briefly"
         )
+    return None
+
+
+_SURROGATE = re.compile(r"[\ud800-\udfff]")
+
+
+def unencodable(value: object) -> str | None:
+    """What is wrong with a parsed output value (text, or lists, mappings and models of it) that holds a lone
+    surrogate (a ``\\ud800`` escape in the reply's JSON): no prompt, report or journal can carry such text. None
+    when it holds none."""
+    if isinstance(value, BaseModel):
+        value = value.model_dump()
+    if isinstance(value, str):
+        found = _SURROGATE.search(value)
+        if found is None:
+            return None
+        return (
+            f"it holds text that is not valid Unicode (a lone surrogate U+{ord(found.group()):04X}, such as a "
+            "\\ud800 escape); write the text without it"
+        )
+    if isinstance(value, dict):
+        value = [*value, *value.values()]
+    if isinstance(value, list | tuple | set | frozenset):
+        return next((problem for item in value if (problem := unencodable(item)) is not None), None)
     return None

@@ -12,7 +12,8 @@ from robotool.eval.failure_classes import FailureClass
 from robotool.eval.grading import ConceptGrade
 from robotool.eval.instances import DEFAULT_SEEDS, parse_seeds, select
 from robotool.eval.journal import JOURNAL, Journal
-from robotool.eval.metrics import summarize
+from robotool.eval.metrics import RepairComparison, summarize
+from robotool.eval.plots import write_plots
 from robotool.eval.records import RunKey, RunRecord, WorldResult
 from robotool.eval.tables import all_tables
 from robotool.solution import TokenUsage
@@ -203,3 +204,32 @@ def test_a_run_with_an_internal_error_is_left_out_of_every_table_but_the_cost() 
         assert "1 run(s) with an internal error (a bug in robotool, not a failure) left out." in tables[title].note
     only_broken = summarize([broken], ["robotool"])
     assert only_broken.success == [] and only_broken.errors == [] and only_broken.internal_errors == {"robotool": 1}
+
+
+def test_plots_show_a_method_name_with_its_controls_and_mathtext_escaped(tmp_path: Path, monkeypatch) -> None:
+    """Found by an adversarial run: a compiled program's file name (its method's name) reached the plots' legends and
+    tick labels raw, so ``$a$`` was drawn as mathtext and an ESC as a missing glyph."""
+    import matplotlib.figure
+    import matplotlib.text
+
+    hostile = "x\x1b[31m $a$ \u202eevil.json"
+    records = [r.model_copy(update={"key": r.key.model_copy(update={"method": hostile})}) for r in RECORDS]
+    summary = summarize(records, [hostile])
+    comparison = RepairComparison(
+        method=hostile, runs=1, sampled=1, sampled_calls=4, sampled_success=0.5, repair_calls=5, repair_success=1.0,
+        plain=2, plain_calls=8, plain_success=0.5,
+    )  # fmt: skip
+    summary = summary.model_copy(update={"repair": [comparison]})
+    drawn: list[str] = []
+    savefig = matplotlib.figure.Figure.savefig
+
+    def keep_texts(fig: matplotlib.figure.Figure, *args, **kwargs) -> None:
+        drawn.extend(t.get_text() for t in fig.findobj(matplotlib.text.Text))
+        savefig(fig, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep_texts)
+    assert write_plots(summary, tmp_path) == ["success.png", "errors.png", "discrimination.png", "repair.png"]
+    named = [text for text in drawn if "evil" in text]
+    assert len(named) >= 5, drawn  # the legends of success and repair (2), the ticks of errors and discrimination
+    assert all("\x1b" not in text and "\u202e" not in text and "$a" not in text.replace("\\$", "") for text in named)
+    assert all("\\x1b[31m \\$a\\$ \\u202eevil.json" in text for text in named), named
