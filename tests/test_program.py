@@ -219,6 +219,15 @@ def test_code_the_sandbox_rejects_is_asked_for_again_with_the_reason() -> None:
     assert coder_calls[0].error in " ".join(repair.split())
 
 
+def test_a_closing_think_tag_in_a_string_of_unfenced_field_code_cuts_nothing() -> None:
+    """Found by an adversarial run: the part of the program before the tag was taken as reasoning, the rest ran."""
+    code = f'open_gripper()\nbanner = """\n</think>\n"""\n{GRASP_DIRECTLY}'
+    script = arm_script([GRASP_DIRECTLY])
+    script["coder"] = [chat_reply(code=code)]
+    solution, _ = _solve("milk_reaching_near", script, method="coder")
+    assert solution.code == code and not solution.candidates[0].notes
+
+
 def test_proposer_has_exactly_the_stages_and_simulates_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
     from robotool import verify
     from robotool.program.lm_program import Proposer

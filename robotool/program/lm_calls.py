@@ -47,7 +47,7 @@ from robotool.program.reply_checks import (
     unreadable_body,
 )
 from robotool.safe_text import encodable
-from robotool.sandbox.extract import without_reasoning
+from robotool.sandbox.reasoning import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
 from robotool.solution import LMCall

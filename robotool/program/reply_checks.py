@@ -6,7 +6,8 @@ A body that is not a chat completion (no choices: a provider's error object such
 a finished answer (cut off at the token limit, stopped by a content filter, a tool called instead of an answer, a
 reason this module does not know) is what was wrong with the reply, to be asked again. A reply in field markers that
 gives one field twice (a draft, then "Corrected:" and the field again), or goes on with more code after its answer
-(after ``[[ ## completed ## ]]``, or after its JSON object), does not say which value is meant. Reasons
+(after ``[[ ## completed ## ]]``, or after its JSON object), or holds code its reader would drop (under a header or
+a JSON key that is no field, or before the answer), does not say which value is meant. Reasons
 are read from the provider's own body where the client kept it (LiteLLM maps ``"error"`` to ``"stop"``). A reply too
 long, or too full of brackets for its length, is not read at all (:func:`costly_to_read`). A reply whose body the
 client could not read as a chat completion is a transport fault too (:func:`unreadable_body`). An output value holding
@@ -26,7 +27,7 @@ from pydantic import BaseModel
 
 from robotool.safe_text import capped
 from robotool.sandbox.code_shape import calling_line
-from robotool.sandbox.extract import without_reasoning
+from robotool.sandbox.reasoning import without_reasoning
 
 MAX_REPLY_CHARS = 100_000
 """The longest reply text (its reasoning left out) that is read as an answer."""
@@ -178,15 +179,44 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     _, completed, after = text.partition("[[ ## completed ## ]]")
     if completed and _more_code(after):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
+    stray = _code_beside_fields(text, set(signature.output_fields))
+    if stray is not None:
+        return f"the reply holds code {stray}; give the program in its field only"
     rest = _after_json_answer(text, set(signature.output_fields))
     if rest is not None and _more_code(rest):
         return "the reply goes on after its JSON object with more code; give the answer once, then end it"
     return None
 
 
+_HEADER = re.compile(r"^.*?\[\[ ## (.+?) ## \]\]", re.MULTILINE)
+_OPENING_FENCE = re.compile(r"(?:```|~~~)[\w-]*[ \t]*\n?[ \t]*\Z")
+
+
+def _code_beside_fields(text: str, names: set[str]) -> str | None:
+    """Where a reply holds code that its format's reader would drop, in words, or None: under a field header that is
+    none of the output fields ``names`` (``[[ ## corrected_code ## ]]``, ``[[ ## CODE ## ]]``), before the first
+    field header or before the JSON answer (a program, then the answer), or under a key of the JSON answer that is no
+    field (``"final_code"``)."""
+    headers = list(_HEADER.finditer(text))
+    for k, header in enumerate(headers):
+        end = headers[k + 1].start() if k + 1 < len(headers) else len(text)
+        if header.group(1) not in {*names, "completed"} and _more_code(text[header.end() : end]):
+            return f"under the field header {capped(header.group(1), 40)!r}, which is no field of the answer"
+    answer = _json_answer(text, names)
+    in_fields = any(header.group(1) in names for header in headers)
+    before = text[: headers[0].start()] if in_fields else text[: answer[1]] if answer else ""
+    if _more_code(_OPENING_FENCE.sub("", before.rstrip(" \t"))):
+        return "before its answer"
+    for key, value in answer[0].items() if answer else ():
+        if key not in names and isinstance(value, str) and _more_code(value):
+            return f"under the JSON key {capped(key, 40)!r}, which is no field of the answer"
+    return None
+
+
 def _more_code(text: str) -> bool:
-    """Whether ``text`` (what follows an answer) holds more code: a fenced block or a field, or a line that reads as
-    code and calls something (a correction written without fences, or indented as a Markdown code block)."""
+    """Whether ``text`` (what follows an answer, or stands beside it) holds more code: a fenced block or a field, or
+    a line that reads as code and calls something (a correction written without fences, or indented as a Markdown
+    code block)."""
     return bool(_MORE_CODE.search(text)) or any(
         calling_line(line) for line in text.split("\n")[:MAX_LINES_AFTER]
     )
@@ -204,6 +234,17 @@ _CLOSING_FENCE = re.compile(r"\A[ \t]*\n?[ \t]*(?:```|~~~)[ \t]*(?:\n|\Z)")
 def _after_json_answer(text: str, names: set[str]) -> str | None:
     """The text after the first JSON object that starts a line and gives one of the output fields ``names`` (and
     after the fence that closes it, when it stood in one), or None when there is no such object."""
+    answer = _json_answer(text, names)
+    if answer is None:
+        return None
+    rest = text[answer[2] :]
+    closing = _CLOSING_FENCE.match(rest)
+    return rest[closing.end() :] if closing else rest
+
+
+def _json_answer(text: str, names: set[str]) -> tuple[dict[str, Any], int, int] | None:
+    """The first JSON object that starts a line and gives one of the output fields ``names``, where it starts and
+    where it ends; None when there is no such object."""
     decoder = json.JSONDecoder()
     for start in re.finditer(r"^[ \t]*\{", text, re.MULTILINE):
         try:
@@ -211,9 +252,7 @@ def _after_json_answer(text: str, names: set[str]) -> str | None:
         except (ValueError, RecursionError):  # not JSON, or too deep to read: no answer here
             continue
         if isinstance(answer, dict) and names & set(answer):
-            rest = text[end:]
-            closing = _CLOSING_FENCE.match(rest)
-            return rest[closing.end() :] if closing else rest
+            return answer, start.start(), end
     return None
 
 

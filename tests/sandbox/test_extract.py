@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import re
 import time
 
 import pytest
 
 from robotool.sandbox import ProgramRejected, extract, extract_program, validate
+from robotool.sandbox.reasoning import without_reasoning
 
 # CPU seconds for 100 kB: linear work takes about one on a slow 2-core machine, a quadratic blow-up minutes
 CPU_LIMIT_S = 5.0
@@ -154,6 +156,55 @@ def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
 def test_what_is_no_whole_program_is_asked_again_with_why(answer: str, problem: str) -> None:
     with pytest.raises(ProgramRejected, match=problem):
         extract(answer)
+
+
+HEAD = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0], p[1], p[2] + 0.12])\n'
+
+
+@pytest.mark.parametrize(
+    ("answer", "placeholder"),
+    [
+        (
+            f"Your program:\n```python\n{PROGRAM}```\nCorrected code:\n"
+            f"```python\n{HEAD}# ... rest of the code unchanged ...\n```",
+            "# ... rest of the code unchanged ...",
+        ),
+        (f"```python\n{PROGRAM}```\nFixed code:\n```python\n{HEAD}...\n```", "..."),
+        (f"```python\n{HEAD}# ... (same as before)\n```", "# ... (same as before)"),
+        (f"```python\n{HEAD}# (rest unchanged)\n```", "# (rest unchanged)"),
+        (f"```python\n{HEAD}# rest of the code here\n```", "# rest of the code here"),
+        (f"```python\n{HEAD}# TODO: move to the milk and grasp it\npass\n```", "# TODO: move to the milk"),
+    ],
+    ids=[
+        "rest unchanged after a correction label",
+        "a bare ellipsis",
+        "same as before",
+        "rest unchanged",
+        "rest of the code",
+        "TODO pass",
+    ],
+)
+def test_a_block_that_says_it_leaves_code_out_is_asked_again_naming_the_line(answer: str, placeholder: str) -> None:
+    """Found by an adversarial run: a corrected block ending in '# ... rest of the code unchanged ...' ran alone."""
+    with pytest.raises(
+        ProgramRejected, match=r"line [45]: .*placeholder for code left out \(" + re.escape(repr(placeholder)[:-1])
+    ):
+        extract(answer)
+
+
+@pytest.mark.parametrize(
+    "comment",
+    [
+        "# the rest of the walk is done",
+        "# keep the gripper unchanged ...",
+        "# lift ... slowly",
+        "# TODO: tune the height",
+        "# keep the rest of the code simple",
+    ],
+)
+def test_a_comment_about_the_task_is_no_placeholder(comment: str) -> None:
+    program = f"{HEAD}{comment}\nclose_gripper()\n"
+    assert extract(f"Corrected code:\n```python\n{program}```").code == program
 
 
 DRAFT = "```python\nopen_gripper()\nclose_gripper()\n```"
@@ -412,6 +463,15 @@ def test_a_closing_think_tag_named_in_a_sentence_ends_no_reasoning() -> None:
     assert extract(f"I should open the gripper first.</think>\n\n{GRASP}").code == GRASP  # the tag ends its line
 
 
+def test_a_closing_think_tag_inside_a_multi_line_string_of_unfenced_code_is_code() -> None:
+    """Found by an adversarial run: the tag inside a field's unfenced code cut the program's start off."""
+    program = f'open_gripper()\nbanner = """\n</think>\n"""\n{GRASP}'
+    reply = f"[[ ## code ## ]]\n{program}\n[[ ## completed ## ]]"
+    assert without_reasoning(reply) == reply and extract(program).code == program
+    # a triple quote named in the reasoning is no string of code: the reasoning still ends at the tag
+    assert extract(f'I would give it a """ docstring.\n</think>\n{GRASP}').code == GRASP
+
+
 @pytest.mark.parametrize(
     "program",
     [
@@ -500,8 +560,6 @@ WAYPOINTS = "\n".join(f"move_to_position([0.3, {y}, 0.3])" for y in (0.0, 0.1, 0
 
 
 def test_reasoning_is_stripped_from_a_long_line_of_escaped_quotes_in_linear_time() -> None:
-    from robotool.sandbox.extract import without_reasoning
-
     line = "x = ['" + "\\'" * 48_000 + "<think>\n"
     started = time.process_time()
     assert without_reasoning(line) == line
@@ -577,11 +635,27 @@ def test_an_unclosed_think_tag_in_a_sentence_cuts_nothing(tag: str) -> None:
         "Task file used:\n```\ntask: milk_reaching_near\nstage: coder\n```",
         "When run, the simulator logs:\n```\nopen_gripper() -> ok\nclose_gripper() -> ok\n```",
         "The reach is checked as\n\n    d = sqrt(x**2 + y**2)\n\nwhich is within reach.",
+        "The reach is\nreach = np.linalg.norm(np.array([dx, dy]))\nwhich is enough.",
     ],
-    ids=["status", "state", "assignment", "yaml", "trace", "formula"],
+    ids=["status", "state", "assignment", "yaml", "trace", "formula", "numpy formula"],
 )
 def test_an_output_listing_or_a_formula_beside_the_program_is_no_second_program(listing: str) -> None:
     assert extract(f"```python\n{GRASP}```\n{listing}\n").code == GRASP
+
+
+@pytest.mark.parametrize(
+    ("after", "line"),
+    [
+        ('p = get_graspable_point("milk")\nmoved = move_to_position(p)\nheld = close_gripper()', "p = get_graspable"),
+        ("held = close_gripper()", "held = close_gripper()"),
+    ],
+    ids=["three steps", "one step"],
+)
+def test_a_line_outside_the_block_that_calls_a_skill_is_no_formula(after: str, line: str) -> None:
+    """Found by an adversarial run: each line, an assignment of names the block does not use, was passed over as a
+    formula; only the block ran."""
+    with pytest.raises(ProgramRejected, match=rf"also code outside the code blocks \('{re.escape(line)}"):
+        extract(f"Start with:\n```python\nopen_gripper()\n```\nThen continue:\n\n{after}\n")
 
 
 def test_an_untagged_correction_that_does_not_parse_is_still_its_syntax_error() -> None:
