@@ -24,6 +24,7 @@ import json
 import re
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -36,7 +37,7 @@ from dspy.utils.callback import BaseCallback
 from dspy.utils.exceptions import AdapterParseError, DSPyError, LMError, is_retryable_lm_error
 from pydantic import ValidationError
 
-from robotool.errors import LMUnavailableError
+from robotool.errors import LMUnavailableError, RobotoolWarning
 from robotool.program.lm import DEFAULT_FORMAT_RETRIES, MAX_RETRY_WAIT_S, LMConfigError, retry_after, unavailable
 from robotool.program.reply_checks import (
     costly_to_read,
@@ -46,7 +47,7 @@ from robotool.program.reply_checks import (
     unfinished,
     unreadable_body,
 )
-from robotool.safe_text import encodable
+from robotool.safe_text import encodable, prompt_block
 from robotool.sandbox.reasoning import without_reasoning
 from robotool.signatures import validation_notes
 from robotool.signatures.models import NoteSink
@@ -106,6 +107,7 @@ class PromptLog:
         self.path = path
         with _LOG_LOCKS_GUARD:
             self._lock = _LOG_LOCKS.setdefault(path.resolve(), threading.Lock())
+        self.broken = False  # a line could not be written: the log ends there, the run goes on
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             path.open("a", encoding="utf-8").close()
@@ -113,9 +115,16 @@ class PromptLog:
             raise LMConfigError(f"cannot write the prompt log {path}: {e.strerror or e}") from None
 
     def write(self, record: dict[str, Any]) -> None:
-        line = json.dumps(record, default=str)
-        with self._lock, self.path.open("a", encoding="utf-8") as f:
-            f.write(line + "\n")
+        """Append one line; when one cannot be written (a full disk), warn once and write no more."""
+        if self.broken:
+            return
+        try:
+            with self._lock, self.path.open("a", encoding="utf-8") as f:
+                f.write(json.dumps(record, default=str) + "\n")
+        except OSError as e:
+            self.broken = True
+            message = f"cannot write the prompt log {self.path}: {e.strerror or e}; it ends here, the run goes on"
+            warnings.warn(RobotoolWarning(message), stacklevel=2)
 
 
 @dataclass
@@ -347,7 +356,8 @@ def call_stage(
         if last is None or last.error is not None:  # the request itself failed: asking again would fail the same way
             break
         reply = encodable(last.reply or "")  # a reply with no text at all (a tool call alone) is asked again too
-        rejected = (reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]", problem)
+        shown = reply if len(reply) <= MAX_SHOWN_REPLY else reply[:MAX_SHOWN_REPLY] + "\n[... cut]"
+        rejected = (prompt_block(shown), prompt_block(problem))  # its field markers broken: it opens no section
     tried = f"{len({c.attempt for c in calls})} attempt(s)"
     raise StageFailed(f"{problem} ({tried})" if calls else problem, calls)
 
