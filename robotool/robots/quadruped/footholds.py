@@ -47,7 +47,7 @@ class Footholds:
         out = np.zeros(geoms.shape, dtype=bool)
         if not hit.size:
             return out
-        frame = state.frames()[worlds][:, self.frames.body[hit]] @ self.frames.rot[hit]  # (k, m, 3, 3), axes as columns
+        frame = state.frames()[worlds[:, None], self.frames.body[hit]] @ self.frames.rot[hit]  # (k, m, 3, 3): axes
         up = np.abs(frame[:, :, 2, :])  # (k, m, 3): how vertical each of the geom's axes lies
         kind, size = self.kind[hit], self.size[hit]
         diameter = 2.0 * FOOT_RADIUS

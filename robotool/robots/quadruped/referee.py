@@ -146,14 +146,13 @@ class Referee:
         return conditions
 
     def push_started(self, w: int, index: int) -> None:
-        """A push of object ``index`` starts in world ``w``: it is no longer shoved or rammed."""
-        self.state.bumped[w, index] = np.nan
-        self.state.carried[w, index] = 0.0
-        self.state.rammed_by[w, index] = -1
-        self.state.drift[w, index] = 0.0
-        self.state.ride_start[w, index] = np.nan  # where the stride moves it from, from the next ride on
-        self.state.ride_top[w, index] = np.nan
-        self.state.force_limit[w] = np.nan  # read anew: it may push from another surface
+        """A push of object ``index`` starts in world ``w``: it is no longer shoved, rammed or moved by the stride (what
+        the stride does to it counts from the next ride on)."""
+        s = self.state
+        s.bumped[w, index], s.ride_start[w, index], s.ride_top[w, index] = np.nan, np.nan, np.nan
+        s.carried[w, index], s.drift[w, index], s.rammed_by[w, index] = 0.0, 0.0, -1
+        s.ride_touched[w, index] = s.ride_carried[w, index] = False
+        s.force_limit[w] = np.nan  # read anew: it may push from another surface
 
     def judge(self, mask: np.ndarray, moves: MoveRunner) -> list[SkillEnd]:
         """Check the rules in the worlds in ``mask`` after a tick: end the skills of robots that fell, stop and
