@@ -1009,6 +1009,18 @@ def test_a_gap_walked_across_on_two_blades_under_the_feet_is_refused() -> None:
         assert "gap of 1.00 m" in (world_failure(rollout) or ""), world_failure(rollout)
 
 
+def test_a_gap_walked_across_on_posts_narrower_than_a_foot_is_the_whole_gap() -> None:
+    """Tried as an optimiser would, after the blades: rows of 12 mm posts 10 cm apart, so that no space between them
+    is over the 0.10 m gap limit. A post's top carries no foot: the walk is refused for the gap itself (the old reading
+    saw stepping stones, and refused only where its rays missed a post: 'gap of 0.22 m')."""
+    program = (CHEATS / "walk_across_a_gap_on_two_blades.py").read_text()
+    for rollout in sim.run_sessions(
+        _scene("gap_crossed_on_two_rows_of_steel_posts"), start_sessions([program] * 2, "quadruped"), seed=11
+    ):
+        assert not rollout.success, rollout.conditions
+        assert "gap of 1.00 m" in (world_failure(rollout) or ""), world_failure(rollout)
+
+
 def test_the_same_gap_is_walked_across_on_two_beams_as_wide_as_the_feet() -> None:
     """The control: beams 8 cm wide in the blades' place (a foot is 6 cm across) carry the same walk."""
     program = (CHEATS / "walk_across_a_gap_on_two_blades.py").read_text()
