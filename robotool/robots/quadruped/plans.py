@@ -212,9 +212,9 @@ class Plans:
         return None
 
     def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
-        """One straight push of object ``index`` to ``goal`` in world ``w``, refused where what it would move is over
-        the push limit now (something came to ride on it since the push rules were checked) or takes more than the feet
-        hold where the robot stands (:meth:`.push_rules.PushRules.leg_rules`); its outcome."""
+        """One straight push of object ``index`` to ``goal`` in world ``w``, refused where the push rules do not hold
+        from where the robot stands now (:meth:`.push_rules.PushRules.leg_rules`: something came to ride on the
+        object, the robot walked onto another surface); its outcome."""
         broken = self.referee.pushes.leg_rules(w, index)
         if broken is not None:
             return "refused", f"cannot push {self.scene.object_names[index]}: {broken[0]}", broken[1]

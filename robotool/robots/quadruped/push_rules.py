@@ -1,6 +1,7 @@
 """The quadruped's push rules, checked when a push starts and as each push leg starts: what a push of an object would
 move (the object, what rides on it and what is stuck to it) and whether the robot may push it from where it stands
-(:func:`~.push.rule_violation`); the referee also weighs what a push carries while it moves."""
+(:func:`~.push.rule_violation`); the referee also weighs what a push carries, and reads what the robot stands on,
+while it moves."""
 
 from __future__ import annotations
 
@@ -29,11 +30,9 @@ class PushRules:
     def push_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
         """Check the push rules in world ``w`` from rays under the feet and the object, and the masses it moves; then
         whether the feet can hold the push (:meth:`grip_rule`)."""
-        names = self.scene.object_names
         z, objects, feet_on = self._feet_surface(w)
-        on = objects[z >= z.max() - RISE]
-        on = on[on >= 0]
-        movable = next((names[o] for o in on if self.facts.movable[o]), None)
+        on = _stood_on(z[None], objects[None])[0]
+        movable = next((self.scene.object_names[o] for o in on if o >= 0 and self.facts.movable[o]), None)
         below, support, friction = self._support(w, index)
         mass, riders, stuck = self._load(w, index)
         broken = rule_violation(
@@ -56,13 +55,27 @@ class PushRules:
         return mass_violation(*self._load(w, index), self.limits)
 
     def leg_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
-        """Check, as a push leg of object ``index`` starts in world ``w``, the push limit (as :meth:`load_rule`) and
-        that the friction under the robot's feet holds the push's reaction (:meth:`_grip`): the robot may have walked
-        onto another surface since the push rules were checked, and what rides on the object may have changed."""
-        load = self._load(w, index)
-        heavy = mass_violation(*load, self.limits)
-        _, support, friction = self._support(w, index)
-        return heavy or self._grip(w, index, load[0], support, friction, self._feet_surface(w)[2])
+        """Check the push rules (:meth:`push_rules`) again as a push leg of object ``index`` starts in world ``w``,
+        from where the robot stands now: it may have walked onto another surface since they were checked (a push
+        called from a fixed stage beside a loose deck, the object on the deck, starts with the robot on the deck;
+        found by an adversarial run), and what rides on the object may have changed."""
+        return self.push_rules(w, index)
+
+    def footing(self, worlds: np.ndarray, pushed: np.ndarray) -> dict[int, str]:
+        """World -> the rule broken, in those of ``worlds`` (k,) where a push of object ``pushed`` (k,) runs and the
+        robot stands on a movable object now: it pushes only from the ground or a fixed object (:meth:`push_rules`),
+        also after it walked onto something else along the push."""
+        if worlds.size == 0:
+            return {}
+        z, objects, _ = self._feet_surfaces(worlds)
+        on = _stood_on(z, objects)
+        movable = (on >= 0) & self.facts.movable[np.maximum(on, 0)]
+        broken = {}
+        for k in np.flatnonzero(movable.any(axis=1)).tolist():
+            name, own = self.scene.object_names[pushed[k]], on[k, movable[k]]
+            why = "it" if pushed[k] in own else f"{self.scene.object_names[own[0]]}, which is movable,"
+            broken[int(worlds[k])] = f"cannot push {name}: the robot came to stand on {why} while pushing"
+        return broken
 
     def _grip(
         self, w: int, index: int, mass: float, support: int, friction: float, feet_on: np.ndarray
@@ -251,3 +264,9 @@ class PushRules:
                     grown = True
         along = [int(o) for o in np.unique(owner[moved]) if o != index and np.all(moved[owner == o])]
         return [o for o in along if not stuck[owner == o].any()], [o for o in along if stuck[owner == o].any()]
+
+
+def _stood_on(z: np.ndarray, objects: np.ndarray) -> np.ndarray:
+    """(k, 4) the objects the robot stands on (-1: the ground, nothing or a foot on a lower surface), from the heights
+    ``z`` and objects ``objects`` (each (k, 4)) under its feet: those under the feet on the highest surface."""
+    return np.where(z >= z.max(axis=1, keepdims=True) - RISE, objects, -1)

@@ -166,6 +166,7 @@ class Referee:
         self._rams(ends, mask, centres[:, :, :2], shift, travel, moves, stood_on)
         self._stride_loads(ends, mask, centres, moves)
         self._riders(ends, mask, moves)
+        self._push_footing(ends, mask, moves)
         self._strains(ends, mask, travel, moves)
         if self.facts.fragile.any():
             self._crushes(ends, mask, moves)
@@ -300,7 +301,7 @@ class Referee:
         """Find the pushes that ram more than the robot may push, in the worlds in ``mask``. A push rams the movable
         objects that the pushed object presses, directly or through others, and that lie ahead of it: their centres
         beyond its front face, or the contacts through which it or another pressed object presses them facing along
-        the push (:meth:`_pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
+        the push (:func:`pressed_along`: an object caught in the crook of a hook, behind the hook's front face, is
         rammed, books lying on it or not). What rides on it is weighed when the push starts, as each push leg starts
         (:meth:`.push_rules.PushRules.load_rule`) and while it moves (:meth:`_riders`); what it drags by friction,
         pressing down on it, is not rammed (its weight loads the push: :mod:`.push_force`), but what bears it up and
@@ -414,6 +415,17 @@ class Referee:
             s.shoves[w] = reason = f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}"
             self._refuse(w, reason, heavy[1], ends, moves)
 
+    def _push_footing(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
+        """Stop and refuse the pushes, in the worlds in ``mask``, whose robot has come to stand on a movable object
+        (:meth:`.push_rules.PushRules.footing`: a push called from a fixed stage walked on onto a loose deck; found by
+        an adversarial run); the world fails (:meth:`conditions`)."""
+        s, m = self.state, moves.state
+        worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
+        for w, reason in self.pushes.footing(worlds, m.pushing[worlds]).items():
+            if s.shoves[w] is None and self.senses.state.failed[w] is None:
+                s.shoves[w] = reason
+                self._refuse(w, reason, {}, ends, moves)
+
     def _strains(self, ends: list[SkillEnd], mask: np.ndarray, travel: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the pushes, in the worlds in ``mask``, that have taken more force than the robot may push
         with (:class:`~.push_force.PushForce`; ``travel``: each object's this tick); the world fails
@@ -437,7 +449,7 @@ class Referee:
         rows = np.flatnonzero((pressed & ~ahead).any(axis=1))  # the normals only where they can add a rammed one
         normals = {w: self._object_normals(w) for w in set(worlds[rows].tolist())}  # a world's once: rows share it
         for k in rows:
-            rammed[k] |= self._pressed_along(normals[int(worlds[k])], int(index[k]), pressed[k], u[k])
+            rammed[k] |= pressed_along(normals[int(worlds[k])], int(index[k]), pressed[k], u[k])
         return rammed
 
     def _driven(self) -> np.ndarray:
@@ -481,26 +493,6 @@ class Referee:
             out[:, owner[b1]] |= active & group[:, owner[b2]]
         return out & pressed
 
-    @staticmethod
-    def _pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
-        (x-y) or aside in a world whose objects press on each other along ``normals`` (:meth:`_object_normals`): for
-        one of them, the horizontal part of the summed normals of its contacts with the object is at least
-        :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within :data:`SIDE_ANGLE` of
-        horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of its way moves it as
-        surely as its face does). Each presser is judged alone, by its horizontal part, so that what lies on the
-        object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push nor makes one.
-        What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down: a bar rolling
-        under a pushed board's raised end goes where the push takes it."""
-        pressers = pressed.copy()
-        pressers[index] = True
-        pressing = normals[pressers]  # (npresser, nobject, 3)
-        flat = np.linalg.norm(pressing[:, :, :2], axis=2)
-        along = pressing[:, :, :2] @ u
-        aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
-        under = bears_up(normals[:, index])  # (nobject,) pressing the object up
-        return pressed & (((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0) | under)
-
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
         return self.facts.sums.pairs(self.senses.sim.contact_normals(w))
@@ -518,3 +510,23 @@ class Referee:
             if not added.any():
                 return group & ~own
             group |= added
+
+
+def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
+    (x-y) or aside in a world whose objects press on each other along ``normals`` (:meth:`Referee._object_normals`): for
+    one of them, the horizontal part of the summed normals of its contacts with the object is at least
+    :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within :data:`SIDE_ANGLE` of
+    horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of its way moves it as
+    surely as its face does). Each presser is judged alone, by its horizontal part, so that what lies on the
+    object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push nor makes one.
+    What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down: a bar rolling
+    under a pushed board's raised end goes where the push takes it."""
+    pressers = pressed.copy()
+    pressers[index] = True
+    pressing = normals[pressers]  # (npresser, nobject, 3)
+    flat = np.linalg.norm(pressing[:, :, :2], axis=2)
+    along = pressing[:, :, :2] @ u
+    aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
+    under = bears_up(normals[:, index])  # (nobject,) pressing the object up
+    return pressed & (((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0) | under)
