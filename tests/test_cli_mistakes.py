@@ -55,6 +55,12 @@ def _mistakes(tmp_path: Path) -> list[tuple[list[str], str]]:
         (["run", "milk_reaching_near", str(tmp_path / "nope.py")], "program file not found"),
         (["describe", "no_such_task"], "no built-in task or file by that name"),
         (["describe", ""], "error: '': give a built-in task name or a task file"),  # it read the folder "."
+        (["run", "milk_reaching_near", program, "--json", ""], "--json: expected a file name, got an empty one"),
+        (["eval", "--out", " "], "--out: expected a folder name, got an empty one"),  # it wrote into "."
+        (
+            ["optimize", "--optimizer", "planner-demos", "--out", str(tmp_path / "p.txt")],
+            "a compiled program is saved as a .json file",  # which solve --program then refused to load
+        ),
     ]
 
 

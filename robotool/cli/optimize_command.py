@@ -27,9 +27,9 @@ from robotool.cli.options import (
     Verbs,
     add_lm_options,
     add_world_options,
+    compiled_program_file,
     count,
     lm_from,
-    output_file,
     output_folder,
     positive_int,
     print_error,
@@ -68,7 +68,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="gepa (reflective prompt evolution), mipro (MIPROv2), bootstrap (BootstrapFewShot), simba, "
         "or planner-demos (no LM: verified search-planner solutions as demonstrations)",
     )
-    p.add_argument("--out", type=output_file, required=True, metavar="PROGRAM.json", help="the compiled program")
+    p.add_argument(
+        "--out", type=compiled_program_file, required=True, metavar="PROGRAM.json", help="the compiled program"
+    )
     p.add_argument(
         "--log",
         type=output_folder,

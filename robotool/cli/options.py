@@ -181,6 +181,8 @@ def cluster_address(text: str) -> str:
 
 def output_file(text: str) -> Path:
     """A file the command will write: its folder must exist and be writable, and it must not be a folder."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name, got an empty one")
     path = Path(text)
     folder = path.parent
     if path.is_dir():
@@ -192,8 +194,19 @@ def output_file(text: str) -> Path:
     return path
 
 
+def compiled_program_file(text: str) -> Path:
+    """A file a compiled program will be saved to (:func:`output_file`): a ``.json`` file, the only kind that
+    ``--program`` loads."""
+    path = output_file(text)
+    if path.suffix.lower() != ".json":
+        raise argparse.ArgumentTypeError(f"{path}: a compiled program is saved as a .json file, which --program loads")
+    return path
+
+
 def output_folder(text: str) -> Path:
     """A folder the command will create or write into: it must not be a file, and it must be creatable."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder name, got an empty one")
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{path} is a file, not a folder")
