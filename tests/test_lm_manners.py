@@ -87,3 +87,25 @@ def test_a_rejected_key_from_the_providers_variable_is_named(monkeypatch, capsys
         code = main(["solve", TASK, "--lm", "openai/standin", "--api-base", server.base_url, "--no-cache"])
     err = capsys.readouterr().err
     assert code == 2 and "check the API key in OPENAI_API_KEY" in err
+
+
+def test_a_run_reads_the_bundled_model_metadata_instead_of_fetching_it(monkeypatch, caplog) -> None:
+    """Offline, DSPy's first LM call tried to fetch the remote model map and warned ("Model metadata refresh failed")
+    on every run; an LM made here reads the bundled snapshot, and a user who set the variable keeps it."""
+    from dspy.clients import model_metadata
+
+    def no_fetch(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the remote model map was fetched")
+
+    monkeypatch.setattr(model_metadata.urllib.request, "urlopen", no_fetch)
+    monkeypatch.delenv("LITELLM_LOCAL_MODEL_COST_MAP", raising=False)
+    monkeypatch.setattr(model_metadata, "_data", None)
+    rules = stage_rules(arm_script([GRASP_DIRECTLY]))
+    with StandinServer(Script(rules=rules)) as server:
+        lm = make_lm("openai/standin", api_base=server.base_url, cache=False, num_retries=0)
+        with dspy.context(lm=lm):
+            assert RoboTool()(task=tasks.load(TASK)).code
+    assert model_metadata.source_info()["is_env_forced"] and "metadata" not in caplog.text
+    monkeypatch.setenv("LITELLM_LOCAL_MODEL_COST_MAP", "False")
+    make_lm("openai/standin", api_base=server.base_url)
+    assert model_metadata.os.environ["LITELLM_LOCAL_MODEL_COST_MAP"] == "False"

@@ -1,7 +1,9 @@
 """Language-model configuration, and what its failures mean to a user.
 
 ``ROBOTOOL_LM`` names the model when ``--lm`` is not given (``ROBOTOOL_API_BASE`` likewise the
-server). DSPy's response cache is on by default, so repeated runs cost nothing; tests turn it off.
+server). DSPy's response cache is on by default, so repeated runs cost nothing; tests turn it off. Model
+metadata (context windows, prices) comes from the snapshot DSPy and LiteLLM ship, not fetched anew on every run
+(offline, each fetch waited and warned): ``LITELLM_LOCAL_MODEL_COST_MAP=False`` asks for the remote map.
 :func:`unavailable` turns an LM call's error that no reply can cure (no key, a rejected key, an
 unknown model, an unreachable server, no quota, retries used up) into a one-line
 :class:`~robotool.errors.LMUnavailableError` that names the flag or variable to fix.
@@ -28,6 +30,8 @@ DEFAULT_TIMEOUT = 180.0
 """Seconds to wait for each LM reply when no timeout is given."""
 MAX_TIMEOUT = 3600.0
 """The longest wait for one LM reply that may be set (far longer ones overflow the transport's clock)."""
+BUNDLED_METADATA = "LITELLM_LOCAL_MODEL_COST_MAP"
+"""Set to "True" (unless set already) when an LM is made: model metadata from the bundled snapshot."""
 DEFAULT_FORMAT_RETRIES = 2
 """Repairs after a reply that does not parse: each shows the model its reply and what was wrong."""
 MAX_RETRY_WAIT_S = 60.0
@@ -72,6 +76,7 @@ def make_lm(
         return None
     if "/" not in model:
         raise LMConfigError(f"model {model!r} needs a provider prefix, e.g. openai/{model}")
+    os.environ.setdefault(BUNDLED_METADATA, "True")
     if not _provider_known(model):
         raise LMConfigError(
             f"model {model!r} names no provider DSPy or LiteLLM knows ({model.split('/', 1)[0]!r}): check --lm; an "
@@ -109,8 +114,7 @@ def make_lm(
 
 
 def _provider_known(model: str) -> bool:
-    """Whether DSPy can route ``model``: its own engine's providers, else LiteLLM's (imported only then, with its
-    bundled model cost map: fetching the remote one takes seconds and warns on every failed try)."""
+    """Whether DSPy can route ``model``: its own engine's providers, else LiteLLM's (imported only then)."""
     from dspy.clients.engines.lm15_engine import LM15Engine
     from dspy.lm15 import RouterConfig, UnknownModelError
 
@@ -119,7 +123,6 @@ def _provider_known(model: str) -> bool:
     except UnknownModelError:
         from dspy.clients._litellm import get_litellm
 
-        os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
         return model.split("/", 1)[0] in get_litellm(feature="checking the provider of --lm").provider_list
     return True
 
