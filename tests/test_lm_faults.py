@@ -197,7 +197,7 @@ def test_a_reply_that_did_not_finish_is_asked_again_with_why(reason: str, extra:
     assert solution.success and expected in second, second
 
 
-def test_a_reply_with_no_text_is_asked_again() -> None:
+def test_a_reply_with_no_text_but_a_tool_call_is_asked_again_saying_so() -> None:
     tool_call = {"id": "c", "type": "function", "function": {"name": "code", "arguments": "{}"}}
     body = _completion({"content": None, "tool_calls": [tool_call]}, "stop")
     script = arm_script([GRASP_DIRECTLY])
@@ -205,27 +205,32 @@ def test_a_reply_with_no_text_is_asked_again() -> None:
     with StandinServer(Script(rules=rules)) as server:
         solution = _solve(server)
         second = server.requests[-1]["messages"][-1]["content"]
-    assert solution.success and "the reply was empty" in second
+    assert solution.success and "the reply called a tool instead of answering" in second
 
 
 def test_a_reply_with_no_text_is_empty_never_the_repr_of_what_it_held() -> None:
     program = json.dumps({"code": GRASP_DIRECTLY})
     shapes = [
-        _completion(
-            {
-                "content": None,
-                "tool_calls": [{"id": "c", "type": "function", "function": {"name": "code", "arguments": program}}],
-            },
-            "stop",
+        (
+            _completion(
+                {
+                    "content": None,
+                    "tool_calls": [{"id": "c", "type": "function", "function": {"name": "code", "arguments": program}}],
+                },
+                "stop",
+            ),
+            "the reply called a tool instead of answering",
         ),
-        _completion({"content": "", "reasoning_content": f"```python\n{GRASP_DIRECTLY}```"}, "stop"),
+        (
+            _completion({"content": "", "reasoning_content": f"```python\n{GRASP_DIRECTLY}```"}, "stop"),
+            "the reply was empty",
+        ),
     ]
-    for body in shapes:
+    for body, expected in shapes:
         rules = stage_rules(arm_script([GRASP_DIRECTLY]), coder=[Rule(body=body, content_type="application/json")])
         with StandinServer(Script(rules=rules)) as server:
             solution = _solve(server, format_retries=0)
-        assert not solution.success
-        assert "the reply was empty" in str(solution.candidates[0].failure)
+        assert not solution.success and expected in str(solution.candidates[0].failure)
 
 
 def test_cli_gateway_page_is_one_line_and_exit_2(capsys) -> None:

@@ -165,6 +165,7 @@ class _Request:
     tokens: tuple[int, int] = (0, 0)
     cached: bool = False
     error: str | None = None
+    tool_called: bool = False  # the reply called a tool (whatever text it held)
 
 
 class _Recorder(BaseCallback):
@@ -199,6 +200,8 @@ class _Recorder(BaseCallback):
         request.tokens = (after[0] - request.tokens_before[0], after[1] - request.tokens_before[1])
         request.cached = exception is None and self._entries() == request.entries_before  # DSPy adds no usage for hits
         request.reply = _reply_text(outputs)
+        first = outputs[0] if outputs else None
+        request.tool_called = isinstance(first, dict) and bool(first.get("tool_calls"))
         request.error = _one_line(exception) if exception is not None else None
         self.requests.append(request)
 
@@ -402,6 +405,8 @@ def _ask(
                 if problem:
                     return None, problem
                 reply = _last_reply(recorder) if recorder.requests else e.lm_response
+                if not (reply or "").strip() and recorder.requests and recorder.requests[-1].tool_called:
+                    return None, "the reply called a tool instead of answering; answer in the text, in the format asked"
                 outputs, failure, salvage_note = _salvaged(e, reply, signature, settings.adapter, salvage)
                 if salvage_note is not None:
                     notes.notes.append(salvage_note)
