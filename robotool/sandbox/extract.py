@@ -61,8 +61,7 @@ def extract(text: str) -> Extraction:
     another program) is taken when no different program follows it but an aside ("For comparison, ..."); else one
     program left is taken; otherwise which one is meant is not clear (a
     draft and a correction, a program and a usage example, two options, two different programs marked final, code
-    outside the Python blocks too, a change given in words after them: :func:`_change_after_blocks`) and
-    :class:`ProgramRejected` says so, to be asked again. A Python block that does
+    outside the Python blocks too) and :class:`ProgramRejected` says so, to be asked again. A Python block that does
     not parse, and an untagged one that looks like code, is meant as a program: its syntax error is raised, never
     passed over for another block. Blocks are never joined, and :attr:`Extraction.chosen` says which was taken.
     Without a block, the program is the reply with prose before and after it left out; when a line that looks like
@@ -99,14 +98,6 @@ def _extract(text: str) -> Extraction:
                 "blocks",
                 f"the reply holds code block {index + 1} and also code {elsewhere}; it is not clear which is meant; "
                 "give exactly one program, in one code block",
-            )
-        change = _change_after_blocks(text, blocks)
-        if change is not None:
-            raise ProgramRejected(
-                None,
-                "blocks",
-                f"after its code the reply gives code that no block holds ({change[:40]!r}): a change written in "
-                "words is not made to the program; give the whole program, changed, in one code block",
             )
         code = blocks[index].code.strip("\n")
         if len(blocks) > 1:
@@ -215,33 +206,6 @@ def _code_outside_python_blocks(text: str, blocks: list[_Block]) -> str | None:
         body = text[opening.end() + 1 : closing.start() if closing else len(text)]
         if not (_PYTHON_TAG.fullmatch(tag) or tag.lower() in _MARKDOWN_TAGS) and calls(textwrap.dedent(body)):
             return f"in a block tagged {tag!r}"
-    return None
-
-
-_INLINE_CODE = re.compile(r"`([^`\n]+)`")
-
-
-def _change_after_blocks(text: str, blocks: list[_Block]) -> str | None:
-    """An inline code span in the prose after the reply's last code block that calls what no block calls as written
-    ("Actually, replace the last line with `move_to_position([0.1, 0.2, 0.3])`"), or None: a change given in words
-    (in any language), which the program as written does not make. Spans that only name what a block calls (an
-    explanation: "it lifts the milk with `close_gripper()`"), elide it (`move_to_position(...)`) or call only math
-    (:func:`_formula`'s), are prose."""
-    pairs = fence_pairs(text)
-    closing = pairs[-1][1] if pairs else None
-    if closing is None:
-        return None
-    called = set()
-    for block in blocks:
-        with contextlib.suppress(SyntaxError, ValueError, MemoryError):
-            called |= {ast.dump(node) for node in ast.walk(quiet_parse(block.code)) if isinstance(node, ast.Call)}
-    for span in _INLINE_CODE.findall(text[closing.end() :]):
-        if "..." in span or not calls(span.strip()):
-            continue
-        spans = ast.walk(quiet_parse(span.strip()))
-        new = [node for node in spans if isinstance(node, ast.Call) and ast.dump(node) not in called]
-        if any(_callee(node.func) not in _MATH_CALLS for node in new):
-            return span.strip()
     return None
 
 

@@ -728,31 +728,3 @@ def test_a_bare_final_label_after_a_draft_marks_the_block_final(label: str) -> N
 def test_a_bare_final_label_is_asked_again_when_another_program_competes(answer: str) -> None:
     with pytest.raises(ProgramRejected, match="which one is meant"):
         extract(answer)
-
-
-@pytest.mark.parametrize(
-    "words",
-    [
-        "Actually, replace the last line with `move_to_position([0.1, 0.2, 0.3])`.",
-        "把最后一行换成 `move_to_position([0.1, 0.2, 0.3])`。",
-        "Better: `p = get_graspable_point('cup')` first.",
-    ],
-    ids=["english", "chinese", "new call"],
-)
-def test_a_change_written_in_words_after_the_program_is_asked_again(words: str) -> None:
-    """Found by an adversarial run: the block ran unchanged, the change left out as a line of prose."""
-    with pytest.raises(ProgramRejected, match="gives code that no block holds"):
-        extract(f"```python\n{GRASP}```\n{words}\n")
-
-
-@pytest.mark.parametrize(
-    "words",
-    [
-        "It closes the gripper with `close_gripper()` once it is there.",
-        "Each `move_to_position(...)` call waits for the arm.",
-        "The helper `get_graspable_point` gives the point; `np.linalg.norm(d)` would give its distance.",
-    ],
-    ids=["names a call", "elided", "math and names"],
-)
-def test_prose_after_the_program_that_only_names_its_calls_is_kept(words: str) -> None:
-    assert extract(f"```python\n{GRASP}```\n{words}\n").code == GRASP
