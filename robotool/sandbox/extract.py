@@ -275,7 +275,16 @@ _SET_ASIDE = (
 )
 _BARE_FINAL = re.compile(r"[#*_\s]*final[*_\s]*:?[*_\s]*", re.IGNORECASE)  # one word: 'FINAL:', '### Final'
 _NOT_FINAL = re.compile(rf"\b(?:{_SET_ASIDE}|{_FAULTY})\b|n't\b", re.IGNORECASE)
-_ASIDE = re.compile(rf"\b(?:{_SET_ASIDE})\b|n't\b", re.IGNORECASE)
+_ASIDE = re.compile(
+    r"\b(?:for (?:comparison|reference)|compared?|alternatively|alternatives?|another option|options? \d|"
+    r"(?:the|your|my) (?:original|old|older|previous|earlier|initial|current|first) "
+    r"(?:program|code|version|script|attempt|draft)|"
+    r"(?:you|I) (?:provided|gave|sent|wrote|shared)|usage|example|test(?:ing)?\b)",
+    re.IGNORECASE,
+)
+"""Words that set a block aside as not the program, after a program marked final (a correction says nothing of the
+kind; what this misses is asked again, the safe side: found by an adversarial run, "not", "no", "first", "before" in
+a correction's label set the correction aside and ran the draft)."""
 
 
 def _marked_final(label: str) -> bool:

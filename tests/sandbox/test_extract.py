@@ -728,3 +728,27 @@ def test_a_bare_final_label_after_a_draft_marks_the_block_final(label: str) -> N
 def test_a_bare_final_label_is_asked_again_when_another_program_competes(answer: str) -> None:
     with pytest.raises(ProgramRejected, match="which one is meant"):
         extract(answer)
+
+
+@pytest.mark.parametrize(
+    "label",
+    [
+        "Correction: open the gripper before grasping:",
+        "That doesn't open the gripper, so use this instead:",
+        "No wait, this is the right one:",
+        "Hmm, that never opens the gripper. Corrected version, which opens the gripper first:",
+    ],
+)
+def test_a_correction_after_a_program_marked_final_is_asked_again(label: str) -> None:
+    """Found by an adversarial run: everyday words in the correction's label ("before", "n't", "no", "first") set the
+    correction aside as no program, and the draft marked final ran."""
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(f"Final program:\n```python\n{NOGRIP}```\n{label}\n```python\n{GRASP}```\n")
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["Alternatively, from above:", "Your original program:", "Example usage:", "The code you provided:"],
+)
+def test_an_aside_after_a_program_marked_final_is_set_aside(label: str) -> None:
+    assert extract(f"Final program:\n```python\n{GRASP}```\n{label}\n```python\n{NOGRIP}```\n").code == GRASP
