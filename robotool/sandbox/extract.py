@@ -276,7 +276,7 @@ _SET_ASIDE = (
 _BARE_FINAL = re.compile(r"[#*_\s]*final[*_\s]*:?[*_\s]*", re.IGNORECASE)  # one word: 'FINAL:', '### Final'
 _NOT_FINAL = re.compile(rf"\b(?:{_SET_ASIDE}|{_FAULTY})\b|n't\b", re.IGNORECASE)
 _ASIDE = re.compile(
-    r"\b(?:for (?:comparison|reference)|compared?|alternatively|alternatives?|another option|options? \d|"
+    r"\b(?:for (?:comparison|reference)|alternatively|alternatives?|another option|options? \d|"
     r"(?:the|your|my) (?:original|old|older|previous|earlier|initial|current|first) "
     r"(?:program|code|version|script|attempt|draft)|"
     r"(?:you|I) (?:provided|gave|sent|wrote|shared)|usage|example|test(?:ing)?\b)",
