@@ -256,15 +256,20 @@ class Payload:
 
     def _moves(self, state: BatchState, w: int, load: Load) -> bool:
         """Whether a push over the limit counts at this tick: once the pushes over the limit have moved what they push
-        ``press_travel`` up or sideways and carried the gripper as far along themselves, in all, each from where it
-        went over (a press into a support moves nothing but down, or carries the gripper nowhere: it is no load)."""
+        ``press_travel`` up or sideways (or down, while it presses a moving part: a loose block pressed onto a stiff
+        button's face, found by an adversarial run) and carried the gripper as far along themselves, in all, each
+        from where it went over (a press into a support moves nothing but down, or carries the gripper nowhere: it is
+        no load)."""
         s = self.state
         now = state.xpos[w, np.append(self.scene.object_body, self.parts.gripper)]
         if np.isnan(s.press_from[w]).any():
             s.press_from[w] = now
         moved = now - s.press_from[w]
-        objects = moved[:-1][load.pushed & self.parts.movable]
-        lifted = float(np.max(np.maximum(np.linalg.norm(objects[:, :2], axis=1), objects[:, 2]), initial=0.0))
+        pushed = load.pushed & self.parts.movable
+        objects = moved[:-1][pushed]
+        on_parts = state.touching[w][np.asarray(self.bodies.member[:, pushed].any(axis=1))][:, self.bodies.parts].any()
+        down = np.abs(objects[:, 2]) if on_parts else objects[:, 2]  # down onto a part that gives (a button's face)
+        lifted = float(np.max(np.maximum(np.linalg.norm(objects[:, :2], axis=1), down), initial=0.0))
         s.press_peak[w] = max(float(s.press_peak[w]), min(lifted, float(moved[-1] @ load.toward)))
         return bool(s.pressed[w] + s.press_peak[w] >= self.travel)
 
