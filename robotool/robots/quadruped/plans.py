@@ -92,9 +92,12 @@ class Plans:
     def turn(self, w: int, heading: float) -> SkillPlan:
         """Turn in place to ``heading`` (degrees from +x, a quarter turn's multiple), the shorter way round; refused
         where a foot's arc would leave the level it stands on or the body's sweep meets anything above it."""
+        asked = heading
+        if abs(heading) >= 360.0:  # exactly (a float's remainder is exact): 1e20 / 90 is a whole number, 1e20 deg no
+            heading = heading % 360.0  # quarter turn, and radians() of a huge heading is off by degrees (an adversary)
         quarters = heading / 90.0
         if abs(quarters - round(quarters)) > 1e-6:
-            reason = f"the robot turns by quarter turns: heading {heading:g} is not 0, 90, 180 or 270"
+            reason = f"the robot turns by quarter turns: heading {asked:g} is not 0, 90, 180 or 270"
             return "refused", reason, {}
         yaw = float(self.senses.yaw(w))
         target = yaw + float(np.angle(np.exp(1j * (np.radians(heading) - yaw))))  # the shorter way round
@@ -102,7 +105,7 @@ class Plans:
             return None
         problem = self._sweep_problem(w, yaw, target)
         if problem is not None:
-            return "refused", f"cannot turn to {heading:g} deg: {problem}", {}
+            return "refused", f"cannot turn to {asked:g} deg: {problem}", {}
         outcome = yield Move(self.senses.position(w), turn=target)
         return None if outcome[0] == "done" else outcome
 

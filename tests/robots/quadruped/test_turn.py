@@ -121,3 +121,17 @@ def test_after_a_quarter_turn_each_corner_of_the_turned_outline_has_its_own_foot
     assert names[0] == list(FOOT_NAMES)
     assert names[1] == ["rear-left", "front-left", "rear-right", "front-right"]
     assert names[2] == ["front-left", "front-right", "rear-left", "rear-right"]
+
+
+@pytest.mark.parametrize(("heading", "turned"), [(1e20, None), (90.0 * (2**44 + 1), True), (-720.0, False)])
+def test_a_heading_of_many_turns_is_read_exactly(heading: float, turned: bool | None) -> None:
+    """Found by an adversarial run: a heading of many turns passed the quarter-turn check (1e20 / 90 is a whole number)
+    and turned the body to an angle off the quarters; each is now read as its remainder of a whole turn."""
+    code = f"turn_to_heading({heading!r})\nprint(get_size('robot'))\n"
+    (rollout,) = _run(_task("platform_narrower_than_the_robot_is_long"), code, worlds=1)
+    turn = rollout.calls[0]
+    if turned is None:
+        assert turn.outcome == "refused" and "quarter turns" in (turn.reason or ""), _calls(rollout)
+    else:
+        assert turn.outcome == "done", _calls(rollout)
+        assert rollout.calls[1].result == ([0.3, 0.65, 0.3] if turned else [0.65, 0.3, 0.3]), _calls(rollout)
