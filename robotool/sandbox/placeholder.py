@@ -20,7 +20,7 @@ _LEFT_OUT = re.compile(r"\b(?:rest|remainder|remaining|code|program|script|lines
 """What such words are said of: the rest, the code, the steps (``# (rest unchanged)``)."""
 _ELLIPSIS_PHRASE = re.compile(
     r"^(?:\.\.\.|\u2026)\W*(?:\(?\s*(?:rest|remainder|remaining|same|existing|previous|original|other|more|code|etc"
-    r"|unchanged|omitted)\b.*)?$",
+    r"|unchanged|omitted|and so on)\b.*)?$",
     re.IGNORECASE,
 )
 """A comment that opens with an ellipsis and names nothing done (``# ...``, ``# ... (same as before)``)."""
@@ -30,6 +30,17 @@ _REST_OF_CODE = re.compile(
     re.IGNORECASE,
 )
 """A comment that only names the code left out (``# rest of the code``, ``# ... rest of code here``)."""
+_ONLY_ELIDED = re.compile(
+    r"^\W*(?:same as (?:above|before|earlier|previously)|etc|and so on|unchanged|as before)\W*$", re.IGNORECASE
+)
+"""A comment that says only that something is as it was (``# same as above``, ``# etc.``, ``# [unchanged]``)."""
+_KEPT_ELSEWHERE = re.compile(
+    r"\b(?:as you had (?:it|them)|(?:as )?in your (?:program|code|version|script|draft)|from your "
+    r"(?:program|code|version|script|draft))\b",
+    re.IGNORECASE,
+)
+"""Words that point at code kept in another program (``# rest as you had it``, ``# the other steps as in your
+program``)."""
 _TODO = re.compile(r"\b(?:TODO|FIXME|XXX)\b|\byour code here\b|\bimplement\b|\bfill in\b", re.IGNORECASE)
 
 
@@ -53,7 +64,11 @@ def _placeholder(code: str, tree: ast.Module) -> tuple[int, str] | None:
     """The line number and text of the first placeholder in ``code`` (parsed as ``tree``), or None."""
     lines = code.split("\n")
     comments = _comments(code)
-    found = [(line, f"# {text}") for line, text in comments.items() if _says_left_out(text)]
+    found = [
+        (line, f"# {text}")
+        for line, text in comments.items()
+        if _says_left_out(text, alone=lines[line - 1].lstrip().startswith("#"))
+    ]
     for node in ast.walk(tree):
         if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and node.value.value is Ellipsis:
             found.append((node.lineno, lines[node.lineno - 1].strip()))
@@ -64,12 +79,16 @@ def _placeholder(code: str, tree: ast.Module) -> tuple[int, str] | None:
     return min(found) if found else None
 
 
-def _says_left_out(comment: str) -> bool:
-    """Whether a comment's text says code was left out or kept as it was, rather than what the program does."""
+def _says_left_out(comment: str, alone: bool) -> bool:
+    """Whether a comment's text says code was left out or kept as it was, rather than what the program does; a
+    comment on a line of its own (``alone``) may also say so in fewer words (``# same as above``, ``# etc.``, ``# rest
+    as you had it``: found by an adversarial run), which beside code say what that code does (``z = 0.1  # same as
+    above``)."""
     return bool(
         _ELLIPSIS_PHRASE.match(comment)
         or _REST_OF_CODE.match(comment)
         or (_ELIDED.search(comment) and _LEFT_OUT.search(comment))
+        or (alone and (_ONLY_ELIDED.match(comment) or _KEPT_ELSEWHERE.search(comment)))
     )
 
 

@@ -752,3 +752,30 @@ def test_a_correction_after_a_program_marked_final_is_asked_again(label: str) ->
 )
 def test_an_aside_after_a_program_marked_final_is_set_aside(label: str) -> None:
     assert extract(f"Final program:\n```python\n{GRASP}```\n{label}\n```python\n{NOGRIP}```\n").code == GRASP
+
+
+@pytest.mark.parametrize(
+    "comment",
+    [
+        "# same as above",
+        "# etc.",
+        "# \u2026 and so on",
+        "# [unchanged]",
+        "# (keep the remaining lines from your version)",
+        "# the other steps as in your program",
+        "# rest as you had it",
+    ],
+)
+def test_a_comment_line_that_only_says_the_rest_is_as_it_was_is_a_placeholder(comment: str) -> None:
+    """Found by an adversarial run: each two-line fragment ran as the whole program."""
+    with pytest.raises(ProgramRejected, match="placeholder for code left out"):
+        extract(f"Corrected code:\n```python\n{HEAD}{comment}\n```\n")
+
+
+@pytest.mark.parametrize(
+    "line",
+    ["close_gripper()  # same as above", "close_gripper()  # as in your program", "# close the gripper as before"],
+)
+def test_such_words_beside_code_or_naming_a_step_are_no_placeholder(line: str) -> None:
+    program = f"{HEAD}{line}\nclose_gripper()\n"
+    assert extract(f"Corrected code:\n```python\n{program}```").code == program
