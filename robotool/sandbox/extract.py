@@ -14,6 +14,7 @@ from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_FUNCTIONS, NU
 from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_like_code, quiet_parse
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
+from robotool.sandbox.joined import refuse_joined
 from robotool.sandbox.placeholder import refuse_placeholder
 from robotool.sandbox.reasoning import without_reasoning
 from robotool.sandbox.unfenced import unfenced_program
@@ -111,6 +112,7 @@ def _extract(text: str) -> Extraction:
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
     refuse_placeholder(code, tree)
+    refuse_joined(code)
     code = "\n".join(_expand_indent_tabs(line) for line in code.split("\n"))
     if not has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")

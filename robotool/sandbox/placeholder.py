@@ -63,17 +63,17 @@ def refuse_placeholder(code: str, tree: ast.Module) -> None:
 def _placeholder(code: str, tree: ast.Module) -> tuple[int, str] | None:
     """The line number and text of the first placeholder in ``code`` (parsed as ``tree``), or None."""
     lines = code.split("\n")
-    comments = _comments(code)
+    found_comments = comments(code)
     found = [
         (line, f"# {text}")
-        for line, text in comments.items()
+        for line, text in found_comments.items()
         if _says_left_out(text, alone=lines[line - 1].lstrip().startswith("#"))
     ]
     for node in ast.walk(tree):
         if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and node.value.value is Ellipsis:
             found.append((node.lineno, lines[node.lineno - 1].strip()))
         elif isinstance(node, ast.Pass):
-            note = comments.get(node.lineno) or comments.get(_line_above(lines, node.lineno), "")
+            note = found_comments.get(node.lineno) or found_comments.get(_line_above(lines, node.lineno), "")
             if _TODO.search(note):
                 found.append((node.lineno, f"# {note} / pass"))
     return min(found) if found else None
@@ -92,7 +92,7 @@ def _says_left_out(comment: str, alone: bool) -> bool:
     )
 
 
-def _comments(code: str) -> dict[int, str]:
+def comments(code: str) -> dict[int, str]:
     """The text of each comment in ``code`` (which parses), by line number; string literals hold none."""
     found: dict[int, str] = {}
     with contextlib.suppress(tokenize.TokenError, SyntaxError):  # what ast accepts and tokenize does not: no comments

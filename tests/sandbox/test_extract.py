@@ -779,3 +779,35 @@ def test_a_comment_line_that_only_says_the_rest_is_as_it_was_is_a_placeholder(co
 def test_such_words_beside_code_or_naming_a_step_are_no_placeholder(line: str) -> None:
     program = f"{HEAD}{line}\nclose_gripper()\n"
     assert extract(f"Corrected code:\n```python\n{program}```").code == program
+
+
+TOP = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0], p[1], p[2] + 0.1])\nclose_gripper()\n'
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        f"```python\n# Option 1: grasp from the side\n{GRASP}\n# Option 2: grasp from above\n{TOP}```\n",
+        f"```python\n# First attempt (wrong: never opens the gripper)\n{NOGRIP}\n# Corrected version\n{GRASP}```\n",
+        f"Option 1, from the side:\n{GRASP}\n# Option 2, from above:\n{TOP}",
+        f"{NOGRIP}\n# Wait, that never opens the gripper. Corrected:\n{GRASP}",
+    ],
+    ids=["two options in a block", "a draft and its fix in a block", "unfenced options", "unfenced draft and fix"],
+)
+def test_two_programs_joined_by_their_comments_are_asked_again(answer: str) -> None:
+    """Found by an adversarial run: both ran, one after the other."""
+    with pytest.raises(ProgramRejected, match="joined in one block"):
+        extract(answer)
+
+
+@pytest.mark.parametrize(
+    "program",
+    [
+        f"# Option 2 (from above), the one that fits under the shelf\n{TOP}",
+        f"# Final version: open first, then grasp\n{GRASP}",
+        f"{GRASP}# Step 2: lift it\nmove_to_position([0.3, 0.0, 0.3])\n",
+    ],
+    ids=["one option named", "a final version named first", "numbered steps"],
+)
+def test_one_program_whose_comments_name_an_option_or_a_version_is_kept(program: str) -> None:
+    assert extract(f"```python\n{program}```\n").code == program
