@@ -71,7 +71,8 @@ def extract(text: str) -> Extraction:
     four spaces; tabs mixed with spaces the way Python refuses are its syntax error), and adds ``import numpy as np``
     / ``import math`` at the top when the program uses ``np.`` / ``math.`` without importing them. Raises
     :class:`ProgramRejected` when no program is found, it does not parse or is nested too deeply to be read, or it
-    says it leaves part of itself out (``# ... rest of the code unchanged ...``, ``...``; see :mod:`.placeholder`).
+    says it leaves part of itself out (``# ... rest of the code unchanged ...``, ``...``; see :mod:`.placeholder`), or
+    its comments join two programs (``# Option 1:`` ... ``# Option 2:``; see :mod:`.joined`).
     """
     try:
         return _extract(text)
