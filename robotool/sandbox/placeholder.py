@@ -47,7 +47,8 @@ _TODO = re.compile(r"\b(?:TODO|FIXME|XXX)\b|\byour code here\b|\bimplement\b|\bf
 def refuse_placeholder(code: str, tree: ast.Module) -> None:
     """Refuse a program that says it leaves part of itself out: a comment saying code was omitted or unchanged
     (``# ... rest of the code unchanged ...``, ``# (rest unchanged)``, ``# ... (same as before)``), ``...`` as a
-    statement, or ``pass`` under a TODO comment. A comment about the task (``# the rest of the walk is done``) is none.
+    statement or a value, or ``pass`` under a TODO comment. A comment about the task (``# the rest of the walk is
+    done``) is none.
     """
     found = _placeholder(code, tree)
     if found is not None:
@@ -70,13 +71,19 @@ def _placeholder(code: str, tree: ast.Module) -> tuple[int, str] | None:
         if _says_left_out(text, alone=lines[line - 1].lstrip().startswith("#"))
     ]
     for node in ast.walk(tree):
-        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and node.value.value is Ellipsis:
+        if isinstance(node, ast.Expr | ast.Assign | ast.AnnAssign) and _elided(node.value):  # ``...``, ``p = ...``
             found.append((node.lineno, lines[node.lineno - 1].strip()))
         elif isinstance(node, ast.Pass):
             note = found_comments.get(node.lineno) or found_comments.get(_line_above(lines, node.lineno), "")
             if _TODO.search(note):
                 found.append((node.lineno, f"# {note} / pass"))
     return min(found) if found else None
+
+
+def _elided(value: ast.expr | None) -> bool:
+    """Whether a statement's value is ``...`` (a value left out; found by an adversarial run: ``p = ...  # as before``
+    ran and failed at run time)."""
+    return isinstance(value, ast.Constant) and value.value is Ellipsis
 
 
 def _says_left_out(comment: str, alone: bool) -> bool:

@@ -174,6 +174,7 @@ HEAD = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0],
         (f"```python\n{HEAD}# (rest unchanged)\n```", "# (rest unchanged)"),
         (f"```python\n{HEAD}# rest of the code here\n```", "# rest of the code here"),
         (f"```python\n{HEAD}# TODO: move to the milk and grasp it\npass\n```", "# TODO: move to the milk"),
+        (f"```python\n{HEAD}q = ...  # the lift, as before\nmove_to_position(q)\n```", "q = ...  # the lift"),
     ],
     ids=[
         "rest unchanged after a correction label",
@@ -182,6 +183,7 @@ HEAD = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0],
         "rest unchanged",
         "rest of the code",
         "TODO pass",
+        "an ellipsis as a value",
     ],
 )
 def test_a_block_that_says_it_leaves_code_out_is_asked_again_naming_the_line(answer: str, placeholder: str) -> None:
