@@ -216,9 +216,9 @@ class Plans:
 
     def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
         """One straight push of object ``index`` to ``goal`` in world ``w``, refused where the push rules do not hold
-        from where the robot stands now (:meth:`.push_rules.PushRules.leg_rules`: something came to ride on the
+        from where the robot stands now (:meth:`.push_rules.PushRules.push_rules`: something came to ride on the
         object, the robot walked onto another surface); its outcome."""
-        broken = self.referee.pushes.leg_rules(w, index)
+        broken = self.referee.pushes.push_rules(w, index)
         if broken is not None:
             return "refused", f"cannot push {self.scene.object_names[index]}: {broken[0]}", broken[1]
         return (yield Move(goal, pushing=index, face=face))

@@ -54,13 +54,6 @@ class PushRules:
         to the push's start rides along)."""
         return mass_violation(*self._load(w, index), self.limits)
 
-    def leg_rules(self, w: int, index: int) -> tuple[str, dict[str, float]] | None:
-        """Check the push rules (:meth:`push_rules`) again as a push leg of object ``index`` starts in world ``w``,
-        from where the robot stands now: it may have walked onto another surface since they were checked (a push
-        called from a fixed stage beside a loose deck, the object on the deck, starts with the robot on the deck;
-        found by an adversarial run), and what rides on the object may have changed."""
-        return self.push_rules(w, index)
-
     def footing(self, worlds: np.ndarray, pushed: np.ndarray) -> dict[int, str]:
         """World -> the rule broken, in those of ``worlds`` (k,) where a push of object ``pushed`` (k,) runs and the
         robot stands on a movable object now: it pushes only from the ground or a fixed object (:meth:`push_rules`),

@@ -238,14 +238,12 @@ class Referee:
         s.bumped[first] = centres[first]
         moved = known_lengths(np.linalg.norm(centres - s.bumped, axis=2))
         for w in np.flatnonzero(mask & (moved > self.config.shove).any(axis=1)):
-            if s.shoves[w] is not None or state.failed[w] is not None:
-                continue
             index = int(np.argmax(moved[w]))
-            s.shoves[w] = reason = (
+            reason = (
                 f"the robot ran into {scene.object_names[index]} and moved it {moved[w, index]:.2f} m "
                 "(a walk or a climb does not push things: push_to_position does, within the push rules)"
             )
-            self._refuse(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends, moves)
+            self._shoved(int(w), reason, {"moved": round(float(moved[w, index]), 3)}, ends, moves)
         return stood_on
 
     def _owned(self, bodies: npt.ArrayLike) -> np.ndarray:
@@ -272,6 +270,13 @@ class Referee:
             up = bears_up(normals, FOOTING_ANGLE) & on
             out[w] = up[:, foot].any(axis=1) & ~(on & ~up).any(axis=1)
         return out
+
+    def _shoved(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd], moves: MoveRunner) -> None:
+        """The robot moved what it may not in world ``w`` (a shove, a ram, a load over the push limit): the first such
+        rule broken fails the world (:meth:`conditions`) and refuses the move in progress."""
+        if self.state.shoves[w] is None and self.senses.state.failed[w] is None:
+            self.state.shoves[w] = reason
+            self._refuse(w, reason, measured, ends, moves)
 
     def _refuse(self, w: int, reason: str, measured: dict[str, float], ends: list[SkillEnd], moves: MoveRunner) -> None:
         """Refuse the move in progress in world ``w`` for a broken rule; with none (the program over), an event."""
@@ -385,9 +390,7 @@ class Referee:
         or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
         s, limit = self.state, self.limits.max_push_mass
         for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, self._pressed_by).items():
-            if s.shoves[w] is None and self.senses.state.failed[w] is None:
-                s.shoves[w] = reason
-                self._refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
+            self._shoved(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Weigh what a push carries while it moves, in the worlds in ``mask`` where another movable object touches the
@@ -410,30 +413,23 @@ class Referee:
             s.overloaded[w] = np.nan if heavy is None else np.fmin(s.overloaded[w], now)
             if heavy is None or now - s.overloaded[w] < RIDE_TIME:
                 continue
-            if s.shoves[w] is not None or state.failed[w] is not None:
-                continue
-            s.shoves[w] = reason = f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}"
-            self._refuse(w, reason, heavy[1], ends, moves)
+            self._shoved(w, f"pushing {names[m.pushing[w]]} carried too much: {heavy[0]}", heavy[1], ends, moves)
 
     def _push_footing(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the pushes, in the worlds in ``mask``, whose robot has come to stand on a movable object
         (:meth:`.push_rules.PushRules.footing`: a push called from a fixed stage walked on onto a loose deck; found by
         an adversarial run); the world fails (:meth:`conditions`)."""
-        s, m = self.state, moves.state
+        m = moves.state
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
         for w, reason in self.pushes.footing(worlds, m.pushing[worlds]).items():
-            if s.shoves[w] is None and self.senses.state.failed[w] is None:
-                s.shoves[w] = reason
-                self._refuse(w, reason, {}, ends, moves)
+            self._shoved(w, reason, {}, ends, moves)
 
     def _strains(self, ends: list[SkillEnd], mask: np.ndarray, travel: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the pushes, in the worlds in ``mask``, that have taken more force than the robot may push
         with (:class:`~.push_force.PushForce`; ``travel``: each object's this tick); the world fails
         (:meth:`conditions`)."""
         for w, reason, measured in self.forces.check(mask, moves, travel, self.state.strained, self.state.force_limit):
-            if self.state.shoves[w] is None and self.senses.state.failed[w] is None:
-                self.state.shoves[w] = reason
-                self._refuse(w, reason, measured, ends, moves)
+            self._shoved(w, reason, measured, ends, moves)
 
     def _rammed(self, worlds: np.ndarray, index: np.ndarray, centres: np.ndarray, u: np.ndarray) -> np.ndarray:
         """(k, nobject) the objects that the push of object ``index[i]`` along ``u[i]`` rams in world ``worlds[i]``
@@ -466,19 +462,19 @@ class Referee:
             for pusher in np.unique(s.rammed_by[w, moved[k]]).tolist():
                 group = moved[k] & (s.rammed_by[w] == pusher)
                 mass = float(masses[k, pusher] + masses[k, group].sum())
-                if mass <= limit or s.shoves[w] is not None or self.senses.state.failed[w] is not None:
+                if mass <= limit:
                     continue
                 ram = (
                     f"{names[pusher]}, driven by the stride of the robot on it,"
                     if self._driven()[w, pusher]
                     else (f"pushing {names[pusher]}")
                 )
-                s.shoves[w] = reason = (
+                reason = (
                     f"{ram} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "
                     f"{mass:.1f} kg in all, over the push limit of {limit:.1f} kg (a push moves only what the robot "
                     "may push)"
                 )
-                self._refuse(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
+                self._shoved(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
         """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
