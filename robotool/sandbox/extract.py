@@ -290,6 +290,19 @@ kind; what this misses is asked again, the safe side: found by an adversarial ru
 a correction's label set the correction aside and ran the draft)."""
 
 
+_RETRACTION = re.compile(
+    rf"\b(?:wait|actually|oops|sorry|scratch that|mistake|mistaken|instead|rather|simply|just|{_FAULTY}|not needed|"
+    r"unnecessary|no need|only \w+(?: \w+)? (?:is|are) (?:needed|necessary|required))\b",
+    re.IGNORECASE,
+)
+"""Words that take back a block and present the next as what runs instead: a later block that repeats part of the
+program after them is a correction, not a quote (``Wait, the task is only to move there. Just:``)."""
+_MARKER_ALONE = re.compile(
+    rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})[*_\s]*:?",
+    re.IGNORECASE,
+)
+
+
 def _marked_final(label: str) -> bool:
     """Whether a label says the block after it is the final program ("Final program:", "Here is the corrected
     code:"), not only names a word ("To complete the task", "What was fixed:") or takes it back in the marker's
@@ -344,12 +357,13 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     if marked and len(programs) > 1:  # a program marked final is meant unless a different one follows it
         later = [k for k in programs if k > marked[-1] and not quotes(k, marked[-1]) and not _aside(blocks[k].label)]
         if not later:
-            return marked[-1], f"marked {blocks[marked[-1]].label[:60]!r}"
+            return _unretracted(blocks, programs, quotes, marked[-1]), f"marked {blocks[marked[-1]].label[:60]!r}"
         whole = [marked[-1], *later]
     else:
         whole = quotes.whole()
         if len(whole) == 1:
-            return whole[0], "the only program; the other blocks quote it or are no programs"
+            why = "the only program; the other blocks quote it or are no programs"
+            return _unretracted(blocks, programs, quotes, whole[0]), why
     several = (
         f"more than {MOST_PROGRAMS} different programs"
         if len(whole) > MOST_PROGRAMS
@@ -360,6 +374,28 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
         "blocks",
         f"the reply holds {several} and does not say which one is meant; give exactly one program, in one code block",
     )
+
+
+def _unretracted(blocks: list[_Block], programs: list[int], quotes: _Quotes, chosen: int) -> int:
+    """``chosen``, unless a later block that repeats part of it follows words that take it back or mark the part as
+    the program ("Wait, the rest is wrong. Simply:", "Final program:"): a correction that keeps a run of the draft's
+    lines reads as a quote of it (found by an adversarial run, where the longer draft ran); it is asked again."""
+    for k in programs:
+        if k > chosen and quotes(k, chosen) and _retracts(blocks[k].label):
+            raise ProgramRejected(
+                None,
+                "blocks",
+                f"code block {k + 1} repeats part of block {chosen + 1} after {blocks[k].label[-80:]!r}; it is not "
+                "clear whether it replaces it; give exactly one program, in one code block",
+            )
+    return chosen
+
+
+def _retracts(label: str) -> bool:
+    """Whether a label takes back the block before it (:data:`_RETRACTION`) or its last sentence is a final marker
+    alone ("Final program:", "Here is the corrected code:")."""
+    sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
+    return _RETRACTION.search(label) is not None or _MARKER_ALONE.fullmatch(label[sentence:].strip()) is not None
 
 
 def _has_call(tree: ast.Module) -> bool:

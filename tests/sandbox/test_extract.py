@@ -617,6 +617,28 @@ def test_a_line_of_the_program_under_a_marker_word_is_a_quote_not_the_program(la
     assert extract(answer).code == GRASP
 
 
+# Found by a fourth adversarial run: a correction that keeps a run of the draft's lines read as a quote of it, and the
+# longer draft ran.
+OPEN_FIRST = 'open_gripper()\np = get_graspable_point("milk")\nmove_to_position(p)\nclose_gripper()\n'
+SHORTENED = {
+    "one line, after 'Simply:'": ("Wait, the task is only to open it; the rest is wrong. Simply:", GRASP, 1, 2),
+    "one line, marked final": ("Final program:", GRASP, 1, 2),
+    "the last line, after 'only ... is needed'": ("Actually it is open, so only the grasp is needed:", GRASP, 3, 4),
+    "a run from the middle, after 'Just:'": ("Wait, the task is only to move to the milk. Just:", OPEN_FIRST, 1, 3),
+}
+
+
+@pytest.mark.parametrize(("label", "draft", "start", "end"), SHORTENED.values(), ids=SHORTENED.keys())
+def test_a_correction_that_repeats_a_run_of_the_drafts_lines_is_asked_again(
+    label: str, draft: str, start: int, end: int
+) -> None:
+    part = "".join(draft.splitlines(keepends=True)[start:end])
+    answer = f"```python\n{draft}```\n{label}\n```python\n{part}```\n"
+    with pytest.raises(ProgramRejected, match="repeats part of block 1"):
+        extract(answer)
+    assert extract(f"```python\n{draft}```\nThe step that matters:\n```python\n{part}```\n").code == draft
+
+
 @pytest.mark.parametrize("tag", ["<think>", "<reasoning>", "[THINK]", "`<think>`"])
 def test_an_unclosed_think_tag_in_a_sentence_cuts_nothing(tag: str) -> None:
     answer = (
