@@ -11,6 +11,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_FUNCTIONS, NUMPY_LINALG
+from robotool.sandbox.changes import refuse_change_in_words
 from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_like_code, quiet_parse
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
@@ -102,6 +103,7 @@ def _extract(text: str) -> Extraction:
                 "give exactly one program, in one code block",
             )
         code = blocks[index].code.strip("\n")
+        refuse_change_in_words(outside_blocks(text[blocks[index].end :]))
         if len(blocks) > 1:
             chosen = f"the reply held {len(blocks)} code blocks; block {index + 1} ({why}) was used, not joined"
         fence_lines = blocks[index].fence_lines
@@ -109,6 +111,8 @@ def _extract(text: str) -> Extraction:
         if _has_diff(text.split("\n")):
             raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
         code, fence_lines = unfenced_program(text).strip("\n"), lone_fence
+        if code.strip():
+            refuse_change_in_words(text[text.rfind(code) + len(code) :])
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
@@ -135,6 +139,8 @@ class _Block:
     """The last non-blank line of text before the block's opening fence."""
     tagged: bool
     """Whether its fence names Python (else it has no tag)."""
+    end: int
+    """Where in the reply its closing fence ends (the reply's end when it has none)."""
 
 
 def _without_a_lone_fence(text: str) -> tuple[str, int]:
@@ -150,10 +156,10 @@ def _without_a_lone_fence(text: str) -> tuple[str, int]:
 _MARKDOWN_TAGS = frozenset({"markdown", "md"})
 
 
-def _fenced_blocks(text: str, depth: int = 0) -> list[_Block]:
+def _fenced_blocks(text: str, depth: int = 0, at: int = 0) -> list[_Block]:
     """The Python or untagged fenced blocks, in order, those inside a Markdown block (````markdown) included; as in
     CommonMark, a block whose opening fence is indented (in a list item) has as many leading spaces of each line
-    removed, at most."""
+    removed, at most. ``text`` starts at offset ``at`` of the reply."""
     blocks: list[_Block] = []
     previous_end = 0
     for opening, closing in fence_pairs(text):
@@ -161,12 +167,13 @@ def _fenced_blocks(text: str, depth: int = 0) -> list[_Block]:
         _check_fence(opening)
         tag, inner = opening.group(2), text[opening.end() + 1 : end]
         if tag.lower() in _MARKDOWN_TAGS and depth < 2:
-            blocks += _fenced_blocks(inner, depth + 1)
+            blocks += _fenced_blocks(inner, depth + 1, at + opening.end() + 1)
         elif _PYTHON_TAG.fullmatch(tag):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
             label = before[-1].strip() if before else ""
             code = _dedented(inner, fence_indent(opening)).strip("\n")
-            blocks.append(_Block(code, 1 + (closing is not None), label, tagged=bool(tag)))
+            ends = at + (closing.end() if closing else len(text))
+            blocks.append(_Block(code, 1 + (closing is not None), label, tagged=bool(tag), end=ends))
         previous_end = closing.end() if closing else len(text)
     return blocks
 
