@@ -73,7 +73,9 @@ def extract(text: str) -> Extraction:
     / ``import math`` at the top when the program uses ``np.`` / ``math.`` without importing them. Raises
     :class:`ProgramRejected` when no program is found, it does not parse or is nested too deeply to be read, or it
     says it leaves part of itself out (``# ... rest of the code unchanged ...``, ``...``; see :mod:`.placeholder`), or
-    its comments join two programs (``# Option 1:`` ... ``# Option 2:``; see :mod:`.joined`).
+    its comments join two programs (``# Option 1:`` ... ``# Option 2:``; see :mod:`.joined`), or the words after it
+    ask for a change to it ("Actually, replace the last line with ..."; see :mod:`.changes`), or a later block repeats
+    a run of its lines after words that take it back ("Wait, the rest is wrong. Simply:").
     """
     try:
         return _extract(text)
