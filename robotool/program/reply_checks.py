@@ -26,6 +26,7 @@ from dspy.utils.exceptions import LMError, LMProviderError, LMUnexpectedError
 from pydantic import BaseModel
 
 from robotool.safe_text import capped
+from robotool.sandbox.changes import change_in_words
 from robotool.sandbox.code_shape import calling_line
 from robotool.sandbox.reasoning import without_reasoning
 
@@ -165,8 +166,9 @@ def unfinished(lm: dspy.LM) -> str | None:
 def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str | None:
     """What was wrong with ``reply`` when it gives an output field more than once (the adapter would read the first,
     or the last): its ``[[ ## name ## ]]`` header on more than one line (bold, with words after it or code on its
-    line too), its ``"name":`` key in more than one JSON object, or more code after ``[[ ## completed ## ]]`` (a
-    correction after the end); else None. Reasoning is left out first."""
+    line too), its ``"name":`` key in more than one JSON object, or more code after ``[[ ## completed ## ]]`` or the
+    JSON answer (a correction after the end), or words there that ask for a change to a program the stage writes
+    (:func:`.changes.change_in_words`); else None. Reasoning is left out first."""
     text = without_reasoning(reply or "")
     twice = []
     for name in signature.output_fields:
@@ -179,13 +181,23 @@ def repeated_fields(reply: str | None, signature: type[dspy.Signature]) -> str |
     _, completed, after = text.partition("[[ ## completed ## ]]")
     if completed and _more_code(after):
         return "the reply goes on after [[ ## completed ## ]] with more code; give the answer once, then end it"
+    coded = "code" in signature.output_fields  # a stage that writes a program
+    change = change_in_words(after) if completed and coded else None
+    if change is not None:
+        return f"after [[ ## completed ## ]] the reply asks for a change in words ({capped(change, 80)!r}); {_WHOLE}"
     stray = _code_beside_fields(text, set(signature.output_fields))
     if stray is not None:
         return f"the reply holds code {stray}; give the program in its field only"
     rest = _after_json_answer(text, set(signature.output_fields))
     if rest is not None and _more_code(rest):
         return "the reply goes on after its JSON object with more code; give the answer once, then end it"
+    change = change_in_words(rest) if rest is not None and coded else None
+    if change is not None:
+        return f"after its JSON object the reply asks for a change in words ({capped(change, 80)!r}); {_WHOLE}"
     return None
+
+
+_WHOLE = "give the whole program, changes made, in its field"
 
 
 _HEADER = re.compile(r"^.*?\[\[ ## (.+?) ## \]\]", re.MULTILINE)

@@ -29,16 +29,25 @@ _NAMES_CODE = re.compile(
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+|\n")
 
 
-def refuse_change_in_words(prose: str) -> None:
-    """Raise :class:`ProgramRejected` when ``prose`` (the reply's words after its program) asks for a change to the
-    program (see the module)."""
+def change_in_words(prose: str) -> str | None:
+    """The first sentence of ``prose`` (a reply's words after its program) that asks for a change to the program (see
+    the module), or None."""
     for sentence in _SENTENCE_END.split(prose):
         sentence = sentence.strip()
         edit = _OPENS_WITH_AN_EDIT.match(sentence) or (_TAKES_BACK.search(sentence) and _NAMES_AN_EDIT.search(sentence))
         if edit and _NAMES_CODE.search(sentence):
-            raise ProgramRejected(
-                None,
-                "text",
-                f"after its program the reply asks for a change in words ({sentence[:80]!r}); give the whole program, "
-                "changes made, in one code block",
-            )
+            return sentence
+    return None
+
+
+def refuse_change_in_words(prose: str) -> None:
+    """Raise :class:`ProgramRejected` when ``prose`` (the reply's words after its program) asks for a change to the
+    program (:func:`change_in_words`)."""
+    sentence = change_in_words(prose)
+    if sentence is not None:
+        raise ProgramRejected(
+            None,
+            "text",
+            f"after its program the reply asks for a change in words ({sentence[:80]!r}); give the whole program, "
+            "changes made, in one code block",
+        )
