@@ -119,7 +119,7 @@ def _extract(text: str) -> Extraction:
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
     refuse_placeholder(code, tree)
-    refuse_joined(code)
+    refuse_joined(code, tree)
     code = "\n".join(_expand_indent_tabs(line) for line in code.split("\n"))
     if not has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")

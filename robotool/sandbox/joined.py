@@ -4,6 +4,7 @@ run: both ran, one after the other)."""
 
 from __future__ import annotations
 
+import ast
 import re
 
 from robotool.sandbox.placeholder import comments
@@ -12,17 +13,21 @@ from robotool.sandbox.validate import ProgramRejected
 _OPTION = re.compile(r"^\W*(?:option|alternative|approach|variant|solution)\s*#?\s*(\d+|[a-c])\b", re.IGNORECASE)
 """A comment that opens one of several options (``# Option 2: grasp from above``)."""
 _CORRECTION = re.compile(
-    r"\b(?:corrected|fixed|revised|updated|improved|final)\s+(?:version|code|program|script)\b|^\W*(?:wait|oops)\b",
+    r"\b(?:corrected|fixed|revised|updated|improved|final)\s+(?:version|code|program|script)\b|^\W*(?:wait|oops)\b|"
+    r"^\W*(?:alternatively|another (?:option|approach|way|version)|or,? (?:instead|alternatively))\b",
     re.IGNORECASE,
 )
-"""A comment that opens a correction of what came before it (``# Corrected version``, ``# Wait, that never ...``)."""
+"""A comment that opens a correction of what came before it, or another way to do it (``# Corrected version``,
+``# Wait, that never ...``, ``# Alternatively, from above:``)."""
 
 
-def refuse_joined(code: str) -> None:
-    """Refuse a program whose own comments, each on a line of its own, open two different options, or open a later
-    option or a correction after code (:class:`ProgramRejected`, asked again)."""
+def refuse_joined(code: str, tree: ast.Module) -> None:
+    """Refuse a program whose own comments, each on a line of its own (or strings standing as statements, which read
+    as comments: found by an adversarial run), open two different options, or open a later option or a correction
+    after code (:class:`ProgramRejected`, asked again)."""
     lines = code.split("\n")
     alone = {line: text for line, text in comments(code).items() if lines[line - 1].lstrip().startswith("#")}
+    alone.update(_strings_alone(tree))
     options = {match.group(1).lower(): line for line, text in alone.items() if (match := _OPTION.match(text))}
     if len(options) > 1:
         raise ProgramRejected(
@@ -37,9 +42,19 @@ def refuse_joined(code: str) -> None:
             raise ProgramRejected(
                 line,
                 "blocks",
-                f"the program holds code and then another version of it ({('# ' + text)[:50]!r}) joined in one "
-                "block; give the one program meant, in one code block",
+                f"the program holds code and then another version of it ({lines[line - 1].strip()[:50]!r}) joined in "
+                "one block; give the one program meant, in one code block",
             )
+
+
+def _strings_alone(tree: ast.Module) -> dict[int, str]:
+    """The text of each string that stands as a statement in the program ``tree`` (``\"\"\"Then lift it.\"\"\"``), by
+    its first line."""
+    return {
+        node.lineno: node.value.value.strip()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)
+    }
 
 
 def _statement(line: str) -> bool:

@@ -815,8 +815,17 @@ TOP = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position([p[0], 
         f"```python\n# First attempt (wrong: never opens the gripper)\n{NOGRIP}\n# Corrected version\n{GRASP}```\n",
         f"Option 1, from the side:\n{GRASP}\n# Option 2, from above:\n{TOP}",
         f"{NOGRIP}\n# Wait, that never opens the gripper. Corrected:\n{GRASP}",
+        f'{GRASP}"""Alternatively, from above:"""\n{TOP}',
+        f"```python\n{GRASP}\n# Another way: grasp from above\n{TOP}```\n",
     ],
-    ids=["two options in a block", "a draft and its fix in a block", "unfenced options", "unfenced draft and fix"],
+    ids=[
+        "two options in a block",
+        "a draft and its fix in a block",
+        "unfenced options",
+        "unfenced draft and fix",
+        "unfenced options split by a string",
+        "another way in a block",
+    ],
 )
 def test_two_programs_joined_by_their_comments_are_asked_again(answer: str) -> None:
     """Found by an adversarial run: both ran, one after the other."""
