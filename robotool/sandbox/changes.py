@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 
+from robotool.sandbox.placeholder import comments
 from robotool.sandbox.validate import ProgramRejected
 
 _EDITS = r"replace|change|swap|drop|remove|delete|insert|add|put|wrap|raise|lower|retry"
@@ -51,3 +52,23 @@ def refuse_change_in_words(prose: str) -> None:
             f"after its program the reply asks for a change in words ({sentence[:80]!r}); give the whole program, "
             "changes made, in one code block",
         )
+
+
+_REMOVE_ME = re.compile(
+    r"\b(?:remove|delete)\s+(?:this|that)\b|\bdrop\s+(?:this|that)\s+(?:line|call|step)\b|"
+    r"\b(?:this|the) line (?:is )?not needed\b",
+    re.IGNORECASE,
+)
+
+
+def refuse_change_in_comments(code: str) -> None:
+    """Raise :class:`ProgramRejected` when a comment in the program asks to remove the code it stands beside
+    (``close_gripper()  # remove this line: the task is only to reach``: found by an adversarial run, where the line
+    ran)."""
+    for line, text in comments(code).items():
+        if _REMOVE_ME.search(text):
+            raise ProgramRejected(
+                line,
+                "text",
+                f"a comment in the program asks for a change ({text[:60]!r}); give the whole program, changes made",
+            )

@@ -11,7 +11,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_FUNCTIONS, NUMPY_LINALG
-from robotool.sandbox.changes import refuse_change_in_words
+from robotool.sandbox.changes import refuse_change_in_comments, refuse_change_in_words
 from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_like_code, quiet_parse
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
@@ -88,7 +88,7 @@ def _extract(text: str) -> Extraction:
         raise ProgramRejected(None, "text", f"answer is longer than {MAX_PROGRAM_CHARS} characters")
     check_parse_cost(text, "answer")
     text = text.replace("\r\n", "\n").replace("\r", "\n").replace("\ufeff", "").replace("\u00a0", " ")
-    text = html_code_blocks(without_reasoning(text))
+    text = _unquoted(html_code_blocks(without_reasoning(text)))
     text, lone_fence = _without_a_lone_fence(text)
     blocks = _fenced_blocks(text)
     chosen = None
@@ -120,6 +120,7 @@ def _extract(text: str) -> Extraction:
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
     refuse_placeholder(code, tree)
     refuse_joined(code, tree)
+    refuse_change_in_comments(code)
     code = "\n".join(_expand_indent_tabs(line) for line in code.split("\n"))
     if not has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")
@@ -215,10 +216,33 @@ def _code_outside_python_blocks(text: str, blocks: list[_Block]) -> str | None:
             return f"outside the code blocks ({line.strip()[:40]!r})"
     for opening, closing in fence_pairs(text):
         tag = opening.group(2)
-        body = text[opening.end() + 1 : closing.start() if closing else len(text)]
+        body = _PROMPT.sub("", text[opening.end() + 1 : closing.start() if closing else len(text)])
         if not (_PYTHON_TAG.fullmatch(tag) or tag.lower() in _MARKDOWN_TAGS) and calls(textwrap.dedent(body)):
             return f"in a block tagged {tag!r}"
     return None
+
+
+_PROMPT = re.compile(r"^[ \t]*(?:>>>|\.\.\.)(?: |$)", re.MULTILINE)
+"""A Python prompt at a line's start, in a session shown in a block (```pycon: found by an adversarial run, a
+correction shown as a session went unseen)."""
+_QUOTE_MARKS = re.compile(r"^[ ]{0,3}>(?!>>)[ ]?(?:[ ]{0,3}>(?!>>)[ ]?)*", re.MULTILINE)
+
+
+def _unquoted(text: str) -> str:
+    """``text`` with its Markdown block quotes' marks (``> ``) taken off its lines outside its fenced blocks, so that
+    what a quote holds is read as the reply's own text (found by an adversarial run: a corrected program in a fenced
+    block inside a quote went unseen, and the draft ran); a Python prompt (``>>>``) is no mark, and a block's own
+    lines are kept as written."""
+    if ">" not in text:
+        return text
+    parts, end = [], 0
+    for opening, closing in fence_pairs(text):
+        parts += [
+            _QUOTE_MARKS.sub("", text[end : opening.start()]),
+            text[opening.start() : closing.end() if closing else len(text)],
+        ]
+        end = closing.end() if closing else len(text)
+    return "".join([*parts, _QUOTE_MARKS.sub("", text[end:])])
 
 
 _DIFF_PROBLEM = (

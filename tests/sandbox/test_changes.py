@@ -55,3 +55,36 @@ EXPLANATIONS = [
 @pytest.mark.parametrize("words", EXPLANATIONS)
 def test_an_explanation_after_the_program_leaves_it(words: str) -> None:
     assert extract(f"Here is the program:\n{FENCED}{words}\n").code == GRASP
+
+
+QUOTED_OR_SHOWN = {
+    "a line in a block quote": "Actually, the last line should be:\n> move_to_position([0.1, 0.2, 0.3])\n",
+    "a corrected program in a quoted block": (
+        "> **Correction:** the gripper must open first:\n> ```python\n> open_gripper()\n"
+        '> p = get_graspable_point("milk")\n> move_to_position(p)\n> close_gripper()\n> ```\n'
+    ),
+    "a correction shown as a session": (
+        "Corrected:\n```pycon\n>>> open_gripper()\n>>> move_to_position(get_graspable_point('milk'))\n```\n"
+    ),
+}
+
+
+@pytest.mark.parametrize("after", QUOTED_OR_SHOWN.values(), ids=QUOTED_OR_SHOWN.keys())
+def test_code_in_a_block_quote_or_a_session_after_the_program_is_seen(after: str) -> None:
+    """Found by an adversarial run: the quote and the session were read as prose, and the program above ran."""
+    with pytest.raises(ProgramRejected, match=r"different programs|code outside the code blocks|block tagged 'pycon'"):
+        extract(f"{FENCED}{after}")
+
+
+def test_a_quote_of_the_task_beside_the_program_leaves_it() -> None:
+    answer = f"> Grasp the milk carton.\n\nHere is the program:\n{FENCED}> It opens the gripper before the move.\n"
+    assert extract(answer).code == GRASP
+
+
+def test_a_comment_that_asks_to_remove_its_line_is_asked_again() -> None:
+    """Found by an adversarial run: the line ran."""
+    program = GRASP.replace("close_gripper()", "close_gripper()  # remove this line: the task is only to reach")
+    with pytest.raises(ProgramRejected, match="a comment in the program asks for a change"):
+        extract(f"```python\n{program}```\n")
+    kept = GRASP.replace("close_gripper()", "close_gripper()  # drop the carton only once it is over the tray")
+    assert extract(f"```python\n{kept}```\n").code == kept
