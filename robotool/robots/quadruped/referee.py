@@ -19,6 +19,7 @@ are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,14 +86,16 @@ class RefereeState:
     force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
     # (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
+    last_frames: np.ndarray  # (nworld, nobject, 4) each object's orientation at the last tick (a unit quaternion)
     ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride first carried something
     # under the feet since the object was last pushed (NaN: not yet; :mod:`.stride_loads`)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: not yet)
+    ride_frames: np.ndarray  # (nworld, nobject, 4) each object's orientation then (a unit quaternion)
     ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried since then
     ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride since then
 
     @classmethod
-    def empty(cls, nworld: int, centres: np.ndarray) -> RefereeState:
+    def empty(cls, nworld: int, centres: np.ndarray, frames: np.ndarray) -> RefereeState:
         nobject = centres.shape[1]
         return cls(
             failures=[None] * nworld,
@@ -112,8 +115,10 @@ class RefereeState:
             strained=np.zeros((nworld, nobject)),
             force_limit=np.full((nworld, 2), np.nan),
             last_centres=centres,
+            last_frames=frames,
             ride_start=np.full((nworld, nobject, 3), np.nan),
             ride_top=np.full((nworld, nobject), np.nan),
+            ride_frames=frames.copy(),
             ride_touched=np.zeros((nworld, nobject), dtype=bool),
             ride_carried=np.zeros((nworld, nobject), dtype=bool),
         )
@@ -125,7 +130,7 @@ class Referee:
     def __init__(self, senses: Senses, rays: Rays, limits: QuadrupedLimits, config: QuadrupedConfig):
         self.senses, self.rays, self.limits, self.config = senses, rays, limits, config
         self.facts, self.scene = senses.facts, senses.scene
-        self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state))
+        self.state = RefereeState.empty(senses.sim.nworld, senses.centers(senses.state), senses.frames())
         self.magnets = Magnets(self.scene)
         self.pushes = PushRules(senses, rays, limits, self.magnets)
         self.forces = PushForce(senses, self.pushes, limits, config)
@@ -311,7 +316,8 @@ class Referee:
         (:meth:`.push_rules.PushRules.load_rule`) and while it moves (:meth:`_riders`); what it drags by friction,
         pressing down on it, is not rammed (its weight loads the push: :mod:`.push_force`), but what bears it up and
         goes along under it is.
-        The travel of each rammed object adds up from push to push until the robot pushes it itself, and so does what it
+        The travel of each rammed object (its centre's, and the sweep of its corners as it turns while a ram presses
+        its side: :func:`side_swings`) adds up from push to push until the robot pushes it itself, and so does what it
         travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box rolls on:
         the push set it moving); what the pushed object or a rammed one rams on its own way after the push, until it
         comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is still in 3-D for :data:`REST_TIME`
@@ -340,14 +346,17 @@ class Referee:
         s.coasting |= ridden & self._driven()  # a lever tipping under the feet rocks, a cart rolls away: the stride
         # drives back what the feet stand on, and it rams like a pushed object
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
+        met = np.zeros(s.coasting.shape, dtype=bool)  # what a ram presses this tick
         if worlds.size:
             index = m.pushing[worlds]
             s.coasting[worlds, index] = True
-            rammed = self._rammed(worlds, index, centres, m.u[worlds])
-            s.rammed_by[worlds] = np.where(rammed, index[:, None], s.rammed_by[worlds])
-        self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step)
+            met[worlds] = self._rammed(worlds, index, centres, m.u[worlds])
+            s.rammed_by[worlds] = np.where(met[worlds], index[:, None], s.rammed_by[worlds])
+        self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step, met)
         travelling = (s.rammed_by >= 0) & mask[:, None]
-        s.carried += np.where(travelling, step, 0.0)
+        swung = side_swings(self.senses, met & travelling, s.last_frames, self._object_normals)
+        s.carried += np.where(travelling, step, 0.0) + swung
+        s.last_frames = np.where(mask[:, None, None], self.senses.frames(), s.last_frames)
         moved = travelling & (s.carried > self.config.shove)
         candidates = np.flatnonzero(moved.any(axis=1))
         if candidates.size:
@@ -361,12 +370,14 @@ class Referee:
         centres: np.ndarray,
         shift: np.ndarray,
         step: np.ndarray,
+        met: np.ndarray,
     ) -> None:
         """What a pushed object, or one its push rammed, rams on its own way once the push is over, until it comes to
         rest, is rammed by that push too (found by an adversarial run: a 4.2 kg drum pushed at walking pace and left
         to roll on across ice knocked a 10 kg crate off a deck, and one pushed to the top of a ramp a 15 kg one; only
         what it pressed while the push ran was weighed). Read along each one's own way this tick, in the worlds in
-        ``mask``; in the worlds ``pushing``, where a push runs, its object ``pushed`` is read by the push itself."""
+        ``mask``; in the worlds ``pushing``, where a push runs, its object ``pushed`` is read by the push itself. What
+        they press this tick is marked in ``met`` (nworld, nobject)."""
         s = self.state
         pushed_now = np.zeros(s.coasting.shape, dtype=bool)
         pushed_now[pushing, pushed] = True
@@ -379,11 +390,12 @@ class Referee:
         source = np.where(s.rammed_by[worlds, objects] >= 0, s.rammed_by[worlds, objects], objects)
         for k in np.flatnonzero(rammed.any(axis=1)).tolist():
             w = int(worlds[k])
-            hit = rammed[k] & (s.rammed_by[w] < 0) & (np.arange(rammed.shape[1]) != source[k])
+            hit = rammed[k] & (np.arange(rammed.shape[1]) != source[k])
             if self._driven()[w, source[k]]:  # it rams what it meets, not what rides on it or what it rides on
                 normals = self._object_normals(w)
                 hit &= ~(bears_up(normals[source[k]]) | bears_up(normals[:, source[k]]))
-            s.rammed_by[w, hit] = source[k]
+            s.rammed_by[w, hit & (s.rammed_by[w] < 0)] = source[k]
+            met[w] |= hit
 
     def _stride_loads(self, ends: list[SkillEnd], mask: np.ndarray, centres: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
@@ -526,3 +538,23 @@ def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.nd
     aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
     under = bears_up(normals[:, index])  # (nobject,) pressing the object up
     return pressed & (((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0) | under)
+
+
+def side_swings(
+    senses: Senses, met: np.ndarray, before: np.ndarray, normals_in: Callable[[int], np.ndarray]
+) -> np.ndarray:
+    """(nworld, nobject) m the farthest each rammed object pressed this tick (``met``) swept a corner round as it
+    turned from its orientation ``before`` (the last tick's; a light box rammed into one end of a 20 kg plank on a post
+    swung the plank into line over a gap while its centre moved under 3 cm: found by an adversarial run), where a
+    movable object presses one of its sides (``normals_in(w)``: the summed contact normals between the objects in
+    world ``w``); what turns only under a load that presses it down, or on what bears it up, or once nothing presses
+    it, counts by its centre alone (a board whose cube rides on it turns as a chair pushed out from under its raised
+    end lets it down)."""
+    swings = np.zeros(met.shape)
+    for w in np.flatnonzero(met.any(axis=1)).tolist():
+        normals = normals_in(w)[senses.facts.movable]  # (nmovable, nobject, 3) onto each object
+        touched = np.linalg.norm(normals, axis=2) > 0
+        sides = touched & ~bears_up(normals) & ~bears_up(-normals)
+        objects = np.flatnonzero(met[w] & sides.any(axis=0))
+        swings[w, objects] = senses.sweeps(np.full(len(objects), w), objects, before[w, objects])
+    return swings

@@ -15,7 +15,7 @@ from robotool.robots.quadruped.object_sums import ObjectSums
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.support import Parts
 from robotool.robots.quadruped.terrain import quarter_turns
-from robotool.sim.backend import BatchedSim, BatchState
+from robotool.sim.backend import BatchedSim, BatchState, quat_to_mat
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.object_goals import local_corners, world_corners
 
@@ -131,6 +131,23 @@ class Senses:
         found = self.of_state(state, ("corners", index), lambda: world_corners(state, body, corners[index]))
         lo = self.of_state(state, ("lo", index), lambda: found.min(axis=1))
         return lo, self.of_state(state, ("hi", index), lambda: found.max(axis=1))
+
+    def frames(self) -> np.ndarray:
+        """(nworld, nobject, 4) each object's orientation now (its body's unit quaternion, w first), read-only."""
+        return self.of_state(self.state, "frames", lambda: self.state.xquat[:, self.scene.object_body].copy())
+
+    def sweeps(self, worlds: np.ndarray, objects: np.ndarray, before: np.ndarray) -> np.ndarray:
+        """(k,) m the most a corner of object ``objects[i]`` in world ``worlds[i]`` has travelled across (x-y) as the
+        object turned from orientation ``before[i]`` (a unit quaternion) to now: a plank swung round a post sweeps
+        its ends far while its centre stays."""
+        out = np.zeros(len(worlds))
+        turned = quat_to_mat(self.frames()[worlds, objects]) - quat_to_mat(before)  # (k, 3, 3)
+        for o in np.unique(objects).tolist():
+            rows = objects == o
+            if not self.facts.cloth[o]:
+                swept = np.einsum("kij,cj->kci", turned[rows], self.facts.corners[o])[:, :, :2]
+                out[rows] = np.linalg.norm(swept, axis=2).max(axis=1)
+        return out
 
     def bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned x-y bounds of an object in world ``w``."""

@@ -29,6 +29,7 @@ class Rides(Protocol):
     ride_start: np.ndarray  # (nworld, nobject, 3) where each object was when the stride first moved anything since it
     # was last pushed (NaN: not yet)
     ride_top: np.ndarray  # (nworld, nobject) m the highest each object has been since then (NaN: not yet)
+    ride_frames: np.ndarray  # (nworld, nobject, 4) each object's orientation then (a unit quaternion)
     ride_touched: np.ndarray  # (nworld, nobject) bool: touched what the stride carried (or was carried), in a ride
     ride_carried: np.ndarray  # (nworld, nobject) bool: carried by the stride in a ride
 
@@ -47,17 +48,19 @@ class StrideLoads:
         (``resting``, (nworld, nobject)); what the rides move counts from where it was when the stride first moved
         anything, over every ride since, until the robot pushes it itself (a fourth adversarial run: a board held to
         under 3 cm of travel, kicked again and again, knocked a 20 kg drum 0.7 m along in strokes of under 3 cm). An
-        object the stride carried that lies more than ``shove`` across from there is moved by the robot, as by a
-        push, whether it moved under the feet or coasted on after them (a board kicked back 2.5 cm coasted 0.85 m on
-        with the 15 kg cart under it); so are the movable objects that touched what it carried, directly or through
-        others (``group``), that lie more than ``shove`` across from there and have shifted against it by no more
-        than :data:`SLIP` of its travel (what it rides on and rolls with it, what rides on it; not a roller it rolls
-        on), or went on more than ``shove`` farther than it (knocked on by it: the drum), or sank more than ``shove``,
-        however little it moved itself (a board walked along rolled a 20 kg drum out from under it off a ledge; a
-        board kicked 1.5 cm between stops knocked one off a ledge). What rose more than ``shove`` is a lever's load,
-        the lever's work, as long as it does not sink back below where it was by more than that (a 10 kg cube a
-        lever lifted rode 12-19 cm back on the board walked along, off a shelf, and came down). Returns, for each
-        world where they weigh more than the push limit, the reason, naming the carried object, and their mass."""
+        object the stride carried that lies more than ``shove`` across from there (its centre's travel and the sweep of
+        its corners as it turned: four quarter turns in place on a 20 kg plank on a post swung it into line over a gap
+        while its centre moved 2-5 mm, found by an adversarial run) is moved by the robot, as by a push, whether it
+        moved under the feet or coasted on after them (a board kicked back 2.5 cm coasted 0.85 m on with the 15 kg cart
+        under it); so are the movable objects that touched what it carried, directly or through others (``group``), that
+        lie more than ``shove`` across from there and have shifted against it by no more than :data:`SLIP` of its travel
+        (what it rides on and rolls with it, what rides on it; not a roller it rolls on), or went on more than ``shove``
+        farther than it (knocked on by it: the drum), or sank more than ``shove``, however little it moved itself (a
+        board walked along rolled a 20 kg drum out from under it off a ledge; a board kicked 1.5 cm between stops
+        knocked one off a ledge). What rose more than ``shove`` is a lever's load, the lever's work, as long as it does
+        not sink back below where it was by more than that (a 10 kg cube a lever lifted rode 12-19 cm back on the board
+        walked along, off a shelf, and came down). Returns, for each world where they weigh more than the push limit,
+        the reason, naming the carried object, and their mass."""
         shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
         start, top, touched, carried = rides.ride_start, rides.ride_top, rides.ride_touched, rides.ride_carried
         carrying = (drift > 0) & mask[:, None]
@@ -66,6 +69,7 @@ class StrideLoads:
             return {}
         begun = riding[:, None] & np.isnan(start[:, :, 0])
         start[begun] = centres[begun]
+        rides.ride_frames[begun] = self.senses.frames()[begun]
         top[riding] = np.fmax(top[riding], centres[riding, :, 2])
         carried |= carrying
         touched |= carrying
@@ -83,7 +87,8 @@ class StrideLoads:
         knocked = across[worlds] > across[worlds, objects][:, None] + shove  # farther than what drove it: knocked on
         along = touched[worlds] & (across[worlds] > shove) & (~lifted | sank)
         along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank | knocked
-        along[rows, objects] = across[worlds, objects] > shove
+        swept = self.senses.sweeps(worlds, objects, rides.ride_frames[worlds, objects])  # turned round under the feet
+        along[rows, objects] = across[worlds, objects] + swept > shove
         load = (self.senses.masses(worlds) * along).sum(axis=1)
         names = self.senses.scene.object_names
         found: dict[int, tuple[str, float]] = {}

@@ -1,6 +1,9 @@
-"""A push or a turn in place moves what it swings round as well as what it shifts: open holes (found by an
-adversarial run), kept as strict xfails. A 20 kg plank lying aslant on a post in the middle of a gap, swung into line
-over the gap, lets the robot walk across it."""
+"""A push or a turn in place moves what it swings round as well as what it shifts (found by an adversarial run): a
+20 kg plank lying aslant on a post in the middle of a gap, swung into line over the gap, lets the robot walk across
+it. A light box rammed into one end of the plank swings it while its centre barely moves: the ram rule counts the
+sweep of the plank's corners (the same ram with a 2 kg plank is an honest push). Four quarter turns in place on the
+plank's middle swing it too: the stride rule counts the sweep of what the feet carry round (the same turns on a 4 kg
+plank are an honest stride)."""
 
 from __future__ import annotations
 
@@ -8,37 +11,51 @@ import pytest
 from fixtures.paths import FIXTURES
 
 from robotool import sim, tasks
+from robotool.rollout import Rollout
 from robotool.sandbox import start_sessions
 from robotool.verify import world_failure
 
-CASES = [
-    pytest.param(
-        "heavy_plank_aslant_over_a_gap_on_a_post",
-        "ram_a_heavy_plank_round_on_its_post",  # a light box pushed into one end of the plank
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="open: the ram rule weighs what a rammed object's centre travels (the plank's, under 3 cm; its "
-            "ends, 0.4 m). Counting the corners' sweep about the vertical refused an honest chair pushed out from "
-            "under a lever's raised end (the board on it yaws a few degrees as it comes down)",
-        ),
-        id="rammed by a pushed box",
-    ),
-    pytest.param(
-        "heavy_plank_aslant_on_a_post_with_the_robot_on_it",
-        "turn_in_place_to_swing_a_heavy_plank_round",  # four quarter turns on the plank's middle
-        marks=pytest.mark.xfail(
-            strict=True,
-            reason="open: the stride rule weighs what an object's centre travels under the feet (2-5 mm here), and "
-            "the yaw servo's reaction on what the feet stand on may be larger than the body's yaw inertia would give",
-        ),
-        id="turned on by the robot",
-    ),
-]
 
-
-@pytest.mark.parametrize(("layout", "program"), CASES)
-def test_a_heavy_plank_swung_round_into_a_bridge_is_weighed(layout: str, program: str) -> None:
+def _run(layout: str, program: str, seed: int = 1) -> list[Rollout]:
     task = tasks.load(FIXTURES / "layouts" / f"{layout}.yaml")
     code = (FIXTURES / "cheats" / f"{program}.py").read_text()
-    for rollout in sim.run_sessions(task, start_sessions([code] * 2, "quadruped"), seed=1):
-        assert not rollout.success, world_failure(rollout)
+    return sim.run_sessions(task, start_sessions([code] * 2, "quadruped"), seed=seed)
+
+
+@pytest.mark.slow
+def test_a_light_box_rammed_into_a_heavy_planks_end_to_swing_it_round_is_refused() -> None:
+    for rollout in _run("heavy_plank_aslant_over_a_gap_on_a_post", "ram_a_heavy_plank_round_on_its_post"):
+        push = next(c for c in rollout.calls if c.outcome != "done")
+        assert push.skill == "push_to_position" and push.outcome == "refused", world_failure(rollout)
+        assert "pushing box rammed plank" in push.reason and push.measured["mass"] > 20.0, push
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+
+
+@pytest.mark.slow
+def test_the_same_ram_on_a_light_plank_swings_it_into_a_bridge() -> None:
+    """The control (the plank's swing is the same; its weight is within the push limit). On other draws of the
+    perturbed worlds the robot's stance behind the box can end on the plank's swung end, and the footing rule refuses
+    that push: these two worlds keep to the stage."""
+    for rollout in _run("light_plank_aslant_over_a_gap_on_a_post", "ram_a_heavy_plank_round_on_its_post", seed=3):
+        assert rollout.success, world_failure(rollout)
+
+
+@pytest.mark.slow
+def test_turning_in_place_on_a_heavy_plank_to_swing_it_round_is_refused() -> None:
+    """The stride rule counts the sweep of the corners of what it carries round under the feet (the plank's centre
+    moves 2-5 mm)."""
+    for rollout in _run(
+        "heavy_plank_aslant_on_a_post_with_the_robot_on_it", "turn_in_place_to_swing_a_heavy_plank_round"
+    ):
+        turn = rollout.calls[0]
+        assert turn.skill == "turn_to_heading" and turn.outcome == "refused", world_failure(rollout)
+        assert turn.reason.startswith("plank, driven by the stride of the robot on it, moved"), turn.reason
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False
+
+
+@pytest.mark.slow
+def test_the_same_turns_on_a_light_plank_swing_it_into_a_bridge() -> None:
+    for rollout in _run(
+        "light_plank_aslant_on_a_post_with_the_robot_on_it", "turn_in_place_to_swing_a_heavy_plank_round"
+    ):
+        assert rollout.success, world_failure(rollout)
