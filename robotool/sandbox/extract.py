@@ -142,6 +142,8 @@ class _Block:
     """The last non-blank line of text before the block's opening fence."""
     tagged: bool
     """Whether its fence names Python (else it has no tag)."""
+    heading: str
+    """The last Markdown heading (``## Final program``) between the block before it and its opening fence, or ''."""
     end: int
     """Where in the reply its closing fence ends (the reply's end when it has none)."""
 
@@ -157,6 +159,7 @@ def _without_a_lone_fence(text: str) -> tuple[str, int]:
 
 
 _MARKDOWN_TAGS = frozenset({"markdown", "md"})
+_HEADING = re.compile(r"[ ]{0,3}#{1,6}[ \t]")
 
 
 def _fenced_blocks(text: str, depth: int = 0, at: int = 0) -> list[_Block]:
@@ -174,9 +177,10 @@ def _fenced_blocks(text: str, depth: int = 0, at: int = 0) -> list[_Block]:
         elif _PYTHON_TAG.fullmatch(tag):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
             label = before[-1].strip() if before else ""
+            heading = next((line.strip() for line in reversed(before) if _HEADING.match(line)), "")
             code = _dedented(inner, fence_indent(opening)).strip("\n")
             ends = at + (closing.end() if closing else len(text))
-            blocks.append(_Block(code, 1 + (closing is not None), label, tagged=bool(tag), end=ends))
+            blocks.append(_Block(code, 1 + (closing is not None), label, bool(tag), heading, ends))
         previous_end = closing.end() if closing else len(text)
     return blocks
 
@@ -301,9 +305,14 @@ def _check_fence(opening: re.Match[str]) -> None:
 
 _FINAL = re.compile(
     r"\b(?:final|corrected|fixed|revised|complete|full|whole|updated|improved)\s+(?:python\s+)?"
-    r"(?:program|code|version|script|solution|answer)\b",
+    r"(?:program|code|version|script|solution|answer)\b|"
+    r"\b(?:código|programa|versión|versão|code|programme|codice|programma|versione)\s+"
+    r"(?:final|finale|corregid[oa]|corrigid[oa]|corrigée?|corrett[oa])\b|"
+    r"\b(?:endgültige|finale|korrigierte)[sr]?\s+(?:programm|code|version)\b|最终(?:代码|程序|版本)|修正后的(?:代码|程序)",
     re.IGNORECASE,
 )
+"""A final marker, in English and in the languages models answer in most (found by an adversarial run: '最终代码：',
+'Código final:', 'Programme final :', 'Endgültiges Programm:' were read as no marker)."""
 _FAULTY = r"wrong|incorrect|buggy|broken|fails?|failed|failing|crashed"  # may say so of the block before the label
 _SET_ASIDE = (
     r"not|never|no|original|old|older|previous|earlier|initial|first|draft|current|currently|existing|gave|given|sent|"
@@ -334,6 +343,11 @@ _MARKER_ALONE = re.compile(
     rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})[*_\s]*:?",
     re.IGNORECASE,
 )
+
+
+def _marked(block: _Block) -> bool:
+    """Whether the block's label, or the heading above it (``## Final program``, then a sentence), marks it final."""
+    return _marked_final(block.label) or (block.heading != block.label and _marked_final(block.heading))
 
 
 def _marked_final(label: str) -> bool:
@@ -378,7 +392,7 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     if not programs:
         return len(blocks) - 1, "the last"
     quotes = _Quotes(blocks, programs)
-    marked = [k for k in programs if _marked_final(blocks[k].label) and not quotes.fragment(k)]
+    marked = [k for k in programs if _marked(blocks[k]) and not quotes.fragment(k)]
     if len({tuple(_statement_lines(blocks[k].code)) for k in marked}) > 1:  # two options, or an echo marked too
         raise ProgramRejected(
             None,

@@ -844,3 +844,14 @@ def test_two_programs_joined_by_their_comments_are_asked_again(answer: str) -> N
 )
 def test_one_program_whose_comments_name_an_option_or_a_version_is_kept(program: str) -> None:
     assert extract(f"```python\n{program}```\n").code == program
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["最终代码：", "Código final:", "Programme final :", "Endgültiges Programm:", "## Final program\n\nIt opens:"],
+    ids=["zh", "es", "fr", "de", "a heading, then a sentence"],
+)
+def test_a_fix_marked_final_in_another_language_or_by_a_heading_is_taken(label: str) -> None:
+    """Found by an adversarial run: honest replies asked again, as two programs neither marked."""
+    answer = f"```python\n{NOGRIP}```\nThat misses the open step.\n\n{label}\n```python\n{GRASP}```\n"
+    assert extract(answer).code == GRASP
