@@ -1,12 +1,25 @@
 """A change to the program asked for in words after it, in an LM reply: "Actually, replace the last line with ...",
-"Wait: swap the two calls", "Then add these steps at the end:". Such a reply means a program it does not show, so it
-is asked again (found by an adversarial run: the program as written ran, the change said in words unseen). An
-explanation ("It uses get_graspable_point rather than get_center", "You can change the offset") is no such request:
-a sentence asks for a change when it opens with an edit verb ("Replace", "Then add", "Note: put"), or takes the
-program back ("actually", "wait", "oops", "correction") and names an edit ("drop", "swap") or what a line should be;
-and it names code (a call, a line, a step, the program; or it ends with a colon, before what it adds). An edit told
-in the past ("this version adds the open step") describes the program shown, and a step told in the imperative
-("2. Add 5 cm for the approach") what the program does."""
+"Wait. The last call is wrong: it should be `open_gripper()`", "Then add these steps at the end:". Such a reply means a
+program it does not show, so it is asked again (found by an adversarial run: the program as written ran, the change
+said in words unseen).
+
+Most words after a program explain it, and a second adversarial run showed how easily a word list refuses them: step
+lists name the robot's own actions ("**Lower and grasp**: the second call lowers ..."), tips speak to the user
+("Replace `"milk"` with your object's name if it differs"), and answers to a request to ask again apologise ("Sorry, I
+forgot the open step; it is fixed now"). So a sentence asks for a change only in two shapes, read with Markdown
+emphasis, list and quote marks taken off:
+
+- it opens with an edit of code ("Replace", "Then add", "Note: remove", "Make ... instead"; the robot's own verbs,
+  such as lower, raise, drop or put, are no edit) whose object, within its first words, is a place in the program (the
+  last line, line 3, the first call, at the end, code in backticks) or that ends with a colon, before what it adds,
+  and it sets no condition ("if your object differs", "to suit your gripper": a tip), describes no program shown
+  ("Change: the gripper now opens first") and lists no changes made ("Changes made: - Replace ..."); or it turns one
+  call into another (`close_gripper()` -> `open_gripper()`);
+- or a sentence that opens by taking something back ("Actually,", "Wait.", "Oops", "Correction:", "My mistake",
+  "Fix:") names code or a place in the program, or one of the next two sentences names it and says what it should be
+  ("should be", "is wrong", "not needed", an edit), and none of them describes the program shown ("this version",
+  "is fixed now", "as above", told in the past) or sets a condition.
+"""
 
 from __future__ import annotations
 
@@ -15,30 +28,93 @@ import re
 from robotool.sandbox.placeholder import comments
 from robotool.sandbox.validate import ProgramRejected
 
-_EDITS = r"replace|change|swap|drop|remove|delete|insert|add|put|wrap|raise|lower|retry"
-_OPENS_WITH_AN_EDIT = re.compile(
-    r"[\W\d_]*(?:(?:note|also|then|and|so|now|finally|one fix|fix|correction|edit|update)\b[\s:,-]*)*(?:please\s+)?"
-    r"(?:replace|change|swap|drop|remove|delete|insert|add|put|wrap|raise|lower|set|use\b.*\binstead)\b",
-    re.IGNORECASE,
-)
-_TAKES_BACK = re.compile(r"\b(?:actually|wait|oops|sorry|correction|my mistake|one fix)\b", re.IGNORECASE)
-_NAMES_AN_EDIT = re.compile(rf"\b(?:{_EDITS})\b|\b(?:should|must|needs? to) be\b", re.IGNORECASE)
-_NAMES_CODE = re.compile(
-    r"`|\w\(|\b(?:lines?|calls?|steps?|code|program|script|block|version|target|at the end|instead)\b|:\s*$",
-    re.IGNORECASE,
-)
+_MARKS = re.compile(r"\*\*|__|~~|^(?:[^\w`]|_)*(?:\d+[.)]\s+|\[!\w+\]\s*)?")
+"""Markdown emphasis anywhere, and at a sentence's start what is no word nor code (list, quote, heading and table
+marks, an emoji, an opening bracket) and a step's number."""
+_ABBREVIATIONS = re.compile(r"\b(?:e\.g|i\.e|etc|vs|cf|approx|incl)\.", re.IGNORECASE)
 _SENTENCE_END = re.compile(r"(?<=[.!?])\s+|\n")
+_PREFIX = (
+    r"(?:(?:note|also|then|and|so|now|finally|ps|p\.s|todo|nb|important|update|edit|fix|correction|actually|oh|one fix|"
+    r"one more thing|instead|you (?:should|need to|must|have to))\b[\s:,.\-—–]*)*(?:please\s+)?"
+)
+_EDIT = (
+    r"replace|(?:change|modify|update|edit)(?!\s*:)|swap|remove|delete|add|append|prepend|skip|scrap|comment out|"
+    r"get rid of|leave out|make(?! sure)|use\b.{0,60}\binstead"
+)
+_PLACE = (
+    r"`[^`]+`|\b(?:the )?(?:last|first|second|third|fourth|final|next|previous|\d+(?:st|nd|rd|th)) "
+    r"(?:line|call|step|move|command|one)s?\b|\blines? \d+\b|\bat the (?:very )?(?:end|start|beginning|top|bottom)\b|"
+    r"\b(?:before|after) (?:the )?`?\w+\("
+)
+_OPENS_WITH_AN_EDIT = re.compile(rf"{_PREFIX}(?:{_EDIT})\b(?P<rest>.*)", re.IGNORECASE | re.DOTALL)
+_NAMES_A_PLACE = re.compile(_PLACE, re.IGNORECASE)
+_CONDITION = re.compile(
+    r"\b(?:if|when|whenever|unless|in case|to suit|as needed|your|you'd|you want|for (?:other|taller|shorter|heavier)|"
+    r"to grasp|to handle|to make)\b",
+    re.IGNORECASE,
+)
+_TAKES_BACK = re.compile(
+    r"(?:hmm,?\s*)?(?:actually\b|wait\s*[,.!:;—–-]|oops\b(?!-)|sorry(?! (?:for|about|if|to)\b)|correction\b|"
+    r"one correction\b|(?:small |one |quick )?fix:|my mistake|on second thought|no,? wait|no\s*[,.—–-]|scratch that|"
+    r"typo\b)",
+    re.IGNORECASE,
+)
+_NAMES_CODE = re.compile(r"`[^`]*`|\w\(|\b(?:line|call|step)s?\b", re.IGNORECASE)
+_SAYS_WHAT_IT_SHOULD_BE = re.compile(
+    rf"\b(?:should (?:be|read|come|stay|go)|must (?:be|come)|has to (?:be|come)|needs? to (?:be|come)|is wrong|"
+    rf"are wrong|not needed|don't|do not|no need|instead|rather than|I meant|missing|use|{_EDIT})\b|\bnot `|→|->",
+    re.IGNORECASE,
+)
+_DESCRIBES_THE_PROGRAM = re.compile(
+    r"\b(?:this version|(?:the )?(?:version|program|code) above|as above|now|fixed|applied|already|as it is|as shown|"
+    r"I forgot|I had|I've|I have|was|were|which (?:this|it) does|(?:is|are) (?:called|done|there|in place))\b",
+    re.IGNORECASE,
+)
+_BLANKED_CODE = re.compile(r"`[^`]*`")
+_CHANGE_LOG = re.compile(
+    r"(?:key |main )?(?:changes(?: made)?|what (?:was )?changed|what I changed)\s*:", re.IGNORECASE
+)
+"""A list of the changes made, in the imperative ("Changes made: - Replace ..."), describes the program shown."""
+_ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
+"""One call turned into another (`close_gripper()` → `open_gripper()`)."""
 
 
 def change_in_words(prose: str) -> str | None:
     """The first sentence of ``prose`` (a reply's words after its program) that asks for a change to the program (see
     the module), or None."""
-    for sentence in _SENTENCE_END.split(prose):
-        sentence = sentence.strip()
-        edit = _OPENS_WITH_AN_EDIT.match(sentence) or (_TAKES_BACK.search(sentence) and _NAMES_AN_EDIT.search(sentence))
-        if edit and _NAMES_CODE.search(sentence):
+    sentences = [_MARKS.sub("", s).strip() for s in _SENTENCE_END.split(_ABBREVIATIONS.sub("", prose))]
+    sentences = [s for s in sentences if s]
+    for k, sentence in enumerate(sentences):
+        logged = any(_CHANGE_LOG.match(earlier) for earlier in sentences[max(k - 5, 0) : k])
+        if (_asks_an_edit(sentence) and not logged) or _ARROW.search(sentence):
             return sentence
+        if _TAKES_BACK.match(sentence):
+            for later in sentences[k : k + 3]:
+                words = _BLANKED_CODE.sub("x", later)
+                if _DESCRIBES_THE_PROGRAM.search(words) or _CONDITION.search(words):
+                    continue
+                named = _NAMES_CODE.search(later) or _NAMES_A_PLACE.search(later)
+                if named and (later is sentence or _SAYS_WHAT_IT_SHOULD_BE.search(words)):
+                    return later
     return None
+
+
+def takes_back(sentence: str) -> bool:
+    """Whether a sentence opens by taking something back ("Actually,", "Wait.", "Oops", "Correction:", "My mistake"),
+    Markdown marks aside."""
+    return _TAKES_BACK.match(_MARKS.sub("", sentence).strip()) is not None
+
+
+def _asks_an_edit(sentence: str) -> bool:
+    """Whether a sentence opens with an edit of a place in the program, and sets no condition (see the module)."""
+    found = _OPENS_WITH_AN_EDIT.match(sentence)
+    words = _BLANKED_CODE.sub("x", sentence)
+    if found is None or _CONDITION.search(words) or _DESCRIBES_THE_PROGRAM.search(words):
+        return False
+    rest = found.group("rest")
+    if rest.lstrip().startswith(":") and rest.lstrip()[1:].strip():
+        return False  # a step's label ("3. **Swap**: the two moves trade places"), not an order
+    return rest.rstrip().endswith(":") or _NAMES_A_PLACE.search(" ".join(rest.split()[:8])) is not None
 
 
 def refuse_change_in_words(prose: str) -> None:
@@ -55,16 +131,16 @@ def refuse_change_in_words(prose: str) -> None:
 
 
 _REMOVE_ME = re.compile(
-    r"\b(?:remove|delete)\s+(?:this|that)\b|\bdrop\s+(?:this|that)\s+(?:line|call|step)\b|"
-    r"\b(?:this|the) line (?:is )?not needed\b",
+    r"\b(?:remove|delete|drop)\s+(?:this|that)(?:\s+(?:line|call|step))?\s*(?:$|[:;,.(—–-])|"
+    r"\b(?:this|the) line (?:is )?not needed\b|\bshould be `?\w+\(",
     re.IGNORECASE,
 )
 
 
 def refuse_change_in_comments(code: str) -> None:
-    """Raise :class:`ProgramRejected` when a comment in the program asks to remove the code it stands beside
-    (``close_gripper()  # remove this line: the task is only to reach``: found by an adversarial run, where the line
-    ran)."""
+    """Raise :class:`ProgramRejected` when a comment in the program asks to remove the code it stands beside or says
+    what it should be instead (``close_gripper()  # remove this line: the task is only to reach``,
+    ``close_gripper()  # should be open_gripper() here``: found by adversarial runs, where the line ran)."""
     for line, text in comments(code).items():
         if _REMOVE_ME.search(text):
             raise ProgramRejected(

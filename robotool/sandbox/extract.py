@@ -11,7 +11,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from robotool.sandbox.allowlist import BUILTINS, MATH_NAMES, NUMPY_FUNCTIONS, NUMPY_LINALG
-from robotool.sandbox.changes import refuse_change_in_comments, refuse_change_in_words
+from robotool.sandbox.changes import refuse_change_in_comments, refuse_change_in_words, takes_back
 from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_like_code, quiet_parse
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
@@ -105,7 +105,7 @@ def _extract(text: str) -> Extraction:
                 "give exactly one program, in one code block",
             )
         code = blocks[index].code.strip("\n")
-        refuse_change_in_words(outside_blocks(text[blocks[index].end :]))
+        refuse_change_in_words(_prose_after(text, blocks[index].end))
         if len(blocks) > 1:
             chosen = f"the reply held {len(blocks)} code blocks; block {index + 1} ({why}) was used, not joined"
         fence_lines = blocks[index].fence_lines
@@ -114,7 +114,7 @@ def _extract(text: str) -> Extraction:
             raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
         code, fence_lines = unfenced_program(text).strip("\n"), lone_fence
         if code.strip():
-            refuse_change_in_words(text[text.rfind(code) + len(code) :])
+            refuse_change_in_words(text[text.find(code) + len(code) :])  # the program, not a quote of it after
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
@@ -226,6 +226,24 @@ def _code_outside_python_blocks(text: str, blocks: list[_Block]) -> str | None:
     return None
 
 
+def _prose_after(text: str, end: int) -> str:
+    """The reply's words after offset ``end`` (a block's end), outside its fenced blocks paired over the whole reply
+    (a slice pairs them anew: a wrapper's closing fence would open a block), and inside a Markdown block the program
+    lies in; an unclosed block at the end, after a doubled closing fence, is words too."""
+    parts, start = [], end
+    for opening, closing in fence_pairs(text):
+        if (closing.end() if closing else len(text)) <= end:
+            continue
+        if opening.start() < end:  # a Markdown block the program lies in: its words after the program
+            parts.append(outside_blocks(text[end : closing.start() if closing else len(text)]))
+        else:
+            parts.append(text[max(start, end) : opening.start()])
+        if closing is None and opening.start() >= end:
+            parts.append(text[opening.end() :])
+        start = closing.end() if closing else len(text)
+    return "\n".join([*parts, text[max(start, end) :]])
+
+
 _PROMPT = re.compile(r"^[ \t]*(?:>>>|\.\.\.)(?: |$)", re.MULTILINE)
 """A Python prompt at a line's start, in a session shown in a block (```pycon: found by an adversarial run, a
 correction shown as a session went unseen)."""
@@ -233,14 +251,16 @@ _QUOTE_MARKS = re.compile(r"^[ ]{0,3}>(?!>>)[ ]?(?:[ ]{0,3}>(?!>>)[ ]?)*", re.MU
 
 
 def _unquoted(text: str) -> str:
-    """``text`` with its Markdown block quotes' marks (``> ``) taken off its lines outside its fenced blocks, so that
-    what a quote holds is read as the reply's own text (found by an adversarial run: a corrected program in a fenced
-    block inside a quote went unseen, and the draft ran); a Python prompt (``>>>``) is no mark, and a block's own
-    lines are kept as written."""
-    if ">" not in text:
+    """``text`` with its Markdown block quotes' marks (``> ``) taken off the lines after its first fenced block and
+    outside the fenced blocks, so that what a quote after the program holds is read as the reply's own text (found by
+    an adversarial run: a corrected program in a fenced block inside a quote went unseen, and the draft ran); a quote
+    before it echoes the user's code or task, and a Python prompt (``>>>``) is no mark."""
+    pairs = list(fence_pairs(text)) if ">" in text else []
+    if not pairs:
         return text
-    parts, end = [], 0
-    for opening, closing in fence_pairs(text):
+    parts, end = [], pairs[0][1].end() if pairs[0][1] else len(text)
+    parts.append(text[:end])
+    for opening, closing in pairs[1:]:
         parts += [
             _QUOTE_MARKS.sub("", text[end : opening.start()]),
             text[opening.start() : closing.end() if closing else len(text)],
@@ -332,15 +352,23 @@ kind; what this misses is asked again, the safe side: found by an adversarial ru
 a correction's label set the correction aside and ran the draft)."""
 
 
-_RETRACTION = re.compile(
-    rf"\b(?:wait|actually|oops|sorry|scratch that|mistake|mistaken|instead|rather|simply|just|{_FAULTY}|not needed|"
-    r"unnecessary|no need|only \w+(?: \w+)? (?:is|are) (?:needed|necessary|required))\b",
+_CALLS_IT_WRONG = re.compile(
+    rf"\b(?:that|this|the above|the rest|the (?:first|previous|earlier) (?:version|program|draft|attempt))\b"
+    rf"[^.!?]{{0,80}}?\b(?:is|are|was|were)\b[^.!?]{{0,80}}?\b(?:{_FAULTY}|not needed|unnecessary)\b|"
+    r"\bonly \w+(?: \w+)? (?:is|are) (?:needed|necessary|required)\b",
     re.IGNORECASE,
 )
-"""Words that take back a block and present the next as what runs instead: a later block that repeats part of the
-program after them is a correction, not a quote (``Wait, the task is only to move there. Just:``)."""
+"""A sentence that calls the block before wrong or not needed ("the turn and the climb are wrong"), or says only a
+part is needed: a later block that repeats part of the program after it is a correction, not a quote."""
+_SHORTER = re.compile(
+    r"[#*_\s]*(?:or,?\s*)?(?:simply|just|instead|rather|shorter|simpler|"
+    r"(?:the )?(?:shorter|simpler) (?:version|program|code))[*_\s]*[:：]?",
+    re.IGNORECASE,
+)
+"""A last sentence that is only "Simply:", "Just:", "Shorter version:": what follows replaces the block before."""
 _MARKER_ALONE = re.compile(
-    rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})[*_\s]*:?",
+    rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})"
+    r"[*_\s]*[:：]?",
     re.IGNORECASE,
 )
 
@@ -439,10 +467,19 @@ def _unretracted(blocks: list[_Block], programs: list[int], quotes: _Quotes, cho
 
 
 def _retracts(label: str) -> bool:
-    """Whether a label takes back the block before it (:data:`_RETRACTION`) or its last sentence is a final marker
-    alone ("Final program:", "Here is the corrected code:")."""
-    sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
-    return _RETRACTION.search(label) is not None or _MARKER_ALONE.fullmatch(label[sentence:].strip()) is not None
+    """Whether a label takes back the block before it: one of its sentences opens by taking something back ("Wait,",
+    "Actually,", "Oops": :func:`.changes.takes_back`) or calls the block wrong (:data:`_CALLS_IT_WRONG`), or its last
+    sentence is only a word that shortens ("Simply:", "Just:") or a final marker ("Final program:", "最终代码："). Such
+    words inside an explanation ("To run it, simply call:", "The part that actually does the approach:") take
+    nothing back (found by an adversarial run: snippets explained were asked again)."""
+    sentences = [s.strip() for s in re.split(r"(?<=[.!?])\s+", label) if s.strip()]
+    last = sentences[-1] if sentences else ""
+    return (
+        any(takes_back(sentence) for sentence in sentences)
+        or _CALLS_IT_WRONG.search(label) is not None
+        or _SHORTER.fullmatch(last) is not None
+        or _MARKER_ALONE.fullmatch(last) is not None
+    )
 
 
 def _has_call(tree: ast.Module) -> bool:

@@ -10,23 +10,28 @@ import re
 from robotool.sandbox.placeholder import comments
 from robotool.sandbox.validate import ProgramRejected
 
-_OPTION = re.compile(r"^\W*(?:option|alternative|approach|variant|solution)\s*#?\s*(\d+|[a-c])\b", re.IGNORECASE)
-"""A comment that opens one of several options (``# Option 2: grasp from above``)."""
+_OPTION = re.compile(
+    r"^\W*(?:option|alternative|approach|variant|solution|version|method)\s*#?\s*(\d+|[a-c])\s*(?:[:).,—–-]|$)",
+    re.IGNORECASE,
+)
+"""A comment that opens one of several options (``# Option 2: grasp from above``; not ``# Approach 10 cm above``)."""
 _CORRECTION = re.compile(
-    r"\b(?:corrected|fixed|revised|updated|improved|final)\s+(?:version|code|program|script)\b|^\W*(?:wait|oops)\b|"
-    r"^\W*(?:alternatively|another (?:option|approach|way|version)|or,? (?:instead|alternatively))\b",
+    r"\b(?:corrected|fixed|revised|updated|improved|final)\s+(?:version|code|program|script)\b(?!\s+of\b)|"
+    r"^\W*(?:wait|oops)(?:\s*[,.!:;—–]|\s+-)|^\W*(?:alternatively|or,? (?:instead|alternatively))\b|"
+    r"^\W*(?:another|or) (?:option|approach|way|version)\s*[:(,—–-]",
     re.IGNORECASE,
 )
 """A comment that opens a correction of what came before it, or another way to do it (``# Corrected version``,
-``# Wait, that never ...``, ``# Alternatively, from above:``)."""
+``# Wait, that never ...``, ``# Alternatively, from above:``; not ``# Wait for the grip to settle``)."""
 
 
 def refuse_joined(code: str, tree: ast.Module) -> None:
-    """Refuse a program whose own comments, each on a line of its own (or strings standing as statements, which read
-    as comments: found by an adversarial run), open two different options, or open a later option or a correction
-    after code (:class:`ProgramRejected`, asked again)."""
+    """Refuse a program whose own top-level comments, each on a line of its own (or strings standing as statements,
+    which read as comments: found by an adversarial run), open two different options, or open a later option or a
+    correction after code (:class:`ProgramRejected`, asked again); comments inside a block (``if``/``else`` branches)
+    name the cases of one program."""
     lines = code.split("\n")
-    alone = {line: text for line, text in comments(code).items() if lines[line - 1].lstrip().startswith("#")}
+    alone = {line: text for line, text in comments(code).items() if lines[line - 1].startswith("#")}
     alone.update(_strings_alone(tree))
     options = {match.group(1).lower(): line for line, text in alone.items() if (match := _OPTION.match(text))}
     if len(options) > 1:
@@ -48,11 +53,11 @@ def refuse_joined(code: str, tree: ast.Module) -> None:
 
 
 def _strings_alone(tree: ast.Module) -> dict[int, str]:
-    """The text of each string that stands as a statement in the program ``tree`` (``\"\"\"Then lift it.\"\"\"``), by
-    its first line."""
+    """The text of each string that stands as a statement between the program's top-level statements
+    (``\"\"\"Then lift it.\"\"\"``; not its docstring), by its first line."""
     return {
         node.lineno: node.value.value.strip()
-        for node in ast.walk(tree)
+        for node in tree.body[1:]
         if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)
     }
 

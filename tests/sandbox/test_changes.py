@@ -16,7 +16,9 @@ CHANGES = {
     "a removal naming a call the program makes": "Actually, drop the `close_gripper()` line: only reach the milk.",
     "a removal without a span": "Actually, remove the close_gripper() call at the end.",
     "a reorder": "Wait: swap `open_gripper()` and `move_to_position(p)`, the gripper must open after the move.",
-    "a wrap": "Note: put `close_gripper()` under an `if p[2] > 0:` check.",
+    "a wrap after a take-back": "Actually, put `close_gripper()` under an `if p[2] > 0:` check.",
+    "in bold, after a heading": "## Correction\n\nThe last line is wrong. It should be `open_gripper()`.",
+    "one call into another": "`close_gripper()` → `open_gripper()` (sorry, typo)",
     "an assignment": "One fix: change the target to `p = [0.3, 0.1, 0.2]` before the move.",
     "steps to add, listed": "Then add these steps at the end:\n- move_to_position([0.3, 0.0, 0.3])\n- open_gripper()",
     "what a line should be, in bold": "Actually, the last line should be **move_to_position([0.1, 0.2, 0.3])**.",
@@ -49,6 +51,15 @@ EXPLANATIONS = [
     "I forgot to add the open step in my first attempt; this version adds it.",
     "Let me know if you want me to add a retreat step.",
     "Changing the offset to 0.1 would approach from higher.",
+    # found by an adversarial run: each was asked again by the first version of the rule
+    "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
+    "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",
+    'Replace `"milk"` with the name of your object if it differs.',
+    "Sorry, I forgot to add the `open_gripper()` call before the move last time; it's fixed now.",
+    "**Change:** `open_gripper()` now comes before the move.",
+    "You can adapt it to other objects, e.g. replace `milk` with `juice` where you need to.",
+    "**Changes made:**\n- Replace `get_center` with `get_graspable_point` for a better grasp.",
+    "3. **Swap**: `move_to_position(p)` does this part.",
 ]
 
 
@@ -88,3 +99,57 @@ def test_a_comment_that_asks_to_remove_its_line_is_asked_again() -> None:
         extract(f"```python\n{program}```\n")
     kept = GRASP.replace("close_gripper()", "close_gripper()  # drop the carton only once it is over the tray")
     assert extract(f"```python\n{kept}```\n").code == kept
+
+
+# Found by a second adversarial run: honest replies that the first versions of the rules above asked again, and words
+# after the program that were not the words read.
+DEF_AND_CALL = 'def grasp_milk():\n    p = get_graspable_point("milk")\n    open_gripper()\n    move_to_position(p)\n'
+DEF_AND_CALL += "    close_gripper()\n\n\ngrasp_milk()\n"
+BRANCHES = (
+    'p = get_graspable_point("milk")\nopen_gripper()\nif p[2] > 0.5:\n    # Option 1: on the high shelf\n'
+    "    move_to_position([p[0] - 0.1, p[1], p[2]])\nelse:\n    # Option 2: on the table, from above\n"
+    "    move_to_position(p)\nclose_gripper()\n"
+)
+KEPT = {
+    "a call of the program's function, 'simply'": (
+        f"```python\n{DEF_AND_CALL}```\nTo run it, simply call:\n```python\ngrasp_milk()\n```\n",
+        DEF_AND_CALL,
+    ),
+    "the user's draft quoted before the fix": (
+        'Your program:\n> ```python\n> p = get_graspable_point("milk")\n> move_to_position(p)\n> close_gripper()\n'
+        f"> ```\n\nIt never opens the gripper. Add the open step:\n{FENCED}",
+        GRASP,
+    ),
+    "the user's line quoted before the fix": (
+        f'The line\n> move_to_position("milk")\n\npasses a name. Fixed:\n{FENCED}',
+        GRASP,
+    ),
+    "a comment on waiting": (
+        f"```python\n{GRASP}# Wait for the grip to settle\nmove_to_position([0.3, 0.0, 0.3])\n```\n",
+        f"{GRASP}# Wait for the grip to settle\nmove_to_position([0.3, 0.0, 0.3])\n",
+    ),
+    "a comment on the approach height": (
+        f"```python\n# Approach 10 cm above the milk\n{GRASP}```\n",
+        f"# Approach 10 cm above the milk\n{GRASP}",
+    ),
+    "options as the branches of one program": (f"```python\n{BRANCHES}```\n", BRANCHES),
+}
+
+
+@pytest.mark.parametrize(("answer", "program"), KEPT.values(), ids=KEPT.keys())
+def test_snippets_quotes_and_comments_that_change_nothing_leave_the_program(answer: str, program: str) -> None:
+    assert extract(answer).code == program
+
+
+@pytest.mark.parametrize(
+    "answer",
+    [
+        "open_gripper()\n\nWait, also add `close_gripper()` after `open_gripper()`.\n",
+        f"````markdown\nHere's the program:\n{FENCED}````\n\nActually, replace the last line with `open_gripper()`.\n",
+        f"{FENCED}```\n\nActually, replace the last line with `open_gripper()`.\n",
+    ],
+    ids=["after an unfenced program the words quote", "after a Markdown wrapper", "after a doubled closing fence"],
+)
+def test_the_words_read_are_those_after_the_program(answer: str) -> None:
+    with pytest.raises(ProgramRejected, match="asks for a change in words"):
+        extract(answer)
