@@ -27,8 +27,16 @@ from robotool.robots.quadruped.body import GRAVITY
 from robotool.robots.quadruped.move_runner import MoveRunner
 from robotool.robots.quadruped.push_rules import PushRules
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
-from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.quadruped_skills import BELLY_HEIGHT, QuadrupedLimits
 from robotool.robots.quadruped.sensing import Senses
+
+BUMP_REACH = 0.02
+"""m from the torso's box within which what moves during a walk may have been knocked by it."""
+KNOCK_COS = 0.5
+"""What the robot moves goes its way: an object's travel counts when it is within 60 degrees of the body's (a cube a
+lever lifts beside the torso moves up, not along the walk)."""
+BUMP_TRAVEL = 0.005
+"""m a walk may move what it ran into, while that bears up another in part, before the force it took is weighed."""
 
 
 @dataclass(frozen=True)
@@ -97,4 +105,61 @@ class PushForce:
                     "limit, on its support takes: it moves more than the robot may push"
                 )
             out.append((w, reason, {"force": round(float(along[k]), 1), "limit": round(limit, 1)}))
+        return out
+
+    def bumps(
+        self, bumping: np.ndarray, free: np.ndarray, shift: np.ndarray, needed: np.ndarray, travel: np.ndarray
+    ) -> tuple[np.ndarray, list[tuple[int, str, dict[str, float]]]]:
+        """Weigh what a walk or a climb moves of what it runs into: ``bumping`` (nworld, nobject), the movable objects
+        the robot touched outside a push, that no foot stands on and the stride does not drive, while a walk or a climb
+        runs, and of those ``free`` to be, the ones within :data:`BUMP_REACH` of the torso (a knock that parts within a
+        tick leaves no touch to read). While the robot touches one or it lies that near, the most sliding it takes (what
+        the push rules read: :meth:`.PushRules.sliding_force`; read before a knock too, which may lift its load a while)
+        is kept in ``needed`` (N); its travel across this tick (``shift`` (nworld, nobject, 3) m), where it goes the
+        body's way (:data:`KNOCK_COS`), adds up in ``travel`` (m); both are updated in place. An object that bears up
+        another in part, moved :data:`BUMP_TRAVEL` or more, whose sliding took more than a push of it may
+        (``push_force_margin`` times the push limit's force on its support, and what the feet hold), was pushed by the
+        walk, however little it moved (found by an adversarial run: a walk's torso slid a light hook 1-3 cm from under a
+        25 kg plank's end, which took 60-130 N, under the shove rule's ``shove``, and dropped the plank); what bears
+        nothing up is weighed by the shove rule. Returns which objects the walk moved this tick (nworld, nobject), and
+        (world, reason, measured) for each that it pushed."""
+        step = np.linalg.norm(shift[:, :, :2], axis=2)
+        watched = bumping | self._near_torso(free)
+        velocity = self.senses.state.qvel[:, self.senses.facts.ids.qvel[:2]]  # (nworld, 2) the body's, across
+        along = np.einsum("woi,wi->wo", shift[:, :, :2], velocity)
+        moving = watched & (step > self.still) & (along > KNOCK_COS * step * np.linalg.norm(velocity, axis=1)[:, None])
+        travel += np.where(moving, step, 0.0)
+        names, out = self.scene.object_names, []
+        for w, o in zip(*np.nonzero(watched), strict=True):
+            w, o = int(w), int(o)
+            force, drag, _ = self.pushes.sliding_force(w, o)
+            if drag > 0.0:
+                needed[w, o] = max(needed[w, o], force)
+            if travel[w, o] < BUMP_TRAVEL or needed[w, o] == 0.0:
+                continue
+            pushes = self.margin * self.mass * GRAVITY * self.pushes.sliding_friction(w, o)
+            limit = min(pushes, float(self.pushes.feet_hold(w)[1]))
+            if needed[w, o] > limit:
+                reason = (
+                    f"the robot ran into {names[o]} and moved it {travel[w, o]:.3f} m while it bore up another object "
+                    f"in part, which took {needed[w, o]:.0f} N, over the {limit:.0f} N pushing it may take (a walk or "
+                    "a climb does not push things: push_to_position does, within the push rules)"
+                )
+                out.append((w, reason, {"force": round(float(needed[w, o]), 1), "limit": round(limit, 1)}))
+        return moving, out
+
+    def _near_torso(self, objects: np.ndarray) -> np.ndarray:
+        """(nworld, nobject) which of ``objects`` lie within :data:`BUMP_REACH` of the torso's box (from the belly up:
+        the body's origin is at the feet's bottom)."""
+        out = np.zeros(objects.shape, dtype=bool)
+        worlds = np.flatnonzero(objects.any(axis=1))
+        if worlds.size == 0:
+            return out
+        senses, height = self.senses, self.senses.facts.height
+        centre = senses.state.xpos[worlds, senses.facts.ids.body] + [0.0, 0.0, (height + BELLY_HEIGHT) / 2]
+        half = np.array([np.append(senses.half_now(int(w)), (height - BELLY_HEIGHT) / 2) for w in worlds])
+        for o in np.flatnonzero(objects[worlds].any(axis=0)).tolist():
+            lo, hi = senses.boxes(o)
+            gap = np.maximum(lo[worlds] - (centre + half), (centre - half) - hi[worlds]).max(axis=1)
+            out[worlds, o] = objects[worlds, o] & (gap <= BUMP_REACH)
         return out

@@ -91,6 +91,13 @@ class PushRules:
             {"force": round(force, 2), "limit": round(holds, 2), "friction": round(grip, 4)},
         )
 
+    def sliding_force(self, w: int, index: int) -> tuple[float, float, list[str]]:
+        """What sliding object ``index`` in world ``w`` takes now (N: what it moves slid on its support, and what it
+        bears up in part dragged, as :meth:`_grip` reads them), the part of it that drags, and what it drags."""
+        _, _, friction = self._support(w, index)
+        drag, dragged = self._dragged(w, index, friction)
+        return self._load(w, index)[0] * GRAVITY * friction + drag, drag, dragged
+
     def _dragged(self, w: int, index: int, friction: float) -> tuple[float, list[str]]:
         """The force (N) a push of object ``index`` in world ``w`` takes beyond sliding what it moves at ``friction``,
         and the names of what adds it: each movable object that what the push moves (:meth:`_carried`) bears up in

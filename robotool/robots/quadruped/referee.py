@@ -19,6 +19,7 @@ are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -83,6 +84,8 @@ class RefereeState:
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
+    bump_force: np.ndarray  # (nworld, nobject) N the most a walk or a climb took to slide each object it ran into
+    bump_travel: np.ndarray  # (nworld, nobject) m each object travelled across meanwhile (:mod:`.push_force`)
     force_limit: np.ndarray  # (nworld, 2) N the push leg under way may take: the push limit's, what the feet hold
     # (NaN: not read yet; :mod:`.push_force`)
     last_centres: np.ndarray  # (nworld, nobject, 3) where each object was at the last tick
@@ -113,6 +116,8 @@ class RefereeState:
             still=np.zeros((nworld, nobject)),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
+            bump_force=np.zeros((nworld, nobject)),
+            bump_travel=np.zeros((nworld, nobject)),
             force_limit=np.full((nworld, 2), np.nan),
             last_centres=centres,
             last_frames=frames,
@@ -156,6 +161,7 @@ class Referee:
         s = self.state
         s.bumped[w, index], s.ride_start[w, index], s.ride_top[w, index] = np.nan, np.nan, np.nan
         s.carried[w, index], s.drift[w, index], s.rammed_by[w, index] = 0.0, 0.0, -1
+        s.bump_force[w, index] = s.bump_travel[w, index] = 0.0
         s.ride_touched[w, index] = s.ride_carried[w, index] = False
         s.force_limit[w] = np.nan  # read anew: it may push from another surface
 
@@ -168,6 +174,7 @@ class Referee:
         self.state.last_centres = np.where(mask[:, None, None], centres, self.state.last_centres)
         stood_on = self._shoves(ends, mask, centres, shift, moves)  # in 3-D: a torso lifting what lies on it shoves
         travel = np.linalg.norm(shift, axis=2)  # each object's, in 3-D
+        self._bump_strains(ends, mask, shift, moves, stood_on)
         self._rams(ends, mask, centres[:, :, :2], shift, travel, moves, stood_on)
         self._stride_loads(ends, mask, centres, moves)
         self._riders(ends, mask, moves)
@@ -401,7 +408,8 @@ class Referee:
         """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
         or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
         s, limit = self.state, self.limits.max_push_mass
-        for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, self._pressed_by).items():
+        group = functools.partial(pressed_by, self.senses)
+        for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, group).items():
             self._shoved(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
@@ -436,6 +444,23 @@ class Referee:
         for w, reason in self.pushes.footing(worlds, m.pushing[worlds]).items():
             self._shoved(w, reason, {}, ends, moves)
 
+    def _bump_strains(
+        self, ends: list[SkillEnd], mask: np.ndarray, shift: np.ndarray, moves: MoveRunner, stood_on: np.ndarray
+    ) -> None:
+        """Stop and refuse the walks and climbs, in the worlds in ``mask``, that moved what the robot ran into
+        (:meth:`_shoves`; not what a foot stands on, ``stood_on``) with more force than a push of it may take
+        (:meth:`.push_force.PushForce.bumps`); the world fails (:meth:`conditions`). What they move rams as a pushed
+        object does (found by an adversarial run: a light bar nudged under 3 cm rolled a 20 kg drum off a stage)."""
+        s, m = self.state, moves.state
+        free = (
+            ~s.pressed & ~stood_on & (s.drift == 0) & (mask & m.moving & (m.pushing < 0))[:, None] & self.facts.movable
+        )
+        bumping = free & ~np.isnan(s.bumped[:, :, 0])
+        moved, pushed = self.forces.bumps(bumping, free, shift, s.bump_force, s.bump_travel)
+        s.coasting |= moved  # what it moves rams as a pushed object does, until it comes to rest (:meth:`_rams`)
+        for w, reason, measured in pushed:
+            self._shoved(w, reason, measured, ends, moves)
+
     def _strains(self, ends: list[SkillEnd], mask: np.ndarray, travel: np.ndarray, moves: MoveRunner) -> None:
         """Stop and refuse the pushes, in the worlds in ``mask``, that have taken more force than the robot may push
         with (:class:`~.push_force.PushForce`; ``travel``: each object's this tick); the world fails
@@ -452,8 +477,8 @@ class Referee:
             extent[index == o] = (hi - lo)[worlds[index == o], :2]
         front = np.einsum("ki,ki->k", np.abs(u), extent) / 2  # from the pushed object's centre to its front face
         ahead = np.einsum("koi,ki->ko", centres[worlds] - centres[worlds, index][:, None], u) > front[:, None]
-        pressed = self._pressed_by(worlds, index)
-        rammed = pressed & (ahead | self._stuck_to(worlds, index, pressed))
+        pressed = pressed_by(self.senses, worlds, index)
+        rammed = pressed & (ahead | stuck_to(self.senses, self.magnets, worlds, index, pressed))
         rows = np.flatnonzero((pressed & ~ahead).any(axis=1))  # the normals only where they can add a rammed one
         normals = {w: self._object_normals(w) for w in set(worlds[rows].tolist())}  # a world's once: rows share it
         for k in rows:
@@ -479,7 +504,9 @@ class Referee:
                 ram = (
                     f"{names[pusher]}, driven by the stride of the robot on it,"
                     if self._driven()[w, pusher]
-                    else (f"pushing {names[pusher]}")
+                    else f"{names[pusher]}, moved by the robot's walk or climb,"
+                    if s.bump_travel[w, pusher] > 0
+                    else f"pushing {names[pusher]}"
                 )
                 reason = (
                     f"{ram} rammed {', '.join(names[o] for o in np.flatnonzero(group))}: "
@@ -488,36 +515,40 @@ class Referee:
                 )
                 self._shoved(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
-    def _stuck_to(self, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray) -> np.ndarray:
-        """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
-        object in world ``worlds[i]``: they go wherever it is pushed."""
-        owner = self.scene.body_object
-        group = pressed.copy()
-        group[np.arange(len(worlds)), index] = True
-        out = np.zeros(pressed.shape, dtype=bool)
-        for eq, b1, b2 in self.magnets.pairs:
-            active = self.senses.state.eq_active[worlds, eq]
-            out[:, owner[b2]] |= active & group[:, owner[b1]]
-            out[:, owner[b1]] |= active & group[:, owner[b2]]
-        return out & pressed
-
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
         return self.facts.sums.pairs(self.senses.sim.contact_normals(w))
 
-    def _pressed_by(self, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
-        """(k, nobject) the movable objects that object ``index[i]`` touches in world ``worlds[i]``, directly or
-        through other movable objects (itself left out)."""
-        member = self.facts.bodies
-        touch = ((member @ self.senses.state.touching[worlds] @ member.T) > 0).astype(float)  # counts: exact
-        own = np.arange(len(self.scene.object_names))[None, :] == np.asarray(index)[:, None]
-        group = own.copy()
-        while True:
-            near = (group.astype(float)[:, None, :] @ touch)[:, 0] > 0
-            added = near & self.facts.movable & ~group
-            if not added.any():
-                return group & ~own
-            group |= added
+
+def stuck_to(
+    senses: Senses, magnets: Magnets, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray
+) -> np.ndarray:
+    """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
+    object in world ``worlds[i]``: they go wherever it is pushed."""
+    owner = senses.scene.body_object
+    group = pressed.copy()
+    group[np.arange(len(worlds)), index] = True
+    out = np.zeros(pressed.shape, dtype=bool)
+    for eq, b1, b2 in magnets.pairs:
+        active = senses.state.eq_active[worlds, eq]
+        out[:, owner[b2]] |= active & group[:, owner[b1]]
+        out[:, owner[b1]] |= active & group[:, owner[b2]]
+    return out & pressed
+
+
+def pressed_by(senses: Senses, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """(k, nobject) the movable objects that object ``index[i]`` touches in world ``worlds[i]``, directly or
+    through other movable objects (itself left out)."""
+    member = senses.facts.bodies
+    touch = ((member @ senses.state.touching[worlds] @ member.T) > 0).astype(float)  # counts: exact
+    own = np.arange(len(senses.scene.object_names))[None, :] == np.asarray(index)[:, None]
+    group = own.copy()
+    while True:
+        near = (group.astype(float)[:, None, :] @ touch)[:, 0] > 0
+        added = near & senses.facts.movable & ~group
+        if not added.any():
+            return group & ~own
+        group |= added
 
 
 def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
