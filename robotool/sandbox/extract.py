@@ -486,13 +486,19 @@ def _has_call(tree: ast.Module) -> bool:
     return any(isinstance(node, ast.Call) for node in ast.walk(tree))
 
 
+_FAULTY_LABEL = re.compile(rf"\b(?:{_FAULTY}|never|misses|missing)\b", re.IGNORECASE)
+"""Words that call the block before a label faulty: what follows them is its correction, not an aside."""
+
+
 def _aside(label: str) -> bool:
     """Whether a label's last sentence says the block after it is not the program (``For comparison, the naive
     version:``, ``The code you provided:``); a correction after a program marked final says nothing of the kind, and
     a sentence that calls something wrong may take back the block before it (``Wait, that is wrong.``: found by an
-    adversarial run, where the retracted block ran)."""
+    adversarial run, where the retracted block ran); nor is a label that takes back the block before it or calls it
+    faulty (:func:`_retracts`, :data:`_FAULTY_LABEL`: "Wait, the previous code never opens the gripper; use this:",
+    "My first attempt above is wrong; use this instead:", found by a second adversarial run)."""
     sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
-    return _ASIDE.search(label[sentence:]) is not None
+    return _ASIDE.search(label[sentence:]) is not None and not _retracts(label) and not _FAULTY_LABEL.search(label)
 
 
 MOST_PROGRAMS = 8

@@ -855,3 +855,18 @@ def test_a_fix_marked_final_in_another_language_or_by_a_heading_is_taken(label: 
     """Found by an adversarial run: honest replies asked again, as two programs neither marked."""
     answer = f"```python\n{NOGRIP}```\nThat misses the open step.\n\n{label}\n```python\n{GRASP}```\n"
     assert extract(answer).code == GRASP
+
+
+@pytest.mark.parametrize(
+    "label",
+    [
+        "Wait — the previous code never opens the gripper, use this:",
+        "My first attempt above is wrong; use this instead:",
+        "Scratch that, the current code is wrong — this is the right one:",
+    ],
+)
+def test_a_correction_after_a_program_marked_final_that_takes_it_back_is_no_aside(label: str) -> None:
+    """Found by an adversarial run: 'previous code', 'first attempt', 'current code' set the correction aside as an
+    echo, and the draft marked final ran."""
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(f"Final program:\n```python\n{NOGRIP}```\n\n{label}\n```python\n{GRASP}```\n")
