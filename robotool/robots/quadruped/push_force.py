@@ -13,8 +13,10 @@ under them included), read at every tick it is weighed, where the feet stand the
 carries on with the feet on ice holds what the ice does). A push of an object that takes more than either while the
 object moves (faster than ``settled_speed``: a push pressed against what stands in the way moves nothing) for
 ``push_strain_time`` in all over the run (the forces are read at an instant: knocks and starts peak) moves more than
-the robot may push, or more than its feet could push: the referee refuses it and the world fails. (The tunables are
-in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+the robot may push, or more than its feet could push: the referee refuses it and the world fails. A walk or a climb
+that moves what it ran into is weighed the same way where that bears up another object in part (:meth:`PushForce.bumps`:
+the shove rule's 3 cm would let it slide a loaded prop away). (The tunables are in
+:class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations

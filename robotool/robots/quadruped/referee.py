@@ -1,5 +1,5 @@
-"""The quadruped's referee: the judge rules that physics alone would let a program break, checked every tick in
-every world, and the push rules checked when a push starts (and the push limit as each push leg starts).
+"""The quadruped's referee: the judge rules that physics alone would let a program break, checked every tick in every
+world, and the push rules checked when a push starts (and the push limit as each push leg starts).
 
 Every tick, in every world, a robot whose centre of mass has stayed outside the support of its touching feet for
 ``fall_ticks`` ticks with the lift off and that tips, or that tilts past ``fall_tilt``, has fallen: its skill ends with
@@ -9,12 +9,13 @@ torso has touched, other than one being pushed, and that has moved more than ``s
 push moved it by not counted), was shoved; so were the objects that a push rams ahead of the pushed one, or drags along
 under it or stuck to it, or carries on it a while, once together they weigh more than the push limit, and so was what a
 push moves that takes more force than pushing what the robot may push takes (:mod:`.push_force`: a chair pushed out from
-under a heavily loaded lever), and so was what the stride of a walk or a climb carried under the feet, and what went
-along with it, once they weigh more than the push limit, ramming something or not (:mod:`.stride_loads`: a 15 kg cart
-on free rollers, walked off, rolled off them onto the floor). The move is stopped and refused, naming them, and the
-world fails. A foot or the belly that rests on a fragile object (a low glass vase reads as a step) breaks it, and so
-does standing on a movable object that rests on it: the move is refused, naming it, and the world fails. (The tunables
-are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
+under a heavily loaded lever; and what a walk or a climb ran into and moved, however little, while it bore up another
+object, with more sliding than a push of it may take), and so was what the stride of a walk or a climb carried under the
+feet, and what went along with it, once they weigh more than the push limit, ramming something or not
+(:mod:`.stride_loads`: a 15 kg cart on free rollers, walked off, rolled off them onto the floor). The move is stopped
+and refused, naming them, and the world fails. A foot or the belly that rests on a fragile object (a low glass vase
+reads as a step) breaks it, and so does standing on a movable object that rests on it: the move is refused, naming it,
+and the world fails. (The tunables are in :class:`~robotool.robots.quadruped.quadruped_config.QuadrupedConfig`.)
 """
 
 from __future__ import annotations
