@@ -124,6 +124,14 @@ def _extract(text: str) -> Extraction:
     code = "\n".join(_expand_indent_tabs(line) for line in code.split("\n"))
     if not has_action(tree):
         raise ProgramRejected(None, "text", "no Python program found in the answer (only prose, names or values)")
+    defined = _only_defines(tree)
+    if defined:
+        raise ProgramRejected(
+            None,
+            "text",
+            f"the program only defines {', '.join(defined[:5])} and never calls them (a call shown apart, as usage or "
+            "in words, does not run); give the whole program, with its calls, in one code block",
+        )
     missing = [stmt for alias, stmt in _IMPORTS.items() if _uses(tree, alias) and not _imports(tree, alias)]
     dropped = _non_blank(text) - _non_blank(code) - fence_lines
     return Extraction(code="\n".join([*missing, code]) + "\n", dropped_lines=max(dropped, 0), chosen=chosen)
@@ -480,6 +488,22 @@ def _retracts(label: str) -> bool:
         or _SHORTER.fullmatch(last) is not None
         or _MARKER_ALONE.fullmatch(last) is not None
     )
+
+
+def _only_defines(tree: ast.Module) -> list[str]:
+    """The functions and classes a program defines when it does nothing else at its top level (imports and a docstring
+    aside), else []: run, it would do nothing (found by an adversarial run: "Final program:" over the definition, then
+    "Usage:" over its call, ran the definition alone)."""
+    names = []
+    for k, node in enumerate(tree.body):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.append(node.name)
+        elif not (
+            isinstance(node, ast.Import | ast.ImportFrom)
+            or (k == 0 and isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant))
+        ):
+            return []
+    return names
 
 
 def _has_call(tree: ast.Module) -> bool:

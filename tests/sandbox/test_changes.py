@@ -153,3 +153,15 @@ def test_snippets_quotes_and_comments_that_change_nothing_leave_the_program(answ
 def test_the_words_read_are_those_after_the_program(answer: str) -> None:
     with pytest.raises(ProgramRejected, match="asks for a change in words"):
         extract(answer)
+
+
+@pytest.mark.parametrize(
+    "after",
+    ["Usage:\n```python\ngrasp('milk')\n```\n", "Then call `grasp('milk')` to pick up the milk.\n"],
+    ids=["a usage block", "a call in words"],
+)
+def test_a_program_that_only_defines_its_function_is_asked_again(after: str) -> None:
+    """Found by an adversarial run: the definition alone ran, and the robot did nothing."""
+    definition = "def grasp(name):\n    p = get_graspable_point(name)\n    open_gripper()\n    move_to_position(p)\n"
+    with pytest.raises(ProgramRejected, match="only defines grasp and never calls them"):
+        extract(f"Final program:\n```python\n{definition}```\n{after}")
