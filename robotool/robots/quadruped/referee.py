@@ -21,7 +21,6 @@ and the world fails. (The tunables are in :class:`~robotool.robots.quadruped.qua
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +32,7 @@ from robotool.robots.quadruped.push_force import PushForce
 from robotool.robots.quadruped.push_rules import PushRules
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
+from robotool.robots.quadruped.rams import pressed_along, pressed_by, side_swings, stuck_to, turns
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.stride_loads import StrideLoads
@@ -53,11 +53,8 @@ from robotool.sim.magnets import Magnets
 
 FALL_CONDITION = "robot_has_not_fallen"  # the goal condition a fall breaks
 SHOVE_CONDITION = "robot_shoved_nothing"  # the goal condition a shove breaks
-RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
 STILL = 1e-5  # m an object may move in a tick and count as still: whether a foot stands on it matters not (a shove
 # of 3 cm at this pace would take 150 s)
-SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
-RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
 RIDE_TIME = 0.5  # s a push may carry more than the push limit before it counts (what tips against it leans a while)
 REST_TIME = 0.5  # s an object must stay still (in 3-D) to have come to rest: a wedged box tipping free pauses a tick
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
@@ -349,8 +346,11 @@ class Referee:
         s.rammed_by[at_rest] = -1  # at rest: what moves it later is not this ram
         s.coasting[at_rest] = False
         s.drift[at_rest] = 0.0
-        ridden = stood_on & (mask & m.moving & (m.pushing < 0))[:, None] & (step > STILL)
-        s.drift += np.where(ridden, step, 0.0)
+        ridden = stood_on & (mask & m.moving & (m.pushing < 0))[:, None]
+        turned = turns(self.senses, ridden, s.last_frames) > STILL  # what turns in place under the feet rides too
+        ride = np.where(turned, np.maximum(step, 2 * STILL), step)  # (it counts as ridden; the stride weighs the turn)
+        ridden &= ride > STILL
+        s.drift += np.where(ridden, ride, 0.0)
         s.coasting |= ridden & self._driven()  # a lever tipping under the feet rocks, a cart rolls away: the stride
         # drives back what the feet stand on, and it rams like a pushed object
         worlds = np.flatnonzero(mask & m.moving & (m.pushing >= 0))
@@ -362,7 +362,8 @@ class Referee:
             s.rammed_by[worlds] = np.where(met[worlds], index[:, None], s.rammed_by[worlds])
         self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step, met)
         travelling = (s.rammed_by >= 0) & mask[:, None]
-        swung = side_swings(self.senses, met & travelling, s.last_frames, self._object_normals)
+        pusher = np.where((s.rammed_by >= 0) & (s.rammed_by == m.pushing[:, None]), s.rammed_by, -1)
+        swung = side_swings(self.senses, met & travelling, s.last_frames, self._object_normals, pusher)
         s.carried += np.where(travelling, step, 0.0) + swung
         s.last_frames = np.where(mask[:, None, None], self.senses.frames(), s.last_frames)
         moved = travelling & (s.carried > self.config.shove)
@@ -519,74 +520,3 @@ class Referee:
     def _object_normals(self, w: int) -> np.ndarray:
         """(nobject, nobject, 3) the summed contact normals from each object onto each other in world ``w``."""
         return self.facts.sums.pairs(self.senses.sim.contact_normals(w))
-
-
-def stuck_to(
-    senses: Senses, magnets: Magnets, worlds: np.ndarray, index: np.ndarray, pressed: np.ndarray
-) -> np.ndarray:
-    """(k, nobject) the ``pressed`` objects stuck (a magnet's weld) to object ``index[i]`` or to another pressed
-    object in world ``worlds[i]``: they go wherever it is pushed."""
-    owner = senses.scene.body_object
-    group = pressed.copy()
-    group[np.arange(len(worlds)), index] = True
-    out = np.zeros(pressed.shape, dtype=bool)
-    for eq, b1, b2 in magnets.pairs:
-        active = senses.state.eq_active[worlds, eq]
-        out[:, owner[b2]] |= active & group[:, owner[b1]]
-        out[:, owner[b1]] |= active & group[:, owner[b2]]
-    return out & pressed
-
-
-def pressed_by(senses: Senses, worlds: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """(k, nobject) the movable objects that object ``index[i]`` touches in world ``worlds[i]``, directly or
-    through other movable objects (itself left out)."""
-    member = senses.facts.bodies
-    touch = ((member @ senses.state.touching[worlds] @ member.T) > 0).astype(float)  # counts: exact
-    own = np.arange(len(senses.scene.object_names))[None, :] == np.asarray(index)[:, None]
-    group = own.copy()
-    while True:
-        near = (group.astype(float)[:, None, :] @ touch)[:, 0] > 0
-        added = near & senses.facts.movable & ~group
-        if not added.any():
-            return group & ~own
-        group |= added
-
-
-def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """(nobject,) the ``pressed`` objects that object ``index`` or another pressed object presses on along ``u``
-    (x-y) or aside in a world whose objects press on each other along ``normals`` (:meth:`Referee._object_normals`): for
-    one of them, the horizontal part of the summed normals of its contacts with the object is at least
-    :data:`RAM_PRESS` and points within :data:`RAM_ANGLE` of ``u``, or lies within :data:`SIDE_ANGLE` of
-    horizontal (it presses a flank or a slanted face: a hook's tip wedging a crate out of its way moves it as
-    surely as its face does). Each presser is judged alone, by its horizontal part, so that what lies on the
-    object (pressing down) or under it (carrying it, on a tilted board too) neither hides a push nor makes one.
-    What bears the object up (:func:`~.support.bears_up`) is dragged along under it, pressed down: a bar rolling
-    under a pushed board's raised end goes where the push takes it."""
-    pressers = pressed.copy()
-    pressers[index] = True
-    pressing = normals[pressers]  # (npresser, nobject, 3)
-    flat = np.linalg.norm(pressing[:, :, :2], axis=2)
-    along = pressing[:, :, :2] @ u
-    aside = flat > np.cos(SIDE_ANGLE) * np.linalg.norm(pressing, axis=2)
-    under = bears_up(normals[:, index])  # (nobject,) pressing the object up
-    return pressed & (((flat >= RAM_PRESS) & ((along > np.cos(RAM_ANGLE) * flat) | aside)).any(axis=0) | under)
-
-
-def side_swings(
-    senses: Senses, met: np.ndarray, before: np.ndarray, normals_in: Callable[[int], np.ndarray]
-) -> np.ndarray:
-    """(nworld, nobject) m the farthest each rammed object pressed this tick (``met``) swept a corner round as it
-    turned from its orientation ``before`` (the last tick's; a light box rammed into one end of a 20 kg plank on a post
-    swung the plank into line over a gap while its centre moved under 3 cm: found by an adversarial run), where a
-    movable object presses one of its sides (``normals_in(w)``: the summed contact normals between the objects in
-    world ``w``); what turns only under a load that presses it down, or on what bears it up, or once nothing presses
-    it, counts by its centre alone (a board whose cube rides on it turns as a chair pushed out from under its raised
-    end lets it down)."""
-    swings = np.zeros(met.shape)
-    for w in np.flatnonzero(met.any(axis=1)).tolist():
-        normals = normals_in(w)[senses.facts.movable]  # (nmovable, nobject, 3) onto each object
-        touched = np.linalg.norm(normals, axis=2) > 0
-        sides = touched & ~bears_up(normals) & ~bears_up(-normals)
-        objects = np.flatnonzero(met[w] & sides.any(axis=0))
-        swings[w, objects] = senses.sweeps(np.full(len(objects), w), objects, before[w, objects])
-    return swings

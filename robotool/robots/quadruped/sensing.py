@@ -136,17 +136,24 @@ class Senses:
         """(nworld, nobject, 4) each object's orientation now (its body's unit quaternion, w first), read-only."""
         return self.of_state(self.state, "frames", lambda: self.state.xquat[:, self.scene.object_body].copy())
 
-    def sweeps(self, worlds: np.ndarray, objects: np.ndarray, before: np.ndarray) -> np.ndarray:
-        """(k,) m the most a corner of object ``objects[i]`` in world ``worlds[i]`` has travelled across (x-y) as the
-        object turned from orientation ``before[i]`` (a unit quaternion) to now: a plank swung round a post sweeps
-        its ends far while its centre stays."""
+    def sweeps(self, worlds: np.ndarray, objects: np.ndarray, before: np.ndarray, least: float = 0.0) -> np.ndarray:
+        """(k,) m the arc the farthest corner of object ``objects[i]`` in world ``worlds[i]`` has swept about the
+        vertical as the object turned from orientation ``before[i]`` (a unit quaternion) to now: the vertical part of
+        the turn's rotation vector times the corners' largest reach across. A plank swung round a post sweeps its
+        ends far while its centre stays; a drum rolling about its level axis, or a board tipping, sweeps nothing. A turn
+        of at most ``least`` (rad) sweeps nothing either."""
         out = np.zeros(len(worlds))
-        turned = quat_to_mat(self.frames()[worlds, objects]) - quat_to_mat(before)  # (k, 3, 3)
+        now = quat_to_mat(self.frames()[worlds, objects])
+        turn = now @ quat_to_mat(before).transpose(0, 2, 1)  # (k, 3, 3) from then to now, in world axes
+        angle = np.arccos(np.clip((np.trace(turn, axis1=1, axis2=2) - 1) / 2, -1.0, 1.0))
+        scale = np.where(np.sin(angle) > 1e-6, angle / (2 * np.sin(np.maximum(angle, 1e-6))), 0.5)
+        about_z = np.abs(scale * (turn[:, 1, 0] - turn[:, 0, 1]))  # rad: the rotation vector's vertical part
+        about_z[about_z <= least] = 0.0
         for o in np.unique(objects).tolist():
             rows = objects == o
             if not self.facts.cloth[o]:
-                swept = np.einsum("kij,cj->kci", turned[rows], self.facts.corners[o])[:, :, :2]
-                out[rows] = np.linalg.norm(swept, axis=2).max(axis=1)
+                reach = np.linalg.norm(np.einsum("kij,cj->kci", now[rows], self.facts.corners[o])[:, :, :2], axis=2)
+                out[rows] = about_z[rows] * reach.max(axis=1)
         return out
 
     def bounds(self, w: int, index: int) -> tuple[np.ndarray, np.ndarray]:

@@ -16,6 +16,9 @@ from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.support import known_lengths
 
+TURN = np.radians(6.0)
+"""rad an object may turn about the vertical since a ride began before its sweep counts as travel (a lever's board
+yaws a degree or two as it tips under the feet; a plank swung into line turns tens of degrees)."""
 SLIP = 0.3  # the most an object may shift against a driven one, as a share of the driven one's own travel, and go
 # along with it: the cart under a driven board shifts about 1 % of it; a roller rolling under it stays half behind
 
@@ -48,19 +51,20 @@ class StrideLoads:
         (``resting``, (nworld, nobject)); what the rides move counts from where it was when the stride first moved
         anything, over every ride since, until the robot pushes it itself (a fourth adversarial run: a board held to
         under 3 cm of travel, kicked again and again, knocked a 20 kg drum 0.7 m along in strokes of under 3 cm). An
-        object the stride carried that lies more than ``shove`` across from there (its centre's travel and the sweep of
-        its corners as it turned: four quarter turns in place on a 20 kg plank on a post swung it into line over a gap
-        while its centre moved 2-5 mm, found by an adversarial run) is moved by the robot, as by a push, whether it
-        moved under the feet or coasted on after them (a board kicked back 2.5 cm coasted 0.85 m on with the 15 kg cart
-        under it); so are the movable objects that touched what it carried, directly or through others (``group``), that
-        lie more than ``shove`` across from there and have shifted against it by no more than :data:`SLIP` of its travel
-        (what it rides on and rolls with it, what rides on it; not a roller it rolls on), or went on more than ``shove``
-        farther than it (knocked on by it: the drum), or sank more than ``shove``, however little it moved itself (a
-        board walked along rolled a 20 kg drum out from under it off a ledge; a board kicked 1.5 cm between stops
-        knocked one off a ledge). What rose more than ``shove`` is a lever's load, the lever's work, as long as it does
-        not sink back below where it was by more than that (a 10 kg cube a lever lifted rode 12-19 cm back on the board
-        walked along, off a shelf, and came down). Returns, for each world where they weigh more than the push limit,
-        the reason, naming the carried object, and their mass."""
+        object the stride carried that lies more than ``shove`` across from there (its centre's travel and the arc its
+        corners swept about the vertical, :meth:`_swept`: four quarter turns in place on a 20 kg plank on a post swung
+        it into line over a gap while its centre moved 2-5 mm, found by an adversarial run; what touched it is read the
+        same way) is moved by the robot, as by a push, whether it moved under the feet or coasted on after them (a board
+        kicked back 2.5 cm coasted 0.85 m on with the 15 kg cart under it); so are the movable objects that touched what
+        it carried, directly or through others (``group``), that lie more than ``shove`` across from there and have
+        shifted against it by no more than :data:`SLIP` of its travel (what it rides on and rolls with it, what rides on
+        it; not a roller it rolls on), or went on more than ``shove`` farther than it (knocked on by it: the drum), or
+        sank more than ``shove``, however little it moved itself (a board walked along rolled a 20 kg drum out from
+        under it off a ledge; a board kicked 1.5 cm between stops knocked one off a ledge). What rose more than
+        ``shove`` is a lever's load, the lever's work, as long as it does not sink back below where it was by more than
+        that (a 10 kg cube a lever lifted rode 12-19 cm back on the board walked along, off a shelf, and came down).
+        Returns, for each world where they weigh more than the push limit, the reason, naming the carried object, and
+        their mass."""
         shove, limit, drift = self.config.shove, self.limits.max_push_mass, rides.drift
         start, top, touched, carried = rides.ride_start, rides.ride_top, rides.ride_touched, rides.ride_carried
         carrying = (drift > 0) & mask[:, None]
@@ -81,14 +85,14 @@ class StrideLoads:
         if worlds.size == 0:
             return {}
         rows = np.arange(len(worlds))
+        moved = across[worlds] + self._swept(worlds, objects, touched[worlds], rides.ride_frames)  # (k, nobject)
         slip = np.linalg.norm(travel[worlds, :, :2] - travel[worlds, objects][:, None, :2], axis=2)
         lifted = top[worlds] - start[worlds, :, 2] > shove
         sank = start[worlds, :, 2] - centres[worlds, :, 2] > shove
-        knocked = across[worlds] > across[worlds, objects][:, None] + shove  # farther than what drove it: knocked on
-        along = touched[worlds] & (across[worlds] > shove) & (~lifted | sank)
-        along &= (slip <= SLIP * across[worlds, objects][:, None]) | sank | knocked
-        swept = self.senses.sweeps(worlds, objects, rides.ride_frames[worlds, objects])  # turned round under the feet
-        along[rows, objects] = across[worlds, objects] + swept > shove
+        knocked = moved > moved[rows, objects][:, None] + shove  # farther than what drove it: knocked on
+        along = touched[worlds] & (moved > shove) & (~lifted | sank)
+        along &= (slip <= SLIP * moved[rows, objects][:, None]) | sank | knocked
+        along[rows, objects] = moved[rows, objects] > shove
         load = (self.senses.masses(worlds) * along).sum(axis=1)
         names = self.senses.scene.object_names
         found: dict[int, tuple[str, float]] = {}
@@ -101,3 +105,14 @@ class StrideLoads:
             )
             found.setdefault(int(worlds[k]), (reason, float(load[k])))
         return found
+
+    def _swept(self, worlds: np.ndarray, objects: np.ndarray, touched: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """(k, nobject) m the arc each object carried (``objects`` (k,)) or touched (``touched`` (k, nobject)) in
+        ``worlds`` swept about the vertical since the ride began (its orientation then: ``frames``), else 0: a light
+        mat turned in place on a 20 kg plank on a post swung the plank round under it (found by an adversarial run)."""
+        out = np.zeros(touched.shape)
+        watched = touched.copy()
+        watched[np.arange(len(worlds)), objects] = True
+        k, o = np.nonzero(watched)
+        out[k, o] = self.senses.sweeps(worlds[k], o, frames[worlds[k], o], TURN)
+        return out

@@ -59,3 +59,36 @@ def test_the_same_turns_on_a_light_plank_swing_it_into_a_bridge() -> None:
         "light_plank_aslant_on_a_post_with_the_robot_on_it", "turn_in_place_to_swing_a_heavy_plank_round"
     ):
         assert rollout.success, world_failure(rollout)
+
+
+# Found by a second adversarial run, against the first versions of the sweeps: a box pushed along the plank's top drags
+# it round by friction (no side pressed), and a light mat between the feet and the plank turns with the robot (the
+# plank only touched what the stride carried).
+BYPASSES = [
+    ("heavy_plank_aslant_with_a_light_box_on_its_end", "drag_a_heavy_plank_round_by_a_box_on_its_end", "rammed plank"),
+    (
+        "heavy_plank_aslant_on_a_post_under_a_light_mat",
+        "turn_in_place_on_a_mat_to_swing_a_heavy_plank_round",
+        "(mat, plank)",
+    ),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("layout", "program", "named"), BYPASSES, ids=["a box on its end", "a mat on it"])
+def test_a_heavy_plank_swung_round_through_what_lies_on_it_is_weighed(layout: str, program: str, named: str) -> None:
+    for rollout in _run(layout, program):
+        assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False, world_failure(rollout)
+        assert named in (world_failure(rollout) or ""), world_failure(rollout)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("layout", "program", "seed"),
+    [(BYPASSES[0][0], BYPASSES[0][1], 1), (BYPASSES[1][0], BYPASSES[1][1], 2)],
+    ids=["a box on its end", "a mat on it"],
+)
+def test_the_same_with_a_light_plank_swings_it_into_a_bridge(layout: str, program: str, seed: int) -> None:
+    """The controls: on other draws of the worlds a light plank can tip under the robot as it walks on, a fall."""
+    for rollout in _run(layout.replace("heavy", "light"), program, seed=seed):
+        assert rollout.success, world_failure(rollout)
