@@ -31,6 +31,7 @@ from robotool.robots.quadruped.push_rules import PushRules
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import BELLY_HEIGHT, QuadrupedLimits
 from robotool.robots.quadruped.sensing import Senses
+from robotool.robots.quadruped.terrain import quarter_turns
 
 BUMP_REACH = 0.02
 """m from the torso's box within which what moves during a walk may have been knocked by it."""
@@ -134,9 +135,9 @@ class PushForce:
         names, out = self.scene.object_names, []
         for w, o in zip(*np.nonzero(watched), strict=True):
             w, o = int(w), int(o)
-            force, drag, _ = self.pushes.sliding_force(w, o)
-            if drag > 0.0:
-                needed[w, o] = max(needed[w, o], force)
+            if self._touches_another(w, o):  # else it bears nothing up (most ticks: a step beside the robot)
+                force, drag, _ = self.pushes.sliding_force(w, o)
+                needed[w, o] = max(needed[w, o], force) if drag > 0.0 else needed[w, o]
             if travel[w, o] < BUMP_TRAVEL or needed[w, o] == 0.0:
                 continue
             pushes = self.margin * self.mass * GRAVITY * self.pushes.sliding_friction(w, o)
@@ -150,6 +151,11 @@ class PushForce:
                 out.append((w, reason, {"force": round(float(needed[w, o]), 1), "limit": round(limit, 1)}))
         return moving, out
 
+    def _touches_another(self, w: int, index: int) -> bool:
+        """Whether object ``index`` touches another movable object in world ``w`` (the robot's bodies aside)."""
+        touching = self.senses.state.touching[w][self.scene.body_object == index].any(axis=0)
+        return bool((touching & self.bodies.movable & (self.scene.body_object != index)).any())
+
     def _near_torso(self, objects: np.ndarray) -> np.ndarray:
         """(nworld, nobject) which of ``objects`` lie within :data:`BUMP_REACH` of the torso's box (from the belly up:
         the body's origin is at the feet's bottom)."""
@@ -159,7 +165,9 @@ class PushForce:
             return out
         senses, height = self.senses, self.senses.facts.height
         centre = senses.state.xpos[worlds, senses.facts.ids.body] + [0.0, 0.0, (height + BELLY_HEIGHT) / 2]
-        half = np.array([np.append(senses.half_now(int(w)), (height - BELLY_HEIGHT) / 2) for w in worlds])
+        odd = (quarter_turns(senses.yaw(worlds)) % 2 == 1)[:, None]  # turned a quarter: length along y
+        half = np.hstack([np.where(odd, senses.facts.half[::-1], senses.facts.half), np.full((len(worlds), 1), 0.0)])
+        half[:, 2] = (height - BELLY_HEIGHT) / 2
         for o in np.flatnonzero(objects[worlds].any(axis=0)).tolist():
             lo, hi = senses.boxes(o)
             gap = np.maximum(lo[worlds] - (centre + half), (centre - half) - hi[worlds]).max(axis=1)

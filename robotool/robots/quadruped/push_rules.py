@@ -93,7 +93,10 @@ class PushRules:
 
     def sliding_force(self, w: int, index: int) -> tuple[float, float, list[str]]:
         """What sliding object ``index`` in world ``w`` takes now (N: what it moves slid on its support, and what it
-        bears up in part dragged, as :meth:`_grip` reads them), the part of it that drags, and what it drags."""
+        bears up in part dragged, as :meth:`_grip` reads them), the part of it that drags, and what it drags; (0, 0, [])
+        when it drags nothing (its support is then not read: the rays cost)."""
+        if not self._dragged(w, index, 1.0)[1]:
+            return 0.0, 0.0, []
         _, _, friction = self._support(w, index)
         drag, dragged = self._dragged(w, index, friction)
         return self._load(w, index)[0] * GRAVITY * friction + drag, drag, dragged
