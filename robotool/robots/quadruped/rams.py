@@ -34,25 +34,28 @@ def side_swings(
     met: np.ndarray,
     before: np.ndarray,
     normals_in: Callable[[int], np.ndarray],
-    sources: np.ndarray,
+    rammed_by: np.ndarray,
+    pushing: np.ndarray,
 ) -> np.ndarray:
-    """(nworld, nobject) m the arc the farthest corner of each rammed object pressed this tick (``met``) swept about the
-    vertical since its orientation ``before`` (the last tick's; :meth:`.Senses.sweeps`: a light box rammed into one end
-    of a 20 kg plank on a post swung the plank into line over a gap while its centre moved under 3 cm, found by an
-    adversarial run), where a movable object presses one of its sides, or it bears up the object pushed that rams it
-    (``sources`` (nworld, nobject), -1: none; a box pushed along the top of the plank's end drags it round by friction,
-    found by a second run). ``normals_in(w)``: the summed contact normals between the objects in world ``w``. What turns
-    only under a load that presses it down, on what bears it up, or once nothing presses it, counts by its centre alone
-    (a board whose cube rides on it turns as a chair pushed out from under its raised end lets it down)."""
+    """(nworld, nobject) m the arc the farthest corner of each rammed object pressed this tick (``met``) swept about
+    the vertical since its orientation ``before`` (the last tick's; :meth:`.Senses.sweeps`: a light box rammed into one
+    end of a 20 kg plank on a post swung the plank into line over a gap while its centre moved under 3 cm, found by an
+    adversarial run), where a movable object presses one of its sides, or it bears up the object pushed (``pushing``
+    (nworld,), -1: none) or one that push rams on its side (``rammed_by`` (nworld, nobject)): a box pushed along the
+    plank's top, or rammed there by another, drags it round by friction (found by later runs). ``normals_in(w)``: the
+    summed contact normals between the objects in world ``w``. What turns only under a load that presses it down, on
+    what bears it up, or once nothing presses it, counts by its centre alone (a board whose cube rides on it turns as a
+    chair pushed out from under its raised end lets it down)."""
     swings = np.zeros(met.shape)
     for w in np.flatnonzero(met.any(axis=1)).tolist():
         normals = normals_in(w)  # (nobject, nobject, 3) from each object onto each other
         movable = normals[senses.facts.movable]
         touched = np.linalg.norm(movable, axis=2) > 0
         sides = (touched & ~bears_up(movable) & ~bears_up(-movable)).any(axis=0)
+        group = np.flatnonzero(sides & (rammed_by[w] == pushing[w])) if pushing[w] >= 0 else np.zeros(0, dtype=int)
+        group = np.append(group, pushing[w]) if pushing[w] >= 0 else group
         objects = np.flatnonzero(met[w])
-        source = sources[w, objects]
-        under = (source >= 0) & bears_up(normals[objects, np.maximum(source, 0)])
+        under = bears_up(normals[objects][:, group]).any(axis=1) if group.size else np.zeros(len(objects), dtype=bool)
         objects = objects[sides[objects] | under]
         swings[w, objects] = senses.sweeps(np.full(len(objects), w), objects, before[w, objects])
     return swings

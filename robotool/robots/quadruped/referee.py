@@ -362,8 +362,8 @@ class Referee:
             s.rammed_by[worlds] = np.where(met[worlds], index[:, None], s.rammed_by[worlds])
         self._coasting_rams(worlds, m.pushing[worlds], mask, centres, shift, step, met)
         travelling = (s.rammed_by >= 0) & mask[:, None]
-        pusher = np.where((s.rammed_by >= 0) & (s.rammed_by == m.pushing[:, None]), s.rammed_by, -1)
-        swung = side_swings(self.senses, met & travelling, s.last_frames, self._object_normals, pusher)
+        pushing = np.where(m.moving, m.pushing, -1)
+        swung = side_swings(self.senses, met & travelling, s.last_frames, self._object_normals, s.rammed_by, pushing)
         s.carried += np.where(travelling, step, 0.0) + swung
         s.last_frames = np.where(mask[:, None, None], self.senses.frames(), s.last_frames)
         moved = travelling & (s.carried > self.config.shove)

@@ -67,6 +67,11 @@ def test_the_same_turns_on_a_light_plank_swing_it_into_a_bridge() -> None:
 BYPASSES = [
     ("heavy_plank_aslant_with_a_light_box_on_its_end", "drag_a_heavy_plank_round_by_a_box_on_its_end", "rammed plank"),
     (
+        "heavy_plank_aslant_with_a_box_on_its_end_and_a_ram",
+        "ram_a_box_on_a_heavy_planks_end_to_swing_it_round",
+        "rammed plank",
+    ),
+    (
         "heavy_plank_aslant_on_a_post_under_a_light_mat",
         "turn_in_place_on_a_mat_to_swing_a_heavy_plank_round",
         "(mat, plank)",
@@ -75,7 +80,9 @@ BYPASSES = [
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("layout", "program", "named"), BYPASSES, ids=["a box on its end", "a mat on it"])
+@pytest.mark.parametrize(
+    ("layout", "program", "named"), BYPASSES, ids=["a box on its end", "a box rammed on its end", "a mat on it"]
+)
 def test_a_heavy_plank_swung_round_through_what_lies_on_it_is_weighed(layout: str, program: str, named: str) -> None:
     for rollout in _run(layout, program):
         assert not rollout.success and rollout.conditions["robot_shoved_nothing"] is False, world_failure(rollout)
@@ -85,8 +92,8 @@ def test_a_heavy_plank_swung_round_through_what_lies_on_it_is_weighed(layout: st
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("layout", "program", "seed"),
-    [(BYPASSES[0][0], BYPASSES[0][1], 1), (BYPASSES[1][0], BYPASSES[1][1], 2)],
-    ids=["a box on its end", "a mat on it"],
+    [(BYPASSES[0][0], BYPASSES[0][1], 1), (BYPASSES[1][0], BYPASSES[1][1], 2), (BYPASSES[2][0], BYPASSES[2][1], 2)],
+    ids=["a box on its end", "a box rammed on its end", "a mat on it"],
 )
 def test_the_same_with_a_light_plank_swings_it_into_a_bridge(layout: str, program: str, seed: int) -> None:
     """The controls: on other draws of the worlds a light plank can tip under the robot as it walks on, a fall."""
