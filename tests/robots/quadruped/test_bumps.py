@@ -54,3 +54,16 @@ def test_a_walk_that_nudges_a_bar_into_a_heavy_drum_rams_it() -> None:
 def test_the_same_nudges_of_light_loads_succeed(layout: str, program: str) -> None:
     for rollout in _run(layout, _cheat(program)):
         assert rollout.success, world_failure(rollout)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: what a push rams is weighed by mass, and by force only where the robot presses it; a light bar "
+    "pushed into a light hook knocks it from under a heavy plank in one tick (the knock's force is read at no tick, "
+    "and the plank's load lifts as it lands); the walk's check reads loads near the torso only. Reading them near the "
+    "object pushed too refused the lever's honest chair push (the board on the chair drags a few cm, bearing the cube)",
+)
+def test_a_push_of_a_light_bar_that_knocks_a_loaded_hook_out_is_weighed() -> None:
+    """Found by an adversarial run: 20/20 worlds on seeds 1-5 dropped the 25 kg plank."""
+    for rollout in _run("light_bar_against_a_loaded_hooks_handle", _cheat("push_a_bar_into_a_loaded_hook")):
+        assert not rollout.success, world_failure(rollout)
