@@ -76,9 +76,9 @@ class PushRules:
         """Whether the robot's feet hold a push of object ``index`` in world ``w``: the push must slide ``mass`` (kg:
         the object with what rides on it or is stuck to it) on its support (the geom ``support`` it rests on most,
         -1: none), which takes its weight times the ``friction`` between them (:meth:`_support`), and drag what it
-        bears up in part (:meth:`_dragged`); the feet hold :meth:`feet_hold`. A push that takes more is refused: on
+        bears up in part (:meth:`_drag`); the feet hold :meth:`feet_hold`. A push that takes more is refused: on
         that footing the feet, not the object, would slide."""
-        drag, dragged = self._dragged(w, index, friction)
+        drag, dragged = self._drag(w, self._borne(w, index), friction)
         force = mass * GRAVITY * friction + drag
         robot, holds, floor, grip = self.feet_hold(w, feet_on)
         if force <= holds:
@@ -95,29 +95,34 @@ class PushRules:
         """What sliding object ``index`` in world ``w`` takes now (N: what it moves slid on its support, and what it
         bears up in part dragged, as :meth:`_grip` reads them), the part of it that drags, and what it drags; (0, 0, [])
         when it drags nothing (its support is then not read: the rays cost)."""
-        if not self._dragged(w, index, 1.0)[1]:
+        borne = self._borne(w, index)
+        if not borne:
             return 0.0, 0.0, []
         _, _, friction = self._support(w, index)
-        drag, dragged = self._dragged(w, index, friction)
+        drag, dragged = self._drag(w, borne, friction)
         return self._load(w, index)[0] * GRAVITY * friction + drag, drag, dragged
 
-    def _dragged(self, w: int, index: int, friction: float) -> tuple[float, list[str]]:
-        """The force (N) a push of object ``index`` in world ``w`` takes beyond sliding what it moves at ``friction``,
-        and the names of what adds it: each movable object that what the push moves (:meth:`_carried`) bears up in
-        part (an anvil lying partly on a pushed sled, partly on a fixed rail) presses it onto its support with the
-        force it bears there (read from the solver's contact forces, which loads the push at ``friction``), and is
-        dragged along until it slides on it or its other supports slide under it, whichever takes less (at its own
-        friction, the least either pair has)."""
-        owner, names = self.scene.body_object, self.scene.object_names
+    def _borne(self, w: int, index: int) -> list[tuple[int, float]]:
+        """Each movable object that what a push of object ``index`` in world ``w`` moves (:meth:`_carried`) bears up in
+        part (an anvil lying partly on a pushed sled, partly on a fixed rail), with the force (N) it bears it up by,
+        read from the solver's contact forces."""
+        owner = self.scene.body_object
         moved = np.isin(owner, [index, *(o for part in self._carried(w, index) for o in part)])
         up = self.senses.sim.contact_forces(np.array([w]), moved)[0, :, 2]  # N each body is borne up by the moved
         movable = (owner >= 0) & self.facts.movable[np.maximum(owner, 0)] & ~self.scene.robot_body
+        objects = np.unique(owner[movable & ~moved & (up > BORNE)]).tolist()
+        return [(o, float(up[owner == o].clip(min=0.0).sum())) for o in objects]
+
+    def _drag(self, w: int, borne: list[tuple[int, float]], friction: float) -> tuple[float, list[str]]:
+        """The force (N) a push in world ``w`` takes beyond sliding what it moves at ``friction``, and the names of
+        what adds it: each object ``borne`` up in part (:meth:`_borne`) is pressed onto what the push moves with the
+        force it bears there (which loads the push at ``friction``), and is dragged along until it slides on it or its
+        other supports slide under it, whichever takes less (at its own friction, the least either pair has)."""
         drag, dragged = 0.0, []
-        for o in np.unique(owner[movable & ~moved & (up > BORNE)]).tolist():
-            share = float(up[owner == o].clip(min=0.0).sum())
+        for o, share in borne:
             rest = max(self.senses.mass(w, o) * GRAVITY - share, 0.0)
             drag += share * friction + min(share, rest) * self._own_friction(w, o)
-            dragged.append(names[o])
+            dragged.append(self.scene.object_names[o])
         return drag, dragged
 
     def feet_hold(self, w: int, feet_on: np.ndarray | None = None) -> tuple[float, float, str, float]:

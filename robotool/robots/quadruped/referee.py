@@ -139,6 +139,7 @@ class Referee:
         self.forces = PushForce(senses, self.pushes, limits, config)
         self.crushes = Crushes(senses)
         self.strides = StrideLoads(senses, limits, config)  # (its state: the ride_ fields of RefereeState)
+        self.grouped = functools.partial(pressed_by, senses)  # what touches what, directly or through others
 
     def conditions(self) -> dict[str, list[bool]]:
         """What every goal also needs, per world: the robot has not fallen, it shoved nothing by walking into it
@@ -410,8 +411,7 @@ class Referee:
         """Stop and refuse the moves, in the worlds in ``mask``, whose stride moves more than the push limit, ramming
         or not (:class:`~.stride_loads.StrideLoads`); the world fails (:meth:`conditions`)."""
         s, limit = self.state, self.limits.max_push_mass
-        group = functools.partial(pressed_by, self.senses)
-        for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, group).items():
+        for w, (reason, mass) in self.strides.weigh(s, mask, centres, s.still >= REST_TIME, self.grouped).items():
             self._shoved(w, reason, {"mass": round(mass, 3), "limit": limit}, ends, moves)
 
     def _riders(self, ends: list[SkillEnd], mask: np.ndarray, moves: MoveRunner) -> None:
