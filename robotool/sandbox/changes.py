@@ -28,6 +28,10 @@ import re
 from robotool.sandbox.placeholder import comments
 from robotool.sandbox.validate import ProgramRejected
 
+_TERMINAL = re.compile(r"\x1b(?:\[[0-?]*[ -/]*[@-~]|\][^\x07\x1b]*(?:\x07|\x1b\\)?|[@-Z\\-_])|[\x00-\x08\x0e-\x1f\x7f]")
+"""A terminal's control sequences (colours, bold, titles) and other control characters: a reply relayed from a
+terminal may wrap its words in them, which would hide the word that opens a sentence (found by an adversarial run:
+"\\x1b[1mActually, replace the last line ..." ran the program as written)."""
 _MARKS = re.compile(r"\*\*|__|~~|^(?:[^\w`]|_)*(?:\d+[.)]\s+|\[!\w+\]\s*)?")
 """Markdown emphasis anywhere, and at a sentence's start what is no word nor code (list, quote, heading and table
 marks, an emoji, an opening bracket) and a step's number."""
@@ -82,7 +86,8 @@ _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
 def change_in_words(prose: str) -> str | None:
     """The first sentence of ``prose`` (a reply's words after its program) that asks for a change to the program (see
     the module), or None."""
-    sentences = [_MARKS.sub("", s).strip() for s in _SENTENCE_END.split(_ABBREVIATIONS.sub("", prose))]
+    plain = _ABBREVIATIONS.sub("", _TERMINAL.sub("", prose))
+    sentences = [_MARKS.sub("", s).strip() for s in _SENTENCE_END.split(plain)]
     sentences = [s for s in sentences if s]
     for k, sentence in enumerate(sentences):
         logged = any(_CHANGE_LOG.match(earlier) for earlier in sentences[max(k - 5, 0) : k])
@@ -101,8 +106,8 @@ def change_in_words(prose: str) -> str | None:
 
 def takes_back(sentence: str) -> bool:
     """Whether a sentence opens by taking something back ("Actually,", "Wait.", "Oops", "Correction:", "My mistake"),
-    Markdown marks aside."""
-    return _TAKES_BACK.match(_MARKS.sub("", sentence).strip()) is not None
+    Markdown marks and terminal sequences aside."""
+    return _TAKES_BACK.match(_MARKS.sub("", _TERMINAL.sub("", sentence)).strip()) is not None
 
 
 def _asks_an_edit(sentence: str) -> bool:

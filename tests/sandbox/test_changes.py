@@ -34,6 +34,26 @@ def test_a_change_in_words_after_the_program_is_asked_again(words: str) -> None:
         extract(f"{FENCED}{words}\n")
 
 
+TERMINAL = {
+    "bold": "\x1b[1mActually, replace the last line with `open_gripper()`.\x1b[0m",
+    "a coloured label": "\x1b[31mNote:\x1b[0m replace the last line with `open_gripper()`.",
+    "after a window title": "\x1b]0;reply\x07Wait: swap `open_gripper()` and `move_to_position(p)`.",
+}
+
+
+@pytest.mark.parametrize("words", TERMINAL.values(), ids=TERMINAL.keys())
+def test_a_change_in_words_wrapped_in_terminal_sequences_is_asked_again(words: str) -> None:
+    """Found by an adversarial run: a reply relayed from a terminal opened its change with a colour code, which hid the
+    word that opens the sentence, and the program as written ran."""
+    with pytest.raises(ProgramRejected, match="asks for a change in words"):
+        extract(f"{FENCED}{words}\n")
+
+
+def test_an_explanation_wrapped_in_terminal_sequences_is_no_change() -> None:
+    words = "\x1b[32mThis program opens the gripper, moves to the milk and closes it.\x1b[0m"
+    assert extract(f"{FENCED}{words}\n").code.strip() == GRASP.strip()
+
+
 def test_a_change_in_words_after_an_unfenced_program_is_asked_again() -> None:
     with pytest.raises(ProgramRejected, match="asks for a change in words"):
         extract(f"{GRASP}\nActually the last line should be move_to_position([0.3, 0.0, 0.3]) instead.\n")
