@@ -9,15 +9,15 @@ alone costs least when it holds). A program that succeeds in every one of these 
 rollouts are the planning and the fresh worlds together, so one that fails a fresh world no longer counts as
 succeeding everywhere and ranks below one that held in all of them. The first round's best guess runs in its fresh
 worlds in the same batch as its planning worlds (most often it holds, and one batch of eight worlds costs much less
-than two of three and five: the controller's tick costs nearly as much for few worlds as for many); those fresh
-rollouts count only if it held in every planning world. When the first round holds nothing, programs the caller
-makes from its failures (the planner's variants of a near miss) join the second round. A program that pushes an
-object some program's push found too heavy on its own in a planning world is not verified (:func:`too_heavy`: a
-seed makes the same world in every batch, so its push is refused there, and a planner's program pushes an object only
-to use it or to clear it away). A program that starts as a tried one did up to a call that failed in a planning world
-(:func:`repeats`) is verified after the programs as likely by prediction that do not. The search stops at the first
-round with a program that succeeded in every planning and fresh world (or when the rounds run out, or the next round
-would not fit the budget of simulated world-seconds: :class:`Pace`).
+than two of three and five: the controller's tick costs nearly as much for few worlds as for many), unless it is
+predicted to fail (every program is, then); those fresh rollouts count only if it held in every planning world.
+When the first round holds nothing, programs the caller makes from its failures (the planner's variants of a near miss)
+join the second round. A program that pushes an object some program's push found too heavy on its own in a planning
+world is not verified (:func:`too_heavy`: a seed makes the same world in every batch, so its push is refused there, and
+a planner's program pushes an object only to use it or to clear it away). A program that starts as a tried one did up to
+a call that failed in a planning world (:func:`repeats`) is verified after the programs as likely by prediction that do
+not. The search stops at the first round with a program that succeeded in every planning and fresh world (or when the
+rounds run out, or the next round would not fit the budget of simulated world-seconds: :class:`Pace`).
 """
 
 from __future__ import annotations
@@ -250,7 +250,8 @@ def search(
                 codes.append(item.candidate.code)
         planning = range(seed, seed + worlds)
         fresh = range(verification_seed(seed, worlds), verification_seed(seed, worlds) + budget.verify)
-        ahead = bool(budget.verify) and not rounds and bool(codes)  # the best guess's fresh worlds, in this batch
+        # the best guess's fresh worlds, in this batch (not for one predicted to fail: it seldom holds)
+        ahead = bool(budget.verify) and not rounds and bool(codes) and runnable[0].program.doubt is None
         runs = [(code, [*planning, *fresh] if ahead and k == 0 else planning) for k, code in enumerate(codes)]
         results = run_seeded(task, runs, backend=backend)
         pace.charge(results)

@@ -124,6 +124,21 @@ def test_the_first_round_may_verify_fewer_programs_than_the_beam(task, monkeypat
     assert [len(seeds) for _, seeds in runner.calls[0]] == [3 + 5]  # the best guess's fresh worlds ran ahead
 
 
+@pytest.mark.parametrize(("fails", "batches"), [({0, 1, 2}, [[3]]), (set(), [[3], [5]])])
+def test_the_fresh_worlds_of_a_best_guess_predicted_to_fail_do_not_run_ahead(
+    task, monkeypatch: pytest.MonkeyPatch, fails: set[int], batches: list[list[int]]
+) -> None:
+    """Every program is doubted only when every one is predicted to fail (a cube too heavy for the robot's weight on
+    the lever): the best guess then seldom holds, and five fresh worlds run ahead with it are spent for nothing. When
+    it holds against the prediction, its fresh worlds run after, as any other's do."""
+    guess = _doubted(1.0)
+    runner = ScriptedRunner({guess.code: fails})
+    monkeypatch.setattr(search_module, "run_seeded", runner)
+    tried, _ = _search(task, [guess], Budget(beam=3, rounds=1, work=float("inf"), verify=5))
+    assert [[len(seeds) for _, seeds in batch] for batch in runner.calls] == batches
+    assert len(tried[0].candidate.rollouts) == (3 if fails else 8)
+
+
 def test_a_program_whose_stance_has_no_slack_is_tried_after_one_with_slack_and_as_many_objects() -> None:
     tight, roomy = _program(1.0), _program(2.0)
     roomy.motion("walk_to_position", point=Point.at(None, (3.0, 0.0, 0.0)), intent="one more step")

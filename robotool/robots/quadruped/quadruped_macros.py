@@ -177,6 +177,9 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             if w.quad.stands_clear(w.layout, near_prop):  # (else the push routes to where it lines up by itself)
                 w.floor_walk(near_prop, f"walk beside {prop.name}")
             w.push(prop.name, out, "out from under the board")
+            if prop.effective_mass > quad.limits.max_push_mass:  # refused in every world
+                limit = quad.limits.max_push_mass
+                w.doubt(f"{prop.name} weighs {prop.effective_mass:.3g} kg, over the {limit:g} kg push limit")
             thin = _thin_prop_push(quad.layout, p, bbox, -side * lat, clearance)
             if thin is not None:
                 prog.thin.append(thin)
@@ -188,6 +191,7 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
         step_on = fulcrum.center - a * _step_on_distance(walker.extent(a), fulcrum, quad.layout.box(target.name), a)
         step_on = step_on - lat * ((step_on - bbox.center) @ lat)
         end = bbox.center + a * (float(np.abs(a) @ bbox.half) - walker.extent(a) - INSET)
+        w.doubt(_outweighed(quad, board, fulcrum, target, a, end))
         into_lane = w.here + lat * (side * beside - (w.here - bbox.center) @ lat)
         lane_end = step_on + lat * side * beside
         # (after a turn the robot stands in that lane already; where something stands there, the walk to the lane's
@@ -211,6 +215,29 @@ def _levers(quad: Quadruped, target: SceneObject) -> Iterator[Program]:
             + f"the lever lifts {target.name}."
         )
         yield prog
+
+
+def _outweighed(
+    quad: Quadruped, board: SceneObject, fulcrum: Box, load: SceneObject, a: np.ndarray, end: np.ndarray
+) -> str | None:
+    """Why the robot standing at ``end`` on ``board`` (its far end along ``a``) cannot tip the lever over ``fulcrum``
+    and lift ``load`` on its other end, or None: the moments of the weights about the pivot, taken at the fulcrum's
+    edge toward the load (the most the robot's weight can gain: a board lying on a box tips about its other edge), the
+    board's own weight counted where its centre lies. A load too heavy for the robot's weight there is not lifted in
+    any world (a cube of 28 kg on a 2.4 m board over a roller, against the 12 kg robot, held the board down in every
+    world; the search tried every lever before it gave up)."""
+    limits = quad.task.limits
+    assert isinstance(limits, QuadrupedLimits)
+    pivot = float(fulcrum.center @ a) - float(np.abs(a) @ fulcrum.half)
+    board_centre = float(quad.layout.box(board.name).center @ a)
+    tips = limits.mass * (float(end @ a) - pivot) + board.effective_mass * (board_centre - pivot)
+    holds = load.effective_mass * (pivot - float(np.asarray(load.center[:2]) @ a))
+    if tips > holds:
+        return None
+    return (
+        f"the robot's {limits.mass:g} kg at {board.name}'s far end cannot outweigh {load.name}'s "
+        f"{load.effective_mass:.3g} kg on its other end: the lever would not tip"
+    )
 
 
 def _strides(start: np.ndarray, fulcrum: np.ndarray, end: np.ndarray) -> list[np.ndarray]:

@@ -109,3 +109,19 @@ def test_a_lane_beside_the_board_blocked_by_a_heavy_box_is_walked_around() -> No
             if motion.skill == "walk_to_position":
                 xy = motion.point.estimate()[:2]
                 assert np.any(np.abs(xy - toolbox.center) > toolbox.half + np.array(task.limits.body_size[:2]) / 2)
+
+
+@pytest.mark.parametrize(("seed", "why"), [(41, "cannot outweigh cube's 27.6 kg"), (13, "chair weighs 6 kg, over")])
+def test_a_lever_the_robot_cannot_tip_or_a_prop_it_cannot_push_is_predicted_to_fail(seed: int, why: str) -> None:
+    """cube_lifting 41 (a 27.6 kg cube on the lowered end, the 12 kg robot on the raised one, the roller near the
+    board's middle) and 13 (a 6 kg chair under the raised end, over the 5 kg push limit): every lever held still or
+    every push was refused in every world, and the search tried them all (24 s) before it gave up. Every lever program
+    now carries the reason as its doubt, so that the search gives up after its doubted rounds."""
+    programs = list(candidates(generate("cube_lifting", seed).task, True))
+    assert programs and all(p.doubt is not None and why in p.doubt for p in programs)
+
+
+def test_a_cube_the_robot_outweighs_on_the_lever_is_not_doubted() -> None:
+    """The built-in scene (a 10 kg cube, a 3 kg chair) and one with the heaviest cube the family makes solvable."""
+    for task in (tasks.load("cube_lifting"), generate("cube_lifting", 47).task):
+        assert all(p.doubt is None for p in candidates(task, True))
