@@ -1,7 +1,7 @@
 """The search planner on layouts it was not built from (task fixtures under tests/fixtures/layouts/): staircases of
 two and three pushed boxes approached from -x and +y (two crates heavier together than the push limit among them), a
 gap crossed toward -x, levers reflected and turned along y, a lever whose prop is reached around a heavy box standing
-between it and the robot.
+between it and the robot, a climb and a vase lowering whose robot starts on a stage or the sofa and steps down first.
 
 Each is solved with a verified success, and a tool-free attempt fails in simulation. Also the layout predictions
 those need: a walk over a box between the feet, a push routed around a wall."""
@@ -17,13 +17,16 @@ from fixtures.paths import FIXTURES
 from robotool import tasks
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout
+from robotool.planner.search import order
 from robotool.robots.quadruped.predict import LANE, drift_room, push_route, walk_violation
+from robotool.robots.quadruped.quadruped_macros import candidates
 from robotool.task.task_file import parse_task
 from robotool.task.task_model import Task
 from robotool.verify import failure_reason, prepare_code, run_codes
 
 LAYOUTS = FIXTURES / "layouts"
 NAMES = [  # this module's fixtures in that folder (others there serve the cheat corpus)
+    "climb_from_a_stage",
     "gap_toward_minus_x",
     "lever_along_y",
     "lever_past_a_toolbox",
@@ -73,6 +76,21 @@ def test_unseen_layout_is_not_solved_without_a_tool(name: str) -> None:
     (rollouts,) = run_codes(task, [code], worlds=2, seed=0)
     assert rollouts and not any(r.success for r in rollouts)
     assert failure_reason(rollouts)
+
+
+@pytest.mark.parametrize("name", ["climb_from_a_stage", "vase_from_the_sofa"])
+def test_a_robot_that_starts_on_a_stage_steps_down_before_the_plans_made_from_the_ground(name: str) -> None:
+    """Found by a held-out run: from the stage every program was predicted to fail (the climb), or none was made (the
+    vase); the programs now open with a walk off the stage's side onto the ground, and are predicted fine."""
+    task = _load(name)
+    start = Box.of(task.object("stage" if name.startswith("climb") else "sofa"))
+    programs = [p for p in order(candidates(task, True)) if p.doubt is None]
+    assert programs
+    for prog in programs:
+        first = prog.motions[0]
+        assert first.skill == "walk_to_position" and "step down off" in first.explanation
+        xy = np.asarray(first.point.estimate()[:2])
+        assert first.point.estimate()[2] == 0.0 and not np.all((start.lo <= xy) & (xy <= start.hi))
 
 
 def test_a_walk_over_a_box_between_the_feet_is_predicted_to_run_into_it() -> None:

@@ -55,7 +55,8 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
     can make facing as it starts that the search would try first (:func:`_leading`) leave a thin margin
     (:func:`.search.tight`), or every one is predicted to fail, the programs it can make after a quarter turn in place
     (its x and y sizes swapped) are made too; when every one is predicted to fail, those it can make after pushing
-    an object out of the way first (:func:`_cleared`)."""
+    an object out of the way first (:func:`_cleared`), or, with none of those, after stepping down off the top it
+    starts on (:func:`_stepped_down`)."""
     quads = [Quadruped(task)]
     made = list(_programs(quads[0], tools))
     yield from made
@@ -69,8 +70,10 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
             yield from turned
             made += turned
     if tools and all(p.doubt is not None for p in made):
-        for quad in quads:
-            yield from _cleared(quad, tools)
+        cleared = [p for quad in quads for p in _cleared(quad, tools)]
+        yield from cleared
+        if not cleared:
+            yield from _stepped_down(quads[0], tools)
 
 
 def _leading(programs: list[Program]) -> list[Program]:
@@ -110,6 +113,31 @@ def _cleared(quad: Quadruped, tools: bool) -> Iterator[Program]:
             yield from fine
             if fine:
                 break
+
+
+def _stepped_down(quad: Quadruped, tools: bool) -> Iterator[Program]:
+    """For a robot that starts on an object's top (a sofa, a stage) from where every program is predicted to fail, or
+    none is made (the macros plan a staircase, a push or a lever from the ground): the programs made after it first
+    walks straight off one side of that top onto the ground, as low a drop as it may step down, to where its body stands
+    clear of what is there, the walk predicted fine; those not predicted to fail, from the first side that leaves any
+    (found by a held-out layout: a vase_lowering robot that started on the sofa beside the vase got no program)."""
+    if quad.floor_name == "ground" or quad.floor > quad.limits.max_step_down:
+        return
+    top = quad.layout.box(quad.floor_name)
+    for d in DIRECTIONS:
+        axis = int(np.argmax(np.abs(d)))
+        spot = quad.start.copy()
+        spot[axis] = top.center[axis] + d[axis] * (top.half[axis] + quad.extent(d) + SIDE)
+        opening = quad.program()
+        ground = quad.on_ground(spot, opening)
+        if not ground.stands_clear(quad.layout, spot) or walk_violation(quad.layout, quad.start, [spot], quad.limits):
+            continue
+        Writer(quad, opening).walk(spot, "ground", f"step down off {quad.floor_name} onto the ground")
+        opening.say(f"Step down off {quad.floor_name}.")
+        fine = [p for p in _programs(ground, tools) if p.doubt is None]
+        yield from fine
+        if fine:
+            return
 
 
 def _programs(quad: Quadruped, tools: bool) -> Iterator[Program]:

@@ -122,6 +122,13 @@ class Quadruped:
         out.placed = self.placed | frozenset(placed)
         return out
 
+    def on_ground(self, here: np.ndarray, opening: Program) -> Quadruped:
+        """The same robot once it has stepped down off what it started on to ``here`` on the ground, its programs
+        opening with ``opening`` (that step down)."""
+        out = self.after(self.layout, here, ())
+        out.floor_name, out.floor, out.opening = "ground", 0.0, opening
+        return out
+
     def extent(self, u: np.ndarray) -> float:
         """Half length of the body along direction ``u``."""
         return float(np.abs(u) @ self.half)
