@@ -84,7 +84,7 @@ def print_solution(solution: Solution, console: Console) -> None:
             f"{candidate.skill_calls:.1f}" if ran else "-",
             console_markup("; ".join([failure, *candidate.notes])),
         )
-    console.print(table)
+    console.print(table if solution.candidates else f"Candidates ({solution.method}): none was made (see the notes)")
     print_repairs(solution, console)
     if solution.code:
         # numbered lines: a long line of the model's code wraps right of the numbers, never at column 0

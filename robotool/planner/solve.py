@@ -140,7 +140,12 @@ def solve(
             f"The search stopped at its budget of {planner.work:g} simulated world-seconds with {unverified} "
             "program(s) not verified."
         )
-    if not solution.success:
+    if not generated:
+        solution.notes.append(
+            f"The {task.robot.type}'s planner macros made no program for this layout (none of their approaches fits "
+            f"where the objects and the robot stand{'' if tools else ' without a tool'}): nothing ran in simulation."
+        )
+    elif not solution.success:
         solution.notes.append("No candidate reached the goal in simulation; the best failed candidate is returned.")
     return solution
 

@@ -8,13 +8,17 @@ those need: a walk over a box between the feet, a push routed around a wall."""
 
 from __future__ import annotations
 
+import io
 from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 from fixtures.paths import FIXTURES
+from rich.console import Console
 
 from robotool import tasks
+from robotool.cli.summary import print_solution
 from robotool.planner import solve
 from robotool.planner.layout import Box, Layout
 from robotool.planner.search import order
@@ -91,6 +95,21 @@ def test_a_robot_that_starts_on_a_stage_steps_down_before_the_plans_made_from_th
         assert first.skill == "walk_to_position" and "step down off" in first.explanation
         xy = np.asarray(first.point.estimate()[:2])
         assert first.point.estimate()[2] == 0.0 and not np.all((start.lo <= xy) & (xy <= start.hi))
+
+
+def test_a_layout_no_macro_fits_says_so_and_runs_nothing() -> None:
+    """Found by a held-out run: where the macros made no program the answer was an empty table of candidates and "the
+    best failed candidate is returned". The robot starts on a 0.8 m platform, too high to step down from."""
+    layout = yaml.safe_load((LAYOUTS / "vase_from_the_sofa.yaml").read_text())
+    platform = {"name": "platform", "shape": "box", "center": [3, -2, 0.4], "size": [1, 1, 0.8], "movable": False}
+    layout |= {"robot": {"type": "quadruped", "position": [3, -2]}, "objects": [*layout["objects"], platform]}
+    solution = solve(parse_task(layout))
+    assert not solution.candidates and solution.code is None and not solution.success
+    assert "made no program for this layout" in solution.notes[-1]
+    assert not any("best failed" in note for note in solution.notes)
+    out = io.StringIO()
+    print_solution(solution, Console(file=out, width=200))
+    assert "Candidates (search): none was made" in out.getvalue()
 
 
 def test_a_walk_over_a_box_between_the_feet_is_predicted_to_run_into_it() -> None:
