@@ -1,7 +1,8 @@
 """The search planner on layouts it was not built from (task fixtures under tests/fixtures/layouts/): staircases of
 two and three pushed boxes approached from -x and +y (two crates heavier together than the push limit among them), a
 gap crossed toward -x, levers reflected and turned along y, a lever whose prop is reached around a heavy box standing
-between it and the robot, a climb and a vase lowering whose robot starts on a stage or the sofa and steps down first.
+between it and the robot, a climb and a vase lowering whose robot starts on a stage or the sofa and steps down first, a
+gap crossed from a sofa the robot climbs onto first.
 
 Each is solved with a verified success, and a tool-free attempt fails in simulation. Also the layout predictions
 those need: a walk over a box between the feet, a push routed around a wall."""
@@ -39,6 +40,7 @@ NAMES = [  # this module's fixtures in that folder (others there serve the cheat
     "staircase_three",
     "staircase_two_toward_minus_x",
     "staircase_two_toward_plus_y",
+    "traverse_from_the_floor",
 ]
 
 
@@ -95,6 +97,21 @@ def test_a_robot_that_starts_on_a_stage_steps_down_before_the_plans_made_from_th
         assert first.skill == "walk_to_position" and "step down off" in first.explanation
         xy = np.asarray(first.point.estimate()[:2])
         assert first.point.estimate()[2] == 0.0 and not np.all((start.lo <= xy) & (xy <= start.hi))
+
+
+def test_a_robot_on_the_floor_climbs_onto_the_sofa_a_board_bridges_from_first() -> None:
+    """Found by a held-out run: from the floor every program climbed at sofa_2 across the gap (predicted to fail); the
+    programs now climb onto sofa_1 first, to where the body stands clear of the board lying on it (standing on the
+    board, the robot could not push it), and bridge the gap from there."""
+    task = _load("traverse_from_the_floor")
+    board = Box.of(task.object("board"))
+    programs = [p for p in order(candidates(task, True)) if p.doubt is None]
+    assert programs
+    for prog in programs:
+        first, push = prog.motions[0], next(m for m in prog.motions if m.skill == "push_to_position")
+        assert first.skill == "climb_to_position" and first.point.estimate()[2] == pytest.approx(0.24)
+        front = first.point.estimate()[0] + task.limits.body_size[0] / 2  # facing +x, toward the board
+        assert push.obj == "board" and front < board.lo[0]
 
 
 def test_a_layout_no_macro_fits_says_so_and_runs_nothing() -> None:

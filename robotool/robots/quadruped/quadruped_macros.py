@@ -33,10 +33,12 @@ from robotool.robots.quadruped.quadruped_routes import (
     TIP_PAST,
     Quadruped,
     Route,
+    landed_clear,
     routes_onto,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.quadruped_writer import Writer, turn_spots
+from robotool.robots.quadruped.terrain import RISE
 from robotool.task.concepts import surface_under
 from robotool.task.scene import SceneObject
 from robotool.task.task_model import Task
@@ -56,7 +58,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
     (:func:`.search.tight`), or every one is predicted to fail, the programs it can make after a quarter turn in place
     (its x and y sizes swapped) are made too; when every one is predicted to fail, those it can make after pushing
     an object out of the way first (:func:`_cleared`), or, with none of those, after stepping down off the top it
-    starts on (:func:`_stepped_down`)."""
+    starts on (:func:`_stepped_down`) or climbing onto another top first (:func:`_climbed_first`)."""
     quads = [Quadruped(task)]
     made = list(_programs(quads[0], tools))
     yield from made
@@ -74,6 +76,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
         yield from cleared
         if not cleared:
             yield from _stepped_down(quads[0], tools)
+            yield from _climbed_first(quads[0], tools)
 
 
 def _leading(programs: list[Program]) -> list[Program]:
@@ -129,7 +132,7 @@ def _stepped_down(quad: Quadruped, tools: bool) -> Iterator[Program]:
         spot = quad.start.copy()
         spot[axis] = top.center[axis] + d[axis] * (top.half[axis] + quad.extent(d) + SIDE)
         opening = quad.program()
-        ground = quad.on_ground(spot, opening)
+        ground = quad.moved_to("ground", 0.0, spot, opening, quad.layout, ())
         if not ground.stands_clear(quad.layout, spot) or walk_violation(quad.layout, quad.start, [spot], quad.limits):
             continue
         Writer(quad, opening).walk(spot, "ground", f"step down off {quad.floor_name} onto the ground")
@@ -138,6 +141,38 @@ def _stepped_down(quad: Quadruped, tools: bool) -> Iterator[Program]:
         yield from fine
         if fine:
             return
+
+
+def _climbed_first(quad: Quadruped, tools: bool) -> Iterator[Program]:
+    """For a robot that starts on the ground from where every program is predicted to fail: the programs made after it
+    first goes onto a fixed object's top by a route predicted fine (a step, then the sofa a board on it bridges from),
+    those not predicted to fail; the tops nearest the goal's object first, from the first route that leaves any (found
+    by a held-out layout: a robot on the floor before a sofa_traversing scene only tried to climb onto the far sofa)."""
+    if quad.floor_name != "ground":
+        return
+    goal = quad.layout.box(quad.task.goal.object)
+    tops = [
+        o
+        for o in quad.task.objects
+        if not o.movable and o.shape != "cloth" and o.name != goal.name and o.top > quad.floor + RISE
+    ]
+    tops.sort(key=lambda o: float(np.linalg.norm(quad.layout.box(o.name).center - goal.center)))
+    for top in tops:
+        for onto in routes_onto(quad, top.name, tools):
+            route = landed_clear(quad, top.name, onto)  # (standing on what lies there, it could not push that)
+            if route is None:
+                continue
+            opening = quad.program()
+            w = Writer(quad, opening)
+            w.route(route)
+            if opening.doubt is not None:
+                continue
+            placed = [push.name for push in route.pushes]
+            up = quad.moved_to(top.name, w.layout.box(top.name).top, w.here, opening, w.layout, placed)
+            fine = [p for p in _programs(up, tools) if p.doubt is None]
+            yield from fine
+            if fine:
+                return
 
 
 def _programs(quad: Quadruped, tools: bool) -> Iterator[Program]:

@@ -122,11 +122,14 @@ class Quadruped:
         out.placed = self.placed | frozenset(placed)
         return out
 
-    def on_ground(self, here: np.ndarray, opening: Program) -> Quadruped:
-        """The same robot once it has stepped down off what it started on to ``here`` on the ground, its programs
-        opening with ``opening`` (that step down)."""
-        out = self.after(self.layout, here, ())
-        out.floor_name, out.floor, out.opening = "ground", 0.0, opening
+    def moved_to(
+        self, surface: str, level: float, here: np.ndarray, opening: Program, layout: Layout, placed: Iterable[str]
+    ) -> Quadruped:
+        """The same robot once ``opening`` has brought it to ``here`` on ``surface`` (the ground, or an object's top at
+        height ``level``) and rearranged the scene to ``layout``, the ``placed`` objects to stay: its programs open
+        with ``opening``."""
+        out = self.after(layout, here, placed)
+        out.floor_name, out.floor, out.opening = surface, level, opening
         return out
 
     def extent(self, u: np.ndarray) -> float:
@@ -183,9 +186,28 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
     if surface != name:
         return route
     previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
-    layout = route.layout(quad.layout)
-    if walk_violation(layout, previous, [last], quad.limits) is None:
+    if walk_violation(route.layout(quad.layout), previous, [last], quad.limits) is None:
         return route
+    return _pulled_back(quad, name, route) or route
+
+
+def landed_clear(quad: Quadruped, name: str, route: Route) -> Route | None:
+    """``route`` (onto ``name``) with its stop where the body stands clear of what lies on ``name``'s top (a board
+    the robot would stand on, and then not push): unchanged when it does, else pulled back along the way it arrives
+    as :func:`_landing` pulls it; None when no point is clear."""
+    layout = route.layout(quad.layout)
+    if _highest_under(quad, layout, route.waypoints[-1][0]) <= layout.box(name).top + RISE:
+        return route
+    return _pulled_back(quad, name, route)
+
+
+def _pulled_back(quad: Quadruped, name: str, route: Route) -> Route | None:
+    """``route`` with its last stop, on ``name``, moved back along the way it arrives to the farthest point with every
+    foot on the top (over ``name`` itself), the body's outline (and its side margin) clear of what stands there and
+    the walk there predicted fine; None when no point is."""
+    last, _ = route.waypoints[-1]
+    previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
+    layout = route.layout(quad.layout)
     top, length = layout.box(name).top, float(np.linalg.norm(last - previous))
     for s in np.arange(length - LANDING_STEP, 0.0, -LANDING_STEP):
         stop = previous + (last - previous) * s / length
@@ -197,7 +219,7 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
             and walk_violation(layout, previous, [stop], quad.limits) is None
         ):
             return replace(route, waypoints=[*route.waypoints[:-1], (stop, name)])
-    return route
+    return None
 
 
 def _direct(quad: Quadruped, name: str) -> Iterator[Route]:
