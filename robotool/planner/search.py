@@ -271,7 +271,7 @@ def search(
         tried += batch
         rounds += 1
         pace.ended()
-        if any(held(t.candidate) for t in batch) or _hopeless(tried, rounds, budget):
+        if any(held(t.candidate) for t in batch) or hopeless(tried, rounds, budget):
             break
         if follow_up is not None and rounds == 1:
             carried = follow_up(batch)
@@ -284,9 +284,10 @@ def mark_repaired(candidate: Candidate, source: Candidate) -> None:
     candidate.notes.append(f"re-parameterised from candidate {source.index}")
 
 
-def _hopeless(tried: list[Tried], rounds: int, budget: Budget) -> bool:
-    """Whether the search stops early: ``budget.doubted_rounds`` rounds have run, every program in them was predicted
-    to break a limit and none succeeded in any world (those left are doubted too: doubted programs come last)."""
+def hopeless(tried: list[Tried], rounds: int, budget: Budget) -> bool:
+    """Whether the search stops early (and the planner repairs nothing): ``budget.doubted_rounds`` rounds have run,
+    every program in them was predicted to break a limit and none succeeded in any world (those left are doubted too:
+    doubted programs come last)."""
     return (
         budget.doubted_rounds is not None
         and rounds >= budget.doubted_rounds

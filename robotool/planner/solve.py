@@ -17,7 +17,18 @@ from robotool import robots
 from robotool.errors import RobotoolError
 from robotool.planner.codegen import Program
 from robotool.planner.reparameterise import repaired
-from robotool.planner.search import Budget, Pace, Tried, doomed, held, mark_repaired, order, search, too_heavy
+from robotool.planner.search import (
+    Budget,
+    Pace,
+    Tried,
+    doomed,
+    held,
+    hopeless,
+    mark_repaired,
+    order,
+    search,
+    too_heavy,
+)
 from robotool.robots.registry import SearchMacros
 from robotool.signatures.models import ObjectRole, scene_context
 from robotool.signatures.traces import failure_trace
@@ -90,7 +101,9 @@ def solve(
             follow_up=(lambda batch: near_miss_repairs(task, batch, budget.beam)) if repair else None,
             pace=pace,
         )
-        if repair and not any(held(t.candidate) for t in tried):
+        # a search that gave up on programs all predicted to fail repairs none: their variants are predicted to fail
+        # too (unsolvable vase scenes spent a third of their 12-19 s on such repairs, none of which held)
+        if repair and not any(held(t.candidate) for t in tried) and not hopeless(tried, rounds, budget):
             repair_round(
                 task,
                 tried,
