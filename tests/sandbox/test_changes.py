@@ -25,6 +25,11 @@ CHANGES = {
     "a removal listed under a colon": "Remove:\n- close_gripper()",
     "a target to use instead": "Use this target instead (the graspable point is off):\n```\np = [0.3, 0.0, 0.1]\n```",
     "a retry in a span": "Actually, retry the move: `for _ in range(3): move_to_position(p)`.",
+    # found by an adversarial run: take-backs in the languages whose final markers are read
+    "in Spanish": "En realidad, reemplaza la última línea por `open_gripper()`.",
+    "in French": "En fait, remplacez la dernière ligne par `open_gripper()`.",
+    "in German": "Korrektur: ersetze die letzte Zeile durch `open_gripper()`.",
+    "in Chinese": "更正：把最后一行改成 `open_gripper()`。",
 }
 
 
@@ -71,6 +76,8 @@ EXPLANATIONS = [
     "I forgot to add the open step in my first attempt; this version adds it.",
     "Let me know if you want me to add a retreat step.",
     "Changing the offset to 0.1 would approach from higher.",
+    "En realidad, este programa funciona para cualquier posición de la leche.",
+    "其实这个程序适用于任何位置。",
     # found by an adversarial run: each was asked again by the first version of the rule
     "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
     "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",

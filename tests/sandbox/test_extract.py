@@ -625,6 +625,10 @@ SHORTENED = {
     "one line, marked final": ("Final program:", GRASP, 1, 2),
     "the last line, after 'only ... is needed'": ("Actually it is open, so only the grasp is needed:", GRASP, 3, 4),
     "a run from the middle, after 'Just:'": ("Wait, the task is only to move to the milk. Just:", OPEN_FIRST, 1, 3),
+    # found by an adversarial run: the same take-backs in the languages whose final markers are read
+    "one line, after 'Korrektur:'": ("Korrektur:", GRASP, 1, 2),
+    "one line, after 'Corrección:'": ("Corrección:", GRASP, 1, 2),
+    "one line, after '更正后：'": ("更正后：", GRASP, 1, 2),
 }
 
 
