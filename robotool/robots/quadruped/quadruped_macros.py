@@ -58,7 +58,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
     (:func:`.search.tight`), or every one is predicted to fail, the programs it can make after a quarter turn in place
     (its x and y sizes swapped) are made too; when every one is predicted to fail, those it can make after pushing
     an object out of the way first (:func:`_cleared`), or, with none of those, after stepping down off the top it
-    starts on (:func:`_stepped_down`) or climbing onto another top first (:func:`_climbed_first`)."""
+    starts on (:func:`_stepped_down`) or going onto another top first (:func:`_via_another_top`)."""
     quads = [Quadruped(task)]
     made = list(_programs(quads[0], tools))
     yield from made
@@ -76,7 +76,7 @@ def candidates(task: Task, tools: bool) -> Iterator[Program]:
         yield from cleared
         if not cleared:
             yield from _stepped_down(quads[0], tools)
-            yield from _climbed_first(quads[0], tools)
+            yield from _via_another_top(quads[0], tools)
 
 
 def _leading(programs: list[Program]) -> list[Program]:
@@ -143,18 +143,18 @@ def _stepped_down(quad: Quadruped, tools: bool) -> Iterator[Program]:
             return
 
 
-def _climbed_first(quad: Quadruped, tools: bool) -> Iterator[Program]:
-    """For a robot that starts on the ground from where every program is predicted to fail: the programs made after it
-    first goes onto a fixed object's top by a route predicted fine (a step, then the sofa a board on it bridges from),
-    those not predicted to fail; the tops nearest the goal's object first, from the first route that leaves any (found
-    by a held-out layout: a robot on the floor before a sofa_traversing scene only tried to climb onto the far sofa)."""
-    if quad.floor_name != "ground":
-        return
+def _via_another_top(quad: Quadruped, tools: bool) -> Iterator[Program]:
+    """For a robot from where every program is predicted to fail: the programs made after it first goes onto another
+    fixed object's top by a route predicted fine (from the floor, a step then the sofa a board lying there bridges
+    from; from a sofa, the middle sofa of three over the first gap, the second bridged from there), to where its body
+    stands clear of what lies on that top, those not predicted to fail; the tops nearest the goal's object first, from
+    the first route that leaves any (found by held-out layouts: a robot on the floor before a sofa_traversing scene only
+    tried to climb onto the far sofa; two gaps in a row were bridged one only)."""
     goal = quad.layout.box(quad.task.goal.object)
     tops = [
         o
         for o in quad.task.objects
-        if not o.movable and o.shape != "cloth" and o.name != goal.name and o.top > quad.floor + RISE
+        if not o.movable and o.shape != "cloth" and o.name not in (goal.name, quad.floor_name) and o.top > RISE
     ]
     tops.sort(key=lambda o: float(np.linalg.norm(quad.layout.box(o.name).center - goal.center)))
     for top in tops:
