@@ -33,7 +33,7 @@ from robotool.robots.quadruped.quadruped_routes import (
     TIP_PAST,
     Quadruped,
     Route,
-    landed_clear,
+    pulled_back,
     routes_onto,
 )
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
@@ -159,7 +159,10 @@ def _via_another_top(quad: Quadruped, tools: bool) -> Iterator[Program]:
     tops.sort(key=lambda o: float(np.linalg.norm(quad.layout.box(o.name).center - goal.center)))
     for top in tops:
         for onto in routes_onto(quad, top.name, tools):
-            route = landed_clear(quad, top.name, onto)  # (standing on what lies there, it could not push that)
+            layout, level = onto.layout(quad.layout), quad.layout.box(top.name).top
+            arrived = quad.moved_to(top.name, level, onto.waypoints[-1][0], quad.program(), layout, ())
+            # standing on what lies on that top, the robot could not push it: stop short of it
+            route = onto if arrived.stands_clear(layout, arrived.start) else pulled_back(quad, top.name, onto)
             if route is None:
                 continue
             opening = quad.program()
@@ -168,7 +171,7 @@ def _via_another_top(quad: Quadruped, tools: bool) -> Iterator[Program]:
             if opening.doubt is not None:
                 continue
             placed = [push.name for push in route.pushes]
-            up = quad.moved_to(top.name, w.layout.box(top.name).top, w.here, opening, w.layout, placed)
+            up = quad.moved_to(top.name, level, w.here, opening, w.layout, placed)
             fine = [p for p in _programs(up, tools) if p.doubt is None]
             yield from fine
             if fine:

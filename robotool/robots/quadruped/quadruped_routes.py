@@ -125,9 +125,8 @@ class Quadruped:
     def moved_to(
         self, surface: str, level: float, here: np.ndarray, opening: Program, layout: Layout, placed: Iterable[str]
     ) -> Quadruped:
-        """The same robot once ``opening`` has brought it to ``here`` on ``surface`` (the ground, or an object's top at
-        height ``level``) and rearranged the scene to ``layout``, the ``placed`` objects to stay: its programs open
-        with ``opening``."""
+        """The same robot once ``opening`` has brought it to ``here`` on ``surface`` (the ground, or a top ``level``
+        high) and rearranged the scene to ``layout``, the ``placed`` objects to stay: its programs open with it."""
         out = self.after(layout, here, placed)
         out.floor_name, out.floor, out.opening = surface, level, opening
         return out
@@ -188,20 +187,10 @@ def _landing(quad: Quadruped, name: str, route: Route) -> Route:
     previous = route.waypoints[-2][0] if len(route.waypoints) > 1 else quad.start
     if walk_violation(route.layout(quad.layout), previous, [last], quad.limits) is None:
         return route
-    return _pulled_back(quad, name, route) or route
+    return pulled_back(quad, name, route) or route
 
 
-def landed_clear(quad: Quadruped, name: str, route: Route) -> Route | None:
-    """``route`` (onto ``name``) with its stop where the body stands clear of what lies on ``name``'s top (a board
-    the robot would stand on, and then not push): unchanged when it does, else pulled back along the way it arrives
-    as :func:`_landing` pulls it; None when no point is clear."""
-    layout = route.layout(quad.layout)
-    if _highest_under(quad, layout, route.waypoints[-1][0]) <= layout.box(name).top + RISE:
-        return route
-    return _pulled_back(quad, name, route)
-
-
-def _pulled_back(quad: Quadruped, name: str, route: Route) -> Route | None:
+def pulled_back(quad: Quadruped, name: str, route: Route) -> Route | None:
     """``route`` with its last stop, on ``name``, moved back along the way it arrives to the farthest point with every
     foot on the top (over ``name`` itself), the body's outline (and its side margin) clear of what stands there and
     the walk there predicted fine; None when no point is."""
