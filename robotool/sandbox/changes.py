@@ -62,7 +62,7 @@ _TAKES_BACK = re.compile(
     r"one correction\b|(?:small |one |quick )?fix:|my mistake|on second thought|no,? wait|no\s*[,.—–-]|scratch that|"
     r"typo\b|"
     # the same in the languages whose final markers the labels read (es, pt, fr, de, zh)
-    r"en realidad\b|corrección\b|na verdade\b|correção\b|en fait\b|eigentlich\b|korrektur\b|更正|修正：|其实|抱歉)",
+    r"en realidad\b|corrección\b|na verdade\b|correção\b|en fait\b|eigentlich\b|korrektur\b|更正|修正：|其实)",
     re.IGNORECASE,
 )
 _NAMES_CODE = re.compile(r"`[^`]*`|\w\(|\b(?:line|call|step)s?\b", re.IGNORECASE)
