@@ -78,6 +78,7 @@ EXPLANATIONS = [
     "Changing the offset to 0.1 would approach from higher.",
     "En realidad, este programa funciona para cualquier posición de la leche.",
     "其实这个程序适用于任何位置。",
+    "抱歉，上面的代码缺少 `open_gripper()`，已修正。",  # an apology answering a re-ask, the code already fixed
     # found by an adversarial run: each was asked again by the first version of the rule
     "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
     "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",
