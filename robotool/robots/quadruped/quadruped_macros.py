@@ -160,7 +160,7 @@ def _via_another_top(quad: Quadruped, tools: bool) -> Iterator[Program]:
     for top in tops:
         for onto in routes_onto(quad, top.name, tools):
             layout, level = onto.layout(quad.layout), quad.layout.box(top.name).top
-            arrived = quad.moved_to(top.name, level, onto.waypoints[-1][0], quad.program(), layout, ())
+            arrived = quad.moved_to(top.name, level, onto.waypoints[-1][0], Program(), layout, ())  # where it lands
             # standing on what lies on that top, the robot could not push it: stop short of it
             route = onto if arrived.stands_clear(layout, arrived.start) else pulled_back(quad, top.name, onto)
             if route is None:
