@@ -16,6 +16,10 @@ in seconds.
     python benchmarks/planner.py --no-repair                       # without planner repair
     python benchmarks/planner.py --families                        # the built-in tasks only
     python benchmarks/planner.py --fresh 0                         # skip the re-run in fresh worlds
+    python benchmarks/planner.py --families --no-builtins --task-files held_out/   # task files kept elsewhere
+
+Task files (``--task-files``: files or folders of ``*.yaml``) are counted as solvable instances in a row of their
+own; a file that does not load is listed with its error and counted as not solved.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import statistics
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from robotool import tasks
 from robotool.planner import solve
@@ -129,6 +134,21 @@ def attempt_family(family: str, seed: int, worlds: int, repair: bool, fresh: int
     return attempt(f"{family}/{seed}", instance.task, instance.solvable, instance.needs_tool, worlds, repair, fresh)
 
 
+def task_files(paths: list[Path]) -> dict[str, Task]:
+    """The tasks of the YAML files named, and of those in the folders named in name order; exits naming every file
+    that does not load."""
+    files = [f for p in paths for f in (sorted(p.glob("*.yaml")) if p.is_dir() else [p])]
+    loaded, problems = {}, []
+    for f in files:
+        try:
+            loaded[str(f)] = tasks.load(f)
+        except (OSError, ValueError) as e:
+            problems.append(f"- {e}")
+    if problems:
+        raise SystemExit("task files that do not load:\n" + "\n".join(problems))
+    return loaded
+
+
 def add(row: Row, result: Attempt) -> None:
     row.times.append(result.seconds)
     row.instances += 1
@@ -170,9 +190,13 @@ def main() -> None:
         help="perturbed worlds, unseen by the planner, each returned program runs in again (0: none)",
     )
     parser.add_argument("--no-repair", action="store_true", help="give up without re-parameterising failed programs")
+    parser.add_argument(
+        "--task-files", nargs="*", type=Path, default=[], help="task files, or folders of them, run as solvable"
+    )
     args = parser.parse_args()
     first, _, last = args.seeds.partition("-")
     seeds = range(int(first), int(last or first) + 1)
+    files = task_files(args.task_files)
     rows = []
     names = families() if args.families is None else args.families
     # the worker processes simulate at once: each batch steps on its process's share of the cores
@@ -199,6 +223,20 @@ def main() -> None:
             print(row.line(), flush=True)
             for failure in row.failures if args.verbose else []:
                 print(f"- {failure}", flush=True)
+        if files:
+            row = Row("task files")
+            repair = not args.no_repair
+            jobs = [
+                pool.submit(attempt, name, task, True, task.category != "no_tool", args.worlds, repair, args.fresh)
+                for name, task in files.items()
+            ]
+            for job in jobs:
+                result = job.result()
+                add(row, result)
+                if args.verbose:
+                    print(f"  {result.label}: {result.seconds:.1f} s, {100 * result.world_rate:.0f}% of worlds")
+            rows.append(row)
+            print(row.line(), flush=True)
     if not args.no_builtins:
         row = Row("built-in tasks")
         for name in tasks.names():
