@@ -34,6 +34,7 @@ import numpy.ma
 
 from robotool.program_session import SkillCallError
 from robotool.robots.skills import SkillSpec, check_arguments
+from robotool.safe_text import encodable
 from robotool.sandbox.allowlist import (
     BUILTINS,
     LOOP_TYPE_KEYWORDS,
@@ -291,7 +292,7 @@ class _Program:
         if self.printed > self.limits.max_output_chars:
             limit = self.limits.max_output_chars
             raise _LimitExceeded(f"output limit exceeded (printed more than {limit} characters)")
-        self.output.append(_encodable(text))
+        self.output.append(encodable(text))
 
     def show_warning(self, message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
         self.print(f"warning: {_public_name(category)}: {_safe_str(message)}")
@@ -369,11 +370,6 @@ def _safe_str(value: object) -> str:
         text = str(value)[: MAX_ERROR_CHARS * 4]
         for directory in _HOST_DIRECTORIES:
             text = text.replace(directory, "...")
-        return _encodable(_PRIVATE_NAME.sub(lambda m: _PUBLIC_NAMES[m.group()], ADDRESS.sub(ADDRESS_SHOWN, text)))
+        return encodable(_PRIVATE_NAME.sub(lambda m: _PUBLIC_NAMES[m.group()], ADDRESS.sub(ADDRESS_SHOWN, text)))
     except BaseException:  # a hostile __str__, a huge integer, no memory left
         return UNDESCRIBABLE
-
-
-def _encodable(text: str) -> str:
-    """The text with lone surrogates escaped, so that it always encodes as UTF-8 JSON."""
-    return text.encode("utf-8", "backslashreplace").decode("utf-8")
