@@ -192,6 +192,45 @@ def test_a_sheet_off_the_ground_or_magnetic_is_refused(paper: dict, problem: str
     parse_task({**data, "objects": [SHELF, {**card, "center": [*paper["center"][:2], paper["center"][2] + 0.0015]}]})
 
 
+# Found by an adversarial run: a fixed 0.2 mm sheet of 10 g, its low end on the floor, tilted up to a 0.34 m sofa's
+# edge, passed the ground rule, and the quadruped walked up it onto the sofa as up a rigid ramp (the sheet's
+# thickness and mass say it is paper: it would sag to the floor).
+SOFA = {"name": "sofa", "shape": "box", "center": [3.0, 0.2, 0.17], "size": [0.9, 1.5, 0.34], "movable": False}
+RAMP = {
+    "name": "paper_ramp",
+    "shape": "box",
+    "center": [1.9226, 0.2, 0.17],
+    "size": [1.3, 0.7, 0.0002],
+    "rpy": [0.0, -15.1614, 0.0],
+    "movable": False,
+    "mass": 0.01,
+}
+
+
+@pytest.mark.parametrize("movable", [False, True])
+def test_a_sheet_tilted_into_a_ramp_is_refused(movable: bool) -> None:
+    robot = {"type": "quadruped", "position": [0.0, 0.2]}
+    data = {"format": 1, "name": "t", "category": "no_tool", "instruction": "x", "robot": robot}
+    data["objects"] = [SOFA, {**RAMP, "movable": movable}]
+    data["goal"] = {"robot_on": "sofa"}
+    with pytest.raises(TaskFileError, match=re.escape("objects[1](paper_ramp).rpy: a sheet lies flat on the ground")):
+        parse_task(data)
+    flat = {**RAMP, "movable": movable, "center": [1.9226, 0.2, 0.0001], "rpy": [0.0, 0.0, 30.0]}  # turned, flat
+    parse_task({**data, "objects": [SOFA, flat]})
+
+
+# Found by an adversarial run: a cloth declared fixed was built as free hinged links, and every rule that weighs what
+# the robot moves or what bears its weight (shoves, pushes, crushes of what lies under it) passed it by as fixed: the
+# robot drove an 18 kg "fixed" chain 0.7 m with its torso, and walked over a "fixed" blanket on a glass slab.
+def test_a_fixed_cloth_is_refused() -> None:
+    data = tasks.load("sofa_traversing").model_dump(mode="json", exclude_defaults=True)
+    cloth = next(o for o in data["objects"] if o["shape"] == "cloth")
+    cloth.pop("mass", None)
+    cloth["movable"] = False
+    with pytest.raises(TaskFileError, match=re.escape("(strip_of_cloth): a cloth drapes and slides: it cannot be")):
+        parse_task(data)
+
+
 # Found by an adversarial run: only fixed objects were checked against each other, so a movable weight placed 1.5 cm
 # inside a fixed button's face was accepted; the first physics step pushed the face in, and a program that did
 # nothing scored `button_pressed`. Solid objects may touch, not interpenetrate, whichever of them is movable.

@@ -207,8 +207,15 @@ class SceneObject(StrictModel):
         return self if self.shape != "cloth" else self._cloth_options()
 
     def _cloth_options(self) -> SceneObject:
-        """A cloth, movable or not, is at most :data:`MAX_CLOTH_LENGTH` long and :data:`MIN_CLOTH_MASS` per metre
-        heavy, :data:`MIN_MASS` at least."""
+        """A cloth is movable (the simulator builds it as free hinged links that drape and slide: found by an
+        adversarial run, a cloth declared fixed was built free, and every rule that weighs what the robot moves or
+        what bears its weight passed it by as fixed), at most :data:`MAX_CLOTH_LENGTH` long and
+        :data:`MIN_CLOTH_MASS` per metre heavy, :data:`MIN_MASS` at least."""
+        if not self.movable:
+            raise ValueError(
+                "a cloth drapes and slides: it cannot be fixed in place; leave out 'movable' (or make it a box, "
+                "which may be fixed)"
+            )
         length = max(self.size[:2])
         if length > MAX_CLOTH_LENGTH:
             raise ValueError(f"a cloth is at most {MAX_CLOTH_LENGTH:g} m long (this one {length:g} m)")

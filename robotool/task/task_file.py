@@ -323,21 +323,31 @@ def _near_pairs(task: Task, parts: dict[str, list[geometry.Part]], indices: list
 
 
 def _sheet_problems(task: Task) -> list[Problem]:
-    """A sheet (paper, card: :attr:`~robotool.task.scene.SceneObject.is_sheet`) lies on the ground, where the
+    """A sheet (paper, card: :attr:`~robotool.task.scene.SceneObject.is_sheet`) lies flat on the ground, where the
     simulator lets it rest (it passes through other objects: what lies on it rests on it by rule), and is never
     magnetic (a magnet's hold would make it a rigid plate: held by one end, it would carry or push what it is stuck
-    to)."""
+    to). Found by an adversarial run: a fixed 0.2 mm sheet of 10 g tilted from the floor up to a sofa's edge passed
+    the ground rule by its low end, and the quadruped walked up it as up a rigid ramp, 0.34 m over its step limit."""
     problems = []
     for i, obj in enumerate(task.objects):
         if not obj.is_sheet:
             continue
         advice = "make it thicker or heavier than a sheet (a plate) to"
+        rise = obj.top - obj.bottom - min(obj.size)
         if obj.bottom > RESTING_TOLERANCE:
             problems.append(
                 Problem(
                     path=f"{_object_path(task, i)}.center",
                     message=f"a sheet lies on the ground, not {obj.bottom:.3f} m above it (it would pass through what "
                     f"is under it); {advice} lay it on another object",
+                )
+            )
+        elif rise > RESTING_TOLERANCE:
+            problems.append(
+                Problem(
+                    path=f"{_object_path(task, i)}.rpy",
+                    message=f"a sheet lies flat on the ground, not tilted (its far end {rise:.3f} m above its near "
+                    f"end: a sheet is too limp to hold itself up as a ramp); {advice} lean it on something",
                 )
             )
         if obj.magnetic:
