@@ -119,6 +119,7 @@ def _extract(text: str) -> Extraction:
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused
+    _refuse_signed_calls(tree)
     refuse_placeholder(code, tree)
     refuse_joined(code, tree)
     refuse_change_in_comments(code)
@@ -284,6 +285,12 @@ _DIFF_PROBLEM = (
 )
 
 
+_SIGNED_CALL_PROBLEM = (
+    "a call with a sign before it reads as a line of a diff (- removed, + added), not as code to run; give the whole "
+    "program, changes made, in one code block"
+)
+
+
 def _has_diff(lines: list[str]) -> bool:
     """Whether ``lines`` give a change as a diff (tagged or not): a run of lines that remove (``-``) and add (``+``)
     code, headers (``---``, ``+++``, ``@@``) aside."""
@@ -298,6 +305,20 @@ def _has_diff(lines: list[str]) -> bool:
             return True
         run = []
     return False
+
+
+def _refuse_signed_calls(tree: ast.Module) -> None:
+    """Refuse a statement that is a call with a sign before it (``-push_to_position(...)``, ``+ open_gripper()``):
+    no program negates what a call returns and throws it away, but a diff's removed and added lines parse so, and
+    a removed line would still run (found by an adversarial run: a push the model removed was made)."""
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Expr)
+            and isinstance(node.value, ast.UnaryOp)
+            and isinstance(node.value.op, (ast.USub, ast.UAdd))
+            and isinstance(node.value.operand, ast.Call)
+        ):
+            raise ProgramRejected(node.lineno, "blocks", _SIGNED_CALL_PROBLEM)
 
 
 _DIFF_TAGS = frozenset({"diff", "patch", "udiff"})

@@ -150,8 +150,24 @@ def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
         ),
         (f"```python open_gripper()\n{PROGRAM}```", "opening fence line holds code"),
         (f"{PROGRAM}\nFinally, stop if the carton was not lifted:\nassert p[2] > 0\n", "syntax error"),
+        # found by an adversarial run: a diff's lines in a Python block parse (unary minus on a call), and the push
+        # the model removed was made
+        (
+            'Remove the push:\n```python\nwalk_to_position([1.0, 0.0, 0.0])\n-push_to_position("box_1", [0.5, 0.2, '
+            "0.1])\nclimb_to_position([1.5, 0.0, 0.4])\n```",
+            "line 2: a call with a sign before it reads as a line of a diff",
+        ),
+        ("```python\nopen_gripper()\nif True:\n    + close_gripper()\n```", "line 3: a call with a sign before it"),
     ],
-    ids=["an untagged diff", "a bullet list", "a fix as a diff", "code on the fence line", "an assert after prose"],
+    ids=[
+        "an untagged diff",
+        "a bullet list",
+        "a fix as a diff",
+        "code on the fence line",
+        "an assert after prose",
+        "a removed line in a Python block",
+        "an added line indented",
+    ],
 )
 def test_what_is_no_whole_program_is_asked_again_with_why(answer: str, problem: str) -> None:
     with pytest.raises(ProgramRejected, match=problem):
