@@ -78,9 +78,14 @@ _DESCRIBES_THE_PROGRAM = re.compile(
 )
 _BLANKED_CODE = re.compile(r"`[^`]*`")
 _CHANGE_LOG = re.compile(
-    r"(?:key |main )?(?:changes(?: made)?|what (?:was )?changed|what I changed)\s*:", re.IGNORECASE
+    r"(?:here(?:'s| is) )?(?:key |main )?(?:changes(?: made| applied)?|(?:a )?summary of (?:the )?changes|"
+    r"(?:fix(?:es)?|modifications|improvements|edits) (?:made|applied)|what (?:was |I )?(?:changed|fixed)|"
+    r"what(?:'s| is) different)\s*(?::|$)",
+    re.IGNORECASE,
 )
-"""A list of the changes made, in the imperative ("Changes made: - Replace ..."), describes the program shown."""
+"""A list of the changes made, in the imperative ("Changes made: - Replace ...", "Summary of changes:", "Fixes
+applied:", "What I fixed:"), describes the program shown. A bare "Fix:" or "Modifications:" may as well ask for them
+(after the program as it was), and is read as a request."""
 _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
 """One call turned into another (`close_gripper()` → `open_gripper()`)."""
 

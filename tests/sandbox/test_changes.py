@@ -87,6 +87,11 @@ EXPLANATIONS = [
     "**Change:** `open_gripper()` now comes before the move.",
     "You can adapt it to other objects, e.g. replace `milk` with `juice` where you need to.",
     "**Changes made:**\n- Replace `get_center` with `get_graspable_point` for a better grasp.",
+    # found by an adversarial run: change logs under other headings were read as asking for the changes they list
+    "### Summary of changes\n- Add `open_gripper()` at the start so the fingers clear the carton.",
+    "**Fixes applied:**\n- Use `get_graspable_point` instead of `get_center` for the target.",
+    "**What I fixed:**\n1. Add `open_gripper()` before the move.",
+    "Here's what's different:\n- Replace `get_center` with `get_graspable_point`.",
     "3. **Swap**: `move_to_position(p)` does this part.",
 ]
 
