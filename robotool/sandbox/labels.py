@@ -52,6 +52,16 @@ _SHORTER = re.compile(
     re.IGNORECASE,
 )
 """A last sentence that is only "Simply:", "Just:", "Shorter version:": what follows replaces the block before."""
+_CORRECTION_ALONE = re.compile(
+    r"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |a |my )?(?:"
+    r"corrected|fixed|updated?|revised|better|correct(?:ed)? (?:version|program|code)|(?:the )?fix|edit|after|"
+    r"(?:it )?should (?:just |only )?(?:be|read)(?: just| only)?|(?:use|try) this(?: instead)?|use|"
+    r"(?:right|cleaner|simpler|better|working) (?:program|code|version)(?: is)?)[*_\s]*[:：]?[*_\s]*",
+    re.IGNORECASE,
+)
+"""A last sentence that is only a correction's label ("Corrected:", "Fixed:", "Here's the fix:", "Use this:", "It should
+be:"): what follows replaces the block before (found by an adversarial run: a shorter fix under such a label was read
+as a quote, and the draft ran)."""
 _MARKER_ALONE = re.compile(
     rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})"
     r"[*_\s]*[:：]?",
@@ -81,7 +91,8 @@ def _marked_final(label: str) -> bool:
 def retracts(label: str) -> bool:
     """Whether a label takes back the block before it: one of its sentences opens by taking something back ("Wait,",
     "Actually,", "Oops": :func:`.changes.takes_back`) or calls the block wrong (:data:`_CALLS_IT_WRONG`), or its last
-    sentence is only a word that shortens ("Simply:", "Just:") or a final marker ("Final program:", "最终代码："). Such
+    sentence is only a word that shortens ("Simply:", "Just:"), a final marker ("Final program:", "最终代码：") or a
+    correction's label ("Corrected:", "Here's the fix:": :data:`_CORRECTION_ALONE`). Such
     words inside an explanation ("To run it, simply call:", "The part that actually does the approach:") take
     nothing back (found by an adversarial run: snippets explained were asked again)."""
     sentences = [s.strip() for s in re.split(r"(?<=[.!?])\s+", label) if s.strip()]
@@ -91,6 +102,7 @@ def retracts(label: str) -> bool:
         or _CALLS_IT_WRONG.search(label) is not None
         or _SHORTER.fullmatch(last) is not None
         or _MARKER_ALONE.fullmatch(last) is not None
+        or _CORRECTION_ALONE.fullmatch(last) is not None
     )
 
 

@@ -133,6 +133,24 @@ def test_a_variant_or_a_retracted_program_is_asked_again(answer: str) -> None:
         extract(answer)
 
 
+DRAFT_WITH_WAYPOINTS = (
+    'p = get_center("milk")\nopen_gripper()\nmove_to_position([0.3, 0.0, 0.3])\nmove_to_position([p[0], p[1], 0.3])\n'
+    "move_to_position(p)\nclose_gripper()\n"
+)
+
+
+@pytest.mark.parametrize(
+    "label",
+    ["Corrected:", "**Fixed:**", "Here's the fix:", "Use this:", "Try this instead:", "It should be just:", "UPDATE:"],
+)
+def test_a_shorter_fix_under_a_correction_label_is_no_quote_of_the_draft(label: str) -> None:
+    """Found by an adversarial run: the fix kept a run of the draft's lines, so it read as a quote, and the draft (with
+    the waypoints the model dropped) ran."""
+    answer = f"```python\n{DRAFT_WITH_WAYPOINTS}```\n{label}\n```python\nmove_to_position(p)\nclose_gripper()\n```"
+    with pytest.raises(ProgramRejected, match="repeats part of block 1 after"):
+        extract(answer)
+
+
 def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
     label = "Wait, the last two lines are wrong. Here is the corrected code:"
     answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
