@@ -2,8 +2,11 @@
 
 :func:`robotool.sim.build.make_spec` adds an inactive weld ``magnet__<a>__<b>`` for every pair of
 magnetic objects; :meth:`Magnets.update` activates it, at the current relative pose, in every world
-where the two bodies touch. A magnet holds a bounded load, read where the two meet (the patch where the smaller of the
-two faces that face each other overlaps the other body, :func:`join_face`): a force up to :data:`HOLD_FORCE`; a couple
+where the two bodies touch. A magnet holds a bounded load, read where the two meet (of the parts that touch, the patch
+where the smaller of the two faces that face each other overlaps the other part, :func:`join_face`; found by an
+adversarial run: read from the boxes around whole objects, a hook's 3 cm bar end stuck to a wall held a patch as tall
+as its 25 cm upright, which touched nothing, and a 3.5 kg bracket hung from it): a force up to :data:`HOLD_FORCE`; a
+couple
 that peels the patch off about one of its edges up to :data:`HOLD_FORCE` times the patch's half width across that edge
 (the pull of the whole patch at its far edge), and a twist about its normal up to :data:`HOLD_FORCE` times its
 smaller half width (as if that pull held by friction at the patch's edge). Past any of these the weld lets go, and that
@@ -14,6 +17,7 @@ couple of 2 N m, so it does not carry a robot across a gap as a cantilever, and 
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,8 +41,13 @@ class Magnets:
             for eq in range(model.neq)
             if model.equality(eq).name.startswith("magnet__")
         ]
-        corners = local_corners(scene)  # each object's parts' corners in its body frame
-        self.boxes = {int(b): _box(corners[int(scene.body_object[b])]) for _, b1, b2 in self.pairs for b in (b1, b2)}
+        corners = local_corners(scene)  # each object's parts' corners in its body frame, 8 a part
+        self.boxes = {
+            int(b): [_box(part) for part in np.split(corners[o], len(corners[o]) // 8)]
+            for _, b1, b2 in self.pairs
+            for b in (b1, b2)
+            for o in [int(scene.body_object[b])]
+        }
         self._let_go: np.ndarray | None = None  # (nworld, neq): released, not attached again until apart
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
@@ -64,6 +73,7 @@ class Magnets:
 
 
 BodyBox = tuple[np.ndarray, np.ndarray]  # a box in a body's frame: its centre and half sizes
+BodyParts = tuple[int, list[BodyBox]]  # a body and the boxes of its parts, in its frame
 
 
 def _box(corners: np.ndarray) -> BodyBox:
@@ -83,6 +93,15 @@ class JoinFace:
     half: np.ndarray
     normal: np.ndarray
 
+    def where(self, chosen: np.ndarray, other: JoinFace) -> JoinFace:
+        """Per world, ``other``'s patch where ``chosen`` (k,), else this one."""
+        return JoinFace(
+            centre=np.where(chosen[:, None], other.centre, self.centre),
+            axes=np.where(chosen[:, None, None], other.axes, self.axes),
+            half=np.where(chosen[:, None], other.half, self.half),
+            normal=np.where(chosen[:, None], other.normal, self.normal),
+        )
+
     def overloaded(self, load: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """(k,) whether a weld load (k, 6: force, then torque about ``origin`` (k, 3), as
         :meth:`~robotool.sim.backend.BatchedSim.weld_load` gives it) is more than the magnet holds."""
@@ -97,23 +116,40 @@ class JoinFace:
         )
 
 
-def join_face(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
-    """The patch where two touching bodies meet in ``worlds`` (each ``(body, (centre, half sizes))``, its box in the
-    body's frame): of each box, the face the other box lies beyond (least inside its plane), where the other box's
-    extent covers it; of the two, the smaller."""
-    first, second = _facing(state, worlds, one, two), _facing(state, worlds, two, one)
-    mine = first.half.prod(axis=1) <= second.half.prod(axis=1)
-    return JoinFace(
-        centre=np.where(mine[:, None], first.centre, second.centre),
-        axes=np.where(mine[:, None, None], first.axes, second.axes),
-        half=np.where(mine[:, None], first.half, second.half),
-        normal=np.where(mine[:, None], first.normal, second.normal),
-    )
+def join_face(state: BatchState, worlds: np.ndarray, one: BodyParts, two: BodyParts) -> JoinFace:
+    """The patch where two touching bodies meet in ``worlds`` (each ``(body, boxes of its parts in its frame)``): of
+    the pairs of their parts, the one nearest to touching (the least gap between the boxes along their axes); of each of
+    its two boxes, the face the other box lies beyond (least inside its plane), where the other box's extent covers it;
+    of the two, the smaller."""
+    (body, parts), (other, other_parts) = one, two
+    best: JoinFace | None = None
+    least = np.full(len(worlds), np.inf)
+    for box, other_box in itertools.product(parts, other_parts):
+        (first, gap), (second, other_gap) = (
+            _facing(state, worlds, (body, box), (other, other_box)),
+            _facing(state, worlds, (other, other_box), (body, box)),
+        )
+        mine = first.half.prod(axis=1) <= second.half.prod(axis=1)
+        face = JoinFace(
+            centre=np.where(mine[:, None], first.centre, second.centre),
+            axes=np.where(mine[:, None, None], first.axes, second.axes),
+            half=np.where(mine[:, None], first.half, second.half),
+            normal=np.where(mine[:, None], first.normal, second.normal),
+        )
+        apart = np.maximum(gap, other_gap)
+        nearer = apart < least
+        least = np.where(nearer, apart, least)
+        best = face if best is None else best.where(nearer, face)
+    assert best is not None
+    return best
 
 
-def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]) -> JoinFace:
+def _facing(
+    state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two: tuple[int, BodyBox]
+) -> tuple[JoinFace, np.ndarray]:
     """The face of the first box that the second lies beyond (of its six, the one whose plane the second box reaches
-    least far inside: about 0 for the face they touch on), cut to the part of it the second box's extent covers."""
+    least far inside: about 0 for the face they touch on), cut to the part of it the second box's extent covers, and
+    how far beyond it the second box lies (k,; < 0: inside its plane)."""
     (body, (centre, half)), (other, (other_centre, other_half)) = one, two
     rot, other_rot = state.xmat(body)[worlds], state.xmat(other)[worlds]  # (k, 3, 3): axes as columns
     origin = state.xpos[worlds, body] + rot @ centre
@@ -130,4 +166,5 @@ def _facing(state: BatchState, worlds: np.ndarray, one: tuple[int, BodyBox], two
     along, extent = np.take_along_axis(local, others, 1), np.take_along_axis(reach, others, 1)  # (k, 2) in-plane
     low, high = np.maximum(-half[others], along - extent), np.minimum(half[others], along + extent)
     middle = np.einsum("ki,kij->kj", (low + high) / 2, axes)
-    return JoinFace(origin + normal * half[axis][:, None] + middle, axes, np.maximum(high - low, 0.0) / 2, normal)
+    face_ = JoinFace(origin + normal * half[axis][:, None] + middle, axes, np.maximum(high - low, 0.0) / 2, normal)
+    return face_, gaps[k, face]

@@ -105,6 +105,13 @@ CASES = [  # (program, task, what its failure reason must say)
     # a 3.5 kg bar hung by a 3 cm square magnet patch on a post's side, its weight twisting the patch by 9 N m: a magnet
     # held 20 N m of twist whatever its patch
     ("arm_hang_a_steel_bar_on_a_post_by_its_side", "arm_steel_bar_beside_a_magnetic_post", "not reached: bar_lifted"),
+    # a 3.5 kg bracket hung by its bar's 3 cm end on a wall: the patch was read from the box around the whole bracket,
+    # as tall as its upright
+    (
+        "arm_hang_a_steel_bracket_on_a_wall_by_its_bar_end",
+        "arm_steel_bracket_below_a_magnetic_wall",
+        "not reached: bracket_lifted",
+    ),
 ]
 
 
