@@ -16,7 +16,7 @@ from robotool.sandbox.code_shape import calling_line, calls, has_action, looks_l
 from robotool.sandbox.fences import FENCE, fence_indent, fence_pairs, outside_blocks
 from robotool.sandbox.html_blocks import html_code_blocks
 from robotool.sandbox.joined import refuse_joined
-from robotool.sandbox.labels import aside, marks_final, retracts
+from robotool.sandbox.labels import aside, marks_final, not_an_answer, retracts
 from robotool.sandbox.placeholder import refuse_placeholder
 from robotool.sandbox.reasoning import without_reasoning
 from robotool.sandbox.unfenced import unfenced_program
@@ -104,6 +104,13 @@ def _extract(text: str) -> Extraction:
                 "blocks",
                 f"the reply holds code block {index + 1} and also code {elsewhere}; it is not clear which is meant; "
                 "give exactly one program, in one code block",
+            )
+        if why == _ONLY_PROGRAM and not_an_answer(blocks[index].label, blocks[index].heading):
+            raise ProgramRejected(
+                None,
+                "blocks",
+                f"the only program follows {blocks[index].label[-80:]!r}, which says it is not the final program "
+                "(a draft, pseudo-code, a partial fix, your own code); give the final program, in one code block",
             )
         code = blocks[index].code.strip("\n")
         refuse_change_in_words(_prose_after(text, blocks[index].end))
@@ -353,6 +360,9 @@ def _check_fence(opening: re.Match[str]) -> None:
         )
 
 
+_ONLY_PROGRAM = "the only program; the other blocks quote it or are no programs"
+
+
 def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     """The index of the block to run and why (see :func:`extract`); raises :class:`ProgramRejected` when a block
     meant as a program does not parse, or several different programs leave it unclear which one is meant."""
@@ -398,8 +408,7 @@ def _choose_block(blocks: list[_Block]) -> tuple[int, str]:
     else:
         whole = quotes.whole()
         if len(whole) == 1:
-            why = "the only program; the other blocks quote it or are no programs"
-            return _unretracted(blocks, programs, quotes, whole[0]), why
+            return _unretracted(blocks, programs, quotes, whole[0]), _ONLY_PROGRAM
     several = (
         f"more than {MOST_PROGRAMS} different programs"
         if len(whole) > MOST_PROGRAMS

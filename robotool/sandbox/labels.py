@@ -106,6 +106,23 @@ def retracts(label: str) -> bool:
     )
 
 
+_NOT_AN_ANSWER = re.compile(
+    r"\b(?:(?:first |rough )?draft|pseudo-?code|(?:rough )?sketch|untested|not (?:the |a )?final|what not to do|"
+    r"superseded|naive (?:version|attempt|approach|program)|partial (?:fix|program|solution|version)|"
+    r"(?:code|program) (?:you|the user) (?:provided|gave|sent|shared|wrote)|from (?:your|the) prompt)\b|"
+    r"^[#*_\s]*(?:your|the user's) (?:final |original |current )?(?:code|program)[*_\s]*[:：]?[*_\s]*$",
+    re.IGNORECASE,
+)
+"""Words before a reply's only program that say it is not the answer: a draft, pseudo-code, a sketch, a partial fix,
+what not to do, the user's own code echoed (found by an adversarial run, where each ran as the program)."""
+
+
+def not_an_answer(label: str, heading: str) -> bool:
+    """Whether a block's label, or the heading above it, says it is no answer (:data:`_NOT_AN_ANSWER`), and it is not
+    marked final."""
+    return not marks_final(label, heading) and any(_NOT_AN_ANSWER.search(text) for text in (label, heading))
+
+
 _FAULTY_LABEL = re.compile(rf"\b(?:{_FAULTY}|never|misses|missing)\b", re.IGNORECASE)
 """Words that call the block before a label faulty: what follows them is its correction, not an aside."""
 

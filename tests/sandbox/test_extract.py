@@ -151,6 +151,27 @@ def test_a_shorter_fix_under_a_correction_label_is_no_quote_of_the_draft(label: 
         extract(answer)
 
 
+@pytest.mark.parametrize(
+    "label",
+    [
+        "First draft:",
+        "Here is some pseudo-code for the approach:",
+        "A rough sketch (untested, not the final program):",
+        "Partial fix (the lift still needs to be added):",
+        "This is what NOT to do:",
+        "Your code:",
+        "The code you provided:",
+        "## Draft",
+    ],
+)
+def test_the_only_program_labelled_as_no_answer_is_asked_again(label: str) -> None:
+    """Found by an adversarial run: the label before a reply's only block was never read, and a draft, pseudo-code, a
+    partial fix or the user's own code echoed ran as the program."""
+    with pytest.raises(ProgramRejected, match="which says it is not the final program"):
+        extract(f"{label}\n```python\n{GRASP}```\nThis fails because the push comes too late.\n")
+    assert extract(f"Here is an example program:\n```python\n{GRASP}```\n").code == GRASP  # an answer, shown
+
+
 def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
     label = "Wait, the last two lines are wrong. Here is the corrected code:"
     answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
