@@ -177,6 +177,10 @@ def _without_a_lone_fence(text: str) -> tuple[str, int]:
 
 _MARKDOWN_TAGS = frozenset({"markdown", "md"})
 _HEADING = re.compile(r"[ ]{0,3}#{1,6}[ \t]")
+_RULE = re.compile(r"[ ]{0,3}(?:(?:-[ \t]*){3,}|(?:\*[ \t]*){3,}|(?:_[ \t]*){3,}|=+)[ \t]*")
+"""A thematic break (``---``, ``***``) or a setext heading's underline (``-----``, ``=====``): no label of a block;
+the words above it are (found by an adversarial run: '---' was read as the label, and 'Final program:' above it
+not)."""
 
 
 def _fenced_blocks(text: str, depth: int = 0, at: int = 0) -> list[_Block]:
@@ -193,7 +197,8 @@ def _fenced_blocks(text: str, depth: int = 0, at: int = 0) -> list[_Block]:
             blocks += _fenced_blocks(inner, depth + 1, at + opening.end() + 1)
         elif _PYTHON_TAG.fullmatch(tag):
             before = [line for line in text[previous_end : opening.start()].split("\n") if line.strip()]
-            label = before[-1].strip() if before else ""
+            words = [line for line in before if not _RULE.fullmatch(line)]  # a rule, or a setext heading's underline
+            label = words[-1].strip() if words else ""
             heading = next((line.strip() for line in reversed(before) if _HEADING.match(line)), "")
             code = _dedented(inner, fence_indent(opening)).strip("\n")
             ends = at + (closing.end() if closing else len(text))

@@ -172,6 +172,17 @@ def test_the_only_program_labelled_as_no_answer_is_asked_again(label: str) -> No
     assert extract(f"Here is an example program:\n```python\n{GRASP}```\n").code == GRASP  # an answer, shown
 
 
+@pytest.mark.parametrize(
+    ("draft", "final"),
+    [("Draft:\n\n---\n", "Final program:\n\n---\n"), ("Draft\n-----\n", "Final\n=====\n")],
+    ids=["a rule under the label", "setext headings"],
+)
+def test_a_rule_or_a_heading_underline_is_no_label(draft: str, final: str) -> None:
+    """Found by an adversarial run: the line of dashes was read as the block's label, and the marker above it not."""
+    answer = f"{draft}```python\n{LONGER}```\n{final}```python\n{PROGRAM}```\n"
+    assert extract(answer).code == PROGRAM
+
+
 def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
     label = "Wait, the last two lines are wrong. Here is the corrected code:"
     answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
