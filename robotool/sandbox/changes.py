@@ -61,10 +61,20 @@ _TAKES_BACK = re.compile(
     r"(?:hmm,?\s*)?(?:actually\b|wait\s*[,.!:;—–-]|oops\b(?!-)|sorry(?! (?:for|about|if|to)\b)|correction\b|"
     r"one correction\b|(?:small |one |quick )?fix:|my mistake|on second thought|no,? wait|no\s*[,.—–-]|scratch that|"
     r"typo\b|"
-    # the same in the languages whose final markers the labels read (es, pt, fr, de, zh)
-    r"en realidad\b|corrección\b|na verdade\b|correção\b|en fait\b|eigentlich\b|korrektur\b|更正|修正：|其实)",
+    # the same in the languages whose final markers the labels read (es, pt, fr, de, zh, ja, ko, ru)
+    r"en realidad\b|corrección\b|na verdade\b|correção\b|en fait\b|eigentlich\b|korrektur\b|更正|修正：|其实|"
+    r"申し訳|すみません|ごめんなさい|訂正|正しくは|죄송|잠깐|정정|извините|подождите|поправка\b|на самом деле\b)",
     re.IGNORECASE,
 )
+_EDIT_ASKED_ELSEWHERE = re.compile(
+    r"置き換えて|に置き換え|変更して|削除して|追加して|にしてください|"
+    r"바꾸세요|바꿔 ?주세요|변경하세요|삭제하세요|추가하세요|넣으세요|"
+    r"\b(?:замените|измените|поменяйте|удалите|уберите|добавьте|вставьте)\b",
+    re.IGNORECASE,
+)
+"""An edit asked for in the imperative in Japanese, Korean or Russian ("最後の行を `x` に置き換えてください",
+"마지막 줄을 `x`로 바꾸세요", "Замените последнюю строку на `x`"): with code named, a change to the program (found by an
+adversarial run, where the English verbs alone were read)."""
 _NAMES_CODE = re.compile(r"`[^`]*`|\w\(|\b(?:line|call|step)s?\b", re.IGNORECASE)
 _SAYS_WHAT_IT_SHOULD_BE = re.compile(
     rf"\b(?:should (?:be|read|come|stay|go)|must (?:be|come)|has to (?:be|come)|needs? to (?:be|come)|is wrong|"
@@ -99,6 +109,8 @@ def change_in_words(prose: str) -> str | None:
     for k, sentence in enumerate(sentences):
         logged = any(_CHANGE_LOG.match(earlier) for earlier in sentences[max(k - 5, 0) : k])
         if (_asks_an_edit(sentence) and not logged) or _ARROW.search(sentence):
+            return sentence
+        if _EDIT_ASKED_ELSEWHERE.search(sentence) and _BLANKED_CODE.search(sentence) and not logged:
             return sentence
         if _TAKES_BACK.match(sentence):
             for later in sentences[k : k + 3]:

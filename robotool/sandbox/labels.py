@@ -14,11 +14,14 @@ _FINAL = re.compile(
     r"(?:program|code|version|script|solution|answer)\b|"
     r"\b(?:código|programa|versión|versão|code|programme|codice|programma|versione)\s+"
     r"(?:final|finale|corregid[oa]|corrigid[oa]|corrigée?|corrett[oa])\b|"
-    r"\b(?:endgültige|finale|korrigierte)[sr]?\s+(?:programm|code|version)\b|最终(?:代码|程序|版本)|修正后的(?:代码|程序)",
+    r"\b(?:endgültige|finale|korrigierte)[sr]?\s+(?:programm|code|version)\b|最终(?:代码|程序|版本)|修正后的(?:代码|程序)|"
+    r"最終(?:的な)?(?:コード|プログラム)|修正(?:後|した)の?(?:コード|プログラム)|(?:최종|수정된) ?(?:코드|프로그램)|"
+    r"\b(?:окончательн|итогов|исправленн)\w*\s+(?:код|программ)\w*",
     re.IGNORECASE,
 )
-"""A final marker, in English and in the languages models answer in most (found by an adversarial run: '最终代码：',
-'Código final:', 'Programme final :', 'Endgültiges Programm:' were read as no marker)."""
+"""A final marker, in English and in the languages models answer in most (found by adversarial runs: '最终代码：',
+'Código final:', 'Programme final :', 'Endgültiges Programm:', '修正後のコード：', '수정된 코드:',
+'Исправленный код:' were read as no marker)."""
 _FAULTY = r"wrong|incorrect|buggy|broken|fails?|failed|failing|crashed"  # may say so of the block before the label
 _SET_ASIDE = (
     r"not|never|no|original|old|older|previous|earlier|initial|first|draft|current|currently|existing|gave|given|sent|"

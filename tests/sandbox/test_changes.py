@@ -30,6 +30,13 @@ CHANGES = {
     "in French": "En fait, remplacez la dernière ligne par `open_gripper()`.",
     "in German": "Korrektur: ersetze die letzte Zeile durch `open_gripper()`.",
     "in Chinese": "更正：把最后一行改成 `open_gripper()`。",
+    # found by a later adversarial run: Japanese, Korean and Russian, taken back or asked in the imperative
+    "in Japanese, an apology": "申し訳ありません、最後の行は `open_gripper()` にする必要があります。",
+    "in Japanese, asked": "最後の行を `open_gripper()` に置き換えてください。",
+    "in Korean, an apology": "죄송합니다, 마지막 줄은 `open_gripper()`이어야 합니다.",
+    "in Korean, asked": "마지막 줄을 `open_gripper()`로 바꾸세요.",
+    "in Russian, an apology": "Извините, последняя строка должна быть `open_gripper()`.",
+    "in Russian, asked": "Замените последнюю строку на `open_gripper()`.",
 }
 
 
@@ -79,6 +86,7 @@ EXPLANATIONS = [
     "En realidad, este programa funciona para cualquier posición de la leche.",
     "其实这个程序适用于任何位置。",
     "抱歉，上面的代码缺少 `open_gripper()`，已修正。",  # an apology answering a re-ask, the code already fixed
+    "Изменения: добавил `open_gripper()` перед движением.",  # a change made (past tense), not asked for
     # found by an adversarial run: each was asked again by the first version of the rule
     "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
     "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",

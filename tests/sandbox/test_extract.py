@@ -918,8 +918,17 @@ def test_one_program_whose_comments_name_an_option_or_a_version_is_kept(program:
 
 @pytest.mark.parametrize(
     "label",
-    ["最终代码：", "Código final:", "Programme final :", "Endgültiges Programm:", "## Final program\n\nIt opens:"],
-    ids=["zh", "es", "fr", "de", "a heading, then a sentence"],
+    [
+        "最终代码：",
+        "Código final:",
+        "Programme final :",
+        "Endgültiges Programm:",
+        "修正後のコード：",
+        "수정된 코드:",
+        "Исправленный код:",
+        "## Final program\n\nIt opens:",
+    ],
+    ids=["zh", "es", "fr", "de", "ja", "ko", "ru", "a heading, then a sentence"],
 )
 def test_a_fix_marked_final_in_another_language_or_by_a_heading_is_taken(label: str) -> None:
     """Found by an adversarial run: honest replies asked again, as two programs neither marked."""
