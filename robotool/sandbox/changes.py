@@ -43,7 +43,7 @@ _PREFIX = (
 )
 _EDIT = (
     r"replace|(?:change|modify|update|edit)(?!\s*:)|swap|remove|delete|add|append|prepend|skip|scrap|comment out|"
-    r"get rid of|leave out|make(?! sure)|use\b.{0,60}\binstead"
+    r"get rid of|leave out|make(?! sure)|use\b.{0,60}\binstead|insert|switch|reorder|(?:put|move)(?=\s+\*{0,2}`)"
 )
 _PLACE = (
     r"`[^`]+`|\b(?:the )?(?:last|first|second|third|fourth|final|next|previous|\d+(?:st|nd|rd|th)) "
@@ -96,13 +96,28 @@ _CHANGE_LOG = re.compile(
 """A list of the changes made, in the imperative ("Changes made: - Replace ...", "Summary of changes:", "Fixes
 applied:", "What I fixed:"), describes the program shown. A bare "Fix:" or "Modifications:" may as well ask for them
 (after the program as it was), and is read as a request."""
+_CALL_SPAN = r"\*{0,2}`[^`]*\w\([^`]*`"
+_NAMES_ITS_REPLACEMENT = re.compile(
+    rf"\b(?:should|must|needs? to|has to) (?:be|read|end with|come (?:first|last))\s*:?\s*{_CALL_SPAN}|"
+    rf"\binstead of\s+\*{{0,2}}`[^`]+`[^.!?]*?\b(?:call|use)\s+\*{{0,2}}`|"
+    rf"\brather than\s+\*{{0,2}}`[^`]+`[^.!?]*?\b(?:call|use)\s+\*{{0,2}}`|"
+    rf"\b(?:call|use)\s+\*{{0,2}}`[^`]+`[^.!?]{{0,60}}\binstead of\b|"
+    rf"\buse\s+\*{{0,2}}`[^`]+`[^.!?]{{0,30}},? not\s+\*{{0,2}}`",
+    re.IGNORECASE,
+)
+"""A sentence that names the code a place of the program should hold ("the last line must be `open_gripper()`, not
+...", "Instead of `close_gripper()`, call `open_gripper()`", "Use `x` here, not `y`"), whatever opens it (found by an
+adversarial run: such notes after the only program, opened by no edit verb nor take-back, ran the program as it was)."""
+_FIRST_PERSON = re.compile(r"\b(?:I|we)\b")
+"""What the model did ("I used `x` instead of hard-coding ..."), not what it asks for."""
 _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
 """One call turned into another (`close_gripper()` → `open_gripper()`)."""
 
 
-def change_in_words(prose: str) -> str | None:
+def change_in_words(prose: str, program: str | None = None) -> str | None:
     """The first sentence of ``prose`` (a reply's words after its program) that asks for a change to the program (see
-    the module), or None."""
+    the module), or None; given the ``program``, also one that asks to call code the program does not hold
+    (:func:`_asks_for_a_missing_call`)."""
     plain = _ABBREVIATIONS.sub("", _TERMINAL.sub("", prose))
     sentences = [_MARKS.sub("", s).strip() for s in _SENTENCE_END.split(plain)]
     sentences = [s for s in sentences if s]
@@ -111,6 +126,10 @@ def change_in_words(prose: str) -> str | None:
         if (_asks_an_edit(sentence) and not logged) or _ARROW.search(sentence):
             return sentence
         if _EDIT_ASKED_ELSEWHERE.search(sentence) and _BLANKED_CODE.search(sentence) and not logged:
+            return sentence
+        if _NAMES_ITS_REPLACEMENT.search(sentence) and not logged and not _tells(_BLANKED_CODE.sub("x", sentence)):
+            return sentence
+        if program is not None and not logged and _asks_for_a_missing_call(sentence, program):
             return sentence
         if _TAKES_BACK.match(sentence):
             for later in sentences[k : k + 3]:
@@ -141,10 +160,33 @@ def _asks_an_edit(sentence: str) -> bool:
     return rest.rstrip().endswith(":") or _NAMES_A_PLACE.search(" ".join(rest.split()[:8])) is not None
 
 
-def refuse_change_in_words(prose: str) -> None:
-    """Raise :class:`ProgramRejected` when ``prose`` (the reply's words after its program) asks for a change to the
+_ASKS_TO_CALL = re.compile(r"\b(?:call|calling|add|insert|run)\s+\*{0,2}`(?P<code>[^`]*\w\([^`]*)`", re.IGNORECASE)
+
+
+def _asks_for_a_missing_call(sentence: str, program: str) -> bool:
+    """Whether a sentence asks to call code (``call `open_gripper()` first``, "don't forget to call ...") that the
+    program does not hold as written, and tells nothing done or shown (found by an adversarial run: "Don't forget to
+    call `open_gripper()` before the move", after a program without it, ran that program)."""
+    if _tells(_BLANKED_CODE.sub("x", sentence)):
+        return False
+    held = _plain(program)
+    return any(_plain(found["code"]) not in held for found in _ASKS_TO_CALL.finditer(sentence))
+
+
+def _plain(code: str) -> str:
+    """Code without its white space, its quotes all double: the same call however it is spaced or quoted."""
+    return re.sub(r"\s+", "", code).replace("'", '"')
+
+
+def _tells(words: str) -> bool:
+    """Whether a sentence (its code blanked) tells what was done or what is shown, or sets a condition: no request."""
+    return any(pattern.search(words) for pattern in (_FIRST_PERSON, _DESCRIBES_THE_PROGRAM, _CONDITION))
+
+
+def refuse_change_in_words(prose: str, program: str | None = None) -> None:
+    """Raise :class:`ProgramRejected` when ``prose`` (the reply's words after its ``program``) asks for a change to the
     program (:func:`change_in_words`)."""
-    sentence = change_in_words(prose)
+    sentence = change_in_words(prose, program)
     if sentence is not None:
         raise ProgramRejected(
             None,

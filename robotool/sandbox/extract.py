@@ -113,7 +113,7 @@ def _extract(text: str) -> Extraction:
                 "(a draft, pseudo-code, a partial fix, your own code); give the final program, in one code block",
             )
         code = blocks[index].code.strip("\n")
-        refuse_change_in_words(_prose_after(text, blocks[index].end))
+        refuse_change_in_words(_prose_after(text, blocks[index].end), code)
         if len(blocks) > 1:
             chosen = f"the reply held {len(blocks)} code blocks; block {index + 1} ({why}) was used, not joined"
         fence_lines = blocks[index].fence_lines
@@ -122,7 +122,7 @@ def _extract(text: str) -> Extraction:
             raise ProgramRejected(None, "blocks", _DIFF_PROBLEM)
         code, fence_lines = unfenced_program(text).strip("\n"), lone_fence
         if code.strip():
-            refuse_change_in_words(text[text.find(code) + len(code) :])  # the program, not a quote of it after
+            refuse_change_in_words(text[text.find(code) + len(code) :], code)  # the program, not a quote of it after
     if not code.strip():
         raise ProgramRejected(None, "text", "no Python program found in the answer")
     tree = parse_program(code)  # as written: tabs mixed with spaces the way Python rejects (a TabError) are refused

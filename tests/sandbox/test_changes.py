@@ -37,6 +37,13 @@ CHANGES = {
     "in Korean, asked": "마지막 줄을 `open_gripper()`로 바꾸세요.",
     "in Russian, an apology": "Извините, последняя строка должна быть `open_gripper()`.",
     "in Russian, asked": "Замените последнюю строку на `open_gripper()`.",
+    # found by a later adversarial run: notes that name what a place should hold, or ask for a call the program lacks
+    "what the last line must be": "**Important:** the last line must be `open_gripper()`, not `close_gripper()`.",
+    "instead of one call, another": "Instead of `close_gripper()`, call `open_gripper()` at the end.",
+    "rather than one, another": "Rather than `move_to_position(p)`, use `move_to_position([0.3, 0.0, 0.3])` here.",
+    "a call to insert": "Insert `open_gripper()` before `move_to_position(p)`.",
+    "a call not to forget": "Don't forget to call `move_to_position([0.3, 0.0, 0.3])` after the grasp to lift it.",
+    "a call to add at the end": "Also call `move_to_position([0.3, 0.0, 0.3])` at the end to lift it clear.",
 }
 
 
@@ -87,6 +94,9 @@ EXPLANATIONS = [
     "其实这个程序适用于任何位置。",
     "抱歉，上面的代码缺少 `open_gripper()`，已修正。",  # an apology answering a re-ask, the code already fixed
     "Изменения: добавил `open_gripper()` перед движением.",  # a change made (past tense), not asked for
+    "Don't forget: `open_gripper()` must come before the move, which the program does.",
+    "I used `get_graspable_point` instead of `get_center` so the fingers close on the carton.",
+    "It is important to call `open_gripper()` first, so the fingers clear the carton.",
     # found by an adversarial run: each was asked again by the first version of the rule
     "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
     "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",
@@ -204,5 +214,6 @@ def test_the_words_read_are_those_after_the_program(answer: str) -> None:
 def test_a_program_that_only_defines_its_function_is_asked_again(after: str) -> None:
     """Found by an adversarial run: the definition alone ran, and the robot did nothing."""
     definition = "def grasp(name):\n    p = get_graspable_point(name)\n    open_gripper()\n    move_to_position(p)\n"
-    with pytest.raises(ProgramRejected, match="only defines grasp and never calls them"):
+    # (the call asked for in words is also a call the program does not hold: a change asked in words)
+    with pytest.raises(ProgramRejected, match=r"only defines grasp and never calls them|asks for a change in words"):
         extract(f"Final program:\n```python\n{definition}```\n{after}")
