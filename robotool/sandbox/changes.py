@@ -108,6 +108,14 @@ _NAMES_ITS_REPLACEMENT = re.compile(
 """A sentence that names the code a place of the program should hold ("the last line must be `open_gripper()`, not
 ...", "Instead of `close_gripper()`, call `open_gripper()`", "Use `x` here, not `y`"), whatever opens it (found by an
 adversarial run: such notes after the only program, opened by no edit verb nor take-back, ran the program as it was)."""
+_WITHDRAWS = re.compile(
+    r"\b(?:this|that|it|the above|the (?:program|code|version) above)\b[^.!?:]{0,40}?\b(?:is wrong|is incorrect|"
+    r"won't work|will not work|doesn't work|does not work|fails|is unnecessary|is not needed)\b|"
+    r"\blet me (?:reconsider|redo|rethink|try (?:again|another)|fix (?:this|that|it)|correct (?:this|that|it))\b",
+    re.IGNORECASE,
+)
+"""Words after the program that withdraw it ("Wait, this is wrong ... Let me reconsider.", "Hmm, the above won't
+work: the box is fixed."): found by an adversarial run, where the program ran as if meant."""
 _FIRST_PERSON = re.compile(r"\b(?:I|we)\b")
 """What the model did ("I used `x` instead of hard-coding ..."), not what it asks for."""
 _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
@@ -130,6 +138,8 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
         if _NAMES_ITS_REPLACEMENT.search(sentence) and not logged and not _tells(_BLANKED_CODE.sub("x", sentence)):
             return sentence
         if program is not None and not logged and _asks_for_a_missing_call(sentence, program):
+            return sentence
+        if _WITHDRAWS.search(sentence) and not _CONDITION.search(_BLANKED_CODE.sub("x", sentence)):
             return sentence
         if _TAKES_BACK.match(sentence):
             for later in sentences[k : k + 3]:

@@ -44,6 +44,8 @@ CHANGES = {
     "a call to insert": "Insert `open_gripper()` before `move_to_position(p)`.",
     "a call not to forget": "Don't forget to call `move_to_position([0.3, 0.0, 0.3])` after the grasp to lift it.",
     "a call to add at the end": "Also call `move_to_position([0.3, 0.0, 0.3])` at the end to lift it clear.",
+    "withdrawn": "Wait, this is wrong: the carton is out of reach. Let me reconsider.",
+    "the above won't work": "Hmm, the above won't work: the gripper is already closed.",
 }
 
 
@@ -97,6 +99,8 @@ EXPLANATIONS = [
     "Don't forget: `open_gripper()` must come before the move, which the program does.",
     "I used `get_graspable_point` instead of `get_center` so the fingers close on the carton.",
     "It is important to call `open_gripper()` first, so the fingers clear the carton.",
+    "Without the open step this would fail, so the program opens first.",
+    "If the carton is out of reach, this won't work.",
     # found by an adversarial run: each was asked again by the first version of the rule
     "### Explanation:\n5. **Lower and grasp**: The second call lowers the gripper, then `close_gripper()` closes it.",
     "How it works:\n6. Put the milk down by lowering it and calling `open_gripper()`.",
