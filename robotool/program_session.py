@@ -13,9 +13,12 @@ from __future__ import annotations
 
 import queue
 import threading
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from multiprocessing.connection import Connection
+from multiprocessing.connection import wait as connection_wait
+from typing import Any, Protocol, cast, runtime_checkable
 
 
 @dataclass(frozen=True)
@@ -53,6 +56,46 @@ class ProgramSession(Protocol):
 
     def close(self) -> None:
         """Stop the program and free its resources."""
+
+
+@runtime_checkable
+class ArrivingSession(Protocol):
+    """A session whose messages come through a channel the runner can watch (a sandboxed program's socket)."""
+
+    def channel(self) -> tuple[Connection, float] | None:
+        """The channel its next message comes through and the seconds it has left to send it, while it owes one."""
+
+    def arrived(self, at: float) -> None:
+        """Its message began to arrive at ``at`` (``time.monotonic()``): it is charged no later time waiting."""
+
+
+def wait_all(sessions: Sequence[ProgramSession]) -> list[SkillRequest | ProgramEnded]:
+    """Each session's :meth:`~ProgramSession.wait`, in the sessions' order; those with a channel
+    (:class:`ArrivingSession`) are taken as their messages arrive, each told when its began to arrive, so that a
+    program is charged only for its own time and not for the runner's time on the others (found by an adversarial
+    run: waited on in turn, a good program whose reply sat unread behind 24 busy-looping ones ran out of its
+    wall-clock budget)."""
+    results: dict[int, SkillRequest | ProgramEnded] = {}
+    watched: dict[int, tuple[Connection, float]] = {}
+    for k, session in enumerate(sessions):
+        owed = session.channel() if isinstance(session, ArrivingSession) else None
+        if owed is None:
+            results[k] = session.wait()
+        else:
+            watched[k] = owed
+    started = time.monotonic()
+    while watched:
+        left = min(budget for _, budget in watched.values()) - (time.monotonic() - started)
+        ready = set(connection_wait([conn for conn, _ in watched.values()], timeout=max(left, 0.0)))
+        now = time.monotonic()
+        arriving = [k for k, (conn, _) in watched.items() if conn in ready]
+        for k in arriving:
+            cast(ArrivingSession, sessions[k]).arrived(now)
+        # one that arrived, else the one out of time first (its wait ends it)
+        k = arriving[0] if arriving else min(watched, key=lambda j: watched[j][1])
+        del watched[k]
+        results[k] = sessions[k].wait()
+    return [results[k] for k in range(len(sessions))]
 
 
 class SkillCallError(RuntimeError):

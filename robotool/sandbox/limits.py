@@ -23,9 +23,10 @@ class SandboxLimits(BaseModel):
     """Per-program limits. Time spent waiting for the simulator to answer a skill call counts
     against none of them: ``cpu_s`` is the worker's own CPU time (it does not grow while 256 workers
     share two cores, only their wall time does), and ``wall_s`` only runs while the worker owes the
-    runner an answer: from ``resume`` until ``wait`` reads its next skill call or its end. A message
-    that has already arrived is always accepted, so ``wall_s`` is a backstop for a worker that is
-    stuck without using CPU, set well above ``cpu_s``."""
+    runner an answer: from ``resume`` until its next skill call or its end begins to arrive (the runner
+    watches every world at once), and while ``wait`` then reads it. A message that has already arrived
+    is always accepted, so ``wall_s`` is a backstop for a worker that is stuck without using CPU, set
+    well above ``cpu_s``."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 

@@ -7,6 +7,7 @@ import functools
 import signal
 import time
 from collections.abc import Sequence
+from multiprocessing.connection import Connection
 
 from pydantic import ValidationError
 
@@ -75,6 +76,7 @@ class SandboxSession:
         self._calls = 0
         self._started = False
         self._owed_since: float | None = None
+        self._arrived: float | None = None  # when the message owed began to arrive, once the runner saw it
         self._wall_spent = 0.0
         self._received = 0
         self._unsent = b""
@@ -104,7 +106,20 @@ class SandboxSession:
         self._started = True
         assert self._worker is not None, "a session has its worker until it ends"
         self._send(GO if reply is None else encode_reply(reply))
-        self._owed_since = time.monotonic()
+        self._owed_since, self._arrived = time.monotonic(), None
+
+    def channel(self) -> tuple[Connection, float] | None:
+        """The worker's socket and the program's wall time left, while it owes a message
+        (:class:`~robotool.program_session.ArrivingSession`)."""
+        if self._ended is not None or self._owed_since is None or self._worker is None or self._unsent:
+            return None  # (a reply not yet written in full: wait() writes it first)
+        return self._worker.conn, self.limits.wall_s - self._wall_spent - (time.monotonic() - self._owed_since)
+
+    def arrived(self, at: float) -> None:
+        """Its message began to arrive at ``at``: the program's time stops there, but for the time :meth:`wait` then
+        spends reading it."""
+        if self._arrived is None:
+            self._arrived = at
 
     def wait(self) -> SkillRequest | ProgramEnded:
         """Block until the program calls a skill or ends (or overruns its wall-clock budget)."""
@@ -114,8 +129,9 @@ class SandboxSession:
         assert worker is not None, "a session has its worker until it ends"
         if self._owed_since is None:
             raise RuntimeError("wait() without a pending resume()")
-        budget = self.limits.wall_s - self._wall_spent - (time.monotonic() - self._owed_since)
-        deadline = time.monotonic() + max(budget, 0.0)
+        waited = time.monotonic()
+        owed = (self._arrived or waited) - self._owed_since  # its own time, to when its message began to arrive
+        deadline = waited + max(self.limits.wall_s - self._wall_spent - owed, 0.0)
         try:
             self._unsent = write_by(worker.conn, self._unsent, deadline)
             if self._unsent:  # the worker stopped reading what it is owed
@@ -127,8 +143,8 @@ class SandboxSession:
             return self._end(self._death_reason(worker.zygote.exit_code(worker.pid)))
         except OSError:
             return self._end(MALFORMED)
-        self._wall_spent += time.monotonic() - self._owed_since
-        self._owed_since = None
+        self._wall_spent += owed + (time.monotonic() - waited)
+        self._owed_since = self._arrived = None
         self._received += len(data)
         if self._received > max_world_bytes(self.limits):
             return self._end(TOO_MUCH_DATA)

@@ -34,6 +34,7 @@ from robotool.program_session import (
     SkillRequest,
     TrustedProgram,
     TrustedSession,
+    wait_all,
 )
 from robotool.robots.skills import SceneBox, SkillArgumentError
 from robotool.rollout import Event, Rollout, SkillCall
@@ -264,8 +265,8 @@ class _Run:
         while to_wait:
             again = []
             starts: dict[int, SkillRequest] = {}
-            for i in to_wait:
-                message = self.worlds[i].session.wait()
+            messages = wait_all([self.worlds[i].session for i in to_wait])
+            for i, message in zip(to_wait, messages, strict=True):
                 if isinstance(message, ProgramEnded):
                     self._end(i, state, message.error, message.output, settle=True)
                 elif self._request(i, state, message):

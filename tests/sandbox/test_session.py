@@ -18,7 +18,7 @@ import pytest
 from fixtures.paths import FIXTURES
 
 from robotool import robots
-from robotool.program_session import ProgramEnded, SkillReply, SkillRequest
+from robotool.program_session import ProgramEnded, SkillReply, SkillRequest, wait_all
 from robotool.sandbox import SandboxLimits, SandboxSession, start_sessions, validate
 from robotool.sandbox.validate import ProgramRejected
 from robotool.sandbox.zygote import Zygote, zygote
@@ -173,6 +173,30 @@ def test_wall_clock_stops_a_program_that_overruns_it() -> None:
     assert world.ended is not None
     assert world.ended.error == "wall-clock limit exceeded (0.5 s of program time)"
     assert time.monotonic() - started < 3.0
+
+
+@pytest.mark.slow
+def test_a_program_is_not_charged_for_the_time_the_runner_waits_on_others() -> None:
+    """Found by an adversarial run: the runner waited on the worlds in turn, and a good program whose reply sat unread
+    behind busy-looping ones was charged for them: it ran out of its wall-clock budget at its next call. Waited on as
+    their messages arrive (:func:`~robotool.program_session.wait_all`), each world pays for its own time only."""
+    limits = FAST.model_copy(update={"cpu_s": 1.0, "wall_s": 1.5})
+    sessions = start_sessions(
+        ["x = 0\nwhile True:\n    x += 1\n"] * 4 + ["open_gripper()\nclose_gripper()\n"], "arm", limits
+    )
+    try:
+        for session in sessions:
+            session.resume(None)
+        started = time.monotonic()
+        *spinning, good = wait_all(sessions)
+        assert time.monotonic() - started > 1.5  # the good world's reply waited behind theirs, longer than its budget
+        assert all(isinstance(m, ProgramEnded) and m.error for m in spinning), spinning
+        assert good == SkillRequest("open_gripper", ())
+        sessions[-1].resume(SkillReply())
+        assert wait_all(sessions[-1:]) == [SkillRequest("close_gripper", ())]
+    finally:
+        for session in sessions:
+            session.close()
 
 
 def test_crashed_worker_fails_only_its_world() -> None:
