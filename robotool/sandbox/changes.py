@@ -208,7 +208,12 @@ def refuse_change_in_words(prose: str, program: str | None = None) -> None:
 
 _REMOVE_ME = re.compile(
     r"\b(?:remove|delete|drop)\s+(?:this|that)(?:\s+(?:line|call|step))?\s*(?:$|[:;,.(—–-])|"
-    r"\b(?:this|the) line (?:is )?not needed\b|\bshould be `?\w+\(",
+    r"\b(?:this|the) line (?:is )?not needed\b|\bshould be `?\w+\(|"
+    # found by a later adversarial run: each ran the line it stands beside
+    r"(?:^|<-+|-+>|→|:|,)\s*(?:remove|delete|drop)(?:\s+(?:it|this|me))?\s*[.!]?\s*$|"
+    r"\b(?:change|replace|swap)\s+(?:this|it|that)(?:\s+(?:line|call))?\s+(?:to|with|for|by)\b|"
+    r"\b(?:TODO|FIXME)\b\W*(?:replace|change|remove|delete|add|fix|use|swap)\b|\bFIXME\b|\boops\b|"
+    r"\bwrong\b[^#]{0,40}\buse\b",
     re.IGNORECASE,
 )
 

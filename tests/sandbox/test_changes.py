@@ -147,12 +147,33 @@ def test_a_quote_of_the_task_beside_the_program_leaves_it() -> None:
     assert extract(answer).code == GRASP
 
 
-def test_a_comment_that_asks_to_remove_its_line_is_asked_again() -> None:
+@pytest.mark.parametrize(
+    "comment",
+    [
+        "remove this line: the task is only to reach",
+        # found by a later adversarial run: each ran the line it stands beside
+        "<-- change this to open_gripper()",
+        "oops, this should open the gripper",
+        "not needed, remove",
+        "FIXME: this closes too early",
+        "TODO: replace with open_gripper()",
+        "wrong call: use open_gripper()",
+        "<- delete",
+    ],
+)
+def test_a_comment_that_asks_to_change_its_line_is_asked_again(comment: str) -> None:
     """Found by an adversarial run: the line ran."""
-    program = GRASP.replace("close_gripper()", "close_gripper()  # remove this line: the task is only to reach")
+    program = GRASP.replace("close_gripper()", f"close_gripper()  # {comment}")
     with pytest.raises(ProgramRejected, match="a comment in the program asks for a change"):
         extract(f"```python\n{program}```\n")
-    kept = GRASP.replace("close_gripper()", "close_gripper()  # drop the carton only once it is over the tray")
+
+
+@pytest.mark.parametrize(
+    "comment",
+    ["drop the carton only once it is over the tray", "close after the move, else the fingers hit the carton"],
+)
+def test_a_comment_that_explains_its_line_leaves_it(comment: str) -> None:
+    kept = GRASP.replace("close_gripper()", f"close_gripper()  # {comment}")
     assert extract(f"```python\n{kept}```\n").code == kept
 
 
