@@ -65,6 +65,16 @@ _CORRECTION_ALONE = re.compile(
 """A last sentence that is only a correction's label ("Corrected:", "Fixed:", "Here's the fix:", "Use this:", "It should
 be:"): what follows replaces the block before (found by an adversarial run: a shorter fix under such a label was read
 as a quote, and the draft ran)."""
+_ASKS_FOR_A_CHANGE = re.compile(
+    r"\b(?:should|must)\s+(?:just |only )?(?:be|read|end with|start with|begin with|look like)\b|"
+    r"\b(?:isn't|is not|aren't|are not|not)\s+(?:needed|necessary|required)\b|"
+    r"\bonly the (?:last|first) (?:\w+ )?(?:lines?|calls?|steps?) (?:is|are) (?:needed|necessary|required)\b|"
+    r"\bmove (?:this|these|that) (?:line|lines|call|calls)\b|\b(?:don't|do not) need\b",
+    re.IGNORECASE,
+)
+"""A label that asks for a change to the block before, with what follows as the change ("The last line should be:",
+"The push isn't necessary; start from here:", "Move this line to the end:"): found by an adversarial run, where the
+fragment after it read as a quote and the unchanged program ran."""
 _MARKER_ALONE = re.compile(
     rf"[#*_\s]*(?:(?:so,?\s*)?(?:here(?:'s| is)|this is|below is)\s+)?(?:the |my |a )?(?:{_FINAL.pattern})"
     r"[*_\s]*[:：]?",
@@ -106,6 +116,7 @@ def retracts(label: str) -> bool:
         or _SHORTER.fullmatch(last) is not None
         or _MARKER_ALONE.fullmatch(last) is not None
         or _CORRECTION_ALONE.fullmatch(last) is not None
+        or _ASKS_FOR_A_CHANGE.search(label) is not None
     )
 
 

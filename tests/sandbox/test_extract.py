@@ -183,6 +183,25 @@ def test_a_rule_or_a_heading_underline_is_no_label(draft: str, final: str) -> No
     assert extract(answer).code == PROGRAM
 
 
+@pytest.mark.parametrize(
+    "label",
+    [
+        "The last line should be:",
+        "Only the last two lines are needed:",
+        "The push step isn't necessary, you can start from here:",
+        "The task only asks to grasp it, so the program should end with:",
+        "Move this line to the end:",
+    ],
+)
+def test_a_fragment_under_words_that_ask_for_a_change_is_no_quote(label: str) -> None:
+    """Found by an adversarial run: the fragment read as a snippet explained, and the unchanged program ran."""
+    answer = f"```python\n{DRAFT_WITH_WAYPOINTS}```\n{label}\n```python\nmove_to_position(p)\nclose_gripper()\n```"
+    with pytest.raises(ProgramRejected, match="repeats part of block 1 after"):
+        extract(answer)
+    explained = f"```python\n{DRAFT_WITH_WAYPOINTS}```\nThe key step is the grasp:\n```python\nclose_gripper()\n```"
+    assert extract(explained).code == DRAFT_WITH_WAYPOINTS
+
+
 def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
     label = "Wait, the last two lines are wrong. Here is the corrected code:"
     answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
