@@ -147,6 +147,21 @@ def aside(label: str) -> bool:
     a sentence that calls something wrong may take back the block before it (``Wait, that is wrong.``: found by an
     adversarial run, where the retracted block ran); nor is a label that takes back the block before it or calls it
     faulty (:func:`retracts`, :data:`_FAULTY_LABEL`: "Wait, the previous code never opens the gripper; use this:",
-    "My first attempt above is wrong; use this instead:", found by a second adversarial run)."""
+    "My first attempt above is wrong; use this instead:", found by a second adversarial run), nor one that prefers it
+    (:data:`_PREFERS`)."""
     sentence = max(label.rstrip(" .!?:").rfind(end) for end in ".!?") + 1
-    return _ASIDE.search(label[sentence:]) is not None and not retracts(label) and not _FAULTY_LABEL.search(label)
+    return (
+        _ASIDE.search(label[sentence:]) is not None
+        and not retracts(label)
+        and not _FAULTY_LABEL.search(label)
+        and not _PREFERS.search(label)
+    )
+
+
+_PREFERS = re.compile(
+    r"\b(?:recommend(?:ed)?|better|prefer(?:red|able)?|corrected|fixed|forgot|actually works?|that works|working)\b",
+    re.IGNORECASE,
+)
+"""Words that prefer the block after a label to the one before ("Alternatively, and this is what I'd recommend:",
+"For comparison, the corrected version:", "The original code forgot to open the gripper; use this version:"): no
+aside (found by an adversarial run, where the program marked final before it ran)."""

@@ -47,6 +47,21 @@ def test_the_block_marked_final_is_taken_even_before_a_later_one() -> None:
     assert "block 1 (marked 'Final program:')" in extraction.note
 
 
+@pytest.mark.parametrize(
+    "label",
+    [
+        "Alternatively, and this is what I'd actually recommend, open first:",
+        "For comparison, the corrected version that opens the gripper:",
+        "The original code forgot to open the gripper; use this version:",
+    ],
+)
+def test_a_later_program_preferred_to_the_one_marked_final_is_no_aside(label: str) -> None:
+    """Found by an adversarial run: the aside word set the preferred program aside, and the one marked final ran."""
+    answer = f"Final program:\n```python\n{NOGRIP}```\n{label}\n```python\n{GRASP}```\n"
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(answer)
+
+
 def test_an_output_listing_after_the_program_is_not_taken_for_it() -> None:
     extraction = extract(f"```python\n{PROGRAM}```\nOutput:\n```\nDone\n```\n")
     assert extraction.code == PROGRAM and "block 1 (the only program" in extraction.note
