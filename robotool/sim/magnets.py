@@ -1,18 +1,17 @@
 """Magnetic objects weld to each other on contact (chains included), and let go past what a magnet holds, per world.
 
-:func:`robotool.sim.build.make_spec` adds an inactive weld ``magnet__<a>__<b>`` for every pair of
-magnetic objects; :meth:`Magnets.update` activates it, at the current relative pose, in every world
-where the two bodies touch. A magnet holds a bounded load, read where the two meet (of the parts that touch, the patch
-where the smaller of the two faces that face each other overlaps the other part, :func:`join_face`; found by an
-adversarial run: read from the boxes around whole objects, a hook's 3 cm bar end stuck to a wall held a patch as tall
-as its 25 cm upright, which touched nothing, and a 3.5 kg bracket hung from it): a force up to :data:`HOLD_FORCE`; a
-couple
-that peels the patch off about one of its edges up to :data:`HOLD_FORCE` times the patch's half width across that edge
-(the pull of the whole patch at its far edge), and a twist about its normal up to :data:`HOLD_FORCE` times its
-smaller half width (as if that pull held by friction at the patch's edge). Past any of these the weld lets go, and that
-pair attaches again only after the two have come apart: a board stuck by its 2 cm end face to a cabinet's side holds a
-couple of 2 N m, so it does not carry a robot across a gap as a cantilever, and a bar held across a 3 cm post by a
-3 cm square patch holds 3 N m of twist, not the 9 N m of a cantilevered 3.5 kg bar turned so that its load twists it.
+:func:`robotool.sim.build.make_spec` adds an inactive weld ``magnet__<a>__<b>`` for every pair of magnetic objects;
+:meth:`Magnets.update` activates it, at the current relative pose, in every world where the two bodies touch. A magnet
+holds a bounded load, read where the two meet (of the parts that touch, the patch where the smaller of the two faces
+that face each other overlaps the other part, :func:`join_face`; found by an adversarial run: read from the boxes around
+whole objects, a hook's 3 cm bar end stuck to a wall held a patch as tall as its 25 cm upright, which touched nothing,
+and a 3.5 kg bracket hung from it): a force up to :data:`HOLD_FORCE`; a couple that peels the patch off about one of its
+edges up to :data:`HOLD_FORCE` times the patch's half width across that edge (the pull of the whole patch at its far
+edge), and a twist about its normal up to :data:`HOLD_FORCE` times its smaller half width (as if that pull held by
+friction at the patch's edge). Past any of these the weld lets go, and that pair attaches again only after the two have
+come apart: a board stuck by its 2 cm end face to a cabinet's side holds a couple of 2 N m, so it does not carry a robot
+across a gap as a cantilever, and a bar held across a 3 cm post by a 3 cm square patch holds 3 N m of twist, not the 9 N
+m of a cantilevered 3.5 kg bar turned so that its load twists it.
 """
 
 from __future__ import annotations
@@ -129,13 +128,7 @@ def join_face(state: BatchState, worlds: np.ndarray, one: BodyParts, two: BodyPa
             _facing(state, worlds, (body, box), (other, other_box)),
             _facing(state, worlds, (other, other_box), (body, box)),
         )
-        mine = first.half.prod(axis=1) <= second.half.prod(axis=1)
-        face = JoinFace(
-            centre=np.where(mine[:, None], first.centre, second.centre),
-            axes=np.where(mine[:, None, None], first.axes, second.axes),
-            half=np.where(mine[:, None], first.half, second.half),
-            normal=np.where(mine[:, None], first.normal, second.normal),
-        )
+        face = second.where(first.half.prod(axis=1) <= second.half.prod(axis=1), first)  # the smaller
         apart = np.maximum(gap, other_gap)
         nearer = apart < least
         least = np.where(nearer, apart, least)
@@ -166,5 +159,5 @@ def _facing(
     along, extent = np.take_along_axis(local, others, 1), np.take_along_axis(reach, others, 1)  # (k, 2) in-plane
     low, high = np.maximum(-half[others], along - extent), np.minimum(half[others], along + extent)
     middle = np.einsum("ki,kij->kj", (low + high) / 2, axes)
-    face_ = JoinFace(origin + normal * half[axis][:, None] + middle, axes, np.maximum(high - low, 0.0) / 2, normal)
-    return face_, gaps[k, face]
+    patch = JoinFace(origin + normal * half[axis][:, None] + middle, axes, np.maximum(high - low, 0.0) / 2, normal)
+    return patch, gaps[k, face]
