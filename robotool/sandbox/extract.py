@@ -478,7 +478,10 @@ class _Quotes:
         self.lines = {k: _statement_lines(blocks[k].code) for k in programs}
         self.counts = {k: Counter(self.lines[k]) for k in programs}
         self.joined = {k: "\n" + "\n".join(self.lines[k]) + "\n" for k in programs}
-        self.alone = {k: len(self.lines[k]) >= 3 and _stands_alone(quiet_parse(blocks[k].code)) for k in programs}
+        self.alone = {
+            k: (len(self.lines[k]) >= 3 or _names_an_option(blocks[k])) and _stands_alone(quiet_parse(blocks[k].code))
+            for k in programs
+        }
         self.columns: dict[int, dict[str, set[int]]] = {k: {} for k in programs}
         for k in programs:
             for line in self.lines[k]:
@@ -515,6 +518,23 @@ class _Quotes:
                 if len(whole) > MOST_PROGRAMS:
                     break
         return sorted(whole)
+
+
+_OPTION = re.compile(
+    r"\b(?:option|approach|alternative(?:ly)?|variant|plan [a-z0-9])\b|^\W*or\b|"
+    r"\bif (?:you (?:also |only |just )?(?:want|need|prefer)|there(?:'s| is| are))\b|"
+    r"\b(?:the )?(?:simple|simpler|short|shorter|direct|safer|minimal) (?:one|version|way|route)\b",
+    re.IGNORECASE,
+)
+"""Words before a block that offer it as one of several ways ("Option 2 (around the obstacle):", "Or, pushing the box
+first:", "If you also want it to cross the platform:"): a program so offered is one on its own, however short, not a
+quote of a longer one (found by an adversarial run: a 1-2 line option whose lines ran in the other was read as a quote
+of it, and the other ran)."""
+
+
+def _names_an_option(block: _Block) -> bool:
+    """Whether the words before ``block`` (its label or heading) offer it as one of several ways (:data:`_OPTION`)."""
+    return any(_OPTION.search(text) for text in (block.label, block.heading))
 
 
 def _stands_alone(tree: ast.Module) -> bool:

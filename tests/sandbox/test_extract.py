@@ -217,6 +217,25 @@ def test_a_fragment_under_words_that_ask_for_a_change_is_no_quote(label: str) ->
     assert extract(explained).code == DRAFT_WITH_WAYPOINTS
 
 
+WALK_AROUND = "walk_to_position([1.0, 1.0, 0.0])\nwalk_to_position([2.0, 0.0, 0.0])\n"
+
+
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [
+        ("Option 1 (direct):", "Option 2 (around the obstacle):"),
+        ("### Approach 1: straight", "### Approach 2: around the box first"),
+        ("The simple one:", "Or, around the box first:"),
+    ],
+)
+def test_a_short_option_whose_lines_run_in_another_is_no_quote_of_it(first: str, second: str) -> None:
+    """Found by an adversarial run: a one-line option whose line ran in the other read as a quote of it, and the other
+    option ran."""
+    answer = f"{first}\n```python\nwalk_to_position([2.0, 0.0, 0.0])\n```\n{second}\n```python\n{WALK_AROUND}```\n"
+    with pytest.raises(ProgramRejected, match="2 different programs"):
+        extract(answer)
+
+
 def test_a_correction_that_leaves_lines_out_is_no_quote_of_the_draft() -> None:
     label = "Wait, the last two lines are wrong. Here is the corrected code:"
     answer = f"```python\n{LONGER}```\n{label}\n```python\n{PROGRAM}```"
