@@ -111,11 +111,20 @@ adversarial run: such notes after the only program, opened by no edit verb nor t
 _WITHDRAWS = re.compile(
     r"\b(?:this|that|it|the above|the (?:program|code|version) above)\b[^.!?:]{0,40}?\b(?:is wrong|is incorrect|"
     r"won't work|will not work|doesn't work|does not work|fails|is unnecessary|is not needed)\b|"
-    r"\blet me (?:reconsider|redo|rethink|try (?:again|another)|fix (?:this|that|it)|correct (?:this|that|it))\b",
+    r"\blet me (?:reconsider|redo|rethink|try (?:again|another)|fix (?:this|that|it)|correct (?:this|that|it))\b|"
+    r"\bthe (?:\w+ )?(?:push|walk|climb|move|turn|grasp|step|call|line)e?s? (?:is|are) "
+    r"(?:unnecessary|not needed|wrong)\b",
     re.IGNORECASE,
 )
 """Words after the program that withdraw it ("Wait, this is wrong ... Let me reconsider.", "Hmm, the above won't
 work: the box is fixed."): found by an adversarial run, where the program ran as if meant."""
+_UNDONE = re.compile(
+    r"\b(?:don't|do not|no need to)\s+(?:\w+\s+)?(?:push|walk|climb|move|turn|grasp|open|close|lift|lower)\b|"
+    r"\bshould (?:be|read)\s+-?\d",
+    re.IGNORECASE,
+)
+"""After a take-back, a step undone or a number changed without naming the code ("Actually, don't push the box",
+"Wait, but the climb height should be 0.45"): found by an adversarial run, where the program ran as written."""
 _FIRST_PERSON = re.compile(r"\b(?:I|we)\b")
 """What the model did ("I used `x` instead of hard-coding ..."), not what it asks for."""
 _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
@@ -146,7 +155,7 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
                 words = _BLANKED_CODE.sub("x", later)
                 if _DESCRIBES_THE_PROGRAM.search(words) or _CONDITION.search(words):
                     continue
-                named = _NAMES_CODE.search(later) or _NAMES_A_PLACE.search(later)
+                named = _NAMES_CODE.search(later) or _NAMES_A_PLACE.search(later) or _UNDONE.search(words)
                 if named and (later is sentence or _SAYS_WHAT_IT_SHOULD_BE.search(words)):
                     return later
     return None

@@ -46,6 +46,9 @@ CHANGES = {
     "a call to add at the end": "Also call `move_to_position([0.3, 0.0, 0.3])` at the end to lift it clear.",
     "withdrawn": "Wait, this is wrong: the carton is out of reach. Let me reconsider.",
     "the above won't work": "Hmm, the above won't work: the gripper is already closed.",
+    "a step called unnecessary": "**Update:** the final move is unnecessary; the carton is reached already.",
+    "a step undone after a take-back": "Actually, don't close the gripper: the task only asks to reach the milk.",
+    "a number changed after a take-back": "Wait, but the approach height should be 0.15, not 0.1.",
 }
 
 
