@@ -79,14 +79,19 @@ class RobotOnGoal(ReadAtTicks):
 
     def _through_carriers(self, state: BatchState) -> np.ndarray:
         """(nworld, 4) whether each foot stands on carriers that pass its weight to the target (a cloth's link passes
-        it to what that link lies on)."""
+        it to what that link lies on): a carrier the foot touches counts only where it presses the foot up, as the
+        target must (found by an adversarial run: slats standing on a rug and leaning on the feet of a robot held up
+        by a deck over the rug credited it with standing on the rug)."""
         on_feet = state.touching[:, self.ids.feet].astype(float)  # (nworld, 4, nbody)
         under = (on_feet @ self.parts.member.T.astype(float) > 0) & self.carrier  # (nworld, 4, npart)
         out = np.zeros(under.shape[:2], dtype=bool)
         worlds = np.flatnonzero(under.any(axis=(1, 2)))
         if worlds.size == 0:
             return out
-        rests = resting_on(np.stack([self.sim.contact_normals(int(w)) for w in worlds]), self.parts)
+        normals = np.stack([self.sim.contact_normals(int(w)) for w in worlds])  # (k, nbody, nbody, 3)
+        onto_feet = np.einsum("pb,kbfx->kfpx", self.parts.member.astype(float), normals[:, :, self.ids.feet])
+        under[worlds] &= bears_up(onto_feet)  # (k, 4, npart): each part presses the foot up
+        rests = resting_on(normals, self.parts)
         for f in range(under.shape[1]):
             loaded, _ = pass_weight(rests, under[worlds, f], self.carrier)
             out[worlds, f] = self.parts.objects(loaded, self.nobject)[:, self.index]

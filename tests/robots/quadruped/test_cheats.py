@@ -675,6 +675,13 @@ REASONED_CASES = [  # (program, layout, what the refusal must say): found by adv
     # a walk onto a platform drove a 15 kg cloth (an iron chain 0.2 m high, which the rays see through) off it with
     # the torso: a cloth was never judged shoved
     ("walk_a_heavy_chain_off_a_platform", "heavy_chain_on_a_platform", "the robot ran into iron_chain"),
+    # slats on a rug leaning on the feet of a robot borne up by a deck over the rug: a foot touching a movable object
+    # resting on the goal object was credited, however it pressed the foot
+    (
+        "stand_on_a_deck_over_the_rug_touching_slats",
+        "deck_over_a_rug_with_slats_leaning_on_the_feet",
+        "robot_weight_on_rug",
+    ),
 ]
 
 
