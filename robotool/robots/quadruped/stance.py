@@ -26,6 +26,8 @@ from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 
 REACH = 0.04  # m each way from a foot's centre that its surface's slope is read across
+GRAVITY = 9.81  # m/s^2
+SIDEWAYS_SLACK = 5.0  # N a sideways push on the settled body may pass the feet's grip by
 AROUND = np.array([[REACH, 0.0], [-REACH, 0.0], [0.0, REACH], [0.0, -REACH]])  # where, about the foot's centre
 
 
@@ -50,7 +52,8 @@ class Stance:
         self.state = StanceState.empty(senses.sim.nworld)
 
     def read(self, state: BatchState, worlds: list[int]) -> None:
-        """Read, in ``worlds`` (settled), whether a foot stands on a slope steeper than its friction holds."""
+        """Read, in ``worlds`` (settled), whether a foot stands on a slope steeper than its friction holds, or movable
+        objects push the body sideways harder than the feet's friction could hold it."""
         if not worlds:
             return
         w = np.asarray(worlds, dtype=int)
@@ -78,6 +81,26 @@ class Stance:
                 "its friction holds"
             )
             self.state.time[world] = float(state.time[world])
+        self._pushed_sideways(state, w, np.where(touching, friction, np.nan))  # where no slope said so
+
+    def _pushed_sideways(self, state: BatchState, worlds: np.ndarray, friction: np.ndarray) -> None:
+        """Where movable objects push the settled body sideways (their contacts' forces on its bodies, summed across)
+        harder than its weight on its feet's friction could hold it, it would slide (found by an adversarial run: a
+        25 kg plank leaning on the robot's side pushed it 65-77 N sideways, on a stage whose friction holds 46 N, and
+        the world-anchored servos held it)."""
+        sim, scene = self.senses.sim, self.senses.scene
+        movable = np.asarray(self.senses.facts.movable)[np.maximum(scene.body_object, 0)] & (scene.body_object >= 0)
+        pushed = sim.contact_forces(worlds, movable)[:, scene.robot_body, :2].sum(axis=1)  # (k, 2)
+        weight = sim.body_mass[worlds][:, scene.robot_body].sum(axis=1) * GRAVITY
+        grip = weight * np.nanmean(np.where(np.isnan(friction).all(axis=1, keepdims=True), 0.0, friction), axis=1)
+        force = np.linalg.norm(pushed, axis=1)
+        for k, world in enumerate(worlds.tolist()):
+            if force[k] > grip[k] + SIDEWAYS_SLACK and self.state.slid[world] is None:
+                self.state.slid[world] = (
+                    f"it stood where it would slide: something pushed it {force[k]:.0f} N sideways, more than the "
+                    f"{grip[k]:.0f} N its feet's friction holds"
+                )
+                self.state.time[world] = float(state.time[world])
 
     def holds(self) -> list[bool]:
         """Per world: the robot would not slide off where it stood when its goal was read."""

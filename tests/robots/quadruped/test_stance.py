@@ -1,4 +1,5 @@
-"""The stance read at the goal: a robot left standing on a slope steeper than its feet's friction holds has fallen.
+"""The stance read at the goal: a robot left standing on a slope steeper than its feet's friction holds, or pushed
+sideways harder than it holds, has fallen.
 
 The simulated body stands on frictionless feet held by world-anchored servos, so it stays on any slope; the goal read
 must not count what only that makes possible (robotool/robots/quadruped/stance.py)."""
@@ -45,3 +46,17 @@ def test_a_foot_near_a_side_edge_reads_the_slope_along_it() -> None:
     for rollout in run_worlds(task, ['p = get_position("robot")'] * 2, [0, 1]):
         assert not rollout.success and rollout.conditions[FALL_CONDITION] is False, rollout.conditions
         assert "a slope of 20.0 deg under its" in (world_failure(rollout) or ""), world_failure(rollout)
+
+
+def test_a_robot_pushed_sideways_harder_than_its_feet_hold_has_fallen() -> None:
+    """Found by an adversarial run (every world on three seeds): a 25 kg plank leaning on the robot's side pushed it
+    65-77 N sideways on a waxed stage whose friction holds about 46 N, and the world-anchored servos held it there.
+    Without the plank the same stance holds."""
+    task = tasks.load(FIXTURES / "layouts" / "heavy_plank_leaning_on_the_robot_on_a_waxed_stage.yaml")
+    for rollout in run_worlds(task, ['p = get_position("robot")'] * 2, [0, 1]):
+        assert not rollout.success and rollout.conditions[FALL_CONDITION] is False, rollout.conditions
+        assert "it stood where it would slide: something pushed it" in (world_failure(rollout) or "")
+    data = task.model_dump(mode="json", exclude_defaults=True)
+    data["objects"] = [o for o in data["objects"] if o["name"] != "plank"]
+    for rollout in run_worlds(parse_task(data), ['p = get_position("robot")'] * 2, [0, 1]):
+        assert rollout.success, world_failure(rollout)
