@@ -326,8 +326,9 @@ def _sheet_problems(task: Task) -> list[Problem]:
     """A sheet (paper, card: :attr:`~robotool.task.scene.SceneObject.is_sheet`) lies flat on the ground, where the
     simulator lets it rest (it passes through other objects: what lies on it rests on it by rule), and is never
     magnetic (a magnet's hold would make it a rigid plate: held by one end, it would carry or push what it is stuck
-    to). Found by an adversarial run: a fixed 0.2 mm sheet of 10 g tilted from the floor up to a sofa's edge passed
-    the ground rule by its low end, and a legged robot walked up it as up a rigid ramp, 0.34 m over its step limit."""
+    to). Found by an adversarial run: a fixed 0.2 mm sheet of 10 g tilted from the floor up to a 0.34 m sofa's edge
+    passed the ground rule by its low end, and a legged robot walked up it as up a rigid ramp, 0.22 m over its step
+    limit."""
     problems = []
     for i, obj in enumerate(task.objects):
         if not obj.is_sheet:
