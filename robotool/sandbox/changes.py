@@ -6,7 +6,7 @@ said in words unseen).
 Most words after a program explain it, and a second adversarial run showed how easily a word list refuses them: step
 lists name the robot's own actions ("**Lower and grasp**: the second call lowers ..."), tips speak to the user
 ("Replace `"milk"` with your object's name if it differs"), and answers to a request to ask again apologise ("Sorry, I
-forgot the open step; it is fixed now"). So a sentence asks for a change only in two shapes, read with Markdown
+forgot the open step; it is fixed now"). So a sentence asks for a change only in these shapes, read with Markdown
 emphasis, list and quote marks taken off:
 
 - it opens with an edit of code ("Replace", "Then add", "Note: remove", "Make ... instead"; the robot's own verbs,
@@ -15,6 +15,9 @@ emphasis, list and quote marks taken off:
   and it sets no condition ("if your object differs", "to suit your gripper": a tip), describes no program shown
   ("Change: the gripper now opens first") and lists no changes made ("Changes made: - Replace ..."); or it turns one
   call into another (`close_gripper()` -> `open_gripper()`);
+- it names the code a place should hold ("the last line must be `x`, not `y`", "Instead of `y`, call `x`"), asks
+  in the imperative to call code the program does not hold ("Don't forget to call `x`"), asks for an edit in
+  Japanese, Korean or Russian naming code, or withdraws the program ("Wait, this is wrong ... Let me reconsider.");
 - or a sentence that opens by taking something back ("Actually,", "Wait.", "Oops", "Correction:", "My mistake",
   "Fix:") names code or a place in the program, or one of the next two sentences names it and says what it should be
   ("should be", "is wrong", "not needed", an edit), and none of them describes the program shown ("this version",
@@ -139,14 +142,7 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
     sentences = [_MARKS.sub("", s).strip() for s in _SENTENCE_END.split(plain)]
     sentences = [s for s in sentences if s]
     for k, sentence in enumerate(sentences):
-        logged = any(_CHANGE_LOG.match(earlier) for earlier in sentences[max(k - 5, 0) : k])
-        if (_asks_an_edit(sentence) and not logged) or _ARROW.search(sentence):
-            return sentence
-        if _EDIT_ASKED_ELSEWHERE.search(sentence) and _BLANKED_CODE.search(sentence) and not logged:
-            return sentence
-        if _NAMES_ITS_REPLACEMENT.search(sentence) and not logged and not _tells(_BLANKED_CODE.sub("x", sentence)):
-            return sentence
-        if program is not None and not logged and _asks_for_a_missing_call(sentence, program):
+        if _ARROW.search(sentence) or (not _logged(sentences[max(k - 5, 0) : k]) and _asks(sentence, program)):
             return sentence
         if _WITHDRAWS.search(sentence) and not _CONDITION.search(_BLANKED_CODE.sub("x", sentence)):
             return sentence
@@ -159,6 +155,23 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
                 if named and (later is sentence or _SAYS_WHAT_IT_SHOULD_BE.search(words)):
                     return later
     return None
+
+
+def _logged(earlier: list[str]) -> bool:
+    """Whether one of the sentences before opens a list of the changes made (:data:`_CHANGE_LOG`)."""
+    return any(_CHANGE_LOG.match(sentence) for sentence in earlier)
+
+
+def _asks(sentence: str, program: str | None) -> bool:
+    """Whether a sentence asks for a change in one of the shapes read without a take-back before it: an edit opening
+    it, an edit asked in Japanese, Korean or Russian naming code, the code a place should hold, or (given the
+    ``program``) a call the program does not hold."""
+    return (
+        _asks_an_edit(sentence)
+        or (_EDIT_ASKED_ELSEWHERE.search(sentence) is not None and _BLANKED_CODE.search(sentence) is not None)
+        or (_NAMES_ITS_REPLACEMENT.search(sentence) is not None and not _tells(_BLANKED_CODE.sub("x", sentence)))
+        or (program is not None and _asks_for_a_missing_call(sentence, program))
+    )
 
 
 def takes_back(sentence: str) -> bool:
