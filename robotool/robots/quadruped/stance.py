@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robotool.robots.quadruped.body import GRAVITY
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
@@ -26,7 +27,6 @@ from robotool.rollout import Event
 from robotool.sim.backend import BatchState
 
 REACH = 0.04  # m each way from a foot's centre that its surface's slope is read across
-GRAVITY = 9.81  # m/s^2
 SIDEWAYS_SLACK = 5.0  # N a sideways push on the settled body may pass the feet's grip by
 AROUND = np.array([[REACH, 0.0], [-REACH, 0.0], [0.0, REACH], [0.0, -REACH]])  # where, about the foot's centre
 
@@ -50,6 +50,8 @@ class Stance:
     def __init__(self, senses: Senses, rays: Rays, config: QuadrupedConfig):
         self.senses, self.rays, self.config = senses, rays, config
         self.state = StanceState.empty(senses.sim.nworld)
+        owner = senses.scene.body_object
+        self.movable = (owner >= 0) & np.asarray(senses.facts.movable)[np.maximum(owner, 0)]  # (nbody,)
 
     def read(self, state: BatchState, worlds: list[int]) -> None:
         """Read, in ``worlds`` (settled), whether a foot stands on a slope steeper than its friction holds, or movable
@@ -89,8 +91,7 @@ class Stance:
         25 kg plank leaning on the robot's side pushed it 65-77 N sideways, on a stage whose friction holds 46 N, and
         the world-anchored servos held it)."""
         sim, scene = self.senses.sim, self.senses.scene
-        movable = np.asarray(self.senses.facts.movable)[np.maximum(scene.body_object, 0)] & (scene.body_object >= 0)
-        pushed = sim.contact_forces(worlds, movable)[:, scene.robot_body, :2].sum(axis=1)  # (k, 2)
+        pushed = sim.contact_forces(worlds, self.movable)[:, scene.robot_body, :2].sum(axis=1)  # (k, 2)
         weight = sim.body_mass[worlds][:, scene.robot_body].sum(axis=1) * GRAVITY
         grip = weight * np.nanmean(np.where(np.isnan(friction).all(axis=1, keepdims=True), 0.0, friction), axis=1)
         force = np.linalg.norm(pushed, axis=1)
