@@ -50,8 +50,6 @@ class Stance:
     def __init__(self, senses: Senses, rays: Rays, config: QuadrupedConfig):
         self.senses, self.rays, self.config = senses, rays, config
         self.state = StanceState.empty(senses.sim.nworld)
-        owner = senses.scene.body_object
-        self.movable = (owner >= 0) & np.asarray(senses.facts.movable)[np.maximum(owner, 0)]  # (nbody,)
 
     def read(self, state: BatchState, worlds: list[int]) -> None:
         """Read, in ``worlds`` (settled), whether a foot stands on a slope steeper than its friction holds, or movable
@@ -91,7 +89,8 @@ class Stance:
         25 kg plank leaning on the robot's side pushed it 65-77 N sideways, on a stage whose friction holds 46 N, and
         the world-anchored servos held it)."""
         sim, scene = self.senses.sim, self.senses.scene
-        pushed = sim.contact_forces(worlds, self.movable)[:, scene.robot_body, :2].sum(axis=1)  # (k, 2)
+        movable = (scene.body_object >= 0) & np.asarray(self.senses.facts.movable)[np.maximum(scene.body_object, 0)]
+        pushed = sim.contact_forces(worlds, movable)[:, scene.robot_body, :2].sum(axis=1)  # (k, 2)
         weight = sim.body_mass[worlds][:, scene.robot_body].sum(axis=1) * GRAVITY
         grip = weight * np.nanmean(np.where(np.isnan(friction).all(axis=1, keepdims=True), 0.0, friction), axis=1)
         force = np.linalg.norm(pushed, axis=1)
