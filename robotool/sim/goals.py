@@ -90,7 +90,7 @@ def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
     falls = [
         FallTracker(scene, index, obj.fragile.max_drop)
         for index, obj in enumerate(scene.task.objects)
-        if obj.fragile is not None and obj.movable  # (a fixed object does not fall)
+        if obj.fragile is not None  # (a fixed one is struck, found by an adversarial run: it was never judged)
     ]
     passage = PassageWatch(scene)
     return WithSceneRules(goal, falls, passage if passage else None) if falls or passage else goal

@@ -164,7 +164,8 @@ class LiftedGoal(ReadAtTicks):
 
 
 class FallTracker:
-    """Follows the falls of one fragile object in every world and remembers whether it broke."""
+    """Follows the falls of one fragile object in every world and remembers whether it broke. A fixed one does not
+    fall or land: it breaks where something strikes it too fast (:class:`~robotool.sim.strikes.StrikeWatch`)."""
 
     def __init__(self, scene: Scene, index: int, max_drop: float):
         self.scene, self.max_drop = scene, max_drop
@@ -187,6 +188,7 @@ class FallTracker:
         self.name = scene.task.objects[index].name
         self.strikes = StrikeWatch(scene, index, max_drop)
         self.landings = OutlineLandings(scene, index, max_drop, self.strikes.limit, self.others)
+        self.moves = scene.task.objects[index].movable
         self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
@@ -208,18 +210,20 @@ class FallTracker:
         for w in map(int, np.flatnonzero(active & (speed > self.strikes.limit) & ~self.broken)):
             names = sorted({self.strikes.name(k, int(through[w, k])) for k in np.flatnonzero(strikers[w]).tolist()})
             self._break(state, w, self._strike(float(speed[w])), " and ".join(names))
-        new = active[:, None] & hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
-        landing, onto = self.landings.landing(state, active, new)
-        for w in map(int, np.flatnonzero(active & (landing > self.strikes.limit) & ~self.broken)):
-            landed_on = self._names(self.scene.body_object[self.others[onto[w]]])
-            self._break(state, w, self._strike(float(landing[w])), landed_on)
+        if self.moves:
+            new = active[:, None] & hard & ~self._touch  # (a body at a time: what it touched already is not landed on)
+            landing, onto = self.landings.landing(state, active, new)
+            for w in map(int, np.flatnonzero(active & (landing > self.strikes.limit) & ~self.broken)):
+                landed_on = self._names(self.scene.body_object[self.others[onto[w]]])
+                self._break(state, w, self._strike(float(landing[w])), landed_on)
         self._touch = np.where(active[:, None], touch, self._touch)
-        speed = np.abs(state.qvel[:, self._dof()]).max(axis=1)
+        speed = np.abs(self._velocity(state)).max(axis=1)
         held = self._held(state)
         borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
         resting = active & (held | (borne & (speed < RESTING_SPEED)))
         self.rest_height = np.where(resting, height, self.rest_height)
-        self.landings.rest(resting)
+        if self.moves:
+            self.landings.rest(resting)
 
     def _break(self, state: BatchState, world: int, measured: dict[str, float], detail: str) -> None:
         """It broke in ``world`` now: keep the ``broke`` event."""
@@ -249,10 +253,12 @@ class FallTracker:
         if self.rest_height is None or self.broken is None:
             return np.zeros(len(state.time), dtype=bool)
         dt = self.scene.control_dt
-        fall = self.rest_height - state.xpos[:, self.body, 2]
-        sinking = np.maximum(-state.qvel[:, self._dof()[2]], 0.0)
-        falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
         held = self._held(state)
+        if not self.moves:
+            return ~self.broken & self.strikes.watched(state, dt, held)
+        fall = self.rest_height - state.xpos[:, self.body, 2]
+        sinking = np.maximum(-self._velocity(state)[:, 2], 0.0)
+        falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
         landing = ~held & (self.landings.descent(state).max(axis=1) + FALL_ACCELERATION * dt > self.strikes.limit)
         return ~self.broken & (falling | landing | self.strikes.watched(state, dt, held))
 
@@ -265,10 +271,12 @@ class FallTracker:
         names = sorted({self.scene.task.objects[k].name if k >= 0 else "the ground" for k in objects.tolist()})
         return " and ".join(names) if names else "the ground"
 
-    def _dof(self) -> np.ndarray:
-        model = self.scene.model
-        adr = model.body_dofadr[self.body]
-        return np.arange(adr, adr + 3)
+    def _velocity(self, state: BatchState) -> np.ndarray:
+        """(nworld, 3) its linear velocity (none for a fixed object)."""
+        if not self.moves:
+            return np.zeros((len(state.time), 3))
+        adr = int(self.scene.model.body_dofadr[self.body])
+        return np.asarray(state.qvel[:, adr : adr + 3])
 
 
 class OutlineLandings:

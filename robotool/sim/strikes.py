@@ -56,6 +56,7 @@ class StrikeWatch:
         self.loose = ~self.robot & ~self.soft  # the movable objects among them that may rest on it and pass a blow on
         self.body = int(scene.object_body[index])
         self.dof = int(scene.model.body_dofadr[self.body])  # its free joint's linear velocity, in the world frame
+        self.fixed_object = self.dof < 0  # a fixed object (no joint) is struck at the striker's own speed
         self.limit = float(np.sqrt(2 * GRAVITY * max_drop))
         mass = np.array([objects[o].effective_mass if o >= 0 else 1.0 for o in of.tolist()])
         cushioned = self.limit * np.sqrt(np.maximum(objects[index].effective_mass / mass, 1.0))
@@ -90,7 +91,7 @@ class StrikeWatch:
         carried = self._resting(direct, pairs, self.loose & self._above(state))
         onto = pairs & carried[:, None, :]  # s touches c, which rests on the object
         walls = self.fixed.touching(state, self.mine)
-        own = state.qvel[:, self.dof : self.dof + 3]
+        own = self._own_velocity(state)
         own_speed = np.linalg.norm(own, axis=1)
         if self._time is None:
             self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
@@ -122,6 +123,12 @@ class StrikeWatch:
         self._own = np.where(active, own_speed, self._own)
         through = np.where(via, np.argmax(fresh, axis=2), -1)
         return struck, np.hstack([new, met]), np.hstack([through, np.full(met.shape, -1)])
+
+    def _own_velocity(self, state: BatchState) -> np.ndarray:
+        """(nworld, 3) the object's linear velocity in the world frame (none for a fixed object)."""
+        if self.fixed_object:
+            return np.zeros((len(state.time), 3))
+        return np.asarray(state.qvel[:, self.dof : self.dof + 3])
 
     def name(self, striker: int, through: int) -> str:
         """Who struck: a striker's name, and what it struck through (-1: nothing)."""
@@ -179,9 +186,9 @@ class StrikeWatch:
         is within what that start and gain cover. It gains :data:`GAIN` where something that moves touches it or a
         striker could strike it (``struck``: a shove), else gravity's pull at most (sliding or falling)."""
         nworld = len(state.time)
-        if not len(self.fixed.names):
+        if not len(self.fixed.names) or self.fixed_object:
             return np.zeros(nworld, dtype=bool)
-        speed = np.linalg.norm(state.qvel[:, self.dof : self.dof + 3], axis=1)
+        speed = np.linalg.norm(self._own_velocity(state), axis=1)
         pushed = np.asarray(state.touching[:, self.mine][:, :, self.movers].any(axis=(1, 2))) | struck.any(axis=1)
         gain = np.where(pushed, GAIN, GRAVITY)
         fast = speed + gain * dt > self.limit

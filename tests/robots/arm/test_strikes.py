@@ -1,6 +1,7 @@
 """Glass struck by what moves (found by adversarial runs): a fragile object breaks when the robot or a movable object
 comes to touch it (or what rests on it) faster than a fall of its ``max_drop`` lands (a soft one with more energy than
-that fall), not only in a fall of its own onto what does not move; and a gentle touch leaves it whole."""
+that fall), not only in a fall of its own onto what does not move, a fixed one too; and a gentle touch leaves it
+whole."""
 
 from __future__ import annotations
 
@@ -25,6 +26,8 @@ LAYOUTS = FIXTURES / "layouts"
         ("arm_catch_a_sliding_glass_dish_on_the_palm", "arm_glass_dish_sliding_off_a_tilted_shelf", "the robot"),
         # a 3 kg block let go 0.43 m above a dish lying on the floor: whole, since only its own falls were judged
         ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_iron_block_on_a_stool_beside_a_glass_dish", "block"),
+        # the same block onto the dish fixed to the floor: a fixed fragile object was never judged
+        ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_iron_block_on_a_stool_beside_a_fixed_glass_dish", "block"),
         # the same 3 kg block as a sandbag (soft): a soft object struck nothing, however heavy and fast
         ("arm_drop_an_iron_block_onto_a_glass_dish", "arm_sandbag_on_a_stool_beside_a_glass_dish", "block"),
         # a stick pushed near its pivot swept its far end into a dish pinned by a wall: the stick's centre hardly moved
@@ -57,6 +60,7 @@ def test_glass_met_faster_than_its_fall_lands_breaks(run_texts: Any, program: st
     ("layout", "under", "centre"),  # centre: the block's centre's height as it rests on what lies under it
     [
         ("arm_iron_block_on_a_stool_beside_a_glass_dish", "dish", 0.036),
+        ("arm_iron_block_on_a_stool_beside_a_fixed_glass_dish", "dish", 0.036),
         ("arm_sandbag_on_a_stool_beside_a_glass_dish", "dish", 0.036),
         ("arm_iron_block_above_a_lidded_glass_jar", "lid", 0.159),
         ("arm_iron_block_above_a_glass_jar_under_a_lid_and_a_board", "board", 0.189),
