@@ -120,6 +120,12 @@ MALFORMED = [
         "sunk",
     ),
     ("start_over_gap", _edit("sofa_traversing", robot__position=[1.1, -0.35]), "robot.position", "not over a surface"),
+    (  # an adversarial run: the settling gripper pressed such an object down before the program ran
+        "inside_the_gripper",
+        _edit("milk_reaching", objects__2__center=[0.1, 0.0, 0.175], objects__2__size=[0.04, 0.03, 0.35]),
+        "objects[2](lock).center",
+        "into the gripper",
+    ),
     ("quadruped_without_start", _edit("sofa_traversing", robot__position=None), "robot.position", "start"),
     ("unknown_robot", _edit("sofa_traversing", robot__type="drone"), "robot.type", "drone"),
     (

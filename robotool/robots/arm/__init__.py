@@ -4,7 +4,7 @@ Everything the rest of robotool knows about it is the :data:`ROBOT` record below
 of this package: :mod:`.arm_skills` (limits and skills), :mod:`.arm_description`,
 :mod:`.arm_concepts`, :mod:`.arm_body` (simulator model), :mod:`.arm_controller` and :mod:`.arm_grasp` (skill
 controller), :mod:`.arm_goals` (``grasped``), :mod:`.arm_macros` and :mod:`.arm_candidates` (planner) and
-:mod:`.arm_config` (the tunables).
+:mod:`.arm_config` (the tunables), :mod:`.arm_checks` (task-file checks).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
-from robotool.robots.arm import arm_concepts, arm_description
+from robotool.robots.arm import arm_checks, arm_concepts, arm_description
 from robotool.robots.arm.arm_skills import ARM_SKILLS, ArmLimits
 from robotool.robots.registry import (
     DescriptionHooks,
@@ -78,7 +78,12 @@ ROBOT = RobotType(
     limits=ArmLimits,
     skills=ARM_SKILLS,
     goals=frozenset({"grasped", "pressed", "lifted", "lowered"}),
-    rules=TaskRules(key_concepts=arm_concepts.key_concepts, check_robot=_check_robot, reach=_reach),
+    rules=TaskRules(
+        key_concepts=arm_concepts.key_concepts,
+        check_robot=_check_robot,
+        check_start=arm_checks.check_start,
+        reach=_reach,
+    ),
     description=DescriptionHooks(
         section=arm_description.robot_section, ground="the table top", object_facts=arm_description.object_facts
     ),

@@ -16,7 +16,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from robotool.robots.arm.arm_config import ARM
+from robotool.robots.arm.arm_config import ARM, finger_open
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.sim.backend import BatchState
 from robotool.sim.build import DEFAULT_BIT, SHEET_BIT, WELD_SOLIMP, WELD_SOLREF
@@ -29,8 +29,6 @@ SERVO_KP, SERVO_KV, SERVO_FORCE = 2000.0, 80.0, 100.0  # N/m, N s/m, N
 SERVO_FILTER = 0.05  # s: the servo follows a low-passed reference, so the tick-wise steps do not jerk
 FINGER_KP, FINGER_KV = 50.0, 2.0  # N/m, N s/m: about 1 N of squeeze on a 4 cm object
 CONTACT_SOLREF, CONTACT_SOLIMP = (0.005, 1.0), (0.95, 0.99, 0.001, 0.5, 2.0)  # the gripper's hard surfaces
-PALM_HALF = (0.02, 0.05, 0.01)  # m
-PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 # Friction that holds on the table top: with MuJoCo's default pyramidal cone and soft friction, a block pressed
 # from above by a held stick dragged across it crept about 7% of the drag, although the ground (more load, the
 # same coefficient) must hold it still, so repeated presses dragged things in from beyond reach; elliptic cones
@@ -39,11 +37,6 @@ PALM_CLEARANCE = 0.03  # m from the centre up to the palm's underside
 FRICTION_CONE, IMPRATIO = mujoco.mjtCone.mjCONE_ELLIPTIC, 10.0
 AXES = "xyz"
 SIDES = ("left", "right")
-
-
-def finger_open(limits: ArmLimits) -> float:
-    """Each finger's offset from the gripper centre when open (0 when fully closed), m."""
-    return limits.gripper_opening / 2 + ARM.finger_half[1]
 
 
 def grasp_eq_name(obj: str) -> str:
@@ -76,8 +69,8 @@ def add_body(spec: mujoco.MjSpec, task: Task, limits: ArmLimits) -> None:
     gripper.add_geom(
         name="robot_palm",
         type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=PALM_HALF,
-        pos=[0, 0, PALM_CLEARANCE + PALM_HALF[2]],
+        size=ARM.palm_half,
+        pos=[0, 0, ARM.palm_clearance + ARM.palm_half[2]],
         mass=0.5,
         solref=CONTACT_SOLREF,
         solimp=CONTACT_SOLIMP,
@@ -89,7 +82,7 @@ def add_body(spec: mujoco.MjSpec, task: Task, limits: ArmLimits) -> None:
             name=f"robot_finger_{side}",
             type=mujoco.mjtJoint.mjJNT_SLIDE,
             axis=[0, sign, 0],
-            range=[0, finger_open(limits)],
+            range=[0, finger_open(limits.gripper_opening)],
         )
         finger.add_geom(
             name=f"robot_finger_{side}",
@@ -106,7 +99,7 @@ def add_body(spec: mujoco.MjSpec, task: Task, limits: ArmLimits) -> None:
             name=f"robot_finger_{side}", target=f"robot_finger_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT
         )
         act.set_to_position(kp=FINGER_KP, kv=FINGER_KV)
-        act.ctrlrange = [0, finger_open(limits)]
+        act.ctrlrange = [0, finger_open(limits.gripper_opening)]
     spec.add_exclude(bodyname1="robot_finger_left", bodyname2="robot_finger_right")
     _add_start_key(spec)
     for obj in task.objects:

@@ -42,6 +42,10 @@ class ArmConfig:
     """m: half sizes of a finger (x, y across the closing axis, z)."""
     finger_z: float = 0.007
     """m: a finger's centre above the gripper centre (the tips reach 0.016 m below it)."""
+    palm_half: tuple[float, float, float] = (0.02, 0.05, 0.01)
+    """m: half sizes of the palm."""
+    palm_clearance: float = 0.03
+    """m from the gripper centre up to the palm's underside."""
     grip_tolerance: float = 0.003
     """m: geometry within this of a finger counts as next to it."""
     on_top: float = 0.002
@@ -118,3 +122,8 @@ class ArmConfig:
 
 ARM = ArmConfig()
 """The arm's tunables."""
+
+
+def finger_open(gripper_opening: float) -> float:
+    """Each finger's offset from the gripper centre when open (0 when fully closed), m, for the task's opening."""
+    return gripper_opening / 2 + ARM.finger_half[1]

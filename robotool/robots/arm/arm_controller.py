@@ -16,8 +16,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from robotool.robots.arm.arm_body import AXES, add_body, finger_open, graspable_points
-from robotool.robots.arm.arm_config import ARM, ArmConfig
+from robotool.robots.arm.arm_body import AXES, add_body, graspable_points
+from robotool.robots.arm.arm_config import ARM, ArmConfig, finger_open
 from robotool.robots.arm.arm_grasp import ArmParts, Grasp
 from robotool.robots.arm.arm_payload import Payload
 from robotool.robots.arm.arm_skills import ArmLimits
@@ -90,7 +90,7 @@ class ArmController(SkillController):
         self.payload = Payload(sim, self.parts, self.grasp, limits, config)
         self.state = MotionState.empty(sim.nworld, len(self.scene.object_names), config.home)
         sim.ctrl[:, self.parts.xyz_act] = config.home
-        self.finger_open = finger_open(limits)
+        self.finger_open = finger_open(limits.gripper_opening)
         sim.ctrl[:, self.parts.finger_act] = self.finger_open
 
     def world_states(self) -> tuple[Any, ...]:
