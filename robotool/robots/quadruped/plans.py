@@ -4,7 +4,8 @@ A walk is one move, or a few around an object that stands in its way (:func:`~ro
 a push is the approach around the object and one push per axis (:mod:`robotool.robots.quadruped.push`), pushed on
 along the axis while the object's centre falls short (it turned on the way), and, while the object ends off the
 target (it turned or slid aside), pushed again from where it lies, round after round, as long as each brings it
-closer and a way round it is clear. Nothing here reads the task's category or name: limits come from
+closer and a way round it is clear; after such corrections the robot walks back round to the side the first round
+pushed from, where the program expects it. Nothing here reads the task's category or name: limits come from
 ``task.robot.limits`` and the terrain from the simulated geoms.
 """
 
@@ -159,6 +160,8 @@ class Plans:
         senses, config = self.senses, self.config
         goal = np.array(target[:2], dtype=float)
         miss, blocked = np.inf, False
+        side: tuple[np.ndarray, int, np.ndarray] | None = None  # the first round's last leg: direction, axis, end
+        corrected = False
         for attempt in range(1 + config.corrections):
             broken = self.referee.pushes.push_rules(w, index)
             if broken is not None:
@@ -188,6 +191,7 @@ class Plans:
                     outcome = yield Move(waypoint)
                     if outcome[0] != "done":
                         return outcome
+                corrected |= attempt > 0
                 height = senses.centers(senses.state)[w, index, 2]
                 outcome = yield from self._push_move(w, index, end, face)
                 if outcome[0] not in ("done", "stalled"):
@@ -207,12 +211,40 @@ class Plans:
                 outcome = yield Move(senses.position(w) + back)
                 if outcome[0] != "done":
                     return outcome
+                if not attempt:
+                    side = (u, leg.axis, senses.position(w))
             previous, miss = miss, float(np.linalg.norm(senses.centers(senses.state)[w, index, :2] - goal))
             if miss <= config.push_tolerance or blocked or miss > previous - config.correction_gain:
                 break
+        if corrected and side is not None:
+            outcome = yield from self._back_behind(w, index, *side)
+            if outcome[0] != "done":
+                return outcome
         if miss > config.push_tolerance:
             return "stalled", f"{name} stopped {miss:.2f} m from the target", {"distance": miss}
         return None
+
+    def _back_behind(
+        self, w: int, index: int, u: np.ndarray, axis: int, end: np.ndarray
+    ) -> Generator[Move, MoveEnd, MoveEnd]:
+        """After corrections pushed object ``index`` from other sides, walk back round it to where the first round
+        left the robot: behind it on the side its last leg pushed from (direction ``u`` along ``axis``), ``push_gap``
+        off its face and across as it stood then (``end``), so that where a push leaves the robot does not depend on
+        how the object drifted; the way round is the first the legs can walk, else the robot stays."""
+        lo, hi = self.senses.bounds(w, index)
+        half, gap = self.senses.half_now(w), self.config.push_gap
+        spot = np.array(end, dtype=float)
+        spot[axis] = (lo if u[axis] > 0 else hi)[axis] - u[axis] * (half[axis] + gap)
+        robot = self.senses.position(w)
+        if float(np.linalg.norm(spot - robot)) <= self.config.arrived:
+            return "done", "", {}
+        ways = routes(robot, spot, lo - half - gap / 2, hi + half + gap / 2)
+        way = next((way for way in ways if self._check(w, robot, way) is None), None)
+        for waypoint in way or []:
+            outcome = yield Move(waypoint)
+            if outcome[0] != "done":
+                return outcome
+        return "done", "", {}
 
     def _push_move(self, w: int, index: int, goal: np.ndarray, face: float) -> Generator[Move, MoveEnd, MoveEnd]:
         """One straight push of object ``index`` to ``goal`` in world ``w``, refused where the push rules do not hold
