@@ -61,7 +61,7 @@ _CONDITION = re.compile(
     re.IGNORECASE,
 )
 _TAKES_BACK = re.compile(
-    r"(?:hmm,?\s*)?(?:actually\b|wait\s*[,.!:;—–-]|oops\b(?!-)|sorry(?! (?:for|about|if|to)\b)|correction\b|"
+    r"(?:(?:hmm|oh),?\s*)?(?:actually\b|wait\s*[,.!:;—–-]|oops\b(?!-)|sorry(?! (?:for|about|if|to)\b)|correction\b|"
     r"one correction\b|(?:small |one |quick )?fix:|my mistake|on second thought|no,? wait|no\s*[,.—–-]|scratch that|"
     r"typo\b|"
     # the same in the languages whose final markers the labels read (es, pt, fr, de, zh, ja, ko, ru)
@@ -123,11 +123,15 @@ _WITHDRAWS = re.compile(
 work: the box is fixed."): found by an adversarial run, where the program ran as if meant."""
 _UNDONE = re.compile(
     r"\b(?:don't|do not|no need to)\s+(?:\w+\s+)?(?:push|walk|climb|move|turn|grasp|open|close|lift|lower)\b|"
-    r"\bshould (?:be|read)\s+-?\d",
+    r"\bshould (?:be|read)\s+(?:-?\d|\[|[A-Za-z_]\w*\[)",
     re.IGNORECASE,
 )
 """After a take-back, a step undone or a number changed without naming the code ("Actually, don't push the box",
-"Wait, but the climb height should be 0.45"): found by an adversarial run, where the program ran as written."""
+"Wait, but the climb height should be 0.45", "the push target should be [1.2, 0.0, 0.0]", "x should be box[0] - 0.6"):
+found by adversarial runs, where the program ran as written."""
+_NOT_A_NUMBER = re.compile(r"\b(?:not|instead of|rather than)\s+(-?\d+(?:\.\d+)?)\b(?!\s*%)", re.IGNORECASE)
+"""After a take-back, a number of the program said not to be meant ("Wait, the box is 0.25 m tall, not 0.3."): found by
+an adversarial run of replies shaped like real models', where the program ran with 0.3."""
 _FIRST_PERSON = re.compile(r"\b(?:I|we)\b")
 """What the model did ("I used `x` instead of hard-coding ..."), not what it asks for."""
 _ARROW = re.compile(r"`[^`]*\w\([^`]*`\s*(?:→|->|=>)\s*`[^`]*`")
@@ -151,10 +155,23 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
                 words = _BLANKED_CODE.sub("x", later)
                 if _DESCRIBES_THE_PROGRAM.search(words) or _CONDITION.search(words):
                     continue
-                named = _NAMES_CODE.search(later) or _NAMES_A_PLACE.search(later) or _UNDONE.search(words)
+                named = (
+                    _NAMES_CODE.search(later)
+                    or _NAMES_A_PLACE.search(later)
+                    or _UNDONE.search(words)
+                    or (program is not None and _takes_back_a_number(words, program))
+                )
                 if named and (later is sentence or _SAYS_WHAT_IT_SHOULD_BE.search(words)):
                     return later
     return None
+
+
+def _takes_back_a_number(words: str, program: str) -> bool:
+    """Whether words say a number the ``program`` holds is not meant (:data:`_NOT_A_NUMBER`)."""
+    return any(
+        re.search(rf"(?<![\w.]){re.escape(found[1])}(?![\w.])", program) is not None
+        for found in _NOT_A_NUMBER.finditer(words)
+    )
 
 
 def _logged(earlier: list[str]) -> bool:

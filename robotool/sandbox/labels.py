@@ -10,8 +10,9 @@ import re
 from robotool.sandbox.changes import takes_back
 
 _FINAL = re.compile(
-    r"\b(?:final|corrected|fixed|revised|complete|full|whole|updated|improved)\s+(?:python\s+)?"
+    r"\b(?:final|corrected|fixed|revised|complete|full|whole|updated|improved|combined)\s+(?:python\s+)?"
     r"(?:program|code|version|script|solution|answer)\b|"
+    r"\bputting it all together\b|\beverything (?:combined|together)\b|"
     r"\b(?:código|programa|versión|versão|code|programme|codice|programma|versione)\s+"
     r"(?:final|finale|corregid[oa]|corrigid[oa]|corrigée?|corrett[oa])\b|"
     r"\b(?:endgültige|finale|korrigierte)[sr]?\s+(?:programm|code|version)\b|最终(?:代码|程序|版本)|修正后的(?:代码|程序)|"
@@ -21,7 +22,8 @@ _FINAL = re.compile(
 )
 """A final marker, in English and in the languages models answer in most (found by adversarial runs: '最终代码：',
 'Código final:', 'Programme final :', 'Endgültiges Programm:', '修正後のコード：', '수정된 코드:',
-'Исправленный код:' were read as no marker)."""
+'Исправленный код:' were read as no marker, and so were "Combined program:" and "Putting it all together:" after step
+snippets that name things otherwise)."""
 _FAULTY = r"wrong|incorrect|buggy|broken|fails?|failed|failing|crashed"  # may say so of the block before the label
 _SET_ASIDE = (
     r"not|never|no|original|old|older|previous|earlier|initial|first|draft|current|currently|existing|gave|given|sent|"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import itertools
+import keyword
 import re
 import warnings
 
@@ -15,9 +16,18 @@ def unfenced_program(text: str) -> str:
     """The program of a reply without code blocks: the longest run of lines that parses and acts (a word such as
     ``Done`` at its ends left out), when every line left out is prose; raises :class:`ProgramRejected` with the syntax
     error of the whole code when a line that looks like code would be left out (the program would be cut), and when
-    the line before the run ends in code glued to prose (``Sure! open_gripper()``: its first line would be cut)."""
+    the line before the run ends in code glued to prose (``Sure! open_gripper()``: its first line would be cut), and
+    when the reply's last line is the program cut off (:func:`_cut_off`)."""
     lines = text.split("\n")
     start, end = _without_words_around(lines, *_longest_parsing_run(text))
+    last = next((k for k in range(len(lines) - 1, -1, -1) if lines[k].strip()), None)
+    if end > start and last is not None and last >= end and _cut_off(lines[last]) and not looks_like_code(lines[last]):
+        raise ProgramRejected(
+            last + 1,
+            "text",
+            f"the reply ends in the middle of its program ({lines[last].strip()[:40]!r}): it looks cut off; give the "
+            "whole program",
+        )
     before = next((k for k in range(start - 1, -1, -1) if lines[k].strip()), None) if end > start else None
     if before is not None and _ends_with_code(lines[before]):
         raise ProgramRejected(
@@ -81,6 +91,18 @@ def _separates(line: str) -> bool:
     statement = quiet_parse(line).body[0]
     value = statement.value if isinstance(statement, ast.Expr) else None
     return not (isinstance(value, ast.Constant) and isinstance(value.value, str | bytes))
+
+
+_CUT_NAME = re.compile(r"[A-Za-z_][\w.]*")
+
+
+def _cut_off(line: str) -> bool:
+    """Whether a reply's last line, after its program, is the program cut off mid-line (a reply cut at its length
+    limit) that reads as no code line: a name written as code (``close_gripp``, ``move_to_position``: with ``_`` or
+    ``.``), or a keyword alone (``if``). A word of prose (``Done``) is none (found by an adversarial run: the cut line
+    was left out as a word, and the program ran without its last call; code cut mid-call is its syntax error)."""
+    text = line.strip()
+    return keyword.iskeyword(text) or (_CUT_NAME.fullmatch(text) is not None and ("_" in text or "." in text))
 
 
 def _only_a_value(line: str) -> bool:

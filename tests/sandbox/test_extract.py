@@ -521,6 +521,53 @@ def test_extraction_counts_the_lines_it_left_out() -> None:
         extract(f"{PROGRAM}move_to_position([0.3, 0,\n")
 
 
+@pytest.mark.parametrize("cut", ["move_to_pos", "close_gripp", "close_gripper", "if", "while"])
+def test_a_reply_cut_off_after_its_unfenced_program_is_asked_again_never_run_short(cut: str) -> None:
+    """Found by an adversarial run of replies shaped like real models': a reply cut at its length limit in the middle
+    of its last line lost that line as a word of prose (as "Done" is), and the program ran without its last call."""
+    with pytest.raises(ProgramRejected, match="line 6: the reply ends in the middle of its program"):
+        extract(f"Here is the code:\n\n{GRASP_THEN}{cut}")
+    assert extract(f"Here is the code:\n\n{GRASP_THEN}\nDone").code == GRASP_THEN
+
+
+GRASP_THEN = 'p = get_center("milk")\nopen_gripper()\nmove_to_position(p)\n'
+CLIMB = (
+    'box = get_position("box")\nwalk_to_position([box[0] - 0.5, box[1], 0.0])\n'
+    'push_to_position("box", [1.5, 0.0, 0.0])\nclimb_to_position([1.5, 0.0, 0.3])\n'
+)
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        "Wait, the box is 0.25 m tall, not 0.3.",
+        "Correction: climb to z = 0.25, the box height, not 0.3.",
+        "Oh wait — the push target should be [1.2, 0.0, 0.0] so the box touches the platform.",
+        "One fix: the walk target x should be box[0] - 0.6 to leave room for the legs.",
+    ],
+)
+def test_a_number_taken_back_in_words_after_the_program_is_asked_again(words: str) -> None:
+    """Found by an adversarial run of replies shaped like real models': each ran the program with the number the words
+    after it take back. A number the program does not hold, or words that take nothing back, leave it."""
+    with pytest.raises(ProgramRejected, match="asks for a change in words"):
+        extract(f"```python\n{CLIMB}```\n{words}\n")
+    for kept in ("Wait, the box is 0.3 m tall, not 0.25.", "**Note:** the climb height matches the box (0.3 m here)."):
+        assert extract(f"```python\n{CLIMB}```\n{kept}\n").code == CLIMB
+
+
+@pytest.mark.parametrize("label", ["Putting it all together:", "Combined program:", "Here's everything combined:"])
+def test_the_program_after_step_snippets_under_a_combining_label_is_final(label: str) -> None:
+    """Found by the same run: step snippets that name things otherwise than the whole program after them made three
+    different programs, and the reply was asked again."""
+    steps = (
+        '### Step 1\n```python\npoint = get_graspable_point("milk")\n```\n'
+        "### Step 2\n```python\nopen_gripper()\nmove_to_position(point)\nclose_gripper()\n```\n"
+    )
+    assert extract(f"{steps}{label}\n\n```python\n{GRASP_THEN}close_gripper()\n```\n").code == (
+        f"{GRASP_THEN}close_gripper()\n"
+    )
+
+
 # Found by a third adversarial run: each ran a program the model did not mean (a draft, a quote, a cut program).
 GRASP = 'p = get_graspable_point("milk")\nopen_gripper()\nmove_to_position(p)\nclose_gripper()\n'
 PUT_DOWN = f"{GRASP}move_to_position([0.3, 0.0, 0.3])\nopen_gripper()\nmove_to_position([0.3, 0.2, 0.3])\n" + (
