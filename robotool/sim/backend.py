@@ -140,6 +140,11 @@ class BatchedSim(Protocol):
         bool) put on each other body through their contacts, in world axes (the solver's contact forces; zeros for
         the bodies they do not touch and for the flagged ones)."""
 
+    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """After the last step in ``world``: where the bodies flagged in ``first`` ((nbody,) bool) touch the others
+        (geoms within :data:`TOUCH_DISTANCE`), as contact positions (n, 3) in world axes, and the other body of each
+        (n,)."""
+
     def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position (nworld, ngeom, 3) and rotation matrix (nworld, ngeom, 9) after the last step, current
         in ``worlds`` (the other worlds' rows may be stale); read-only."""
@@ -320,6 +325,17 @@ def contacts_from(geom_body: np.ndarray, geom: np.ndarray, first: np.ndarray) ->
     index = np.flatnonzero(onto_second | onto_first)
     other = np.where(onto_second[index], b2[index], b1[index])
     return index, other, np.where(onto_second[index], 1.0, -1.0)
+
+
+def points_from_contacts(
+    geom_body: np.ndarray, geom: np.ndarray, dist: np.ndarray, pos: np.ndarray, first: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """One world's contacts (geom pairs (n, 2), distances (n,), positions (n, 3)) that join a body flagged in ``first``
+    to another, within :data:`TOUCH_DISTANCE` (see :meth:`BatchedSim.contact_points`): their positions and other
+    bodies."""
+    near = np.flatnonzero(np.asarray(dist) <= TOUCH_DISTANCE)
+    index, other, _ = contacts_from(geom_body, np.asarray(geom)[near].reshape(-1, 2), first)
+    return np.asarray(pos, dtype=float)[near][index].reshape(-1, 3), other
 
 
 @functools.cache

@@ -22,6 +22,7 @@ from robotool.sim.backend import (
     contacts_from,
     geom_groups,
     normals_from_contacts,
+    points_from_contacts,
     touching_from_contacts,
     weld_load_from_rows,
     weld_relpose,
@@ -79,7 +80,7 @@ class WarpSim:
         self.xfrc_applied = np.zeros((nworld, model.nbody, 6))
         self._graphs: dict[int, wp.Graph] = {}
         self._state = self._read()
-        self._contacts: tuple[np.ndarray, ...] | None = None  # the contact list read back for contact_normals
+        self._contacts: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None  # _contact_list
         self._geoms: tuple[np.ndarray, np.ndarray] | None = None  # the geoms' poses read back for geom_poses
         self._ray_geoms = ray_cast.RayGeoms.of(model)  # for the rays' starts inside geoms (``from_inside``)
 
@@ -186,19 +187,32 @@ class WarpSim:
     def contact_normals(self, world: int) -> np.ndarray:
         """Which way touching bodies press on each other in ``world`` (:meth:`BatchedSim.contact_normals`), from the
         batch's contact list after the last step."""
-        if self._contacts is None:  # read back once per step, whichever worlds ask
+        worldid, geom, dist, normal, _ = self._contact_list()
+        mine = worldid == world
+        return normals_from_contacts(
+            self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
+        )
+
+    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the bodies ``first`` touch the others in ``world`` (:meth:`BatchedSim.contact_points`), from the
+        batch's contact list after the last step."""
+        worldid, geom, dist, _, pos = self._contact_list()
+        mine = worldid == world
+        return points_from_contacts(self.scene.model.geom_bodyid, geom[mine], dist[mine], pos[mine], first)
+
+    def _contact_list(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The batch's contacts after the last step: world, geom pair, distance, normal and position of each (read
+        back once per step, whichever worlds ask)."""
+        if self._contacts is None:
             contact, nacon = self.d.contact, int(self.d.nacon.numpy()[0])
             self._contacts = (
                 contact.worldid.numpy()[:nacon],
                 contact.geom.numpy()[:nacon],
                 contact.dist.numpy()[:nacon],
                 contact.frame.numpy()[:nacon][:, 0, :],
+                contact.pos.numpy()[:nacon],
             )
-        worldid, geom, dist, normal = self._contacts
-        mine = worldid == world
-        return normals_from_contacts(
-            self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
-        )
+        return self._contacts
 
     def contact_forces(self, worlds: np.ndarray, first: np.ndarray) -> np.ndarray:
         """The force the bodies ``first`` put on the others through their contacts (:meth:`BatchedSim.contact_forces`),

@@ -88,7 +88,7 @@ def goal_tracker(scene: Scene, sim: BatchedSim) -> GoalTracker:
     else:
         goal = robots.get(scene.task.embodiment).sim.goal_trackers()[kind](scene, sim)
     falls = [
-        FallTracker(scene, index, obj.fragile.max_drop)
+        FallTracker(scene, sim, index, obj.fragile.max_drop)
         for index, obj in enumerate(scene.task.objects)
         if obj.fragile is not None  # (a fixed one is struck, found by an adversarial run: it was never judged)
     ]

@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 
 from robotool.rollout import Event
-from robotool.sim.backend import BatchState
+from robotool.sim.backend import BatchedSim, BatchState
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import ReadAtTicks
 from robotool.sim.strikes import GeomFrames, StrikeWatch, geom_half_sizes
@@ -167,7 +167,7 @@ class FallTracker:
     """Follows the falls of one fragile object in every world and remembers whether it broke. A fixed one does not
     fall or land: it breaks where something strikes it too fast (:class:`~robotool.sim.strikes.StrikeWatch`)."""
 
-    def __init__(self, scene: Scene, index: int, max_drop: float):
+    def __init__(self, scene: Scene, sim: BatchedSim, index: int, max_drop: float):
         self.scene, self.max_drop = scene, max_drop
         self.body = scene.object_body[index]
         self.bodies = np.flatnonzero(scene.body_object == index)
@@ -186,7 +186,7 @@ class FallTracker:
         self.broken: np.ndarray | None = None
         self.breaks: dict[int, Event] = {}
         self.name = scene.task.objects[index].name
-        self.strikes = StrikeWatch(scene, index, max_drop)
+        self.strikes = StrikeWatch(scene, sim, index, max_drop)
         self.landings = OutlineLandings(scene, index, max_drop, self.strikes.limit, self.others)
         self.moves = scene.task.objects[index].movable
         self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading

@@ -1,18 +1,21 @@
 """Strikes on a fragile object: something moving meeting it faster than a fall of its ``max_drop`` would land.
 
-A fall (:class:`~robotool.sim.object_goals.FallTracker`) is the object's own: its centre dropping onto a surface that
-is not soft, other than the robot. That misses glass struck by what moves: a dish dropped onto the gripper's palm, a
-block dropped onto a dish lying still. So a fragile object also breaks when the robot or a movable object that is not
-soft comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at, or to touch a
-movable object resting on it (a block dropped onto the lid of a glass jar drives the lid into the jar). The speed is
-the other body's, where the object's centre is (its travel and turn since the reading before: the tip of a swung stick
-strikes faster than its middle moves), relative to the object's centre, read before they touched (the larger of the
-last reading before and the first one touching). A soft movable object cushions its blow: the object falling onto
-it lands softly, and one it shoves sideways moves away (driven into a wall, the wall's strike is read). It strikes
-only coming down on the object, pressing it onto what it rests on, with its own downward speed, and only with more
-energy than the object's own fall of ``max_drop`` takes up: faster than ``sqrt(M / m)`` times the limit (M the
-object's mass, m its own), and never slower than the limit (found by an adversarial run: a 3 kg sandbag let go 0.43 m
-above a glass dish left it whole, as soft objects struck nothing). Nor does it pass on a blow it lies under.
+A fall (:class:`~robotool.sim.object_goals.FallTracker`) is the object's own: its centre dropping onto a surface that is
+not soft, other than the robot. That misses glass struck by what moves: a dish dropped onto the gripper's palm, a block
+dropped onto a dish lying still. So a fragile object also breaks when the robot or a movable object that is not soft
+comes to touch it at more than ``sqrt(2 g max_drop)``, the speed a fall of ``max_drop`` lands at, or to touch a movable
+object resting on it (a block dropped onto the lid of a glass jar drives the lid into the jar). The speed is the other
+body's, where the object's centre is (its travel and turn since the reading before: the tip of a swung stick strikes
+faster than its middle moves), relative to the object's centre, read before they touched (the larger of the last reading
+before and the first one touching); where it comes to touch the object itself, its speed at the contact points too, if
+faster (found by an adversarial run: a plank leaning on a block, shoved off it, swung down about its low end onto a 1.5
+m glass floor at 2.2-2.4 m/s, while its speed where the glass's centre lies was 1.1 m/s). A soft movable object cushions
+its blow: the object falling onto it lands softly, and one it shoves sideways moves away (driven into a wall, the wall's
+strike is read). It strikes only coming down on the object, pressing it onto what it rests on, with its own downward
+speed, and only with more energy than the object's own fall of ``max_drop`` takes up: faster than ``sqrt(M / m)`` times
+the limit (M the object's mass, m its own), and never slower than the limit (found by an adversarial run: a 3 kg sandbag
+let go 0.43 m above a glass dish left it whole, as soft objects struck nothing). Nor does it pass on a blow it lies
+under.
 
 The object itself driven into what does not move breaks the same way (found by an adversarial run: a stick shoved a dish
 sideways into a fixed wall at 2.5 times the limit, and the fall rule reads only the drop of its centre): a new touch of
@@ -33,7 +36,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from robotool.sim.backend import BatchState, cross, quat_to_mat
+from robotool.sim.backend import BatchedSim, BatchState, cross, quat_to_mat
 from robotool.sim.compiled_scene import Scene
 
 GRAVITY = 9.81  # m/s^2
@@ -43,13 +46,15 @@ GAIN = 2 * GRAVITY  # m/s^2: the most a striker is taken to gain on the object i
 class StrikeWatch:
     """The strikes on one fragile object in every world: :meth:`update` says how fast things came to touch it."""
 
-    def __init__(self, scene: Scene, index: int, max_drop: float):
+    def __init__(self, scene: Scene, sim: BatchedSim, index: int, max_drop: float):
+        self.sim = sim
         objects = scene.task.objects
         owner = scene.body_object
         movable = np.array([o.movable for o in objects])
         striker = scene.robot_body | ((owner >= 0) & (owner != index) & movable[np.maximum(owner, 0)])
         self.strikers = np.flatnonzero(striker)  # the robot's bodies and the other movable objects'
         self.mine = np.flatnonzero(owner == index)
+        self.mine_mask = owner == index  # (nbody,)
         self.robot = scene.robot_body[self.strikers]  # which strikers are the robot's
         of = owner[self.strikers]
         self.soft = ~self.robot & np.array([objects[o].soft for o in of.tolist()], dtype=bool)
@@ -101,9 +106,13 @@ class StrikeWatch:
         rate = 1.0 / np.where(state.time > self._time, state.time - self._time, np.inf)[:, None, None]
         spin = _turn(self._xmat, xmat) * rate  # (nworld, nstriker, 3): each body's angular velocity
         centre = state.xpos[:, None, self.body]
-        moving = (xpos - self._xpos) * rate + cross(spin, centre - xpos)  # where the object's centre is
+        travel = (xpos - self._xpos) * rate
+        moving = travel + cross(spin, centre - xpos)  # where the object's centre is
         relative = np.linalg.norm(own[:, None] - moving, axis=2)  # (nworld, nstriker)
         speed = np.where(self.soft, np.maximum(-moving[:, :, 2], 0.0), relative)  # a soft one's own, coming down
+        meets = active[:, None] & direct & ~self._direct
+        if meets.any():
+            speed = np.maximum(speed, self._at_contacts(meets, xpos, travel, spin, own))
         fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
         via = fresh.any(axis=2) & ~direct & ~self._touching()  # (what rested on it already does not strike it anew)
         meeting = np.maximum(speed, self._speed)
@@ -123,6 +132,24 @@ class StrikeWatch:
         self._own = np.where(active, own_speed, self._own)
         through = np.where(via, np.argmax(fresh, axis=2), -1)
         return struck, np.hstack([new, met]), np.hstack([through, np.full(met.shape, -1)])
+
+    def _at_contacts(
+        self, meets: np.ndarray, xpos: np.ndarray, travel: np.ndarray, spin: np.ndarray, own: np.ndarray
+    ) -> np.ndarray:
+        """(nworld, nstriker) the speed each striker that ``meets`` the object anew comes to it at, read where they
+        touch (the fastest of their contact points; a soft one's own, coming down; 0 elsewhere): ``travel`` and
+        ``spin`` are each striker's velocity at its origin ``xpos`` and its angular velocity, ``own`` the object's."""
+        out = np.zeros(meets.shape)
+        for w in np.flatnonzero(meets.any(axis=1)).tolist():
+            points, bodies = self.sim.contact_points(w, self.mine_mask)
+            for k in np.flatnonzero(meets[w]).tolist():
+                at = points[bodies == self.strikers[k]]
+                if not len(at):
+                    continue
+                velocity = travel[w, k] + np.cross(spin[w, k], at - xpos[w, k]) - own[w]  # (n, 3)
+                fastest = np.maximum(-velocity[:, 2], 0.0) if self.soft[k] else np.linalg.norm(velocity, axis=1)
+                out[w, k] = float(fastest.max())
+        return out
 
     def _own_velocity(self, state: BatchState) -> np.ndarray:
         """(nworld, 3) the object's linear velocity in the world frame (none for a fixed object)."""

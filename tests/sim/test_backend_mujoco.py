@@ -215,6 +215,26 @@ def test_contact_normals_say_which_way_touching_bodies_press(sim_scene: Any) -> 
         sim.close()
 
 
+def test_contact_points_say_where_flagged_bodies_touch_the_others(sim_scene: Any) -> None:
+    """A box resting on the floor touches it on its underside: the points where the floor's body touches it lie on
+    the floor's top, under the box's footprint, each naming the box's body."""
+    scene = sim_scene("sofa_climbing")
+    sim = MujocoSim(scene, 1, Perturbation.none(scene, 1), njmax=scene.njmax, nconmax=scene.nconmax)
+    try:
+        sim.step(50, np.ones(1, dtype=bool))
+        floor = np.zeros(scene.model.nbody, dtype=bool)
+        floor[0] = True
+        box = scene.object_body[scene.object_index("box_1")]
+        points, bodies = sim.contact_points(0, floor)
+        under = points[bodies == box]
+        centre, half = sim.state().xpos[0, box], np.asarray(scene.task.object("box_1").size) / 2
+        assert len(under) and np.allclose(under[:, 2], 0.0, atol=2e-3), under
+        assert np.all(np.abs(under[:, :2] - centre[:2]) <= half[:2] + 1e-3), (under, centre)
+        assert not np.isin(bodies, np.flatnonzero(floor)).any()
+    finally:
+        sim.close()
+
+
 def test_inside_tells_points_inside_each_primitive_shape_from_points_just_outside() -> None:
     """Points 10 % inside a geom's surface lie in it, points 10 % outside do not, for every primitive shape posed
     anywhere (a ray that starts inside a geom meets it where it leaves it, so its readers ask this)."""

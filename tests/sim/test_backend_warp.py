@@ -76,6 +76,21 @@ def test_contact_normals_match_between_backends(sim_scene: Any, warp_rollouts: l
     np.testing.assert_allclose(unit[1], unit[0], atol=1e-3)
 
 
+def test_contact_points_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
+    """Where the world's own bodies touch what rests on them, from Warp's batched contact list as from each MjData's
+    (a fragile object's strike is read where the striker meets it)."""
+    scene = sim_scene(TASK)
+    sims = [sim.make_sim(scene, 2, backend=b) for b in ("mujoco", "warp")]
+    ground = np.zeros(scene.model.nbody, dtype=bool)
+    ground[0] = True
+    for s in sims:
+        s.step(scene.control_substeps, np.ones(2, dtype=bool))
+    (c, cb), (w, wb) = (s.contact_points(1, ground) for s in sims)
+    assert len(c) and sorted(cb.tolist()) == sorted(wb.tolist())
+    order = [np.lexsort((p[:, 0], p[:, 1], b)) for p, b in ((c, cb), (w, wb))]
+    np.testing.assert_allclose(w[order[1]], c[order[0]], atol=1e-3)
+
+
 def test_contact_forces_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:
     """The force the world's own bodies put on what rests on them, from each backend's solver: each cube lying on the
     table is borne up by its weight, on Warp as on C (the arm's payload reads what the robot bears this way)."""

@@ -90,6 +90,19 @@ def test_a_block_set_down_gently_on_the_glass_leaves_it_whole(
     assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
 
 
+def test_a_plank_swung_down_about_its_low_end_strikes_where_its_far_end_lands(run_texts: Any) -> None:
+    """A plank leaning from a 1.5 m glass floor onto a block, a 12 kg crate on it, shoved off the block: it swings
+    down about its low end and meets the glass at over 2 m/s (limit 1.40 m/s) where its far end lands, though it moves
+    at about 1.1 m/s where the glass's centre lies (where the strike was read)."""
+    task = tasks.load(LAYOUTS / "arm_crate_on_a_plank_leaning_on_a_block_over_a_glass_floor.yaml")
+    program = (CHEATS / "arm_shove_a_loaded_plank_off_its_block_onto_a_glass_floor.py").read_text()
+    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
+    for rollout in rollouts:
+        assert not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.object == "glass_floor" and broke.measured["strike_speed"] > 1.6, broke
+
+
 def test_a_block_let_go_a_little_above_the_glass_breaks_it(run_texts: Any) -> None:
     """A block let go 0.18 m above a plate (max_drop 0.12 m: limit 1.53 m/s) lands at about 1.8 m/s between two control
     ticks (0.1 s on the arm), each of which read it slower than the limit: a striker that could strike that fast before
