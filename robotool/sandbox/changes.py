@@ -169,7 +169,7 @@ def change_in_words(prose: str, program: str | None = None) -> str | None:
 def _takes_back_a_number(words: str, program: str) -> bool:
     """Whether words say a number the ``program`` holds is not meant (:data:`_NOT_A_NUMBER`)."""
     return any(
-        re.search(rf"(?<![\w.]){re.escape(found[1])}(?![\w.])", program) is not None
+        re.search(rf"(?:^|[^\w.]){re.escape(found[1])}(?:$|[^\w.])", program) is not None
         for found in _NOT_A_NUMBER.finditer(words)
     )
 
