@@ -140,10 +140,10 @@ class BatchedSim(Protocol):
         bool) put on each other body through their contacts, in world axes (the solver's contact forces; zeros for
         the bodies they do not touch and for the flagged ones)."""
 
-    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """After the last step in ``world``: where the bodies flagged in ``first`` ((nbody,) bool) touch the others
-        (geoms within :data:`TOUCH_DISTANCE`), as contact positions (n, 3) in world axes, and the other body of each
-        (n,)."""
+        (geoms within :data:`TOUCH_DISTANCE`), as contact positions (n, 3) in world axes, the other body of each (n,)
+        and each contact's unit normal (n, 3; its sign as the contact list has it)."""
 
     def geom_poses(self, worlds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Every geom's position (nworld, ngeom, 3) and rotation matrix (nworld, ngeom, 9) after the last step, current
@@ -328,14 +328,15 @@ def contacts_from(geom_body: np.ndarray, geom: np.ndarray, first: np.ndarray) ->
 
 
 def points_from_contacts(
-    geom_body: np.ndarray, geom: np.ndarray, dist: np.ndarray, pos: np.ndarray, first: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """One world's contacts (geom pairs (n, 2), distances (n,), positions (n, 3)) that join a body flagged in ``first``
-    to another, within :data:`TOUCH_DISTANCE` (see :meth:`BatchedSim.contact_points`): their positions and other
-    bodies."""
+    geom_body: np.ndarray, geom: np.ndarray, dist: np.ndarray, pos: np.ndarray, normal: np.ndarray, first: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One world's contacts (geom pairs (n, 2), distances (n,), positions and normals (n, 3)) that join a body flagged
+    in ``first`` to another, within :data:`TOUCH_DISTANCE` (see :meth:`BatchedSim.contact_points`): their positions,
+    other bodies and normals."""
     near = np.flatnonzero(np.asarray(dist) <= TOUCH_DISTANCE)
     index, other, _ = contacts_from(geom_body, np.asarray(geom)[near].reshape(-1, 2), first)
-    return np.asarray(pos, dtype=float)[near][index].reshape(-1, 3), other
+    picked = near[index]
+    return np.asarray(pos, dtype=float)[picked].reshape(-1, 3), other, np.asarray(normal, dtype=float)[picked]
 
 
 @functools.cache

@@ -279,11 +279,11 @@ class MujocoSim:
         con = d.contact
         return normals_from_contacts(self.scene.model.nbody, self._geom_body, con.geom, con.dist, con.frame[:, :3])
 
-    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where the bodies ``first`` touch the others in ``world`` (:meth:`BatchedSim.contact_points`), from its
         ``MjData``'s contacts."""
         con = self.datas[world].contact
-        return points_from_contacts(self._geom_body, con.geom, con.dist, con.pos, first)
+        return points_from_contacts(self._geom_body, con.geom, con.dist, con.pos, con.frame[:, :3], first)
 
     def contact_forces(self, worlds: np.ndarray, first: np.ndarray) -> np.ndarray:
         """The force the bodies ``first`` put on the others through their contacts (:meth:`BatchedSim.contact_forces`),

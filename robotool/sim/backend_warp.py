@@ -193,12 +193,13 @@ class WarpSim:
             self.scene.model.nbody, self.scene.model.geom_bodyid, geom[mine], dist[mine], normal[mine]
         )
 
-    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def contact_points(self, world: int, first: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where the bodies ``first`` touch the others in ``world`` (:meth:`BatchedSim.contact_points`), from the
         batch's contact list after the last step."""
-        worldid, geom, dist, _, pos = self._contact_list()
+        worldid, geom, dist, normal, pos = self._contact_list()
         mine = worldid == world
-        return points_from_contacts(self.scene.model.geom_bodyid, geom[mine], dist[mine], pos[mine], first)
+        bodies = self.scene.model.geom_bodyid
+        return points_from_contacts(bodies, geom[mine], dist[mine], pos[mine], normal[mine], first)
 
     def _contact_list(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The batch's contacts after the last step: world, geom pair, distance, normal and position of each (read

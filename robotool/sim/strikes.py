@@ -9,13 +9,14 @@ body's, where the object's centre is (its travel and turn since the reading befo
 faster than its middle moves), relative to the object's centre, read before they touched (the larger of the last reading
 before and the first one touching); where it comes to touch the object itself, its speed at the contact points too, if
 faster (found by an adversarial run: a plank leaning on a block, shoved off it, swung down about its low end onto a 1.5
-m glass floor at 2.2-2.4 m/s, while its speed where the glass's centre lies was 1.1 m/s). A soft movable object cushions
-its blow: the object falling onto it lands softly, and one it shoves sideways moves away (driven into a wall, the wall's
-strike is read). It strikes only coming down on the object, pressing it onto what it rests on, with its own downward
-speed, and only with more energy than the object's own fall of ``max_drop`` takes up: faster than ``sqrt(M / m)`` times
-the limit (M the object's mass, m its own), and never slower than the limit (found by an adversarial run: a 3 kg sandbag
-let go 0.43 m above a glass dish left it whole, as soft objects struck nothing). Nor does it pass on a blow it lies
-under.
+m glass floor at 2.2-2.4 m/s, while its speed where the glass's centre lies was 1.1 m/s). What touches it already
+strikes where it touches it anew, :data:`REGION` away, at its speed toward it there (a pole toppled about its foot on
+the glass). A soft movable object cushions its blow: the object falling onto it lands softly, and one it shoves sideways
+moves away (driven into a wall, the wall's strike is read). It strikes only coming down on the object, pressing it onto
+what it rests on, with its own downward speed, and only with more energy than the object's own fall of ``max_drop``
+takes up: faster than ``sqrt(M / m)`` times the limit (M the object's mass, m its own), and never slower than the limit
+(found by an adversarial run: a 3 kg sandbag let go 0.43 m above a glass dish left it whole, as soft objects struck
+nothing). Nor does it pass on a blow it lies under.
 
 The object itself driven into what does not move breaks the same way (found by an adversarial run: a stick shoved a dish
 sideways into a fixed wall at 2.5 times the limit, and the fall rule reads only the drop of its centre): a new touch of
@@ -41,6 +42,7 @@ from robotool.sim.compiled_scene import Scene
 
 GRAVITY = 9.81  # m/s^2
 GAIN = 2 * GRAVITY  # m/s^2: the most a striker is taken to gain on the object in a control interval (a fall, a shove)
+REGION = 0.05  # m from every point a striker touched the object at the last reading: where it touches it anew
 
 
 class StrikeWatch:
@@ -82,6 +84,7 @@ class StrikeWatch:
         self._speed = np.zeros(0)
         self._walls = np.zeros(0, dtype=bool)  # (nworld, nfixed): touching a fixed object
         self._own = np.zeros(0)  # (nworld,): the object's own speed
+        self._regions: dict[int, dict[int, np.ndarray]] = {}  # world -> striker -> (n, 3) where it touched the object
 
     def update(self, state: BatchState, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Read the ``active`` worlds: (nworld,) the fastest strike that began since the last reading (0: none),
@@ -110,14 +113,16 @@ class StrikeWatch:
         moving = travel + cross(spin, centre - xpos)  # where the object's centre is
         relative = np.linalg.norm(own[:, None] - moving, axis=2)  # (nworld, nstriker)
         speed = np.where(self.soft, np.maximum(-moving[:, :, 2], 0.0), relative)  # a soft one's own, coming down
-        meets = active[:, None] & direct & ~self._direct
-        if meets.any():
-            speed = np.maximum(speed, self._at_contacts(meets, xpos, travel, spin, own))
+        at_contacts, elsewhere = self._at_contacts(active[:, None] & direct, xpos, travel, spin, own)
+        speed = np.where(direct & ~self._direct, np.maximum(speed, at_contacts), speed)
         fresh = onto & ~self._pairs  # a new touch of what rests on the object (not one it came to rest under)
         via = fresh.any(axis=2) & ~direct & ~self._touching()  # (what rested on it already does not strike it anew)
         meeting = np.maximum(speed, self._speed)
         new = active[:, None] & ((direct & ~self._direct) | via) & (~self.soft | (meeting > self.limits))
         struck = np.where(new, meeting, 0.0).max(axis=1, initial=0.0)
+        landed = active[:, None] & direct & self._direct & (elsewhere > self.limits)  # touching, it lands elsewhere
+        new |= landed
+        struck = np.maximum(struck, np.where(landed, elsewhere, 0.0).max(axis=1, initial=0.0))
         met = active[:, None] & walls & ~self._walls  # (nworld, nfixed): a new touch of a fixed object
         struck = np.maximum(struck, np.where(met.any(axis=1), np.maximum(own_speed, self._own), 0.0))
         keep = active[:, None]
@@ -134,22 +139,38 @@ class StrikeWatch:
         return struck, np.hstack([new, met]), np.hstack([through, np.full(met.shape, -1)])
 
     def _at_contacts(
-        self, meets: np.ndarray, xpos: np.ndarray, travel: np.ndarray, spin: np.ndarray, own: np.ndarray
-    ) -> np.ndarray:
-        """(nworld, nstriker) the speed each striker that ``meets`` the object anew comes to it at, read where they
-        touch (the fastest of their contact points; a soft one's own, coming down; 0 elsewhere): ``travel`` and
-        ``spin`` are each striker's velocity at its origin ``xpos`` and its angular velocity, ``own`` the object's."""
-        out = np.zeros(meets.shape)
-        for w in np.flatnonzero(meets.any(axis=1)).tolist():
-            points, bodies = self.sim.contact_points(w, self.mine_mask)
-            for k in np.flatnonzero(meets[w]).tolist():
-                at = points[bodies == self.strikers[k]]
+        self, touching: np.ndarray, xpos: np.ndarray, travel: np.ndarray, spin: np.ndarray, own: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Read where the strikers ``touching`` (nworld, nstriker) the object touch it: (nworld, nstriker) the speed
+        each comes to it at there (the fastest of its contact points; a soft one's own, coming down), and the speed
+        it comes to it at where it touches it anew, :data:`REGION` or more from every point it touched at the last
+        reading (toward the object, along the contact's normal: a pole standing on glass that topples lands its top
+        on it; found by an adversarial run, where only the pole's first touch was read), 0 elsewhere. ``travel`` and
+        ``spin`` are each striker's velocity at its origin ``xpos`` and its angular velocity, ``own`` the object's.
+        The points are kept for the next reading."""
+        at_contacts, elsewhere = np.zeros(touching.shape), np.zeros(touching.shape)
+        for w in range(len(touching)):
+            if not touching[w].any():
+                self._regions.pop(w, None)
+                continue
+            points, bodies, normals = self.sim.contact_points(w, self.mine_mask)
+            before, regions = self._regions.get(w, {}), {}
+            for k in np.flatnonzero(touching[w]).tolist():
+                mine = bodies == self.strikers[k]
+                at, normal = points[mine], normals[mine]
                 if not len(at):
                     continue
+                regions[k] = at
                 velocity = travel[w, k] + np.cross(spin[w, k], at - xpos[w, k]) - own[w]  # (n, 3)
-                fastest = np.maximum(-velocity[:, 2], 0.0) if self.soft[k] else np.linalg.norm(velocity, axis=1)
-                out[w, k] = float(fastest.max())
-        return out
+                down = np.maximum(-velocity[:, 2], 0.0)
+                at_contacts[w, k] = float((down if self.soft[k] else np.linalg.norm(velocity, axis=1)).max())
+                if k in before:
+                    apart = np.linalg.norm(at[:, None] - before[k][None], axis=2).min(axis=1) >= REGION
+                    if apart.any():
+                        toward = np.abs(np.einsum("ni,ni->n", velocity, normal))
+                        elsewhere[w, k] = float((down if self.soft[k] else toward)[apart].max())
+            self._regions[w] = regions
+        return at_contacts, elsewhere
 
     def _own_velocity(self, state: BatchState) -> np.ndarray:
         """(nworld, 3) the object's linear velocity in the world frame (none for a fixed object)."""

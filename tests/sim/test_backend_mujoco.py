@@ -225,12 +225,13 @@ def test_contact_points_say_where_flagged_bodies_touch_the_others(sim_scene: Any
         floor = np.zeros(scene.model.nbody, dtype=bool)
         floor[0] = True
         box = scene.object_body[scene.object_index("box_1")]
-        points, bodies = sim.contact_points(0, floor)
+        points, bodies, normals = sim.contact_points(0, floor)
         under = points[bodies == box]
         centre, half = sim.state().xpos[0, box], np.asarray(scene.task.object("box_1").size) / 2
         assert len(under) and np.allclose(under[:, 2], 0.0, atol=2e-3), under
         assert np.all(np.abs(under[:, :2] - centre[:2]) <= half[:2] + 1e-3), (under, centre)
         assert not np.isin(bodies, np.flatnonzero(floor)).any()
+        assert np.allclose(np.abs(normals[bodies == box][:, 2]), 1.0, atol=1e-3)  # the floor's normal: vertical
     finally:
         sim.close()
 

@@ -85,10 +85,11 @@ def test_contact_points_match_between_backends(sim_scene: Any, warp_rollouts: li
     ground[0] = True
     for s in sims:
         s.step(scene.control_substeps, np.ones(2, dtype=bool))
-    (c, cb), (w, wb) = (s.contact_points(1, ground) for s in sims)
+    (c, cb, cn), (w, wb, wn) = (s.contact_points(1, ground) for s in sims)
     assert len(c) and sorted(cb.tolist()) == sorted(wb.tolist())
     order = [np.lexsort((p[:, 0], p[:, 1], b)) for p, b in ((c, cb), (w, wb))]
     np.testing.assert_allclose(w[order[1]], c[order[0]], atol=1e-3)
+    np.testing.assert_allclose(wn[order[1]], cn[order[0]], atol=1e-3)
 
 
 def test_contact_forces_match_between_backends(sim_scene: Any, warp_rollouts: list[Any]) -> None:

@@ -103,6 +103,18 @@ def test_a_plank_swung_down_about_its_low_end_strikes_where_its_far_end_lands(ru
         assert broke.object == "glass_floor" and broke.measured["strike_speed"] > 1.6, broke
 
 
+def test_a_pole_toppled_about_its_foot_on_the_glass_strikes_where_its_top_lands(run_texts: Any) -> None:
+    """A pole standing on a wide glass floor, pushed over: its foot touches the glass throughout, and its top lands on
+    it fast, 0.4 m from where the pole touched it at the reading before (only a striker's first touch was read)."""
+    task = tasks.load(LAYOUTS / "arm_pole_standing_on_a_wide_glass_floor.yaml")
+    program = (CHEATS / "arm_topple_a_pole_standing_on_a_glass_floor.py").read_text()
+    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
+    for rollout in rollouts:
+        assert not rollout.success
+        (broke,) = [e for e in rollout.events if e.kind == "broke"]
+        assert broke.detail == "pole" and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+
+
 def test_a_block_let_go_a_little_above_the_glass_breaks_it(run_texts: Any) -> None:
     """A block let go 0.18 m above a plate (max_drop 0.12 m: limit 1.53 m/s) lands at about 1.8 m/s between two control
     ticks (0.1 s on the arm), each of which read it slower than the limit: a striker that could strike that fast before
