@@ -57,9 +57,11 @@ STILL = 1e-5  # m an object may move in a tick and count as still: whether a foo
 # of 3 cm at this pace would take 150 s)
 RIDE_TIME = 0.5  # s a push may carry more than the push limit before it counts (what tips against it leans a while)
 REST_TIME = 0.5  # s an object must stay still (in 3-D) to have come to rest: a wedged box tipping free pauses a tick
-CREEP = 1e-4  # m an object may creep in a tick (2 mm/s) and be done with a push that rammed it: the soft contacts let
-# a heavy cube resting on a tilted board creep down it at 1.3 mm/s for good, and a chair push that dragged both a few
-# millimetres weighed them when the robot's weight tipped the board, 20 s later (a planner's program, 1 world in 7)
+CREEP = 1e-4  # m an object may creep in a tick (2 mm/s), no faster than its slowest since, and be done with a push that
+# rammed it: the soft contacts let a heavy cube resting on a tilted board creep down it at 1.3 mm/s for good, and a
+# chair push that dragged both a few millimetres weighed them when the robot's weight tipped the board, 20 s later (a
+# planner's program, 1 world in 7); one speeding up from rest is not done (an adversarial run: a 15 kg drum tapped off
+# a kerb by a pushed bar rolled away slowly at first)
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -84,6 +86,7 @@ class RefereeState:
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet of a walk or climb, since rest
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
     crept: np.ndarray  # (nworld, nobject) s each object has moved no more than :data:`CREEP` a tick (in 3-D) on end
+    slowest: np.ndarray  # (nworld, nobject) m the least it moved in a tick meanwhile (inf: it moved faster last tick)
     overloaded: np.ndarray  # (nworld,) s: since when a push has carried more than the push limit (NaN: it has not)
     strained: np.ndarray  # (nworld, nobject) s the pushes of each object took more force than they may, over the run
     bump_force: np.ndarray  # (nworld, nobject) N the most a walk or a climb took to slide each object it ran into
@@ -117,6 +120,7 @@ class RefereeState:
             drift=np.zeros((nworld, nobject)),
             still=np.zeros((nworld, nobject)),
             crept=np.zeros((nworld, nobject)),
+            slowest=np.full((nworld, nobject), np.inf),
             overloaded=np.full(nworld, np.nan),
             strained=np.zeros((nworld, nobject)),
             bump_force=np.zeros((nworld, nobject)),
@@ -332,24 +336,28 @@ class Referee:
         travels on after the ram, the push over or not, until it comes to rest (a drum tapped by a pushed box rolls on:
         the push set it moving); what the pushed object or a rammed one rams on its own way after the push, until it
         comes to rest, is rammed by the push too (:meth:`_coasting_rams`). At rest is moving no more than :data:`CREEP`
-        a tick in 3-D for :data:`REST_TIME` on end (found by an adversarial run: a pushed box that wedged for one tick
-        at an edge, then slid free down a ramp into a 15 kg crate, was forgotten at the pause; ``shift`` is in 3-D).
-        What the stride of a walk or a climb drives back under the feet (``stood_on``, from :meth:`_shoves`) rams as a
-        pushed object does, until it comes to rest, once it has travelled ``shove`` across under them (found by an
-        adversarial run: a 15 cm walk along a 3 kg board on free rollers kicked it back into a 10 kg crate on ice, off
-        its pad, with no push and no touch); it rams what it meets, not what rides on it or what it rides on (a second
-        run: a lever on a loose 6 kg roller, rolling a few centimetres as it tips under the feet, lifts the cube on its
-        far end as a lever should); what it and what goes along with it weigh is weighed whatever they ram
-        (:meth:`_stride_loads`). Once the pushed object and the objects it rammed that travelled more than ``shove``
-        weigh more than the push limit, the robot shoved them (a light object used as a ram moves no more than the robot
-        may push): the world fails (:meth:`conditions`) and a move in progress is stopped and refused, naming them."""
+        a tick in 3-D for :data:`REST_TIME` on end, no faster than its slowest meanwhile (found by an adversarial run: a
+        pushed box that wedged for one tick at an edge, then slid free down a ramp into a 15 kg crate, was forgotten at
+        the pause; ``shift`` is in 3-D). What the stride of a walk or a climb drives back under the feet (``stood_on``,
+        from :meth:`_shoves`) rams as a pushed object does, until it comes to rest, once it has travelled ``shove``
+        across under them (found by an adversarial run: a 15 cm walk along a 3 kg board on free rollers kicked it back
+        into a 10 kg crate on ice, off its pad, with no push and no touch); it rams what it meets, not what rides on it
+        or what it rides on (a second run: a lever on a loose 6 kg roller, rolling a few centimetres as it tips under
+        the feet, lifts the cube on its far end as a lever should); what it and what goes along with it weigh is weighed
+        whatever they ram (:meth:`_stride_loads`). Once the pushed object and the objects it rammed that travelled more
+        than ``shove`` weigh more than the push limit, the robot shoved them (a light object used as a ram moves no more
+        than the robot may push): the world fails (:meth:`conditions`) and a move in progress is stopped and refused,
+        naming them."""
         s, m = self.state, moves.state
         dt, here = self.scene.control_dt, mask[:, None]
         s.still = np.where(here & (travel <= STILL), s.still + dt, np.where(here, 0.0, s.still))
-        s.crept = np.where(here & (travel <= CREEP), s.crept + dt, np.where(here, 0.0, s.crept))
+        creeping = here & (travel <= CREEP)
+        s.crept = np.where(creeping, s.crept + dt, np.where(here, 0.0, s.crept))
+        s.slowest = np.where(creeping, np.minimum(s.slowest, travel), np.where(here, np.inf, s.slowest))
         shift = shift[:, :, :2]
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
-        settled = here & (s.crept >= REST_TIME)  # no longer moving on from a ram: what moves it later is not this ram
+        settled = here & (s.crept >= REST_TIME) & (travel <= s.slowest + STILL)  # not speeding up: a later move is
+        # not this ram's
         s.rammed_by[settled] = -1
         s.coasting[settled] = False
         s.drift[here & (s.still >= REST_TIME)] = 0.0

@@ -693,6 +693,20 @@ def test_cheat_fails_in_every_world_for_the_reason_it_names(program: str, scene:
         assert reason in failure_reason(rollout), failure_reason(rollout)
 
 
+def test_a_drum_a_ram_sets_rolling_slowly_from_rest_is_still_rammed() -> None:
+    """Found by an adversarial run: a bar pushed 2 cm into a 15 kg drum held by a kerb on a nearly level deck slid it
+    past the kerb; the drum sped up from rest at about 1 mm/s^2 and rolled off the platform, and a ram was forgotten
+    once what it set moving crept under 2 mm/s for 0.5 s, speeding up or not (in these worlds both drums rolled
+    off)."""
+    program = _text("roll_a_heavy_drum_off_a_kerb_with_a_slow_start")
+    rollouts = sim.run_sessions(
+        _scene("drum_held_by_a_kerb_on_a_nearly_level_deck"), start_sessions([program] * 2, "quadruped"), seed=1
+    )
+    for rollout in rollouts:
+        assert not rollout.success
+        assert "pushing bar rammed drum" in failure_reason(rollout), failure_reason(rollout)
+
+
 def test_a_goal_is_read_once_everything_lies_still() -> None:
     """Found by an adversarial run: a vase pushed rolling off a 1.0 m table, the program ended at once, was read as
     lowered while in mid-air, 1 s after the end, before it struck the floor. The goal is read once every object lies
