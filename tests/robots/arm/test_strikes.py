@@ -16,6 +16,7 @@ from robotool.verify import world_failure
 
 CHEATS = FIXTURES / "cheats"
 LAYOUTS = FIXTURES / "layouts"
+PROGRAMS = FIXTURES / "programs"
 
 
 @pytest.mark.parametrize(
@@ -113,6 +114,26 @@ def test_a_pole_toppled_about_its_foot_on_the_glass_strikes_where_its_top_lands(
         assert not rollout.success
         (broke,) = [e for e in rollout.events if e.kind == "broke"]
         assert broke.detail == "pole" and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+
+
+@pytest.mark.parametrize(
+    ("program", "layout"),
+    [
+        ("arm_push_a_block_along_a_fixed_glass_table", "arm_block_on_a_fixed_glass_table"),
+        ("arm_roll_a_pin_across_a_fixed_glass_plate", "arm_rolling_pin_on_a_fixed_glass_plate"),
+    ],
+)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_what_slides_or_rolls_on_fixed_glass_leaves_it_whole(
+    run_texts: Any, program: str, layout: str, seed: int
+) -> None:
+    """The controls of fixed glass (found by a run that looked for honest programs the judge fails, once fixed fragile
+    objects were judged): a fixed table or floor is read where it is nearest each striker and at the speed toward it
+    there, not where its centre lies (a pin's spin reached there at 1.0-1.27 m/s) nor at a speed away from it (fingers
+    rising past a block's side)."""
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    rollouts: list[Rollout] = run_texts(task, [(PROGRAMS / f"{program}.py").read_text()] * 2, seed=seed)
+    assert not [e for r in rollouts for e in r.events if e.kind == "broke"], [world_failure(r) for r in rollouts]
 
 
 def test_a_block_let_go_a_little_above_the_glass_breaks_it(run_texts: Any) -> None:
