@@ -91,29 +91,30 @@ def test_a_block_set_down_gently_on_the_glass_leaves_it_whole(
     assert not [e for r in rollouts for e in r.events if e.kind == "broke"]
 
 
-def test_a_plank_swung_down_about_its_low_end_strikes_where_its_far_end_lands(run_texts: Any) -> None:
-    """A plank leaning from a 1.5 m glass floor onto a block, a 12 kg crate on it, shoved off the block: it swings
-    down about its low end and meets the glass at over 2 m/s (limit 1.40 m/s) where its far end lands, though it moves
-    at about 1.1 m/s where the glass's centre lies (where the strike was read)."""
-    task = tasks.load(LAYOUTS / "arm_crate_on_a_plank_leaning_on_a_block_over_a_glass_floor.yaml")
-    program = (CHEATS / "arm_shove_a_loaded_plank_off_its_block_onto_a_glass_floor.py").read_text()
-    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
+@pytest.mark.parametrize(
+    ("program", "layout", "strikers"),
+    [
+        # a plank leaning from a 1.5 m glass floor onto a block, a 12 kg crate on it, shoved off the block, swings down
+        # about its low end: over 2 m/s where its far end lands, 1.1 m/s where the glass's centre lies (read there)
+        (
+            "arm_shove_a_loaded_plank_off_its_block_onto_a_glass_floor",
+            "arm_crate_on_a_plank_leaning_on_a_block_over_a_glass_floor",
+            {"plank", "crate"},
+        ),
+        # a pole on a wide glass floor, pushed over: its foot touches the glass throughout, and its top lands 0.4 m from
+        # where it touched it at the reading before (only a striker's first touch was read)
+        ("arm_topple_a_pole_standing_on_a_glass_floor", "arm_pole_standing_on_a_wide_glass_floor", {"pole"}),
+    ],
+)
+def test_a_striker_turning_about_a_point_strikes_where_it_lands(
+    run_texts: Any, program: str, layout: str, strikers: set[str]
+) -> None:
+    task = tasks.load(LAYOUTS / f"{layout}.yaml")
+    rollouts: list[Rollout] = run_texts(task, [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     for rollout in rollouts:
         assert not rollout.success
         (broke,) = [e for e in rollout.events if e.kind == "broke"]
-        assert broke.object == "glass_floor" and broke.measured["strike_speed"] > 1.6, broke
-
-
-def test_a_pole_toppled_about_its_foot_on_the_glass_strikes_where_its_top_lands(run_texts: Any) -> None:
-    """A pole standing on a wide glass floor, pushed over: its foot touches the glass throughout, and its top lands on
-    it fast, 0.4 m from where the pole touched it at the reading before (only a striker's first touch was read)."""
-    task = tasks.load(LAYOUTS / "arm_pole_standing_on_a_wide_glass_floor.yaml")
-    program = (CHEATS / "arm_topple_a_pole_standing_on_a_glass_floor.py").read_text()
-    rollouts: list[Rollout] = run_texts(task, [program] * 2, seed=11)
-    for rollout in rollouts:
-        assert not rollout.success
-        (broke,) = [e for e in rollout.events if e.kind == "broke"]
-        assert broke.detail == "pole" and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
+        assert broke.detail in strikers and broke.measured["strike_speed"] > broke.measured["max_speed"], broke
 
 
 @pytest.mark.parametrize(
