@@ -24,22 +24,28 @@ from robotool.task.scene import PRESS_TRAVEL
 
 
 class PressedGoal(ReadAtTicks):
-    """``pressed: button``: its face travelled at least 1 cm at some time (read at ticks: a press between two ticks is
-    missed, never invented)."""
+    """``pressed: button``: its face travelled at least 1 cm past where it was as the program started, at some time
+    (read at ticks: a press between two ticks is missed, never invented). Found by an adversarial run: a plate the task
+    file lays on an upturned button's face pressed it past 1 cm while the world settled, and a program that did nothing
+    pressed it."""
 
     def __init__(self, scene: Scene):
         self.name = scene.task.goal.object
         model = scene.model
         self.adr = model.sensor_adr[model.sensor(f"{self.name}__travel").id]
         self.max_travel: np.ndarray | None = None
+        self.start: np.ndarray | None = None
 
     def update(self, state: BatchState, active: np.ndarray, credited: np.ndarray) -> None:
+        if self.start is None:
+            self.start = np.maximum(state.sensordata[:, self.adr], 0.0)
         travel = np.where(credited, state.sensordata[:, self.adr], -np.inf)
         self.max_travel = travel if self.max_travel is None else np.maximum(self.max_travel, travel)
 
     def conditions(self, state: BatchState) -> dict[str, np.ndarray]:
         seen = self.max_travel if self.max_travel is not None else state.sensordata[:, self.adr]
-        return {f"{self.name}_pressed": seen >= PRESS_TRAVEL}
+        start = self.start if self.start is not None else 0.0
+        return {f"{self.name}_pressed": seen - start >= PRESS_TRAVEL}
 
 
 OBJECT_GOALS: dict[str, Callable[[Scene], GoalTracker]] = {

@@ -97,6 +97,8 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_rake_a_heavy_milk_in_regrasped_steps", "arm_heavy_milk_beyond_reach", "clamped 0.1"),
     # let go 0.40 m above the floor: its fall was measured from the stool it last rested on, not from the hand
     ("arm_drop_the_vase_from_high", "arm_vase_on_a_stool", "vase broke: it fell 0.4"),
+    # a program that does nothing, on a button a plate the task file lays on it pressed while the world settled
+    ("arm_do_nothing_under_a_button", "arm_plate_lying_on_an_upturned_button", "goal not reached: button_pressed"),
     # a block that tipped off its shelf while the world settled, lifted from the floor: counted from the shelf
     ("arm_lift_a_block_that_tipped_off_its_shelf_from_the_floor", "arm_block_placed_at_a_shelf_edge", "block_lifted"),
     # the glass dropped on the way to lifting the cube: not the goal's object, but broken
