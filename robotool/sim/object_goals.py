@@ -193,7 +193,7 @@ class FallTracker:
         self.name = scene.task.objects[index].name
         self.strikes = StrikeWatch(scene, sim, index, max_drop)
         self.landings = OutlineLandings(scene, index, max_drop, self.strikes.limit, self.others)
-        self.moves = scene.task.objects[index].movable
+        self.moves = not self.strikes.fixed_object
         self._touch = np.zeros((0, len(self.others)), dtype=bool)  # (nworld, len(others)) at the last reading
 
     def update(self, state: BatchState, active: np.ndarray) -> None:
@@ -222,7 +222,7 @@ class FallTracker:
                 landed_on = self._names(self.scene.body_object[self.others[onto[w]]])
                 self._break(state, w, self._strike(float(landing[w])), landed_on)
         self._touch = np.where(active[:, None], touch, self._touch)
-        speed = np.abs(self._velocity(state)).max(axis=1)
+        speed = np.abs(self.strikes.own_velocity(state)).max(axis=1)
         held = self._held(state)
         borne = touch.any(axis=1) | state.touching[:, self.bodies][:, :, self.robot].any(axis=(1, 2))
         resting = active & (held | (borne & (speed < RESTING_SPEED)))
@@ -262,7 +262,7 @@ class FallTracker:
         if not self.moves:
             return ~self.broken & self.strikes.watched(state, dt, held)
         fall = self.rest_height - state.xpos[:, self.body, 2]
-        sinking = np.maximum(-self._velocity(state)[:, 2], 0.0)
+        sinking = np.maximum(-self.strikes.own_velocity(state)[:, 2], 0.0)
         falling = fall + sinking * dt + FALL_ACCELERATION * dt**2 / 2 > self.max_drop
         landing = ~held & (self.landings.descent(state).max(axis=1) + FALL_ACCELERATION * dt > self.strikes.limit)
         return ~self.broken & (falling | landing | self.strikes.watched(state, dt, held))
@@ -275,13 +275,6 @@ class FallTracker:
         """What a fall landed on: object names, or the ground for the world's own bodies."""
         names = sorted({self.scene.task.objects[k].name if k >= 0 else "the ground" for k in objects.tolist()})
         return " and ".join(names) if names else "the ground"
-
-    def _velocity(self, state: BatchState) -> np.ndarray:
-        """(nworld, 3) its linear velocity (none for a fixed object)."""
-        if not self.moves:
-            return np.zeros((len(state.time), 3))
-        adr = int(self.scene.model.body_dofadr[self.body])
-        return np.asarray(state.qvel[:, adr : adr + 3])
 
 
 class OutlineLandings:

@@ -102,7 +102,7 @@ class StrikeWatch:
         carried = self._resting(direct, pairs, self.loose & self._above(state))
         onto = pairs & carried[:, None, :]  # s touches c, which rests on the object
         walls = self.fixed.touching(state, self.mine)
-        own = self._own_velocity(state)
+        own = self.own_velocity(state)
         own_speed = np.linalg.norm(own, axis=1)
         if self._time is None:
             self._time, self._xpos, self._xmat = state.time.copy(), xpos, xmat
@@ -156,10 +156,9 @@ class StrikeWatch:
         ``spin`` are each striker's velocity at its origin ``xpos`` and its angular velocity, ``own`` the object's.
         The points are kept for the next reading."""
         at_contacts, elsewhere = np.zeros(touching.shape), np.zeros(touching.shape)
-        for w in range(len(touching)):
-            if not touching[w].any():
-                self._regions.pop(w, None)
-                continue
+        worlds = np.flatnonzero(touching.any(axis=1)).tolist()
+        self._regions = {w: self._regions[w] for w in worlds if w in self._regions}  # (not touching: forgotten)
+        for w in worlds:
             points, bodies, normals = self.sim.contact_points(w, self.mine_mask)
             before, regions = self._regions.get(w, {}), {}
             for k in np.flatnonzero(touching[w]).tolist():
@@ -189,7 +188,7 @@ class StrikeWatch:
         pick = np.linalg.norm(placed - points[:, :, None], axis=3).argmin(axis=2)  # (nworld, n)
         return np.take_along_axis(placed, pick[:, :, None, None], axis=2)[:, :, 0]
 
-    def _own_velocity(self, state: BatchState) -> np.ndarray:
+    def own_velocity(self, state: BatchState) -> np.ndarray:
         """(nworld, 3) the object's linear velocity in the world frame (none for a fixed object)."""
         if self.fixed_object:
             return np.zeros((len(state.time), 3))
@@ -253,7 +252,7 @@ class StrikeWatch:
         nworld = len(state.time)
         if not len(self.fixed.names) or self.fixed_object:
             return np.zeros(nworld, dtype=bool)
-        speed = np.linalg.norm(self._own_velocity(state), axis=1)
+        speed = np.linalg.norm(self.own_velocity(state), axis=1)
         pushed = np.asarray(state.touching[:, self.mine][:, :, self.movers].any(axis=(1, 2))) | struck.any(axis=1)
         gain = np.where(pushed, GAIN, GRAVITY)
         fast = speed + gain * dt > self.limit
