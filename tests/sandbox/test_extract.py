@@ -479,6 +479,8 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         'x = f"' + "{1}" * 30_000 + '"',  # Python 3.11 parses one f-string's fields in quadratic time
         "x = ['" + "\\'" * 47_000 + "\n",  # string masking from every quote (second adversarial run)
         ("x = " + "lambda: " * 2_850 + "1\nHmm.\n") * 4,  # compiling nested lambdas (second adversarial run)
+        # a program, then words that take back thousands of numbers: each was searched for in the whole program
+        "```python\n" + "move_to_position([0.1, 0.2, 0.3])\n" * 1_600 + "```\nWait, " + "not 9.9, " * 4_800,
     ],
     ids=[
         "names",
@@ -493,6 +495,7 @@ def test_long_prose_is_searched_in_reasonable_time() -> None:
         "f-string-fields",
         "escaped-quotes",
         "nested-lambdas",
+        "numbers-taken-back",
     ],
 )
 def test_extraction_of_100_kb_stays_linear(answer: str) -> None:
