@@ -9,8 +9,9 @@ after :data:`PRESS_TRAVEL`.
 Magnetic objects get an inactive weld ``magnet__<a>__<b>`` per pair (see :mod:`robotool.sim.magnets`).
 A sheet (a thin, light box, like paper: :attr:`~robotool.task.scene.SceneObject.is_sheet`) collides with the ground
 and the robot only; it meets each other movable object through a carrier geom of its own, in place only while the
-object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object. A task file lays a
-sheet on the ground, never magnetic (:mod:`robotool.task.task_file`).
+object rests on the sheet (see :mod:`robotool.sim.sheets`), so its edge never shoves an object; a weld holds it to the
+table while a load pins it down. A task file lays a sheet on the ground, never magnetic
+(:mod:`robotool.task.task_file`).
 Cloth is built as hinged links (:func:`robotool.sim.cloth.add_cloth`).
 The robot is added by its embodiment (:mod:`robotool.sim.embodiment`).
 """
@@ -180,16 +181,32 @@ def sheet_carrier_name(sheet: str, obj: str) -> str:
     return f"{sheet}__carries__{obj}"
 
 
+def sheet_pin_name(sheet: str) -> str:
+    """Name of the weld that holds sheet ``sheet`` to the table while a load pins it down."""
+    return f"{sheet}__pinned"
+
+
 def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
-    """For every sheet and every other movable object: a carrier geom on the sheet that only that object meets.
+    """For every sheet and every other movable object: a carrier geom on the sheet that only that object meets;
+    and per sheet an inactive weld to the world, :func:`sheet_pin_name`, on while a load pins the sheet down.
 
     The carrier is a copy of the sheet's box :data:`SHEET_CARRIER_LIFT` higher (so the object rests on
     it alone, not half on the table), without mass, invisible and without automatic collisions, in an
     explicit contact pair with each part of the object. It is in place for objects that rest on
     the sheet at the start and dropped :data:`SHEET_CARRIER_DROP` below it otherwise;
-    :mod:`robotool.sim.sheets` moves it while the world runs.
+    :mod:`robotool.sim.sheets` moves it and switches the weld while the world runs.
     """
     for sheet in (o for o in task.objects if o.is_sheet and o.movable):
+        spec.add_equality(
+            name=sheet_pin_name(sheet.name),
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=sheet.name,
+            name2="world",
+            active=False,
+            solref=WELD_SOLREF,
+            solimp=WELD_SOLIMP,
+        )
         body = spec.body(sheet.name)
         (part,) = geometry.object_parts(sheet)
         centre, rot = np.asarray(sheet.center, dtype=float), geometry.rotation_matrix(sheet.rpy)

@@ -10,10 +10,14 @@ rides on the sheet by friction, until its support leaves the sheet (less than :d
 over it, or its centre off it), it is lifted off, or the sheet itself is lifted off the table (held up by an
 edge, it droops and carries nothing: :data:`RAISED`); otherwise the carrier lies far below. A sheet pinned down
 (an object standing partly on it, not riding it, presses it with more than :data:`PIN_FORCE` of friction: a crate
-with a corner on it) carries nothing either: it does not slide out from under that load, so what else lies on it
-stays. A sheet slid (or laid) under a standing object got there, not the object: once the sheet moving more than
-the object brought more of the object's base over it (any share, not only its centre), no nudge makes the object
-rest on the sheet until its base has left the sheet entirely, whatever order the slides and nudges came in.
+with a corner on it; or a fixed object stands on it) carries nothing either, and it is held to the table (its weld
+:func:`~robotool.sim.build.sheet_pin_name`) for as long as the pull on it stays within that friction: a pull past it
+slides it a tick at a time, and a fixed object holds it whatever pulls (found by an adversarial run: paper under a
+60 kg crate, or under a block bolted down, was dragged out by its free end and lifted, as a sheet meets nothing but
+the ground and the robot). A sheet slid (or laid) under a standing object got there, not the object: once the sheet
+moving more than the object brought more of the object's base over it (any share, not only its centre), no nudge
+makes the object rest on the sheet until its base has left the sheet entirely, whatever order the slides and nudges
+came in.
 :meth:`Sheets.update` applies this rule after every control tick, per world.
 """
 
@@ -23,15 +27,24 @@ import mujoco
 import numpy as np
 
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import SHEET_CARRIER_DROP, rests_on_sheet, sheet_carrier_name, sheet_friction
+from robotool.sim.build import (
+    DEFAULT_FRICTION,
+    GROUND_FRICTION,
+    SHEET_CARRIER_DROP,
+    rests_on_sheet,
+    sheet_carrier_name,
+    sheet_friction,
+    sheet_pin_name,
+)
 from robotool.sim.compiled_scene import Scene
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
 
 MOVED = 0.002  # m per control tick: a body that moved less than this lay still
 LIFTED = 0.01  # m above a sheet's top: an object this high is off it
+BOLTED_GAP = 0.001  # m above a sheet's top: a fixed object whose base is this near stands on the sheet
 RAISED = 0.002  # m: a sheet whose underside is held this high above the ground droops and carries nothing
-PIN_FORCE = 10.0  # N of friction from what stands partly on a sheet (not riding it) that pins the sheet down
+PIN_FORCE = 10.0  # N of friction from what stands partly on a sheet (not riding it), on both its faces, that pins it
 GRAVITY = 9.81  # m/s^2
 SUPPORT_SHARE = 0.9  # of an object's base over a sheet, with its centre, for it to come to rest on the sheet
 LEAVE_SHARE = 0.5  # an object resting on a sheet leaves it when less of its base than this is over it
@@ -46,26 +59,34 @@ class Sheets:
     def __init__(self, scene: Scene, nworld: int):
         model, task = scene.model, scene.task
         self.links: list[tuple[int, int, int]] = []  # (sheet object, object, carrier geom)
+        self.pins: list[tuple[int, int]] = []  # (sheet object, its weld to the table)
+        self.bolted: list[tuple[int, int]] = []  # (sheet object, a fixed object that may stand on it)
         on = []
         for s, sheet in enumerate(task.objects):
+            if not (sheet.is_sheet and sheet.movable):
+                continue
+            self.pins.append((s, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, sheet_pin_name(sheet.name))))
             for i, obj in enumerate(task.objects):
-                if not (sheet.is_sheet and sheet.movable) or i == s:
-                    continue
                 geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, sheet_carrier_name(sheet.name, obj.name))
                 if geom >= 0:
                     self.links.append((s, i, geom))
                     on.append(rests_on_sheet(obj, sheet))
+                elif not obj.movable and not obj.is_sheet:
+                    self.bolted.append((s, i))
         self.scene = scene
-        self.half = {s: np.asarray(task.objects[s].size[:2]) / 2 for s, _, _ in self.links}
-        self.thickness = {s: min(task.objects[s].size) for s, _, _ in self.links}
+        self.half = {s: np.asarray(task.objects[s].size[:2]) / 2 for s, _ in self.pins}
+        self.thickness = {s: min(task.objects[s].size) for s, _ in self.pins}
         self.placed = {
             g: model.geom_pos[g] + (0.0 if o else SHEET_CARRIER_DROP) * np.array([0.0, 0.0, 1.0])
             for (_, _, g), o in zip(self.links, on, strict=True)
         }
-        self.surface = {i: surface_points(task.objects[i]) for _, i, _ in self.links}
-        self.pin_weight = np.array(  # N of friction per share of the object's base on the sheet, in each pair
-            [
-                sheet_friction(task.objects[s], task.objects[i]) * task.objects[i].effective_mass * GRAVITY
+        objects = {i for _, i, _ in self.links} | {i for _, i in self.bolted}
+        self.surface = {i: surface_points(task.objects[i]) for i in objects}
+        self.pin_weight = np.array(  # N of friction per share of the object's base on the sheet, in each pair: its
+            [  # weight presses the sheet on the table, so both the sheet's faces hold it
+                (sheet_friction(task.objects[s], task.objects[i]) + _on_table(task.objects[s]))
+                * task.objects[i].effective_mass
+                * GRAVITY
                 for s, i, _ in self.links
             ]
         )
@@ -76,7 +97,7 @@ class Sheets:
 
     def update(self, sim: BatchedSim, state: BatchState, active: np.ndarray) -> None:
         """Switch each sheet pair on where its object came to rest on the sheet, off where it left it."""
-        if not self.links:
+        if not self.pins:
             return
         bodies = self.scene.object_body
         xpos = state.xpos[:, bodies]  # (nworld, nobject, 3)
@@ -85,8 +106,9 @@ class Sheets:
         moved = step > MOVED
         first = self.previous is None
         self.previous = xpos.copy()
-        measured = [self._measure(k, xpos, state) for k in range(len(self.links))]
-        pinned = self._pinned([np.where(resting, share, 0.0) for _, share, resting in measured], len(xpos))
+        measured = [self._measure(s, i, xpos, state, LIFTED) for s, i, _ in self.links]
+        hold = self._hold([np.where(resting, share, 0.0) for _, share, resting in measured], xpos, state)
+        pinned = hold > PIN_FORCE
         for k, (s, i, geom) in enumerate(self.links):
             centre_over, share, resting = measured[k]
             resting = resting & ~pinned[:, s]
@@ -107,11 +129,34 @@ class Sheets:
                     self.on[worlds, k] = on
                     drop = 0.0 if on else SHEET_CARRIER_DROP
                     sim.set_geom_pos(worlds, geom, self.placed[geom] - np.array([0.0, 0.0, drop]))
+        self._pin(sim, state, active, pinned, hold)
 
-    def _measure(self, k: int, xpos: np.ndarray, state: BatchState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Pair ``k`` as it lies, (nworld,) each: whether the object's centre is over the sheet, the share of its base
-        over the sheet, and whether it rests there (on the sheet's top, the sheet flat on the ground)."""
-        s, i, _ = self.links[k]
+    def _pin(
+        self, sim: BatchedSim, state: BatchState, active: np.ndarray, pinned: np.ndarray, hold: np.ndarray
+    ) -> None:
+        """Hold each pinned sheet to the table in the ``active`` worlds, and let it go where it is no longer pinned or
+        the pull on it passed ``hold`` (N, (nworld, nobject)) in the last tick: it slides, and is held again the next
+        tick where it is still pinned."""
+        for s, eq in self.pins:
+            on = state.eq_active[:, eq]
+            slips = np.zeros(len(on), dtype=bool)
+            weighed = np.flatnonzero(active & on & np.isfinite(hold[:, s]))
+            if weighed.size:
+                pull = np.linalg.norm(sim.weld_load(weighed, eq)[:, :3], axis=1)
+                slips[weighed] = pull > hold[weighed, s]
+            for worlds, attach in (
+                (np.flatnonzero(active & on & (~pinned[:, s] | slips)), False),
+                (np.flatnonzero(active & ~on & pinned[:, s]), True),
+            ):
+                if worlds.size:
+                    sim.set_weld(worlds, eq, attach)
+
+    def _measure(
+        self, s: int, i: int, xpos: np.ndarray, state: BatchState, gap: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Object ``i`` on sheet ``s`` as they lie, (nworld,) each: whether the object's centre is over the sheet, the
+        share of its base over the sheet, and whether it rests there (its base within ``gap`` of the sheet's top, the
+        sheet flat on the ground)."""
         bodies = self.scene.object_body
         rot = state.xmat(bodies[s])  # (nworld, 3, 3)
         local = np.einsum("wji,wj->wi", rot, xpos[:, i] - xpos[:, s])
@@ -126,15 +171,24 @@ class Sheets:
         share = (over & base).sum(axis=1) / base.sum(axis=1)
         top = xpos[:, s, 2] + self.thickness[s] / 2
         flat = top - self.thickness[s] < RAISED  # a sheet held up by an edge droops: it carries nothing
-        return centre_over, share, flat & (bottom < top + LIFTED)
+        return centre_over, share, flat & (bottom < top + gap)
 
-    def _pinned(self, shares: list[np.ndarray], nworld: int) -> np.ndarray:
-        """(nworld, nobject): the sheets pinned down by what stands partly on them, not riding them (``shares``: per
-        pair, the share of the object's base resting on the sheet)."""
-        pinned = np.zeros((nworld, len(self.scene.task.objects)), dtype=bool)
+    def _hold(self, shares: list[np.ndarray], xpos: np.ndarray, state: BatchState) -> np.ndarray:
+        """(nworld, nobject) N: the friction with which what stands partly on each sheet, not riding it, holds it
+        down (``shares``: per pair, the share of the object's base resting on the sheet); without bound where a fixed
+        object stands on it."""
+        hold = np.zeros((len(xpos), len(self.scene.task.objects)))
         for k, (s, _, _) in enumerate(self.links):
-            pinned[:, s] |= ~self.on[:, k] & (shares[k] * self.pin_weight[k] > PIN_FORCE)
-        return pinned
+            hold[:, s] += np.where(self.on[:, k], 0.0, shares[k] * self.pin_weight[k])
+        for s, i in self.bolted:
+            _, share, resting = self._measure(s, i, xpos, state, BOLTED_GAP)
+            hold[resting & (share > 0.0), s] = np.inf
+        return hold
+
+
+def _on_table(sheet: SceneObject) -> float:
+    """The friction between a sheet and the table under it (MuJoCo's contact takes the larger of the two's)."""
+    return max(sheet.friction or DEFAULT_FRICTION, GROUND_FRICTION)
 
 
 def surface_points(obj: SceneObject) -> np.ndarray:

@@ -142,7 +142,8 @@ class Grasp:
         return self._joined(state, w, self.parts.gripper)
 
     def _joined(self, state: BatchState, w: int, start: int) -> np.ndarray:
-        """Objects joined to body ``start`` in world ``w`` by a chain of active welds (its own object too)."""
+        """Objects joined to body ``start`` in world ``w`` by a chain of active welds (its own object too); a chain
+        does not pass through the world (a pinned sheet's weld holds it to the table, not to other pinned sheets)."""
         model, owner = self.scene.model, self.scene.body_object
         carried = np.zeros(len(self.scene.object_names), dtype=bool)
         reach = {start}
@@ -152,7 +153,7 @@ class Grasp:
             for eq in np.flatnonzero(state.eq_active[w]):
                 a, b = int(model.eq_obj1id[eq]), int(model.eq_obj2id[eq])
                 for x, y in ((a, b), (b, a)):
-                    if x in reach and y not in reach:
+                    if x in reach and y not in reach and y != 0:
                         reach.add(y)
                         grown = True
         for body in reach:

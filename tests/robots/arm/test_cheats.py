@@ -80,6 +80,10 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drag_a_can_over_a_kerb_on_raised_paper", "arm_can_beyond_a_kerb_on_paper", "clamped 0.3"),
     # paper pulled out from under a 60 kg crate standing partly on it brought the can on its far end
     ("arm_drag_paper_from_under_a_heavy_crate", "arm_can_on_paper_pinned_by_a_heavy_crate", "clamped 0.3"),
+    # paper pulled out from under a 60 kg crate, or a block bolted over it, and lifted: a sheet met nothing but the
+    # ground and the robot, so what stood on it never held it back
+    ("arm_drag_pinned_paper_out_and_lift", "arm_paper_pinned_under_a_heavy_crate", "6 move_to_position: stalled"),
+    ("arm_drag_pinned_paper_out_and_lift", "arm_paper_pinned_under_a_fixed_block", "6 move_to_position: stalled"),
     ("arm_degenerate_calls", "milk_reaching", "clamped"),
     ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
     ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
@@ -448,6 +452,19 @@ def test_paper_under_a_light_box_standing_partly_on_it_still_brings_the_can(run_
     )
     program = (CHEATS / "arm_drag_paper_from_under_a_heavy_crate.py").read_text()
     rollouts: list[Rollout] = run_texts(light, [program] * 2, seed=11)
+    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
+
+
+def test_paper_under_a_lighter_crate_is_pulled_out_and_lifted(run_texts: Any) -> None:
+    """The control of the pinned paper that is lifted: with an 8 kg crate where the 60 kg one stood, the friction on
+    the paper's two faces (about 50 N) pins it, but the arm pulls harder: it slides out a tick at a time, and is
+    lifted."""
+    task = _task("arm_paper_pinned_under_a_heavy_crate")
+    lighter = task.model_copy(
+        update={"objects": [o.model_copy(update={"mass": 8.0}) if o.name == "crate" else o for o in task.objects]}
+    )
+    program = (CHEATS / "arm_drag_pinned_paper_out_and_lift.py").read_text()
+    rollouts: list[Rollout] = run_texts(lighter, [program] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
 
