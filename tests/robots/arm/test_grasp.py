@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from fixtures.paths import FIXTURES
 from fixtures.reference import REFERENCE, program
 
 from robotool import sim, tasks
@@ -310,3 +311,21 @@ def test_goal_memory_skips_states_in_which_the_grip_is_past_its_friction(
     monkeypatch.setattr(ArmController, "overloaded", lambda self, state: np.ones(len(state.time), dtype=bool))
     (skipped,) = run_texts(scene, [code], seed=1)
     assert not skipped.success and skipped.conditions["button_pressed"] is False
+
+
+@pytest.mark.parametrize(("friction", "held"), [(0.05, False), (0.3, True), (None, True)])
+def test_the_pads_grip_a_slippery_object_by_its_own_friction(friction: float | None, held: bool) -> None:
+    """Found by an adversarial run: a bar declared greased (friction 0.001) was held by the 120 N pad grip as if it
+    were rubber (MuJoCo takes the larger of two surfaces' frictions, and the grip rule read the pads' alone). The
+    pads grip an object of the default friction (0.5) or more at their own friction, a more slippery one in
+    proportion: a 3 kg block at 0.05 weighs 29 N against 12 N of grip, and slips; at 0.3 it is held (72 N)."""
+    data = tasks.load(FIXTURES / "layouts" / "arm_six_kg_iron_block.yaml").model_dump(
+        mode="json", exclude_defaults=True
+    )
+    block = data["objects"][0] | {"mass": 3.0} | ({} if friction is None else {"friction": friction})
+    task = parse_task(data | {"objects": [block]})
+    (r,) = sim.run_programs(task, [_grasp_at((0.0, 0.0, 0.0), "iron_block")], perturb=False)
+    events = _grasp_events(r)
+    assert [e.kind for e in events] == (["grasped"] if held else ["grasp_failed"]), events
+    if not held:
+        assert events[0].cause == "weak_grip" and events[0].measured["most_weight"] < events[0].measured["weight"]
