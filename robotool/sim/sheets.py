@@ -45,7 +45,6 @@ LIFTED = 0.01  # m above a sheet's top: an object this high is off it
 BOLTED_GAP = 0.001  # m above a sheet's top: a fixed object whose base is this near stands on the sheet
 RAISED = 0.002  # m: a sheet whose underside is held this high above the ground droops and carries nothing
 PIN_FORCE = 10.0  # N of friction from what stands partly on a sheet (not riding it), on both its faces, that pins it
-GRAVITY = 9.81  # m/s^2
 SUPPORT_SHARE = 0.9  # of an object's base over a sheet, with its centre, for it to come to rest on the sheet
 LEAVE_SHARE = 0.5  # an object resting on a sheet leaves it when less of its base than this is over it
 BASE_SAMPLES = 9  # points along each side of a face of an object (a grid; a disc on a cylinder's ends)
@@ -61,6 +60,7 @@ class Sheets:
         self.links: list[tuple[int, int, int]] = []  # (sheet object, object, carrier geom)
         self.pins: list[tuple[int, int]] = []  # (sheet object, its weld to the table)
         self.bolted: list[tuple[int, int]] = []  # (sheet object, a fixed object that may stand on it)
+        self.draped: list[tuple[int, int, float]] = []  # (sheet object, a cloth's link body, the pair's friction)
         on = []
         for s, sheet in enumerate(task.objects):
             if not (sheet.is_sheet and sheet.movable):
@@ -73,6 +73,9 @@ class Sheets:
                     on.append(rests_on_sheet(obj, sheet))
                 elif not obj.movable and not obj.is_sheet:
                     self.bolted.append((s, i))
+                elif obj.shape == "cloth":
+                    mu = sheet_friction(sheet, obj) + _on_table(sheet)
+                    self.draped += [(s, int(b), mu) for b in np.flatnonzero(scene.body_object == i)]
         self.scene = scene
         self.half = {s: np.asarray(task.objects[s].size[:2]) / 2 for s, _ in self.pins}
         self.thickness = {s: min(task.objects[s].size) for s, _ in self.pins}
@@ -82,14 +85,13 @@ class Sheets:
         }
         objects = {i for _, i, _ in self.links} | {i for _, i in self.bolted}
         self.surface = {i: surface_points(task.objects[i]) for i in objects}
-        self.pin_weight = np.array(  # N of friction per share of the object's base on the sheet, in each pair: its
-            [  # weight presses the sheet on the table, so both the sheet's faces hold it
-                (sheet_friction(task.objects[s], task.objects[i]) + _on_table(task.objects[s]))
-                * task.objects[i].effective_mass
-                * GRAVITY
-                for s, i, _ in self.links
+        self.pin_friction = np.array(  # per pair: what presses the object on the table presses the sheet there too,
+            [  # so both the sheet's faces hold it
+                sheet_friction(task.objects[s], task.objects[i]) + _on_table(task.objects[s]) for s, i, _ in self.links
             ]
         )
+        self.link_half = {b: scene.model.geom_size[scene.model.body_geomadr[b]] for _, b, _ in self.draped}
+        self.ground = np.arange(scene.model.nbody) == 0  # the world body: the table's plane
         self.on = np.tile(np.array(on, dtype=bool), (nworld, 1))
         self.share = np.zeros(self.on.shape)  # (nworld, nlink): share of the object's base over its sheet
         self.slid_under = np.zeros_like(self.on)  # the sheet got under the object, not the other way round
@@ -107,7 +109,7 @@ class Sheets:
         first = self.previous is None
         self.previous = xpos.copy()
         measured = [self._measure(s, i, xpos, state, LIFTED) for s, i, _ in self.links]
-        hold = self._hold([np.where(resting, share, 0.0) for _, share, resting in measured], xpos, state)
+        hold = self._hold(sim, [np.where(resting, share, 0.0) for _, share, resting in measured], xpos, state)
         pinned = hold > PIN_FORCE
         for k, (s, i, geom) in enumerate(self.links):
             centre_over, share, resting = measured[k]
@@ -151,6 +153,15 @@ class Sheets:
                 if worlds.size:
                     sim.set_weld(worlds, eq, attach)
 
+    def _draped(self, s: int, b: int, xpos: np.ndarray, state: BatchState) -> np.ndarray:
+        """(nworld,) whether cloth link body ``b`` lies on sheet ``s``: its centre over the sheet, its underside within
+        :data:`LIFTED` of the sheet's top."""
+        sheet = self.scene.object_body[s]
+        local = np.einsum("wji,wj->wi", state.xmat(sheet), state.xpos[:, b] - xpos[:, s])
+        over = np.all(np.abs(local[:, :2]) <= self.half[s], axis=1)
+        top = xpos[:, s, 2] + self.thickness[s] / 2
+        return over & (state.xpos[:, b, 2] - self.link_half[b][2] < top + LIFTED)
+
     def _measure(
         self, s: int, i: int, xpos: np.ndarray, state: BatchState, gap: float
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -173,13 +184,24 @@ class Sheets:
         flat = top - self.thickness[s] < RAISED  # a sheet held up by an edge droops: it carries nothing
         return centre_over, share, flat & (bottom < top + gap)
 
-    def _hold(self, shares: list[np.ndarray], xpos: np.ndarray, state: BatchState) -> np.ndarray:
+    def _hold(self, sim: BatchedSim, shares: list[np.ndarray], xpos: np.ndarray, state: BatchState) -> np.ndarray:
         """(nworld, nobject) N: the friction with which what stands partly on each sheet, not riding it, holds it
-        down (``shares``: per pair, the share of the object's base resting on the sheet); without bound where a fixed
-        object stands on it."""
+        down (``shares``: per pair, the share of the object's base resting on the sheet): the share of the force with
+        which the table bears the object up, its own weight and whatever it carries (found by an adversarial run: a
+        60 kg crate on a 1 kg block standing on paper was not counted); the links of a cloth lying on it alike;
+        without bound where a fixed object stands on it."""
         hold = np.zeros((len(xpos), len(self.scene.task.objects)))
-        for k, (s, _, _) in enumerate(self.links):
-            hold[:, s] += np.where(self.on[:, k], 0.0, shares[k] * self.pin_weight[k])
+        standing = [np.where(self.on[:, k], 0.0, shares[k]) for k in range(len(self.links))]
+        draped = [self._draped(s, b, xpos, state) for s, b, _ in self.draped]
+        pressing = np.flatnonzero(np.any([*standing, *draped], axis=0)) if standing or draped else np.zeros(0, int)
+        if pressing.size:
+            up = np.zeros((len(xpos), self.scene.model.nbody))
+            up[pressing] = np.maximum(sim.contact_forces(pressing, self.ground)[..., 2], 0.0)
+            bodies = self.scene.object_body
+            for k, (s, i, _) in enumerate(self.links):
+                hold[:, s] += standing[k] * self.pin_friction[k] * up[:, bodies[i]]
+            for (s, b, mu), over in zip(self.draped, draped, strict=True):
+                hold[:, s] += np.where(over, mu * up[:, b], 0.0)
         for s, i in self.bolted:
             _, share, resting = self._measure(s, i, xpos, state, BOLTED_GAP)
             hold[resting & (share > 0.0), s] = np.inf

@@ -84,6 +84,11 @@ CASES = [  # (program, task, what its failure reason must say)
     # ground and the robot, so what stood on it never held it back
     ("arm_drag_pinned_paper_out_and_lift", "arm_paper_pinned_under_a_heavy_crate", "6 move_to_position: stalled"),
     ("arm_drag_pinned_paper_out_and_lift", "arm_paper_pinned_under_a_fixed_block", "6 move_to_position: stalled"),
+    # the same with the load on a light block standing on the paper, or a heavy cloth lying on it: only the weight of
+    # what touched the paper counted, and a cloth never did
+    ("arm_drag_pinned_paper_out_and_lift", "arm_paper_under_a_block_loaded_by_a_crate", "6 move_to_position: stalled"),
+    ("arm_drag_pinned_paper_out_and_lift", "arm_paper_under_a_heavy_apron", "6 move_to_position: stalled"),
+    ("arm_drag_paper_from_under_a_heavy_crate", "arm_can_on_paper_under_a_block_loaded_by_a_crate", "clamped 0.3"),
     ("arm_degenerate_calls", "milk_reaching", "clamped"),
     ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
     ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
