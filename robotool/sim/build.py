@@ -43,6 +43,7 @@ WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
 SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
 SHEET_CARRIER_LIFT = 0.002  # m a carrier stands above its sheet, so what rests on it rests on it alone
+MAX_SLIPPERY_PRIORITY = 50  # the highest contact priority a slippery geom gets (one per friction below the default)
 DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets touch the ground and the robot
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
@@ -167,8 +168,31 @@ def make_spec(task: Task, embodiment: Embodiment) -> mujoco.MjSpec:
             solimp=WELD_SOLIMP,
         )
     _add_sheet_pairs(spec, task)
+    _rank_slippery(spec)
     embodiment.add_to_spec(spec, task)
     return spec
+
+
+def contact_friction(a: float | np.ndarray, b: float | np.ndarray) -> float | np.ndarray:
+    """The sliding friction two touching surfaces of frictions ``a`` and ``b`` hold at: the larger of the two's, unless
+    one is more slippery than the default (:data:`DEFAULT_FRICTION`): then the more slippery one's (a greased face is
+    slippery against rubber too). MuJoCo takes the larger of two geoms' frictions; :func:`make_spec` ranks the
+    slippery geoms' contact ``priority`` so that it takes this instead."""
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    out = np.where(low < DEFAULT_FRICTION, low, high)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def _rank_slippery(spec: mujoco.MjSpec) -> None:
+    """Give the scene's geoms more slippery than the default a contact priority, the more slippery the higher: of two
+    touching geoms MuJoCo takes the higher priority's friction (:func:`contact_friction`). Geoms added after this
+    (the robot's) keep their own rules; a robot whose contacts must set their own parameters ranks above
+    :data:`MAX_SLIPPERY_PRIORITY`."""
+    slippery = sorted({float(g.friction[0]) for g in spec.geoms if g.friction[0] < DEFAULT_FRICTION}, reverse=True)
+    rank = {mu: min(k + 1, MAX_SLIPPERY_PRIORITY) for k, mu in enumerate(slippery)}  # (the most slippery may share)
+    for geom in spec.geoms:
+        if geom.friction[0] < DEFAULT_FRICTION:
+            geom.priority = rank[float(geom.friction[0])]
 
 
 def object_geom_name(obj: str, part: int) -> str:
@@ -235,8 +259,8 @@ def _add_sheet_pairs(spec: mujoco.MjSpec, task: Task) -> None:
 
 
 def sheet_friction(sheet: SceneObject, obj: SceneObject) -> float:
-    """The friction between a sheet and an object on it (its carrier's contact pair): the larger of the two's."""
-    return max(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION)
+    """The friction between a sheet and an object on it (its carrier's contact pair, :func:`contact_friction`)."""
+    return float(contact_friction(sheet.friction or DEFAULT_FRICTION, obj.friction or DEFAULT_FRICTION))
 
 
 def rests_on_sheet(obj: SceneObject, sheet: SceneObject) -> bool:

@@ -31,6 +31,7 @@ from robotool.sim.build import (
     DEFAULT_FRICTION,
     GROUND_FRICTION,
     SHEET_CARRIER_DROP,
+    contact_friction,
     rests_on_sheet,
     sheet_carrier_name,
     sheet_friction,
@@ -209,8 +210,8 @@ class Sheets:
 
 
 def _on_table(sheet: SceneObject) -> float:
-    """The friction between a sheet and the table under it (MuJoCo's contact takes the larger of the two's)."""
-    return max(sheet.friction or DEFAULT_FRICTION, GROUND_FRICTION)
+    """The friction between a sheet and the table under it (:func:`~robotool.sim.build.contact_friction`)."""
+    return float(contact_friction(sheet.friction or DEFAULT_FRICTION, GROUND_FRICTION))
 
 
 def surface_points(obj: SceneObject) -> np.ndarray:

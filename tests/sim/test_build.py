@@ -126,3 +126,30 @@ def test_a_sheet_is_thin_and_light(size: tuple[float, float, float], mass: float
     obj = {"name": "plate", "shape": "box", "center": [0.3, 0.0, size[2] / 2], "size": list(size)}
     task = _task([obj if mass is None else {**obj, "mass": mass}])
     assert task.objects[0].is_sheet is sheet
+
+
+def test_a_slippery_surface_is_slippery_against_anything() -> None:
+    """Found by an adversarial run: MuJoCo takes the larger of two touching geoms' frictions, so a greased bar held
+    at a rubber block's 1.0, and a rubber mat lay on ice as on rubber. The slippery geoms' contact priority ranks
+    them, the most slippery highest: of two touching geoms the more slippery one's friction holds. A 1 kg block of the
+    default friction on a slab of ice tilted 5 degrees slides down it; on a slab of the default friction it stays."""
+    from robotool.sim.build import contact_friction
+
+    assert contact_friction(1.0, 0.02) == 0.02 and contact_friction(1.0, 0.5) == 1.0
+    assert contact_friction(0.3, 0.1) == 0.1
+    slid = {}
+    for friction in (0.02, 0.5):
+        slab = {"name": "slab", "shape": "box", "center": [0.4, 0.0, 0.0362], "size": [0.6, 0.3, 0.02],
+                "rpy": [0, 5, 0], "movable": False, "friction": friction}
+        block = {"name": "block", "shape": "box", "center": [0.4026, 0.0, 0.0661], "size": [0.04, 0.04, 0.04],
+                 "rpy": [0, 5, 0], "mass": 1.0}
+        scene = sim.build(_task([block, slab]))
+        model = scene.model
+        priority = {model.geom(g).name: int(model.geom_priority[g]) for g in range(model.ngeom)}
+        assert priority["slab__geom0"] == (1 if friction < 0.5 else 0) and priority["block__geom0"] == 0
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        start = data.xpos[model.body("block").id].copy()
+        mujoco.mj_step(model, data, 500)
+        slid[friction] = float(np.linalg.norm(data.xpos[model.body("block").id] - start))
+    assert slid[0.02] > 0.05 and slid[0.5] < 0.005, slid

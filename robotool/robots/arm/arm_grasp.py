@@ -10,8 +10,8 @@ fingers met and why nothing is held, as a typed ``grasp_failed`` event with the 
 
 The weld stands for a friction grip, so it holds only what that grip can (:class:`Hold`): the pads must
 cover at least half (``edge_share``) of what they could of the object across their width (a pinch of its last
-millimetres at an edge is no grip), and the squeeze of ``grip_force`` per pad, by the pads' friction on that object
-(:func:`grip_share`: less on a slippery one), must carry the load, the weight of
+millimetres at an edge is no grip), and the squeeze of ``grip_force`` per pad, at the friction the pads meet on that
+object (:func:`~robotool.sim.build.contact_friction`: a slippery one's own), must carry the load, the weight of
 the held object and of everything joined to it, and its torque about the pads (the weight's lever along
 the pads against the grip's depth across them, its lever along the closing axis against the width between
 them). A grip that cannot is refused at ``close_gripper``; one that stops holding when more is joined to
@@ -32,10 +32,9 @@ from robotool.robots.arm.arm_config import ARM, ArmConfig
 from robotool.robots.arm.arm_skills import ArmLimits
 from robotool.rollout import Event, GraspFailure
 from robotool.sim.backend import BatchedSim, BatchState
-from robotool.sim.build import DEFAULT_FRICTION
+from robotool.sim.build import DEFAULT_FRICTION, contact_friction
 from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import SkillEnd
-from robotool.task.scene import SceneObject
 
 GRAVITY = 9.81  # m/s^2
 
@@ -85,7 +84,7 @@ class ArmParts:
     object_geoms: tuple[np.ndarray, ...]  # each object's geoms
     movable: np.ndarray  # (nobject,) bool
     sheet: np.ndarray  # (nobject,) bool
-    grip_share: np.ndarray  # (nobject,) of the pads' friction they hold each object with (:func:`grip_share`)
+    friction: np.ndarray  # (nobject,) each object's declared friction, which the pads meet
 
     @classmethod
     def of(cls, scene: Scene) -> ArmParts:
@@ -106,15 +105,8 @@ class ArmParts:
             ),
             movable=np.array([o.movable for o in objects]),
             sheet=np.array([o.is_sheet for o in objects]),
-            grip_share=np.array([grip_share(o) for o in objects]),
+            friction=np.array([o.friction or DEFAULT_FRICTION for o in objects]),
         )
-
-
-def grip_share(obj: SceneObject) -> float:
-    """How much of the pads' friction holds ``obj``: all of it on a surface of the default friction or more, less in
-    proportion on a more slippery one (a greased bar). MuJoCo's contact takes the larger of two surfaces' frictions,
-    so the simulated pads would hold a greased bar as if it were rubber; the grip rule reads the pair."""
-    return min(1.0, (obj.friction or DEFAULT_FRICTION) / DEFAULT_FRICTION)
 
 
 @dataclass
@@ -269,7 +261,7 @@ class Grasp:
         centre = (com * mass[:, None]).sum(axis=0) / total if total > 0 else state.xpos[w, bodies[0]]  # (np.average's)
         weight = float(mass.sum()) * GRAVITY
         lever = centre[:2] - (state.xpos[w, self.parts.gripper] + hold.centre)[:2]
-        grip = self.config.grip_friction * self.config.grip_force * float(self.parts.grip_share[i])
+        grip = self.config.grip_force * float(contact_friction(self.config.grip_friction, self.parts.friction[i]))
         need_depth, need_width = hold.need(weight, lever, grip)
         most = 2 * grip
         if hold.depth >= need_depth - 1e-9 and hold.width >= need_width - 1e-9 and weight <= most:
@@ -347,7 +339,7 @@ class Grasp:
         body = state.xpos[worlds, self.scene.model.eq_obj2id[eqs]]
         torque = load[:, 3:] + np.cross(body - patch, force)
         limp = self.parts.sheet[objects]
-        grip = self.config.grip_friction * self.config.grip_force * self.parts.grip_share[objects]
+        grip = self.config.grip_force * contact_friction(self.config.grip_friction, self.parts.friction[objects])
         couple = self.config.slip_margin * grip
         return np.column_stack(
             [

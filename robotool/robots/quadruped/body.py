@@ -15,7 +15,7 @@ and roll have torque motors bounded by :data:`TILT_FACTOR` (weight times metres)
 hold the body level while the lift carries it; it switches both on only while a foot crosses a step, a small gap or
 a drop edge within the legs' limits, so that standing and walking, the full weight acts through the feet; while
 they act, :mod:`.lift_load` puts their reaction on what the feet stand on, as legs would. The feet
-and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than the scene's geoms): the
+and legs are frictionless (``condim`` 1, imposed through a higher contact ``priority`` than any scene geom's): the
 servos, not the feet, carry the sideways forces, so walking does not drag the surface underfoot; :mod:`.lift_load`
 puts the servos' reaction, as much of it as the feet's grip passes on, on what the feet stand on too (a stride rolls
 a cart on free rollers back). The torso's faces grip what they push (:data:`TORSO_FRICTION`), so that an object
@@ -32,6 +32,7 @@ import numpy as np
 
 from robotool.robots.quadruped.quadruped_skills import BELLY_HEIGHT, QuadrupedLimits
 from robotool.robots.quadruped.terrain import FOOT_RADIUS, foot_offsets
+from robotool.sim.build import MAX_SLIPPERY_PRIORITY
 from robotool.task import geometry
 from robotool.task.task_model import Task
 
@@ -147,7 +148,7 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
             damping=TILT_DAMPING,
             armature=0.01,
         )
-    contact = {"condim": 1, "priority": 1, "group": ROBOT_GROUP}
+    contact = {"condim": 1, "priority": MAX_SLIPPERY_PRIORITY + 1, "group": ROBOT_GROUP}
     body.add_geom(
         name=f"{BODY}_torso",
         type=mujoco.mjtGeom.mjGEOM_BOX,

@@ -12,6 +12,7 @@ from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
 from robotool.robots.quadruped.sensing import SceneFacts
 from robotool.sim.backend import BatchedSim
+from robotool.sim.build import contact_friction
 
 
 class Rays:
@@ -101,12 +102,14 @@ class Rays:
     def sliding(self, worlds: np.ndarray, own: float, geom: np.ndarray, cloth: np.ndarray) -> np.ndarray:
         """The friction an object whose geoms' largest friction is ``own`` (as the perturbation scales it) slides at
         on the solids ``geom`` (k, ...) under it in ``worlds`` (k,), through the cloth links ``cloth`` (-1: none;
-        :meth:`surface`): each pair at the larger of its two frictions, as the simulator combines them; on a cloth,
-        the object slides on the cloth or the cloth with it on the solid, whichever slides first."""
-        solid = self.friction(worlds, geom)
-        limp = self.friction(worlds, cloth)
-        on_cloth = np.minimum(np.maximum(own, limp), np.maximum(limp, solid))
-        return np.where(cloth >= 0, on_cloth, np.maximum(own, solid))
+        :meth:`surface`): each pair at :func:`~robotool.sim.build.contact_friction` of its two frictions, as the
+        simulator combines them; on a cloth, the object slides on the cloth or the cloth with it on the solid,
+        whichever slides first."""
+        scale = self.sim.friction_scale[worlds].reshape(-1, *([1] * (geom.ndim - 1)))
+        mine = own / scale  # as declared, as the pair rule reads frictions; where nothing is hit, its own
+        solid, limp = np.where(geom >= 0, self._raw(geom), mine), self._raw(cloth)
+        on_cloth = np.minimum(contact_friction(mine, limp), contact_friction(limp, solid))
+        return np.where(cloth >= 0, on_cloth, contact_friction(mine, solid)) * scale
 
     def _raw(self, geom: np.ndarray) -> np.ndarray:
         """The unscaled friction of geoms ``geom`` (-1: none, 0)."""

@@ -62,6 +62,9 @@ CREEP = 1e-4  # m an object may creep in a tick (2 mm/s), no faster than its slo
 # chair push that dragged both a few millimetres weighed them when the robot's weight tipped the board, 20 s later (a
 # planner's program, 1 world in 7); one speeding up from rest is not done (an adversarial run: a 15 kg drum tapped off
 # a kerb by a pushed bar rolled away slowly at first)
+WAKE = 5 * CREEP  # m in a tick (1 cm/s): what crept out of a ram and then speeds up past this on its own, untouched by
+# the robot and before it came to rest, is that ram's again (an adversarial run: a 15 kg drum tapped off a kerb by a
+# pushed bar sped up from rest more slowly than the creep rule could tell from soft creep, and rolled off unweighed)
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
@@ -82,6 +85,7 @@ class RefereeState:
     carried: np.ndarray  # (nworld, nobject) m each object travelled while a push of another rammed it, or after,
     # until it came to rest, from push to push until the robot pushes it itself
     rammed_by: np.ndarray  # (nworld, nobject) the object whose push rammed each object, until it comes to rest (-1)
+    dormant_by: np.ndarray  # (nworld, nobject) the object whose push each object crept out of (:data:`WAKE`; -1)
     coasting: np.ndarray  # (nworld, nobject) bool: pushed, and not at rest since (it may roll on after the push)
     drift: np.ndarray  # (nworld, nobject) m each object travelled across under the feet of a walk or climb, since rest
     still: np.ndarray  # (nworld, nobject) s each object has stayed still (in 3-D) on end
@@ -116,6 +120,7 @@ class RefereeState:
             pressed=np.zeros((nworld, nobject), dtype=bool),
             carried=np.zeros((nworld, nobject)),
             rammed_by=np.full((nworld, nobject), -1),
+            dormant_by=np.full((nworld, nobject), -1),
             coasting=np.zeros((nworld, nobject), dtype=bool),
             drift=np.zeros((nworld, nobject)),
             still=np.zeros((nworld, nobject)),
@@ -357,7 +362,8 @@ class Referee:
         shift = shift[:, :, :2]
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
         settled = here & (s.crept >= REST_TIME) & (travel <= s.slowest + STILL)  # not speeding up: a later move is
-        # not this ram's
+        # not this ram's, unless it wakes (:data:`WAKE`)
+        self._doze(settled, here, travel)
         s.rammed_by[settled] = -1
         s.coasting[settled] = False
         s.drift[here & (s.still >= REST_TIME)] = 0.0
@@ -385,6 +391,20 @@ class Referee:
         candidates = np.flatnonzero(moved.any(axis=1))
         if candidates.size:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
+
+    def _doze(self, settled: np.ndarray, here: np.ndarray, travel: np.ndarray) -> None:
+        """What a ram set moving (or a push left coasting) and that has just ``settled`` by the creep rule lies dormant
+        until it comes to rest, or the robot touches it; what lay dormant and, untouched, moves more than :data:`WAKE`
+        in a tick is that ram's again (or coasts again)."""
+        s = self.state
+        touched = self._owned(self.senses.state.touching[:, self.scene.robot_body].any(axis=1)) & here
+        woke = here & (s.dormant_by >= 0) & (travel > WAKE) & ~touched
+        own = np.arange(s.dormant_by.shape[1])[None, :] == s.dormant_by
+        s.coasting |= woke & own
+        s.rammed_by = np.where(woke & ~own, s.dormant_by, s.rammed_by)
+        s.dormant_by[woke | touched | (here & (s.still >= REST_TIME))] = -1
+        source = np.where(s.rammed_by >= 0, s.rammed_by, np.where(s.coasting, np.arange(own.shape[1])[None, :], -1))
+        s.dormant_by = np.where(settled & (source >= 0), source, s.dormant_by)
 
     def _coasting_rams(
         self,

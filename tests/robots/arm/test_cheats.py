@@ -89,6 +89,9 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drag_pinned_paper_out_and_lift", "arm_paper_under_a_block_loaded_by_a_crate", "6 move_to_position: stalled"),
     ("arm_drag_pinned_paper_out_and_lift", "arm_paper_under_a_heavy_apron", "6 move_to_position: stalled"),
     ("arm_drag_paper_from_under_a_heavy_crate", "arm_can_on_paper_under_a_block_loaded_by_a_crate", "clamped 0.3"),
+    # a greased bar pressed against a wall by a held rubber block and slid up it: held at the rubber's and the wall's
+    # friction, the larger of each pair
+    ("arm_clamp_a_greased_bar_to_a_wall_and_lift", "arm_greased_bar_against_a_wall", "not reached: greased_bar_lifted"),
     ("arm_degenerate_calls", "milk_reaching", "clamped"),
     ("arm_sliver_grasp_chain", "button_pressing:196", "a pinch at its edge"),
     ("arm_sliver_grasp_chain", "button_pressing", "a pinch at its edge"),  # a 4 mm pinch held the chain 19 mm out
@@ -442,10 +445,10 @@ def test_the_farthest_honest_push_leaves_the_cube_short_of_the_button(fling_runs
 
 def test_a_move_held_back_by_the_wall_while_it_rises_still_stalls(fling_runs: Any) -> None:
     """The fling's move aimed below the wall's top: the puck slides up the face until the gripper reaches the target's
-    height, held back in x all the while, and the move ends stalled there, 0.30 m short, as before the fix."""
+    height, held back in x all the while, and the move ends stalled there, 0.29 m short, as before the fix."""
     move = fling_runs[2][FLING_WORLDS + 1].calls[-2]
     assert move.outcome == "stalled" and move.reason.startswith("blocked at [0.160"), move
-    assert move.measured["remaining"] == pytest.approx(0.30, abs=0.005)  # 0.29 with the puck once declared slippery
+    assert move.measured["remaining"] == pytest.approx(0.29, abs=0.005)
 
 
 def test_paper_under_a_light_box_standing_partly_on_it_still_brings_the_can(run_texts: Any) -> None:

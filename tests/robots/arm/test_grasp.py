@@ -317,8 +317,8 @@ def test_goal_memory_skips_states_in_which_the_grip_is_past_its_friction(
 def test_the_pads_grip_a_slippery_object_by_its_own_friction(friction: float | None, held: bool) -> None:
     """Found by an adversarial run: a bar declared greased (friction 0.001) was held by the 120 N pad grip as if it
     were rubber (MuJoCo takes the larger of two surfaces' frictions, and the grip rule read the pads' alone). The
-    pads grip an object of the default friction (0.5) or more at their own friction, a more slippery one in
-    proportion: a 3 kg block at 0.05 weighs 29 N against 12 N of grip, and slips; at 0.3 it is held (72 N)."""
+    pads grip an object of the default friction (0.5) or more at their own friction, a more slippery one at its own:
+    a 3 kg block at 0.05 weighs 29 N against 6 N of grip, and slips; at 0.3 it is held (36 N)."""
     data = tasks.load(FIXTURES / "layouts" / "arm_six_kg_iron_block.yaml").model_dump(
         mode="json", exclude_defaults=True
     )

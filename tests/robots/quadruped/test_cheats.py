@@ -218,6 +218,10 @@ LAYOUT_CASES = [
     ("climb_the_lever_from_its_side_past_the_roller", "cube_lifting"),  # the tilted board stands a step too high there
     ("push_a_light_cube_up_the_propped_lever", "lever_light_cube"),  # no stance behind the cube but on the board
     ("ram_a_light_cube_up_the_lever_with_the_chair", "lever_light_cube"),  # chair, cube and board: over the limit
+    # a loose rubber mat on ice held at the rubber's friction (MuJoCo takes the larger of two): a greased or icy face
+    # is slippery against anything
+    ("walk_up_an_icy_ramp_on_a_loose_rubber_mat", "rubber_mat_on_an_icy_ramp"),
+    ("walk_across_an_ice_rink_on_a_loose_rubber_mat", "rubber_mat_on_an_ice_rink"),
 ]
 
 CONTROL_CASES = [
@@ -570,17 +574,12 @@ def test_a_crate_dragged_on_a_pallet_while_its_edge_rests_on_a_strip_is_weighed(
     assert push.outcome == "refused" and ("pushing pallet (touching crate) took" in reason or DRAG in reason), reason
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open: what a pushed object drags by friction (lying on it, borne up elsewhere too) is judged by the force "
-    "the drag takes, not by its mass; weighing it by mass, as a ram is, refuses the lever's own prop: the chair pushed "
-    "out from under a lever's raised end drags the board a few centimetres, and the cube on it rises",
-)
-def test_a_heavy_crate_dragged_along_a_greased_rail_by_a_pushed_pallet_is_weighed() -> None:
+def test_a_greased_crate_is_not_dragged_off_a_greased_rail_by_a_pushed_pallet() -> None:
     """Found by an adversarial run (19 of 20 worlds on seeds 1-5): a 1.5 kg pallet pushed 0.7 m dragged a 20 kg crate,
-    3 cm of whose edge lay on it and the rest on a greased rail (friction 0.02), 0.33 m along the rail and off its
-    end: 22-38 N, within the push's force. Pushing the crate itself is refused for its mass, and so is a box rammed
-    into it; a drag moves it as surely."""
+    3 cm of whose greased steel bottom (friction 0.02) lay on it and the rest on a greased rail, 0.33 m along the rail
+    and off its end (22-38 N, within the push's force), as MuJoCo held the crate on the wooden pallet at the wood's
+    0.5, the larger of the two. A greased face is slippery against anything: the pallet slides out from under it.
+    (What a push drags by friction is still judged by the force the drag takes, not by its mass.)"""
     rollouts = sim.run_sessions(
         _scene("heavy_crate_on_a_greased_rail_beside_a_pallet"),
         start_sessions([_text("push_a_pallet_to_drag_a_heavy_crate_off_a_greased_rail")] * 2, "quadruped"),
@@ -697,7 +696,9 @@ def test_a_drum_a_ram_sets_rolling_slowly_from_rest_is_still_rammed() -> None:
     """Found by an adversarial run: a bar pushed 2 cm into a 15 kg drum held by a kerb on a nearly level deck slid it
     past the kerb; the drum sped up from rest at about 1 mm/s^2 and rolled off the platform, and a ram was forgotten
     once what it set moving crept under 2 mm/s for 0.5 s, speeding up or not (in these worlds both drums rolled
-    off)."""
+    off). Then with the drum and the bar unwaxed, a drum that sped up more slowly than the creep rule could tell from
+    soft creep rolled off in one world: what crept out of a ram is that ram's again once it speeds up past 1 cm/s on
+    its own."""
     program = _text("roll_a_heavy_drum_off_a_kerb_with_a_slow_start")
     rollouts = sim.run_sessions(
         _scene("drum_held_by_a_kerb_on_a_nearly_level_deck"), start_sessions([program] * 2, "quadruped"), seed=1

@@ -66,8 +66,9 @@ def test_a_move_the_feet_cannot_hold_is_refused_at_its_start(layout: str, progra
 
 
 def test_ramming_crates_the_feet_cannot_push_is_refused_as_it_moves() -> None:
-    """A 0.8 kg box rams two rubber-footed crates (4.2 kg in all, within the push limit) off a waxed stage: the push
-    takes about 67 N, over the about 24 N the feet hold for more than half a second."""
+    """A 0.8 kg box rams two rubber-footed crates (4.2 kg in all, within the push limit) off a waxed stage, along a
+    rubber runner: the push takes about 67 N, over the about 24 N the feet hold on the wax for more than half a
+    second, and over twice what sliding 5 kg on the box's support takes (whichever rule says it first)."""
     for rollout in run_quadruped(
         "light_box_before_rubber_footed_crates_on_a_waxed_stage", "ram_crates_off_a_stage_with_a_light_box"
     ):
@@ -75,8 +76,8 @@ def test_ramming_crates_the_feet_cannot_push_is_refused_as_it_moves() -> None:
         assert not rollout.success and push.outcome == "refused", reasons([rollout])
         reason = push.reason or ""
         assert reason.startswith("pushing box_a (touching crate_b, crate_c) took over"), reason
-        assert "the most the robot's feet hold on stage at friction" in reason and "feet would slip" in reason, reason
-        assert push.measured["limit"] < 30.0, push.measured
+        feet = "the most the robot's feet hold on stage at friction" in reason and "feet would slip" in reason
+        assert feet or "2 times what sliding 5.0 kg, the push limit, on its support takes" in reason, reason
 
 
 @pytest.mark.parametrize(
