@@ -29,7 +29,7 @@ from robotool.sim.compiled_scene import Scene
 from robotool.sim.embodiment import Embodiment
 from robotool.task import geometry
 from robotool.task.scene import SceneObject
-from robotool.task.task_model import Task
+from robotool.task.task_model import MAX_OBJECTS, Task
 
 TIMESTEP = 0.002  # s, physics step
 GROUND_FRICTION = 0.5
@@ -43,7 +43,9 @@ WELD_SOLIMP = (0.999, 0.9995, 0.001, 0.5, 2.0)
 SHEET_RESTING = 0.003  # m: an object whose bottom is this close to a sheet's top rests on it
 SHEET_CARRIER_DROP = 10.0  # m a sheet's carrier geom is dropped below it while its object is not on it
 SHEET_CARRIER_LIFT = 0.002  # m a carrier stands above its sheet, so what rests on it rests on it alone
-MAX_SLIPPERY_PRIORITY = 50  # the highest contact priority a slippery geom gets (one per friction below the default)
+MAX_SLIPPERY_PRIORITY = MAX_OBJECTS + 1  # a contact priority per friction below the default, and no more than a task
+# declares (its objects' and the ground's): each its own, so no two slippery geoms share one (found by an adversarial
+# run: a cap of 50 ranks, filled by 49 chips of distinct frictions, held a greased puck on a waxed chute at the wax's)
 DEFAULT_BIT, SHEET_BIT, GROUND_BIT = 1, 2, 4  # contype/conaffinity bits: sheets touch the ground and the robot
 BUTTON_FACE_DEPTH = 0.015  # m
 BUTTON_DAMPING = 2.0  # N s/m
@@ -189,7 +191,9 @@ def _rank_slippery(spec: mujoco.MjSpec) -> None:
     (the robot's) keep their own rules; a robot whose contacts must set their own parameters ranks above
     :data:`MAX_SLIPPERY_PRIORITY`."""
     slippery = sorted({float(g.friction[0]) for g in spec.geoms if g.friction[0] < DEFAULT_FRICTION}, reverse=True)
-    rank = {mu: min(k + 1, MAX_SLIPPERY_PRIORITY) for k, mu in enumerate(slippery)}  # (the most slippery may share)
+    if len(slippery) > MAX_SLIPPERY_PRIORITY:
+        raise ValueError(f"{len(slippery)} frictions below the default: a task has {MAX_SLIPPERY_PRIORITY} at most")
+    rank = {mu: k + 1 for k, mu in enumerate(slippery)}
     for geom in spec.geoms:
         if geom.friction[0] < DEFAULT_FRICTION:
             geom.priority = rank[float(geom.friction[0])]

@@ -153,3 +153,23 @@ def test_a_slippery_surface_is_slippery_against_anything() -> None:
         mujoco.mj_step(model, data, 500)
         slid[friction] = float(np.linalg.norm(data.xpos[model.body("block").id] - start))
     assert slid[0.02] > 0.05 and slid[0.5] < 0.005, slid
+
+
+def test_every_slippery_friction_ranks_apart_below_the_quadrupeds_own() -> None:
+    """Found by an adversarial run: slippery geoms' ranks were capped at 50, and 49 chips of distinct frictions made a
+    greased puck share the top rank with a waxed chute, so MuJoCo held the pair at the wax's friction. Each distinct
+    friction below the default now has its own rank, under the quadruped's geoms' (which keep their own)."""
+    from robotool.robots.quadruped.body import CONTACT_PRIORITY
+    from robotool.sim.build import MAX_SLIPPERY_PRIORITY
+
+    chips = [
+        {"name": f"chip{k}", "shape": "box", "center": [-0.4 + 0.04 * (k % 20), 0.4 + 0.04 * (k // 20), 0.005],
+         "size": [0.02, 0.02, 0.01], "movable": False, "friction": 0.49 - 0.005 * k}
+        for k in range(60)
+    ]
+    model = sim.build(_task([{"name": "puck", "shape": "box", "center": [0.3, 0.0, 0.01], "size": [0.02] * 3,
+                              "mass": 0.02, "friction": 0.001}, *chips])).model
+    names = ["puck", *(c["name"] for c in chips)]
+    ranks = [int(model.geom_priority[model.geom(f"{name}__geom0").id]) for name in names]
+    assert len(set(ranks)) == len(ranks) and ranks[0] == max(ranks) == 61, ranks
+    assert CONTACT_PRIORITY > MAX_SLIPPERY_PRIORITY >= 201

@@ -52,6 +52,7 @@ LEG_RETRACT = 0.05  # m a leg can pull its foot up above the nominal stance
 OFF = -100.0  # lift setpoint that saturates the motor at zero force
 TILT_DAMPING = 3.0  # N m s/rad on pitch and roll (the legs' joint friction; it never holds the body up)
 TORSO_FRICTION = 0.25  # the torso's faces grip what they push (the feet stay frictionless)
+CONTACT_PRIORITY = MAX_SLIPPERY_PRIORITY + 1  # above every scene geom's: the robot's contacts keep their own rules
 ROBOT_GROUP = 2  # geom group of the robot's geoms (shown by default; rays leave it out)
 GRAVITY = 9.81
 
@@ -148,7 +149,7 @@ def add_body(spec: mujoco.MjSpec, task: Task) -> None:
             damping=TILT_DAMPING,
             armature=0.01,
         )
-    contact = {"condim": 1, "priority": MAX_SLIPPERY_PRIORITY + 1, "group": ROBOT_GROUP}
+    contact = {"condim": 1, "priority": CONTACT_PRIORITY, "group": ROBOT_GROUP}
     body.add_geom(
         name=f"{BODY}_torso",
         type=mujoco.mjtGeom.mjGEOM_BOX,
