@@ -451,28 +451,23 @@ def test_a_move_held_back_by_the_wall_while_it_rises_still_stalls(fling_runs: An
     assert move.measured["remaining"] == pytest.approx(0.29, abs=0.005)
 
 
-def test_paper_under_a_light_box_standing_partly_on_it_still_brings_the_can(run_texts: Any) -> None:
-    """The control of the pinned paper: the same pull with a 0.5 kg box where the 60 kg crate stood (about 2 N of
-    friction on the paper, under the 10 N that pins it) brings the can within reach."""
-    task = _task("arm_can_on_paper_pinned_by_a_heavy_crate")
-    light = task.model_copy(
-        update={"objects": [o.model_copy(update={"mass": 0.5}) if o.name == "crate" else o for o in task.objects]}
+@pytest.mark.parametrize(
+    ("task", "mass", "program"),
+    [
+        # a 0.5 kg box where the 60 kg crate stood (about 4 N of friction on the paper's two faces, under the 10 N that
+        # pins it): the pull brings the can within reach
+        ("arm_can_on_paper_pinned_by_a_heavy_crate", 0.5, "arm_drag_paper_from_under_a_heavy_crate"),
+        # an 8 kg crate (about 50 N) pins it, but the arm pulls harder: it slides out a tick at a time, and is lifted
+        ("arm_paper_pinned_under_a_heavy_crate", 8.0, "arm_drag_pinned_paper_out_and_lift"),
+    ],
+)
+def test_paper_under_a_lighter_load_is_pulled_out(run_texts: Any, task: str, mass: float, program: str) -> None:
+    """The controls of the pinned paper: the same pulls with a lighter load where the 60 kg crate stood succeed."""
+    heavy = _task(task)
+    lighter = heavy.model_copy(
+        update={"objects": [o.model_copy(update={"mass": mass}) if o.name == "crate" else o for o in heavy.objects]}
     )
-    program = (CHEATS / "arm_drag_paper_from_under_a_heavy_crate.py").read_text()
-    rollouts: list[Rollout] = run_texts(light, [program] * 2, seed=11)
-    assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
-
-
-def test_paper_under_a_lighter_crate_is_pulled_out_and_lifted(run_texts: Any) -> None:
-    """The control of the pinned paper that is lifted: with an 8 kg crate where the 60 kg one stood, the friction on
-    the paper's two faces (about 50 N) pins it, but the arm pulls harder: it slides out a tick at a time, and is
-    lifted."""
-    task = _task("arm_paper_pinned_under_a_heavy_crate")
-    lighter = task.model_copy(
-        update={"objects": [o.model_copy(update={"mass": 8.0}) if o.name == "crate" else o for o in task.objects]}
-    )
-    program = (CHEATS / "arm_drag_pinned_paper_out_and_lift.py").read_text()
-    rollouts: list[Rollout] = run_texts(lighter, [program] * 2, seed=11)
+    rollouts: list[Rollout] = run_texts(lighter, [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     assert all(r.success for r in rollouts), [world_failure(r) for r in rollouts]
 
 
