@@ -140,6 +140,20 @@ class RefereeState:
             ride_carried=np.zeros((nworld, nobject), dtype=bool),
         )
 
+    def doze(self, settled: np.ndarray, here: np.ndarray, travel: np.ndarray, touched: np.ndarray) -> None:
+        """What a ram set moving (or a push left coasting) and that has just ``settled`` by the creep rule lies dormant
+        until it comes to rest, or the robot touches it (``touched``); what lay dormant and, untouched, moves more than
+        :data:`WAKE` in a tick is that ram's again (or coasts again). In the worlds ``here`` (nworld, 1)."""
+        touched = touched & here
+        woke = here & (self.dormant_by >= 0) & (travel > WAKE) & ~touched
+        own = np.arange(self.dormant_by.shape[1])[None, :] == self.dormant_by
+        self.coasting |= woke & own
+        self.rammed_by = np.where(woke & ~own, self.dormant_by, self.rammed_by)
+        self.dormant_by[woke | touched | (here & (self.still >= REST_TIME))] = -1
+        objects = np.arange(own.shape[1])[None, :]
+        source = np.where(self.rammed_by >= 0, self.rammed_by, np.where(self.coasting, objects, -1))
+        self.dormant_by = np.where(settled & (source >= 0), source, self.dormant_by)
+
 
 class Referee:
     """Judges falls, shoves, rams, crushes and pushes (state: :class:`RefereeState`)."""
@@ -362,8 +376,8 @@ class Referee:
         shift = shift[:, :, :2]
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
         settled = here & (s.crept >= REST_TIME) & (travel <= s.slowest + STILL)  # not speeding up: a later move is
-        # not this ram's, unless it wakes (:data:`WAKE`)
-        self._doze(settled, here, travel)
+        # not this ram's, unless it wakes (:data:`WAKE`, :meth:`RefereeState.doze`)
+        s.doze(settled, here, travel, self._owned(self.senses.state.touching[:, self.scene.robot_body].any(axis=1)))
         s.rammed_by[settled] = -1
         s.coasting[settled] = False
         s.drift[here & (s.still >= REST_TIME)] = 0.0
@@ -391,20 +405,6 @@ class Referee:
         candidates = np.flatnonzero(moved.any(axis=1))
         if candidates.size:
             self._weigh_rams(ends, candidates, moved[candidates], moves)
-
-    def _doze(self, settled: np.ndarray, here: np.ndarray, travel: np.ndarray) -> None:
-        """What a ram set moving (or a push left coasting) and that has just ``settled`` by the creep rule lies dormant
-        until it comes to rest, or the robot touches it; what lay dormant and, untouched, moves more than :data:`WAKE`
-        in a tick is that ram's again (or coasts again)."""
-        s = self.state
-        touched = self._owned(self.senses.state.touching[:, self.scene.robot_body].any(axis=1)) & here
-        woke = here & (s.dormant_by >= 0) & (travel > WAKE) & ~touched
-        own = np.arange(s.dormant_by.shape[1])[None, :] == s.dormant_by
-        s.coasting |= woke & own
-        s.rammed_by = np.where(woke & ~own, s.dormant_by, s.rammed_by)
-        s.dormant_by[woke | touched | (here & (s.still >= REST_TIME))] = -1
-        source = np.where(s.rammed_by >= 0, s.rammed_by, np.where(s.coasting, np.arange(own.shape[1])[None, :], -1))
-        s.dormant_by = np.where(settled & (source >= 0), source, s.dormant_by)
 
     def _coasting_rams(
         self,
