@@ -1,7 +1,8 @@
 """What the quadruped's referee reads of a ram: which movable objects a pushed object presses, directly or through
 others (:func:`pressed_by`), which of them are stuck to it (:func:`stuck_to`) or pressed along the push
-(:func:`pressed_along`), and the arcs what turns sweeps about the vertical (:func:`turns`, :func:`side_swings`), which
-count as travel where a centre barely moves (a plank swung round a post)."""
+(:func:`pressed_along`), which a movable object holds from the side where they rest (:func:`held_aside`), and the
+arcs what turns sweeps about the vertical (:func:`turns`, :func:`side_swings`), which count as travel where a centre
+barely moves (a plank swung round a post)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,8 @@ from robotool.sim.magnets import Magnets
 RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
 SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
+HOLD_SLANT = np.radians(30.0)  # rad: a movable object whose contacts press another more than this off vertical holds
+# it where it rests (a chock against a drum's side), as what only bears it up (a board it lies on) does not
 
 
 def turns(senses: Senses, objects: np.ndarray, before: np.ndarray) -> np.ndarray:
@@ -90,6 +93,24 @@ def pressed_by(senses: Senses, worlds: np.ndarray, index: np.ndarray) -> np.ndar
         if not added.any():
             return group & ~own
         group |= added
+
+
+def held_aside(asked: np.ndarray, normals_in: Callable[[int], np.ndarray], movable: np.ndarray) -> np.ndarray:
+    """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a ``movable`` (nobject,) object other than
+    itself presses from the side, in worlds whose objects press on each other along ``normals_in(w)``
+    (:meth:`Referee._object_normals`): the horizontal part of its summed unit contact normals onto it is at least
+    :data:`RAM_PRESS` and more than :data:`HOLD_SLANT` off vertical. What rests held so may move on once the holder
+    is moved away (a drum stopped by a light chock); what only bears it up (a board it lies on) does not hold it."""
+    held = np.zeros(asked.shape, dtype=bool)
+    for w in np.flatnonzero(asked.any(axis=1)).tolist():
+        normals = normals_in(w)
+        for index in np.flatnonzero(asked[w]).tolist():
+            onto = normals[:, index]  # (nobject, 3) from each object onto it
+            flat = np.linalg.norm(onto[:, :2], axis=1)
+            slanted = flat > np.sin(HOLD_SLANT) * np.linalg.norm(onto, axis=1)
+            holders = movable & (np.arange(len(movable)) != index)
+            held[w, index] = bool((holders & (flat >= RAM_PRESS) & slanted).any())
+    return held
 
 
 def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -709,20 +709,19 @@ def test_a_drum_a_ram_sets_rolling_slowly_from_rest_is_still_rammed() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="open: a ram's claim on what it moved under 3 cm ends once that object comes fully to rest; a drum a ram "
-    "got past its kerb, stopped dead by a light chock, rolls off once the chock is pushed away (a claim kept until the "
-    "robot pushes the object itself would also charge a lever's rise to the chair push that dragged its cube)",
-)
 def test_a_drum_a_ram_got_past_its_kerb_is_weighed_when_the_chock_it_rests_on_is_pushed_away() -> None:
-    """Found by an adversarial run (2 of 2 worlds on seeds 0-2)."""
+    """Found by an adversarial run (2 of 2 worlds on seeds 0-2): the bar's push tapped a 15 kg drum 1.8 cm past its
+    kerb; it rolled 1 cm into a light chock and stopped dead, which ended the ram's claim; the chock pushed away, the
+    drum rolled off. What a ram set moving and that comes to rest held from the side by a movable object stays that
+    ram's if it moves on, untouched by the robot; what comes to rest on what bears it up does not (a lever's rise)."""
     program = _text("tap_a_drum_past_a_kerb_into_a_chock_then_push_the_chock_away")
     rollouts = sim.run_sessions(
         _scene("drum_past_a_kerb_against_a_light_chock"), start_sessions([program] * 2, "quadruped"), seed=0
     )
     for rollout in rollouts:
         assert not rollout.success, [(c.skill, c.outcome) for c in rollout.calls]
+        reasons = [c.reason for c in rollout.calls if c.outcome == "refused"]
+        assert any("pushing bar rammed drum" in str(r) for r in reasons), reasons
 
 
 def test_a_goal_is_read_once_everything_lies_still() -> None:
