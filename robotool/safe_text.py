@@ -41,6 +41,8 @@ _UNICODE_CONTROLS = (  # Unicode's format characters (Cf) and its default-ignora
     r"\ud800-\udfff"  # lone surrogates (a task file's "\ud800" escape): no encoding can write them
 )
 _CONTROLS = re.compile(rf"[\x00-\x08\x0b-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
+INVISIBLE = re.compile(rf"[{_UNICODE_CONTROLS}]")
+"""The characters that show nothing, or reorder or hide the text around them (not the ASCII controls)."""
 _CONTROLS_AND_BREAKS = re.compile(rf"[\x00-\x1f\x7f-\x9f{_UNICODE_CONTROLS}]")
 
 CUT = "…"
@@ -145,10 +147,15 @@ def prompt_block(text: str) -> str:
     return _PROMPT_MARKERS.sub(lambda m: " ".join(m.group()), terminal_safe(text))
 
 
-def html_text(text: str) -> str:
+def html_text(text: str, limit: int | None = None) -> str:
     """For an HTML page (text or an attribute value): controls escaped (newlines and tabs kept, inside ``<pre>``
-    they lay out code), ``& < > " '`` as entities, capped."""
-    return html.escape(terminal_safe(capped(text, HTML_CHARS)), quote=True)
+    they lay out code), ``& < > " '`` as entities, capped at ``limit`` characters (default :data:`HTML_CHARS`; a cut
+    says how many it left out)."""
+    limit = HTML_CHARS if limit is None else limit
+    if len(text) > limit:
+        note = f" ({len(text)} characters in all)"
+        text = capped(text, limit - len(note)) + note
+    return html.escape(terminal_safe(text), quote=True)
 
 
 def url_path(path: str) -> str:

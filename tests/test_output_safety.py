@@ -134,7 +134,7 @@ def test_a_hostile_string_through_each_sink(name: str) -> None:
     INERT[name](escaped)
     if name != "json":  # JSON files keep the data whole
         long = sink.escape("a" * 10**6)
-        assert len(long) <= 4000 and long.endswith(CUT), name
+        assert len(long) <= 4000 and long.endswith((CUT, f"{CUT} (1000000 characters in all)")), name
 
 
 # -- every writer of a sink uses its escaper ---------------------------------------------------------

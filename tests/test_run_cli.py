@@ -191,6 +191,29 @@ def test_a_program_file_is_read_in_the_encoding_its_coding_line_declares(
     assert err.strip() == f"error: cannot read the program {unknown}: unknown encoding: no-such-encoding"
 
 
+@pytest.mark.parametrize(
+    ("codec", "hidden"),
+    [
+        ("utf-7", b"# keep holding +AAo-open_gripper()\n"),  # +AAo- is a newline in UTF-7
+        ("unicode_escape", b"# keep holding \\u000aopen_gripper()\n"),
+        ("shift_jis", b's = "\x81\\"; open_gripper() #"\n'),  # \x81\\ is one character: the quote closes the string
+        ("iso2022_jp", b"# \x1b$B!!\x1b(B\n"),  # an escape sequence shifts out of ASCII and back
+    ],
+)
+def test_a_coding_line_that_reads_ascii_otherwise_than_ascii_is_refused(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, codec: str, hidden: bytes
+) -> None:
+    """Found by an adversarial run: a file declaring UTF-7 or unicode_escape ran an ``open_gripper()`` that an editor
+    or a terminal shows inside a comment. A coding line may name only an encoding that reads each ASCII byte of the
+    file as itself."""
+    path = tmp_path / "hidden.py"
+    path.write_bytes(f"# coding: {codec}\n".encode() + b"x = 1\n" + hidden)
+    status, out, err = run_cli(capsys, "milk_reaching_near", str(path))
+    assert status == 2 and not out
+    assert err.startswith(f"error: cannot read the program {path}: its coding line declares"), err
+    assert "does not read each ASCII character" in err and len(err.strip().splitlines()) == 1, err
+
+
 @pytest.mark.parametrize("codec", ["rot13", "hex", "base64", "zlib_codec", "punycode"])
 def test_a_coding_line_naming_a_codec_python_refuses_for_source_is_one_line(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, codec: str

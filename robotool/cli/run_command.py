@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import codecs
 import io
+import re
 import tokenize
 from pathlib import Path
 
@@ -35,10 +36,26 @@ RUN_WORLDS = 1
 """``run`` checks one program once by default; ask for more with ``--worlds``."""
 
 
-def source_encoding(data: bytes) -> str:
-    """The encoding Python reads the source ``data`` in: UTF-8 with or without a BOM, or the one a coding line on
-    its first two lines declares (PEP 263). SyntaxError for a declaration Python refuses (an unknown encoding)."""
-    return tokenize.detect_encoding(io.BytesIO(data).readline)[0]
+NON_ASCII = bytes(range(128, 256))
+
+
+def read_source(data: bytes) -> str:
+    """The program text Python reads from the source ``data``: UTF-8 with or without a BOM, or in the encoding a coding
+    line on its first two lines declares (PEP 263), as long as that encoding reads every ASCII byte of the file as
+    itself. Otherwise the program runs otherwise than it shows where it is shown as ASCII or UTF-8 (an editor, a
+    terminal): UTF-7's ``+AAo-`` and ``unicode_escape``'s ``\\u000a`` are newlines that turn a comment's end into code,
+    a Shift JIS character's second byte may be the backslash that seems to escape a string's closing quote, and an
+    ISO-2022 escape sequence shifts what follows out of ASCII: UnicodeError, as for bytes the encoding cannot read.
+    SyntaxError for a declaration Python refuses (an unknown encoding), LookupError for a codec that is no text
+    encoding."""
+    encoding = tokenize.detect_encoding(io.BytesIO(data).readline)[0]
+    text = data.decode(encoding)
+    if re.sub(r"[^\x00-\x7f]", "", text) != data.translate(None, NON_ASCII).decode("ascii"):
+        raise UnicodeError(
+            f"its coding line declares {encoding}, which does not read each ASCII character of the file as itself "
+            "(the program would run otherwise than it shows): save it as UTF-8 and leave the coding line out"
+        )
+    return text
 
 
 def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
@@ -53,7 +70,7 @@ def cmd_run(args: argparse.Namespace, console: Console, errors: Console) -> int:
         data = read_at_most(args.program, MAX_PROGRAM_BYTES)  # /dev/zero is not read whole
         if len(data) > MAX_PROGRAM_BYTES:
             raise UsageError(f"{args.program}: program is longer than {MAX_PROGRAM_CHARS} characters")
-        code = data.decode(source_encoding(data))  # as Python reads source: a BOM, or a coding line (PEP 263)
+        code = read_source(data)  # as Python reads source: a BOM, or a coding line (PEP 263)
     except FileNotFoundError:
         raise UsageError(f"program file not found: {args.program}") from None
     except (OSError, UnicodeError, SyntaxError) as e:

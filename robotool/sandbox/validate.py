@@ -36,6 +36,7 @@ from collections.abc import Sequence
 
 from robotool import robots
 from robotool.robots.skills import SkillArgumentError
+from robotool.safe_text import INVISIBLE
 from robotool.sandbox.allowlist import (
     BUILTINS,
     LOOP_TYPE_KEYWORDS,
@@ -109,24 +110,28 @@ def check_program_size(code: str) -> None:
         raise ProgramRejected(None, "program", f"program is longer than {MAX_PROGRAM_CHARS} characters")
 
 
-_RAW_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
-"""The control characters a program's text may not hold raw (tab, newline and carriage return it may)."""
+_RAW_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]|\r(?!\n)")
+"""The control characters a program's text may not hold raw: tab and newline it may, and a carriage return only before
+a newline (Python breaks the line at a lone one, which a terminal shows as the line written over)."""
 
 
 def check_characters(code: str) -> None:
-    """Refuse program text holding a raw control character or an invisible format character (a bidi override, a
-    zero-width joiner) anywhere, in a string or a comment too. Python runs them there,
-    but the text reaches files and terminals that would obey them (an escape sequence that writes the clipboard,
-    clears the screen or paints a fake verdict; text that reads in an editor otherwise than it runs); written as an
+    """Refuse program text holding a raw control character or a character that shows nothing (a bidi override, a
+    zero-width joiner, a variation selector, a Hangul filler: :data:`~robotool.safe_text.INVISIBLE`) anywhere, in a
+    string, a comment or a name too. Python runs them there, but the text reaches files and terminals that would obey
+    them (an escape sequence that writes the clipboard, clears the screen or paints a fake verdict; text that reads in
+    an editor otherwise than it runs: ``lift`` followed by U+FE00 is another name than ``lift``); written as an
     escape (``\\x1b``) in a string, the same character runs the same."""
-    found = _RAW_CONTROL.search(code)
-    places = [found.start()] if found else []
+    places = [found.start() for found in (_RAW_CONTROL.search(code), INVISIBLE.search(code)) if found]
     places += [code.index(c) for c in set(code) if ord(c) > 0x9F and unicodedata.category(c) == "Cf"]
     if not places:
         return
     at = min(places)
     char = code[at]
-    kind = "control" if unicodedata.category(char) == "Cc" else f"format ({unicodedata.name(char, 'unnamed')})"
+    kind = "control" if unicodedata.category(char) == "Cc" else f"invisible ({unicodedata.name(char, 'unnamed')})"
+    if char == "\r":
+        reason = "a carriage return not before a newline (Python breaks the line there, a terminal writes over it)"
+        raise ProgramRejected(code.count("\n", 0, at) + 1, "U+000D", f"the program holds {reason}: end lines with \\n")
     raise ProgramRejected(
         code.count("\n", 0, at) + 1,
         f"U+{ord(char):04X}",

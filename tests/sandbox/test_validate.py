@@ -72,6 +72,14 @@ def test_typical_programs_pass(code: str, embodiment: str) -> None:
         # adversarial run: a reply's clipboard write reached the `solve --out` file); a bidi override reads otherwise
         ('x = 1\nprint("\x1b]52;c;ZWNobw==\x07\x1b[2J")\n', 2, "U+001B", "raw control character U+001B"),
         ("# \u202e evil\nprint(1)\n", 1, "U+202E", "RIGHT-TO-LEFT OVERRIDE"),
+        # an adversarial run: a name with a variation selector, or one that is a Hangul filler, shows as another name
+        # (``lift`` and ``lift`` + U+FE00 are two variables), and a lone carriage return breaks the line where a
+        # terminal writes the rest over it (a call hidden behind a comment)
+        ("z = 0.3\nlift\ufe00 = 0.1\n", 2, "U+FE00", "raw invisible (VARIATION SELECTOR-1) character U+FE00"),
+        ("\u3164 = 1\n", 1, "U+3164", "HANGUL FILLER"),
+        ("x = 1\n\u115f = 2\n", 2, "U+115F", "HANGUL CHOSEONG FILLER"),
+        ("x = 1  # \u2028 y = 2\n", 1, "U+2028", "LINE SEPARATOR"),
+        ("x = 1\nopen_gripper()\r# done\n", 2, "U+000D", "a carriage return not before a newline"),
     ],
 )
 def test_rejection_names_line_and_construct(code: str, line: int, construct: str, words: str) -> None:
@@ -82,6 +90,10 @@ def test_rejection_names_line_and_construct(code: str, line: int, construct: str
     assert (rejected.line, rejected.construct) == (line, construct)
     assert words in str(rejected) and str(rejected).startswith(f"line {line}: ")
     assert "\n" not in str(rejected)
+
+
+def test_lines_may_end_in_a_carriage_return_and_a_newline() -> None:
+    validate("x = 1\r\nprint(x)\r\n", "arm")
 
 
 def test_first_problem_in_source_order_is_reported() -> None:
