@@ -229,9 +229,7 @@ def _more_code(text: str) -> bool:
     """Whether ``text`` (what follows an answer, or stands beside it) holds more code: a fenced block or a field, or
     a line that reads as code and calls something (a correction written without fences, or indented as a Markdown
     code block)."""
-    return bool(_MORE_CODE.search(text)) or any(
-        calling_line(line) for line in text.split("\n")[:MAX_LINES_AFTER]
-    )
+    return bool(_MORE_CODE.search(text)) or any(calling_line(line) for line in text.split("\n")[:MAX_LINES_AFTER])
 
 
 MAX_LINES_AFTER = 200

@@ -17,6 +17,7 @@ dozen; every object adds a body to the simulated scene and to each check of how 
 thousands (3000 stacked boxes took minutes to load) is refused at once rather than loaded."""
 WHY_MAX_OBJECTS = "a real task holds a few dozen at most"
 
+
 def _integer(value: object) -> object:
     """The format is the integer 1: true and 1.0, which pydantic would read as 1, are refused."""
     if isinstance(value, bool | float):

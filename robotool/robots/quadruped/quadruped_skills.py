@@ -27,8 +27,10 @@ class QuadrupedLimits(BaseModel):
     def _taller_than_its_legs(cls, size: tuple[float, float, float]) -> tuple[float, float, float]:
         """The legs hold the torso's underside :data:`BELLY_HEIGHT` up: a body no taller has no torso to build."""
         if not size[2] >= BELLY_HEIGHT + MIN_TORSO:
-            raise ValueError(f"the body's height (z) must be at least {BELLY_HEIGHT + MIN_TORSO:g} m (its legs hold "
-                             f"its underside {BELLY_HEIGHT:g} m up)")
+            raise ValueError(
+                f"the body's height (z) must be at least {BELLY_HEIGHT + MIN_TORSO:g} m (its legs hold "
+                f"its underside {BELLY_HEIGHT:g} m up)"
+            )
         return size
 
 
