@@ -138,6 +138,10 @@ class QuadrupedConfig:
     """m the robot keeps from the far edge of what it walks onto."""
     bridge_overlap: float = 0.15
     """m a bridge rests on each side of a gap."""
+    flush_gap: float = 0.03
+    """m a staircase link pushed flush beside a movable object standing by the same face keeps from its side (5 mm
+    beside a fixed one): the push slides along that side, and a few centimetres of a perturbed world's drift rammed a
+    3.5 kg box into the push, over the push limit together (3 fresh worlds in 9)."""
     prop_clearances: tuple[float, ...] = (1.2, 0.8, 0.5, 0.2)
     """m a prop pushed out from under a board keeps from the board's side, tried in this order: far enough to be left
     behind by the board's end when friction drags it sideways part of the way, even where the prop, pushed off its

@@ -38,6 +38,7 @@ DRAG_CLEARANCE = QUADRUPED.prop_drag_clearance
 SIDE = QUADRUPED.board_side
 TIP_PAST = QUADRUPED.tip_past
 MAX_STEPS = QUADRUPED.max_steps
+FLUSH_GAP = QUADRUPED.flush_gap
 MOVED_AWAY = 0.02  # m: a placement nearer than this to where a link stands is where it stands
 STEP_GAP = 0.01  # m a staircase link is placed short of the next (pushed flush, a perturbed overrun rams the next)
 Placement = tuple[np.ndarray, np.ndarray | None]  # a staircase link's climb direction (to the next) and new centre
@@ -434,31 +435,30 @@ def _sides(
     quad: Quadruped, layout: Layout, obj: SceneObject, nxt: SceneObject, directions: list[np.ndarray]
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """Centres for ``obj`` against ``nxt``'s side facing each of ``directions`` (the climb's direction; :data:`STEP_GAP`
-    short of it): centred,
-    flush with either end, or flush with something else standing by the same face, as long as the feet can stand
-    across both."""
+    short of it): centred, flush with either end, or flush with something else standing by the same face, as long as
+    the feet can stand across both; none nearer than :data:`FLUSH_GAP` beside a movable object."""
     box, nxt_box = layout.box(obj.name), layout.box(nxt.name)
-    others = [
-        layout.box(o.name) for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)
-    ]
+    beside = [o for o in quad.task.objects if o.shape != "cloth" and o.name not in (obj.name, nxt.name)]
+    others = [(layout.box(o.name), FLUSH_GAP if o.movable else 0.005) for o in beside]  # 5 mm from a fixed one
     for direction in directions:
         axis = int(np.argmax(np.abs(direction)))
         lat = 1 - axis
         slide = max(0.0, float(nxt_box.half[lat] - box.half[lat]))
         along = nxt_box.center[axis] - direction[axis] * (nxt_box.half[axis] + box.half[axis] + STEP_GAP)
         offsets = [0.0, slide, -slide]
-        for other in others:  # flush against something else that stands by the same face
+        for other, gap in others:  # flush against something else that stands by the same face
             if other.lo[axis] < along + box.half[axis] and other.hi[axis] > along - box.half[axis]:
                 offsets += [
-                    float(other.hi[lat] + box.half[lat] + 0.005 - nxt_box.center[lat]),
-                    float(other.lo[lat] - box.half[lat] - 0.005 - nxt_box.center[lat]),
+                    float(other.hi[lat] + box.half[lat] + gap - nxt_box.center[lat]),
+                    float(other.lo[lat] - box.half[lat] - gap - nxt_box.center[lat]),
                 ]
         reach = float(nxt_box.half[lat] + box.half[lat]) - 2 * (quad.half[lat] - FOOT)
         for offset in dict.fromkeys(round(o, 4) for o in offsets if abs(o) <= reach):
             xy = nxt_box.center.copy()
             xy[axis] = along
             xy[lat] += offset
-            yield direction, xy
+            if all(box.moved_to(xy).overlap(o) <= 1e-3 - gap for o, gap in others if gap == FLUSH_GAP):
+                yield direction, xy
 
 
 def _chain_route(quad: Quadruped, chain: list[SceneObject], combo: list[Placement]) -> Route | None:

@@ -625,3 +625,32 @@ def test_a_push_lined_up_with_little_room_is_thin(room: float, cramped: bool) ->
     writer.push("box_a", np.array([0.0, -1.0]), "down")
     assert writer.prog.doubt is None
     assert any("of room" in note for note in writer.prog.thin) == cramped
+
+
+@pytest.mark.parametrize("seed", [28000, 28003])
+def test_a_staircase_link_placed_beside_a_movable_object_keeps_a_ram_s_gap_from_it(seed: int) -> None:
+    """Found on the planner benchmark's fresh worlds: box_1 was pushed against the sofa 5 mm beside box_2 (box_2 by the
+    same face), sliding along box_2's side; a perturbed push drifted into it (3.5 kg: the two together over the push
+    limit, 3 fresh worlds in 9) or stopped short against it. Every placement beside a movable object keeps
+    ``flush_gap`` from it."""
+    task = generate("sofa_climbing", seed).task
+    quad = Quadruped(task)
+    routes = [r for r in routes_onto(quad, "sofa", tools=True) if r.pushes and "box_2" not in dict(r.uses)]
+    assert routes  # box_1 alone as the step; box_2 stands by the sofa's face (a step it leads to is STEP_GAP short)
+    for route in routes:
+        layout = quad.layout
+        for name, xy, *_ in route.pushes:
+            layout = layout.with_moved(name, xy)
+        placed, beside = layout.box("box_1"), layout.box("box_2")
+        apart = np.maximum(beside.lo - placed.hi, placed.lo - beside.hi)[:2]  # per axis: > 0 where they stand apart
+        assert float(apart.max()) >= QUADRUPED.flush_gap - 1e-3, (route.words, apart)
+
+
+@pytest.mark.slow
+def test_a_staircase_beside_a_heavy_neighbour_holds_in_fresh_worlds() -> None:
+    """The same instance's returned program, run in nine worlds the planner never saw, succeeds in every one."""
+    task = generate("sofa_climbing", 28003).task
+    solution = solve(task, worlds=3)
+    assert solution.success and solution.code is not None
+    for rollout in run_codes(task, [solution.code], worlds=9, seed=50_000):
+        assert failure_reason(rollout) is None, failure_reason(rollout)
