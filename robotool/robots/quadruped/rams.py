@@ -1,6 +1,6 @@
 """What the quadruped's referee reads of a ram: which movable objects a pushed object presses, directly or through
 others (:func:`pressed_by`), which of them are stuck to it (:func:`stuck_to`) or pressed along the push
-(:func:`pressed_along`), which a movable object holds from the side where they rest (:func:`held_aside`), and the
+(:func:`pressed_along`), which a moving carrier bears along (:func:`borne_along`), and the
 arcs what turns sweeps about the vertical (:func:`turns`, :func:`side_swings`), which count as travel where a centre
 barely moves (a plank swung round a post)."""
 
@@ -17,8 +17,7 @@ from robotool.sim.magnets import Magnets
 RAM_ANGLE = np.radians(60.0)  # rad: contacts pressing within this of the push direction push what they touch along
 SIDE_ANGLE = np.radians(30.0)  # rad: contacts pressing within this of horizontal press a side, whichever way it faces
 RAM_PRESS = 0.5  # the least horizontal part of a presser's summed unit contact normals along the push that rams
-HOLD_SLANT = np.radians(30.0)  # rad: a movable object whose contacts press another more than this off vertical holds
-# it where it rests (a chock against a drum's side), as what only bears it up (a board it lies on) does not
+STILL_CARRIER = 1e-5  # m a carrier may move in a tick and count as still (:func:`borne_along`)
 
 
 def turns(senses: Senses, objects: np.ndarray, before: np.ndarray) -> np.ndarray:
@@ -95,22 +94,17 @@ def pressed_by(senses: Senses, worlds: np.ndarray, index: np.ndarray) -> np.ndar
         group |= added
 
 
-def held_aside(asked: np.ndarray, normals_in: Callable[[int], np.ndarray], movable: np.ndarray) -> np.ndarray:
-    """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a ``movable`` (nobject,) object other than
-    itself presses from the side, in worlds whose objects press on each other along ``normals_in(w)``
-    (:meth:`Referee._object_normals`): the horizontal part of its summed unit contact normals onto it is at least
-    :data:`RAM_PRESS` and more than :data:`HOLD_SLANT` off vertical. What rests held so may move on once the holder
-    is moved away (a drum stopped by a light chock); what only bears it up (a board it lies on) does not hold it."""
-    held = np.zeros(asked.shape, dtype=bool)
+def borne_along(senses: Senses, asked: np.ndarray, travel: np.ndarray) -> np.ndarray:
+    """(nworld, nobject) which of the objects ``asked`` (nworld, nobject) a movable object that moved this tick
+    (``travel`` (nworld, nobject) m, in 3-D) bears up (:func:`~.support.bears_up`): it goes where its carrier takes it
+    (a cube on a lever's board as the board tips)."""
+    borne = np.zeros(asked.shape, dtype=bool)
     for w in np.flatnonzero(asked.any(axis=1)).tolist():
-        normals = normals_in(w)
+        normals = senses.facts.sums.pairs(senses.sim.contact_normals(w))  # (nobject, nobject, 3) from one onto another
+        carriers = senses.facts.movable & (travel[w] > STILL_CARRIER)
         for index in np.flatnonzero(asked[w]).tolist():
-            onto = normals[:, index]  # (nobject, 3) from each object onto it
-            flat = np.linalg.norm(onto[:, :2], axis=1)
-            slanted = flat > np.sin(HOLD_SLANT) * np.linalg.norm(onto, axis=1)
-            holders = movable & (np.arange(len(movable)) != index)
-            held[w, index] = bool((holders & (flat >= RAM_PRESS) & slanted).any())
-    return held
+            borne[w, index] = bool((carriers & bears_up(normals[:, index])).any())
+    return borne
 
 
 def pressed_along(normals: np.ndarray, index: int, pressed: np.ndarray, u: np.ndarray) -> np.ndarray:

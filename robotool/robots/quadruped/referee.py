@@ -32,7 +32,7 @@ from robotool.robots.quadruped.push_force import PushForce
 from robotool.robots.quadruped.push_rules import PushRules
 from robotool.robots.quadruped.quadruped_config import QuadrupedConfig
 from robotool.robots.quadruped.quadruped_skills import QuadrupedLimits
-from robotool.robots.quadruped.rams import held_aside, pressed_along, pressed_by, side_swings, stuck_to, turns
+from robotool.robots.quadruped.rams import borne_along, pressed_along, pressed_by, side_swings, stuck_to, turns
 from robotool.robots.quadruped.rays import Rays
 from robotool.robots.quadruped.sensing import Senses
 from robotool.robots.quadruped.stride_loads import StrideLoads
@@ -140,24 +140,21 @@ class RefereeState:
             ride_carried=np.zeros((nworld, nobject), dtype=bool),
         )
 
-    def resting(self, here: np.ndarray) -> np.ndarray:
-        """(nworld, nobject) the objects that have stayed still for :data:`REST_TIME`, in the worlds ``here``."""
-        return here & (self.still >= REST_TIME)
-
     def doze(
-        self, settled: np.ndarray, here: np.ndarray, travel: np.ndarray, touched: np.ndarray, held: np.ndarray
+        self, settled: np.ndarray, here: np.ndarray, travel: np.ndarray, touched: np.ndarray, borne: np.ndarray
     ) -> None:
         """What a ram set moving (or a push left coasting) and that has just ``settled`` by the creep rule lies dormant
-        until it comes to rest on its own, not ``held`` from the side by a movable object (a drum stopped by a light
-        chock rolls on once the chock is pushed away), or the robot touches it (``touched``); what lay dormant and,
-        untouched, moves more than :data:`WAKE` in a tick is that ram's again (or coasts again). In the worlds ``here``
-        (nworld, 1)."""
+        until the robot touches it (``touched``: its own rules judge it then); what lies dormant and moves more than
+        :data:`WAKE` in a tick, untouched and not ``borne`` along by a moving carrier (a lever's board tipping under
+        the robot lifts the cube a chair push dragged), is that ram's again (or coasts again), however long it lay
+        still: a drum a tap got past its kerb and that a light chock stopped dead rolls on, the ram's, once the chock
+        is pushed away. In the worlds ``here`` (nworld, 1)."""
         touched = touched & here
-        woke = here & (self.dormant_by >= 0) & (travel > WAKE) & ~touched
+        woke = here & (self.dormant_by >= 0) & (travel > WAKE) & ~touched & ~borne
         own = np.arange(self.dormant_by.shape[1])[None, :] == self.dormant_by
         self.coasting |= woke & own
         self.rammed_by = np.where(woke & ~own, self.dormant_by, self.rammed_by)
-        self.dormant_by[woke | touched | (self.resting(here) & ~held)] = -1
+        self.dormant_by[woke | touched] = -1
         objects = np.arange(own.shape[1])[None, :]
         source = np.where(self.rammed_by >= 0, self.rammed_by, np.where(self.coasting, objects, -1))
         self.dormant_by = np.where(settled & (source >= 0), source, self.dormant_by)
@@ -385,8 +382,8 @@ class Referee:
         step = np.linalg.norm(shift, axis=2)  # (nworld, nobject) each object's travel this tick, across
         settled = here & (s.crept >= REST_TIME) & (travel <= s.slowest + STILL)  # not speeding up (:meth:`~.doze`)
         touched = self._owned(self.senses.state.touching[:, self.scene.robot_body].any(axis=1))
-        dozing = s.resting(here) & (s.dormant_by >= 0)
-        s.doze(settled, here, travel, touched, held_aside(dozing, self._object_normals, self.facts.movable))
+        stirred = here & (s.dormant_by >= 0) & (travel > WAKE)
+        s.doze(settled, here, travel, touched, borne_along(self.senses, stirred, travel))
         s.rammed_by[settled] = -1
         s.coasting[settled] = False
         s.drift[here & (s.still >= REST_TIME)] = 0.0

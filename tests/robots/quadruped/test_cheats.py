@@ -709,19 +709,28 @@ def test_a_drum_a_ram_sets_rolling_slowly_from_rest_is_still_rammed() -> None:
 
 
 @pytest.mark.slow
-def test_a_drum_a_ram_got_past_its_kerb_is_weighed_when_the_chock_it_rests_on_is_pushed_away() -> None:
-    """Found by an adversarial run (2 of 2 worlds on seeds 0-2): the bar's push tapped a 15 kg drum 1.8 cm past its
-    kerb; it rolled 1 cm into a light chock and stopped dead, which ended the ram's claim; the chock pushed away, the
-    drum rolled off. What a ram set moving and that comes to rest held from the side by a movable object stays that
-    ram's if it moves on, untouched by the robot; what comes to rest on what bears it up does not (a lever's rise)."""
-    program = _text("tap_a_drum_past_a_kerb_into_a_chock_then_push_the_chock_away")
-    rollouts = sim.run_sessions(
-        _scene("drum_past_a_kerb_against_a_light_chock"), start_sessions([program] * 2, "quadruped"), seed=0
-    )
-    for rollout in rollouts:
-        assert not rollout.success, [(c.skill, c.outcome) for c in rollout.calls]
-        reasons = [c.reason for c in rollout.calls if c.outcome == "refused"]
-        assert any("pushing bar rammed drum" in str(r) for r in reasons), reasons
+@pytest.mark.parametrize(
+    ("program", "layout", "seeds"),
+    [
+        ("tap_a_drum_past_a_kerb_into_a_chock_then_push_the_chock_away", "drum_past_a_kerb_against_a_light_chock", [0]),
+        ("tap_a_reel_past_a_kerb_then_push_a_low_chock_away", "reel_past_a_kerb_against_a_low_chock", [0, 2]),
+    ],
+)
+def test_what_a_ram_got_past_its_kerb_is_weighed_when_it_rolls_on_after_lying_still(
+    program: str, layout: str, seeds: list[int]
+) -> None:
+    """Found by adversarial runs. A bar's push tapped a 15 kg drum 1.8 cm past its kerb; it rolled 1 cm into a light
+    chock and stopped dead, which ended the ram's claim; the chock pushed away, the drum rolled off (2 of 2 worlds on
+    seeds 0-2). Keeping the claim while a movable object held it from the side was not enough: a 20 kg reel stopped
+    against a chock only 3.5 cm high, touching it nearly from below, or short of it (seeds 0-2: 6 of 6 worlds). What a
+    ram set moving lies dormant however long it lies still, and is the ram's again when it moves on, untouched by the
+    robot and not borne along by a moving carrier (a lever's rise is its board's)."""
+    for seed in seeds:
+        rollouts = sim.run_sessions(_scene(layout), start_sessions([_text(program)] * 2, "quadruped"), seed=seed)
+        for rollout in rollouts:
+            assert not rollout.success, [(c.skill, c.outcome) for c in rollout.calls]
+            reasons = [c.reason for c in rollout.calls if c.outcome == "refused"]
+            assert any("rammed" in str(r) and ("drum" in str(r) or "reel" in str(r)) for r in reasons), reasons
 
 
 def test_a_goal_is_read_once_everything_lies_still() -> None:
