@@ -87,11 +87,13 @@ class ArmConfig:
     grasp for the group to count as held up by them (:mod:`.arm_payload`); less is a push, a drag or a graze."""
     press_travel: float = 0.005
     """m: a push, a drag or a press that takes more of the arm than ``max_payload`` holds up counts only once the
-    pushes over it have moved what they push this far up or sideways, and the gripper as far along them, in all over
-    the run (:mod:`.arm_payload`): a press into a support (a block set down with its target below the support, the
-    stack under it sinking a few millimetres into its soft contacts; the fingers driven into the table) is no load; a
-    lever's end pressed down under a heavy load raises the load centimetres, and a heavy crate pushed along in strokes
-    of a few millimetres goes this far in two."""
+    pushes over it have moved what they push this far up or sideways (any point of it: a beam turned about its middle
+    moves its ends), and worked the gripper along them as much as a push at the limit does over this far (a push of
+    twice the limit: half as far), in all over the run (:mod:`.arm_payload`): a press into a support (a block set down
+    with its target below the support, the stack under it sinking a few millimetres into its soft contacts; the
+    fingers driven into the table) is no load; a lever's end pressed down under a heavy load raises the load
+    centimetres (a steep lever while its end sinks 3 mm, found by an adversarial run), and a heavy crate pushed along
+    in strokes of a few millimetres goes this far in two."""
     edge_share: float = 0.5
     """The least share of what the pads could cover of an object across their width that is a grip rather than a
     pinch at its edge."""

@@ -18,13 +18,14 @@ grasp, in any direction) is a push, which takes the rating as the weight it woul
 load is the payload and the push, so it carries 4 kg, or pushes 39 N, or carries 2 kg while it pushes 20 N. A push is
 not capped at the group's weight: a lever multiplies it (pressing a beam 5 cm before its fulcrum raises an anvil 10 cm
 beyond it with twice the anvil's weight). A push is no load until it moves what it pushes: a tick of a push over the
-limit counts once the pushes over it have moved what they push ``press_travel`` up or sideways, and the gripper as far
-along them, in all over the run, each push as far as it moved them from where it went over (so a load pushed along in
-short strokes counts as one long push). A press into a support is no load: it moves nothing but down (a block set down
-with its target below its support, the stack under it sinking into its soft contacts), or it carries the gripper nowhere
-(the fingers driven into the table, a beam pressed down onto the table sliding along under them). A lever's end pressed
-down under a heavy anvil carries the gripper down and the anvil up centimetres, and holding it down after that counts
-too.
+limit counts once the pushes over it have moved what they push ``press_travel`` up or sideways (any point of it: a
+beam turned about its middle moves its ends, not its centre), and worked the gripper along them as much as a push at
+the limit does over ``press_travel`` (a steep lever raises its load centimetres while its end sinks millimetres), in
+all over the run, each push as far as it moved them from where it went over (so a load pushed along in short strokes
+counts as one long push). A press into a support is no load: it moves nothing but down (a block set down with its
+target below its support, the stack under it sinking into its soft contacts), or it carries the gripper nowhere (the
+fingers driven into the table, a beam pressed down onto the table sliding along under them). A lever's end pressed down
+under a heavy anvil carries the gripper down and the anvil up centimetres, and holding it down after that counts too.
 
 The moving parts of fixed objects (a button's face) are pushed too: the force the robot's bodies and what its grasp
 carries (a held tool) put on such a part counts, up to what holds it where it is (its spring at its travel, its
@@ -168,6 +169,7 @@ class PayloadState:
     over_for: np.ndarray  # (nworld,) s over max_payload, added up over the run
     over_now: np.ndarray  # (nworld,) bool: over it at the last tick
     press_from: np.ndarray  # (nworld, nobject + 1, 3) m: the objects, the gripper as the push went over (NaN: not)
+    press_frames: np.ndarray  # (nworld, nobject, 4) the objects' orientations then (unit quaternions; NaN: not)
     press_peak: np.ndarray  # (nworld,) m: the farthest the push now over the limit has moved them (see Payload._moves)
     pressed: np.ndarray  # (nworld,) m: how far the earlier pushes over the limit moved them, added up
     broke: list[str | None]  # the reason the arm carried too much (the world fails), once it did
@@ -178,6 +180,7 @@ class PayloadState:
             over_for=np.zeros(nworld),
             over_now=np.zeros(nworld, dtype=bool),
             press_from=np.full((nworld, nobject + 1, 3), np.nan),
+            press_frames=np.full((nworld, nobject, 4), np.nan),
             press_peak=np.zeros(nworld),
             pressed=np.zeros(nworld),
             broke=[None] * nworld,
@@ -191,6 +194,9 @@ class Payload:
         self.sim, self.parts, self.grasp, self.scene = sim, parts, grasp, sim.scene
         self.limit, self.time, self.lift = limits.max_payload, config.payload_time, config.contact_lift
         self.travel = config.press_travel
+        self.reach = np.array(  # (nobject,) m from a rigid object's centre to its farthest corner (a cloth's links: 0)
+            [0.0 if o.shape == "cloth" else float(np.linalg.norm(o.size)) / 2 for o in self.scene.task.objects]
+        )
         owner = np.asarray(self.scene.body_object)
         robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
@@ -244,6 +250,7 @@ class Payload:
         s.pressed[done] += s.press_peak[done]
         s.press_peak[done] = 0.0
         s.press_from[done] = np.nan
+        s.press_frames[done] = np.nan
         return out
 
     def _through_grasp(self, state: BatchState, w: int, carried: np.ndarray) -> np.ndarray:
@@ -257,20 +264,26 @@ class Payload:
     def _moves(self, state: BatchState, w: int, load: Load) -> bool:
         """Whether a push over the limit counts at this tick: once the pushes over the limit have moved what they push
         ``press_travel`` up or sideways (or down, while it presses a moving part: a loose block pressed onto a stiff
-        button's face, found by an adversarial run) and carried the gripper as far along themselves, in all, each
-        from where it went over (a press into a support moves nothing but down, or carries the gripper nowhere: it is
-        no load)."""
+        button's face, found by an adversarial run), any point of it (a beam turned about its middle moves its ends,
+        not its centre), and worked the gripper as far along themselves as a push at the limit goes that far (a push
+        of twice the limit counts after half the gripper's travel: a steep lever raises its load centimetres while its
+        end sinks millimetres), in all, each from where it went over (a press into a support moves nothing but down,
+        or carries the gripper nowhere: it is no load)."""
         s = self.state
         now = state.xpos[w, np.append(self.scene.object_body, self.parts.gripper)]
+        frames = state.xquat[w, self.scene.object_body]
         if np.isnan(s.press_from[w]).any():
-            s.press_from[w] = now
+            s.press_from[w], s.press_frames[w] = now, frames
         moved = now - s.press_from[w]
         pushed = load.pushed & self.parts.movable
         objects = moved[:-1][pushed]
+        turned = 2.0 * np.arccos(np.clip(np.abs(np.sum(frames * s.press_frames[w], axis=1)), 0.0, 1.0))
         on_parts = state.touching[w][np.asarray(self.bodies.member[:, pushed].any(axis=1))][:, self.bodies.parts].any()
         down = np.abs(objects[:, 2]) if on_parts else objects[:, 2]  # down onto a part that gives (a button's face)
-        lifted = float(np.max(np.maximum(np.linalg.norm(objects[:, :2], axis=1), down), initial=0.0))
-        s.press_peak[w] = max(float(s.press_peak[w]), min(lifted, float(moved[-1] @ load.toward)))
+        swept = np.maximum(np.linalg.norm(objects[:, :2], axis=1), down) + (self.reach * turned)[pushed]
+        lifted = float(np.max(swept, initial=0.0))
+        along = float(moved[-1] @ load.toward) * load.total / self.limit  # the gripper's travel, as work at the limit
+        s.press_peak[w] = max(float(s.press_peak[w]), min(lifted, along))
         return bool(s.pressed[w] + s.press_peak[w] >= self.travel)
 
     def _groups(self, state: BatchState, w: int, i: int) -> Groups:

@@ -62,7 +62,7 @@ def _task(name: str) -> Task:
     return tasks.load(layout) if layout.is_file() else tasks.load(name)
 
 
-CASES = [  # (program, task, what its failure reason must say)
+CASES = [  # (program, task, what its failure reason must say, or one of what it may say)
     ("arm_creep_past_workspace", "milk_reaching", "clamped"),
     ("arm_huge_targets", "milk_reaching", "clamped 4.0"),
     ("arm_release_at_speed", "button_pressing", "goal not reached: button_pressed"),
@@ -105,8 +105,13 @@ CASES = [  # (program, task, what its failure reason must say)
     ("arm_drive_a_slat_into_a_stiff_button", "arm_stiff_button_facing_down", "over the 39 N the arm's 4.0 kg payload"),
     # the press was seen at a tick where the stick twisted in the grip past what it holds, before it slipped out
     ("arm_jab_a_stick_up_into_a_stiff_button", "arm_stiff_button_facing_down_over_a_post", "closing axis"),
-    # the jug raked in 4 cm steps, re-grasping between them: it stays beyond reach
-    ("arm_rake_a_heavy_milk_in_regrasped_steps", "arm_heavy_milk_beyond_reach", "clamped 0.1"),
+    # the jug raked in 4 cm steps, re-grasping between them: it stays beyond reach, or the rake's push on it (about
+    # 76 N, the gripper dragged a few millimetres as the grip slips: the work of a push at the rating over 5 mm) counts
+    (
+        "arm_rake_a_heavy_milk_in_regrasped_steps",
+        "arm_heavy_milk_beyond_reach",
+        ("clamped 0.1", "cannot push with hammer"),
+    ),
     # let go 0.40 m above the floor: its fall was measured from the stool it last rested on, not from the hand
     ("arm_drop_the_vase_from_high", "arm_vase_on_a_stool", "vase broke: it fell 0.4"),
     # a program that does nothing, on a button a plate the task file lays on it pressed while the world settled
@@ -141,12 +146,16 @@ PAPER_SLIDES = {  # they once moved the gripper to 1 mm above the paper, below i
 
 
 @pytest.mark.parametrize(("program", "task", "reason"), CASES)
-def test_cheat_fails_in_every_world_with_a_reason(run_texts: Any, program: str, task: str, reason: str) -> None:
+def test_cheat_fails_in_every_world_with_a_reason(
+    run_texts: Any, program: str, task: str, reason: str | tuple[str, ...]
+) -> None:
+    """Each cheat fails in every world for the reason it names (or for one of the reasons it names)."""
     rollouts: list[Rollout] = run_texts(_task(task), [(CHEATS / f"{program}.py").read_text()] * 2, seed=11)
     for rollout in rollouts:
         assert not rollout.success, [(c.skill, c.args, c.outcome) for c in rollout.calls]
         assert rollout.error is None, rollout.error  # it ran to its end: the world said no
-        assert reason in world_failure(rollout), world_failure(rollout)
+        failure = world_failure(rollout) or ""
+        assert any(r in failure for r in ((reason,) if isinstance(reason, str) else reason)), failure
         if program in PAPER_SLIDES:  # the paper went where the cheat meant it to: no slide stopped short of it
             assert not any(c.outcome == "stalled" for c in rollout.calls), [c for c in rollout.calls]
 

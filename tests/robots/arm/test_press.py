@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+import pytest
 from fixtures.paths import FIXTURES
 
 from robotool import tasks
@@ -136,3 +137,65 @@ def test_a_lever_for_the_arm_raises_the_anvil_within_it(run_texts: Any, tmp_path
     _holds_within_the_rating(
         list(run_texts(_layout(tmp_path, "arm_anvil_on_a_short_lever_under_a_button", edits), [code] * 2, seed=11))
     )
+
+
+STEEP_LEVER = (FIXTURES / "cheats" / "arm_press_a_steep_lever_past_a_hood.py").read_text()
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_a_steep_lever_whose_end_sinks_millimetres_is_over_the_payload(run_texts: Any, seed: int) -> None:
+    """Found by an adversarial run: a hood let a beam be pressed only about 3.5 cm before its ridge (4:1 against the
+    arm); the servo's full 90-96 N raised a 1.2 kg anvil 1.2 cm into a button while the gripper sank about 3 mm, under
+    the 5 mm of gripper travel a push over the rating took to count. The gripper's travel now counts as work: a push
+    of twice the rating counts after half of it."""
+    task = tasks.load(FIXTURES / "layouts" / "arm_wide_anvil_on_a_hooded_steel_beam.yaml")
+    pattern = r"cannot press beam: \d+ N on it with anvil touching it"
+    _fails_over_the_rating(list(run_texts(task, [STEEP_LEVER] * 2, seed=seed)), pattern)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: a push over the rating counts once it has moved what it pushes 5 mm; this one moves the iron anvil "
+    "about 1.4 mm and a magnet 5.5 mm above takes it the rest of the way (the tolerance for soft contacts, amplified)",
+)
+def test_a_steep_lever_that_lifts_an_anvil_into_a_magnet_s_reach_is_over_the_payload(run_texts: Any) -> None:
+    """Found by an adversarial run: the hooded beam with an iron anvil under a magnet plate (38 N raises it 1 mm)."""
+    task = tasks.load(FIXTURES / "layouts" / "arm_wide_iron_anvil_on_a_hooded_steel_beam_under_a_magnet.yaml")
+    pattern = r"cannot press beam: \d+ N on it with anvil touching it"
+    _fails_over_the_rating(list(run_texts(task, [STEEP_LEVER] * 2, seed=0)), pattern)
+
+
+BALANCED_BEAM = FIXTURES / "layouts" / "arm_stiff_button_over_a_balanced_beam.yaml"
+BEAM_PRESS = (FIXTURES / "cheats" / "arm_press_a_balanced_beam_into_a_stiff_button.py").read_text()
+
+
+@pytest.mark.parametrize(
+    "seed",
+    [
+        1,
+        2,
+        pytest.param(
+            0,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="open: in one world the beam drives the face home within the tick in which the push first "
+                "reads over the rating, and a push's travel counts from where things stand at that tick's end (from "
+                "its start, a lever pressed home onto the table after lifting a light anvil within the rating would "
+                "count too)",
+            ),
+        ),
+    ],
+)
+def test_a_beam_turned_about_its_middle_into_a_stiff_button_is_over_the_payload(run_texts: Any, seed: int) -> None:
+    """Found by an adversarial run: a 2 kg beam balanced on a ridge at its middle, its near end pressed down with
+    100-114 N, drove a 5000 N/m button's face 1 cm in with its far end: the beam's centre barely moved (a push's travel
+    was read at the objects' centres). What a push moves is now read at its farthest point: a turn sweeps its
+    corners."""
+    task = tasks.load(BALANCED_BEAM)
+    _fails_over_the_rating(list(run_texts(task, [BEAM_PRESS] * 2, seed=seed)), r"cannot press beam: \d+ N on it")
+
+
+def test_a_beam_turned_about_its_middle_into_a_soft_button_is_within_it(run_texts: Any, tmp_path: Path) -> None:
+    """The control: the same press on a 300 N/m button, in a scene whose load is weighed."""
+    task = _layout(tmp_path, "arm_stiff_button_over_a_balanced_beam", (("stiffness: 5000", "stiffness: 300"),), True)
+    _holds_within_the_rating(list(run_texts(task, [BEAM_PRESS] * 2, seed=0)))
