@@ -1,8 +1,8 @@
 """What the quadruped's referee reads of a ram: which movable objects a pushed object presses, directly or through
 others (:func:`pressed_by`), which of them are stuck to it (:func:`stuck_to`) or pressed along the push
-(:func:`pressed_along`), which a moving carrier bears along (:func:`borne_along`), and the
-arcs what turns sweeps about the vertical (:func:`turns`, :func:`side_swings`), which count as travel where a centre
-barely moves (a plank swung round a post)."""
+(:func:`pressed_along`), which a moving carrier bears along (:func:`borne_along`), and the arcs what turns sweeps
+about the vertical (:func:`turns`, :func:`side_swings`), which count as travel where a centre barely moves (a plank
+swung round a post)."""
 
 from __future__ import annotations
 

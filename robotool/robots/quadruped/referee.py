@@ -63,8 +63,9 @@ CREEP = 1e-4  # m an object may creep in a tick (2 mm/s), no faster than its slo
 # planner's program, 1 world in 7); one speeding up from rest is not done (an adversarial run: a 15 kg drum tapped off
 # a kerb by a pushed bar rolled away slowly at first)
 WAKE = 5 * CREEP  # m in a tick (1 cm/s): what crept out of a ram and then speeds up past this on its own, untouched by
-# the robot and before it came to rest, is that ram's again (an adversarial run: a 15 kg drum tapped off a kerb by a
-# pushed bar sped up from rest more slowly than the creep rule could tell from soft creep, and rolled off unweighed)
+# the robot, however long it lay still, is that ram's again (adversarial runs: a 15 kg drum tapped off a kerb by a
+# pushed bar sped up from rest more slowly than the creep rule could tell from soft creep, and rolled off unweighed;
+# one stopped by a light chock rolled off once the chock was pushed away)
 CRUSH_CONDITION = "robot_stood_on_nothing_fragile"  # the goal condition a foot or the belly on a fragile object breaks
 
 
