@@ -1,8 +1,8 @@
 """Render the page: Jinja2 with autoescape on, and every value printed through the ``html`` sink's escaper
-(:func:`robotool.safe_text.html_text`: controls made visible, length capped, HTML escaped; a program listing is
-capped only at the longest program the sandbox runs, so that it shows all that runs); the CSS is inlined so the page is
-one file, and pictures and videos are linked by relative paths (an evaluation) or embedded as ``data:`` URIs (a single
-solve or run)."""
+(:func:`robotool.safe_text.html_text`: controls made visible, length capped, HTML escaped; a program is listed
+whole, so that all that runs shows: the sandbox and the reply extractor refuse one over 100 KB before it gets here); the
+CSS is inlined so the page is one file, and pictures and videos are linked by relative paths (an evaluation) or embedded
+as ``data:`` URIs (a single solve or run)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,6 @@ from robotool.eval.tables import TextTable
 from robotool.execute import RunReport
 from robotool.report_page.views import Media, PageView, record_view, rollouts_view, solution_view
 from robotool.safe_text import html_text, url_path
-from robotool.sandbox.validate import MAX_PROGRAM_CHARS
 from robotool.solution import Solution
 from robotool.task.task_model import Task
 
@@ -51,7 +50,7 @@ def _environment() -> Environment:
         lstrip_blocks=True,
     )
     env.filters["url"] = _url
-    env.filters["program"] = lambda code: Markup(html_text(code, MAX_PROGRAM_CHARS))  # shown whole: what runs
+    env.filters["program"] = lambda code: Markup(html_text(code, len(code)))  # whole: all that runs shows
     env.filters["percent"] = lambda rate: "–" if rate is None else f"{100 * rate:.0f}%"
     return env
 

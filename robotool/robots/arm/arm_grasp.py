@@ -85,6 +85,7 @@ class ArmParts:
     movable: np.ndarray  # (nobject,) bool
     sheet: np.ndarray  # (nobject,) bool
     friction: np.ndarray  # (nobject,) each object's declared friction, which the pads meet
+    reach: np.ndarray  # (nobject,) m from a rigid object's centre to its farthest corner (a cloth's links: 0)
 
     @classmethod
     def of(cls, scene: Scene) -> ArmParts:
@@ -106,6 +107,7 @@ class ArmParts:
             movable=np.array([o.movable for o in objects]),
             sheet=np.array([o.is_sheet for o in objects]),
             friction=np.array([o.friction or DEFAULT_FRICTION for o in objects]),
+            reach=np.array([0.0 if o.shape == "cloth" else float(np.linalg.norm(o.size)) / 2 for o in objects]),
         )
 
 

@@ -194,9 +194,6 @@ class Payload:
         self.sim, self.parts, self.grasp, self.scene = sim, parts, grasp, sim.scene
         self.limit, self.time, self.lift = limits.max_payload, config.payload_time, config.contact_lift
         self.travel = config.press_travel
-        self.reach = np.array(  # (nobject,) m from a rigid object's centre to its farthest corner (a cloth's links: 0)
-            [0.0 if o.shape == "cloth" else float(np.linalg.norm(o.size)) / 2 for o in self.scene.task.objects]
-        )
         owner = np.asarray(self.scene.body_object)
         robot = np.asarray(self.scene.robot_body, dtype=bool)  # (nbody,) the robot's own bodies
         member = (owner[:, None] == np.arange(len(self.scene.object_names))[None, :]).astype(float)
@@ -280,7 +277,7 @@ class Payload:
         turned = 2.0 * np.arccos(np.clip(np.abs(np.sum(frames * s.press_frames[w], axis=1)), 0.0, 1.0))
         on_parts = state.touching[w][np.asarray(self.bodies.member[:, pushed].any(axis=1))][:, self.bodies.parts].any()
         down = np.abs(objects[:, 2]) if on_parts else objects[:, 2]  # down onto a part that gives (a button's face)
-        swept = np.maximum(np.linalg.norm(objects[:, :2], axis=1), down) + (self.reach * turned)[pushed]
+        swept = np.maximum(np.linalg.norm(objects[:, :2], axis=1), down) + (self.parts.reach * turned)[pushed]
         lifted = float(np.max(swept, initial=0.0))
         along = float(moved[-1] @ load.toward) * load.total / self.limit  # the gripper's travel, as work at the limit
         s.press_peak[w] = max(float(s.press_peak[w]), min(lifted, along))
