@@ -150,7 +150,7 @@ def prompt_block(text: str) -> str:
 def html_text(text: str, limit: int | None = None) -> str:
     """For an HTML page (text or an attribute value): controls escaped (newlines and tabs kept, inside ``<pre>``
     they lay out code), ``& < > " '`` as entities, capped at ``limit`` characters (default :data:`HTML_CHARS`; a cut
-    says how many it left out)."""
+    says how long the text was)."""
     limit = HTML_CHARS if limit is None else limit
     if len(text) > limit:
         note = f" ({len(text)} characters in all)"

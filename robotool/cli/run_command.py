@@ -37,6 +37,7 @@ RUN_WORLDS = 1
 
 
 NON_ASCII = bytes(range(128, 256))
+"""The bytes that are not ASCII characters (left out to compare a file's ASCII with its text's)."""
 
 
 def read_source(data: bytes) -> str:
