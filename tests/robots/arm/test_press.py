@@ -199,3 +199,16 @@ def test_a_beam_turned_about_its_middle_into_a_soft_button_is_within_it(run_text
     """The control: the same press on a 300 N/m button, in a scene whose load is weighed."""
     task = _layout(tmp_path, "arm_stiff_button_over_a_balanced_beam", (("stiffness: 5000", "stiffness: 300"),), True)
     _holds_within_the_rating(list(run_texts(task, [BEAM_PRESS] * 2, seed=0)))
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open: a push's work counts whole, the part a fixed support bears too: pressing a light board leaning on a "
+    "wall flat with the servo driven 8 cm past it (100 N, nearly all of it into the wall) counts once the board has "
+    "seated 5 mm and the gripper moved 2 mm (found by an adversarial run; the same press passed before the gripper's "
+    "travel counted as work)",
+)
+def test_a_light_board_pressed_flat_against_a_wall_is_within_the_payload(run_texts: Any) -> None:
+    task = tasks.load(FIXTURES / "layouts" / "arm_light_board_leaning_on_a_wall.yaml")
+    code = (FIXTURES / "programs" / "arm_press_a_leaning_board_into_a_wall.py").read_text()
+    _holds_within_the_rating(list(run_texts(task, [code] * 2, seed=0)))
