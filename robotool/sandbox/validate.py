@@ -122,8 +122,7 @@ def check_characters(code: str) -> None:
     them (an escape sequence that writes the clipboard, clears the screen or paints a fake verdict; text that reads in
     an editor otherwise than it runs: ``lift`` followed by U+FE00 is another name than ``lift``); written as an
     escape (``\\x1b``) in a string, the same character runs the same."""
-    places = [found.start() for found in (_RAW_CONTROL.search(code), INVISIBLE.search(code)) if found]
-    places += [code.index(c) for c in set(code) if ord(c) > 0x9F and unicodedata.category(c) == "Cf"]
+    places = [found.start() for found in (_RAW_CONTROL.search(code), INVISIBLE.search(code)) if found]  # every Cf too
     if not places:
         return
     at = min(places)
